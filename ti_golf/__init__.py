@@ -1,0 +1,41 @@
+"""ti_golf: golf-ball physics as a Taichi data-parallel particle engine.
+
+Quick start::
+
+    import numpy as np
+    import ti_golf as tg
+
+    res = tg.sweep("lab_turbulent", angles_deg=np.arange(36, 37.41, 0.02))
+    print(res.angle_deg[res.best()], res.carry.max())
+
+    sim = tg.Simulation.from_scene("lab_spin_decay", overrides={"launch.angle_deg": 40})
+    sim.run(until="rest")
+    print(sim.flight().carry, sim.counts())
+
+Taichi is initialised on first use (CPU, f64) or explicitly with :func:`init`.
+"""
+
+from .config import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING, Scene
+from .errors import ConfigError, SimulationError, TiGolfError
+from .runtime import init
+from .scene import load_scene
+from .sim import Recording, Simulation
+from .sweep import SweepResult, sweep
+
+__all__ = [
+    "AT_REST",
+    "ConfigError",
+    "FLYING",
+    "OUT_OF_BOUNDS",
+    "ROLLING",
+    "Recording",
+    "Scene",
+    "Simulation",
+    "SimulationError",
+    "SweepResult",
+    "TiGolfError",
+    "init",
+    "load_scene",
+    "sweep",
+]
+__version__ = "0.1.0"

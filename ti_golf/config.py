@@ -1,0 +1,309 @@
+"""Scene configuration: frozen dataclasses and the schema every scene key is checked against.
+
+Plain Python, no Taichi import, so scenes can be parsed and validated before ``ti.init``.
+The schema (:data:`SCHEMA`) is the single source of truth for key names, units, defaults and
+allowed ranges: the loader validates against it and ``ti-golf keys`` prints it as documentation.
+
+Conventions: SI units, x downrange, y up, z lateral. Symbols follow the lab report
+(``C_D``, ``C_M``, ``omega_M``, ``C_omega``, ``k_p``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+Vec3 = tuple[float, float, float]
+
+#: Ball status codes stored per ball (``State.status``).
+FLYING, ROLLING, AT_REST, OUT_OF_BOUNDS = 0, 1, 2, 3
+STATUS_NAMES = {FLYING: "flying", ROLLING: "rolling", AT_REST: "at_rest", OUT_OF_BOUNDS: "out_of_bounds"}
+
+INTEGRATORS = ("semi_implicit", "rk4")
+
+
+# ----------------------------------------------------------------------------------------------
+# Schema
+# ----------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Key:
+    """One scene key: its type, default, unit, allowed range and meaning.
+
+    ``kind`` is one of ``"float"``, ``"int"``, ``"bool"``, ``"str"``, ``"vec3"``, ``"range"``
+    (a START:STOP:STEP string or a list of numbers) or ``"text"`` (free text).
+    ``check`` returns ``None`` when a (type-correct) value is allowed, else a phrase such as
+    ``"must be > 0"``.
+    """
+
+    name: str
+    kind: str
+    default: Any
+    unit: str
+    doc: str
+    check: Callable[[Any], str | None] | None = None
+    allowed: str = ""
+
+
+def _positive(v: float) -> str | None:
+    return None if v > 0 else "must be > 0"
+
+
+def _non_negative(v: float) -> str | None:
+    return None if v >= 0 else "must be >= 0"
+
+
+def _unit_interval(v: float) -> str | None:
+    return None if 0.0 <= v <= 1.0 else "must be in [0, 1]"
+
+
+def _one_of(*choices: Any) -> Callable[[Any], str | None]:
+    def check(v: Any) -> str | None:
+        return None if v in choices else "must be one of " + ", ".join(repr(c) for c in choices)
+
+    return check
+
+
+def _angle(limit: float) -> Callable[[float], str | None]:
+    def check(v: float) -> str | None:
+        return None if -limit <= v <= limit else f"must be in [-{limit:g}, {limit:g}] degrees"
+
+    return check
+
+
+SCHEMA: dict[str, dict[str, Key]] = {
+    "air": {
+        k.name: k
+        for k in [
+            Key("rho", "float", 1.3, "kg/m^3", "air density ρ", _non_negative, ">= 0"),
+            Key("gamma", "int", 2, "-", "flow type γ: 1 laminar (drag ∝ v), 2 turbulent (drag ∝ v²)",
+                _one_of(1, 2), "1 or 2"),
+            Key("C_D", "float", 0.3, "-", "drag coefficient; k_D = ½ρA·C_D (L.22)", _non_negative, ">= 0"),
+            Key("C_M", "float", 0.0, "-", "Magnus coefficient; k_M = ½ρA·C_M/ω_M (L.2, L.21)",
+                _non_negative, ">= 0"),
+            Key("omega_M", "float", 1.0, "1/s", "reference angular velocity ω_M of the Magnus law (L.2)",
+                _positive, "> 0"),
+            Key("C_omega", "float", 0.0, "-", "spin-decay coefficient; k_ω = ½ρA·C_ω/m (L.17, L.23)",
+                _non_negative, ">= 0"),
+            Key("wind", "vec3", (0.0, 0.0, 0.0), "m/s", "constant wind; forces use v_rel = v − wind (L.21–L.23)"),
+        ]
+    },
+    "ball": {
+        k.name: k
+        for k in [
+            Key("mass", "float", 0.045, "kg", "ball mass m", _positive, "> 0"),
+            Key("radius", "float", 0.02, "m", "ball radius R (cross-section A = πR²)", _positive, "> 0"),
+        ]
+    },
+    "launch": {
+        k.name: k
+        for k in [
+            Key("speed", "float", 80.0, "m/s", "launch speed |v0|", _non_negative, ">= 0"),
+            Key("angle_deg", "float", 45.0, "deg", "elevation above the horizontal", _angle(90), "[-90, 90]"),
+            Key("direction_deg", "float", 0.0, "deg", "azimuth, from +x toward +z", _angle(360), "[-360, 360]"),
+            Key("spin", "vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity ω0 (+z is backspin for a shot toward +x)"),
+            Key("position", "vec3", None, "m",
+                "launch point of the ball's centre (default: resting on the ground, [0, ground_height + radius, 0])"),
+        ]
+    },
+    "world": {
+        k.name: k
+        for k in [
+            Key("dt", "float", 0.001, "s", "time step h", _positive, "> 0"),
+            Key("gravity", "vec3", (0.0, -9.81, 0.0), "m/s^2", "gravitational acceleration g"),
+            Key("integrator", "str", "semi_implicit", "-",
+                "semi_implicit (the report's leapfrog-style Euler) or rk4 (4th order, for flights)",
+                _one_of(*INTEGRATORS), " | ".join(INTEGRATORS)),
+            Key("t_end", "float", 20.0, "s", "default duration of `ti-golf run`", _positive, "> 0"),
+            Key("t_max", "float", 60.0, "s", "longest flight a sweep integrates before giving up on a ball",
+                _positive, "> 0"),
+            Key("ground", "bool", True, "-", "an impenetrable ground plane y = ground_height"),
+            Key("ground_height", "float", 0.0, "m", "height of the ground plane"),
+            Key("v_rest", "float", 0.01, "m/s", "a touching ball slower than this (and R|ω| below it) may come to rest",
+                _non_negative, ">= 0"),
+            Key("t_rest", "float", 0.2, "s", "how long a ball must stay below v_rest before it is put at rest",
+                _non_negative, ">= 0"),
+        ]
+    },
+    "contact": {
+        k.name: k
+        for k in [
+            Key("e", "float", 0.5, "-", "coefficient of restitution e (B.9)", _unit_interval, "[0, 1]"),
+            Key("mu", "float", 0.4, "-", "Coulomb friction coefficient μ (B.15)", _non_negative, ">= 0"),
+            Key("k_p", "float", 0.2, "-", "position-projection factor k_p (B.18; stable below 0.5)",
+                _unit_interval, "[0, 1]"),
+            Key("mu_roll", "float", 0.05, "-", "rolling-resistance coefficient: a rolling ball decelerates at μ_roll·g",
+                _non_negative, ">= 0"),
+            Key("v_bounce", "float", 0.05, "m/s",
+                "normal approach speeds below v_bounce + 2|g|h are treated as inelastic (no micro-bounces)",
+                _non_negative, ">= 0"),
+        ]
+    },
+    "sweep": {
+        k.name: k
+        for k in [
+            Key("angles", "range", None, "deg", "default elevation angles of `ti-golf sweep` (START:STOP:STEP or list)"),
+            Key("speeds", "range", None, "m/s", "default launch speeds of `ti-golf sweep`"),
+            Key("spins", "range", None, "rad/s", "default spin magnitudes of `ti-golf sweep` (along the scene's spin axis)"),
+        ]
+    },
+}
+
+#: Top-level keys that are not tables.
+TOP_LEVEL: dict[str, Key] = {
+    "description": Key("description", "text", "", "-", "one line shown by `ti-golf scenes`"),
+}
+
+
+# ----------------------------------------------------------------------------------------------
+# Dataclasses (static parameters; per-step state lives in ti_golf.state)
+# ----------------------------------------------------------------------------------------------
+def _default(section: str, name: str) -> Any:
+    """Dataclass defaults come from :data:`SCHEMA`, so the two can never disagree."""
+    return SCHEMA[section][name].default
+
+
+@dataclass(frozen=True)
+class Air:
+    """Air properties (report L.1–L.23)."""
+
+    rho: float = _default("air", "rho")
+    gamma: int = _default("air", "gamma")
+    C_D: float = _default("air", "C_D")
+    C_M: float = _default("air", "C_M")
+    omega_M: float = _default("air", "omega_M")
+    C_omega: float = _default("air", "C_omega")
+    wind: Vec3 = _default("air", "wind")
+
+
+@dataclass(frozen=True)
+class Ball:
+    """Properties of the default ball [kg, m]."""
+
+    mass: float = _default("ball", "mass")
+    radius: float = _default("ball", "radius")
+
+
+@dataclass(frozen=True)
+class Launch:
+    """One launched ball: speed [m/s], elevation and azimuth [deg], spin [rad/s], position [m]."""
+
+    speed: float = _default("launch", "speed")
+    angle_deg: float = _default("launch", "angle_deg")
+    direction_deg: float = _default("launch", "direction_deg")
+    spin: Vec3 = _default("launch", "spin")
+    position: Vec3 | None = _default("launch", "position")
+
+
+@dataclass(frozen=True)
+class World:
+    """Time stepping, gravity and the ground plane."""
+
+    dt: float = _default("world", "dt")
+    gravity: Vec3 = _default("world", "gravity")
+    integrator: str = _default("world", "integrator")
+    t_end: float = _default("world", "t_end")
+    t_max: float = _default("world", "t_max")
+    ground: bool = _default("world", "ground")
+    ground_height: float = _default("world", "ground_height")
+    v_rest: float = _default("world", "v_rest")
+    t_rest: float = _default("world", "t_rest")
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Impulse-contact parameters (report Appendix B)."""
+
+    e: float = _default("contact", "e")
+    mu: float = _default("contact", "mu")
+    k_p: float = _default("contact", "k_p")
+    mu_roll: float = _default("contact", "mu_roll")
+    v_bounce: float = _default("contact", "v_bounce")
+
+
+@dataclass(frozen=True)
+class SweepDefaults:
+    """Default launch-condition lists for ``ti-golf sweep`` (``None``: use the launch table)."""
+
+    angles: tuple[float, ...] | None = None
+    speeds: tuple[float, ...] | None = None
+    spins: tuple[float, ...] | None = None
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene: everything static a simulation needs.
+
+    ``launch`` is ``None`` when the scene has no ``[launch]`` table (no launched ball).
+    """
+
+    name: str = "scene"
+    description: str = ""
+    path: str = ""
+    air: Air = field(default_factory=Air)
+    ball: Ball = field(default_factory=Ball)
+    launch: Launch | None = field(default_factory=Launch)
+    world: World = field(default_factory=World)
+    contact: Contact = field(default_factory=Contact)
+    sweep: SweepDefaults = field(default_factory=SweepDefaults)
+
+    def launch_position(self) -> Vec3:
+        """Launch point [m]: the scene's, or the ball resting on the ground at the origin."""
+        if self.launch is not None and self.launch.position is not None:
+            return self.launch.position
+        return (0.0, self.world.ground_height + self.ball.radius, 0.0)
+
+
+def launch_velocity(speed: float, angle_deg: float, direction_deg: float) -> Vec3:
+    """Velocity [m/s] for a launch at ``angle_deg`` elevation and ``direction_deg`` azimuth (+x toward +z)."""
+    th, ph = math.radians(angle_deg), math.radians(direction_deg)
+    return (speed * math.cos(th) * math.cos(ph), speed * math.sin(th), speed * math.cos(th) * math.sin(ph))
+
+
+def backspin_axis(direction_deg: float) -> Vec3:
+    """Unit backspin axis d × ŷ for a shot along azimuth ``direction_deg`` (+z for a shot toward +x)."""
+    ph = math.radians(direction_deg)
+    return (-math.sin(ph), 0.0, math.cos(ph))
+
+
+def parse_range(text: str | Sequence[float], source: str, key: str) -> tuple[float, ...]:
+    """Parse ``START:STOP:STEP`` (STOP included) or ``a,b,c`` (or a list) into a tuple of floats."""
+    if isinstance(text, (list, tuple)):
+        values = []
+        for v in text:
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise_config(source, key, f"must be a list of numbers (got {v!r})")
+            values.append(float(v))
+        out = tuple(values)
+    else:
+        s = str(text).strip()
+        try:
+            if ":" in s:
+                parts = [float(p) for p in s.split(":")]
+                if len(parts) != 3:
+                    raise ValueError
+                start, stop, step = parts
+                if not step > 0:
+                    raise_config(source, key, f"STEP must be > 0 in START:STOP:STEP (got {s!r})")
+                if stop < start:
+                    raise_config(source, key, f"STOP must be >= START in START:STOP:STEP (got {s!r})")
+                n = int(math.floor((stop - start) / step + 1e-9)) + 1
+                if n > 10_000_000:
+                    raise_config(source, key, f"gives {n} values; at most 10,000,000 are allowed")
+                out = tuple(round(start + i * step, 12) for i in range(n))
+            else:
+                out = tuple(float(p) for p in s.split(",") if p.strip() != "")
+        except ValueError:
+            raise_config(source, key, f"must be START:STOP:STEP (STOP included) or a comma list of numbers (got {s!r})")
+    if not out:
+        raise_config(source, key, "must list at least one value")
+    if not all(math.isfinite(v) for v in out):
+        raise_config(source, key, "values must be finite numbers")
+    return out
+
+
+def raise_config(source: str, key: str | None, reason: str) -> None:
+    """Raise a :class:`~ti_golf.errors.ConfigError` (helper that keeps call sites one line)."""
+    from .errors import ConfigError
+
+    raise ConfigError(source, key, reason)

@@ -1,0 +1,33 @@
+"""Exceptions that reach the user as one clear line (the CLI turns them into exit code 2)."""
+
+from __future__ import annotations
+
+
+class TiGolfError(Exception):
+    """Base class of every error ti_golf reports to a user without a traceback."""
+
+
+class ConfigError(TiGolfError):
+    """Bad scene or command-line input.
+
+    Attributes:
+        source: where the input came from: a file path, ``"--set"`` or ``"--angles"``.
+        key: the dotted scene key (``"air.gamma"``) or option at fault, or ``None`` for the whole file.
+        reason: what is wrong and what is allowed.
+    """
+
+    def __init__(self, source: str, key: str | None, reason: str) -> None:
+        self.source = str(source)
+        self.key = key
+        self.reason = reason
+        where = f"{self.source}: " if self.source else ""
+        what = f"key '{key}' " if key else ""
+        super().__init__(f"{where}{what}{reason}")
+
+
+class SimulationError(TiGolfError):
+    """A simulation left the domain of finite numbers; ``balls`` names the offending ball ids."""
+
+    def __init__(self, message: str, balls: list[int] | None = None) -> None:
+        self.balls = list(balls or [])
+        super().__init__(message)

@@ -1,0 +1,48 @@
+"""Static data of a simulation: parameters from the scene and per-ball properties."""
+
+from __future__ import annotations
+
+import numpy as np
+import taichi as ti
+
+from .config import Scene
+from .physics.integrate import INTEGRATOR_CODES
+from .physics.types import AirParams, ContactParams, vec3
+from .runtime import np_float
+
+
+class Model:
+    """What does not change while stepping.
+
+    Attributes:
+        scene: the validated scene.
+        n: number of balls.
+        radius: ball radii [m], shape (N,), Taichi ndarray.
+        mass: ball masses [kg], shape (N,), Taichi ndarray.
+        launch_height: height whose downward crossing counts as landing [m], shape (N,).
+        air, contact: kernel-argument structs (AirParams, ContactParams).
+        gravity: g [m/s²], vec3.
+        integrator: the integrator code (a compile-time constant of the kernels).
+    """
+
+    def __init__(self, scene: Scene, radius: np.ndarray, mass: np.ndarray, launch_height: np.ndarray) -> None:
+        f = np_float()
+        self.scene = scene
+        self.n = int(len(radius))
+        self.radius = ti.ndarray(float, self.n)
+        self.radius.from_numpy(np.asarray(radius, dtype=f))
+        self.mass = ti.ndarray(float, self.n)
+        self.mass.from_numpy(np.asarray(mass, dtype=f))
+        self.launch_height = ti.ndarray(float, self.n)
+        self.launch_height.from_numpy(np.asarray(launch_height, dtype=f))
+        self.radius_np = np.asarray(radius, dtype=float)
+        self.mass_np = np.asarray(mass, dtype=float)
+        a, c, w = scene.air, scene.contact, scene.world
+        self.air = AirParams(rho=a.rho, gamma=a.gamma, C_D=a.C_D, C_M=a.C_M, omega_M=a.omega_M,
+                             C_omega=a.C_omega, wind=vec3(*a.wind))
+        self.contact = ContactParams(e=c.e, mu=c.mu, k_p=c.k_p, mu_roll=c.mu_roll, v_bounce=c.v_bounce)
+        self.gravity = vec3(*w.gravity)
+        self.integrator = INTEGRATOR_CODES[w.integrator]
+        self.dt = w.dt
+        self.ground_p = vec3(0.0, w.ground_height, 0.0)
+        self.ground_n = vec3(0.0, 1.0, 0.0)

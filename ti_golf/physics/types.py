@@ -1,0 +1,43 @@
+"""Taichi types of the physics kernels (created after ``ti.init``, see the package docstring)."""
+
+
+import taichi as ti
+
+from . import _ensure_init  # noqa: F401  (Taichi must be initialised before the types below)
+
+vec3 = ti.types.vector(3, float)
+"""3-vector of the default float [SI units]."""
+
+AirParams = ti.types.struct(
+    rho=float,  # air density ρ [kg/m³]
+    gamma=ti.i32,  # flow type γ: 1 laminar, 2 turbulent
+    C_D=float,  # drag coefficient (L.22)
+    C_M=float,  # Magnus coefficient (L.21)
+    omega_M=float,  # Magnus reference angular velocity ω_M [1/s] (L.2)
+    C_omega=float,  # spin-decay coefficient (L.23)
+    wind=vec3,  # constant wind velocity [m/s]
+)
+"""Air parameters, passed to kernels by value (tunable without recompiling)."""
+
+ContactParams = ti.types.struct(
+    e=float,  # restitution (B.9)
+    mu=float,  # Coulomb friction (B.15)
+    k_p=float,  # position projection factor (B.18)
+    mu_roll=float,  # rolling resistance: deceleration μ_roll·g_n while rolling
+    v_bounce=float,  # approach speeds below v_bounce + 2|g|h are inelastic [m/s]
+)
+"""Impulse-contact parameters (report Appendix B)."""
+
+BallCoef = ti.types.struct(
+    kD=float,  # k_D / m [1/m for γ=2, 1/s for γ=1]
+    kM=float,  # k_M / m [1/m]
+    kw=float,  # k_ω (L.17) [1/m]
+    radius=float,  # R [m]
+)
+"""Per-ball aerodynamic coefficients divided by the mass, computed once per kernel launch."""
+
+# ndarray annotations (any length; element types follow the precision chosen at init)
+vec3_array = ti.types.ndarray(dtype=vec3, ndim=1)
+float_array = ti.types.ndarray(dtype=float, ndim=1)
+int_array = ti.types.ndarray(dtype=ti.i32, ndim=1)
+vec3_table = ti.types.ndarray(dtype=vec3, ndim=2)

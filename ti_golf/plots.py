@@ -1,0 +1,82 @@
+"""Matplotlib (Agg) figures: sweep trajectories and carry, run trajectories and spin decay."""
+
+from __future__ import annotations
+
+import os
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .sim import Recording
+    from .sweep import SweepResult
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_sweep(res: "SweepResult", path: str | os.PathLike[str], title: str | None = None) -> None:
+    """Side view of the recorded trajectories (as the report's Figures 3.1-1 to 3.1-4) and carry vs angle."""
+    plt = _pyplot()
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5), gridspec_kw={"width_ratios": [1.6, 1]})
+    best = res.best()
+    x0 = np.asarray(res.scene.launch_position())
+    if res.traj is not None and res.traj_index is not None:
+        cmap = plt.get_cmap("viridis")
+        k = len(res.traj_index)
+        for j, i in enumerate(res.traj_index):
+            p = res.traj[j]
+            d = np.hypot(p[:, 0] - x0[0], p[:, 2] - x0[2])
+            ax1.plot(d, p[:, 1] - x0[1], color=cmap(j / max(k - 1, 1)), lw=1.0,
+                     label=f"{res.angle_deg[i]:.4g}°" if k <= 12 else None)
+        if k <= 12:
+            ax1.legend(fontsize=7, ncol=2, title="launch angle")
+    ax1.set_xlabel("downrange distance [m]")
+    ax1.set_ylabel("height above launch [m]")
+    ax1.set_aspect("equal", adjustable="datalim")
+    ax1.grid(alpha=0.3)
+    ax1.set_title(title or res.scene.description or res.scene.name, fontsize=9)
+    order = np.argsort(res.angle_deg, kind="stable")
+    groups = {(s, w) for s, w in zip(res.speed_mps, res.spin_radps)}
+    for s, w in sorted(groups):
+        m = (res.speed_mps[order] == s) & (res.spin_radps[order] == w)
+        ax2.plot(res.angle_deg[order][m], res.carry[order][m], ".-", ms=3,
+                 label=f"{s:g} m/s, {w:g} rad/s" if len(groups) > 1 else None)
+    ax2.plot([res.angle_deg[best]], [res.carry[best]], "r*", ms=12,
+             label=f"best {res.angle_deg[best]:.4g}°: {res.carry[best]:.3f} m")
+    ax2.set_xlabel("launch angle [deg]")
+    ax2.set_ylabel("carry [m]")
+    ax2.grid(alpha=0.3)
+    ax2.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_run(rec: "Recording", path: str | os.PathLike[str], title: str = "", max_balls: int = 20) -> None:
+    """Trajectory side view and spin magnitude |ω| vs time (as the report's Figure 3.2-3)."""
+    plt = _pyplot()
+    a = rec.arrays()
+    t, x, w = a["traj_t"], a["traj_x"], a["traj_w"]
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), gridspec_kw={"height_ratios": [1.3, 1]})
+    n = x.shape[1] if x.ndim == 3 else 0
+    for i in range(min(n, max_balls)):
+        ax1.plot(x[:, i, 0], x[:, i, 1], lw=1.0)
+        ax2.plot(t, np.linalg.norm(w[:, i, :], axis=1), lw=1.0)
+    ax1.set_xlabel("x [m]")
+    ax1.set_ylabel("y [m]")
+    ax1.set_aspect("equal", adjustable="datalim")
+    ax1.grid(alpha=0.3)
+    ax1.set_title(title, fontsize=9)
+    ax2.set_xlabel("t [s]")
+    ax2.set_ylabel("|ω| [rad/s]")
+    ax2.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -1,0 +1,96 @@
+"""The one place that calls ``ti.init``: backend choice, precision and fallbacks.
+
+Backend: ``--arch`` / :func:`init` argument, else the environment variable ``TI_GOLF_ARCH``,
+else ``cpu``. Precision: ``--precision`` / argument, else ``TI_GOLF_PRECISION``, else ``f64``
+(the accuracy targets of the sweep are met in f64; f32 is faster on some GPUs).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import sys
+from dataclasses import dataclass
+
+os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")  # keep stdout clean (JSON output)
+os.environ.setdefault("TI_LOG_LEVEL", "warn")
+
+import taichi as ti  # noqa: E402
+
+from .errors import ConfigError  # noqa: E402
+
+ARCHES = ("cpu", "cuda", "vulkan", "gpu")
+PRECISIONS = ("f32", "f64")
+
+
+@dataclass(frozen=True)
+class RuntimeInfo:
+    """What :func:`init` settled on: requested and actual backend, and the float type."""
+
+    requested_arch: str
+    arch: str
+    precision: str
+
+
+_info: RuntimeInfo | None = None
+
+
+def _resolve(arch: str | None, precision: str | None) -> tuple[str, str]:
+    arch = (arch or os.environ.get("TI_GOLF_ARCH") or "cpu").lower()
+    precision = (precision or os.environ.get("TI_GOLF_PRECISION") or "f64").lower()
+    if arch not in ARCHES:
+        raise ConfigError("--arch" if arch else "TI_GOLF_ARCH", None, f"unknown backend {arch!r}; allowed: {', '.join(ARCHES)}")
+    if precision not in PRECISIONS:
+        raise ConfigError("--precision", None, f"unknown precision {precision!r}; allowed: f32, f64")
+    return arch, precision
+
+
+def init(arch: str | None = None, precision: str | None = None, *, debug: bool = False) -> RuntimeInfo:
+    """Initialise Taichi once per process.
+
+    A second call with the same (or no) request returns the existing runtime; a second call that
+    asks for a different backend or precision raises, because Taichi cannot switch in-process
+    (run another process instead).
+    """
+    global _info
+    want_arch, want_prec = _resolve(arch, precision)
+    if _info is not None:
+        if (arch and want_arch != _info.requested_arch) or (precision and want_prec != _info.precision):
+            raise RuntimeError(
+                f"ti_golf is already initialised with arch={_info.requested_arch}, precision={_info.precision}; "
+                "start a new process to change them"
+            )
+        return _info
+    banner = io.StringIO()
+    with contextlib.redirect_stdout(banner):  # Taichi prints "Starting on arch=..." on stdout
+        ti.init(
+            arch=getattr(ti, want_arch),
+            default_fp=ti.f64 if want_prec == "f64" else ti.f32,
+            default_ip=ti.i32,
+            debug=debug,
+            offline_cache=True,
+        )
+    for line in banner.getvalue().splitlines():  # keep stdout clean for JSON; pass on anything unusual
+        if not line.startswith("[Taichi] Starting on arch"):
+            print(line, file=sys.stderr)
+    actual = ti.lang.impl.current_cfg().arch
+    _info = RuntimeInfo(requested_arch=want_arch, arch=str(actual).split(".")[-1], precision=want_prec)
+    return _info
+
+
+def ensure_init() -> RuntimeInfo:
+    """Initialise with the defaults (environment variables honoured) unless already done."""
+    return _info if _info is not None else init()
+
+
+def info() -> RuntimeInfo | None:
+    """The current runtime, or ``None`` before :func:`init`."""
+    return _info
+
+
+def np_float():
+    """The numpy float type matching the Taichi default float."""
+    import numpy as np
+
+    return np.float64 if ensure_init().precision == "f64" else np.float32

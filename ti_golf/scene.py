@@ -1,0 +1,248 @@
+"""TOML scene files -> validated :class:`~ti_golf.config.Scene`, with ``--set KEY=VALUE`` overrides.
+
+Every problem raises :class:`~ti_golf.errors.ConfigError` naming the file (or ``--set``), the
+dotted key and what is allowed. No Taichi import here.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import os
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+try:  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
+from .config import (
+    SCHEMA,
+    TOP_LEVEL,
+    Air,
+    Ball,
+    Contact,
+    Key,
+    Launch,
+    Scene,
+    SweepDefaults,
+    World,
+    parse_range,
+    raise_config,
+)
+from .errors import ConfigError
+
+_SECTION_TYPES = {"air": Air, "ball": Ball, "launch": Launch, "world": World, "contact": Contact}
+
+
+def _suggest(name: str, candidates: Iterable[str]) -> str:
+    close = difflib.get_close_matches(name, list(candidates), n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
+    """Check the type of one value against its schema entry and return it normalised."""
+    kind = key.kind
+    if kind == "float" or kind == "int":
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise_config(source, dotted, f"must be a number{_unit(key)} (got {value!r})")
+        if kind == "int":
+            if isinstance(value, float) and not value.is_integer():
+                raise_config(source, dotted, f"must be an integer (got {value!r})")
+            value = int(value)
+        else:
+            value = float(value)
+            if not math.isfinite(value):
+                raise_config(source, dotted, f"must be a finite number (got {value!r})")
+    elif kind == "bool":
+        if not isinstance(value, bool):
+            raise_config(source, dotted, f"must be true or false (got {value!r})")
+    elif kind in ("str", "text"):
+        if not isinstance(value, str):
+            raise_config(source, dotted, f"must be a string (got {value!r})")
+    elif kind == "vec3":
+        if (
+            not isinstance(value, (list, tuple))
+            or len(value) != 3
+            or any(isinstance(c, bool) or not isinstance(c, (int, float)) for c in value)
+        ):
+            raise_config(source, dotted, f"must be a list of 3 numbers{_unit(key)}, e.g. [0, 0, 0] (got {value!r})")
+        value = tuple(float(c) for c in value)
+        if not all(math.isfinite(c) for c in value):
+            raise_config(source, dotted, f"must hold finite numbers (got {list(value)!r})")
+    elif kind == "range":
+        value = parse_range(value if isinstance(value, (list, tuple)) else str(value), source, dotted)
+    if key.check is not None:
+        problem = key.check(value)
+        if problem:
+            raise_config(source, dotted, f"{problem} (got {value!r})")
+    return value
+
+
+def _unit(key: Key) -> str:
+    return f" in {key.unit}" if key.unit not in ("-", "") else ""
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """Split ``KEY=VALUE`` and parse VALUE as TOML (``[-5,0,0]``, ``0.25``, ``true``); bare words are strings."""
+    if "=" not in text:
+        raise ConfigError("--set", text, "must be KEY=VALUE, e.g. --set air.wind=[-5,0,0]")
+    dotted, raw = text.split("=", 1)
+    dotted, raw = dotted.strip(), raw.strip()
+    if not dotted:
+        raise ConfigError("--set", None, f"missing KEY in {text!r} (expected KEY=VALUE)")
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        if raw.replace("_", "").replace("-", "").isalnum():
+            value = raw  # a bare word such as rk4
+        else:
+            raise ConfigError("--set", dotted, f"value {raw!r} is not valid TOML (numbers, [x, y, z], true/false, \"text\")")
+    return dotted, value
+
+
+def _apply_override(data: dict[str, Any], dotted: str, value: Any) -> None:
+    parts = dotted.split(".")
+    if len(parts) == 1:
+        if parts[0] not in TOP_LEVEL:
+            raise ConfigError("--set", dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
+        data[parts[0]] = value
+        return
+    if len(parts) != 2:
+        raise ConfigError("--set", dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
+    section, name = parts
+    if section not in SCHEMA or name not in SCHEMA[section]:
+        raise ConfigError("--set", dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
+    table = data.setdefault(section, {})
+    if not isinstance(table, dict):
+        raise ConfigError("--set", dotted, f"cannot be set: '{section}' is not a table in the scene")
+    table[name] = ("--set", value)
+
+
+def _all_keys() -> list[str]:
+    return list(TOP_LEVEL) + [f"{s}.{k}" for s, keys in SCHEMA.items() for k in keys]
+
+
+def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Read a TOML file, turning every I/O or syntax problem into a :class:`ConfigError`."""
+    p = Path(path)
+    if not p.exists():
+        raise ConfigError(str(p), None, "file not found")
+    if p.is_dir():
+        raise ConfigError(str(p), None, "is a directory, not a scene file")
+    try:
+        text = p.read_bytes().decode("utf-8")
+    except OSError as exc:
+        raise ConfigError(str(p), None, f"cannot be read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise ConfigError(str(p), None, "is not UTF-8 text") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(str(p), None, f"is not valid TOML: {exc}") from None
+
+
+def resolve_scene_path(name: str | os.PathLike[str]) -> Path:
+    """A scene path as given, or a bare name looked up in the bundled ``scenes/`` folder."""
+    p = Path(name)
+    if p.exists() or p.suffix == ".toml" and p.parent != Path("."):
+        return p
+    for cand in (scenes_dir() / p, scenes_dir() / f"{p}.toml"):
+        if cand.exists():
+            return cand
+    return p
+
+
+def scenes_dir() -> Path:
+    """The ``scenes/`` folder of the source tree (environment variable ``TI_GOLF_SCENES`` overrides)."""
+    env = os.environ.get("TI_GOLF_SCENES")
+    if env:
+        return Path(env)
+    return Path(__file__).resolve().parent.parent / "scenes"
+
+
+def load_scene(
+    path: str | os.PathLike[str] | None = None,
+    overrides: Mapping[str, Any] | Iterable[str] | None = None,
+    *,
+    data: Mapping[str, Any] | None = None,
+) -> Scene:
+    """Load and validate a scene.
+
+    Args:
+        path: a TOML file, or a bundled scene's name (``"lab_turbulent"``); ``None`` with ``data``.
+        overrides: ``{"air.C_D": 0.25}`` or ``["air.C_D=0.25", ...]`` (``--set`` syntax).
+        data: an already-parsed TOML document (used instead of reading ``path``).
+
+    Raises:
+        ConfigError: naming the file, the key and what is allowed.
+    """
+    if data is None:
+        if path is None:
+            raise ConfigError("", None, "no scene given")
+        p = resolve_scene_path(path)
+        raw = read_toml(p)
+        source = str(p)
+    else:
+        raw = dict(data)
+        p = Path(path) if path else Path("<scene>")
+        source = str(path) if path else "<scene>"
+    doc: dict[str, Any] = {k: (dict(v) if isinstance(v, dict) else v) for k, v in raw.items()}
+    if overrides:
+        items = overrides.items() if isinstance(overrides, Mapping) else (parse_override(o) for o in overrides)
+        for dotted, value in items:
+            _apply_override(doc, dotted, value)
+    return _build(doc, source, p.stem)
+
+
+def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
+    kwargs: dict[str, Any] = {"name": name, "path": source}
+    for top, value in doc.items():
+        if top in TOP_LEVEL:
+            kwargs[top] = _coerce(value, TOP_LEVEL[top], source, top)
+            continue
+        if top not in SCHEMA:
+            raise_config(source, top, f"is not a scene table or key{_suggest(top, list(SCHEMA) + list(TOP_LEVEL))}; "
+                         f"allowed: {', '.join(list(TOP_LEVEL) + list(SCHEMA))}")
+        if not isinstance(value, dict):
+            raise_config(source, top, f"must be a table [{top}] (got {value!r})")
+    for section, keys in SCHEMA.items():
+        table = doc.get(section)
+        if table is None:
+            continue
+        values: dict[str, Any] = {}
+        for name_, value in table.items():
+            dotted = f"{section}.{name_}"
+            src = source
+            if isinstance(value, tuple) and len(value) == 2 and value[0] == "--set":
+                src, value = value
+            if name_ not in keys:
+                raise_config(src, dotted, f"is unknown{_suggest(name_, keys)}; allowed in [{section}]: "
+                             + ", ".join(keys))
+            values[name_] = _coerce(value, keys[name_], src, dotted)
+        if section == "sweep":
+            kwargs["sweep"] = SweepDefaults(**values)
+        else:
+            kwargs[section] = _SECTION_TYPES[section](**values)
+    if "launch" not in doc:
+        kwargs["launch"] = None
+    return Scene(**kwargs)
+
+
+def describe_keys() -> str:
+    """Every scene key with unit, default, allowed values and meaning, as a Markdown table."""
+    rows = ["| key | unit | default | allowed | meaning |", "|---|---|---|---|---|"]
+    for k in TOP_LEVEL.values():
+        rows.append(f"| `{k.name}` | - | `\"\"` | text | {k.doc} |")
+    for section, keys in SCHEMA.items():
+        for k in keys.values():
+            d = k.default
+            if isinstance(d, tuple):
+                d = "[" + ", ".join(f"{c:g}" for c in d) + "]"
+            elif isinstance(d, bool):
+                d = str(d).lower()
+            elif d is None:
+                d = "(see meaning)"
+            rows.append(f"| `{section}.{k.name}` | {k.unit} | `{d}` | {k.allowed or k.kind} | {k.doc} |")
+    return "\n".join(rows)

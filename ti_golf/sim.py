@@ -1,0 +1,258 @@
+"""The :class:`Simulation` facade: build from a scene, step, inspect, modify, continue.
+
+Like the report's WoP object: set initial conditions, simulate, read ``x``/``v``/``w``, change
+them and simulate again.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable, Mapping
+
+import numpy as np
+
+from .config import AT_REST, OUT_OF_BOUNDS, STATUS_NAMES, Scene, launch_velocity
+from .errors import ConfigError, SimulationError
+from .results import Flight
+from .runtime import ensure_init
+from .scene import load_scene
+
+
+@dataclass
+class Recording:
+    """Samples taken every ``record_every`` steps: times (S,), positions and spins (S, N, 3)."""
+
+    t: list[float] = field(default_factory=list)
+    x: list[np.ndarray] = field(default_factory=list)
+    w: list[np.ndarray] = field(default_factory=list)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """``traj_t`` (S,), ``traj_x`` (S, N, 3), ``traj_w`` (S, N, 3)."""
+        return {"traj_t": np.asarray(self.t), "traj_x": np.asarray(self.x), "traj_w": np.asarray(self.w)}
+
+
+class Simulation:
+    """Many balls under the scene's air, gravity and ground, advanced by data-parallel kernels.
+
+    Args:
+        scene: a validated :class:`~ti_golf.config.Scene`.
+        x, v, w: initial positions [m], velocities [m/s], spins [rad/s], each (N, 3). Default: one
+            ball launched as the scene's ``[launch]`` table says.
+        radius, mass: per-ball radius [m] and mass [kg], scalars or (N,). Default: the scene's ball.
+        track: which balls get landing detection (carry, apex ...); default all.
+    """
+
+    def __init__(
+        self,
+        scene: Scene,
+        x: np.ndarray | None = None,
+        v: np.ndarray | None = None,
+        w: np.ndarray | None = None,
+        radius: float | np.ndarray | None = None,
+        mass: float | np.ndarray | None = None,
+        track: bool | np.ndarray = True,
+    ) -> None:
+        ensure_init()
+        from .model import Model
+        from .state import State
+
+        self.scene = scene
+        if x is None:
+            if scene.launch is None:
+                raise ConfigError(scene.path, "launch", "the scene has no [launch] table and no balls were given")
+            L = scene.launch
+            x = np.array([scene.launch_position()])
+            v = np.array([launch_velocity(L.speed, L.angle_deg, L.direction_deg)])
+            w = np.array([L.spin])
+        x = _as_vectors(x, "x")
+        n = len(x)
+        v = np.zeros((n, 3)) if v is None else _as_vectors(v, "v", n)
+        w = np.zeros((n, 3)) if w is None else _as_vectors(w, "w", n)
+        radius = _per_ball(scene.ball.radius if radius is None else radius, n, "radius")
+        mass = _per_ball(scene.ball.mass if mass is None else mass, n, "mass")
+        self.model = Model(scene, radius, mass, launch_height=x[:, 1])
+        self.state = State(n)
+        self.state.reset(x, v, w, track)
+        self.launch_x = x.copy()
+        """Launch points [m], shape (N, 3): carry is measured from here."""
+        self._check_buf = None
+
+    @classmethod
+    def from_scene(cls, path: str | os.PathLike[str], overrides: Mapping[str, Any] | Iterable[str] | None = None,
+                   **kwargs: Any) -> "Simulation":
+        """Load a TOML scene (path or bundled name) with optional overrides and build a simulation."""
+        return cls(load_scene(path, overrides), **kwargs)
+
+    # -- inspection -------------------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        """Number of balls."""
+        return self.state.n
+
+    @property
+    def t(self) -> float:
+        """Simulated time [s]."""
+        return self.state.t
+
+    @property
+    def dt(self) -> float:
+        """Time step h [s]."""
+        return self.model.dt
+
+    @property
+    def x(self) -> np.ndarray:
+        """Ball centres [m], a copy, shape (N, 3)."""
+        return self.state.x.to_numpy().astype(np.float64)
+
+    @x.setter
+    def x(self, value: np.ndarray) -> None:
+        self.state.x.from_numpy(_as_vectors(value, "x", self.n).astype(self.state.x.to_numpy().dtype))
+
+    @property
+    def v(self) -> np.ndarray:
+        """Velocities [m/s], a copy, shape (N, 3)."""
+        return self.state.v.to_numpy().astype(np.float64)
+
+    @v.setter
+    def v(self, value: np.ndarray) -> None:
+        self._wake()
+        self.state.v.from_numpy(_as_vectors(value, "v", self.n).astype(self.state.v.to_numpy().dtype))
+
+    @property
+    def w(self) -> np.ndarray:
+        """Angular velocities ω [rad/s], a copy, shape (N, 3)."""
+        return self.state.w.to_numpy().astype(np.float64)
+
+    @w.setter
+    def w(self, value: np.ndarray) -> None:
+        self._wake()
+        self.state.w.from_numpy(_as_vectors(value, "w", self.n).astype(self.state.w.to_numpy().dtype))
+
+    @property
+    def status(self) -> np.ndarray:
+        """Per-ball status codes (ti_golf.config: FLYING, ROLLING, AT_REST, OUT_OF_BOUNDS), shape (N,)."""
+        return self.state.status.to_numpy()
+
+    def counts(self) -> dict[str, int]:
+        """How many balls are flying, rolling, at rest and out of bounds."""
+        s = self.status
+        return {name: int(np.count_nonzero(s == code)) for code, name in STATUS_NAMES.items()}
+
+    def flight(self) -> Flight:
+        """Landing outcomes of the tracked balls (NaN where not landed yet)."""
+        a = self.state.numpy()
+        return Flight.from_arrays(self.launch_x, a["landed"], a["apex"], a["t_land"], a["land_x"], a["land_v"])
+
+    def _wake(self) -> None:
+        s = self.state.status.to_numpy()
+        s[s == AT_REST] = 0
+        self.state.status.from_numpy(s)
+        self.state.rest_time.from_numpy(np.zeros(self.n, self.state.rest_time.to_numpy().dtype))
+
+    # -- stepping ---------------------------------------------------------------------------------
+    def step(self, n: int = 1) -> None:
+        """Advance ``n`` time steps; raises SimulationError naming the balls that went non-finite."""
+        from .physics import kernels
+
+        m, s, w = self.model, self.state, self.scene.world
+        kernels.advance(
+            m.air, m.contact, m.gravity, m.dt, m.integrator, int(n), s.t, int(w.ground), m.ground_p, m.ground_n,
+            w.v_rest, w.t_rest, m.radius, m.mass, m.launch_height,
+            s.x, s.v, s.w, s.status, s.rest_time, s.landed, s.apex, s.t_land, s.land_x, s.land_v,
+        )
+        s.t += n * m.dt
+        self.check_finite()
+
+    def check_finite(self) -> None:
+        """Raise :class:`SimulationError` naming the first ball whose state is NaN or infinite."""
+        import taichi as ti
+
+        from .physics import kernels
+
+        if self._check_buf is None:
+            self._check_buf = ti.ndarray(ti.i32, 1)
+        kernels.first_nonfinite(self.state.x, self.state.v, self.state.w, self._check_buf)
+        bad = int(self._check_buf.to_numpy()[0])
+        if bad < self.n:
+            raise SimulationError(
+                f"ball {bad} went non-finite at t = {self.t:.6g} s (x, v or ω is NaN or infinite); "
+                "try a smaller world.dt or check the scene's parameters",
+                [bad],
+            )
+
+    def run(
+        self,
+        t: float | None = None,
+        steps: int | None = None,
+        until: str | None = None,
+        record_every: int = 0,
+        progress: Callable[[float, float], None] | None = None,
+    ) -> Recording:
+        """Advance by ``t`` seconds or ``steps`` steps (default: the scene's ``world.t_end``).
+
+        ``until="rest"`` stops early once every ball is at rest or out of bounds; ``until="landed"``
+        once every tracked ball has landed. ``record_every=K`` samples x and ω every K steps.
+        ``progress(t_done, t_total)`` is called between chunks.
+        """
+        if until not in (None, "rest", "landed"):
+            raise ValueError(f"until must be None, 'rest' or 'landed' (got {until!r})")
+        if steps is None:
+            duration = self.scene.world.t_end if t is None else float(t)
+            steps = int(math.ceil(duration / self.dt - 1e-9))
+        steps = int(steps)
+        rec = Recording()
+        if record_every:
+            rec.t.append(self.t)
+            rec.x.append(self.x)
+            rec.w.append(self.w)
+        chunk = int(record_every) if record_every else max(1, min(steps, int(round(0.05 / self.dt)) or 1))
+        done = 0
+        while done < steps:
+            k = min(chunk, steps - done)
+            self.step(k)
+            done += k
+            if record_every and done % record_every == 0:
+                rec.t.append(self.t)
+                rec.x.append(self.x)
+                rec.w.append(self.w)
+            if progress is not None:
+                progress(done * self.dt, steps * self.dt)
+            if until is not None and self._finished(until):
+                break
+        return rec
+
+    def _finished(self, until: str) -> bool:
+        if until == "rest":
+            s = self.status
+            return bool(np.all((s == AT_REST) | (s == OUT_OF_BOUNDS)))
+        landed = self.state.landed.to_numpy()
+        return bool(np.all(landed != 0))
+
+    def save(self, path: str | os.PathLike[str], recording: Recording | None = None) -> None:
+        """Write an ``.npz`` with ``x``, ``v``, ``w`` (N, 3), ``t``, ``status`` and, if given, the recording."""
+        data: dict[str, Any] = {"x": self.x, "v": self.v, "w": self.w, "t": np.float64(self.t),
+                                "status": self.status, "radius": self.model.radius_np, "mass": self.model.mass_np}
+        if recording is not None and recording.t:
+            data.update(recording.arrays())
+        np.savez(path, **data)
+
+
+def _as_vectors(a: Any, name: str, n: int | None = None) -> np.ndarray:
+    arr = np.asarray(a, dtype=np.float64)
+    if arr.ndim == 1 and arr.shape == (3,):
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 3 or (n is not None and arr.shape[0] != n):
+        want = f"({n}, 3)" if n is not None else "(N, 3)"
+        raise ValueError(f"{name} must have shape {want} (got {arr.shape})")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} holds NaN or infinite values")
+    return arr
+
+
+def _per_ball(a: Any, n: int, name: str) -> np.ndarray:
+    arr = np.broadcast_to(np.asarray(a, dtype=np.float64), (n,)).copy()
+    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise ValueError(f"{name} must be finite and > 0 for every ball")
+    return arr

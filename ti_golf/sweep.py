@@ -1,0 +1,183 @@
+"""Launch-condition sweeps: one ball per (angle, speed, spin), all integrated together to landing."""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+from dataclasses import dataclass
+from typing import Any, Iterable, Mapping, Sequence
+
+import numpy as np
+
+from .config import Scene, backspin_axis, launch_velocity
+from .errors import ConfigError, SimulationError
+from .results import CSV_COLUMNS, Flight
+from .runtime import ensure_init, np_float
+from .scene import load_scene
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Outcome of a sweep, one entry per launch condition (N entries).
+
+    Attributes:
+        angle_deg, speed_mps, spin_radps: the launch conditions, shape (N,).
+        flight: carry, apex, landing point, time, angle and speed, shape (N,) each.
+        traj_index: indices of the conditions whose trajectories were recorded, shape (K,).
+        traj: their centre positions [m], shape (K, S, 3), sampled every ``traj_dt`` seconds
+            (after landing a trajectory repeats its landing point); ``None`` if not recorded.
+        traj_dt: sampling interval of ``traj`` [s].
+        scene: the scene the sweep ran.
+    """
+
+    angle_deg: np.ndarray
+    speed_mps: np.ndarray
+    spin_radps: np.ndarray
+    flight: Flight
+    scene: Scene
+    traj_index: np.ndarray | None = None
+    traj: np.ndarray | None = None
+    traj_dt: float = 0.0
+
+    @property
+    def carry(self) -> np.ndarray:
+        """Carry [m], shape (N,)."""
+        return self.flight.carry
+
+    def best(self) -> int:
+        """Index of the longest carry (ignoring balls that did not land)."""
+        c = np.where(self.flight.landed, self.flight.carry, -np.inf)
+        return int(np.argmax(c))
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The CSV columns (see :data:`ti_golf.results.CSV_COLUMNS`) as arrays."""
+        f = self.flight
+        return dict(zip(CSV_COLUMNS, (self.angle_deg, self.speed_mps, self.spin_radps, f.carry, f.landing_x,
+                                       f.landing_z, f.apex, f.flight_time, f.landing_angle, f.landing_speed)))
+
+    def to_csv(self, path: str | os.PathLike[str]) -> None:
+        """Write one row per launch condition with the :data:`CSV_COLUMNS` header."""
+        cols = self.columns()
+        with open(path, "w", newline="") as fh:
+            out = csv.writer(fh)
+            out.writerow(CSV_COLUMNS)
+            for row in zip(*cols.values()):
+                out.writerow([f"{v:.10g}" for v in row])
+
+
+def launch_grid(
+    scene: Scene, angles_deg: Sequence[float] | None = None, speeds: Sequence[float] | None = None,
+    spins: Sequence[float] | None = None,
+) -> tuple[np.ndarray, ...]:
+    """All combinations (angle fastest, then spin, then speed) as arrays.
+
+    ``spins`` are magnitudes [rad/s] along the scene's spin axis (or the backspin axis when the
+    scene's spin is zero). Returns (angle_deg, speed, spin, x0, v0, w0), the last three (N, 3).
+    """
+    if scene.launch is None:
+        raise ConfigError(scene.path, "launch", "a sweep needs a [launch] table in the scene")
+    L = scene.launch
+    angles = np.asarray(angles_deg if angles_deg is not None else (scene.sweep.angles or (L.angle_deg,)), float)
+    speeds_ = np.asarray(speeds if speeds is not None else (scene.sweep.speeds or (L.speed,)), float)
+    spin_vec = np.asarray(L.spin, float)
+    spin_mag = float(np.linalg.norm(spin_vec))
+    axis = spin_vec / spin_mag if spin_mag > 0 else np.asarray(backspin_axis(L.direction_deg))
+    spins_ = np.asarray(spins if spins is not None else (scene.sweep.spins or (spin_mag,)), float)
+    for name, arr, lo, hi in (("angles", angles, -90, 90), ("speeds", speeds_, 0, math.inf), ("spins", spins_, -math.inf, math.inf)):
+        if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr < lo) or np.any(arr > hi):
+            raise ConfigError(f"--{name}", None, f"values must be finite and in [{lo}, {hi}]")
+    sp, sn, an = np.meshgrid(speeds_, spins_, angles, indexing="ij")
+    an, sp, sn = an.ravel(), sp.ravel(), sn.ravel()
+    n = an.size
+    x0 = np.tile(np.asarray(scene.launch_position(), float), (n, 1))
+    th, ph = np.radians(an), math.radians(L.direction_deg)
+    v0 = np.stack([sp * np.cos(th) * math.cos(ph), sp * np.sin(th), sp * np.cos(th) * math.sin(ph)], axis=1)
+    w0 = sn[:, None] * axis[None, :]
+    return an, sp, sn, x0, v0, w0
+
+
+def fly(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, record_every: int = 0,
+        n_samples: int = 0) -> dict[str, np.ndarray]:
+    """Integrate balls from (x0, v0, w0) (each (N, 3)) to landing at their launch height.
+
+    Uses the scene's integrator and ``world.dt``; gives up on a ball after ``world.t_max``.
+    Returns the raw arrays (x, v, w, landed, apex, t_land, land_x, land_v and, when recording, traj).
+    """
+    ensure_init()
+    import taichi as ti
+
+    from .physics import kernels
+    from .physics.integrate import INTEGRATOR_CODES
+    from .physics.types import AirParams, vec3
+
+    f = np_float()
+    n = len(x0)
+    a, wld = scene.air, scene.world
+
+    def nd(values: np.ndarray, dtype: Any) -> Any:
+        arr = ti.ndarray(dtype, values.shape[0]) if values.ndim == 1 else ti.ndarray(vec3, values.shape[0])
+        arr.from_numpy(np.ascontiguousarray(values, dtype=f if dtype is not ti.i32 else np.int32))
+        return arr
+
+    x, v, w = nd(x0, vec3), nd(v0, vec3), nd(w0, vec3)
+    radius, mass = nd(np.full(n, scene.ball.radius), float), nd(np.full(n, scene.ball.mass), float)
+    landed, apex, t_land = nd(np.zeros(n), ti.i32), nd(np.zeros(n), float), nd(np.zeros(n), float)
+    land_x, land_v = nd(np.zeros((n, 3)), vec3), nd(np.zeros((n, 3)), vec3)
+    traj = ti.ndarray(vec3, (n, n_samples) if record_every else (1, 1))
+    air = AirParams(rho=a.rho, gamma=a.gamma, C_D=a.C_D, C_M=a.C_M, omega_M=a.omega_M, C_omega=a.C_omega,
+                    wind=vec3(*a.wind))
+    kernels.fly_to_landing(air, vec3(*wld.gravity), wld.dt, INTEGRATOR_CODES[wld.integrator], wld.t_max,
+                           int(record_every), radius, mass, x, v, w, landed, apex, t_land, land_x, land_v, traj)
+    out = {name: arr.to_numpy() for name, arr in
+           dict(x=x, v=v, w=w, landed=landed, apex=apex, t_land=t_land, land_x=land_x, land_v=land_v).items()}
+    if record_every:
+        out["traj"] = traj.to_numpy()
+    bad = ~np.all(np.isfinite(np.concatenate([out["x"], out["v"], out["w"]], axis=1)), axis=1)
+    if np.any(bad):
+        ids = np.flatnonzero(bad)
+        raise SimulationError(f"{ids.size} ball(s) went non-finite, first ball {ids[0]} "
+                              f"(launch v = {v0[ids[0]].round(6).tolist()} m/s); try a smaller world.dt", ids[:20].tolist())
+    return out
+
+
+def sweep(
+    scene: Scene | str | os.PathLike[str],
+    angles_deg: Sequence[float] | None = None,
+    speeds: Sequence[float] | None = None,
+    spins: Sequence[float] | None = None,
+    overrides: Mapping[str, Any] | Iterable[str] | None = None,
+    trajectories: int = 0,
+) -> SweepResult:
+    """Fly one ball per launch condition, all together, until every ball has landed.
+
+    Args:
+        scene: a Scene, a TOML path or a bundled scene name.
+        angles_deg, speeds, spins: launch conditions (default: the scene's ``[sweep]`` lists, else
+            its ``[launch]`` values). Every combination is flown.
+        overrides: scene overrides (``{"air.wind": [-5, 0, 0]}`` or ``["air.wind=[-5,0,0]"]``).
+        trajectories: also record the trajectories of up to this many evenly spaced conditions.
+
+    Example:
+        >>> res = sweep("lab_turbulent", angles_deg=np.arange(36, 37.41, 0.02))   # doctest: +SKIP
+        >>> res.angle_deg[res.best()], res.carry.max()                           # doctest: +SKIP
+    """
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene, overrides)
+    elif overrides:
+        raise ValueError("overrides apply to scene files; pass a modified Scene instead")
+    an, sp, sn, x0, v0, w0 = launch_grid(scene, angles_deg, speeds, spins)
+    raw = fly(scene, x0, v0, w0)
+    flight = Flight.from_arrays(x0, raw["landed"], raw["apex"], raw["t_land"], raw["land_x"], raw["land_v"])
+    res = SweepResult(an, sp, sn, flight, scene)
+    if trajectories > 0:
+        k = min(int(trajectories), an.size)
+        idx = np.unique(np.linspace(0, an.size - 1, k).round().astype(int))
+        t_longest = np.nanmax(np.append(flight.flight_time[idx], 0.0))
+        dt = scene.world.dt
+        t_span = min(t_longest if t_longest > 0 else scene.world.t_max, scene.world.t_max)
+        every = max(1, int(t_span / dt / 400))
+        n_samples = int(math.ceil(t_span / dt / every)) + 2
+        rec = fly(scene, x0[idx], v0[idx], w0[idx], record_every=every, n_samples=n_samples)
+        res = SweepResult(an, sp, sn, flight, scene, traj_index=idx, traj=rec["traj"], traj_dt=every * dt)
+    return res
