@@ -20,7 +20,7 @@ from .errors import ConfigError, SimulationError, TiGolfError
 from .runtime import init
 from .scene import load_scene
 from .sim import Recording, Simulation
-from .sweep import SweepResult, sweep
+from .sweeps import SweepResult, sweep
 
 __all__ = [
     "AT_REST",

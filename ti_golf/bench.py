@@ -12,7 +12,7 @@ import numpy as np
 from .config import Air, Ball, Launch, Scene, SweepDefaults, World
 
 
-def bench_scene(dt: float = 0.05) -> Scene:
+def bench_scene(dt: float = 0.1) -> Scene:
     """The full model: turbulent drag, Magnus (lab coefficients), spin decay and a quartering wind."""
     return Scene(
         name="bench_sweep",
@@ -47,15 +47,15 @@ def _best_time(fn: Callable[[], Any], repeats: int) -> float:
     return best
 
 
-def bench_sweep(n: int = 100_000, dt: float = 0.05, repeats: int = 3, n_reference: int = 64,
-                n_numpy: int = 20_000, n_scipy: int = 100, log: Callable[[str], None] = print) -> dict[str, Any]:
+def bench_sweep(n: int = 100_000, dt: float = 0.1, repeats: int = 3, n_reference: int = 64,
+                n_numpy: int | None = None, n_scipy: int = 100, log: Callable[[str], None] = print) -> dict[str, Any]:
     """Time a data-parallel sweep of ``n`` launches and compare with numpy and scipy baselines.
 
     Returns the JSON-able result (``trajectories_per_s``, ``max_rel_carry_error``, ``baselines``, ...).
     """
     from .reference import carry_numpy, carry_scipy
     from .runtime import ensure_init
-    from .sweep import fly
+    from .sweeps import fly
 
     info = ensure_init()
     scene = bench_scene(dt)
@@ -80,7 +80,7 @@ def bench_sweep(n: int = 100_000, dt: float = 0.05, repeats: int = 3, n_referenc
     max_rel = float(np.nanmax(rel)) if np.all(np.isfinite(rel)) else float("inf")
     log(f"max relative carry error vs scipy DOP853 (rtol 1e-12) on {pick.size} trajectories: {max_rel:.2e}")
 
-    k_np = min(n_numpy, n)
+    k_np = n if n_numpy is None else min(n_numpy, n)
     t_np = _best_time(lambda: carry_numpy(scene, x0[:k_np], v0[:k_np], w0[:k_np], dt), 1)
     k_sp = min(n_scipy, n)
     t_sp = _best_time(lambda: carry_scipy(scene, x0[:k_sp], v0[:k_sp], w0[:k_sp], rtol=1e-9, atol=1e-9), 1)

@@ -81,7 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
     bsub = b.add_subparsers(dest="bench", required=True, parser_class=_Parser)
     bs = bsub.add_parser("sweep", help="data-parallel sweep vs numpy and scipy baselines")
     bs.add_argument("--n", type=int, default=100_000, help="launch conditions (default 100000)")
-    bs.add_argument("--dt", type=float, default=0.05, help="RK4 step [s] (default 0.05)")
+    bs.add_argument("--dt", type=float, default=0.1, help="RK4 step [s] (default 0.1)")
     bs.add_argument("--repeats", type=int, default=3, help="timed repeats; the best is reported")
     bs.add_argument("--json", action="store_true", help="end with one line of JSON")
     _runtime_options(bs)
@@ -155,7 +155,7 @@ def _parse_opt_range(text: str | None, option: str) -> tuple[float, ...] | None:
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from .scene import load_scene
-    from .sweep import sweep
+    from .sweeps import sweep
 
     _check_writable(args.out, "--out")
     _check_writable(args.plot, "--plot")
@@ -239,7 +239,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 def _cmd_table(args: argparse.Namespace) -> int:
     from .scene import load_scene
-    from .sweep import sweep
+    from .sweeps import sweep
 
     _check_writable(args.plot, "--plot")
     print("Table 3.1-1 (report) reproduced: best launch angle and maximum distance, v0 = 80 m/s")

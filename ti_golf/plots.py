@@ -9,7 +9,7 @@ import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
     from .sim import Recording
-    from .sweep import SweepResult
+    from .sweeps import SweepResult
 
 
 def _pyplot():

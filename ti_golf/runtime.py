@@ -70,6 +70,7 @@ def init(arch: str | None = None, precision: str | None = None, *, debug: bool =
             default_ip=ti.i32,
             debug=debug,
             offline_cache=True,
+            fast_math=False,
         )
     for line in banner.getvalue().splitlines():  # keep stdout clean for JSON; pass on anything unusual
         if not line.startswith("[Taichi] Starting on arch"):

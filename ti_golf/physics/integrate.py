@@ -15,7 +15,7 @@ depend on where the step boundaries fall.
 
 import taichi as ti
 
-from .aero import derivatives
+from .aero import V, X, rates
 
 SEMI_IMPLICIT = 0
 RK4 = 1
@@ -26,26 +26,20 @@ NOT_TRACKED, IN_FLIGHT, LANDED = -1, 0, 1
 
 
 @ti.func
-def step_free(x, v, w, h, integrator: ti.template(), coef, air, gravity):
-    """One free-flight step of size ``h`` [s]; returns the new (x, v, ω)."""
-    x1, v1, w1 = x, v, w
+def step_free(S, h, integrator: ti.template(), coef, air, gravity):
+    """One free-flight step of size ``h`` [s] of a lane state matrix S (9, L) (see :mod:`.aero`)."""
+    S1 = S
     if ti.static(integrator == RK4):
-        a1, b1 = derivatives(v, w, coef, air, gravity)
-        v2, w2 = v + 0.5 * h * a1, w + 0.5 * h * b1
-        a2, b2 = derivatives(v2, w2, coef, air, gravity)
-        v3, w3 = v + 0.5 * h * a2, w + 0.5 * h * b2
-        a3, b3 = derivatives(v3, w3, coef, air, gravity)
-        v4, w4 = v + h * a3, w + h * b3
-        a4, b4 = derivatives(v4, w4, coef, air, gravity)
-        x1 = x + (h / 6.0) * (v + 2.0 * v2 + 2.0 * v3 + v4)
-        v1 = v + (h / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-        w1 = w + (h / 6.0) * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
+        k1 = rates(S, coef, air, gravity)
+        k2 = rates(S + (0.5 * h) * k1, coef, air, gravity)
+        k3 = rates(S + (0.5 * h) * k2, coef, air, gravity)
+        k4 = rates(S + h * k3, coef, air, gravity)
+        S1 = S + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
     else:
-        a, b = derivatives(v, w, coef, air, gravity)
-        v1 = v + h * a
-        w1 = w + h * b
-        x1 = x + h * v1
-    return x1, v1, w1
+        S1 = S + h * rates(S, coef, air, gravity)  # v' = v + h·a(v, ω), ω' likewise
+        for c, l in ti.static(ti.ndrange(3, S.m)):  # x' = x + h·v' (the new velocity: symplectic)
+            S1[X + c, l] = S[X + c, l] + h * S1[V + c, l]
+    return S1
 
 
 @ti.func
@@ -79,13 +73,15 @@ def hermite_root(y0, y1, m0, m1, level):
     s = (y0 - level) / (y0 - y1)
     for _ in ti.static(range(8)):
         f = hermite(y0, y1, m0, m1, s) - level
-        if f > 0:
+        if f > 0.0:
             lo = s
-        else:
+        elif f < 0.0:
             hi = s
         df = hermite_ds(y0, y1, m0, m1, s)
-        s_new = s - f / df if df != 0 else 0.5 * (lo + hi)
-        if s_new <= lo or s_new >= hi:
+        s_new = 0.5 * (lo + hi)
+        if df != 0.0:
+            s_new = s - f / df
+        if s_new < lo or s_new > hi:  # Newton left the bracket: bisect instead
             s_new = 0.5 * (lo + hi)
         s = s_new
     return s
@@ -103,6 +99,25 @@ def hermite_extremum(p0, p1, m0, m1):
 
 
 @ti.func
+def apex_in_step(y, y1, vy, vy1, h):
+    """Highest y [m] inside a step whose vertical velocity turns from vy > 0 to vy1 ≤ 0 (Hermite)."""
+    s = hermite_extremum(y, y1, h * vy, h * vy1)
+    return hermite(y, y1, h * vy, h * vy1, s)
+
+
+@ti.func
+def landing_in_step(x, v, x1, v1, h, t, level):
+    """(time [s], point [m], velocity [m/s]) where y crosses ``level`` downward inside the step.
+
+    The step runs from (x, v) at time ``t`` to (x1, v1); requires y ≥ level > y1.
+    """
+    s = hermite_root(x[1], x1[1], h * v[1], h * v1[1], level)
+    p = hermite(x, x1, h * v, h * v1, s)
+    p[1] = level
+    return t + s * h, p, hermite_ds(x, x1, h * v, h * v1, s) / h
+
+
+@ti.func
 def track_flight(x, v, x1, v1, h, t, level, landed, apex, t_land, land_x, land_v):
     """Update the apex and detect the landing of one ball during the step (x, v) → (x1, v1).
 
@@ -110,16 +125,10 @@ def track_flight(x, v, x1, v1, h, t, level, landed, apex, t_land, land_x, land_v
     step [s]. Returns the updated (landed, apex, t_land, land_x, land_v).
     """
     if landed == IN_FLIGHT:
+        apex = ti.max(apex, x1[1])
         if v[1] > 0.0 and v1[1] <= 0.0:
-            s = hermite_extremum(x[1], x1[1], h * v[1], h * v1[1])
-            apex = ti.max(apex, hermite(x[1], x1[1], h * v[1], h * v1[1], s))
-        else:
-            apex = ti.max(apex, x1[1])
+            apex = ti.max(apex, apex_in_step(x[1], x1[1], v[1], v1[1], h))
         if x[1] >= level and x1[1] < level:
-            s = hermite_root(x[1], x1[1], h * v[1], h * v1[1], level)
-            land_x = hermite(x, x1, h * v, h * v1, s)
-            land_x[1] = level
-            land_v = hermite_ds(x, x1, h * v, h * v1, s) / h
-            t_land = t + s * h
+            t_land, land_x, land_v = landing_in_step(x, v, x1, v1, h, t, level)
             landed = LANDED
     return landed, apex, t_land, land_x, land_v

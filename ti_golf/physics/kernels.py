@@ -1,17 +1,22 @@
-"""Kernels: one thread per ball, inputs first, outputs last.
+"""Kernels: one thread per ball (or per lane group of balls), inputs first, outputs last.
 
-Balls do not interact yet, so each thread integrates its own ball through many steps without
+Balls do not interact yet, so each thread integrates its balls through many steps without
 leaving the kernel (a "fused" step loop): per-step launch overhead is paid once per call.
 """
-
 
 import taichi as ti
 
 from ..config import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING
-from .aero import ball_coefficients
+from .aero import ROWS, SPIN, V, W, X, coefficients, column, row
 from .contact import plane_contact
-from .integrate import IN_FLIGHT, step_free, track_flight
+from .integrate import IN_FLIGHT, LANDED, apex_in_step, landing_in_step, step_free, track_flight
 from .types import AirParams, ContactParams, float_array, int_array, vec3, vec3_array, vec3_table
+
+
+@ti.func
+def lane_state(x, v, w):
+    """A (10, 1) lane state matrix holding one ball's x, v, ω and |ω|."""
+    return ti.Matrix([[x[0]], [x[1]], [x[2]], [v[0]], [v[1]], [v[2]], [w[0]], [w[1]], [w[2]], [w.norm()]])
 
 
 @ti.kernel
@@ -21,14 +26,16 @@ def fly_to_landing(
     gravity: vec3,
     h: float,
     integrator: ti.template(),
+    lanes: ti.template(),
     t_max: float,
     record_every: ti.i32,
     radius: float_array,
     mass: float_array,
-    # State in/out (each ball advances until it lands or reaches t_max):
-    x: vec3_array,
-    v: vec3_array,
-    w: vec3_array,
+    # Launch (read only):
+    order: int_array,
+    x0: vec3_array,
+    v0: vec3_array,
+    w0: vec3_array,
     # Flight record out:
     landed: int_array,
     apex: float_array,
@@ -37,36 +44,78 @@ def fly_to_landing(
     land_v: vec3_array,
     traj: vec3_table,
 ):
-    """Integrate every ball from t = 0 to its landing at its launch height (sweeps).
+    """Integrate balls from their launch state until they land at their launch height (sweeps).
 
-    ``traj`` (N, S): positions every ``record_every`` steps while ``record_every > 0``; the
-    remaining samples of a landed ball repeat its landing point.
+    Balls go in groups of ``lanes`` that step together (SIMD) until all of them have landed or
+    ``t_max`` [s] has passed. Slot s of the launch order flies ball ``order[s]``; ``order`` should
+    put balls of similar flight time next to each other, and its length is a multiple of ``lanes``
+    (pad by repeating an id: each ball's results are written once, by its first slot).
+    ``traj`` (N, S): positions every ``record_every`` steps while ``record_every > 0``; after
+    landing a trajectory repeats its landing point.
     """
-    for i in range(x.shape[0]):
-        coef = ball_coefficients(air, radius[i], mass[i])
-        xi, vi, wi = x[i], v[i], w[i]
-        level = xi[1]
-        state = IN_FLIGHT
-        top, tl, lx, lv = xi[1], 0.0, xi, vi
-        n_samples = traj.shape[1]
+    n_samples = traj.shape[1]
+    for group in range(order.shape[0] // lanes):
+        ids = ti.Vector([order[group * lanes + l] for l in ti.static(range(lanes))])
+        S = ti.Matrix.zero(float, ROWS, lanes)
+        rad = ti.Vector.zero(float, lanes)
+        mas = ti.Vector.zero(float, lanes)
+        for l in ti.static(range(lanes)):
+            for c in ti.static(range(3)):
+                S[X + c, l] = x0[ids[l]][c]
+                S[V + c, l] = v0[ids[l]][c]
+                S[W + c, l] = w0[ids[l]][c]
+            S[SPIN, l] = w0[ids[l]].norm()
+            rad[l] = radius[ids[l]]
+            mas[l] = mass[ids[l]]
+        coef = coefficients(air, rad, mas)
+        level = row(S, 1)
+        state = ti.Vector([IN_FLIGHT] * lanes, dt=ti.i32)
+        top = row(S, 1)
+        tl = ti.Vector.zero(float, lanes)
+        LX = ti.Matrix.zero(float, 3, lanes)
+        LV = ti.Matrix.zero(float, 3, lanes)
         if record_every > 0 and n_samples > 0:
-            traj[i, 0] = xi
+            for l in ti.static(range(lanes)):
+                traj[ids[l], 0] = column(S, X, l)
         k = 0
-        while state == IN_FLIGHT and k * h < t_max:
-            x1, v1, w1 = step_free(xi, vi, wi, h, integrator, coef, air, gravity)
-            state, top, tl, lx, lv = track_flight(xi, vi, x1, v1, h, k * h, level, state, top, tl, lx, lv)
-            xi, vi, wi = x1, v1, w1
+        flying = 1
+        while flying != 0 and k * h < t_max:
+            S1 = step_free(S, h, integrator, coef, air, gravity)
+            # Lane-wise checks every step; the scalar per-ball work runs only at an apex or a landing.
+            in_flight = state == IN_FLIGHT
+            y, y1, vy, vy1 = row(S, 1), row(S1, 1), row(S, 4), row(S1, 4)
+            top = ti.select(in_flight, ti.max(top, y1), top)
+            peak = in_flight & (vy > 0.0) & (vy1 <= 0.0)
+            cross = in_flight & (y >= level) & (y1 < level)
+            if (peak | cross).any():
+                for l in ti.static(range(lanes)):
+                    if peak[l]:
+                        top[l] = ti.max(top[l], apex_in_step(y[l], y1[l], vy[l], vy1[l], h))
+                    if cross[l]:
+                        t1, p, u = landing_in_step(column(S, X, l), column(S, V, l), column(S1, X, l),
+                                                   column(S1, V, l), h, k * h, level[l])
+                        state[l], tl[l] = LANDED, t1
+                        for c in ti.static(range(3)):
+                            LX[c, l], LV[c, l] = p[c], u[c]
+                flying = ti.cast((state == IN_FLIGHT).any(), ti.i32)
+            S = S1
             k += 1
-            if record_every > 0 and k % record_every == 0:
-                j = k // record_every
-                if j < n_samples:
-                    traj[i, j] = lx if state != IN_FLIGHT else xi
+            if record_every > 0 and k % record_every == 0 and k // record_every < n_samples:
+                for l in ti.static(range(lanes)):
+                    traj[ids[l], k // record_every] = column(S, X, l) if state[l] == IN_FLIGHT else column(LX, 0, l)
         if record_every > 0:
-            j0 = k // record_every + 1
-            for j in range(j0, n_samples):
-                traj[i, j] = lx if state != IN_FLIGHT else xi
-        x[i], v[i], w[i] = xi, vi, wi
-        landed[i], apex[i], t_land[i], land_x[i], land_v[i] = state, top, tl, lx, lv
+            for j in range(k // record_every + 1, n_samples):
+                for l in ti.static(range(lanes)):
+                    traj[ids[l], j] = column(S, X, l) if state[l] == IN_FLIGHT else column(LX, 0, l)
+        for l in ti.static(range(lanes)):
+            first = True
+            for m in ti.static(range(l)):
+                if ids[m] == ids[l]:
+                    first = False
+            if first:
+                i = ids[l]
+                landed[i], apex[i], t_land[i] = state[l], top[l], tl[l]
+                land_x[i], land_v[i] = column(LX, 0, l), column(LV, 0, l)
 
 
 @ti.kernel
@@ -110,12 +159,13 @@ def advance(
         st = status[i]
         if st != AT_REST and st != OUT_OF_BOUNDS:
             r = radius[i]
-            coef = ball_coefficients(air, r, mass[i])
+            coef = coefficients(air, ti.Vector([r]), ti.Vector([mass[i]]))
             xi, vi, wi = x[i], v[i], w[i]
             rt = rest_time[i]
             fl, top, tl, lx, lv = landed[i], apex[i], t_land[i], land_x[i], land_v[i]
             for k in range(n_steps):
-                x1, v1, w1 = step_free(xi, vi, wi, h, integrator, coef, air, gravity)
+                S1 = step_free(lane_state(xi, vi, wi), h, integrator, coef, air, gravity)
+                x1, v1, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
                 fl, top, tl, lx, lv = track_flight(xi, vi, x1, v1, h, t0 + k * h, launch_height[i], fl, top, tl, lx, lv)
                 touching = 0
                 if ground != 0:

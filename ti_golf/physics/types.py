@@ -5,7 +5,10 @@ import taichi as ti
 
 from . import _ensure_init  # noqa: F401  (Taichi must be initialised before the types below)
 
-vec3 = ti.types.vector(3, float)
+real = ti.f64 if ti.lang.impl.get_runtime().default_fp == ti.f64 else ti.f32
+"""The float type chosen at ``ti.init`` (f32 or f64), spelled out so numpy arrays can be checked against it."""
+
+vec3 = ti.types.vector(3, real)
 """3-vector of the default float [SI units]."""
 
 AirParams = ti.types.struct(
@@ -28,16 +31,8 @@ ContactParams = ti.types.struct(
 )
 """Impulse-contact parameters (report Appendix B)."""
 
-BallCoef = ti.types.struct(
-    kD=float,  # k_D / m [1/m for γ=2, 1/s for γ=1]
-    kM=float,  # k_M / m [1/m]
-    kw=float,  # k_ω (L.17) [1/m]
-    radius=float,  # R [m]
-)
-"""Per-ball aerodynamic coefficients divided by the mass, computed once per kernel launch."""
-
 # ndarray annotations (any length; element types follow the precision chosen at init)
 vec3_array = ti.types.ndarray(dtype=vec3, ndim=1)
-float_array = ti.types.ndarray(dtype=float, ndim=1)
+float_array = ti.types.ndarray(dtype=real, ndim=1)
 int_array = ti.types.ndarray(dtype=ti.i32, ndim=1)
 vec3_table = ti.types.ndarray(dtype=vec3, ndim=2)
