@@ -1,0 +1,40 @@
+# ti_golf: `make demo` and `make test` work on a fresh machine (they create .venv and install).
+PYTHON ?= python3
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+TIGOLF := $(VENV)/bin/ti-golf
+STAMP  := $(VENV)/.installed
+OUT    ?= out
+
+.PHONY: setup demo test bench system-deps clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e ".[test,bench]"
+	touch $(STAMP)
+
+setup: $(STAMP)
+
+# The software Vulkan driver for off-screen GGUI rendering (needs root and apt-get; skipped otherwise).
+system-deps:
+	@if command -v apt-get >/dev/null 2>&1 && [ "$$(id -u)" = 0 ]; then \
+	  dpkg -s mesa-vulkan-drivers >/dev/null 2>&1 || \
+	  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq mesa-vulkan-drivers libvulkan1 >/dev/null; } \
+	  || echo "system-deps: could not install mesa-vulkan-drivers; rendering tests will be skipped"; \
+	else echo "system-deps: not root or no apt-get; skipping mesa-vulkan-drivers"; fi
+
+demo: setup
+	mkdir -p $(OUT)
+	$(TIGOLF) table --plot $(OUT)/lab_table.png
+	$(TIGOLF) sweep lab_turbulent --angles 32:42:0.5 --out $(OUT)/sweep_turbulent.csv --plot $(OUT)/sweep_turbulent.png
+	$(TIGOLF) run lab_spin_decay --until rest --out $(OUT)/spin_decay.npz --plot $(OUT)/spin_decay.png
+
+test: setup
+	$(PY) -m pytest -q
+
+bench: setup
+	$(TIGOLF) bench sweep --json
+
+clean:
+	rm -rf $(VENV) $(OUT) .pytest_cache
