@@ -12,7 +12,8 @@ Per step, with the free-flight prediction (x, v, ω) → (x1, v1, ω1):
 3. Coulomb friction at the contact point, −μ·j_n·t̂ (B.15), clipped so that it can at most stop the
    sliding there (solid sphere, I = 2/5·mR²: the contact-point slip changes by 7/2 of the centre's
    change), and changing ω by (5/2)(j_t/R)(n × t̂);
-4. rolling resistance while in resting contact: |Δv_t| ≤ μ_roll·j_n, keeping the rolling condition;
+4. rolling resistance while in resting contact: |Δv_t| ≤ μ_roll·j_n with Δω = n × Δv / R, which
+   leaves the contact-point slip unchanged (a rolling ball decelerates at μ_roll·g and keeps rolling);
 5. the step is split at the time of impact (linear in the gaps), so the bounce starts on the surface;
 6. position projection of any remaining penetration, x += k_p·Δx·n (B.18).
 """

@@ -1,0 +1,272 @@
+"""Physics verification: every claim against a closed form, a conservation law, an independent
+high-accuracy integration (scipy DOP853) or the report's own tables.
+
+Tolerances are tied to the integrator: RK4 has global error O(h⁴), the semi-implicit Euler O(h).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import ti_golf as tg
+from ti_golf.config import backspin_axis, launch_velocity
+from ti_golf.reference import derivatives as reference_derivatives
+
+G = 9.81
+
+
+def lab(name: str, *overrides: str) -> tg.Scene:
+    return tg.load_scene(name, list(overrides))
+
+
+# ---------------------------------------------------------------------------------------------
+# Ballistics and the report's tables
+# ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("angle", [10.0, 30.0, 45.0, 62.5])
+def test_vacuum_range_is_closed_form(angle):
+    # R = v0² sin 2θ / g. RK4 integrates a quadratic trajectory exactly and the cubic Hermite
+    # landing interpolates it exactly, so only round-off remains.
+    res = tg.sweep(lab("lab_vacuum"), angles_deg=[angle])
+    expected = 80.0**2 * math.sin(math.radians(2 * angle)) / G
+    assert res.carry[0] == pytest.approx(expected, rel=1e-10)
+    # apex v0² sin²θ / 2g above the launch point, flight time 2 v0 sinθ / g
+    vy = 80.0 * math.sin(math.radians(angle))
+    assert res.flight.apex[0] - 0.02 == pytest.approx(vy**2 / (2 * G), rel=1e-10)
+    assert res.flight.flight_time[0] == pytest.approx(2 * vy / G, rel=1e-10)
+    assert res.flight.landing_angle[0] == pytest.approx(angle, abs=1e-8)
+
+
+def test_semi_implicit_euler_is_first_order():
+    # The report's integrator: halving h halves the carry error (global error O(h)).
+    exact = 80.0**2 / G
+    errors = []
+    for dt in (0.004, 0.002, 0.001):
+        res = tg.sweep(lab("lab_vacuum", "world.integrator=semi_implicit", f"world.dt={dt}"), angles_deg=[45.0])
+        errors.append(abs(res.carry[0] - exact))
+    ratios = [errors[0] / errors[1], errors[1] / errors[2]]
+    assert all(1.8 < r < 2.2 for r in ratios), (errors, ratios)
+
+
+# report Appendix A (RK4, h = 0.01, Mathematica): carry [m] at launch angle [deg], v0 = 80 m/s
+APPENDIX_A = {
+    "lab_laminar": {40.0: 618.821, 42.0: 623.979, 44.4: 626.179, 46.0: 625.228, 50.0: 614.458},
+    "lab_turbulent": {32.0: 210.29, 34.0: 211.616, 36.6: 212.243, 38.0: 212.085, 42.0: 209.799},
+    "lab_vacuum": {40.0: 642.484, 45.0: 652.396, 50.0: 642.484},
+}
+
+
+@pytest.mark.parametrize("scene", sorted(APPENDIX_A))
+def test_appendix_a_table(scene):
+    # The appendix prints 6 significant digits: agreement to half a unit in the last digit.
+    table = APPENDIX_A[scene]
+    res = tg.sweep(lab(scene), angles_deg=list(table))
+    for angle, carry in zip(res.angle_deg, res.carry):
+        assert carry == pytest.approx(table[angle], abs=0.0006 if carry < 1000 else 0.006), angle
+
+
+@pytest.mark.parametrize(
+    "scene, angles, best_carry, tol",
+    [
+        ("lab_turbulent", np.arange(36.0, 37.4001, 0.02), 212.243, 0.05),  # Appendix A maximum
+        ("lab_laminar", np.arange(43.4, 45.4001, 0.02), 626.179, 0.1),
+        ("lab_vacuum", np.arange(44.0, 46.0001, 0.02), 652.396, 0.1),
+    ],
+)
+def test_best_carry_of_fine_sweep(scene, angles, best_carry, tol):
+    res = tg.sweep(lab(scene), angles_deg=angles)
+    assert res.carry[res.best()] == pytest.approx(best_carry, abs=tol)
+
+
+def test_table_3_1_1_magnus_row():
+    # report Table 3.1-1: turbulent drag + Magnus (ω0 = 10 rad/s, ω_M = 1/s): 244 m at 11.5°,
+    # read off trajectories 0.5° apart.
+    res = tg.sweep(lab("lab_magnus"), angles_deg=np.arange(7.0, 17.001, 0.05))
+    b = res.best()
+    assert res.carry[b] == pytest.approx(244.0, abs=1.0)
+    assert res.angle_deg[b] == pytest.approx(11.5, abs=0.5)
+    # and the lift makes it carry farther than the same shot without Magnus (report: +20 %)
+    plain = tg.sweep(lab("lab_turbulent"), angles_deg=np.arange(30.0, 40.0, 0.1)).carry.max()
+    assert 1.10 < res.carry[b] / plain < 1.25
+
+
+# ---------------------------------------------------------------------------------------------
+# Conservation laws
+# ---------------------------------------------------------------------------------------------
+def _free_flight(scene: tg.Scene, angle: float = 45.0, speed: float = 80.0) -> tg.Simulation:
+    return tg.Simulation(scene, x=[[0.0, 0.0, 0.0]], v=[launch_velocity(speed, angle, 0.0)])
+
+
+def test_energy_is_conserved_in_vacuum_by_rk4():
+    sim = _free_flight(lab("lab_vacuum", "world.ground=false"))
+    e0 = 0.5 * np.sum(sim.v**2) + G * sim.x[0, 1]
+    for _ in range(20):  # 10 s in 0.5 s chunks: RK4 is exact for constant gravity, round-off remains
+        sim.run(t=0.5)
+        e = 0.5 * np.sum(sim.v**2) + G * sim.x[0, 1]
+        assert abs(e - e0) / e0 < 1e-12
+
+
+def test_semi_implicit_energy_drift_is_exact():
+    # Symplectic Euler under constant gravity: E(n+1) − E(n) = −½h²g² per unit mass exactly,
+    # so after t seconds the energy has changed by −½ h g² t (a closed form, not a tolerance).
+    h, t = 0.001, 5.0
+    sim = _free_flight(lab("lab_vacuum", "world.ground=false", "world.integrator=semi_implicit", f"world.dt={h}"))
+    e0 = 0.5 * np.sum(sim.v**2) + G * sim.x[0, 1]
+    sim.run(t=t)
+    e1 = 0.5 * np.sum(sim.v**2) + G * sim.x[0, 1]
+    assert e1 - e0 == pytest.approx(-0.5 * h * G**2 * t, rel=1e-6)
+
+
+# ---------------------------------------------------------------------------------------------
+# Magnus force, spin decay and wind against an independent integration
+# ---------------------------------------------------------------------------------------------
+def _scipy_trajectory(scene: tg.Scene, x0, v0, w0, times):
+    def rhs(_t, y):
+        dv, dw = reference_derivatives(scene, y[3:6][None], y[6:9][None])
+        return np.concatenate([y[3:6], dv[0], dw[0]])
+
+    sol = solve_ivp(rhs, (0, times[-1]), np.concatenate([x0, v0, w0]), method="DOP853", rtol=1e-12,
+                    atol=1e-12, t_eval=times)
+    return sol.y[0:3].T, sol.y[6:9].T
+
+
+@pytest.mark.parametrize(
+    "overrides, spin",
+    [
+        # Magnus only (lab row 4), spin decay with gamma = 2 and 1, and all of it in a crosswind
+        (("air.C_M=0.025",), 10.0),
+        (("air.C_M=0.025", "air.omega_M=100", "air.C_omega=1.0"), 300.0),
+        (("air.gamma=1", "air.C_M=0.025", "air.omega_M=100", "air.C_omega=0.5"), 300.0),
+        (("air.C_M=0.025", "air.omega_M=100", "air.C_omega=1.0", "air.wind=[-4, 0.5, 3]"), 300.0),
+    ],
+)
+def test_magnus_and_spin_decay_match_scipy(overrides, spin):
+    x0, v0 = np.zeros(3), np.array(launch_velocity(45.0, 25.0, 10.0))
+    w0 = spin * (np.array(backspin_axis(10.0)) + np.array([0.0, 0.15, 0.0]))  # backspin and some side spin
+    errors = []
+    for dt in (0.2, 0.1, 0.005):
+        scene = lab("lab_turbulent", "world.ground=false", f"world.dt={dt}", *overrides)
+        sim = tg.Simulation(scene, x=[x0], v=[v0], w=[w0])
+        rec = sim.run(t=4.0, record_every=int(round(0.2 / dt)))
+        ref_x, ref_w = _scipy_trajectory(scene, x0, v0, w0, np.asarray(rec.t))
+        errors.append((np.max(np.abs(np.asarray(rec.x)[:, 0] - ref_x)),
+                       np.max(np.abs(np.asarray(rec.w)[:, 0] - ref_w)) / np.linalg.norm(w0)))
+    (ex1, _), (ex2, _), (ex3, ew3) = errors
+    # RK4 converges to the independent solution at 4th order: halving h divides the error by ~16
+    assert 10.0 < ex1 / ex2 < 22.0, errors
+    assert ex3 < 1e-6 and ew3 < 1e-8, errors
+    # and the physics moved things: the spin-free drag-only flight ends elsewhere
+    plain = tg.Simulation(lab("lab_turbulent", "world.ground=false"), x=[x0], v=[v0])
+    plain.run(t=4.0)
+    assert np.linalg.norm(plain.x[0] - ref_x[-1]) > 1.0
+
+
+def test_spin_decay_closed_form_laminar():
+    # γ = 1: dω/dt = −k_ω ω with k_ω = ½ρA·C_ω/m (L.17, L.18), so |ω(t)| = ω0·exp(−k_ω t)
+    scene = lab("lab_laminar", "world.ground=false", "air.C_omega=2.0", "world.dt=0.01")
+    sim = tg.Simulation(scene, x=[[0, 0, 0]], v=[[30.0, 10.0, 0]], w=[[0, 0, 500.0]])
+    sim.run(t=3.0)
+    k_w = 0.5 * 1.3 * math.pi * 0.02**2 * 2.0 / 0.045
+    assert np.linalg.norm(sim.w[0]) == pytest.approx(500.0 * math.exp(-k_w * 3.0), rel=1e-9)
+
+
+def test_wind_enters_through_relative_velocity():
+    # Galilean invariance of L.21–L.23: a shot at v0 in a wind W flies like a shot at v0 − W in
+    # still air, carried along by W: x_W(t) = x_0(t) + W t.
+    W = np.array([-5.0, 0.0, 2.0])
+    base = lab("lab_magnus", "world.ground=false", "air.C_omega=1.0")
+    windy = lab("lab_magnus", "world.ground=false", "air.C_omega=1.0", "air.wind=[-5, 0, 2]")
+    v0, w0 = np.array(launch_velocity(80.0, 12.0, 0.0)), np.array([0.0, 0.0, 10.0])
+    a = tg.Simulation(windy, x=[[0, 0, 0]], v=[v0], w=[w0])
+    b = tg.Simulation(base, x=[[0, 0, 0]], v=[v0 - W], w=[w0])
+    a.run(t=5.0)
+    b.run(t=5.0)
+    np.testing.assert_allclose(a.x[0], b.x[0] + W * a.t, atol=1e-9)
+    np.testing.assert_allclose(a.v[0], b.v[0] + W, atol=1e-9)
+    # a ball released with the wind's velocity: v_rel is vertical, so it drifts with the wind
+    # exactly while drag slows its fall below the vacuum value ½gt²
+    c = tg.Simulation(windy, x=[[0, 100.0, 0]], v=[W])
+    c.run(t=2.0)
+    np.testing.assert_allclose(c.x[0, [0, 2]], W[[0, 2]] * 2.0, atol=1e-12)
+    assert 0.9 * 0.5 * G * 4.0 < 100.0 - c.x[0, 1] < 0.5 * G * 4.0
+
+
+def test_headwind_shortens_the_shot():
+    # report Figure 3.2-4 vs 3.2-5: the same shots carry less into a 5 m/s headwind
+    calm = tg.sweep(lab("lab_magnus"), angles_deg=np.arange(7, 17.01, 0.5))
+    head = tg.sweep(lab("lab_headwind"), angles_deg=np.arange(7, 17.01, 0.5))
+    assert np.all(head.carry < calm.carry)
+
+
+# ---------------------------------------------------------------------------------------------
+# Ground plane contact (report Appendix B)
+# ---------------------------------------------------------------------------------------------
+def test_bounce_heights_follow_restitution():
+    # a ball dropped from height H rebounds to e²H, then e⁴H (no drag). The contact is resolved at
+    # the time of impact, so the error is a few g·h² per bounce.
+    H, e, h = 1.0, 0.6, 1e-4
+    scene = lab("lab_vacuum", f"contact.e={e}", "world.integrator=semi_implicit", f"world.dt={h}", "contact.mu=0")
+    sim = tg.Simulation(scene, x=[[0, 0.02 + H, 0]])
+    rec = sim.run(t=2.0, record_every=10)
+    y = np.asarray(rec.x)[:, 0, 1] - 0.02
+    peaks = [y[i] for i in range(1, len(y) - 1) if y[i - 1] < y[i] >= y[i + 1] and y[i] > 0.01]
+    assert peaks[0] == pytest.approx(e**2 * H, abs=2e-3)
+    assert peaks[1] == pytest.approx(e**4 * H, abs=2e-3)
+
+
+def test_dropped_ball_comes_to_rest_without_sinking_or_jitter():
+    scene = lab("lab_vacuum", "world.integrator=semi_implicit", "world.dt=0.001")
+    sim = tg.Simulation(scene, x=[[0, 0.5, 0]])
+    ys = []
+    for _ in range(300):
+        sim.step(10)
+        ys.append(sim.x[0, 1])
+    assert sim.counts()["at_rest"] == 1
+    assert min(ys) >= 0.02 - 1e-12  # never below the surface
+    x_rest = sim.x.copy()
+    sim.run(t=2.0)
+    np.testing.assert_array_equal(sim.x, x_rest)  # at rest means at rest
+    assert sim.x[0, 1] == pytest.approx(0.02, abs=1e-9)
+
+
+def test_rolling_ball_stops_where_closed_form_says():
+    # A ball pushed along the ground at u0 with no spin (no air): it slides, friction μ slows it
+    # and spins it up until the contact point sticks, then it rolls and rolling resistance μ_roll
+    # stops it. Rolling resistance slows the centre by μ_r·g without changing the contact-point
+    # slip, so the slip decays at (7/2)μg (solid sphere) and the centre at (μ+μ_r)g while sliding;
+    # then the ball rolls at du/dt = −μ_r g.
+    u0, mu, mu_r = 3.0, 0.3, 0.05
+    scene = lab("lab_vacuum", "world.integrator=semi_implicit", "world.dt=0.0005", f"contact.mu={mu}",
+                f"contact.mu_roll={mu_r}")
+    sim = tg.Simulation(scene, x=[[0, 0.02, 0]], v=[[u0, 0, 0]])
+    sim.run(t=15.0, until="rest")
+    t1 = u0 / (3.5 * mu * G)
+    u1 = u0 - (mu + mu_r) * G * t1
+    distance = u0 * t1 - 0.5 * (mu + mu_r) * G * t1**2 + u1**2 / (2 * mu_r * G)
+    assert sim.counts()["at_rest"] == 1
+    assert sim.x[0, 0] == pytest.approx(distance, abs=0.01)
+
+
+@pytest.mark.parametrize("velocity", [[0.0, -500.0, 0.0], [353.6, -353.6, 0.0]])
+def test_no_tunnelling_at_500_mps(velocity):
+    # h·|v| = 0.5 m is 25 radii per step: the half-space test (L.3, L.4) still catches the contact.
+    scene = lab("lab_vacuum", "world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.8")
+    sim = tg.Simulation(scene, x=[[0, 1.0, 0]], v=[velocity])
+    lowest = np.inf
+    for _ in range(400):
+        sim.step(1)
+        lowest = min(lowest, sim.x[0, 1])
+    assert lowest >= 0.02 - 1e-9
+    assert sim.v[0, 1] != 0 or sim.x[0, 1] > 0.02  # it bounced back up
+
+
+def test_friction_spins_up_a_sliding_ball():
+    # sliding without spin, friction builds spin until the ball rolls: ω_z = −v_x / R
+    scene = lab("lab_vacuum", "world.integrator=semi_implicit", "world.dt=0.0005", "contact.mu_roll=0")
+    sim = tg.Simulation(scene, x=[[0, 0.02, 0]], v=[[2.0, 0, 0]])
+    sim.run(t=1.0)
+    assert sim.w[0, 2] == pytest.approx(-sim.v[0, 0] / 0.02, rel=1e-6)
+    assert sim.v[0, 0] == pytest.approx(5 / 7 * 2.0, rel=1e-3)  # angular momentum about the contact point
