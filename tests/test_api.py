@@ -1,0 +1,111 @@
+"""The Python API: a Simulation you can step, inspect, modify and continue; sweeps as arrays."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import ti_golf as tg
+from tests.conftest import SCENES, run_cli
+
+
+def test_step_inspect_modify_continue():
+    # like the report's WoP object: simulate, read the state, change it, simulate again
+    sim = tg.Simulation.from_scene("lab_turbulent", ["world.ground=false"])
+    assert sim.n == 1 and sim.t == 0.0
+    sim.step(50)
+    assert sim.t == pytest.approx(0.5)
+    x_mid, v_mid = sim.x, sim.v
+    assert x_mid[0, 0] > 10 and v_mid[0, 0] > 0
+    sim.v = -v_mid  # turn the ball around ...
+    sim.run(t=0.5)  # ... and, in vacuum, it would retrace its path; with drag it falls short
+    assert abs(sim.x[0, 0]) < x_mid[0, 0]
+    assert sim.t == pytest.approx(1.0)
+
+
+def test_continuing_equals_one_long_run():
+    a = tg.Simulation.from_scene("lab_spin_decay")
+    b = tg.Simulation.from_scene("lab_spin_decay")
+    a.run(t=3.0)
+    for _ in range(6):
+        b.run(t=0.5)
+    np.testing.assert_array_equal(a.x, b.x)
+    np.testing.assert_array_equal(a.w, b.w)
+
+
+def test_many_balls_of_different_size_and_mass():
+    # a heavier ball of the same size loses less speed to drag (k_D/m): it carries farther
+    scene = tg.load_scene("lab_turbulent", ["world.ground=false"])
+    v = np.tile([60.0, 40.0, 0.0], (3, 1))
+    sim = tg.Simulation(scene, x=np.zeros((3, 3)), v=v, radius=[0.02, 0.02, 0.03], mass=[0.045, 0.09, 0.045])
+    sim.run(t=12.0, until="landed")
+    carry = sim.flight().carry
+    assert carry[1] > carry[0] > carry[2]
+
+
+def test_sweep_returns_arrays_in_grid_order():
+    res = tg.sweep("lab_magnus", angles_deg=[8, 10, 12], speeds=[60, 80], spins=[0, 10])
+    assert res.angle_deg.shape == res.carry.shape == (12,)
+    np.testing.assert_array_equal(res.angle_deg[:3], [8, 10, 12])  # angle varies fastest
+    assert set(res.speed_mps) == {60.0, 80.0} and set(res.spin_radps) == {0.0, 10.0}
+    cols = res.columns()
+    assert {"carry_m", "apex_m", "landing_angle_deg"} <= set(cols)
+    # more backspin (Magnus lift) carries farther at these low angles
+    i0 = np.flatnonzero((res.speed_mps == 80) & (res.spin_radps == 0) & (res.angle_deg == 10))[0]
+    i1 = np.flatnonzero((res.speed_mps == 80) & (res.spin_radps == 10) & (res.angle_deg == 10))[0]
+    assert res.carry[i1] > res.carry[i0]
+
+
+def test_sweep_and_simulation_agree():
+    # the fused sweep kernel and the step-by-step Simulation integrate the same equations
+    res = tg.sweep("lab_spin_decay", angles_deg=[30.0])
+    sim = tg.Simulation.from_scene("lab_spin_decay", ["launch.angle_deg=30", "world.ground=false"])
+    sim.run(t=8.0, until="landed")
+    f = sim.flight()
+    assert f.carry[0] == pytest.approx(res.carry[0], rel=1e-9)
+    assert f.apex[0] == pytest.approx(res.flight.apex[0], rel=1e-9)
+    assert f.flight_time[0] == pytest.approx(res.flight.flight_time[0], rel=1e-9)
+
+
+def test_sweep_is_deterministic_and_independent_of_grouping():
+    # balls are grouped in SIMD lanes after sorting; results must not depend on the grouping
+    angles = np.linspace(5, 60, 37)
+    a = tg.sweep("lab_magnus", angles_deg=angles)
+    b = tg.sweep("lab_magnus", angles_deg=angles[::-1])
+    np.testing.assert_array_equal(a.carry, b.carry[::-1])
+
+
+def test_nonfinite_simulation_names_the_ball():
+    sim = tg.Simulation.from_scene("lab_turbulent", ["world.ground=false"])
+    sim.v = [[np.finfo(float).max, 0.0, 0.0]]  # drag ∝ v² overflows to inf
+    with pytest.raises(tg.SimulationError, match="ball 0") as err:
+        sim.step(1)
+    assert err.value.balls == [0]
+
+
+def test_status_counts():
+    sim = tg.Simulation(tg.load_scene("lab_vacuum"), x=[[0, 0.02, 0], [1, 2.0, 0]], v=[[0, 0, 0], [0, 0, 0]])
+    sim.step(1)
+    c = sim.counts()
+    assert c["flying"] == 1 and c["rolling"] == 1
+    sim.run(t=3.0)
+    assert sim.counts()["at_rest"] == 2
+
+
+@pytest.mark.parametrize("path", sorted(SCENES.glob("*.toml")), ids=lambda p: p.stem)
+def test_every_scene_loads_and_runs(path):
+    scene = tg.load_scene(path)
+    assert scene.description
+    sim = tg.Simulation(scene)
+    sim.run(t=0.5)
+    assert np.all(np.isfinite(sim.x))
+    res = tg.sweep(scene)
+    assert np.all(res.flight.landed)
+
+
+def test_f32_precision_meets_a_looser_accuracy():
+    # precision is chosen per process: run the CLI in f32 (another process, its own ti.init)
+    out = run_cli("sweep", "lab_turbulent", "--angles", "36.6", "--precision", "f32")
+    assert out.returncode == 0, out.stderr
+    carry = float(out.stdout.split("carry ")[1].split(" m")[0])
+    assert carry == pytest.approx(212.243, abs=0.01)  # report Appendix A, f32 round-off ~1e-5
