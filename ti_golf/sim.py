@@ -16,7 +16,7 @@ import numpy as np
 from .config import AT_REST, OUT_OF_BOUNDS, STATUS_NAMES, Scene, launch_velocity
 from .errors import ConfigError, SimulationError
 from .results import Flight
-from .runtime import ensure_init
+from .runtime import ensure_init, np_float
 from .scene import load_scene
 
 
@@ -101,34 +101,22 @@ class Simulation:
         """Time step h [s]."""
         return self.model.dt
 
-    @property
-    def x(self) -> np.ndarray:
-        """Ball centres [m], a copy, shape (N, 3)."""
-        return self.state.x.to_numpy().astype(np.float64)
+    def _vectors(self, name: str) -> np.ndarray:
+        return getattr(self.state, name).to_numpy().astype(np.float64)
 
-    @x.setter
-    def x(self, value: np.ndarray) -> None:
-        self.state.x.from_numpy(_as_vectors(value, "x", self.n).astype(self.state.x.to_numpy().dtype))
+    def _assign(self, name: str, value: np.ndarray) -> None:
+        """Overwrite x, v or w; a changed velocity or spin wakes balls at rest."""
+        arr = _as_vectors(value, name, self.n).astype(np_float())
+        if name != "x":
+            self._wake()
+        getattr(self.state, name).from_numpy(arr)
 
-    @property
-    def v(self) -> np.ndarray:
-        """Velocities [m/s], a copy, shape (N, 3)."""
-        return self.state.v.to_numpy().astype(np.float64)
-
-    @v.setter
-    def v(self, value: np.ndarray) -> None:
-        self._wake()
-        self.state.v.from_numpy(_as_vectors(value, "v", self.n).astype(self.state.v.to_numpy().dtype))
-
-    @property
-    def w(self) -> np.ndarray:
-        """Angular velocities ω [rad/s], a copy, shape (N, 3)."""
-        return self.state.w.to_numpy().astype(np.float64)
-
-    @w.setter
-    def w(self, value: np.ndarray) -> None:
-        self._wake()
-        self.state.w.from_numpy(_as_vectors(value, "w", self.n).astype(self.state.w.to_numpy().dtype))
+    x = property(lambda self: self._vectors("x"), lambda self, a: self._assign("x", a),
+                 doc="Ball centres [m], a copy, shape (N, 3); assign to move balls.")
+    v = property(lambda self: self._vectors("v"), lambda self, a: self._assign("v", a),
+                 doc="Velocities [m/s], a copy, shape (N, 3); assign to change them (wakes resting balls).")
+    w = property(lambda self: self._vectors("w"), lambda self, a: self._assign("w", a),
+                 doc="Angular velocities ω [rad/s], a copy, shape (N, 3); assign to change them.")
 
     @property
     def status(self) -> np.ndarray:

@@ -1,0 +1,421 @@
+"""Bad scene input gets one clear error naming the file, the key and what is allowed.
+
+Each class of mistake is checked through the API (``ti_golf.load_scene`` raising ``ConfigError``
+with ``.key`` and a message holding the path and the allowed values) and, for a representative
+subset, through the command line (exit code 2, one short line on stderr, no traceback).
+Scene files are written into ``tmp_path`` from a copy of ``scenes/lab_turbulent.toml``.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+from pathlib import Path
+
+import pytest
+from conftest import SCENES, run_cli
+
+try:  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
+import ti_golf
+from ti_golf import ConfigError
+from ti_golf.config import parse_range
+
+BASE_SCENE = SCENES / "lab_turbulent.toml"
+
+
+# ----------------------------------------------------------------------------------------------
+# Helpers
+# ----------------------------------------------------------------------------------------------
+def edit_scene(section: str, key: str, value: str, text: str | None = None) -> str:
+    """``text`` (default: lab_turbulent.toml) with ``[section] key = value`` set (value is TOML text).
+
+    The key's line is replaced when the section has it, else inserted right after the section
+    header; a missing section is appended. Works line by line so that the scene's description
+    (which mentions "C_D = 0.3") is never touched.
+    """
+    lines = (BASE_SCENE.read_text(encoding="utf-8") if text is None else text).splitlines()
+    header = f"[{section}]"
+    try:
+        start = next(i for i, ln in enumerate(lines) if ln.strip() == header)
+    except StopIteration:
+        return "\n".join(lines + ["", header, f"{key} = {value}", ""])
+    end = next((i for i in range(start + 1, len(lines)) if lines[i].lstrip().startswith("[")), len(lines))
+    pattern = re.compile(rf"^\s*{re.escape(key)}\s*=")
+    for i in range(start + 1, end):
+        if pattern.match(lines[i]):
+            lines[i] = f"{key} = {value}"
+            break
+    else:
+        lines.insert(start + 1, f"{key} = {value}")
+    return "\n".join(lines) + "\n"
+
+
+def write_scene(tmp_path: Path, text: str, name: str = "scene.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def assert_short_cli_error(proc: subprocess.CompletedProcess, *fragments: str) -> None:
+    """Exit code 2, one short message on stderr holding every fragment, no traceback."""
+    assert proc.returncode == 2, (proc.returncode, proc.stdout, proc.stderr)
+    err = proc.stderr
+    assert "Traceback" not in err, err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert 1 <= len(lines) <= 2, err
+    assert len(err) < 600, err
+    for frag in fragments:
+        assert frag in err, (frag, err)
+
+
+# ----------------------------------------------------------------------------------------------
+# Every bundled scene is valid
+# ----------------------------------------------------------------------------------------------
+SCENE_FILES = sorted(SCENES.glob("*.toml"))
+
+
+def test_there_are_bundled_scenes():
+    assert len(SCENE_FILES) >= 4  # at least the four rows of the report's Table 3.1-1
+
+
+@pytest.mark.parametrize("path", SCENE_FILES, ids=[p.stem for p in SCENE_FILES])
+def test_bundled_scene_loads_with_description(path: Path):
+    scene = ti_golf.load_scene(path)
+    assert scene.name == path.stem
+    assert isinstance(scene.description, str) and scene.description.strip()
+    # the description is the file's own text, not a default
+    assert scene.description == tomllib.loads(path.read_text(encoding="utf-8"))["description"]
+    assert scene.launch is not None
+    # a bare name resolves to the same bundled file
+    assert Path(ti_golf.load_scene(path.stem).path).resolve() == path.resolve()
+
+
+def test_edit_helper_produces_loadable_scene(tmp_path):
+    """Guards the helper: a valid edit loads and takes effect (so the failures below are real)."""
+    path = write_scene(tmp_path, edit_scene("air", "C_D", "0.25"))
+    scene = ti_golf.load_scene(path)
+    assert scene.air.C_D == 0.25
+    assert scene.description == ti_golf.load_scene(BASE_SCENE).description  # description untouched
+    path = write_scene(tmp_path, edit_scene("contact", "e", "0.7"), "new_section.toml")
+    assert ti_golf.load_scene(path).contact.e == 0.7
+
+
+# ----------------------------------------------------------------------------------------------
+# Bad keys and values, through the API
+# ----------------------------------------------------------------------------------------------
+# (section, key, TOML value, expected ConfigError.key, fragments the message must contain)
+BAD_VALUES = {
+    # unknown keys: the message lists what the table allows
+    "unknown_key": ("air", "rhoo", "1.3", "air.rhoo", ["'rho'", "rho, gamma, C_D, C_M, omega_M, C_omega, wind"]),
+    "unknown_key_world": ("world", "dtt", "0.01", "world.dtt", ["'dt'", "integrator"]),
+    # wrong types
+    "string_for_number": ("air", "C_D", '"0.3"', "air.C_D", ["must be a number", "'0.3'"]),
+    "bool_for_number": ("ball", "mass", "true", "ball.mass", ["must be a number", "kg", "True"]),
+    "list_of_2_for_vec3": ("air", "wind", "[1, 2]", "air.wind", ["list of 3 numbers", "m/s"]),
+    "string_for_vec3": ("launch", "spin", '"0,0,10"', "launch.spin", ["list of 3 numbers", "rad/s"]),
+    "bool_in_vec3": ("world", "gravity", "[0, true, 0]", "world.gravity", ["list of 3 numbers"]),
+    "float_for_int": ("air", "gamma", "1.5", "air.gamma", ["integer", "1.5"]),
+    "number_for_bool": ("world", "ground", "1", "world.ground", ["true or false"]),
+    "number_for_str": ("world", "integrator", "4", "world.integrator", ["string"]),
+    "unknown_integrator": ("world", "integrator", '"euler"', "world.integrator", ["'semi_implicit'", "'rk4'", "euler"]),
+    # non-finite numbers (nan and inf are valid TOML floats)
+    "nan_C_D": ("air", "C_D", "nan", "air.C_D", ["finite", "nan"]),
+    "inf_C_D": ("air", "C_D", "inf", "air.C_D", ["finite", "inf"]),
+    "minus_inf_dt": ("world", "dt", "-inf", "world.dt", ["finite"]),
+    "nan_speed": ("launch", "speed", "nan", "launch.speed", ["finite"]),
+    "nan_in_vec3": ("air", "wind", "[nan, 0, 0]", "air.wind", ["finite"]),
+    "nan_gamma": ("air", "gamma", "nan", "air.gamma", ["integer"]),
+    "nan_in_sweep_list": ("sweep", "angles", "[36, nan]", "sweep.angles", ["finite"]),
+    # out of range
+    "mass_zero": ("ball", "mass", "0", "ball.mass", ["> 0", "0.0"]),
+    "mass_negative": ("ball", "mass", "-0.045", "ball.mass", ["> 0", "-0.045"]),
+    "radius_zero": ("ball", "radius", "0.0", "ball.radius", ["> 0"]),
+    "radius_negative": ("ball", "radius", "-0.02", "ball.radius", ["> 0", "-0.02"]),
+    "e_above_1": ("contact", "e", "1.5", "contact.e", ["[0, 1]", "1.5"]),
+    "e_negative": ("contact", "e", "-0.1", "contact.e", ["[0, 1]", "-0.1"]),
+    "mu_negative": ("contact", "mu", "-0.1", "contact.mu", [">= 0", "-0.1"]),
+    "k_p_negative": ("contact", "k_p", "-0.01", "contact.k_p", ["[0, 1]"]),
+    "k_p_above_1": ("contact", "k_p", "1.01", "contact.k_p", ["[0, 1]", "1.01"]),
+    "dt_zero": ("world", "dt", "0.0", "world.dt", ["> 0"]),
+    "dt_negative": ("world", "dt", "-0.01", "world.dt", ["> 0", "-0.01"]),
+    "gamma_3": ("air", "gamma", "3", "air.gamma", ["1, 2", "3"]),
+    "gamma_0": ("air", "gamma", "0", "air.gamma", ["1, 2"]),
+    "angle_above_90": ("launch", "angle_deg", "100", "launch.angle_deg", ["[-90, 90]"]),
+    "sweep_range_backwards": ("sweep", "angles", '"36:30:0.1"', "sweep.angles", ["STOP must be >= START"]),
+    "sweep_range_step_zero": ("sweep", "angles", '"36:37:0"', "sweep.angles", ["STEP must be > 0"]),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_VALUES), ids=list(BAD_VALUES))
+def test_bad_value_names_file_key_and_allowed(tmp_path, case):
+    section, key, value, want_key, fragments = BAD_VALUES[case]
+    path = write_scene(tmp_path, edit_scene(section, key, value))
+    with pytest.raises(ConfigError) as info:
+        ti_golf.load_scene(path)
+    err = info.value
+    assert err.key == want_key
+    assert err.source == str(path)
+    msg = str(err)
+    assert str(path) in msg and f"'{want_key}'" in msg, msg
+    for frag in fragments:
+        assert frag in msg, (frag, msg)
+    assert "\n" not in msg
+
+
+@pytest.mark.parametrize(
+    "section, key, value, attr",
+    [
+        ("contact", "e", "0", 0.0),
+        ("contact", "e", "1", 1.0),
+        ("contact", "k_p", "0", 0.0),
+        ("contact", "k_p", "1.0", 1.0),
+        ("contact", "mu", "0", 0.0),
+        ("air", "gamma", "1", 1),
+        ("air", "gamma", "2.0", 2),  # an integral float is an integer
+        ("air", "C_D", "0", 0.0),
+    ],
+)
+def test_range_boundaries_are_allowed(tmp_path, section, key, value, attr):
+    """The documented ranges are inclusive where the schema says so ([0, 1], >= 0, 1 or 2)."""
+    scene = ti_golf.load_scene(write_scene(tmp_path, edit_scene(section, key, value)))
+    got = getattr(getattr(scene, section), key)
+    assert got == attr and type(got) is type(attr)
+
+
+# Unknown tables and top-level keys: (appended TOML text, expected key, fragments)
+BAD_TABLES = {
+    "unknown_table": ("[terrain]\nslope = 0.1\n", "terrain", ["air, ball, launch, world, contact, sweep"]),
+    "misspelt_table": ("[airr]\nrho = 1.2\n", "airr", ["did you mean 'air'", "air, ball, launch"]),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_TABLES), ids=list(BAD_TABLES))
+def test_unknown_table_names_file_and_allowed_tables(tmp_path, case):
+    extra, want_key, fragments = BAD_TABLES[case]
+    path = write_scene(tmp_path, BASE_SCENE.read_text(encoding="utf-8") + "\n" + extra)
+    with pytest.raises(ConfigError) as info:
+        ti_golf.load_scene(path)
+    assert info.value.key == want_key
+    msg = str(info.value)
+    assert str(path) in msg and want_key in msg
+    for frag in fragments:
+        assert frag in msg, (frag, msg)
+
+
+def test_table_given_as_value_is_rejected(tmp_path):
+    text = "launch = 5\n" + BASE_SCENE.read_text(encoding="utf-8").replace("[launch]", "[launch_removed]")
+    text = text.replace("[launch_removed]\nspeed = 80.0\nangle_deg = 36.6\n", "")
+    assert "[launch" not in text
+    path = write_scene(tmp_path, text)
+    with pytest.raises(ConfigError) as info:
+        ti_golf.load_scene(path)
+    assert info.value.key == "launch"
+    assert str(path) in str(info.value) and "table" in str(info.value)
+
+
+def test_description_must_be_text(tmp_path):
+    text = re.sub(r'^description = ".*"$', "description = 5", BASE_SCENE.read_text(encoding="utf-8"), flags=re.M)
+    path = write_scene(tmp_path, text)
+    with pytest.raises(ConfigError) as info:
+        ti_golf.load_scene(path)
+    assert info.value.key == "description"
+    assert str(path) in str(info.value) and "string" in str(info.value)
+
+
+# ----------------------------------------------------------------------------------------------
+# Files that cannot be read or parsed
+# ----------------------------------------------------------------------------------------------
+def _missing(tmp_path: Path) -> Path:
+    return tmp_path / "no_such_folder" / "missing.toml"
+
+
+def _directory(tmp_path: Path) -> Path:  # unreadable as a file, even for root
+    d = tmp_path / "folder.toml"
+    d.mkdir()
+    return d
+
+
+def _bad_utf8(tmp_path: Path) -> Path:
+    p = tmp_path / "latin1.toml"
+    p.write_bytes(BASE_SCENE.read_bytes().replace(b"Lab Table", b"Lab \xff\xfe Table", 1))
+    return p
+
+
+def _malformed(tmp_path: Path) -> Path:
+    return write_scene(tmp_path, BASE_SCENE.read_text(encoding="utf-8").replace("[world]", "[world", 1), "broken.toml")
+
+
+def _duplicate_table(tmp_path: Path) -> Path:
+    return write_scene(tmp_path, BASE_SCENE.read_text(encoding="utf-8") + "\n[world]\ndt = 0.02\n", "dup.toml")
+
+
+BAD_FILES = {
+    "missing": (_missing, ["not found"]),
+    "directory": (_directory, ["directory"]),
+    "invalid_utf8": (_bad_utf8, ["UTF-8"]),
+    "malformed_toml": (_malformed, ["not valid TOML", "line"]),
+    "duplicate_table": (_duplicate_table, ["not valid TOML"]),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_FILES), ids=list(BAD_FILES))
+def test_bad_file_names_the_file(tmp_path, case):
+    make, fragments = BAD_FILES[case]
+    path = make(tmp_path)
+    with pytest.raises(ConfigError) as info:
+        ti_golf.load_scene(path)
+    assert info.value.key is None
+    assert info.value.source == str(path)
+    msg = str(info.value)
+    assert msg.startswith(str(path)), msg
+    for frag in fragments:
+        assert frag in msg, (frag, msg)
+
+
+# ----------------------------------------------------------------------------------------------
+# The same errors through the command line (a representative subset)
+# ----------------------------------------------------------------------------------------------
+CLI_VALUE_CASES = [
+    ("sweep", "unknown_key"),
+    ("run", "list_of_2_for_vec3"),
+    ("sweep", "bool_for_number"),
+    ("run", "nan_C_D"),
+    ("sweep", "mass_zero"),
+    ("run", "e_above_1"),
+    ("sweep", "gamma_3"),
+]
+
+
+@pytest.mark.parametrize("command, case", CLI_VALUE_CASES, ids=[f"{c}-{k}" for c, k in CLI_VALUE_CASES])
+def test_cli_bad_value_exits_2_with_one_line(tmp_path, command, case):
+    section, key, value, want_key, fragments = BAD_VALUES[case]
+    path = write_scene(tmp_path, edit_scene(section, key, value))
+    proc = run_cli(command, str(path))
+    assert_short_cli_error(proc, str(path), want_key, *fragments)
+    assert proc.stdout.strip() == ""
+
+
+CLI_FILE_CASES = [("sweep", "missing"), ("run", "directory"), ("sweep", "invalid_utf8"), ("run", "malformed_toml")]
+
+
+@pytest.mark.parametrize("command, case", CLI_FILE_CASES, ids=[f"{c}-{k}" for c, k in CLI_FILE_CASES])
+def test_cli_bad_file_exits_2_with_one_line(tmp_path, command, case):
+    make, fragments = BAD_FILES[case]
+    path = make(tmp_path)
+    proc = run_cli(command, str(path))
+    assert_short_cli_error(proc, str(path), *fragments)
+
+
+def test_cli_unknown_table_exits_2(tmp_path):
+    path = write_scene(tmp_path, BASE_SCENE.read_text(encoding="utf-8") + "\n[terrain]\nslope = 0.1\n")
+    proc = run_cli("sweep", str(path))
+    assert_short_cli_error(proc, str(path), "terrain", "air, ball, launch")
+
+
+# ----------------------------------------------------------------------------------------------
+# --set overrides
+# ----------------------------------------------------------------------------------------------
+def test_set_override_changes_the_scene():
+    base = ti_golf.load_scene(BASE_SCENE)
+    scene = ti_golf.load_scene(BASE_SCENE, ["air.wind=[-5,0,0]"])
+    assert base.air.wind == (0.0, 0.0, 0.0)
+    assert scene.air.wind == (-5.0, 0.0, 0.0)
+    assert scene.air.C_D == base.air.C_D and scene.launch == base.launch  # nothing else changed
+    # several overrides, a bare word and a new table
+    scene = ti_golf.load_scene(BASE_SCENE, ["air.C_D=0.25", "world.integrator=semi_implicit", "contact.e=0.8"])
+    assert (scene.air.C_D, scene.world.integrator, scene.contact.e) == (0.25, "semi_implicit", 0.8)
+    # the mapping form of the API
+    assert ti_golf.load_scene(BASE_SCENE, {"ball.mass": 0.05}).ball.mass == 0.05
+
+
+# (override, expected .key, fragments)
+BAD_SETS = {
+    "unknown_key": ("air.rhoo=1", "air.rhoo", ["is not a scene key", "air.rho"]),
+    "unknown_table": ("terrain.slope=1", "terrain.slope", ["is not a scene key"]),
+    "out_of_range": ("contact.e=2", "contact.e", ["[0, 1]", "2.0"]),
+    "wrong_type": ("air.wind=[1,2]", "air.wind", ["list of 3 numbers"]),
+    "non_finite": ("air.C_D=nan", "air.C_D", ["finite"]),
+    "invalid_toml": ("air.wind=[1,2", "air.wind", ["not valid TOML"]),
+    "no_equals": ("air.C_D", "air.C_D", ["KEY=VALUE"]),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_SETS), ids=list(BAD_SETS))
+def test_bad_set_names_set_and_key(case):
+    override, want_key, fragments = BAD_SETS[case]
+    with pytest.raises(ConfigError) as info:
+        ti_golf.load_scene(BASE_SCENE, [override])
+    assert info.value.source == "--set"
+    assert info.value.key == want_key
+    msg = str(info.value)
+    assert msg.startswith("--set") and f"'{want_key}'" in msg
+    for frag in fragments:
+        assert frag in msg, (frag, msg)
+
+
+@pytest.mark.parametrize("case", ["unknown_key", "out_of_range"])
+def test_cli_bad_set_exits_2(case):
+    override, want_key, fragments = BAD_SETS[case]
+    proc = run_cli("sweep", "lab_turbulent", "--set", override)
+    assert_short_cli_error(proc, "--set", want_key, *fragments)
+
+
+def test_cli_set_wind_changes_the_result():
+    """A 5 m/s headwind shortens the turbulent carry below the still-air maximum."""
+    proc = run_cli("sweep", "lab_turbulent", "--angles", "36.6", "--set", "air.wind=[-5,0,0]")
+    assert proc.returncode == 0, proc.stderr
+    carry = float(re.search(r"carry ([\d.]+) m", proc.stdout).group(1))
+    # report Appendix A: turbulent max 212.243 m at 36.6° in still air
+    assert 100.0 < carry < 212.243 - 5.0, proc.stdout
+
+
+# ----------------------------------------------------------------------------------------------
+# --angles (and the other range options)
+# ----------------------------------------------------------------------------------------------
+BAD_RANGES = {
+    "backwards": ("36:30:0.1", "STOP must be >= START"),
+    "not_numbers": ("a:b:c", "START:STOP:STEP"),
+    "step_zero": ("36:37:0", "STEP must be > 0"),
+    "step_negative": ("36:37:-0.1", "STEP must be > 0"),
+    "two_parts": ("36:37", "START:STOP:STEP"),
+    "empty": ("", "at least one value"),
+    "nan": ("36,nan", "finite"),
+    "too_many": ("0:90:0.000001", "at most 10,000,000"),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_RANGES), ids=list(BAD_RANGES))
+def test_parse_range_rejects(case):
+    text, fragment = BAD_RANGES[case]
+    with pytest.raises(ConfigError) as info:
+        parse_range(text, "--angles", None)
+    assert info.value.source == "--angles"
+    assert fragment in str(info.value) and str(info.value).startswith("--angles")
+
+
+def test_parse_range_accepts_documented_forms():
+    assert parse_range("36:37:0.5", "--angles", None) == (36.0, 36.5, 37.0)  # STOP included
+    assert parse_range("36:37.4:0.02", "--angles", None)[-1] == 37.4
+    assert len(parse_range("36:37.4:0.02", "--angles", None)) == 71
+    assert parse_range("60,80", "--speeds", None) == (60.0, 80.0)
+    assert parse_range([1, 2.5], "sweep.angles", "sweep.angles") == (1.0, 2.5)
+
+
+@pytest.mark.parametrize(
+    "option, value, fragment",
+    [
+        ("--angles", "36:30:0.1", "STOP must be >= START"),
+        ("--angles", "a:b:c", "START:STOP:STEP"),
+        ("--angles", "36:37:0", "STEP must be > 0"),
+        ("--angles", "100", "[-90, 90]"),
+        ("--speeds", "-10,5", "--speeds"),
+    ],
+)
+def test_cli_bad_range_exits_2(option, value, fragment):
+    proc = run_cli("sweep", "lab_turbulent", f"{option}={value}")
+    assert_short_cli_error(proc, option, fragment)
+    assert proc.stdout.strip() == ""
