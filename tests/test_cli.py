@@ -56,28 +56,50 @@ def test_scenes_lists_every_scene_with_its_description():
             f.stem, proc.stdout)
 
 
-def test_keys_prints_every_schema_key_with_its_unit():
-    proc = ok(run_cli("keys"))
-    rows = {}
-    for ln in proc.stdout.splitlines():
-        cells = [c.strip() for c in ln.strip().strip("|").split("|")]
+def _keys_rows(stdout: str) -> dict[str, list[str]]:
+    """The rows of the `keys` Markdown table by key name, cells split on unescaped pipes."""
+    rows: dict[str, list[str]] = {}
+    for ln in stdout.splitlines():
+        cells = [c.strip() for c in re.split(r"(?<!\\)\|", ln.strip().strip("|"))]
         m = re.fullmatch(r"`([\w.]+)`", cells[0]) if cells else None
         if m:
             assert m.group(1) not in rows, f"key {m.group(1)} printed twice"
             rows[m.group(1)] = cells
+    return rows
+
+
+@pytest.fixture(scope="module")
+def keys_output():
+    return ok(run_cli("keys")).stdout
+
+
+def test_keys_prints_every_schema_key_with_its_unit(keys_output):
+    rows = _keys_rows(keys_output)
     expected = {f"{s}.{k}": key for s, keys in SCHEMA.items() for k, key in keys.items()}
     expected.update(TOP_LEVEL)
     assert set(rows) == set(expected), set(rows) ^ set(expected)
     for dotted, key in expected.items():
         assert rows[dotted][1] == key.unit, (dotted, rows[dotted])
-        if key.allowed:
-            assert rows[dotted][3] == key.allowed, (dotted, rows[dotted])
+        if isinstance(key.default, float):
+            assert rows[dotted][2] == f"`{key.default}`", (dotted, rows[dotted])
     # spot checks against the SI units the scenes are written in
     assert rows["air.C_D"][1] == "-"
-    assert rows["contact.k_p"][3] == "[0, 1]"
-    assert rows["world.dt"][1] == "s"
+    assert rows["contact.k_p"][1] == "-" and rows["contact.k_p"][3] == "[0, 1]"
+    assert rows["world.dt"][1] == "s" and rows["world.dt"][3] == "> 0"
     assert rows["ball.mass"][1] == "kg"
-    assert rows["air.wind"][1] == "m/s"
+    assert rows["air.wind"][1] == "m/s" and rows["air.wind"][2] == "`[0, 0, 0]`"
+    assert rows["air.gamma"][3] == "1 or 2"
+
+
+@pytest.mark.xfail(strict=True, reason="describe_keys writes unescaped '|' inside cells (bug, see report)")
+def test_keys_is_a_well_formed_markdown_table(keys_output):
+    rows = _keys_rows(keys_output)
+    bad = {k: len(cells) for k, cells in rows.items() if len(cells) != 5}
+    assert not bad, f"rows with other than 5 cells: {bad}"
+    for section, keys in SCHEMA.items():
+        for name, key in keys.items():
+            if key.allowed:
+                assert rows[f"{section}.{name}"][3].replace("\\|", "|") == key.allowed, (section, name)
 
 
 def test_help_and_unknown_subcommand():

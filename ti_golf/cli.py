@@ -15,12 +15,13 @@ from typing import Sequence
 from .errors import ConfigError, SimulationError, TiGolfError
 
 LAB_TABLE = (
-    ("lab_vacuum", "Reference solution (in vacuo)", 45.0, 652.0),
-    ("lab_laminar", "Laminar flow, drag, no Magnus", 44.5, 626.0),
-    ("lab_turbulent", "Turbulent flow, drag, no Magnus", 36.5, 212.0),
-    ("lab_magnus", "Turbulent flow, drag and Magnus", 11.5, 244.0),
+    ("lab_vacuum", "Reference solution (in vacuo)", 45.0, 652.0, "40:50:0.5"),
+    ("lab_laminar", "Laminar flow, drag, no Magnus", 44.5, 626.0, "40:50:0.5"),
+    ("lab_turbulent", "Turbulent flow, drag, no Magnus", 36.5, 212.0, "32:42:0.5"),
+    ("lab_magnus", "Turbulent flow, drag and Magnus", 11.5, 244.0, "7:17:0.5"),
 )
-"""The scenes of the report's Table 3.1-1 with the table's own best angle [deg] and distance [m]."""
+"""The scenes of the report's Table 3.1-1: the table's best angle [deg] and distance [m], and the
+angles of its Figures 3.1-1 to 3.1-4 (trajectories 0.5° apart)."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -244,12 +245,16 @@ def _cmd_table(args: argparse.Namespace) -> int:
     _check_writable(args.plot, "--plot")
     print("Table 3.1-1 (report) reproduced: best launch angle and maximum distance, v0 = 80 m/s")
     print(f"{'conditions':<36} {'report':>16} {'ti_golf':>22}")
+    from .config import parse_range
+
     results = []
-    for name, label, angle, dist in LAB_TABLE:
+    for name, label, angle, dist, figure_angles in LAB_TABLE:
         scene = load_scene(name)
-        res = sweep(scene, trajectories=11 if args.plot else 0)
+        res = sweep(scene)
         b = res.best()
-        results.append((label, res))
+        if args.plot:
+            fig = sweep(scene, parse_range(figure_angles, name, "figure angles"), trajectories=21)
+            results.append((label, res, fig))
         print(f"{label:<36} {angle:6.1f}° {dist:7.0f} m {res.angle_deg[b]:9.2f}° {res.carry[b]:10.3f} m")
     print("(report: 0.5° spacing; ti_golf: RK4 h = 0.01 s, the [sweep] angles of each scene)")
     if args.plot:
@@ -266,17 +271,20 @@ def _plot_table(results: list, path: str) -> None:
     import numpy as np
 
     fig, axes = plt.subplots(2, 2, figsize=(12, 7))
-    for ax, (label, res) in zip(axes.ravel(), results):
-        for j, i in enumerate(res.traj_index):
-            p = res.traj[j]
-            ax.plot(p[:, 0], p[:, 1] - p[0, 1], lw=0.8, color=plt.get_cmap("viridis")(j / max(len(res.traj_index) - 1, 1)))
+    for ax, (label, res, fig_res) in zip(axes.ravel(), results):
+        k = len(fig_res.traj_index)
+        for j, i in enumerate(fig_res.traj_index):
+            p = fig_res.traj[j]
+            ax.plot(p[:, 0], p[:, 1] - p[0, 1], lw=0.8, color=plt.get_cmap("viridis")(j / max(k - 1, 1)),
+                    label=f"{fig_res.angle_deg[i]:g}°" if j in (0, k - 1) else None)
         b = res.best()
+        ax.legend(fontsize=7, loc="upper right")
         ax.set_title(f"{label}: best {res.angle_deg[b]:.2f}°, {res.carry[b]:.2f} m", fontsize=9)
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
         ax.grid(alpha=0.3)
         ax.set_ylim(bottom=0)
-        ax.set_xlim(0, np.nanmax(res.carry) * 1.05)
+        ax.set_xlim(0, np.nanmax(fig_res.carry) * 1.05)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
