@@ -91,7 +91,6 @@ def test_keys_prints_every_schema_key_with_its_unit(keys_output):
     assert rows["air.gamma"][3] == "1 or 2"
 
 
-@pytest.mark.xfail(strict=True, reason="describe_keys writes unescaped '|' inside cells (bug, see report)")
 def test_keys_is_a_well_formed_markdown_table(keys_output):
     rows = _keys_rows(keys_output)
     bad = {k: len(cells) for k, cells in rows.items() if len(cells) != 5}
@@ -287,6 +286,5 @@ def test_bogus_arch_env_exits_2_naming_allowed_backends(bogus_arch):
     assert "best:" not in proc.stdout  # nothing was simulated
 
 
-@pytest.mark.xfail(strict=True, reason="runtime._resolve labels an env-var error '--arch' (bug, see report)")
 def test_bogus_arch_env_error_names_the_variable(bogus_arch):
     assert "TI_GOLF_ARCH" in bogus_arch.stderr, bogus_arch.stderr

@@ -37,12 +37,14 @@ _info: RuntimeInfo | None = None
 
 
 def _resolve(arch: str | None, precision: str | None) -> tuple[str, str]:
+    arch_from = "--arch" if arch else "TI_GOLF_ARCH"
+    prec_from = "--precision" if precision else "TI_GOLF_PRECISION"
     arch = (arch or os.environ.get("TI_GOLF_ARCH") or "cpu").lower()
     precision = (precision or os.environ.get("TI_GOLF_PRECISION") or "f64").lower()
     if arch not in ARCHES:
-        raise ConfigError("--arch" if arch else "TI_GOLF_ARCH", None, f"unknown backend {arch!r}; allowed: {', '.join(ARCHES)}")
+        raise ConfigError(arch_from, None, f"unknown backend {arch!r}; allowed: {', '.join(ARCHES)}")
     if precision not in PRECISIONS:
-        raise ConfigError("--precision", None, f"unknown precision {precision!r}; allowed: f32, f64")
+        raise ConfigError(prec_from, None, f"unknown precision {precision!r}; allowed: f32, f64")
     return arch, precision
 
 

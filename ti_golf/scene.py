@@ -48,8 +48,10 @@ def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise_config(source, dotted, f"must be a number{_unit(key)} (got {value!r})")
         if kind == "int":
-            if isinstance(value, float) and not value.is_integer():
+            if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
                 raise_config(source, dotted, f"must be an integer (got {value!r})")
+            if key.check is not None and key.check(value):
+                raise_config(source, dotted, f"{key.check(value)} (got {value!r})")
             value = int(value)
         else:
             value = float(value)
@@ -107,7 +109,7 @@ def _apply_override(data: dict[str, Any], dotted: str, value: Any) -> None:
     if len(parts) == 1:
         if parts[0] not in TOP_LEVEL:
             raise ConfigError("--set", dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
-        data[parts[0]] = value
+        data[parts[0]] = ("--set", value)
         return
     if len(parts) != 2:
         raise ConfigError("--set", dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
@@ -200,7 +202,10 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
     kwargs: dict[str, Any] = {"name": name, "path": source}
     for top, value in doc.items():
         if top in TOP_LEVEL:
-            kwargs[top] = _coerce(value, TOP_LEVEL[top], source, top)
+            src = source
+            if isinstance(value, tuple) and len(value) == 2 and value[0] == "--set":
+                src, value = value
+            kwargs[top] = _coerce(value, TOP_LEVEL[top], src, top)
             continue
         if top not in SCHEMA:
             raise_config(source, top, f"is not a scene table or key{_suggest(top, list(SCHEMA) + list(TOP_LEVEL))}; "
@@ -234,7 +239,7 @@ def describe_keys() -> str:
     """Every scene key with unit, default, allowed values and meaning, as a Markdown table."""
     rows = ["| key | unit | default | allowed | meaning |", "|---|---|---|---|---|"]
     for k in TOP_LEVEL.values():
-        rows.append(f"| `{k.name}` | - | `\"\"` | text | {k.doc} |")
+        rows.append(f"| `{k.name}` | - | `\"\"` | text | {_cell(k.doc)} |")
     for section, keys in SCHEMA.items():
         for k in keys.values():
             d = k.default
@@ -244,5 +249,10 @@ def describe_keys() -> str:
                 d = str(d).lower()
             elif d is None:
                 d = "(see meaning)"
-            rows.append(f"| `{section}.{k.name}` | {k.unit} | `{d}` | {k.allowed or k.kind} | {k.doc} |")
+            rows.append(f"| `{section}.{k.name}` | {k.unit} | `{d}` | {_cell(k.allowed or k.kind)} | {_cell(k.doc)} |")
     return "\n".join(rows)
+
+
+def _cell(text: str) -> str:
+    """Escape '|' so a Markdown table cell stays one cell."""
+    return text.replace("|", "\\|")
