@@ -117,7 +117,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
             Key("t_end", "float", 20.0, "s", "default duration of `ti-golf run`", _positive, "> 0"),
             Key("t_max", "float", 60.0, "s", "longest flight a sweep integrates before giving up on a ball",
                 _positive, "> 0"),
-            Key("ground", "bool", True, "-", "an impenetrable ground plane y = ground_height"),
+            Key("ground", "bool", True, "-",
+                "an impenetrable ground plane y = ground_height (off by default when the scene has [[planes]])"),
+            Key("collisions", "bool", True, "-", "ball–ball collisions (hash grid + impulses) when there are several balls"),
             Key("ground_height", "float", 0.0, "m", "height of the ground plane"),
             Key("v_rest", "float", 0.01, "m/s", "a touching ball slower than this (and R|ω| below it) may come to rest",
                 _non_negative, ">= 0"),
@@ -134,6 +136,12 @@ SCHEMA: dict[str, dict[str, Key]] = {
                 _unit_interval, "[0, 1]"),
             Key("mu_roll", "float", 0.05, "-", "rolling-resistance coefficient: a rolling ball decelerates at μ_roll·g",
                 _non_negative, ">= 0"),
+            Key("iterations", "int", 4, "-",
+                "Jacobi sweeps over all touching pairs per step (more: stiffer stacks)",
+                lambda v: None if 1 <= v <= 100 else "must be in [1, 100]", "[1, 100]"),
+            Key("skin", "float", 0.1, "-",
+                "neighbour-list skin as a fraction of the largest radius (lists are rebuilt when a ball moves skin/2)",
+                lambda v: None if 0 < v <= 2 else "must be in (0, 2]", "(0, 2]"),
             Key("v_bounce", "float", 0.05, "m/s",
                 "normal approach speeds below v_bounce + 2|g|h are treated as inelastic (no micro-bounces)",
                 _non_negative, ">= 0"),
@@ -152,6 +160,79 @@ SCHEMA: dict[str, dict[str, Key]] = {
 #: Top-level keys that are not tables.
 TOP_LEVEL: dict[str, Key] = {
     "description": Key("description", "text", "", "-", "one line shown by `ti-golf scenes`"),
+}
+
+
+def _nonzero(v: tuple[float, ...]) -> str | None:
+    return None if any(c != 0 for c in v) else "must not be the zero vector"
+
+
+def _pair(lo: float, hi: float = math.inf) -> Callable[[Any], str | None]:
+    def check(v: tuple[float, ...]) -> str | None:
+        if len(v) != 2 or v[0] > v[1]:
+            return "must be [min, max] with min <= max"
+        return None if lo <= v[0] and v[1] <= hi else f"must lie in [{lo:g}, {hi:g}]"
+
+    return check
+
+
+def _count3(v: tuple[float, ...]) -> str | None:
+    return None if all(c >= 1 and float(c).is_integer() for c in v) and math.prod(v) <= 50_000_000 else \
+        "must be 3 whole numbers >= 1 (at most 50 million balls)"
+
+
+#: Arrays of tables: ``[[balls]]``, ``[[blocks]]``, ``[[planes]]``.
+ARRAY_SCHEMA: dict[str, dict[str, Key]] = {
+    "balls": {
+        k.name: k
+        for k in [
+            Key("position", "vec3", None, "m", "centre of the ball (required)"),
+            Key("velocity", "vec3", (0.0, 0.0, 0.0), "m/s", "initial velocity"),
+            Key("spin", "vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity"),
+            Key("radius", "float", None, "m", "radius (default ball.radius)", _positive, "> 0"),
+            Key("mass", "float", None, "kg", "mass (default ball.mass)", _positive, "> 0"),
+        ]
+    },
+    "blocks": {
+        k.name: k
+        for k in [
+            Key("kind", "str", "lattice", "-",
+                "lattice: count[0]×count[1]×count[2] balls from origin, spacing apart; "
+                "random: `number` balls at seeded random non-overlapping places inside [box_min, box_max]",
+                _one_of("lattice", "random"), "lattice | random"),
+            Key("count", "vec3", (1.0, 1.0, 1.0), "-", "lattice size along x, y, z", _count3, "3 whole numbers >= 1"),
+            Key("number", "int", 0, "-", "number of balls of a random block", lambda v: None if 0 <= v <= 50_000_000
+                else "must be in [0, 50000000]", "[0, 50000000]"),
+            Key("origin", "vec3", (0.0, 0.0, 0.0), "m", "centre of the lattice's first ball"),
+            Key("spacing", "float", None, "m", "lattice spacing (default: one diameter plus 1 %)", _positive, "> 0"),
+            Key("jitter", "float", 0.0, "m", "uniform random offset of each lattice ball (at most half the free gap)",
+                _non_negative, ">= 0"),
+            Key("box_min", "vec3", (0.0, 0.0, 0.0), "m", "lower corner of a random block's box"),
+            Key("box_max", "vec3", (1.0, 1.0, 1.0), "m", "upper corner of a random block's box"),
+            Key("velocity", "vec3", (0.0, 0.0, 0.0), "m/s", "initial velocity of every ball"),
+            Key("velocity_jitter", "float", 0.0, "m/s", "uniform random velocity added per component",
+                _non_negative, ">= 0"),
+            Key("speed", "list2", None, "m/s", "launch speeds [min, max]: the block's balls are shots", _pair(0.0), "[min, max] >= 0"),
+            Key("angle_deg", "list2", None, "deg", "launch elevations [min, max] of shots", _pair(-90.0, 90.0), "[min, max] in [-90, 90]"),
+            Key("direction_deg", "list2", (0.0, 0.0), "deg", "launch azimuths [min, max] of shots", _pair(-360.0, 360.0),
+                "[min, max] in [-360, 360]"),
+            Key("backspin", "list2", (0.0, 0.0), "rad/s", "backspin [min, max] of shots", _pair(-1e5, 1e5), "[min, max]"),
+            Key("spin", "vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity of every ball"),
+            Key("radius", "float", None, "m", "radius (default ball.radius)", _positive, "> 0"),
+            Key("radius_jitter", "float", 0.0, "-", "relative spread of radii: R·(1 ± jitter)",
+                lambda v: None if 0 <= v < 0.5 else "must be in [0, 0.5)", "[0, 0.5)"),
+            Key("mass", "float", None, "kg", "mass (default ball.mass; scaled with R³ when radii vary)", _positive, "> 0"),
+            Key("seed", "int", 0, "-", "random seed (the same seed gives the same balls everywhere)"),
+        ]
+    },
+    "planes": {
+        k.name: k
+        for k in [
+            Key("point", "vec3", (0.0, 0.0, 0.0), "m", "a point on the plane"),
+            Key("normal", "vec3", (0.0, 1.0, 0.0), "-", "normal pointing out of the solid side (normalised on load)",
+                _nonzero, "non-zero vec3"),
+        ]
+    },
 }
 
 
@@ -206,6 +287,7 @@ class World:
     t_max: float = _default("world", "t_max")
     ground: bool = _default("world", "ground")
     ground_height: float = _default("world", "ground_height")
+    collisions: bool = _default("world", "collisions")
     v_rest: float = _default("world", "v_rest")
     t_rest: float = _default("world", "t_rest")
 
@@ -218,7 +300,53 @@ class Contact:
     mu: float = _default("contact", "mu")
     k_p: float = _default("contact", "k_p")
     mu_roll: float = _default("contact", "mu_roll")
+    iterations: int = _default("contact", "iterations")
+    skin: float = _default("contact", "skin")
     v_bounce: float = _default("contact", "v_bounce")
+
+
+@dataclass(frozen=True)
+class Plane:
+    """An impenetrable plane: ``point`` [m] on it, unit ``normal`` out of the solid side."""
+
+    point: Vec3 = (0.0, 0.0, 0.0)
+    normal: Vec3 = (0.0, 1.0, 0.0)
+
+
+@dataclass(frozen=True)
+class BallSpec:
+    """One ball listed in a ``[[balls]]`` table (radius and mass default to the scene's ball)."""
+
+    position: Vec3
+    velocity: Vec3 = (0.0, 0.0, 0.0)
+    spin: Vec3 = (0.0, 0.0, 0.0)
+    radius: float | None = None
+    mass: float | None = None
+
+
+@dataclass(frozen=True)
+class Block:
+    """Many balls at once (``[[blocks]]``): a lattice or a seeded random fill; optionally shots."""
+
+    kind: str = "lattice"
+    count: Vec3 = (1.0, 1.0, 1.0)
+    number: int = 0
+    origin: Vec3 = (0.0, 0.0, 0.0)
+    spacing: float | None = None
+    jitter: float = 0.0
+    box_min: Vec3 = (0.0, 0.0, 0.0)
+    box_max: Vec3 = (1.0, 1.0, 1.0)
+    velocity: Vec3 = (0.0, 0.0, 0.0)
+    velocity_jitter: float = 0.0
+    speed: tuple[float, float] | None = None
+    angle_deg: tuple[float, float] | None = None
+    direction_deg: tuple[float, float] = (0.0, 0.0)
+    backspin: tuple[float, float] = (0.0, 0.0)
+    spin: Vec3 = (0.0, 0.0, 0.0)
+    radius: float | None = None
+    radius_jitter: float = 0.0
+    mass: float | None = None
+    seed: int = 0
 
 
 @dataclass(frozen=True)
@@ -246,6 +374,9 @@ class Scene:
     world: World = field(default_factory=World)
     contact: Contact = field(default_factory=Contact)
     sweep: SweepDefaults = field(default_factory=SweepDefaults)
+    balls: tuple[BallSpec, ...] = ()
+    blocks: tuple[Block, ...] = ()
+    planes: tuple[Plane, ...] = ()
 
     def launch_position(self) -> Vec3:
         """Launch point [m]: the scene's, or the ball resting on the ground at the origin."""

@@ -23,6 +23,8 @@ class Model:
         air, contact: kernel-argument structs (AirParams, ContactParams).
         gravity: g [m/s²], vec3.
         integrator: the integrator code (a compile-time constant of the kernels).
+        plane_p, plane_n: points on and unit normals of the impenetrable planes (the ground
+            included), numpy (P, 3); passed to kernels directly.
     """
 
     def __init__(self, scene: Scene, radius: np.ndarray, mass: np.ndarray, launch_height: np.ndarray) -> None:
@@ -44,5 +46,9 @@ class Model:
         self.gravity = vec3(*w.gravity)
         self.integrator = INTEGRATOR_CODES[w.integrator]
         self.dt = w.dt
-        self.ground_p = vec3(0.0, w.ground_height, 0.0)
-        self.ground_n = vec3(0.0, 1.0, 0.0)
+        planes = [(pl.point, pl.normal) for pl in scene.planes]
+        if w.ground:
+            planes.append(((0.0, w.ground_height, 0.0), (0.0, 1.0, 0.0)))
+        self.plane_p = np.array([p for p, _ in planes], dtype=f).reshape(-1, 3)
+        self.plane_n = np.array([n for _, n in planes], dtype=f).reshape(-1, 3)
+        self.v_inelastic = c.v_bounce + 2.0 * float(np.linalg.norm(w.gravity)) * w.dt

@@ -18,7 +18,11 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 from .config import (
+    ARRAY_SCHEMA,
     SCHEMA,
+    BallSpec,
+    Block,
+    Plane,
     TOP_LEVEL,
     Air,
     Ball,
@@ -70,6 +74,16 @@ def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
             or any(isinstance(c, bool) or not isinstance(c, (int, float)) for c in value)
         ):
             raise_config(source, dotted, f"must be a list of 3 numbers{_unit(key)}, e.g. [0, 0, 0] (got {value!r})")
+        value = tuple(float(c) for c in value)
+        if not all(math.isfinite(c) for c in value):
+            raise_config(source, dotted, f"must hold finite numbers (got {list(value)!r})")
+    elif kind == "list2":
+        if (
+            not isinstance(value, (list, tuple))
+            or len(value) != 2
+            or any(isinstance(c, bool) or not isinstance(c, (int, float)) for c in value)
+        ):
+            raise_config(source, dotted, f"must be a list [min, max] of 2 numbers{_unit(key)} (got {value!r})")
         value = tuple(float(c) for c in value)
         if not all(math.isfinite(c) for c in value):
             raise_config(source, dotted, f"must hold finite numbers (got {list(value)!r})")
@@ -207,9 +221,12 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
                 src, value = value
             kwargs[top] = _coerce(value, TOP_LEVEL[top], src, top)
             continue
+        if top in ARRAY_SCHEMA:
+            continue
         if top not in SCHEMA:
-            raise_config(source, top, f"is not a scene table or key{_suggest(top, list(SCHEMA) + list(TOP_LEVEL))}; "
-                         f"allowed: {', '.join(list(TOP_LEVEL) + list(SCHEMA))}")
+            names = list(TOP_LEVEL) + list(SCHEMA) + [f"[[{a}]]" for a in ARRAY_SCHEMA]
+            raise_config(source, top, f"is not a scene table or key{_suggest(top, list(SCHEMA) + list(TOP_LEVEL) + list(ARRAY_SCHEMA))}; "
+                         f"allowed: {', '.join(names)}")
         if not isinstance(value, dict):
             raise_config(source, top, f"must be a table [{top}] (got {value!r})")
     for section, keys in SCHEMA.items():
@@ -232,7 +249,56 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
             kwargs[section] = _SECTION_TYPES[section](**values)
     if "launch" not in doc:
         kwargs["launch"] = None
+    arrays = {name: _array_tables(doc.get(name), name, source) for name in ARRAY_SCHEMA}
+    kwargs["balls"] = tuple(_ball_spec(t, source, i) for i, t in enumerate(arrays["balls"]))
+    kwargs["blocks"] = tuple(_block(t, source, i) for i, t in enumerate(arrays["blocks"]))
+    kwargs["planes"] = tuple(_plane(t) for t in arrays["planes"])
+    if kwargs["planes"] and "ground" not in doc.get("world", {}):
+        world = kwargs.get("world", World())
+        kwargs["world"] = World(**{**world.__dict__, "ground": False})
     return Scene(**kwargs)
+
+
+def _array_tables(value: Any, name: str, source: str) -> list[dict[str, Any]]:
+    """Validate the tables of one ``[[name]]`` array against :data:`ARRAY_SCHEMA`."""
+    if value is None:
+        return []
+    if not isinstance(value, list) or not all(isinstance(t, dict) for t in value):
+        raise_config(source, name, f"must be an array of tables written [[{name}]]")
+    keys = ARRAY_SCHEMA[name]
+    out = []
+    for i, table in enumerate(value):
+        values = {}
+        for k, v in table.items():
+            dotted = f"{name}[{i}].{k}"
+            if k not in keys:
+                raise_config(source, dotted, f"is unknown{_suggest(k, keys)}; allowed in [[{name}]]: " + ", ".join(keys))
+            values[k] = _coerce(v, keys[k], source, dotted)
+        out.append(values)
+    return out
+
+
+def _ball_spec(values: dict[str, Any], source: str, i: int) -> BallSpec:
+    if "position" not in values:
+        raise_config(source, f"balls[{i}].position", "is required (the ball's centre [x, y, z] in m)")
+    return BallSpec(**values)
+
+
+def _block(values: dict[str, Any], source: str, i: int) -> Block:
+    block = Block(**values)
+    if block.kind == "random":
+        if any(lo >= hi for lo, hi in zip(block.box_min, block.box_max)):
+            raise_config(source, f"blocks[{i}].box_max", "must exceed box_min on every axis")
+    if (block.speed is None) != (block.angle_deg is None):
+        raise_config(source, f"blocks[{i}].speed", "shots need both speed and angle_deg ([min, max] each)")
+    return block
+
+
+def _plane(values: dict[str, Any]) -> Plane:
+    plane = Plane(**values)
+    n = plane.normal
+    length = math.sqrt(sum(c * c for c in n))
+    return Plane(point=plane.point, normal=tuple(c / length for c in n))
 
 
 def describe_keys() -> str:

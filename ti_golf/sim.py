@@ -13,7 +13,7 @@ from typing import Any, Callable, Iterable, Mapping
 
 import numpy as np
 
-from .config import AT_REST, OUT_OF_BOUNDS, STATUS_NAMES, Scene, launch_velocity
+from .config import AT_REST, OUT_OF_BOUNDS, STATUS_NAMES, Scene
 from .errors import ConfigError, SimulationError
 from .results import Flight
 from .runtime import ensure_init, np_float
@@ -60,12 +60,13 @@ class Simulation:
 
         self.scene = scene
         if x is None:
-            if scene.launch is None:
-                raise ConfigError(scene.path, "launch", "the scene has no [launch] table and no balls were given")
-            L = scene.launch
-            x = np.array([scene.launch_position()])
-            v = np.array([launch_velocity(L.speed, L.angle_deg, L.direction_deg)])
-            w = np.array([L.spin])
+            from .builder import build_balls
+
+            balls = build_balls(scene)
+            x, v, w = balls.x, balls.v, balls.w
+            radius = balls.radius if radius is None else radius
+            mass = balls.mass if mass is None else mass
+            track = balls.track
         x = _as_vectors(x, "x")
         n = len(x)
         v = np.zeros((n, 3)) if v is None else _as_vectors(v, "v", n)
@@ -78,6 +79,12 @@ class Simulation:
         self.launch_x = x.copy()
         """Launch points [m], shape (N, 3): carry is measured from here."""
         self._check_buf = None
+        self.solver = None
+        """The CollisionSolver when balls can collide (several balls and ``world.collisions``)."""
+        if n > 1 and scene.world.collisions:
+            from .solver import CollisionSolver
+
+            self.solver = CollisionSolver(self.model)
 
     @classmethod
     def from_scene(cls, path: str | os.PathLike[str], overrides: Mapping[str, Any] | Iterable[str] | None = None,
@@ -145,12 +152,16 @@ class Simulation:
         from .physics import kernels
 
         m, s, w = self.model, self.state, self.scene.world
-        kernels.advance(
-            m.air, m.contact, m.gravity, m.dt, m.integrator, int(n), s.t, int(w.ground), m.ground_p, m.ground_n,
-            w.v_rest, w.t_rest, m.radius, m.mass, m.launch_height,
-            s.x, s.v, s.w, s.status, s.rest_time, s.landed, s.apex, s.t_land, s.land_x, s.land_v,
-        )
-        s.t += n * m.dt
+        if self.solver is not None:
+            for _ in range(int(n)):
+                self.solver.step(m, s)
+        else:
+            kernels.advance(
+                m.air, m.contact, m.gravity, m.dt, m.integrator, int(n), s.t, w.v_rest, w.t_rest, m.radius, m.mass,
+                m.launch_height, m.plane_p, m.plane_n, s.x, s.v, s.w, s.status, s.rest_time, s.landed, s.apex,
+                s.t_land, s.land_x, s.land_v,
+            )
+            s.t += n * m.dt
         self.check_finite()
 
     def check_finite(self) -> None:

@@ -1,23 +1,22 @@
-"""Impulse contact of a ball with an impenetrable plane (report Appendix B), and rest detection.
+"""Impulse contacts (report Appendix B): the pair impulse shared by ball–ball and ball–plane
+contacts, plane position handling, and rest detection helpers.
 
-The plane through ``p`` with unit normal ``n`` is the boundary of an impenetrable half-space
-(behind the plane): the penetration Δx = R − (x − p)·n (L.3) is measured on the signed distance,
-so a ball cannot tunnel through at any speed. A plane is a body of infinite mass: m_red = 1 (B.11).
+A contact between body a (a ball) and body b (a ball, or a plane: a body of infinite mass, B.11)
+along the unit normal n̂ (from b to a):
 
-Per step, with the free-flight prediction (x, v, ω) → (x1, v1, ω1):
-
-1. contact if the predicted penetration is positive, impulse only if approaching (v1·n < 0);
-2. normal jolt  Δv = −(1 + e)(v1·n) n  (B.9, B.11); approach speeds below
-   ``v_bounce + 2|g|h`` use e = 0, so a resting ball does not micro-bounce;
-3. Coulomb friction at the contact point, −μ·j_n·t̂ (B.15), clipped so that it can at most stop the
-   sliding there (solid sphere, I = 2/5·mR²: the contact-point slip changes by 7/2 of the centre's
-   change), and changing ω by (5/2)(j_t/R)(n × t̂);
-4. rolling resistance while in resting contact: |Δv_t| ≤ μ_roll·j_n with Δω = n × Δv / R, which
-   leaves the contact-point slip unchanged (a rolling ball decelerates at μ_roll·g and keeps rolling);
-5. the step is split at the time of impact (linear in the gaps), so the bounce starts on the surface;
-6. position projection of any remaining penetration, x += k_p·Δx·n (B.18).
+1. contact when the gap at the end of the step, gap + h·min(v_n, 0), would be negative (a
+   speculative test on the signed gap, so nothing tunnels through at any speed, L.3, L.4);
+   an impulse only while approaching (v_n < 0);
+2. normal jolt of a: −(1 + e)·m_red·v_n·n̂ with m_red = m_b/(m_a + m_b) (B.5–B.9; 1 for a plane);
+   approach speeds below ``v_inelastic`` use e = 0, so resting contacts do not micro-bounce;
+3. Coulomb friction at the contact point, −μ·j_n·t̂ (B.15), clipped so that it can at most stop
+   the slip there (solid spheres, I = 2/5·mR²: a friction impulse P changes the slip by
+   (7/2)(1/m_a + 1/m_b)·P), and changing both spins;
+4. (planes) rolling resistance while in resting contact, |Δv_t| ≤ μ_roll·j_n with Δω = n̂ × Δv/R,
+   which leaves the contact-point slip unchanged (a rolling ball decelerates at μ_roll·g);
+5. (planes) the step is split at the time of impact, so a bounce starts on the surface;
+6. position projection of what still overlaps, k_p·m_red·Δx·n̂ (B.18).
 """
-
 
 import taichi as ti
 
@@ -27,26 +26,40 @@ _TINY = 1e-12
 
 
 @ti.func
-def friction_jolt(vc_t, j_n, radius, mu, n):
-    """Velocity and spin jolts of Coulomb friction for a contact-point slip ``vc_t`` [m/s].
+def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, e, mu, v_inelastic, h):
+    """Impulse P [N·s] on body a from body b (−P acts on b), or zero when they do not collide.
 
-    ``j_n`` is the normal jolt [m/s] (impulse per mass). The friction jolt is clipped to 2/7 of the
-    slip so that it can only stop the sliding, never reverse it. Returns (Δv, Δω).
+    ``n``: unit normal from b to a; ``gap``: surface distance [m] (negative when overlapping);
+    ``inv_m_b = 0`` and ``r_b = 0`` make b a plane. Returns (P, touching).
     """
-    dv = vec3(0.0)
-    dw = vec3(0.0)
-    slip = vc_t.norm()
-    if slip > _TINY:
-        t_hat = vc_t / slip
-        j_t = ti.min(mu * j_n, (2.0 / 7.0) * slip)
-        dv = -j_t * t_hat
-        dw = (2.5 * j_t / radius) * n.cross(t_hat)
-    return dv, dw
+    P = vec3(0.0)
+    touching = 0
+    v_n = (v_a - v_b).dot(n)
+    if gap + h * ti.min(v_n, 0.0) < 0.0:
+        touching = 1
+        if v_n < 0.0:
+            inv_m = inv_m_a + inv_m_b
+            if -v_n < v_inelastic:
+                e = 0.0
+            j_n = -(1.0 + e) * v_n / inv_m
+            slip = v_a + w_a.cross(-r_a * n) - v_b - w_b.cross(r_b * n)
+            slip_t = slip - slip.dot(n) * n
+            s = slip_t.norm()
+            P = j_n * n
+            if s > _TINY:
+                P -= ti.min(mu * j_n, s / (3.5 * inv_m)) * (slip_t / s)
+    return P, touching
+
+
+@ti.func
+def spin_jolt(P, n, radius, inv_mass):
+    """Δω [rad/s] of a solid sphere of ``radius`` receiving impulse P at the point −radius·n̂."""
+    return (-radius * n).cross(P) * (2.5 * inv_mass / (radius * radius))
 
 
 @ti.func
 def rolling_resistance(v, radius, mu_roll, j_n, n):
-    """(Δv, Δω) that slow a rolling ball by at most μ_roll·j_n [m/s], keeping ω = n × v / R."""
+    """(Δv, Δω) that slow a rolling ball by at most μ_roll·j_n [m/s], keeping the slip unchanged."""
     v_t = v - v.dot(n) * n
     speed = v_t.norm()
     dv = vec3(0.0)
@@ -56,38 +69,41 @@ def rolling_resistance(v, radius, mu_roll, j_n, n):
 
 
 @ti.func
-def plane_contact(x, x1, v1, w1, radius, p, n, contact, v_inelastic, h):
-    """Resolve the contact of one ball with the plane (``p``, ``n``) during the step x → x1.
+def plane_impulse(x, v, w, radius, p, n, contact, v_inelastic, h):
+    """Velocity and spin of a ball after its contact with the plane (p, n̂). Returns (v, ω, touching)."""
+    gap = (x - p).dot(n) - radius
+    P, touching = pair_impulse(n, gap, v, w, radius, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, contact.e, contact.mu,
+                               v_inelastic, h)
+    if touching != 0 and P.dot(n) > 0.0:
+        j_n = P.dot(n)
+        v_new = v + P
+        w_new = w + spin_jolt(P, n, radius, 1.0)
+        if j_n < v_inelastic:  # resting contact (e = 0 was used): rolling resistance
+            dv, dw = rolling_resistance(v_new, radius, contact.mu_roll, j_n, n)
+            v_new += dv
+            w_new += dw
+        v, w = v_new, w_new
+    return v, w, touching
 
-    ``v_inelastic`` [m/s]: approach speeds below it get e = 0. Returns (x1, v1, ω1, touching).
+
+@ti.func
+def plane_position(x, x_free, x1, v_free, v, radius, p, n, k_p, h):
+    """End-of-step position ``x1`` of a ball corrected for the plane (p, n̂).
+
+    ``x`` is the position at the start of the step, ``x_free``/``v_free`` the free-flight
+    prediction, ``v`` the final velocity and ``x1`` the position so far (``x_free + h·(v − v_free)``
+    before the first plane). When the free flight crosses the plane and the plane pushed back, the
+    step is split at the time of impact (linear in the gaps; at the start of the step for a ball
+    already touching); what still penetrates is projected out with k_p (B.18, m_red = 1).
     """
-    touching = 0
     gap0 = (x - p).dot(n) - radius
-    gap1 = (x1 - p).dot(n) - radius
-    if gap1 < 0.0:
-        touching = 1
-        v_n = v1.dot(n)
-        if v_n < 0.0:
-            e = contact.e
-            resting = -v_n < v_inelastic
-            if resting:
-                e = 0.0
-            j_n = -(1.0 + e) * v_n
-            v_c = v1 + w1.cross(-radius * n)  # velocity of the contact point
-            dv, dw = friction_jolt(v_c - v_c.dot(n) * n, j_n, radius, contact.mu, n)
-            v_new = v1 + j_n * n + dv
-            w_new = w1 + dw
-            if resting:
-                dv_r, dw_r = rolling_resistance(v_new, radius, contact.mu_roll, j_n, n)
-                v_new += dv_r
-                w_new += dw_r
-            frac = 0.0
-            if gap0 > 0.0:
-                frac = gap0 / (gap0 - gap1)
-            x1 = x + frac * (x1 - x) + (1.0 - frac) * h * v_new
-            v1 = v_new
-            w1 = w_new
-        gap = (x1 - p).dot(n) - radius
-        if gap < 0.0:
-            x1 -= contact.k_p * gap * n
-    return x1, v1, w1, touching
+    gap1 = (x_free - p).dot(n) - radius
+    if gap1 < 0.0 and v.dot(n) > v_free.dot(n):
+        frac = 0.0  # already touching at the start of the step: the impulse acts from its start
+        if gap0 > 0.0:
+            frac = gap0 / (gap0 - gap1)
+        x1 = x + frac * (x_free - x) + (1.0 - frac) * h * v
+    gap = (x1 - p).dot(n) - radius
+    if gap < 0.0:
+        x1 -= k_p * gap * n
+    return x1

@@ -8,7 +8,7 @@ import taichi as ti
 
 from ..config import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING
 from .aero import ROWS, SPIN, V, W, X, coefficients, column, row
-from .contact import plane_contact
+from .contact import plane_impulse, plane_position
 from .integrate import IN_FLIGHT, LANDED, apex_in_step, landing_in_step, step_free, track_flight
 from .types import AirParams, ContactParams, float_array, int_array, vec3, vec3_array, vec3_table
 
@@ -128,14 +128,13 @@ def advance(
     integrator: ti.template(),
     n_steps: ti.i32,
     t0: float,
-    ground: ti.i32,
-    ground_p: vec3,
-    ground_n: vec3,
     v_rest: float,
     t_rest: float,
     radius: float_array,
     mass: float_array,
     launch_height: float_array,
+    plane_p: vec3_array,
+    plane_n: vec3_array,
     # State in/out:
     x: vec3_array,
     v: vec3_array,
@@ -149,7 +148,8 @@ def advance(
     land_x: vec3_array,
     land_v: vec3_array,
 ):
-    """Advance every active ball by ``n_steps`` steps of ``h`` [s] from time ``t0``, with ground contact.
+    """Advance every active ball by ``n_steps`` steps of ``h`` [s] from ``t0``; balls do not meet
+    each other, only the planes (one thread per ball runs all the steps).
 
     A ball that stays touching with speed and R|ω| below ``v_rest`` for ``t_rest`` is put at rest
     (velocities zeroed, no longer integrated). Balls at rest or out of bounds are not touched.
@@ -165,11 +165,17 @@ def advance(
             fl, top, tl, lx, lv = landed[i], apex[i], t_land[i], land_x[i], land_v[i]
             for k in range(n_steps):
                 S1 = step_free(lane_state(xi, vi, wi), h, integrator, coef, air, gravity)
-                x1, v1, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
-                fl, top, tl, lx, lv = track_flight(xi, vi, x1, v1, h, t0 + k * h, launch_height[i], fl, top, tl, lx, lv)
+                x_free, v_free, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
+                fl, top, tl, lx, lv = track_flight(xi, vi, x_free, v_free, h, t0 + k * h, launch_height[i], fl, top,
+                                                   tl, lx, lv)
+                v1 = v_free
                 touching = 0
-                if ground != 0:
-                    x1, v1, w1, touching = plane_contact(xi, x1, v1, w1, r, ground_p, ground_n, contact, v_inelastic, h)
+                for p in range(plane_p.shape[0]):
+                    v1, w1, t = plane_impulse(xi, v1, w1, r, plane_p[p], plane_n[p], contact, v_inelastic, h)
+                    touching |= t
+                x1 = x_free + h * (v1 - v_free)
+                for p in range(plane_p.shape[0]):
+                    x1 = plane_position(xi, x_free, x1, v_free, v1, r, plane_p[p], plane_n[p], contact.k_p, h)
                 xi, vi, wi = x1, v1, w1
                 if touching != 0 and vi.norm() < v_rest and r * wi.norm() < v_rest:
                     rt += h

@@ -1,0 +1,116 @@
+"""Initial balls of a scene: the launched ball, ``[[balls]]`` and ``[[blocks]]`` as numpy arrays.
+
+Random blocks use numpy's PCG64 generator with the block's seed, so a seed gives the same balls
+on every machine.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import Block, Scene, backspin_axis, launch_velocity, raise_config
+
+
+@dataclass(frozen=True)
+class Balls:
+    """Initial state of N balls: x [m], v [m/s], w [rad/s] (N, 3); radius [m], mass [kg] (N,);
+    ``track`` (N,) marks balls whose flight (carry, apex, landing) is recorded."""
+
+    x: np.ndarray
+    v: np.ndarray
+    w: np.ndarray
+    radius: np.ndarray
+    mass: np.ndarray
+    track: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return len(self.x)
+
+
+def _one(x, v, w, r, m, track) -> Balls:
+    return Balls(np.array([x], float), np.array([v], float), np.array([w], float), np.array([r], float),
+                 np.array([m], float), np.array([track]))
+
+
+def build_balls(scene: Scene) -> Balls:
+    """All balls the scene creates, in order: launch, ``[[balls]]``, then each block."""
+    parts: list[Balls] = []
+    R, M = scene.ball.radius, scene.ball.mass
+    if scene.launch is not None:
+        L = scene.launch
+        parts.append(_one(scene.launch_position(), launch_velocity(L.speed, L.angle_deg, L.direction_deg), L.spin,
+                          R, M, True))
+    for spec in scene.balls:
+        parts.append(_one(spec.position, spec.velocity, spec.spin, spec.radius or R, spec.mass or M, False))
+    for i, block in enumerate(scene.blocks):
+        parts.append(_block_balls(scene, block, i))
+    if not parts:
+        raise_config(scene.path, None, "the scene creates no ball: add a [launch] table, [[balls]] or [[blocks]]")
+    return Balls(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("x", "v", "w", "radius", "mass", "track")))
+
+
+def _block_balls(scene: Scene, block: Block, index: int) -> Balls:
+    rng = np.random.default_rng(block.seed)
+    R0 = block.radius or scene.ball.radius
+    M0 = block.mass or scene.ball.mass
+    r_max = R0 * (1.0 + block.radius_jitter)
+    key = f"blocks[{index}]"
+    if block.kind == "lattice":
+        counts = [int(c) for c in block.count]
+        spacing = block.spacing or 2.02 * r_max
+        if spacing < 2.0 * r_max:
+            raise_config(scene.path, f"{key}.spacing", f"must be at least one diameter ({2 * r_max:g} m) so balls do not overlap")
+        grid = np.stack(np.meshgrid(*[np.arange(c) for c in counts], indexing="ij"), axis=-1).reshape(-1, 3)
+        x = np.asarray(block.origin) + spacing * grid
+        free = 0.5 * (spacing - 2.0 * r_max)
+        jitter = min(block.jitter, free)
+    else:
+        n = block.number
+        lo, hi = np.asarray(block.box_min), np.asarray(block.box_max)
+        size = hi - lo - 2.0 * r_max
+        if np.any(size < 0):
+            raise_config(scene.path, f"{key}.box_max", f"the box is smaller than one ball (diameter {2 * r_max:g} m)")
+        spacing = max(2.02 * r_max, float(np.prod(size + 2 * r_max) / max(n, 1)) ** (1.0 / 3.0))
+        while True:
+            per_axis = np.floor(size / spacing).astype(int) + 1
+            if np.prod(per_axis) >= n or spacing <= 2.02 * r_max:
+                break
+            spacing = max(2.02 * r_max, spacing * 0.98)
+        if np.prod(per_axis) < n:
+            raise_config(scene.path, f"{key}.number", f"{n} balls of radius up to {r_max:g} m do not fit in the box "
+                         f"(at most {int(np.prod(per_axis))})")
+        sites = rng.choice(int(np.prod(per_axis)), size=n, replace=False)
+        grid = np.stack(np.unravel_index(np.sort(sites), per_axis), axis=-1)
+        x = lo + r_max + spacing * grid
+        jitter = 0.5 * (spacing - 2.0 * r_max)
+    n = len(x)
+    if jitter > 0:
+        x = x + rng.uniform(-jitter, jitter, size=(n, 3))
+    radius = R0 * (1.0 + block.radius_jitter * rng.uniform(-1.0, 1.0, n)) if block.radius_jitter else np.full(n, R0)
+    mass = M0 * (radius / R0) ** 3
+    v = np.tile(np.asarray(block.velocity, float), (n, 1))
+    if block.velocity_jitter:
+        v = v + rng.uniform(-block.velocity_jitter, block.velocity_jitter, size=(n, 3))
+    w = np.tile(np.asarray(block.spin, float), (n, 1))
+    track = np.zeros(n, bool)
+    if block.speed is not None and block.angle_deg is not None:
+        speed = rng.uniform(*block.speed, n)
+        angle = rng.uniform(*block.angle_deg, n)
+        direction = rng.uniform(*block.direction_deg, n)
+        spin = rng.uniform(*block.backspin, n)
+        v = v + np.array([launch_velocity(s, a, d) for s, a, d in zip(speed, angle, direction)])
+        w = w + spin[:, None] * np.array([backspin_axis(d) for d in direction])
+        track[:] = True
+    return Balls(x, v, w, radius, mass, track)
+
+
+def bounding_radius(balls: Balls) -> float:
+    """Largest ball radius [m]."""
+    return float(np.max(balls.radius)) if balls.n else 0.0
+
+
+_ = math  # math is kept for future layouts (hexagonal packing)
