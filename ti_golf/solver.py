@@ -36,14 +36,15 @@ class CollisionSolver:
         self.sorted_ids = ti.ndarray(ti.i32, n)
         self.count = ti.ndarray(ti.i32, self.mask + 1)
         self.start = ti.ndarray(ti.i32, self.mask + 2)
-        self.neighbours = ti.ndarray(ti.i32, (n, capacity))
-        self.n_neighbours = ti.ndarray(ti.i32, n)
         self.x_at_build = ti.ndarray(vec3, n)
         self.x_free = ti.ndarray(vec3, n)
         self.v_a, self.w_a = ti.ndarray(vec3, n), ti.ndarray(vec3, n)
         self.v_b, self.w_b = ti.ndarray(vec3, n), ti.ndarray(vec3, n)
+        self.lam = ti.ndarray(float, (n, capacity))
+        self.lam_plane = ti.ndarray(float, (n, max(1, len(model.plane_p))))
         self.flag = ti.ndarray(ti.i32, 1)
         self._valid = False
+        self._rebuild = True
 
     def build(self, state: State) -> None:
         """Sort balls into the hash grid and rebuild every neighbour list (widening the table if needed)."""
@@ -51,41 +52,37 @@ class CollisionSolver:
         grid.count_buckets(state.x, 1.0 / self.cell, self.mask, self.bucket, self.rank, self.count)
         grid.exclusive_scan(self.count, self.start)
         grid.scatter(self.bucket, self.rank, self.start, self.sorted_ids)
+        old = (self.neighbours, self.n_neighbours, self.lam) if self._valid else None
         while True:
+            neighbours = ti.ndarray(ti.i32, (state.n, self.capacity))
+            n_neighbours = ti.ndarray(ti.i32, state.n)
             grid.clear(self.flag)
             grid.build_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, self.skin, self.start,
-                                  self.sorted_ids, self.neighbours, self.n_neighbours, self.x_at_build, self.flag)
+                                  self.sorted_ids, neighbours, n_neighbours, self.x_at_build, self.flag)
             longest = int(self.flag.to_numpy()[0])
             if longest <= self.capacity:
                 break
             self.capacity = int(2 ** np.ceil(np.log2(longest)))
-            self.neighbours = ti.ndarray(ti.i32, (state.n, self.capacity))
+        lam = ti.ndarray(float, (state.n, self.capacity))
+        if old is not None:
+            grid.carry_over(old[0], old[1], old[2], neighbours, n_neighbours, lam)
+        self.neighbours, self.n_neighbours, self.lam = neighbours, n_neighbours, lam
         self.rebuilds += 1
         self._valid = True
 
     def step(self, model: Model, state: State) -> None:
         """Advance all balls by one step of ``model.dt``."""
-        if not self._valid:
+        if not self._valid or self._rebuild:
             self.build(state)
-        m, s, c = model, state, model.scene.contact
-        h = m.dt
+        m, s, w = model, state, model.scene.world
         grid.clear(self.flag)
-        collide.free_step(m.air, m.gravity, h, m.integrator, s.t, 0.5 * self.skin, m.radius, m.mass, m.launch_height,
-                          s.status, s.x, self.x_at_build, s.v, s.w, self.x_free, s.landed, s.apex, s.t_land,
-                          s.land_x, s.land_v, self.flag)
-        if int(self.flag.to_numpy()[0]):
-            self.build(state)
-        v_in, w_in = s.v, s.w  # the free-flight velocities
-        buffers = [(self.v_a, self.w_a), (self.v_b, self.w_b)]
-        for k in range(c.iterations):
-            v_out, w_out = buffers[k % 2]
-            collide.contact_pass(m.contact, h, m.v_inelastic, m.radius, m.mass, m.plane_p, m.plane_n, s.status, s.x,
-                                 self.neighbours, self.n_neighbours, v_in, w_in, v_out, w_out)
-            v_in, w_in = v_out, w_out
-        # finish_step reads x_free[i] and v[i] of ball i before writing x_new[i] and v[i], so it may
-        # write the new positions over x_free; other balls' old positions are read from state.x.
-        collide.finish_step(m.contact, h, m.scene.world.v_rest, m.scene.world.t_rest, m.radius, m.mass, m.plane_p,
-                            m.plane_n, self.neighbours, self.n_neighbours, s.x, self.x_free, s.v, v_in, w_in,
-                            self.x_free, s.v, s.w, s.status, s.rest_time)
-        s.x, self.x_free = self.x_free, s.x
-        s.t += h
+        collide.collision_step(
+            m.air, m.contact, m.gravity, m.dt, m.integrator, m.scene.contact.iterations, s.t, 0.5 * self.skin,
+            w.v_rest, w.t_rest, m.radius, m.mass, m.launch_height, m.plane_p, m.plane_n,
+            self.neighbours, self.n_neighbours, self.x_at_build, self.lam, self.lam_plane,
+            s.x, s.v, s.w, s.status, s.rest_time, self.x_free, self.v_a, self.w_a, self.v_b, self.w_b,
+            s.landed, s.apex, s.t_land, s.land_x, s.land_v, self.flag,
+        )
+        s.x, self.x_free = self.x_free, s.x  # the kernel left the new positions in x_free
+        s.t += m.dt
+        self._rebuild = bool(self.flag.to_numpy()[0])

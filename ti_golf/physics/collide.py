@@ -1,57 +1,139 @@
-"""Kernels of a step with ball–ball collisions (report Appendix B, every touching pair at once).
+"""One step of colliding balls in a single kernel (report Appendix B, every touching pair at once).
 
-A step, with h the time step:
+The kernel's top-level loops run one after another, each over all balls in parallel:
 
-1. ``free_step``: every awake ball flies freely (forces, integrator) to a predicted position;
-   flight records (apex, landing) are updated; balls that moved too far flag a list rebuild;
-2. ``contact_pass`` × ``contact.iterations``: Jacobi sweeps. Each ball gathers the impulses of
-   all its touching neighbours, computed from the velocities of the previous sweep, then those of
-   the planes. Every pair impulse is evaluated with the lower id as body a, so the two balls of a
-   pair see exactly opposite impulses (momentum is conserved to round-off) and no float atomics
-   are needed (results do not depend on thread order);
-3. ``finish_step``: positions from the final velocities (split at a plane's time of impact),
-   position projection of overlaps (B.18), status and rest detection.
+1. free flight: every awake ball flies under gravity and air forces (the integrator) to a
+   predicted position; flight records (apex, landing) are updated;
+2. warm start: last step's *resting* contact impulses (and their friction) are applied again, so
+   a stack starts the step supported instead of re-learning its support every step;
+3. ``iterations`` Jacobi sweeps: each ball gathers the impulses of its touching neighbours,
+   computed from the velocities of the previous sweep, then those of the planes. Every pair
+   impulse is evaluated with the lower id as body a, so the two balls of a pair apply exactly
+   opposite impulses (momentum is conserved to round-off) without float atomics, and results do
+   not depend on thread order;
+4. finish: positions from the final velocities (split at a plane's time of impact), position
+   projection of overlaps (B.18), status and rest detection, and whether the neighbour lists
+   must be rebuilt before the next step.
 """
 
 import taichi as ti
 
 from ..config import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING
 from .aero import V, W, X, coefficients, column
-from .contact import pair_impulse, plane_impulse, plane_position, spin_jolt
-from .grid import int_table
+from .contact import pair_impulse, plane_jolt, plane_position, spin_jolt, warm_impulse
+from .grid import int_table, real_table
 from .integrate import step_free, track_flight
 from .kernels import lane_state
 from .types import AirParams, ContactParams, float_array, int_array, vec3, vec3_array
 
 
+@ti.func
+def pair_geometry(x: ti.template(), radius: ti.template(), a, b):
+    """Unit normal from ball b to ball a, their surface gap [m], and whether the normal is defined."""
+    d = x[a] - x[b]
+    dist = d.norm()
+    n = vec3(0.0, 1.0, 0.0)
+    ok = dist > 0.0
+    if ok:
+        n = d / dist
+    return n, dist - radius[a] - radius[b], ok
+
+
+@ti.func
+def gather(dv, dw, P, n, i_is_a, r_a, r_b, inv_ma, inv_mb):
+    """Add the pair impulse P (on a; −P on b) to the velocity and spin jolts of ball i."""
+    if i_is_a:
+        dv += P * inv_ma
+        dw += spin_jolt(P, n, r_a, inv_ma)
+    else:
+        dv -= P * inv_mb
+        dw += spin_jolt(-P, -n, r_b, inv_mb)
+    return dv, dw
+
+
+@ti.func
+def sweep_ball(i, contact: ti.template(), h, v_inelastic, radius: ti.template(), mass: ti.template(),
+               plane_p: ti.template(), plane_n: ti.template(), status: ti.template(), x: ti.template(),
+               neighbours: ti.template(), n_neighbours: ti.template(), lam: ti.template(),
+               lam_plane: ti.template(), v_in: ti.template(), w_in: ti.template(), v_out: ti.template(),
+               w_out: ti.template()):
+    """One Jacobi sweep for ball i: gather its pair impulses, then its plane impulses."""
+    vi, wi = v_in[i], w_in[i]
+    if status[i] != OUT_OF_BOUNDS:
+        dv, dw = vec3(0.0), vec3(0.0)
+        for k in range(n_neighbours[i]):
+            j = neighbours[i, k]
+            if status[j] != OUT_OF_BOUNDS and (status[i] != AT_REST or status[j] != AT_REST):
+                a, b = ti.min(i, j), ti.max(i, j)  # evaluate every pair as (lower id, higher id)
+                n, gap, ok = pair_geometry(x, radius, a, b)
+                if ok:
+                    inv_ma, inv_mb = 1.0 / mass[a], 1.0 / mass[b]
+                    P, lam_ab, _ = pair_impulse(n, gap, v_in[a], w_in[a], radius[a], inv_ma, v_in[b], w_in[b],
+                                                radius[b], inv_mb, lam[i, k], contact.e, contact.mu, v_inelastic, h)
+                    lam[i, k] = lam_ab  # both balls of the pair store the same value
+                    dv, dw = gather(dv, dw, P, n, i == a, radius[a], radius[b], inv_ma, inv_mb)
+        vi += dv
+        wi += dw
+        for p in range(plane_p.shape[0]):
+            n = plane_n[p]
+            gap = (x[i] - plane_p[p]).dot(n) - radius[i]
+            P, lam_p, _ = pair_impulse(n, gap, vi, wi, radius[i], 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0,
+                                       lam_plane[i, p], contact.e, contact.mu, v_inelastic, h)
+            if P.dot(n) != 0.0:
+                vi, wi = plane_jolt(P, lam_p - lam_plane[i, p], vi, wi, radius[i], n, contact.mu_roll)
+            lam_plane[i, p] = lam_p
+    v_out[i], w_out[i] = vi, wi
+
+
 @ti.kernel
-def free_step(
+def collision_step(
     # Model:
     air: AirParams,
+    contact: ContactParams,
     gravity: vec3,
     h: float,
     integrator: ti.template(),
+    iterations: ti.template(),
     t0: float,
     half_skin: float,
+    v_rest: float,
+    t_rest: float,
     radius: float_array,
     mass: float_array,
     launch_height: float_array,
-    status: int_array,
-    x: vec3_array,
+    plane_p: vec3_array,
+    plane_n: vec3_array,
+    # Neighbour lists (built by grid.build_neighbours) and their accumulated resting impulses:
+    neighbours: int_table,
+    n_neighbours: int_array,
     x_at_build: vec3_array,
-    # State in → free-flight out:
+    lam: real_table,
+    lam_plane: real_table,
+    # State in/out:
+    x: vec3_array,
     v: vec3_array,
     w: vec3_array,
+    status: int_array,
+    rest_time: float_array,
+    # Scratch:
     x_free: vec3_array,
+    v_a: vec3_array,
+    w_a: vec3_array,
+    v_b: vec3_array,
+    w_b: vec3_array,
     # Flight record in/out:
     landed: int_array,
     apex: float_array,
     t_land: float_array,
     land_x: vec3_array,
     land_v: vec3_array,
-    rebuild: int_array,
+    flag: int_array,
 ):
-    """Free flight of every awake ball over one step; ``rebuild[0]`` = 1 when a neighbour list may miss a contact."""
+    """Advance all balls by one step of ``h`` [s]. On return ``flag[0]`` is 1 when some ball may
+    come within reach of a ball missing from its neighbour list next step (rebuild the lists).
+    New positions are left in ``x_free`` (swap it with ``x``)."""
+    v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
+    # 1. free flight (v, w become the free-flight velocities)
     for i in range(x.shape[0]):
         xi = x[i]
         x1, v1, w1 = xi, vec3(0.0), vec3(0.0)
@@ -62,98 +144,52 @@ def free_step(
             landed[i], apex[i], t_land[i], land_x[i], land_v[i] = track_flight(
                 xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i], land_v[i])
         x_free[i], v[i], w[i] = x1, v1, w1
-        if (xi - x_at_build[i]).norm() + h * v1.norm() > half_skin:
-            rebuild[0] = 1
-
-
-@ti.kernel
-def contact_pass(
-    # Model:
-    contact: ContactParams,
-    h: float,
-    v_inelastic: float,
-    radius: float_array,
-    mass: float_array,
-    plane_p: vec3_array,
-    plane_n: vec3_array,
-    status: int_array,
-    x: vec3_array,
-    neighbours: int_table,
-    n_neighbours: int_array,
-    # Velocities of the previous sweep in, of this sweep out:
-    v_in: vec3_array,
-    w_in: vec3_array,
-    v_out: vec3_array,
-    w_out: vec3_array,
-):
-    """One Jacobi sweep of ball–ball and ball–plane impulses (gathered per ball)."""
+    # 2. warm start with last step's resting impulses
     for i in range(x.shape[0]):
-        vi, wi = v_in[i], w_in[i]
+        vi, wi = v[i], w[i]
         if status[i] != OUT_OF_BOUNDS:
             dv, dw = vec3(0.0), vec3(0.0)
             for k in range(n_neighbours[i]):
-                j = neighbours[i, k]
-                if status[j] != OUT_OF_BOUNDS and (status[i] != AT_REST or status[j] != AT_REST):
-                    a, b = ti.min(i, j), ti.max(i, j)  # evaluate every pair as (lower id, higher id)
-                    d = x[a] - x[b]
-                    dist = d.norm()
-                    if dist > 0.0:
-                        n = d / dist
+                if lam[i, k] > 0.0:
+                    j = neighbours[i, k]
+                    a, b = ti.min(i, j), ti.max(i, j)
+                    n, _, ok = pair_geometry(x, radius, a, b)
+                    if ok:
                         inv_ma, inv_mb = 1.0 / mass[a], 1.0 / mass[b]
-                        P, touching = pair_impulse(n, dist - radius[a] - radius[b], v_in[a], w_in[a], radius[a],
-                                                   inv_ma, v_in[b], w_in[b], radius[b], inv_mb, contact.e, contact.mu,
-                                                   v_inelastic, h)
-                        if i == a:
-                            dv += P * inv_ma
-                            dw += spin_jolt(P, n, radius[a], inv_ma)
-                        else:
-                            dv -= P * inv_mb
-                            dw += spin_jolt(-P, -n, radius[b], inv_mb)
+                        P = warm_impulse(n, v[a], w[a], radius[a], v[b], w[b], radius[b], inv_ma + inv_mb,
+                                         lam[i, k], contact.mu)
+                        dv, dw = gather(dv, dw, P, n, i == a, radius[a], radius[b], inv_ma, inv_mb)
             vi += dv
             wi += dw
-            for p in range(plane_p.shape[0]):
-                vi, wi, _ = plane_impulse(x[i], vi, wi, radius[i], plane_p[p], plane_n[p], contact, v_inelastic, h)
-        v_out[i], w_out[i] = vi, wi
-
-
-@ti.kernel
-def finish_step(
-    # Model:
-    contact: ContactParams,
-    h: float,
-    v_rest: float,
-    t_rest: float,
-    radius: float_array,
-    mass: float_array,
-    plane_p: vec3_array,
-    plane_n: vec3_array,
-    neighbours: int_table,
-    n_neighbours: int_array,
-    x: vec3_array,
-    x_free: vec3_array,
-    v_free: vec3_array,
-    v_final: vec3_array,
-    w_final: vec3_array,
-    # out:
-    x_new: vec3_array,
-    v: vec3_array,
-    w: vec3_array,
-    status: int_array,
-    rest_time: float_array,
-):
-    """Positions, projections, status and rest detection at the end of the step.
-
-    ``v`` may be the same array as ``v_free`` (it is read before it is written, per ball).
-    """
+            for p in range(plane_n.shape[0]):
+                if lam_plane[i, p] > 0.0:
+                    n = plane_n[p]
+                    P = warm_impulse(n, vi, wi, radius[i], vec3(0.0), vec3(0.0), 0.0, 1.0, lam_plane[i, p], contact.mu)
+                    vi, wi = plane_jolt(P, lam_plane[i, p], vi, wi, radius[i], n, contact.mu_roll)
+        v_b[i], w_b[i] = vi, wi
+    # 3. Jacobi sweeps, ping-pong between the (v_a, w_a) and (v_b, w_b) buffers
+    for k in ti.static(range(iterations)):
+        if ti.static(k % 2 == 0):
+            for i in range(x.shape[0]):
+                sweep_ball(i, contact, h, v_inelastic, radius, mass, plane_p, plane_n, status, x, neighbours,
+                           n_neighbours, lam, lam_plane, v_b, w_b, v_a, w_a)
+        else:
+            for i in range(x.shape[0]):
+                sweep_ball(i, contact, h, v_inelastic, radius, mass, plane_p, plane_n, status, x, neighbours,
+                           n_neighbours, lam, lam_plane, v_a, w_a, v_b, w_b)
+    # 4. positions, projections, status, rest; then whether the lists stay valid
     for i in range(x.shape[0]):
         st = status[i]
+        v_final, w_final = v_a[i], w_a[i]
+        if ti.static(iterations % 2 == 0):
+            v_final, w_final = v_b[i], w_b[i]
+        x1 = x[i]
         if st != OUT_OF_BOUNDS:
             xi, ri = x[i], radius[i]
-            vf, wf = v_final[i], w_final[i]
-            x1 = x_free[i] + h * (vf - v_free[i])
+            x1 = x_free[i] + h * (v_final - v[i])
             touching = 0
             for p in range(plane_p.shape[0]):
-                x1 = plane_position(xi, x_free[i], x1, v_free[i], vf, ri, plane_p[p], plane_n[p], contact.k_p, h)
+                x1 = plane_position(xi, x_free[i], x1, v[i], v_final, ri, plane_p[p], plane_n[p], contact.k_p, h)
                 if (x1 - plane_p[p]).dot(plane_n[p]) - ri < 0.01 * ri:
                     touching = 1
             for k in range(n_neighbours[i]):  # position projection k_p·m_red·Δx·n̂ (B.18)
@@ -165,22 +201,22 @@ def finish_step(
                     touching = 1
                 if overlap > 0.0 and dist > 0.0:
                     x1 += contact.k_p * mass[j] / (mass[i] + mass[j]) * overlap * (d / dist)
-            if st == AT_REST and (vf.norm() > 0.0 or wf.norm() > 0.0):
+            if st == AT_REST and (v_final.norm() > 0.0 or w_final.norm() > 0.0):
                 st = FLYING  # woken by an impulse
             if st != AT_REST:
                 rt = rest_time[i]
-                if touching != 0 and vf.norm() < v_rest and ri * wf.norm() < v_rest:
+                if touching != 0 and v_final.norm() < v_rest and ri * w_final.norm() < v_rest:
                     rt += h
                 else:
                     rt = 0.0
                 st = ROLLING if touching != 0 else FLYING
                 if rt >= t_rest and touching != 0:
                     st = AT_REST
-                    vf, wf = vec3(0.0), vec3(0.0)
+                    v_final, w_final = vec3(0.0), vec3(0.0)
                     x1 = xi
                 rest_time[i] = rt
-            x_new[i] = x1
-            v[i], w[i] = vf, wf
             status[i] = st
-        else:
-            x_new[i] = x[i]
+        x_free[i] = x1
+        v[i], w[i] = v_final, w_final
+        if (x1 - x_at_build[i]).norm() + 2.0 * h * v_final.norm() > half_skin:
+            flag[0] = 1

@@ -26,29 +26,58 @@ _TINY = 1e-12
 
 
 @ti.func
-def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, e, mu, v_inelastic, h):
-    """Impulse P [N·s] on body a from body b (−P acts on b), or zero when they do not collide.
+def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e, mu, v_inelastic, h):
+    """One sweep's impulse P [N·s] on body a from body b (−P acts on b).
 
     ``n``: unit normal from b to a; ``gap``: surface distance [m] (negative when overlapping);
-    ``inv_m_b = 0`` and ``r_b = 0`` make b a plane. Returns (P, touching).
+    ``inv_m_b = 0`` and ``r_b = 0`` make b a plane. ``lam`` is the pair's accumulated *resting*
+    normal impulse [N·s] (warm-started from the last step). An approaching pair gets the report's
+    jolt −(1+e)·m_red·v_n; a slow approach (below ``v_inelastic``) is inelastic and adds to
+    ``lam``; a separating pair gives back at most ``lam`` (so a warm start that pushed too hard is
+    undone, but elastic impacts are never pulled back). Coulomb friction, bounded by μ times the
+    normal impulse of this sweep, can at most stop the slip at the contact point.
+    Returns (P, lam, touching).
     """
     P = vec3(0.0)
     touching = 0
+    inv_m = inv_m_a + inv_m_b
     v_n = (v_a - v_b).dot(n)
+    j_n = 0.0
     if gap + h * ti.min(v_n, 0.0) < 0.0:
         touching = 1
         if v_n < 0.0:
-            inv_m = inv_m_a + inv_m_b
-            if -v_n < v_inelastic:
-                e = 0.0
-            j_n = -(1.0 + e) * v_n / inv_m
-            slip = v_a + w_a.cross(-r_a * n) - v_b - w_b.cross(r_b * n)
-            slip_t = slip - slip.dot(n) * n
-            s = slip_t.norm()
-            P = j_n * n
-            if s > _TINY:
-                P -= ti.min(mu * j_n, s / (3.5 * inv_m)) * (slip_t / s)
-    return P, touching
+            if -v_n < v_inelastic or e == 0.0:
+                j_n = -v_n / inv_m
+                lam += j_n
+            else:
+                j_n = -(1.0 + e) * v_n / inv_m
+    if v_n > 0.0 and lam > 0.0:
+        j_n = -ti.min(lam, v_n / inv_m)
+        lam += j_n
+    if j_n != 0.0:
+        P = j_n * n
+        if j_n > 0.0:
+            P += friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, inv_m, mu * j_n)
+    return P, lam, touching
+
+
+@ti.func
+def friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, inv_m, bound):
+    """Friction impulse on a [N·s], at most ``bound`` and at most what stops the contact-point slip
+    (solid spheres: an impulse P changes the slip by (7/2)·(1/m_a + 1/m_b)·P)."""
+    slip = v_a + w_a.cross(-r_a * n) - v_b - w_b.cross(r_b * n)
+    slip_t = slip - slip.dot(n) * n
+    s = slip_t.norm()
+    P = vec3(0.0)
+    if s > _TINY:
+        P = -ti.min(bound, s / (3.5 * inv_m)) * (slip_t / s)
+    return P
+
+
+@ti.func
+def warm_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, inv_m, lam, mu):
+    """The impulse that re-applies a pair's resting normal impulse ``lam`` with its friction."""
+    return lam * n + friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, inv_m, mu * lam)
 
 
 @ti.func
@@ -72,18 +101,24 @@ def rolling_resistance(v, radius, mu_roll, j_n, n):
 def plane_impulse(x, v, w, radius, p, n, contact, v_inelastic, h):
     """Velocity and spin of a ball after its contact with the plane (p, n̂). Returns (v, ω, touching)."""
     gap = (x - p).dot(n) - radius
-    P, touching = pair_impulse(n, gap, v, w, radius, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, contact.e, contact.mu,
-                               v_inelastic, h)
+    P, lam, touching = pair_impulse(n, gap, v, w, radius, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0, contact.e,
+                                    contact.mu, v_inelastic, h)
     if touching != 0 and P.dot(n) > 0.0:
-        j_n = P.dot(n)
-        v_new = v + P
-        w_new = w + spin_jolt(P, n, radius, 1.0)
-        if j_n < v_inelastic:  # resting contact (e = 0 was used): rolling resistance
-            dv, dw = rolling_resistance(v_new, radius, contact.mu_roll, j_n, n)
-            v_new += dv
-            w_new += dw
-        v, w = v_new, w_new
+        v, w = plane_jolt(P, lam, v, w, radius, n, contact.mu_roll)
     return v, w, touching
+
+
+@ti.func
+def plane_jolt(P, lam, v, w, radius, n, mu_roll):
+    """Apply a plane's impulse per unit mass P [m/s] to a ball and, when it is a resting impulse
+    (it added ``lam`` > 0), rolling resistance bounded by μ_roll·P·n̂. Returns (v, ω)."""
+    v_new = v + P
+    w_new = w + spin_jolt(P, n, radius, 1.0)
+    if lam > 0.0:
+        dv, dw = rolling_resistance(v_new, radius, mu_roll, P.dot(n), n)
+        v_new += dv
+        w_new += dw
+    return v_new, w_new
 
 
 @ti.func

@@ -16,10 +16,10 @@ half the skin since the build.
 
 import taichi as ti
 
-from .types import float_array, int_array, vec3_array
+from .types import float_array, int_array, real, vec3_array
 
-ivec3 = ti.types.vector(3, ti.i32)
 int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
+real_table = ti.types.ndarray(dtype=real, ndim=2)
 
 
 @ti.func
@@ -108,3 +108,26 @@ def build_neighbours(
         n_neighbours[i] = ti.min(n, capacity)
         x_at_build[i] = xi
         ti.atomic_max(longest[0], n)
+
+
+@ti.kernel
+def carry_over(
+    old_neighbours: int_table,
+    old_count: int_array,
+    old_lam: real_table,
+    neighbours: int_table,
+    n_neighbours: int_array,
+    lam: real_table,
+):
+    """Carry each pair's accumulated impulse from the old to the new neighbour lists (both sorted
+    by id: a merge per ball); new pairs start at zero."""
+    for i in range(n_neighbours.shape[0]):
+        k_old = 0
+        for k in range(n_neighbours[i]):
+            j = neighbours[i, k]
+            while k_old < old_count[i] and old_neighbours[i, k_old] < j:
+                k_old += 1
+            value = 0.0
+            if k_old < old_count[i] and old_neighbours[i, k_old] == j:
+                value = old_lam[i, k_old]
+            lam[i, k] = value
