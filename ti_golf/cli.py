@@ -208,7 +208,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     record_every = args.record_every
     if args.plot and not record_every:
         duration = args.t if args.t is not None else (args.steps or 0) * sim.dt or sim.scene.world.t_end
-        record_every = max(1, int(duration / sim.dt / 2000))
+        record_every = max(1, int(duration / sim.dt / 400))
     progress = _Progress()
     t0 = time.perf_counter()
     rec = None

@@ -66,11 +66,14 @@ def plot_run(rec: "Recording", path: str | os.PathLike[str], title: str = "", ma
     t, x, w = a["traj_t"], a["traj_x"], a["traj_w"]
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), gridspec_kw={"height_ratios": [1.3, 1]})
     n = x.shape[1] if x.ndim == 3 else 0
+    shown = x[:, :max_balls] if n else x
+    spread = np.ptp(shown.reshape(-1, 3), axis=0) if n else np.zeros(3)
+    top = spread[1] < 0.05 * max(spread[0], spread[2], 1e-12)  # everything on the ground: show the top view
     for i in range(min(n, max_balls)):
-        ax1.plot(x[:, i, 0], x[:, i, 1], lw=1.0)
+        ax1.plot(x[:, i, 0], x[:, i, 2] if top else x[:, i, 1], lw=1.0)
         ax2.plot(t, np.linalg.norm(w[:, i, :], axis=1), lw=1.0)
     ax1.set_xlabel("x [m]")
-    ax1.set_ylabel("y [m]")
+    ax1.set_ylabel("z [m] (top view)" if top else "y [m]")
     ax1.set_aspect("equal", adjustable="datalim")
     ax1.grid(alpha=0.3)
     ax1.set_title(title, fontsize=9)

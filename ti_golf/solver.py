@@ -31,6 +31,7 @@ class CollisionSolver:
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
         self.capacity = capacity
         self.rebuilds = 0
+        self.cell_ids = ti.ndarray(ti.types.vector(3, ti.i32), n)
         self.bucket = ti.ndarray(ti.i32, n)
         self.rank = ti.ndarray(ti.i32, n)
         self.sorted_ids = ti.ndarray(ti.i32, n)
@@ -40,7 +41,8 @@ class CollisionSolver:
         self.x_free = ti.ndarray(vec3, n)
         self.v_a, self.w_a = ti.ndarray(vec3, n), ti.ndarray(vec3, n)
         self.v_b, self.w_b = ti.ndarray(vec3, n), ti.ndarray(vec3, n)
-        self.lam = ti.ndarray(float, (n, capacity))
+        self.neighbours = self.n_neighbours = self.lam = None
+        self._spare = None
         self.lam_plane = ti.ndarray(float, (n, max(1, len(model.plane_p))))
         self.flag = ti.ndarray(ti.i32, 1)
         self._valid = False
@@ -49,26 +51,34 @@ class CollisionSolver:
     def build(self, state: State) -> None:
         """Sort balls into the hash grid and rebuild every neighbour list (widening the table if needed)."""
         grid.clear(self.count)
-        grid.count_buckets(state.x, 1.0 / self.cell, self.mask, self.bucket, self.rank, self.count)
+        grid.count_buckets(state.x, 1.0 / self.cell, self.mask, self.cell_ids, self.bucket, self.rank, self.count)
         grid.exclusive_scan(self.count, self.start)
         grid.scatter(self.bucket, self.rank, self.start, self.sorted_ids)
-        old = (self.neighbours, self.n_neighbours, self.lam) if self._valid else None
         while True:
-            neighbours = ti.ndarray(ti.i32, (state.n, self.capacity))
-            n_neighbours = ti.ndarray(ti.i32, state.n)
+            new = self._spare_lists(state.n)
             grid.clear(self.flag)
-            grid.build_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, self.skin, self.start,
-                                  self.sorted_ids, neighbours, n_neighbours, self.x_at_build, self.flag)
+            grid.build_neighbours(state.x, self._model.radius, self.cell_ids, self.mask, self.skin, self.start,
+                                  self.sorted_ids, new[0], new[1], self.x_at_build, self.flag)
             longest = int(self.flag.to_numpy()[0])
             if longest <= self.capacity:
                 break
             self.capacity = int(2 ** np.ceil(np.log2(longest)))
-        lam = ti.ndarray(float, (state.n, self.capacity))
-        if old is not None:
-            grid.carry_over(old[0], old[1], old[2], neighbours, n_neighbours, lam)
-        self.neighbours, self.n_neighbours, self.lam = neighbours, n_neighbours, lam
+        if self._valid:
+            grid.carry_over(self.neighbours, self.n_neighbours, self.lam, *new)
+        else:
+            grid.clear2(new[2])
+        # the old lists become the spare for the next rebuild (no allocation per rebuild)
+        self._spare = (self.neighbours, self.n_neighbours, self.lam)
+        self.neighbours, self.n_neighbours, self.lam = new
         self.rebuilds += 1
         self._valid = True
+
+    def _spare_lists(self, n: int) -> tuple:
+        """Neighbour table, counts and impulses of the current capacity, reusing the spare set."""
+        if self._spare is None or self._spare[0] is None or self._spare[0].shape[1] != self.capacity:
+            self._spare = (ti.ndarray(ti.i32, (n, self.capacity)), ti.ndarray(ti.i32, n),
+                           ti.ndarray(float, (n, self.capacity)))
+        return self._spare
 
     def step(self, model: Model, state: State) -> None:
         """Advance all balls by one step of ``model.dt``."""

@@ -19,6 +19,7 @@ import taichi as ti
 from .types import float_array, int_array, real, vec3_array
 
 int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
+ivec3_array = ti.types.ndarray(dtype=ti.types.vector(3, ti.i32), ndim=1)
 real_table = ti.types.ndarray(dtype=real, ndim=2)
 
 
@@ -44,10 +45,20 @@ def clear(a: int_array):
 
 
 @ti.kernel
-def count_buckets(x: vec3_array, inv_cell: float, mask: ti.i32, bucket: int_array, rank: int_array, count: int_array):
-    """Bucket of every ball and its rank among the balls of that bucket."""
+def clear2(a: real_table):
+    """Set every entry of a float table to zero."""
+    for i, k in a:
+        a[i, k] = 0.0
+
+
+@ti.kernel
+def count_buckets(x: vec3_array, inv_cell: float, mask: ti.i32, cell: ivec3_array, bucket: int_array,
+                  rank: int_array, count: int_array):
+    """Cell and bucket of every ball and its rank among the balls of that bucket."""
     for i in range(x.shape[0]):
-        b = bucket_of(cell_of(x[i], inv_cell), mask)
+        c = cell_of(x[i], inv_cell)
+        b = bucket_of(c, mask)
+        cell[i] = c
         bucket[i] = b
         rank[i] = ti.atomic_add(count[b], 1)
 
@@ -71,7 +82,7 @@ def scatter(bucket: int_array, rank: int_array, start: int_array, sorted_ids: in
 def build_neighbours(
     x: vec3_array,
     radius: float_array,
-    inv_cell: float,
+    cell: ivec3_array,
     mask: ti.i32,
     skin: float,
     start: int_array,
@@ -85,17 +96,18 @@ def build_neighbours(
     """Neighbour lists (ascending ids) of balls closer than r_a + r_b + skin; ``longest[0]`` gets
     the longest list found (it may exceed the table's width: the caller then rebuilds wider)."""
     capacity = neighbours.shape[1]
-    for i in range(x.shape[0]):
+    for idx in range(x.shape[0]):
+        i = sorted_ids[idx]  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         xi = x[i]
         ri = radius[i]
-        c = cell_of(xi, inv_cell)
+        c = cell[i]
         n = 0
         for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2), (-1, 2)))):
             cc = c + d
             b = bucket_of(cc, mask)
             for k in range(start[b], start[b + 1]):
                 j = sorted_ids[k]
-                if j != i and (cell_of(x[j], inv_cell) == cc).all():
+                if j != i and (cell[j] == cc).all():  # not a ball of another cell in the same bucket
                     reach = ri + radius[j] + skin
                     if (x[j] - xi).norm_sqr() < reach * reach:
                         if n < capacity:  # insertion keeps the list sorted by id
