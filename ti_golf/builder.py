@@ -6,7 +6,6 @@ on every machine.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -107,10 +106,3 @@ def _block_balls(scene: Scene, block: Block, index: int) -> Balls:
         track[:] = True
     return Balls(x, v, w, radius, mass, track)
 
-
-def bounding_radius(balls: Balls) -> float:
-    """Largest ball radius [m]."""
-    return float(np.max(balls.radius)) if balls.n else 0.0
-
-
-_ = math  # math is kept for future layouts (hexagonal packing)

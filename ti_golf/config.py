@@ -139,6 +139,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
             Key("iterations", "int", 4, "-",
                 "Jacobi sweeps over all touching pairs per step (more: stiffer stacks)",
                 lambda v: None if 1 <= v <= 100 else "must be in [1, 100]", "[1, 100]"),
+            Key("relax", "float", 0.5, "-",
+                "Jacobi relaxation of resting ball–ball impulses (1: full; lower is steadier in dense piles)",
+                lambda v: None if 0 < v <= 1 else "must be in (0, 1]", "(0, 1]"),
             Key("skin", "float", 0.1, "-",
                 "neighbour-list skin as a fraction of the largest radius (lists are rebuilt when a ball moves skin/2)",
                 lambda v: None if 0 < v <= 2 else "must be in (0, 2]", "(0, 2]"),
@@ -301,6 +304,7 @@ class Contact:
     k_p: float = _default("contact", "k_p")
     mu_roll: float = _default("contact", "mu_roll")
     iterations: int = _default("contact", "iterations")
+    relax: float = _default("contact", "relax")
     skin: float = _default("contact", "skin")
     v_bounce: float = _default("contact", "v_bounce")
 

@@ -42,7 +42,7 @@ class Model:
         a, c, w = scene.air, scene.contact, scene.world
         self.air = AirParams(rho=a.rho, gamma=a.gamma, C_D=a.C_D, C_M=a.C_M, omega_M=a.omega_M,
                              C_omega=a.C_omega, wind=vec3(*a.wind))
-        self.contact = ContactParams(e=c.e, mu=c.mu, k_p=c.k_p, mu_roll=c.mu_roll, v_bounce=c.v_bounce)
+        self.contact = ContactParams(e=c.e, mu=c.mu, k_p=c.k_p, mu_roll=c.mu_roll, relax=c.relax, v_bounce=c.v_bounce)
         self.gravity = vec3(*w.gravity)
         self.integrator = INTEGRATOR_CODES[w.integrator]
         self.dt = w.dt

@@ -69,7 +69,8 @@ def sweep_ball(i, contact: ti.template(), h, v_inelastic, radius: ti.template(),
                 if ok:
                     inv_ma, inv_mb = 1.0 / mass[a], 1.0 / mass[b]
                     P, lam_ab, _ = pair_impulse(n, gap, v_in[a], w_in[a], radius[a], inv_ma, v_in[b], w_in[b],
-                                                radius[b], inv_mb, lam[i, k], contact.e, contact.mu, v_inelastic, h)
+                                                radius[b], inv_mb, lam[i, k], contact.e, contact.mu, v_inelastic, h,
+                                                contact.relax)
                     lam[i, k] = lam_ab  # both balls of the pair store the same value
                     dv, dw = gather(dv, dw, P, n, i == a, radius[a], radius[b], inv_ma, inv_mb)
         vi += dv

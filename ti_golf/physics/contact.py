@@ -26,16 +26,19 @@ _TINY = 1e-12
 
 
 @ti.func
-def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e, mu, v_inelastic, h):
+def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e, mu, v_inelastic, h, relax=1.0):
     """One sweep's impulse P [N·s] on body a from body b (−P acts on b).
 
     ``n``: unit normal from b to a; ``gap``: surface distance [m] (negative when overlapping);
     ``inv_m_b = 0`` and ``r_b = 0`` make b a plane. ``lam`` is the pair's accumulated *resting*
     normal impulse [N·s] (warm-started from the last step). An approaching pair gets the report's
-    jolt −(1+e)·m_red·v_n; a slow approach (below ``v_inelastic``) is inelastic and adds to
-    ``lam``; a separating pair gives back at most ``lam`` (so a warm start that pushed too hard is
+    jolt −(1+e)·m_red·v_n; a slow approach (below ``v_inelastic``), or one between bodies already
+    pressing on each other (``lam`` at least a quarter of the impact's impulse), is inelastic and
+    adds to ``lam`` (in a pile, noise must not turn into bounces); a separating pair gives back at most ``lam`` (so a warm start that pushed too hard is
     undone, but elastic impacts are never pulled back). Coulomb friction, bounded by μ times the
     normal impulse of this sweep, can at most stop the slip at the contact point.
+    ``relax`` ∈ (0, 1] scales the impulses of lasting contacts in a Jacobi sweep: a ball pressed by
+    many neighbours at once would otherwise receive all their corrections together and overshoot.
     Returns (P, lam, touching).
     """
     P = vec3(0.0)
@@ -46,18 +49,25 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
     if gap + h * ti.min(v_n, 0.0) < 0.0:
         touching = 1
         if v_n < 0.0:
-            if -v_n < v_inelastic or e == 0.0:
+            # a lasting contact already presses with an impulse comparable to this approach: in a
+            # pile, noise must not turn into bounces; a real impact is much larger
+            lasting = lam * inv_m > -0.25 * v_n
+            if -v_n < v_inelastic or lasting:
                 j_n = -v_n / inv_m
+                if lasting:
+                    j_n *= relax
                 lam += j_n
+            elif e == 0.0:
+                j_n = -v_n / inv_m  # a plastic impact (not a supporting contact: not accumulated)
             else:
                 j_n = -(1.0 + e) * v_n / inv_m
     if v_n > 0.0 and lam > 0.0:
-        j_n = -ti.min(lam, v_n / inv_m)
+        j_n = -ti.min(lam, relax * v_n / inv_m)
         lam += j_n
     if j_n != 0.0:
         P = j_n * n
         if j_n > 0.0:
-            P += friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, inv_m, mu * j_n)
+            P += friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, inv_m / relax, mu * j_n)
     return P, lam, touching
 
 

@@ -27,6 +27,7 @@ ContactParams = ti.types.struct(
     mu=float,  # Coulomb friction (B.15)
     k_p=float,  # position projection factor (B.18)
     mu_roll=float,  # rolling resistance: deceleration μ_roll·g_n while rolling
+    relax=float,  # Jacobi relaxation of resting ball–ball impulses
     v_bounce=float,  # approach speeds below v_bounce + 2|g|h are inelastic [m/s]
 )
 """Impulse-contact parameters (report Appendix B)."""

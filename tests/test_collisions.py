@@ -1,0 +1,196 @@
+"""Ball–ball collisions (report Appendix B): neighbour search, closed-form two-ball results,
+conservation laws, Newton's cradle, stacking and determinism."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import ti_golf as tg
+from ti_golf.solver import CollisionSolver
+
+# no gravity, air, walls or friction unless a test says otherwise
+FREE = ["world.ground=false", "air.rho=0", "world.gravity=[0,0,0]", "world.integrator=semi_implicit",
+        "world.dt=0.0005", "contact.mu=0", "world.v_rest=0"]
+
+
+def scene(*overrides: str) -> tg.Scene:
+    return tg.load_scene("lab_vacuum", [*FREE, *overrides])
+
+
+# ---------------------------------------------------------------------------------------------
+# Neighbour search
+# ---------------------------------------------------------------------------------------------
+def _brute_force_pairs(x, r, skin):
+    d = np.linalg.norm(x[:, None, :] - x[None, :, :], axis=-1)
+    close = d < r[:, None] + r[None, :] + skin
+    np.fill_diagonal(close, False)
+    return {(i, j) for i, j in zip(*np.nonzero(close))}
+
+
+def _random_sets():
+    rng = np.random.default_rng(3)
+    n = 1500
+    mixed = rng.uniform(0.01, 0.05, n)
+    clustered = np.concatenate([rng.normal(c, 0.08, (n // 3, 3)) for c in ([0, 0, 0], [5, 1, -2], [-3, 0, 4])])
+    sparse = rng.uniform(-3, 3, (n, 3))
+    far = np.concatenate([rng.uniform(-0.5, 0.5, (n // 2, 3)), rng.uniform(-0.5, 0.5, (n // 2, 3)) + 1e4])
+    negative = rng.uniform(-0.6, 0.6, (n, 3)) - 1234.5  # cells with negative coordinates
+    return {"clustered": (clustered, mixed[: len(clustered)]), "sparse": (sparse, mixed),
+            "far_apart": (far, np.full(len(far), 0.03)), "negative": (negative, mixed)}
+
+
+@pytest.mark.parametrize("name", ["clustered", "sparse", "far_apart", "negative"])
+def test_grid_neighbours_equal_brute_force(name):
+    x, r = _random_sets()[name]
+    sim = tg.Simulation(scene(), x=x, radius=r, mass=0.045 * (r / 0.02) ** 3)
+    solver: CollisionSolver = sim.solver
+    solver.build(sim.state)
+    nbr, count = solver.neighbours.to_numpy(), solver.n_neighbours.to_numpy()
+    found = {(i, int(j)) for i in range(len(x)) for j in nbr[i, : count[i]]}
+    expected = _brute_force_pairs(x, r, solver.skin)
+    assert found == expected
+    assert len(expected) > 0
+    for i in range(len(x)):  # lists are sorted by id: sums over them do not depend on threads
+        assert np.all(np.diff(nbr[i, : count[i]]) > 0)
+
+
+# ---------------------------------------------------------------------------------------------
+# Two balls against closed form
+# ---------------------------------------------------------------------------------------------
+def _collide(sc, v, mass=(0.045, 0.045), w=None, offset=(0.0, 0.0, 0.0), t=0.1):
+    x = np.array([[0.0, 1.0, 0.0], [0.05, 1.0, 0.0]]) + np.array([[0, 0, 0], offset])
+    sim = tg.Simulation(sc, x=x, v=v, w=w, mass=list(mass))
+    sim.run(t=t)
+    return sim
+
+
+def test_equal_masses_head_on_exchange_velocities():
+    sim = _collide(scene("contact.e=1"), v=[[1.5, 0, 0], [-0.5, 0, 0]])
+    np.testing.assert_allclose(sim.v, [[-0.5, 0, 0], [1.5, 0, 0]], atol=1e-12)
+
+
+@pytest.mark.parametrize("e", [0.0, 0.3, 0.8])
+def test_unequal_masses_with_restitution(e):
+    # textbook 1-D impact: v1' = (m1 u1 + m2 u2 + m2 e (u2 − u1)) / (m1 + m2), likewise v2'
+    m1, m2, u1, u2 = 0.045, 0.12, 2.0, -0.5
+    sim = _collide(scene(f"contact.e={e}", "contact.v_bounce=0"), v=[[u1, 0, 0], [u2, 0, 0]], mass=(m1, m2))
+    v1 = (m1 * u1 + m2 * u2 + m2 * e * (u2 - u1)) / (m1 + m2)
+    v2 = (m1 * u1 + m2 * u2 + m1 * e * (u1 - u2)) / (m1 + m2)
+    np.testing.assert_allclose(sim.v[:, 0], [v1, v2], atol=1e-12)
+
+
+def test_oblique_hit_without_friction_keeps_tangential_velocity():
+    # centres offset along z: the impulse acts along the line of centres only (μ = 0)
+    sim = _collide(scene("contact.e=1"), v=[[2.0, 0, 0.7], [0, 0, 0]], offset=(0.0, 0.0, 0.025))
+    x = sim.x
+    # the normal at impact: recover it from the final velocities (ball 2 moves along it)
+    n = sim.v[1] / np.linalg.norm(sim.v[1])
+    t = np.cross(n, [0, 1, 0])
+    assert np.dot(sim.v[0], t) == pytest.approx(np.dot([2.0, 0, 0.7], t), abs=1e-12)
+    assert np.dot(sim.v[1], t) == pytest.approx(0.0, abs=1e-12)
+    assert np.isfinite(x).all()
+    np.testing.assert_allclose(sim.w, 0.0, atol=1e-12)  # no friction, no spin
+
+
+def test_friction_spins_colliding_balls():
+    # With friction a glancing hit sets both balls spinning. The friction forces are opposite but
+    # act on opposite sides of the two centres, so for equal balls the torques and the spins are
+    # identical: Δω = (5/2)·(−r n̂ × P)/(m r²) for both. Kinetic energy is lost (e < 1, sliding).
+    v0 = np.array([[2.0, 0, 0], [0, 0, 0]])
+    sim = _collide(scene("contact.e=0.5", "contact.mu=0.3"), v=v0, offset=(0, 0, 0.03))
+    np.testing.assert_allclose(sim.w[0], sim.w[1], rtol=1e-12)
+    assert abs(sim.w[0, 1]) > 1.0
+    m, r = 0.045, 0.02
+    ke = lambda v, w: 0.5 * m * (v**2).sum() + 0.5 * 0.4 * m * r**2 * (w**2).sum()
+    assert ke(sim.v, sim.w) < ke(v0, np.zeros((2, 3)))
+
+
+# ---------------------------------------------------------------------------------------------
+# Many balls
+# ---------------------------------------------------------------------------------------------
+def _gas(sc, n=1000, seed=0):
+    rng = np.random.default_rng(seed)
+    side = int(np.ceil(n ** (1 / 3)))
+    grid = np.stack(np.meshgrid(*[np.arange(side)] * 3, indexing="ij"), -1).reshape(-1, 3)[:n]
+    x = 0.05 * grid + rng.uniform(-0.004, 0.004, (n, 3))
+    v = rng.normal(0, 1.0, (n, 3))
+    mass = rng.uniform(0.03, 0.06, n)
+    return tg.Simulation(sc, x=x, v=v, mass=mass, radius=0.02)
+
+
+def test_momentum_is_conserved_to_round_off_in_a_gas():
+    sim = _gas(scene("contact.e=0.7", "contact.mu=0.3"))
+    m = sim.model.mass_np
+    p0 = (m[:, None] * sim.v).sum(axis=0)
+    sim.run(t=0.5)
+    p1 = (m[:, None] * sim.v).sum(axis=0)
+    scale = (m[:, None] * np.abs(sim.v)).sum()
+    assert np.abs(p1 - p0).max() < 1e-13 * scale
+    assert sim.solver.rebuilds > 1  # the gas moved enough to rebuild the lists
+
+
+def test_kinetic_energy_is_conserved_with_e1_mu0():
+    # e = 1, μ = 0: every binary impact conserves kinetic energy exactly; simultaneous contacts
+    # resolved by Jacobi sweeps and the position projection leave a small error we bound at 1 %.
+    sim = _gas(scene("contact.e=1", "contact.v_bounce=0", "contact.k_p=0"))
+    m = sim.model.mass_np
+    e0 = 0.5 * (m * (sim.v**2).sum(axis=1)).sum()
+    sim.run(t=0.5)
+    e1 = 0.5 * (m * (sim.v**2).sum(axis=1)).sum()
+    assert abs(e1 - e0) / e0 < 0.01
+    # and collisions did happen: the velocity distribution changed
+    assert np.abs(sim.v).max() > 0
+
+
+def test_newtons_cradle_passes_the_impulse_through_the_row():
+    sim = tg.Simulation.from_scene("newtons_cradle")
+    sim.run(t=0.3)
+    np.testing.assert_allclose(sim.v[:5, 0], 0.0, atol=1e-9)  # striker and four balls stop
+    assert sim.v[5, 0] == pytest.approx(1.0, rel=1e-9)  # the last ball leaves with the speed
+    assert sim.x[5, 0] > 0.2
+
+
+def test_column_of_ten_balls_stands():
+    # report Appendix B contacts with warm-started resting impulses: a column on the ground
+    # stays standing and sinks less than 1 % of a radius over 10 s
+    sc = tg.load_scene("lab_vacuum", ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3"])
+    x = np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)])
+    sim = tg.Simulation(sc, x=x)
+    sim.run(t=10.0)
+    assert sim.x[-1, 1] > 0.38 - 0.01 * 0.02
+    np.testing.assert_allclose(sim.x[:, [0, 2]], 0.0, atol=1e-9)  # still a column
+    assert np.all(np.diff(sim.x[:, 1]) > 0.04 - 0.01 * 0.02)  # no pair overlaps by 1 % of a radius
+
+
+def test_pile_settles_without_deep_overlaps():
+    # balls poured into a bin settle with no pair overlapping by more than 5 % of a radius
+    # (inelastic balls and 8 sweeps: with restitution the Jacobi sweeps leave a pile agitated,
+    # see the notes on the collision issue)
+    sc = tg.load_scene(None, data={
+        "description": "small pit", "world": {"dt": 0.001, "integrator": "semi_implicit"},
+        "contact": {"e": 0.0, "mu": 0.3, "iterations": 8},
+        "planes": [{"point": [0, 0, 0], "normal": [0, 1, 0]}, {"point": [0, 0, 0], "normal": [1, 0, 0]},
+                   {"point": [0.5, 0, 0], "normal": [-1, 0, 0]}, {"point": [0, 0, 0], "normal": [0, 0, 1]},
+                   {"point": [0, 0, 0.5], "normal": [0, 0, -1]}],
+        "blocks": [{"kind": "random", "number": 2000, "box_min": [0.02, 0.05, 0.02], "box_max": [0.48, 0.9, 0.48],
+                    "seed": 2}],
+    })
+    sim = tg.Simulation(sc)
+    sim.run(t=1.5)
+    x, r = sim.x, 0.02
+    d = np.linalg.norm(x[:, None] - x[None], axis=-1) + np.eye(len(x)) * 1e9
+    assert (2 * r - d).max() < 0.05 * r
+    assert x[:, 1].min() > r - 0.05 * r and x[:, 1].max() < 0.5  # in the bin, settled low
+    assert np.median(np.linalg.norm(sim.v, axis=1)) < 0.05
+
+
+def test_runs_are_deterministic():
+    def run():
+        sim = _gas(scene("contact.e=0.6", "contact.mu=0.4", "world.gravity=[0,-9.81,0]", "world.ground=true"), n=800)
+        sim.run(t=0.3)
+        return sim.x, sim.v, sim.w
+
+    a, b = run(), run()
+    for u, v in zip(a, b):
+        np.testing.assert_array_equal(u, v)
