@@ -116,3 +116,94 @@ def to_json(result: dict[str, Any]) -> str:
         return o
 
     return json.dumps(clean(result))
+
+
+def pile_scene(n: int) -> tuple[Scene, np.ndarray]:
+    """A dense pile: n balls on a cubic lattice of touching balls in a square bin, resting on the floor.
+
+    Every inner ball touches six neighbours. Returns the scene (planes, full contact model, air,
+    no sleeping) and the positions (n, 3).
+    """
+    from .config import Contact, Plane
+
+    r = 0.02
+    side = int(np.ceil(np.sqrt(n / 16.0)))  # a bin about 16 layers deep
+    layers = int(np.ceil(n / side**2))
+    idx = np.arange(n)
+    grid = np.stack([idx % side, idx // (side * side), (idx // side) % side], axis=1)
+    x = r + 2.0 * r * grid.astype(float)
+    width = 2.0 * r * side
+    planes = (Plane((0, 0, 0), (0, 1, 0)), Plane((0, 0, 0), (1, 0, 0)), Plane((width, 0, 0), (-1, 0, 0)),
+              Plane((0, 0, 0), (0, 0, 1)), Plane((0, 0, width), (0, 0, -1)))
+    scene = Scene(
+        name="bench_collide",
+        description=f"benchmark: {n} balls in a {width:.2f} m bin, {layers} layers",
+        air=Air(rho=1.2, gamma=2, C_D=0.3),
+        launch=None,
+        world=World(dt=0.001, integrator="semi_implicit", ground=False, v_rest=0.0),
+        contact=Contact(e=0.0, mu=0.3, k_p=0.2, iterations=4),
+        planes=planes,
+    )
+    return scene, x
+
+
+def bench_collide(n: int = 131_072, steps: int = 50, log: Callable[[str], None] = print) -> dict[str, Any]:
+    """Time the full collision step (flight forces, grid, ball–ball and plane contacts) on a dense pile."""
+    import resource
+
+    from .runtime import ensure_init
+    from .sim import Simulation
+
+    info = ensure_init()
+    small, xs = pile_scene(64)
+    warm = Simulation(small, x=xs)  # compile every kernel before measuring memory and time
+    warm.step(3)
+    del warm
+    base_rss = _rss_bytes()
+    scene, x = pile_scene(n)
+    sim = Simulation(scene, x=x)
+    sim.step(10)  # settle the first contacts, build the lists
+    rebuilds0 = sim.solver.rebuilds
+    t0 = time.perf_counter()
+    sim.step(steps)
+    seconds = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    xn = sim.x
+    nbr, count = sim.solver.neighbours.to_numpy(), sim.solver.n_neighbours.to_numpy()
+    touching = 0
+    for k in range(nbr.shape[1]):
+        has = count > k
+        j = nbr[has, k]
+        d = np.linalg.norm(xn[has] - xn[j], axis=1)
+        touching += int(np.count_nonzero(d < 2 * 0.02 * 1.001))
+    result = {
+        "benchmark": "collide",
+        "n": n,
+        "steps": steps,
+        "arch": info.arch,
+        "precision": info.precision,
+        "iterations": scene.contact.iterations,
+        "ball_steps_per_s": n * steps / seconds,
+        "ms_per_step": 1e3 * seconds / steps,
+        "contacts_per_ball": touching / n,
+        "list_rebuilds": sim.solver.rebuilds - rebuilds0,
+        "peak_rss_bytes": peak,
+        "bytes_per_ball_above_baseline": (peak - base_rss) / n,
+    }
+    log(f"ti_golf collide: {n} balls, {result['ms_per_step']:.2f} ms/step, {result['ball_steps_per_s']:.3g} ball-steps/s, "
+        f"{result['contacts_per_ball']:.2f} contacts/ball, peak RSS {peak / 2**20:.0f} MiB "
+        f"({result['bytes_per_ball_above_baseline']:.0f} B/ball above baseline), arch={info.arch}, {info.precision}")
+    return result
+
+
+def _rss_bytes() -> int:
+    """Current resident set size [bytes] (Linux /proc; peak RSS elsewhere)."""
+    try:
+        with open("/proc/self/statm") as fh:
+            import os
+
+            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except OSError:  # pragma: no cover
+        import resource
+
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024

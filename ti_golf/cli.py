@@ -86,6 +86,11 @@ def build_parser() -> argparse.ArgumentParser:
     bs.add_argument("--repeats", type=int, default=3, help="timed repeats; the best is reported")
     bs.add_argument("--json", action="store_true", help="end with one line of JSON")
     _runtime_options(bs)
+    bc = bsub.add_parser("collide", help="full collision step on a dense pile of N balls")
+    bc.add_argument("--n", type=int, default=131_072, help="balls (default 131072)")
+    bc.add_argument("--steps", type=int, default=50, help="timed steps (default 50)")
+    bc.add_argument("--json", action="store_true", help="end with one line of JSON")
+    _runtime_options(bc)
     return p
 
 
@@ -291,13 +296,18 @@ def _plot_table(results: list, path: str) -> None:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from .bench import bench_sweep, to_json
+    from .bench import bench_collide, bench_sweep, to_json
 
     if args.n <= 0:
         raise ConfigError("--n", None, f"must be > 0 (got {args.n})")
-    if not args.dt > 0:
-        raise ConfigError("--dt", None, f"must be > 0 (got {args.dt})")
-    result = bench_sweep(n=args.n, dt=args.dt, repeats=max(1, args.repeats))
+    if args.bench == "collide":
+        if args.n < 2 or args.steps <= 0:
+            raise ConfigError("--n" if args.n < 2 else "--steps", None, "must be >= 2 balls and > 0 steps")
+        result = bench_collide(n=args.n, steps=args.steps)
+    else:
+        if not args.dt > 0:
+            raise ConfigError("--dt", None, f"must be > 0 (got {args.dt})")
+        result = bench_sweep(n=args.n, dt=args.dt, repeats=max(1, args.repeats))
     if args.json:
         print(to_json(result))
     return 0

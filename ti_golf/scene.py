@@ -304,19 +304,26 @@ def _plane(values: dict[str, Any]) -> Plane:
 def describe_keys() -> str:
     """Every scene key with unit, default, allowed values and meaning, as a Markdown table."""
     rows = ["| key | unit | default | allowed | meaning |", "|---|---|---|---|---|"]
-    for k in TOP_LEVEL.values():
-        rows.append(f"| `{k.name}` | - | `\"\"` | text | {_cell(k.doc)} |")
-    for section, keys in SCHEMA.items():
+    tables = [("", TOP_LEVEL)] + [(f"{name}.", keys) for name, keys in SCHEMA.items()]
+    tables += [(f"[[{name}]].", keys) for name, keys in ARRAY_SCHEMA.items()]
+    for prefix, keys in tables:
         for k in keys.values():
-            d = k.default
-            if isinstance(d, tuple):
-                d = "[" + ", ".join(f"{c:g}" for c in d) + "]"
-            elif isinstance(d, bool):
-                d = str(d).lower()
-            elif d is None:
-                d = "(see meaning)"
-            rows.append(f"| `{section}.{k.name}` | {k.unit} | `{d}` | {_cell(k.allowed or k.kind)} | {_cell(k.doc)} |")
+            rows.append(f"| `{prefix}{k.name}` | {k.unit} | `{_default_text(k)}` | {_cell(k.allowed or k.kind)} | "
+                        f"{_cell(k.doc)} |")
     return "\n".join(rows)
+
+
+def _default_text(k: Key) -> str:
+    d = k.default
+    if k.kind == "text":
+        return '""'
+    if isinstance(d, tuple):
+        return "[" + ", ".join(f"{c:g}" for c in d) + "]"
+    if isinstance(d, bool):
+        return str(d).lower()
+    if d is None:
+        return "(see meaning)"
+    return str(d)
 
 
 def _cell(text: str) -> str:
