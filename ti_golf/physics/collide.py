@@ -18,9 +18,9 @@ The kernel's top-level loops run one after another, each over all balls in paral
 
 import taichi as ti
 
-from ..config import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING
+from ..config import AT_REST, FLYING, OUT_OF_BOUNDS
 from .aero import V, W, X, coefficients, column
-from .contact import pair_impulse, plane_jolt, plane_position, spin_jolt, warm_impulse
+from .contact import pair_impulse, plane_jolt, plane_position, rest_update, spin_jolt, warm_impulse
 from .grid import int_table, real_table
 from .integrate import step_free, track_flight
 from .kernels import lane_state
@@ -205,17 +205,10 @@ def collision_step(
             if st == AT_REST and (v_final.norm() > 0.0 or w_final.norm() > 0.0):
                 st = FLYING  # woken by an impulse
             if st != AT_REST:
-                rt = rest_time[i]
-                if touching != 0 and v_final.norm() < v_rest and ri * w_final.norm() < v_rest:
-                    rt += h
-                else:
-                    rt = 0.0
-                st = ROLLING if touching != 0 else FLYING
-                if rt >= t_rest and touching != 0:
-                    st = AT_REST
+                st, rest_time[i] = rest_update(touching, v_final, w_final, ri, rest_time[i], h, v_rest, t_rest)
+                if st == AT_REST:
                     v_final, w_final = vec3(0.0), vec3(0.0)
                     x1 = xi
-                rest_time[i] = rt
             status[i] = st
         x_free[i] = x1
         v[i], w[i] = v_final, w_final

@@ -20,6 +20,7 @@ along the unit normal n̂ (from b to a):
 
 import taichi as ti
 
+from ..config import AT_REST, FLYING, ROLLING
 from .types import vec3
 
 _TINY = 1e-12
@@ -152,3 +153,16 @@ def plane_position(x, x_free, x1, v_free, v, radius, p, n, k_p, h):
     if gap < 0.0:
         x1 -= k_p * gap * n
     return x1
+
+
+@ti.func
+def rest_update(touching, v, w, radius, rest_time, h, v_rest, t_rest):
+    """Status and rest timer of a ball after a step: a touching ball whose speed and R|ω| stay
+    below ``v_rest`` [m/s] for ``t_rest`` [s] is put at rest. Returns (status, rest_time)."""
+    rt = 0.0
+    if touching != 0 and v.norm() < v_rest and radius * w.norm() < v_rest:
+        rt = rest_time + h
+    st = ROLLING if touching != 0 else FLYING
+    if rt >= t_rest and touching != 0:
+        st = AT_REST
+    return st, rt

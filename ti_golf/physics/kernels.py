@@ -6,9 +6,9 @@ leaving the kernel (a "fused" step loop): per-step launch overhead is paid once 
 
 import taichi as ti
 
-from ..config import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING
+from ..config import AT_REST, OUT_OF_BOUNDS
 from .aero import ROWS, SPIN, V, W, X, coefficients, column, row
-from .contact import plane_impulse, plane_position
+from .contact import plane_impulse, plane_position, rest_update
 from .integrate import IN_FLIGHT, LANDED, apex_in_step, landing_in_step, step_free, track_flight
 from .types import AirParams, ContactParams, float_array, int_array, vec3, vec3_array, vec3_table
 
@@ -177,13 +177,8 @@ def advance(
                 for p in range(plane_p.shape[0]):
                     x1 = plane_position(xi, x_free, x1, v_free, v1, r, plane_p[p], plane_n[p], contact.k_p, h)
                 xi, vi, wi = x1, v1, w1
-                if touching != 0 and vi.norm() < v_rest and r * wi.norm() < v_rest:
-                    rt += h
-                else:
-                    rt = 0.0
-                st = ROLLING if touching != 0 else FLYING
-                if rt >= t_rest and touching != 0:
-                    st = AT_REST
+                st, rt = rest_update(touching, vi, wi, r, rt, h, v_rest, t_rest)
+                if st == AT_REST:
                     vi = vec3(0.0)
                     wi = vec3(0.0)
                     break
