@@ -14,7 +14,7 @@ from typing import Any, Callable, Iterable, Mapping
 import numpy as np
 
 from .config import AT_REST, OUT_OF_BOUNDS, STATUS_NAMES, Scene
-from .errors import ConfigError, SimulationError
+from .errors import SimulationError
 from .results import Flight
 from .runtime import ensure_init, np_float
 from .scene import load_scene

@@ -10,7 +10,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from .config import Scene, backspin_axis, launch_velocity
+from .config import Scene, backspin_axis
 from .errors import ConfigError, SimulationError
 from .results import CSV_COLUMNS, Flight
 from .runtime import ensure_init, np_float
