@@ -187,7 +187,7 @@ def test_range_boundaries_are_allowed(tmp_path, section, key, value, attr):
 
 # Unknown tables and top-level keys: (appended TOML text, expected key, fragments)
 BAD_TABLES = {
-    "unknown_table": ("[terrain]\nslope = 0.1\n", "terrain", ["air, ball, launch, world, contact, sweep"]),
+    "unknown_table": ("[weather]\nrain = 0.1\n", "weather", ["air, ball, launch, world, contact, sweep, terrain"]),
     "misspelt_table": ("[airr]\nrho = 1.2\n", "airr", ["did you mean 'air'", "air, ball, launch"]),
 }
 
@@ -310,9 +310,9 @@ def test_cli_bad_file_exits_2_with_one_line(tmp_path, command, case):
 
 
 def test_cli_unknown_table_exits_2(tmp_path):
-    path = write_scene(tmp_path, BASE_SCENE.read_text(encoding="utf-8") + "\n[terrain]\nslope = 0.1\n")
+    path = write_scene(tmp_path, BASE_SCENE.read_text(encoding="utf-8") + "\n[weather]\nrain = 0.1\n")
     proc = run_cli("sweep", str(path))
-    assert_short_cli_error(proc, str(path), "terrain", "air, ball, launch")
+    assert_short_cli_error(proc, str(path), "weather", "air, ball, launch")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -334,7 +334,7 @@ def test_set_override_changes_the_scene():
 # (override, expected .key, fragments)
 BAD_SETS = {
     "unknown_key": ("air.rhoo=1", "air.rhoo", ["is not a scene key", "air.rho"]),
-    "unknown_table": ("terrain.slope=1", "terrain.slope", ["is not a scene key"]),
+    "unknown_table": ("weather.rain=1", "weather.rain", ["is not a scene key"]),
     "out_of_range": ("contact.e=2", "contact.e", ["[0, 1]", "2.0"]),
     "wrong_type": ("air.wind=[1,2]", "air.wind", ["list of 3 numbers"]),
     "non_finite": ("air.C_D=nan", "air.C_D", ["finite"]),

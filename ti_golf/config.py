@@ -30,8 +30,9 @@ INTEGRATORS = ("semi_implicit", "rk4")
 class Key:
     """One scene key: its type, default, unit, allowed range and meaning.
 
-    ``kind`` is one of ``"float"``, ``"int"``, ``"bool"``, ``"str"``, ``"vec3"``, ``"range"``
-    (a START:STOP:STEP string or a list of numbers) or ``"text"`` (free text).
+    ``kind`` is one of ``"float"``, ``"int"``, ``"bool"``, ``"str"``, ``"vec3"``, ``"vec2"`` (2 numbers),
+    ``"list2"`` ([min, max]), ``"range"`` (a START:STOP:STEP string or a list of numbers) or ``"text"``
+    (free text).
     ``check`` returns ``None`` when a (type-correct) value is allowed, else a phrase such as
     ``"must be > 0"``.
     """
@@ -103,7 +104,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
             Key("direction_deg", "float", 0.0, "deg", "azimuth, from +x toward +z", _angle(360), "[-360, 360]"),
             Key("spin", "vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity ω0 (+z is backspin for a shot toward +x)"),
             Key("position", "vec3", None, "m",
-                "launch point of the ball's centre (default: resting on the ground, [0, ground_height + radius, 0])"),
+                "launch point of the ball's centre (default: resting on the ground, [0, ground_height + radius, 0], "
+                "or on the terrain at x = z = 0)"),
         ]
     },
     "world": {
@@ -118,7 +120,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
             Key("t_max", "float", 60.0, "s", "longest flight a sweep integrates before giving up on a ball",
                 _positive, "> 0"),
             Key("ground", "bool", True, "-",
-                "an impenetrable ground plane y = ground_height (off by default when the scene has [[planes]])"),
+                "an impenetrable ground plane y = ground_height "
+                "(off by default when the scene has [[planes]] or a [terrain])"),
             Key("collisions", "bool", True, "-", "ball–ball collisions (hash grid + impulses) when there are several balls"),
             Key("ground_height", "float", 0.0, "m", "height of the ground plane"),
             Key("v_rest", "float", 0.01, "m/s", "a touching ball slower than this (and R|ω| below it) may come to rest",
@@ -156,6 +159,36 @@ SCHEMA: dict[str, dict[str, Key]] = {
             Key("angles", "range", None, "deg", "default elevation angles of `ti-golf sweep` (START:STOP:STEP or list)"),
             Key("speeds", "range", None, "m/s", "default launch speeds of `ti-golf sweep`"),
             Key("spins", "range", None, "rad/s", "default spin magnitudes of `ti-golf sweep` (along the scene's spin axis)"),
+        ]
+    },
+    "terrain": {
+        k.name: k
+        for k in [
+            Key("kind", "str", "generated", "-",
+                "generated: seeded fractal noise on a resolution[0]×resolution[1] grid; file: heights from a .npy "
+                "array (first axis along x)", _one_of("generated", "file"), "generated | file"),
+            Key("file", "str", "", "-",
+                "the .npy file of heights [m], shape (nx, nz), nx, nz >= 2 (relative paths: from the scene file's "
+                "folder; from the current folder for --set)"),
+            Key("origin", "vec3", (0.0, 0.0, 0.0), "m",
+                "the grid's first corner [x, y, z]; heights are added to its y"),
+            Key("size", "vec2", (100.0, 100.0), "m", "extent [size_x, size_z] of the grid (the heights span it)",
+                lambda v: None if v[0] > 0 and v[1] > 0 else "must be > 0 on both axes", "[> 0, > 0]"),
+            Key("resolution", "vec2", (129.0, 129.0), "-", "grid points [nx, nz] of generated terrain",
+                lambda v: None if all(c >= 2 and float(c).is_integer() for c in v) and v[0] * v[1] <= 50_000_000
+                else "must be 2 whole numbers >= 2 (at most 50 million points)", "2 whole numbers >= 2"),
+            Key("seed", "int", 0, "-", "random seed of generated terrain (the same seed gives the same heights everywhere)"),
+            Key("amplitude", "float", 1.0, "m", "generated heights lie within ±amplitude", _non_negative, ">= 0"),
+            Key("roughness", "float", 0.5, "-",
+                "amplitude ratio of successive noise octaves (each half the wavelength): small is smooth, near 1 rugged",
+                lambda v: None if 0 < v < 1 else "must be in (0, 1)", "(0, 1)"),
+            Key("profile", "bool", False, "-",
+                "generated heights vary along x only (a 2-D profile, constant along z; resolution [nx, 2] suffices)"),
+            Key("slope", "vec2", (0.0, 0.0), "-",
+                "tilt [dh/dx, dh/dz] added to the heights of either kind (an incline: amplitude 0 and a slope)"),
+            Key("kill_height", "float", None, "m",
+                "balls below this height are out of bounds, as are balls whose x or z leaves the grid "
+                "(default: origin y − 10 m)"),
         ]
     },
 }
@@ -310,6 +343,31 @@ class Contact:
 
 
 @dataclass(frozen=True)
+class TerrainConfig:
+    """The ``[terrain]`` table: a height field (built by :func:`ti_golf.terrain.build_terrain`).
+
+    ``file`` is the resolved path of the .npy heights (kind ``"file"``); ``resolution`` holds ints.
+    """
+
+    kind: str = _default("terrain", "kind")
+    file: str = _default("terrain", "file")
+    origin: Vec3 = _default("terrain", "origin")
+    size: tuple[float, float] = _default("terrain", "size")
+    resolution: tuple[int, int] = (129, 129)
+    seed: int = _default("terrain", "seed")
+    amplitude: float = _default("terrain", "amplitude")
+    roughness: float = _default("terrain", "roughness")
+    profile: bool = _default("terrain", "profile")
+    slope: tuple[float, float] = _default("terrain", "slope")
+    kill_height: float | None = _default("terrain", "kill_height")
+
+    @property
+    def kill(self) -> float:
+        """Height [m] below which a ball is out of bounds (``kill_height``, default origin y − 10 m)."""
+        return self.origin[1] - 10.0 if self.kill_height is None else self.kill_height
+
+
+@dataclass(frozen=True)
 class Plane:
     """An impenetrable plane: ``point`` [m] on it, unit ``normal`` out of the solid side."""
 
@@ -366,7 +424,8 @@ class SweepDefaults:
 class Scene:
     """A validated scene: everything static a simulation needs.
 
-    ``launch`` is ``None`` when the scene has no ``[launch]`` table (no launched ball).
+    ``launch`` is ``None`` when the scene has no ``[launch]`` table (no launched ball), ``terrain``
+    when it has no ``[terrain]`` table.
     """
 
     name: str = "scene"
@@ -381,11 +440,16 @@ class Scene:
     balls: tuple[BallSpec, ...] = ()
     blocks: tuple[Block, ...] = ()
     planes: tuple[Plane, ...] = ()
+    terrain: TerrainConfig | None = None
 
     def launch_position(self) -> Vec3:
-        """Launch point [m]: the scene's, or the ball resting on the ground at the origin."""
+        """Launch point [m]: the scene's, or the ball resting on the ground (the terrain, if any) at x = z = 0."""
         if self.launch is not None and self.launch.position is not None:
             return self.launch.position
+        if self.terrain is not None:
+            from .terrain import build_terrain
+
+            return (0.0, float(build_terrain(self.terrain, self.path).height(0.0, 0.0)) + self.ball.radius, 0.0)
         return (0.0, self.world.ground_height + self.ball.radius, 0.0)
 
 

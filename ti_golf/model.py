@@ -7,7 +7,7 @@ import taichi as ti
 
 from .config import Scene
 from .physics.integrate import INTEGRATOR_CODES
-from .physics.types import AirParams, ContactParams, vec3
+from .physics.types import AirParams, ContactParams, TerrainParams, vec3
 from .runtime import np_float
 
 
@@ -25,6 +25,10 @@ class Model:
         integrator: the integrator code (a compile-time constant of the kernels).
         plane_p, plane_n: points on and unit normals of the impenetrable planes (the ground
             included), numpy (P, 3); passed to kernels directly.
+        terrain: the scene's height field (:class:`ti_golf.terrain.Terrain`, numpy) or ``None``.
+        terrain_params: kernel-argument struct (TerrainParams); ``on`` = 0 without a terrain.
+        terrain_h: the terrain's heights (nx, nz) [m] as a Taichi ndarray (a 2×2 zero grid
+            without a terrain: kernels always take one).
     """
 
     def __init__(self, scene: Scene, radius: np.ndarray, mass: np.ndarray, launch_height: np.ndarray) -> None:
@@ -52,3 +56,16 @@ class Model:
         self.plane_p = np.array([p for p, _ in planes], dtype=f).reshape(-1, 3)
         self.plane_n = np.array([n for _, n in planes], dtype=f).reshape(-1, 3)
         self.v_inelastic = c.v_bounce + 2.0 * float(np.linalg.norm(w.gravity)) * w.dt
+        self.terrain = None
+        heights = np.zeros((2, 2))
+        origin, spacing, kill = (0.0, 0.0, 0.0), (1.0, 1.0), 0.0
+        if scene.terrain is not None:
+            from .terrain import build_terrain
+
+            self.terrain = build_terrain(scene.terrain, scene.path)
+            heights, origin, spacing, kill = (self.terrain.heights, self.terrain.origin, self.terrain.spacing,
+                                              scene.terrain.kill)
+        self.terrain_params = TerrainParams(on=int(self.terrain is not None), origin=vec3(*origin),
+                                            dx=float(spacing[0]), dz=float(spacing[1]), kill=float(kill))
+        self.terrain_h = ti.ndarray(float, heights.shape)
+        self.terrain_h.from_numpy(np.ascontiguousarray(heights, dtype=f))

@@ -23,6 +23,7 @@ from .config import (
     BallSpec,
     Block,
     Plane,
+    TerrainConfig,
     TOP_LEVEL,
     Air,
     Ball,
@@ -77,6 +78,16 @@ def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
         value = tuple(float(c) for c in value)
         if not all(math.isfinite(c) for c in value):
             raise_config(source, dotted, f"must hold finite numbers (got {list(value)!r})")
+    elif kind == "vec2":
+        if (
+            not isinstance(value, (list, tuple))
+            or len(value) != 2
+            or any(isinstance(c, bool) or not isinstance(c, (int, float)) for c in value)
+        ):
+            raise_config(source, dotted, f"must be a list of 2 numbers{_unit(key)}, e.g. [1, 1] (got {value!r})")
+        value = tuple(float(c) for c in value)
+        if not all(math.isfinite(c) for c in value):
+            raise_config(source, dotted, f"must hold finite numbers (got {list(value)!r})")
     elif kind == "list2":
         if (
             not isinstance(value, (list, tuple))
@@ -101,7 +112,8 @@ def _unit(key: Key) -> str:
 
 
 def parse_override(text: str) -> tuple[str, Any]:
-    """Split ``KEY=VALUE`` and parse VALUE as TOML (``[-5,0,0]``, ``0.25``, ``true``); bare words are strings."""
+    """Split ``KEY=VALUE`` and parse VALUE as TOML (``[-5,0,0]``, ``0.25``, ``true``); bare words and
+    paths (letters, digits and ``_-./~``) are strings."""
     if "=" not in text:
         raise ConfigError("--set", text, "must be KEY=VALUE, e.g. --set air.wind=[-5,0,0]")
     dotted, raw = text.split("=", 1)
@@ -111,8 +123,8 @@ def parse_override(text: str) -> tuple[str, Any]:
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
-        if raw.replace("_", "").replace("-", "").isalnum():
-            value = raw  # a bare word such as rk4
+        if raw and all(c.isalnum() or c in "_-./~" for c in raw):
+            value = raw  # a bare word such as rk4, or a path such as data/hills.npy
         else:
             raise ConfigError("--set", dotted, f"value {raw!r} is not valid TOML (numbers, [x, y, z], true/false, \"text\")")
     return dotted, value
@@ -234,6 +246,7 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
         if table is None:
             continue
         values: dict[str, Any] = {}
+        sources: dict[str, str] = {}
         for name_, value in table.items():
             dotted = f"{section}.{name_}"
             src = source
@@ -243,8 +256,11 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
                 raise_config(src, dotted, f"is unknown{_suggest(name_, keys)}; allowed in [{section}]: "
                              + ", ".join(keys))
             values[name_] = _coerce(value, keys[name_], src, dotted)
+            sources[name_] = src
         if section == "sweep":
             kwargs["sweep"] = SweepDefaults(**values)
+        elif section == "terrain":
+            kwargs["terrain"] = _terrain(values, sources, source)
         else:
             kwargs[section] = _SECTION_TYPES[section](**values)
     if "launch" not in doc:
@@ -253,7 +269,7 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
     kwargs["balls"] = tuple(_ball_spec(t, source, i) for i, t in enumerate(arrays["balls"]))
     kwargs["blocks"] = tuple(_block(t, source, i) for i, t in enumerate(arrays["blocks"]))
     kwargs["planes"] = tuple(_plane(t) for t in arrays["planes"])
-    if kwargs["planes"] and "ground" not in doc.get("world", {}):
+    if (kwargs["planes"] or kwargs.get("terrain") is not None) and "ground" not in doc.get("world", {}):
         world = kwargs.get("world", World())
         kwargs["world"] = World(**{**world.__dict__, "ground": False})
     return Scene(**kwargs)
@@ -294,6 +310,27 @@ def _block(values: dict[str, Any], source: str, i: int) -> Block:
     return block
 
 
+def _terrain(values: dict[str, Any], sources: dict[str, str], source: str) -> TerrainConfig:
+    """The ``[terrain]`` table: resolve and check the heights file (shape, finite values) now, so a
+    bad terrain is reported when the scene loads."""
+    from .terrain import load_heights_file
+
+    if "resolution" in values:
+        values["resolution"] = tuple(int(c) for c in values["resolution"])
+    cfg = TerrainConfig(**values)
+    if cfg.kind == "file":
+        src = sources.get("file", source)
+        if not cfg.file:
+            raise_config(src, "terrain.file", "is required when terrain.kind = \"file\" (a .npy array of heights [m], "
+                         "shape (nx, nz))")
+        path = Path(cfg.file).expanduser()
+        if not path.is_absolute() and src != "--set":
+            path = Path(source).parent / path
+        load_heights_file(path, src)
+        cfg = TerrainConfig(**{**cfg.__dict__, "file": str(path)})
+    return cfg
+
+
 def _plane(values: dict[str, Any]) -> Plane:
     plane = Plane(**values)
     n = plane.normal
@@ -315,7 +352,7 @@ def describe_keys() -> str:
 
 def _default_text(k: Key) -> str:
     d = k.default
-    if k.kind == "text":
+    if k.kind == "text" or d == "":
         return '""'
     if isinstance(d, tuple):
         return "[" + ", ".join(f"{c:g}" for c in d) + "]"

@@ -130,6 +130,12 @@ class Simulation:
         """Per-ball status codes (ti_golf.config: FLYING, ROLLING, AT_REST, OUT_OF_BOUNDS), shape (N,)."""
         return self.state.status.to_numpy()
 
+    @property
+    def terrain(self):
+        """The scene's height field (:class:`ti_golf.terrain.Terrain`: heights, origin, spacing,
+        ``height(x, z)``, ``normal(x, z)``), or ``None``."""
+        return self.model.terrain
+
     def counts(self) -> dict[str, int]:
         """How many balls are flying, rolling, at rest and out of bounds."""
         s = self.status
@@ -158,8 +164,8 @@ class Simulation:
         else:
             kernels.advance(
                 m.air, m.contact, m.gravity, m.dt, m.integrator, int(n), s.t, w.v_rest, w.t_rest, m.radius, m.mass,
-                m.launch_height, m.plane_p, m.plane_n, s.x, s.v, s.w, s.status, s.rest_time, s.landed, s.apex,
-                s.t_land, s.land_x, s.land_v,
+                m.launch_height, m.plane_p, m.plane_n, m.terrain_params, m.terrain_h, s.x, s.v, s.w, s.status,
+                s.rest_time, s.landed, s.apex, s.t_land, s.land_x, s.land_v,
             )
             s.t += n * m.dt
         self.check_finite()
@@ -230,9 +236,14 @@ class Simulation:
         return bool(np.all(landed != 0))
 
     def save(self, path: str | os.PathLike[str], recording: Recording | None = None) -> None:
-        """Write an ``.npz`` with ``x``, ``v``, ``w`` (N, 3), ``t``, ``status`` and, if given, the recording."""
+        """Write an ``.npz`` with ``x``, ``v``, ``w`` (N, 3), ``t``, ``status``, ``radius``, ``mass``,
+        with a terrain ``terrain_heights`` (nx, nz), ``terrain_origin`` (3,) and ``terrain_spacing``
+        (dx, dz), and, if given, the recording."""
         data: dict[str, Any] = {"x": self.x, "v": self.v, "w": self.w, "t": np.float64(self.t),
                                 "status": self.status, "radius": self.model.radius_np, "mass": self.model.mass_np}
+        if self.terrain is not None:
+            data.update(terrain_heights=self.terrain.heights, terrain_origin=self.terrain.origin,
+                        terrain_spacing=self.terrain.spacing)
         if recording is not None and recording.t:
             data.update(recording.arrays())
         np.savez(path, **data)

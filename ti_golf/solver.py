@@ -43,7 +43,8 @@ class CollisionSolver:
         self.v_b, self.w_b = ti.ndarray(vec3, n), ti.ndarray(vec3, n)
         self.neighbours = self.n_neighbours = self.lam = None
         self._spare = None
-        self.lam_plane = ti.ndarray(float, (n, max(1, len(model.plane_p))))
+        # resting impulses of the planes and (one column more) the terrain
+        self.lam_plane = ti.ndarray(float, (n, max(1, len(model.plane_p) + (model.terrain is not None))))
         self.flag = ti.ndarray(ti.i32, 1)
         self._valid = False
         self._rebuild = True
@@ -88,7 +89,7 @@ class CollisionSolver:
         grid.clear(self.flag)
         collide.collision_step(
             m.air, m.contact, m.gravity, m.dt, m.integrator, m.scene.contact.iterations, s.t, 0.5 * self.skin,
-            w.v_rest, w.t_rest, m.radius, m.mass, m.launch_height, m.plane_p, m.plane_n,
+            w.v_rest, w.t_rest, m.radius, m.mass, m.launch_height, m.plane_p, m.plane_n, m.terrain_params, m.terrain_h,
             self.neighbours, self.n_neighbours, self.x_at_build, self.lam, self.lam_plane,
             s.x, s.v, s.w, s.status, s.rest_time, self.x_free, self.v_a, self.w_a, self.v_b, self.w_b,
             s.landed, s.apex, s.t_land, s.land_x, s.land_v, self.flag,

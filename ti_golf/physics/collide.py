@@ -7,13 +7,14 @@ The kernel's top-level loops run one after another, each over all balls in paral
 2. warm start: last step's *resting* contact impulses (and their friction) are applied again, so
    a stack starts the step supported instead of re-learning its support every step;
 3. ``iterations`` Jacobi sweeps: each ball gathers the impulses of its touching neighbours,
-   computed from the velocities of the previous sweep, then those of the planes. Every pair
+   computed from the velocities of the previous sweep, then those of the planes and of the
+   terrain (the plane of the patch under the ball, see :mod:`.terrain`). Every pair
    impulse is evaluated with the lower id as body a, so the two balls of a pair apply exactly
    opposite impulses (momentum is conserved to round-off) without float atomics, and results do
    not depend on thread order;
 4. finish: positions from the final velocities (split at a plane's time of impact), position
-   projection of overlaps (B.18), status and rest detection, and whether the neighbour lists
-   must be rebuilt before the next step.
+   projection of overlaps (B.18), status, rest detection and out-of-bounds (off the terrain), and
+   whether the neighbour lists must be rebuilt before the next step.
 """
 
 import taichi as ti
@@ -24,7 +25,9 @@ from .contact import pair_impulse, plane_jolt, plane_position, rest_update, spin
 from .grid import int_table, real_table
 from .integrate import step_free, track_flight
 from .kernels import lane_state
-from .types import AirParams, ContactParams, float_array, int_array, vec3, vec3_array
+from .terrain import outside, surface, terrain_position
+from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, vec3,
+                    vec3_array)
 
 
 @ti.func
@@ -53,11 +56,14 @@ def gather(dv, dw, P, n, i_is_a, r_a, r_b, inv_ma, inv_mb):
 
 @ti.func
 def sweep_ball(i, contact: ti.template(), h, v_inelastic, radius: ti.template(), mass: ti.template(),
-               plane_p: ti.template(), plane_n: ti.template(), status: ti.template(), x: ti.template(),
+               plane_p: ti.template(), plane_n: ti.template(), terrain, heights: ti.template(),
+               status: ti.template(), x: ti.template(), x_free: ti.template(),
                neighbours: ti.template(), n_neighbours: ti.template(), lam: ti.template(),
                lam_plane: ti.template(), v_in: ti.template(), w_in: ti.template(), v_out: ti.template(),
                w_out: ti.template()):
-    """One Jacobi sweep for ball i: gather its pair impulses, then its plane impulses."""
+    """One Jacobi sweep for ball i: gather its pair impulses, then its plane impulses, then the
+    terrain's (the plane of the patch under its free-flight end point; its resting impulse is kept
+    in the column after the planes' in ``lam_plane``)."""
     vi, wi = v_in[i], w_in[i]
     if status[i] != OUT_OF_BOUNDS:
         dv, dw = vec3(0.0), vec3(0.0)
@@ -73,6 +79,8 @@ def sweep_ball(i, contact: ti.template(), h, v_inelastic, radius: ti.template(),
                                                 contact.relax)
                     lam[i, k] = lam_ab  # both balls of the pair store the same value
                     dv, dw = gather(dv, dw, P, n, i == a, radius[a], radius[b], inv_ma, inv_mb)
+            elif status[j] == OUT_OF_BOUNDS:
+                lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
         vi += dv
         wi += dw
         for p in range(plane_p.shape[0]):
@@ -83,6 +91,15 @@ def sweep_ball(i, contact: ti.template(), h, v_inelastic, radius: ti.template(),
             if P.dot(n) != 0.0:
                 vi, wi = plane_jolt(P, lam_p - lam_plane[i, p], vi, wi, radius[i], n, contact.mu_roll)
             lam_plane[i, p] = lam_p
+        if terrain.on != 0:
+            q = plane_p.shape[0]
+            pt, n = surface(heights, terrain, x_free[i])
+            gap = (x[i] - pt).dot(n) - radius[i]
+            P, lam_p, _ = pair_impulse(n, gap, vi, wi, radius[i], 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0,
+                                       lam_plane[i, q], contact.e, contact.mu, v_inelastic, h)
+            if P.dot(n) != 0.0:
+                vi, wi = plane_jolt(P, lam_p - lam_plane[i, q], vi, wi, radius[i], n, contact.mu_roll)
+            lam_plane[i, q] = lam_p
     v_out[i], w_out[i] = vi, wi
 
 
@@ -104,6 +121,8 @@ def collision_step(
     launch_height: float_array,
     plane_p: vec3_array,
     plane_n: vec3_array,
+    terrain: TerrainParams,
+    heights: float_grid,
     # Neighbour lists (built by grid.build_neighbours) and their accumulated resting impulses:
     neighbours: int_table,
     n_neighbours: int_array,
@@ -132,7 +151,10 @@ def collision_step(
 ):
     """Advance all balls by one step of ``h`` [s]. On return ``flag[0]`` is 1 when some ball may
     come within reach of a ball missing from its neighbour list next step (rebuild the lists).
-    New positions are left in ``x_free`` (swap it with ``x``)."""
+    New positions are left in ``x_free`` (swap it with ``x``). With a terrain (``terrain.on``;
+    ``heights`` its grid, else any 2×2 array; ``lam_plane`` then has a column more than there are
+    planes) a ball that leaves the grid's extent or falls below ``terrain.kill`` is put out of
+    bounds (velocities zeroed)."""
     v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
     # 1. free flight (v, w become the free-flight velocities)
     for i in range(x.shape[0]):
@@ -151,7 +173,7 @@ def collision_step(
         if status[i] != OUT_OF_BOUNDS:
             dv, dw = vec3(0.0), vec3(0.0)
             for k in range(n_neighbours[i]):
-                if lam[i, k] > 0.0:
+                if lam[i, k] > 0.0 and status[neighbours[i, k]] != OUT_OF_BOUNDS:
                     j = neighbours[i, k]
                     a, b = ti.min(i, j), ti.max(i, j)
                     n, _, ok = pair_geometry(x, radius, a, b)
@@ -167,17 +189,23 @@ def collision_step(
                     n = plane_n[p]
                     P = warm_impulse(n, vi, wi, radius[i], vec3(0.0), vec3(0.0), 0.0, 1.0, lam_plane[i, p], contact.mu)
                     vi, wi = plane_jolt(P, lam_plane[i, p], vi, wi, radius[i], n, contact.mu_roll)
+            if terrain.on != 0:
+                q = plane_n.shape[0]
+                if lam_plane[i, q] > 0.0:
+                    _, n = surface(heights, terrain, x_free[i])
+                    P = warm_impulse(n, vi, wi, radius[i], vec3(0.0), vec3(0.0), 0.0, 1.0, lam_plane[i, q], contact.mu)
+                    vi, wi = plane_jolt(P, lam_plane[i, q], vi, wi, radius[i], n, contact.mu_roll)
         v_b[i], w_b[i] = vi, wi
     # 3. Jacobi sweeps, ping-pong between the (v_a, w_a) and (v_b, w_b) buffers
     for k in ti.static(range(iterations)):
         if ti.static(k % 2 == 0):
             for i in range(x.shape[0]):
-                sweep_ball(i, contact, h, v_inelastic, radius, mass, plane_p, plane_n, status, x, neighbours,
-                           n_neighbours, lam, lam_plane, v_b, w_b, v_a, w_a)
+                sweep_ball(i, contact, h, v_inelastic, radius, mass, plane_p, plane_n, terrain, heights, status, x,
+                           x_free, neighbours, n_neighbours, lam, lam_plane, v_b, w_b, v_a, w_a)
         else:
             for i in range(x.shape[0]):
-                sweep_ball(i, contact, h, v_inelastic, radius, mass, plane_p, plane_n, status, x, neighbours,
-                           n_neighbours, lam, lam_plane, v_a, w_a, v_b, w_b)
+                sweep_ball(i, contact, h, v_inelastic, radius, mass, plane_p, plane_n, terrain, heights, status, x,
+                           x_free, neighbours, n_neighbours, lam, lam_plane, v_a, w_a, v_b, w_b)
     # 4. positions, projections, status, rest; then whether the lists stay valid
     for i in range(x.shape[0]):
         st = status[i]
@@ -192,6 +220,12 @@ def collision_step(
             for p in range(plane_p.shape[0]):
                 x1 = plane_position(xi, x_free[i], x1, v[i], v_final, ri, plane_p[p], plane_n[p], contact.k_p, h)
                 if (x1 - plane_p[p]).dot(plane_n[p]) - ri < 0.01 * ri:
+                    touching = 1
+            if terrain.on != 0:
+                pt, nt = surface(heights, terrain, x_free[i])
+                x1 = plane_position(xi, x_free[i], x1, v[i], v_final, ri, pt, nt, contact.k_p, h)
+                x1 = terrain_position(xi, x1, pt, nt, ri, heights, terrain)
+                if (x1 - pt).dot(nt) - ri < 0.01 * ri:
                     touching = 1
             for k in range(n_neighbours[i]):  # position projection k_p·m_red·Δx·n̂ (B.18)
                 j = neighbours[i, k]
@@ -209,6 +243,9 @@ def collision_step(
                 if st == AT_REST:
                     v_final, w_final = vec3(0.0), vec3(0.0)
                     x1 = xi
+            if terrain.on != 0 and outside(heights, terrain, x1):
+                st = OUT_OF_BOUNDS
+                v_final, w_final = vec3(0.0), vec3(0.0)
             status[i] = st
         x_free[i] = x1
         v[i], w[i] = v_final, w_final

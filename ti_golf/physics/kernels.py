@@ -10,7 +10,9 @@ from ..config import AT_REST, OUT_OF_BOUNDS
 from .aero import ROWS, SPIN, V, W, X, coefficients, column, row
 from .contact import plane_impulse, plane_position, rest_update
 from .integrate import IN_FLIGHT, LANDED, apex_in_step, landing_in_step, step_free, track_flight
-from .types import AirParams, ContactParams, float_array, int_array, vec3, vec3_array, vec3_table
+from .terrain import outside, surface, terrain_position
+from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, vec3, vec3_array,
+                    vec3_table)
 
 
 @ti.func
@@ -135,6 +137,8 @@ def advance(
     launch_height: float_array,
     plane_p: vec3_array,
     plane_n: vec3_array,
+    terrain: TerrainParams,
+    heights: float_grid,
     # State in/out:
     x: vec3_array,
     v: vec3_array,
@@ -149,10 +153,13 @@ def advance(
     land_v: vec3_array,
 ):
     """Advance every active ball by ``n_steps`` steps of ``h`` [s] from ``t0``; balls do not meet
-    each other, only the planes (one thread per ball runs all the steps).
+    each other, only the planes and the terrain (one thread per ball runs all the steps).
 
     A ball that stays touching with speed and R|ω| below ``v_rest`` for ``t_rest`` is put at rest
-    (velocities zeroed, no longer integrated). Balls at rest or out of bounds are not touched.
+    (velocities zeroed, no longer integrated). With a terrain (``terrain.on``; ``heights`` is its
+    grid, else any 2×2 array), a ball that leaves the grid's (x, z) extent or falls below
+    ``terrain.kill`` is put out of bounds (velocities zeroed). Balls at rest or out of bounds are
+    not touched.
     """
     v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
     for i in range(x.shape[0]):
@@ -173,11 +180,24 @@ def advance(
                 for p in range(plane_p.shape[0]):
                     v1, w1, t = plane_impulse(xi, v1, w1, r, plane_p[p], plane_n[p], contact, v_inelastic, h)
                     touching |= t
+                pt, nt = vec3(0.0), vec3(0.0, 1.0, 0.0)
+                if terrain.on != 0:  # the terrain: the plane of the patch under the free-flight end point
+                    pt, nt = surface(heights, terrain, x_free)
+                    v1, w1, t = plane_impulse(xi, v1, w1, r, pt, nt, contact, v_inelastic, h)
+                    touching |= t
                 x1 = x_free + h * (v1 - v_free)
                 for p in range(plane_p.shape[0]):
                     x1 = plane_position(xi, x_free, x1, v_free, v1, r, plane_p[p], plane_n[p], contact.k_p, h)
+                if terrain.on != 0:
+                    x1 = plane_position(xi, x_free, x1, v_free, v1, r, pt, nt, contact.k_p, h)
+                    x1 = terrain_position(xi, x1, pt, nt, r, heights, terrain)
                 xi, vi, wi = x1, v1, w1
                 st, rt = rest_update(touching, vi, wi, r, rt, h, v_rest, t_rest)
+                if terrain.on != 0 and outside(heights, terrain, xi):
+                    st = OUT_OF_BOUNDS
+                    vi = vec3(0.0)
+                    wi = vec3(0.0)
+                    break
                 if st == AT_REST:
                     vi = vec3(0.0)
                     wi = vec3(0.0)

@@ -37,3 +37,13 @@ vec3_array = ti.types.ndarray(dtype=vec3, ndim=1)
 float_array = ti.types.ndarray(dtype=real, ndim=1)
 int_array = ti.types.ndarray(dtype=ti.i32, ndim=1)
 vec3_table = ti.types.ndarray(dtype=vec3, ndim=2)
+float_grid = ti.types.ndarray(dtype=real, ndim=2)
+
+TerrainParams = ti.types.struct(
+    on=ti.i32,  # 1: the scene has a terrain (its heights are the kernel's height-grid argument); 0: none
+    origin=vec3,  # the grid's first corner [m]; heights are added to its y
+    dx=float,  # grid spacing along x [m]
+    dz=float,  # grid spacing along z [m]
+    kill=float,  # balls below this height are out of bounds [m]
+)
+"""Height-field terrain parameters (see :mod:`ti_golf.physics.terrain`)."""
