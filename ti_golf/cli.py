@@ -1,4 +1,4 @@
-"""Command line: ``ti-golf {scenes,keys,sweep,run,table,bench}``; ``main(argv) -> exit code``.
+"""Command line: ``ti-golf {scenes,keys,sweep,run,table,render,bench}``; ``main(argv) -> exit code``.
 
 Bad input exits with code 2 and one line naming the file, the key and what is allowed.
 """
@@ -91,6 +91,10 @@ def build_parser() -> argparse.ArgumentParser:
     bc.add_argument("--steps", type=int, default=50, help="timed steps (default 50)")
     bc.add_argument("--json", action="store_true", help="end with one line of JSON")
     _runtime_options(bc)
+
+    from .render_cli import add_parser as _add_render_parser
+
+    _add_render_parser(sub)
     return p
 
 
@@ -341,7 +345,14 @@ class _Progress:
             print(file=sys.stderr)
 
 
+def _cmd_render(args: argparse.Namespace) -> int:
+    from .render_cli import cmd_render
+
+    return cmd_render(args)
+
+
 _COMMANDS = {
+    "render": _cmd_render,
     "scenes": _cmd_scenes,
     "keys": _cmd_keys,
     "sweep": _cmd_sweep,

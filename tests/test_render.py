@@ -1,0 +1,277 @@
+"""Off-screen pictures: GGUI snapshots against baselines (with a tolerance), where balls appear,
+and the matplotlib fallback.
+
+Snapshots are compared by mean absolute difference and by the share of strongly changed pixels,
+never byte for byte (software Vulkan drivers differ in the last bits). ``TI_GOLF_UPDATE_BASELINES=1``
+rewrites tests/baselines/*.png; a failing comparison leaves the obtained picture and an amplified
+difference in the test's tmp_path and names them in the message.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import ti_golf as tg
+from ti_golf import render as R
+
+ROOT = Path(__file__).resolve().parent.parent
+BASELINES = Path(__file__).resolve().parent / "baselines"
+SIZE = (320, 240)
+UPDATE = os.environ.get("TI_GOLF_UPDATE_BASELINES") == "1"
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+MAX_MEAN_DIFF_PCT = 1.0  # mean |obtained - baseline| over all pixels and channels, % of full scale
+CHANGED_LEVEL = 0.25  # a pixel "changed strongly" when a channel moved by more than 25 % ...
+MAX_CHANGED_FRACTION = 0.01  # ... and at most 1 % of the pixels may do so
+
+GGUI = R.ggui_available()
+needs_ggui = pytest.mark.skipif(
+    not GGUI, reason="GGUI needs Vulkan, which this machine lacks (apt-get install mesa-vulkan-drivers libvulkan1, "
+                     "or `make system-deps`); the matplotlib fallback is still tested")
+BACKENDS = [pytest.param("ggui", marks=needs_ggui), "matplotlib"]
+
+
+def read_png(path: Path) -> np.ndarray:
+    import matplotlib.image as mpimg
+
+    with open(path, "rb") as fh:
+        assert fh.read(8) == PNG_SIGNATURE, f"{path} is not a PNG"
+    return np.asarray(mpimg.imread(path), dtype=float)[..., :3]
+
+
+def matches(img: np.ndarray, color: tuple[float, float, float], cos_min: float = 0.995,
+            min_norm: float = 0.15) -> np.ndarray:
+    """Pixels whose colour is a shade of ``color`` (lit or in shadow: the same direction in RGB)."""
+    c = np.asarray(color, float)
+    norm = np.linalg.norm(img, axis=2)
+    cos = (img @ c) / np.maximum(norm * np.linalg.norm(c), 1e-12)
+    return (cos >= cos_min) & (norm >= min_norm)
+
+
+def compare_with_baseline(obtained: Path, name: str, tmp_path: Path) -> None:
+    baseline = BASELINES / name
+    if UPDATE:
+        BASELINES.mkdir(exist_ok=True)
+        shutil.copyfile(obtained, baseline)
+        return
+    assert baseline.exists(), (f"no baseline {baseline}; obtained picture: {obtained}. "
+                               "Run with TI_GOLF_UPDATE_BASELINES=1 to create it.")
+    a, b = read_png(obtained), read_png(baseline)
+    assert a.shape == b.shape, f"size {a.shape[1]}x{a.shape[0]} differs from the baseline's {b.shape[1]}x{b.shape[0]}"
+    diff = np.abs(a - b)
+    mean_pct = 100.0 * float(diff.mean())
+    changed = float(np.mean(diff.max(axis=2) > CHANGED_LEVEL))
+    if mean_pct > MAX_MEAN_DIFF_PCT or changed > MAX_CHANGED_FRACTION:
+        import matplotlib.image as mpimg
+
+        kept = tmp_path / f"obtained_{name}"
+        amplified = tmp_path / f"diff_x8_{name}"
+        shutil.copyfile(obtained, kept)
+        mpimg.imsave(amplified, np.clip(8.0 * diff, 0.0, 1.0))
+        pytest.fail(f"{name} differs from {baseline}: mean difference {mean_pct:.3f} % (allowed "
+                    f"{MAX_MEAN_DIFF_PCT} %), {100 * changed:.3f} % of pixels changed by more than "
+                    f"{100 * CHANGED_LEVEL:.0f} % (allowed {100 * MAX_CHANGED_FRACTION:g} %). Obtained: {kept}; "
+                    f"difference x8: {amplified}. If the change is intended: TI_GOLF_UPDATE_BASELINES=1 pytest "
+                    "tests/test_render.py")
+
+
+@pytest.fixture(scope="module")
+def lab():
+    """The lab's turbulent shot 2 s after launch (in flight), with its recorded path."""
+    sim = tg.Simulation.from_scene("lab_turbulent")
+    rec = sim.run(t=2.0, record_every=5)
+    assert sim.counts()["flying"] == 1
+    return sim, rec
+
+
+@pytest.fixture(scope="module")
+def rack():
+    """The break shot 0.05 s in: the cue ball rolling toward a rack of 15 balls."""
+    sim = tg.Simulation.from_scene("break_shot")
+    sim.step(100)
+    return sim
+
+
+# -- snapshots ------------------------------------------------------------------------------------
+@needs_ggui
+def test_lab_trajectory_side_view_snapshot(lab, tmp_path):
+    sim, rec = lab
+    out = tmp_path / "lab_side.png"
+    assert R.render(sim, out, camera="side", size=SIZE, trails=rec, backend="ggui") == "ggui"
+    compare_with_baseline(out, "lab_turbulent_side.png", tmp_path)
+
+
+@needs_ggui
+def test_break_shot_top_view_snapshot(rack, tmp_path):
+    out = tmp_path / "break_top.png"
+    assert R.render(rack, out, camera="top", size=SIZE, backend="ggui") == "ggui"
+    compare_with_baseline(out, "break_shot_top.png", tmp_path)
+
+
+# -- where balls appear ---------------------------------------------------------------------------
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_flying_ball_appears_where_it_is_projected(lab, tmp_path, backend):
+    sim, _ = lab
+    out = tmp_path / f"flying_{backend}.png"
+    assert R.render(sim, out, camera="side", size=SIZE, backend=backend, min_px=3.0) == backend
+    img = read_png(out)
+    assert img.shape == (SIZE[1], SIZE[0], 3)
+    view = R.camera_view(sim, "side", SIZE)
+    (px, py), depth = view.project(sim.x)[0][0], view.project(sim.x)[1][0]
+    assert depth > view.z_near and 0 <= px < SIZE[0] and 0 <= py < SIZE[1]
+    ys, xs = np.nonzero(matches(img, R.FLYING_COLOR))
+    assert len(xs) >= 5, f"no flying-ball colour in {out}"
+    dist = np.hypot(xs + 0.5 - px, ys + 0.5 - py)
+    assert dist.max() <= 3.0 + 2.0, f"flying-ball colour {dist.max():.1f} px from the projected centre ({out})"
+    assert np.hypot(xs.mean() + 0.5 - px, ys.mean() + 0.5 - py) < 1.5
+    for other in (R.ROLLING_COLOR, R.AT_REST_COLOR, R.OUT_OF_BOUNDS_COLOR):
+        assert not matches(img, other).any()
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_no_ball_in_view_shows_no_ball_colour(rack, tmp_path, backend):
+    # above the rack, looking straight up: the sky only (the ground is behind the camera)
+    view = R.View(position=(0.5, 1.0, 0.0), lookat=(0.5, 2.0, 0.0), up=(1.0, 0.0, 0.0), size=SIZE)
+    out = tmp_path / f"empty_{backend}.png"
+    assert R.render(rack, out, camera=view, size=SIZE, backend=backend) == backend
+    img = read_png(out)
+    for color in R.STATUS_COLORS.values():
+        assert not matches(img, color).any(), f"a ball colour shows in {out}"
+    assert np.allclose(img, R.BACKGROUND_COLOR, atol=2.5 / 255)
+    # and the same camera turned toward the rack shows it
+    view = R.View(position=(0.5, 1.0, 0.0), lookat=(1.07, 0.02, 0.0), size=SIZE)
+    R.render(rack, out, camera=view, size=SIZE, backend=backend)
+    assert matches(read_png(out), R.ROLLING_COLOR).sum() > 50
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_wall_seen_from_its_solid_side_is_cut_away(tmp_path, backend):
+    # a floor and a wall at x = 1 whose solid side is x > 1, one ball in front of the wall
+    scene = tg.load_scene(None, data={
+        "planes": [{"point": [0.0, 0.0, 0.0], "normal": [0.0, 1.0, 0.0]},
+                   {"point": [1.0, 0.0, 0.0], "normal": [-1.0, 0.0, 0.0]}],
+        "balls": [{"position": [0.5, 0.1, 0.0], "radius": 0.1}],
+    })
+    sim = tg.Simulation(scene)
+    out = tmp_path / "wall.png"
+    inside = R.View(position=(-1.5, 0.6, 0.0), lookat=(0.5, 0.1, 0.0), size=SIZE)  # from the open side
+    R.render(sim, out, camera=inside, size=SIZE, backend=backend)
+    img = read_png(out)
+    assert matches(img, R.WALL_COLORS[0], cos_min=0.9995).sum() > 1000  # the wall stands behind the ball
+    assert matches(img, R.FLYING_COLOR).sum() > 100
+    outside = R.View(position=(3.0, 0.6, 0.0), lookat=(0.5, 0.1, 0.0), size=SIZE)  # from inside the solid
+    R.render(sim, out, camera=outside, size=SIZE, backend=backend)
+    img = read_png(out)
+    assert not matches(img, R.WALL_COLORS[0], cos_min=0.9995).any()  # cut away: the ball shows
+    assert matches(img, R.FLYING_COLOR).sum() > 100
+
+
+def test_status_colours_are_distinct_from_each_other_and_the_scenery():
+    colors = list(R.STATUS_COLORS.values())
+    assert len(set(colors)) == 4
+    scenery = [R.BACKGROUND_COLOR, *R.GROUND_COLORS, *R.WALL_COLORS, *R.TERRAIN_COLORS]
+    for i, c in enumerate(colors):
+        for other in colors[i + 1:] + scenery:
+            assert not matches(np.array([[other]], float), c, cos_min=0.98).any(), (c, other)
+
+
+# -- cameras and colours (no picture) -------------------------------------------------------------
+def test_camera_presets_frame_the_balls(lab, rack):
+    sim, rec = lab
+    path = np.vstack([np.asarray(rec.x).reshape(-1, 3), sim.x])
+    cases = [("side", R.camera_view(sim, "side", SIZE, trails=rec), path),
+             ("iso", R.camera_view(sim, "iso", SIZE, trails=rec), path),
+             ("top", R.camera_view(rack, "top", SIZE), rack.x),
+             ("iso", R.camera_view(rack, "iso", SIZE), rack.x),
+             ("follow", R.camera_view(sim, "follow", SIZE), sim.x)]
+    for name, view, pts in cases:
+        p, d = view.project(pts)
+        assert np.all(d > view.z_near) and np.all(d < view.z_far), name
+        assert np.all((p >= 0) & (p <= SIZE)), name  # every ball (and the path) in the picture
+    side = cases[0][1]
+    px, _ = side.project(np.array([[0.0, 0.0, 0.0], [50.0, 0.0, 0.0], [0.0, 20.0, 0.0]]))
+    assert px[1, 0] > px[0, 0] and px[2, 1] < px[0, 1]  # side view: x to the right, y up
+    top = cases[2][1]
+    px, _ = top.project(np.array([[0.0, 0.02, 0.0], [1.0, 0.02, 0.0], [0.0, 0.02, 0.1]]))
+    assert px[1, 0] > px[0, 0] and px[2, 1] > px[0, 1]  # top view: x to the right, +z down the picture
+    follow = cases[4][1]
+    assert follow.position[0] < sim.x[0, 0] < follow.lookat[0]  # behind ball 0, looking downrange
+
+
+def test_ball_colours(rack):
+    n = rack.n
+    for mode in ("speed", "spin", "id"):
+        c = R.ball_colors(rack, mode)
+        assert c.shape == (n, 3) and np.all((c >= 0) & (c <= 1))
+    assert len({tuple(c) for c in R.ball_colors(rack, "id")}) == n  # 16 balls, 20 colours
+    speed = R.ball_colors(rack, "speed")
+    assert not np.allclose(speed[0], speed[1])  # the moving cue ball stands out
+    np.testing.assert_allclose(R.ball_colors(rack, "status"), [R.STATUS_COLORS[s] for s in rack.status])
+    with pytest.raises(ValueError, match="color_by"):
+        R.ball_colors(rack, "mass")
+    with pytest.raises(ValueError, match="camera"):
+        R.render(rack, "unused.png", camera="front")
+
+
+# -- fallback -------------------------------------------------------------------------------------
+def test_matplotlib_fallback_writes_a_png(lab, tmp_path):
+    sim, rec = lab
+    out = tmp_path / "fallback.png"
+    assert R.render(sim, out, camera="iso", size=SIZE, trails=rec, backend="matplotlib") == "matplotlib"
+    img = read_png(out)
+    assert img.shape == (SIZE[1], SIZE[0], 3)
+    assert matches(img, R.GROUND_COLORS[0], cos_min=0.999).any()  # the ground is drawn
+    assert not list(tmp_path.glob(".ti_golf_render_*"))  # no temporary file left behind
+
+
+@needs_ggui
+def test_other_size_than_the_window_falls_back_or_raises(rack, tmp_path, capfd):
+    R.render(rack, tmp_path / "a.png", camera="top", size=SIZE, backend="ggui")  # the window exists now
+    with pytest.raises(R.RenderError, match="cannot be resized"):
+        R.render(rack, tmp_path / "b.png", camera="top", size=(160, 120), backend="ggui")
+    capfd.readouterr()
+    for _ in range(2):
+        assert R.render(rack, tmp_path / "c.png", camera="top", size=(160, 120)) == "matplotlib"
+    err = capfd.readouterr().err
+    assert err.count("rendering with matplotlib") <= 1  # one note per process and reason, not per frame
+    assert read_png(tmp_path / "c.png").shape == (120, 160, 3)
+
+
+def _python(code: str, cwd: Path, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, cwd=cwd,
+                          env={**os.environ, **(env or {})}, timeout=300)
+
+
+RENDER_ONE = """
+    import ti_golf as tg
+    from ti_golf.render import render
+    sim = tg.Simulation.from_scene("break_shot")
+    print(render(sim, "pic.png", camera="iso", size=(160, 120)))
+"""
+
+
+def test_without_vulkan_one_line_and_a_matplotlib_picture(tmp_path):
+    # no Vulkan driver to be found: the loader gets an ICD list that does not exist
+    proc = _python(RENDER_ONE, tmp_path, {"VK_ICD_FILENAMES": str(tmp_path / "none.json"),
+                                          "VK_DRIVER_FILES": str(tmp_path / "none.json")})
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.strip().splitlines()[-1] == "matplotlib"
+    assert proc.stderr.strip().splitlines() == ["ti_golf: Vulkan is not available, rendering with matplotlib"]
+    assert read_png(tmp_path / "pic.png").shape == (120, 160, 3)
+
+
+@needs_ggui
+def test_ggui_process_is_quiet_and_leaves_no_imgui_ini(tmp_path):
+    proc = _python(RENDER_ONE, tmp_path)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.strip().splitlines()[-1] == "ggui"
+    assert proc.stderr.strip() == ""  # no Taichi warnings about GGUI's own kernels
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pic.png"]  # Dear ImGui's imgui.ini went elsewhere

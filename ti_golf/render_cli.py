@@ -1,0 +1,111 @@
+"""``ti-golf render``: run a scene and write a picture of its balls (GGUI off screen, else matplotlib).
+
+Standalone until ti_golf/cli.py registers it: ``python -m ti_golf.render_cli SCENE --out pic.png``.
+To register it in ``ti-golf``, cli.py calls :func:`add_parser` in ``build_parser`` and maps
+``"render"`` to :func:`cmd_render` in ``_COMMANDS``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from typing import Sequence
+
+from .errors import ConfigError
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, e.g. 1280x720 (got {text!r})") from None
+    return w, h
+
+
+def add_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> argparse.ArgumentParser:
+    """Add the ``render`` subcommand to ``ti-golf``'s subparsers; returns its parser."""
+    from . import cli
+    from .render import BACKENDS, CAMERAS, COLOR_BY
+
+    p = sub.add_parser("render", help="run a scene and write a PNG of its balls (GGUI off screen, else matplotlib)")
+    cli._scene_options(p)
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--t", type=float,
+                   help="simulated time before the picture [s] (default: the initial state; world.t_end with --until)")
+    g.add_argument("--steps", type=int, help="time steps before the picture")
+    p.add_argument("--until", choices=("rest", "landed"), help="stop early once every ball is at rest / has landed")
+    p.add_argument("--out", required=True, help="the PNG to write")
+    p.add_argument("--camera", choices=CAMERAS, default="iso", help="camera preset (default iso)")
+    p.add_argument("--size", type=_size, default=(1280, 720), metavar="WxH", help="picture size (default 1280x720)")
+    p.add_argument("--color-by", choices=COLOR_BY, default="status", help="ball colours (default status)")
+    p.add_argument("--trails", action="store_true", help="draw each ball's path (records about 200 samples)")
+    p.add_argument("--fov", type=float, default=45.0, help="vertical field of view [deg] (default 45)")
+    p.add_argument("--backend", choices=BACKENDS, default="auto",
+                   help="auto: GGUI, else matplotlib with a note (default); ggui: fail without Vulkan")
+    cli._runtime_options(p)
+    return p
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    """Run ``args.scene`` for ``--t`` / ``--steps`` (default: not at all) and write ``--out``."""
+    from . import cli
+    from .render import render
+    from .sim import Simulation
+
+    cli._check_writable(args.out, "--out")
+    if args.t is not None and not args.t >= 0:
+        raise ConfigError("--t", None, f"must be >= 0 seconds (got {args.t})")
+    if args.steps is not None and args.steps < 0:
+        raise ConfigError("--steps", None, f"must be >= 0 (got {args.steps})")
+    w, h = args.size
+    if not (16 <= w <= 8192 and 16 <= h <= 8192):
+        raise ConfigError("--size", None, f"must be between 16x16 and 8192x8192 (got {w}x{h})")
+    if not 1.0 <= args.fov <= 170.0:
+        raise ConfigError("--fov", None, f"must be in [1, 170] degrees (got {args.fov})")
+    sim = Simulation.from_scene(args.scene, args.overrides)
+    if args.steps is not None:
+        steps = args.steps
+    else:  # default: the initial state, or up to world.t_end with --until
+        duration = args.t if args.t is not None else (sim.scene.world.t_end if args.until else 0.0)
+        steps = int(math.ceil(duration / sim.dt - 1e-9))
+    rec = None
+    if steps > 0:
+        rec = sim.run(steps=steps, until=args.until, record_every=max(1, steps // 200) if args.trails else 0)
+    t0 = time.perf_counter()
+    used = render(sim, args.out, camera=args.camera, size=(w, h), color_by=args.color_by,
+                  trails=rec if args.trails and rec is not None else None, fov=args.fov,
+                  backend=args.backend)
+    print(f"wrote {args.out} ({used}, {sim.n} ball(s) at t = {sim.t:.4g} s, {time.perf_counter() - t0:.2f} s)")
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m ti_golf.render_cli``: the ``render`` subcommand on its own, with ti-golf's error handling."""
+    from . import cli
+    from .errors import SimulationError, TiGolfError
+
+    parser = cli._Parser(prog="ti-golf", description="Golf-ball physics on Taichi: pictures.")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=cli._Parser)
+    add_parser(sub)
+    args = parser.parse_args(["render", *(sys.argv[1:] if argv is None else argv)])
+    try:
+        if args.arch or args.precision:
+            from .runtime import init
+
+            init(args.arch, args.precision)
+        return cmd_render(args)
+    except ConfigError as exc:
+        print(f"ti-golf: error: {exc}", file=sys.stderr)
+        return 2
+    except SimulationError as exc:
+        print(f"ti-golf: simulation stopped: {exc}", file=sys.stderr)
+        return 3
+    except TiGolfError as exc:
+        print(f"ti-golf: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
