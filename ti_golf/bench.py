@@ -118,13 +118,14 @@ def to_json(result: dict[str, Any]) -> str:
     return json.dumps(clean(result))
 
 
-def pile_scene(n: int) -> tuple[Scene, np.ndarray]:
+def pile_scene(n: int, terrain: bool = False) -> tuple[Scene, np.ndarray]:
     """A dense pile: n balls on a cubic lattice of touching balls in a square bin, resting on the floor.
 
-    Every inner ball touches six neighbours. Returns the scene (planes, full contact model, air,
-    no sleeping) and the positions (n, 3).
+    Every inner ball touches six neighbours. With ``terrain`` the floor is a flat height field
+    instead of a plane (same results, the terrain's cost). Returns the scene (planes, full contact
+    model, air, no sleeping) and the positions (n, 3).
     """
-    from .config import Contact, Plane
+    from .config import Contact, Plane, TerrainConfig
 
     r = 0.02
     side = int(np.ceil(np.sqrt(n / 16.0)))  # a bin about 16 layers deep
@@ -135,6 +136,11 @@ def pile_scene(n: int) -> tuple[Scene, np.ndarray]:
     width = 2.0 * r * side
     planes = (Plane((0, 0, 0), (0, 1, 0)), Plane((0, 0, 0), (1, 0, 0)), Plane((width, 0, 0), (-1, 0, 0)),
               Plane((0, 0, 0), (0, 0, 1)), Plane((0, 0, width), (0, 0, -1)))
+    floor = None
+    if terrain:
+        planes = planes[1:]
+        floor = TerrainConfig(kind="generated", origin=(-0.1, 0.0, -0.1), size=(width + 0.2, width + 0.2),
+                              resolution=(65, 65), amplitude=0.0)
     scene = Scene(
         name="bench_collide",
         description=f"benchmark: {n} balls in a {width:.2f} m bin, {layers} layers",
@@ -143,30 +149,45 @@ def pile_scene(n: int) -> tuple[Scene, np.ndarray]:
         world=World(dt=0.001, integrator="semi_implicit", ground=False, v_rest=0.0),
         contact=Contact(e=0.0, mu=0.3, k_p=0.2, iterations=4),
         planes=planes,
+        terrain=floor,
     )
     return scene, x
 
 
-def bench_collide(n: int = 131_072, steps: int = 50, log: Callable[[str], None] = print) -> dict[str, Any]:
-    """Time the full collision step (flight forces, grid, ball–ball and plane contacts) on a dense pile."""
+def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False,
+                  log: Callable[[str], None] = print) -> dict[str, Any]:
+    """Time the full collision step (flight forces, grid, ball–ball and plane contacts) on a dense pile.
+
+    With ``terrain`` the floor is a flat height field, and the same pile on the plane floor is
+    timed in the same run as the baseline (``terrain_overhead``: relative extra time per step).
+    """
     import resource
 
     from .runtime import ensure_init
     from .sim import Simulation
 
     info = ensure_init()
-    small, xs = pile_scene(64)
-    warm = Simulation(small, x=xs)  # compile every kernel before measuring memory and time
-    warm.step(3)
-    del warm
+    for floor in (False, True) if terrain else (False,):
+        small, xs = pile_scene(64, floor)
+        warm = Simulation(small, x=xs)  # compile every kernel before measuring memory and time
+        warm.step(3)
+        del warm
     base_rss = _rss_bytes()
-    scene, x = pile_scene(n)
-    sim = Simulation(scene, x=x)
-    sim.step(10)  # settle the first contacts, build the lists
-    rebuilds0 = sim.solver.rebuilds
-    t0 = time.perf_counter()
-    sim.step(steps)
-    seconds = time.perf_counter() - t0
+
+    def timed(floor: bool) -> tuple[Any, float]:
+        scene, x = pile_scene(n, floor)
+        sim = Simulation(scene, x=x)
+        sim.step(10)  # settle the first contacts, build the lists
+        t0 = time.perf_counter()
+        sim.step(steps)
+        return sim, time.perf_counter() - t0
+
+    plane_seconds = None
+    if terrain:
+        plane_sim, plane_seconds = timed(False)
+        del plane_sim
+    sim, seconds = timed(terrain)
+    scene = sim.scene
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
     xn = sim.x
     nbr, count = sim.solver.neighbours.to_numpy(), sim.solver.n_neighbours.to_numpy()
@@ -186,10 +207,15 @@ def bench_collide(n: int = 131_072, steps: int = 50, log: Callable[[str], None] 
         "ball_steps_per_s": n * steps / seconds,
         "ms_per_step": 1e3 * seconds / steps,
         "contacts_per_ball": touching / n,
-        "list_rebuilds": sim.solver.rebuilds - rebuilds0,
+        "list_rebuilds": sim.solver.rebuilds,
+        "floor": "terrain" if terrain else "plane",
         "peak_rss_bytes": peak,
         "bytes_per_ball_above_baseline": (peak - base_rss) / n,
     }
+    if plane_seconds is not None:
+        result["baselines"] = {"plane_floor_ms_per_step": 1e3 * plane_seconds / steps}
+        result["terrain_overhead"] = seconds / plane_seconds - 1.0
+        log(f"terrain floor vs plane floor: {100 * result['terrain_overhead']:+.1f} % time per step")
     log(f"ti_golf collide: {n} balls, {result['ms_per_step']:.2f} ms/step, {result['ball_steps_per_s']:.3g} ball-steps/s, "
         f"{result['contacts_per_ball']:.2f} contacts/ball, peak RSS {peak / 2**20:.0f} MiB "
         f"({result['bytes_per_ball_above_baseline']:.0f} B/ball above baseline), arch={info.arch}, {info.precision}")
@@ -207,3 +233,46 @@ def _rss_bytes() -> int:
         import resource
 
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def bench_render(n: int = 100_000, size: tuple[int, int] = (1280, 720), frames: int = 3,
+                 log: Callable[[str], None] = print) -> dict[str, Any]:
+    """Seconds per off-screen frame of n balls over a generated terrain (GGUI), with the matplotlib
+    fallback timed in the same run as the baseline."""
+    import os
+    import tempfile
+
+    from .config import TerrainConfig
+    from .render import render
+    from .runtime import ensure_init
+    from .sim import Simulation
+
+    info = ensure_init()
+    side = int(np.ceil(np.sqrt(n / 10.0)))
+    scene = Scene(
+        name="bench_render",
+        description=f"benchmark: {n} balls over a terrain",
+        launch=None,
+        world=World(dt=0.001, integrator="semi_implicit", ground=False),
+        terrain=TerrainConfig(kind="generated", origin=(-1.0, 0.0, -1.0), size=(2.0 + 0.05 * side, 2.0 + 0.05 * side),
+                              resolution=(129, 129), amplitude=0.3, seed=3),
+    )
+    idx = np.arange(n)
+    x = np.stack([0.05 * (idx % side), 0.6 + 0.05 * (idx // (side * side)), 0.05 * ((idx // side) % side)], axis=1)
+    sim = Simulation(scene, x=x)
+    out: dict[str, Any] = {"benchmark": "render", "n": n, "size": list(size), "arch": info.arch}
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "frame.png")
+        for backend, key in (("auto", "seconds_per_frame"), ("matplotlib", "matplotlib")):
+            used = render(sim, path, camera="iso", size=size, backend=backend)  # first frame: window, compile
+            t0 = time.perf_counter()
+            for _ in range(frames if key == "seconds_per_frame" else 1):
+                render(sim, path, camera="iso", size=size, backend=backend)
+            per_frame = (time.perf_counter() - t0) / (frames if key == "seconds_per_frame" else 1)
+            if key == "seconds_per_frame":
+                out["seconds_per_frame"], out["renderer"] = per_frame, used
+            else:
+                out["baselines"] = {"matplotlib_seconds_per_frame": per_frame}
+    log(f"ti_golf render: {n} balls + terrain at {size[0]}x{size[1]}: {out['seconds_per_frame']:.3f} s/frame "
+        f"({out['renderer']}); matplotlib {out['baselines']['matplotlib_seconds_per_frame']:.3f} s/frame")
+    return out

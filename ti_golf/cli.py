@@ -89,8 +89,15 @@ def build_parser() -> argparse.ArgumentParser:
     bc = bsub.add_parser("collide", help="full collision step on a dense pile of N balls")
     bc.add_argument("--n", type=int, default=131_072, help="balls (default 131072)")
     bc.add_argument("--steps", type=int, default=50, help="timed steps (default 50)")
+    bc.add_argument("--terrain", action="store_true",
+                    help="a flat height-field floor instead of the plane (the plane is timed too, as baseline)")
     bc.add_argument("--json", action="store_true", help="end with one line of JSON")
     _runtime_options(bc)
+    br = bsub.add_parser("render", help="seconds per off-screen frame of N balls over a terrain")
+    br.add_argument("--n", type=int, default=100_000, help="balls (default 100000)")
+    br.add_argument("--frames", type=int, default=3, help="timed frames (default 3)")
+    br.add_argument("--json", action="store_true", help="end with one line of JSON")
+    _runtime_options(br)
 
     from .render_cli import add_parser as _add_render_parser
 
@@ -304,10 +311,14 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
     if args.n <= 0:
         raise ConfigError("--n", None, f"must be > 0 (got {args.n})")
-    if args.bench == "collide":
+    if args.bench == "render":
+        from .bench import bench_render
+
+        result = bench_render(n=args.n, frames=max(1, args.frames))
+    elif args.bench == "collide":
         if args.n < 2 or args.steps <= 0:
             raise ConfigError("--n" if args.n < 2 else "--steps", None, "must be >= 2 balls and > 0 steps")
-        result = bench_collide(n=args.n, steps=args.steps)
+        result = bench_collide(n=args.n, steps=args.steps, terrain=args.terrain)
     else:
         if not args.dt > 0:
             raise ConfigError("--dt", None, f"must be > 0 (got {args.dt})")
