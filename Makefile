@@ -24,14 +24,15 @@ system-deps:
 	  || echo "system-deps: could not install mesa-vulkan-drivers; rendering tests will be skipped"; \
 	else echo "system-deps: not root or no apt-get; skipping mesa-vulkan-drivers"; fi
 
-demo: setup
+demo: setup system-deps
 	mkdir -p $(OUT)
 	$(TIGOLF) table --plot $(OUT)/lab_table.png
 	$(TIGOLF) sweep lab_turbulent --angles 32:42:0.5 --out $(OUT)/sweep_turbulent.csv --plot $(OUT)/sweep_turbulent.png
 	$(TIGOLF) run lab_spin_decay --until rest --out $(OUT)/spin_decay.npz --plot $(OUT)/spin_decay.png
 	$(TIGOLF) run break_shot --until rest --out $(OUT)/break_shot.npz --plot $(OUT)/break_shot.png
+	$(TIGOLF) render break_shot --steps 400 --camera iso --trails --out $(OUT)/break_shot_3d.png
 
-test: setup
+test: setup system-deps
 	$(PY) -m pytest -q
 
 bench: setup
