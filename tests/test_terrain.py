@@ -458,3 +458,56 @@ def test_cli_bad_terrain_exits_2(tmp_path):
     proc = run_cli("run", str(path), "--steps", "1")
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "terrain.file" in proc.stderr and "not found" in proc.stderr and len(proc.stderr.splitlines()) == 1
+
+
+# ---------------------------------------------------------------------------------------------
+# Surface types
+# ---------------------------------------------------------------------------------------------
+def _two_plateaus(tmp_path):
+    # heights 0 for x < 0 and 0.5 m for x >= 0 (a step between two grid lines); cells below the
+    # level 0.25 m are surface 0 ("green"), the others surface 1 ("rough")
+    heights = np.zeros((41, 11))
+    heights[20:, :] = 0.5
+    np.save(tmp_path / "steps.npy", heights)
+    return {"kind": "file", "file": str(tmp_path / "steps.npy"), "origin": [-20.0, 0.0, -5.0],
+            "size": [40.0, 10.0], "surface_levels": [0.25]}
+
+
+@pytest.mark.parametrize("collide", [False, True], ids=["advance", "collision_step"])
+def test_surface_types_have_their_own_restitution(tmp_path, collide):
+    # report B.9 per surface: a ball dropped from H on each plateau rebounds to e²H with that
+    # surface's e (the time-of-impact split leaves a few g·h² per bounce)
+    H, h = 1.0, 1e-4
+    sc = scene(world={"dt": h}, contact={"e": 0.5, "mu": 0.0}, terrain=_two_plateaus(tmp_path),
+               surfaces=[{"name": "green", "e": 0.8}, {"name": "rough", "e": 0.3}])
+    x = [[-10.0, R + H, 0.0], [10.0, 0.5 + R + H, 0.0]]
+    if collide:  # both balls in one simulation: the collision step
+        sim = tg.Simulation(sc, x=x)
+        assert sim.solver is not None
+        traj = np.asarray(sim.run(t=1.2, record_every=10).x)
+        ya, yb = traj[:, 0, 1] - R, traj[:, 1, 1] - 0.5 - R
+    else:  # one ball per simulation: the flight kernel
+        a, b = tg.Simulation(sc, x=[x[0]]), tg.Simulation(sc, x=[x[1]])
+        assert a.solver is None
+        ya = np.asarray(a.run(t=1.2, record_every=10).x)[:, 0, 1] - R
+        yb = np.asarray(b.run(t=1.2, record_every=10).x)[:, 0, 1] - 0.5 - R
+
+    def first_peak(y):
+        return next(y[i] for i in range(1, len(y) - 1) if y[i - 1] < y[i] >= y[i + 1] and y[i] > 0.01)
+
+    assert first_peak(ya) == pytest.approx(0.8**2 * H, abs=2e-3)
+    assert first_peak(yb) == pytest.approx(0.3**2 * H, abs=2e-3)
+
+
+def test_surface_defaults_come_from_contact_and_levels_are_checked(tmp_path):
+    from ti_golf.model import Model
+
+    sc = scene(contact={"e": 0.4, "mu": 0.3, "mu_roll": 0.07}, terrain=_two_plateaus(tmp_path),
+               surfaces=[{"name": "fairway", "mu_roll": 0.2}, {"name": "bunker", "e": 0.05}])
+    model = Model(sc, np.full(1, R), np.full(1, 0.045), np.zeros(1))
+    np.testing.assert_allclose(model.surface_table, [[0.4, 0.3, 0.2], [0.05, 0.3, 0.07]])
+    cells = model.terrain.cells
+    assert cells.shape == (40, 10) and set(np.unique(cells)) == {0, 1}
+    assert np.all(cells[:19] == 0) and np.all(cells[20:] == 1)
+    with pytest.raises(tg.ConfigError, match="terrain.surface_levels"):
+        scene(terrain=_two_plateaus(tmp_path), surfaces=[{"name": "only one"}])

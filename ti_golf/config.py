@@ -189,6 +189,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
             Key("kill_height", "float", None, "m",
                 "balls below this height are out of bounds, as are balls whose x or z leaves the grid "
                 "(default: origin y − 10 m)"),
+            Key("surface_levels", "range", None, "m",
+                "per-cell surface types by height: a cell whose mean height (above origin y) is below "
+                "levels[k] (and not below levels[k−1]) uses [[surfaces]] k, the highest cells the last; "
+                "needs one level fewer than there are surfaces"),
         ]
     },
 }
@@ -259,6 +263,16 @@ ARRAY_SCHEMA: dict[str, dict[str, Key]] = {
                 lambda v: None if 0 <= v < 0.5 else "must be in [0, 0.5)", "[0, 0.5)"),
             Key("mass", "float", None, "kg", "mass (default ball.mass; scaled with R³ when radii vary)", _positive, "> 0"),
             Key("seed", "int", 0, "-", "random seed (the same seed gives the same balls everywhere)"),
+        ]
+    },
+    "surfaces": {
+        k.name: k
+        for k in [
+            Key("name", "str", "", "-", "what the surface is (fairway, rough, green, bunker, water …)"),
+            Key("e", "float", None, "-", "restitution on this surface (default contact.e)", _unit_interval, "[0, 1]"),
+            Key("mu", "float", None, "-", "Coulomb friction on this surface (default contact.mu)", _non_negative, ">= 0"),
+            Key("mu_roll", "float", None, "-", "rolling resistance on this surface (default contact.mu_roll)",
+                _non_negative, ">= 0"),
         ]
     },
     "planes": {
@@ -360,11 +374,23 @@ class TerrainConfig:
     profile: bool = _default("terrain", "profile")
     slope: tuple[float, float] = _default("terrain", "slope")
     kill_height: float | None = _default("terrain", "kill_height")
+    surface_levels: tuple[float, ...] | None = _default("terrain", "surface_levels")
 
     @property
     def kill(self) -> float:
         """Height [m] below which a ball is out of bounds (``kill_height``, default origin y − 10 m)."""
         return self.origin[1] - 10.0 if self.kill_height is None else self.kill_height
+
+
+@dataclass(frozen=True)
+class Surface:
+    """A terrain surface type (``[[surfaces]]``): its own restitution, friction and rolling resistance
+    (``None``: the ``[contact]`` value)."""
+
+    name: str = ""
+    e: float | None = None
+    mu: float | None = None
+    mu_roll: float | None = None
 
 
 @dataclass(frozen=True)
@@ -441,6 +467,7 @@ class Scene:
     blocks: tuple[Block, ...] = ()
     planes: tuple[Plane, ...] = ()
     terrain: TerrainConfig | None = None
+    surfaces: tuple[Surface, ...] = ()
 
     def launch_position(self) -> Vec3:
         """Launch point [m]: the scene's, or the ball resting on the ground (the terrain, if any) at x = z = 0."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
-from .config import Scene
+from .config import Scene, Surface
 from .physics.integrate import INTEGRATOR_CODES
 from .physics.types import AirParams, ContactParams, TerrainParams, vec3
 from .runtime import np_float
@@ -27,6 +27,9 @@ class Model:
             included), numpy (P, 3); passed to kernels directly.
         terrain: the scene's height field (:class:`ti_golf.terrain.Terrain`, numpy) or ``None``.
         terrain_params: kernel-argument struct (TerrainParams); ``on`` = 0 without a terrain.
+        terrain_cells: surface type of every terrain cell, Taichi ndarray (nx − 1, nz − 1) int.
+        surface_table: e, μ, μ_roll of every surface type, numpy (S, 3) (one row from [contact]
+            when the scene has no [[surfaces]]).
         terrain_h: the terrain's heights (nx, nz) [m] as a Taichi ndarray (a 2×2 zero grid
             without a terrain: kernels always take one).
     """
@@ -69,3 +72,9 @@ class Model:
                                             dx=float(spacing[0]), dz=float(spacing[1]), kill=float(kill))
         self.terrain_h = ti.ndarray(float, heights.shape)
         self.terrain_h.from_numpy(np.ascontiguousarray(heights, dtype=f))
+        cells = self.terrain.cells if self.terrain is not None else np.zeros((1, 1), np.int32)
+        self.terrain_cells = ti.ndarray(ti.i32, cells.shape)
+        self.terrain_cells.from_numpy(np.ascontiguousarray(cells, dtype=np.int32))
+        surfaces = scene.surfaces or (Surface(),)
+        self.surface_table = np.array([[c.e if sf.e is None else sf.e, c.mu if sf.mu is None else sf.mu,
+                                        c.mu_roll if sf.mu_roll is None else sf.mu_roll] for sf in surfaces], dtype=f)

@@ -23,6 +23,7 @@ from .config import (
     BallSpec,
     Block,
     Plane,
+    Surface,
     TerrainConfig,
     TOP_LEVEL,
     Air,
@@ -269,6 +270,16 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
     kwargs["balls"] = tuple(_ball_spec(t, source, i) for i, t in enumerate(arrays["balls"]))
     kwargs["blocks"] = tuple(_block(t, source, i) for i, t in enumerate(arrays["blocks"]))
     kwargs["planes"] = tuple(_plane(t) for t in arrays["planes"])
+    kwargs["surfaces"] = tuple(Surface(**t) for t in arrays["surfaces"])
+    levels = kwargs["terrain"].surface_levels if kwargs.get("terrain") is not None else None
+    if levels is not None:
+        if len(levels) != len(kwargs["surfaces"]) - 1:
+            raise_config(source, "terrain.surface_levels", f"needs one level fewer than there are [[surfaces]] "
+                         f"({len(kwargs['surfaces'])} surfaces, {len(levels)} levels)")
+        if any(b <= a for a, b in zip(levels, levels[1:])):
+            raise_config(source, "terrain.surface_levels", "must increase")
+    elif kwargs["surfaces"] and kwargs.get("terrain") is None:
+        raise_config(source, "surfaces", "surface types need a [terrain] (with terrain.surface_levels)")
     if (kwargs["planes"] or kwargs.get("terrain") is not None) and "ground" not in doc.get("world", {}):
         world = kwargs.get("world", World())
         kwargs["world"] = World(**{**world.__dict__, "ground": False})

@@ -164,7 +164,8 @@ class Simulation:
         else:
             kernels.advance(
                 m.air, m.contact, m.gravity, m.dt, m.integrator, int(n), s.t, w.v_rest, w.t_rest, m.radius, m.mass,
-                m.launch_height, m.plane_p, m.plane_n, m.terrain_params, m.terrain_h, s.x, s.v, s.w, s.status,
+                m.launch_height, m.plane_p, m.plane_n, m.terrain_params, m.terrain_h, m.terrain_cells, m.surface_table,
+                s.x, s.v, s.w, s.status,
                 s.rest_time, s.landed, s.apex, s.t_land, s.land_x, s.land_v,
             )
             s.t += n * m.dt

@@ -90,6 +90,7 @@ class CollisionSolver:
         collide.collision_step(
             m.air, m.contact, m.gravity, m.dt, m.integrator, m.scene.contact.iterations, s.t, 0.5 * self.skin,
             w.v_rest, w.t_rest, m.radius, m.mass, m.launch_height, m.plane_p, m.plane_n, m.terrain_params, m.terrain_h,
+            m.terrain_cells, m.surface_table,
             self.neighbours, self.n_neighbours, self.x_at_build, self.lam, self.lam_plane,
             s.x, s.v, s.w, s.status, s.rest_time, self.x_free, self.v_a, self.w_a, self.v_b, self.w_b,
             s.landed, s.apex, s.t_land, s.land_x, s.land_v, self.flag,

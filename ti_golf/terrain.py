@@ -37,6 +37,8 @@ class Terrain:
     heights: np.ndarray
     origin: np.ndarray
     spacing: np.ndarray
+    cells: np.ndarray | None = None
+    """Surface type of every cell, (nx − 1, nz − 1) int indices into the scene's [[surfaces]]."""
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -189,4 +191,8 @@ def build_terrain(cfg: TerrainConfig, source: str = "") -> Terrain:
     if cfg.slope[0] or cfg.slope[1]:
         heights = heights + cfg.slope[0] * (spacing[0] * np.arange(nx))[:, None] \
             + cfg.slope[1] * (spacing[1] * np.arange(nz))[None, :]
-    return Terrain(heights=heights, origin=np.asarray(cfg.origin, dtype=float), spacing=spacing)
+    cells = np.zeros((nx - 1, nz - 1), dtype=np.int32)
+    if cfg.surface_levels:
+        mean = 0.25 * (heights[:-1, :-1] + heights[1:, :-1] + heights[:-1, 1:] + heights[1:, 1:])
+        cells = np.searchsorted(np.asarray(cfg.surface_levels), mean, side="right").astype(np.int32)
+    return Terrain(heights=heights, origin=np.asarray(cfg.origin, dtype=float), spacing=spacing, cells=cells)

@@ -25,8 +25,8 @@ from .contact import pair_impulse, plane_jolt, plane_position, rest_update, spin
 from .grid import int_table, real_table
 from .integrate import step_free, track_flight
 from .kernels import lane_state
-from .terrain import outside, surface, terrain_position
-from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, vec3,
+from .terrain import outside, surface, surface_contact, terrain_position
+from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, vec3,
                     vec3_array)
 
 
@@ -57,6 +57,7 @@ def gather(dv, dw, P, n, i_is_a, r_a, r_b, inv_ma, inv_mb):
 @ti.func
 def sweep_ball(i, contact: ti.template(), h, v_inelastic, radius: ti.template(), mass: ti.template(),
                plane_p: ti.template(), plane_n: ti.template(), terrain, heights: ti.template(),
+               terrain_cells: ti.template(), surface_table: ti.template(),
                status: ti.template(), x: ti.template(), x_free: ti.template(),
                neighbours: ti.template(), n_neighbours: ti.template(), lam: ti.template(),
                lam_plane: ti.template(), v_in: ti.template(), w_in: ti.template(), v_out: ti.template(),
@@ -94,11 +95,12 @@ def sweep_ball(i, contact: ti.template(), h, v_inelastic, radius: ti.template(),
         if terrain.on != 0:
             q = plane_p.shape[0]
             pt, n = surface(heights, terrain, x_free[i])
+            ct = surface_contact(contact, surface_table, terrain_cells, heights, terrain, x_free[i])
             gap = (x[i] - pt).dot(n) - radius[i]
             P, lam_p, _ = pair_impulse(n, gap, vi, wi, radius[i], 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0,
-                                       lam_plane[i, q], contact.e, contact.mu, v_inelastic, h)
+                                       lam_plane[i, q], ct.e, ct.mu, v_inelastic, h)
             if P.dot(n) != 0.0:
-                vi, wi = plane_jolt(P, lam_p - lam_plane[i, q], vi, wi, radius[i], n, contact.mu_roll)
+                vi, wi = plane_jolt(P, lam_p - lam_plane[i, q], vi, wi, radius[i], n, ct.mu_roll)
             lam_plane[i, q] = lam_p
     v_out[i], w_out[i] = vi, wi
 
@@ -123,6 +125,8 @@ def collision_step(
     plane_n: vec3_array,
     terrain: TerrainParams,
     heights: float_grid,
+    terrain_cells: int_grid,
+    surface_table: float_grid,
     # Neighbour lists (built by grid.build_neighbours) and their accumulated resting impulses:
     neighbours: int_table,
     n_neighbours: int_array,
@@ -193,18 +197,21 @@ def collision_step(
                 q = plane_n.shape[0]
                 if lam_plane[i, q] > 0.0:
                     _, n = surface(heights, terrain, x_free[i])
-                    P = warm_impulse(n, vi, wi, radius[i], vec3(0.0), vec3(0.0), 0.0, 1.0, lam_plane[i, q], contact.mu)
-                    vi, wi = plane_jolt(P, lam_plane[i, q], vi, wi, radius[i], n, contact.mu_roll)
+                    ct = surface_contact(contact, surface_table, terrain_cells, heights, terrain, x_free[i])
+                    P = warm_impulse(n, vi, wi, radius[i], vec3(0.0), vec3(0.0), 0.0, 1.0, lam_plane[i, q], ct.mu)
+                    vi, wi = plane_jolt(P, lam_plane[i, q], vi, wi, radius[i], n, ct.mu_roll)
         v_b[i], w_b[i] = vi, wi
     # 3. Jacobi sweeps, ping-pong between the (v_a, w_a) and (v_b, w_b) buffers
     for k in ti.static(range(iterations)):
         if ti.static(k % 2 == 0):
             for i in range(x.shape[0]):
-                sweep_ball(i, contact, h, v_inelastic, radius, mass, plane_p, plane_n, terrain, heights, status, x,
+                sweep_ball(i, contact, h, v_inelastic, radius, mass, plane_p, plane_n, terrain, heights, terrain_cells,
+                           surface_table, status, x,
                            x_free, neighbours, n_neighbours, lam, lam_plane, v_b, w_b, v_a, w_a)
         else:
             for i in range(x.shape[0]):
-                sweep_ball(i, contact, h, v_inelastic, radius, mass, plane_p, plane_n, terrain, heights, status, x,
+                sweep_ball(i, contact, h, v_inelastic, radius, mass, plane_p, plane_n, terrain, heights, terrain_cells,
+                           surface_table, status, x,
                            x_free, neighbours, n_neighbours, lam, lam_plane, v_a, w_a, v_b, w_b)
     # 4. positions, projections, status, rest; then whether the lists stay valid
     for i in range(x.shape[0]):

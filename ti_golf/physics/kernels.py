@@ -10,8 +10,8 @@ from ..config import AT_REST, OUT_OF_BOUNDS
 from .aero import ROWS, SPIN, V, W, X, coefficients, column, row
 from .contact import plane_impulse, plane_position, rest_update
 from .integrate import IN_FLIGHT, LANDED, apex_in_step, landing_in_step, step_free, track_flight
-from .terrain import outside, surface, terrain_position
-from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, vec3, vec3_array,
+from .terrain import outside, surface, surface_contact, terrain_position
+from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, vec3, vec3_array,
                     vec3_table)
 
 
@@ -139,6 +139,8 @@ def advance(
     plane_n: vec3_array,
     terrain: TerrainParams,
     heights: float_grid,
+    terrain_cells: int_grid,
+    surface_table: float_grid,
     # State in/out:
     x: vec3_array,
     v: vec3_array,
@@ -183,7 +185,8 @@ def advance(
                 pt, nt = vec3(0.0), vec3(0.0, 1.0, 0.0)
                 if terrain.on != 0:  # the terrain: the plane of the patch under the free-flight end point
                     pt, nt = surface(heights, terrain, x_free)
-                    v1, w1, t = plane_impulse(xi, v1, w1, r, pt, nt, contact, v_inelastic, h)
+                    ct = surface_contact(contact, surface_table, terrain_cells, heights, terrain, x_free)
+                    v1, w1, t = plane_impulse(xi, v1, w1, r, pt, nt, ct, v_inelastic, h)
                     touching |= t
                 x1 = x_free + h * (v1 - v_free)
                 for p in range(plane_p.shape[0]):

@@ -15,10 +15,10 @@ from .types import TerrainParams, float_grid, int_array, vec3, vec3_array
 
 
 @ti.func
-def surface(heights: ti.template(), terrain, x):
-    """(p, n̂): the point of the terrain under x [m] and the unit normal of the bilinear patch there.
+def cell_under(heights: ti.template(), terrain, x):
+    """(i, k, s, t): the grid cell under x [m] and the position s, t ∈ [0, 1] inside it.
 
-    Outside the grid the edge cells are used with the cell coordinates clamped to [0, 1].
+    Outside the grid the edge cells are used with the cell coordinates clamped.
     """
     nx, nz = heights.shape[0], heights.shape[1]
     u = (x[0] - terrain.origin[0]) / terrain.dx
@@ -30,7 +30,29 @@ def surface(heights: ti.template(), terrain, x):
         wc = ti.min(w, nz - 1.0)
     i = ti.min(ti.cast(ti.floor(uc), ti.i32), nx - 2)
     k = ti.min(ti.cast(ti.floor(wc), ti.i32), nz - 2)
-    s, t = uc - i, wc - k
+    return i, k, uc - i, wc - k
+
+
+@ti.func
+def surface_contact(contact, table: ti.template(), cells: ti.template(), heights: ti.template(), terrain, x):
+    """The contact parameters of the surface type of the cell under x: ``contact`` with e, μ and
+    μ_roll from row ``cells[i, k]`` of ``table`` (S, 3)."""
+    i, k, _, _ = cell_under(heights, terrain, x)
+    row = cells[ti.min(i, cells.shape[0] - 1), ti.min(k, cells.shape[1] - 1)]
+    c = contact
+    c.e = table[row, 0]
+    c.mu = table[row, 1]
+    c.mu_roll = table[row, 2]
+    return c
+
+
+@ti.func
+def surface(heights: ti.template(), terrain, x):
+    """(p, n̂): the point of the terrain under x [m] and the unit normal of the bilinear patch there.
+
+    Outside the grid the edge cells are used with the cell coordinates clamped to [0, 1].
+    """
+    i, k, s, t = cell_under(heights, terrain, x)
     h00, h10 = heights[i, k], heights[i + 1, k]
     h01, h11 = heights[i, k + 1], heights[i + 1, k + 1]
     h = terrain.origin[1] + ((h00 * (1.0 - s) + h10 * s) * (1.0 - t) + (h01 * (1.0 - s) + h11 * s) * t)

@@ -47,3 +47,5 @@ TerrainParams = ti.types.struct(
     kill=float,  # balls below this height are out of bounds [m]
 )
 """Height-field terrain parameters (see :mod:`ti_golf.physics.terrain`)."""
+int_grid = ti.types.ndarray(dtype=ti.i32, ndim=2)
+"""2-D int array (terrain cell surface types)."""
