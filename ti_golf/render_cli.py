@@ -82,29 +82,10 @@ def cmd_render(args: argparse.Namespace) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m ti_golf.render_cli``: the ``render`` subcommand on its own, with ti-golf's error handling."""
-    from . import cli
-    from .errors import SimulationError, TiGolfError
+    """``python -m ti_golf.render_cli ARGS`` = ``ti-golf render ARGS`` (same parser, same error handling)."""
+    from .cli import main as cli_main
 
-    parser = cli._Parser(prog="ti-golf", description="Golf-ball physics on Taichi: pictures.")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=cli._Parser)
-    add_parser(sub)
-    args = parser.parse_args(["render", *(sys.argv[1:] if argv is None else argv)])
-    try:
-        if args.arch or args.precision:
-            from .runtime import init
-
-            init(args.arch, args.precision)
-        return cmd_render(args)
-    except ConfigError as exc:
-        print(f"ti-golf: error: {exc}", file=sys.stderr)
-        return 2
-    except SimulationError as exc:
-        print(f"ti-golf: simulation stopped: {exc}", file=sys.stderr)
-        return 3
-    except TiGolfError as exc:
-        print(f"ti-golf: error: {exc}", file=sys.stderr)
-        return 2
+    return cli_main(["render", *(sys.argv[1:] if argv is None else argv)])
 
 
 if __name__ == "__main__":  # pragma: no cover
