@@ -275,3 +275,25 @@ def test_ggui_process_is_quiet_and_leaves_no_imgui_ini(tmp_path):
     assert proc.stdout.strip().splitlines()[-1] == "ggui"
     assert proc.stderr.strip() == ""  # no Taichi warnings about GGUI's own kernels
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pic.png"]  # Dear ImGui's imgui.ini went elsewhere
+
+
+def test_run_writes_numbered_frames_and_a_gif(tmp_path):
+    # ti-golf run --frames-every K: one frame at the start and one every K steps, kept as PNGs and
+    # as an animated GIF with the same number of frames
+    from PIL import Image
+
+    from tests.conftest import run_cli
+
+    out = run_cli("run", "break_shot", "--steps", "200", "--frames-every", "100", "--frames", str(tmp_path / "f"),
+                  "--gif", str(tmp_path / "a.gif"), "--size", "160x120", "--camera", "top")
+    assert out.returncode == 0, out.stderr
+    frames = sorted((tmp_path / "f").glob("frame_*.png"))
+    assert [p.name for p in frames] == ["frame_00000.png", "frame_00001.png", "frame_00002.png"]
+    with Image.open(frames[0]) as im:
+        assert im.size == (160, 120)
+    with Image.open(tmp_path / "a.gif") as gif:
+        assert gif.n_frames == 3
+    # the balls moved between the first and the last frame
+    first = np.asarray(Image.open(frames[0]).convert("RGB"), dtype=float)
+    last = np.asarray(Image.open(frames[-1]).convert("RGB"), dtype=float)
+    assert np.abs(first - last).mean() > 0.01

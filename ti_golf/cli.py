@@ -72,6 +72,11 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--record-every", type=int, default=0, metavar="K", help="record positions and spins every K steps")
     r.add_argument("--out", help="write an .npz with x, v, w (N, 3), t, status (and traj_* when recording)")
     r.add_argument("--plot", help="write a PNG: trajectory and |ω| vs time (records automatically)")
+    r.add_argument("--frames-every", type=int, default=0, metavar="K", help="render a frame every K steps")
+    r.add_argument("--frames", metavar="DIR", help="write the frames as DIR/frame_00000.png, …")
+    r.add_argument("--gif", help="write the frames as an animated GIF (Pillow)")
+    r.add_argument("--camera", choices=("side", "top", "iso", "follow"), default="iso", help="camera of the frames")
+    r.add_argument("--size", default="640x360", metavar="WxH", help="frame size (default 640x360)")
     _runtime_options(r)
 
     t = sub.add_parser("table", help="reproduce the report's Table 3.1-1 from the lab scenes")
@@ -225,13 +230,19 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.plot and not record_every:
         duration = args.t if args.t is not None else (args.steps or 0) * sim.dt or sim.scene.world.t_end
         record_every = max(1, int(duration / sim.dt / 400))
+    frames = _Frames(args, sim) if (args.frames or args.gif) else None
     progress = _Progress()
     t0 = time.perf_counter()
     rec = None
     try:
-        rec = sim.run(t=args.t, steps=args.steps, until=args.until, record_every=record_every, progress=progress)
+        if frames is not None:
+            frames(sim)
+        rec = sim.run(t=args.t, steps=args.steps, until=args.until, record_every=record_every, progress=progress,
+                      every=frames.every if frames else 0, on_every=frames)
     finally:
         progress.close()
+        if frames is not None:
+            frames.close()  # the frames rendered so far are kept, and the GIF is written from them
         if args.out and (rec is not None or sim.t > 0):
             sim.save(args.out, rec)  # save what was simulated even if the run stopped early
     elapsed = time.perf_counter() - t0
@@ -326,6 +337,57 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.json:
         print(to_json(result))
     return 0
+
+
+class _Frames:
+    """Renders a frame every K steps to numbered PNGs (``--frames DIR``) and/or an animated GIF."""
+
+    def __init__(self, args: argparse.Namespace, sim) -> None:
+        import tempfile
+
+        from .render_cli import _size
+
+        if args.frames_every < 0:
+            raise ConfigError("--frames-every", None, f"must be >= 0 (got {args.frames_every})")
+        _check_writable(args.gif, "--gif")
+        if args.gif:
+            try:
+                import PIL  # noqa: F401
+            except ImportError:
+                raise ConfigError("--gif", None, "needs Pillow: pip install pillow") from None
+        duration = args.t if args.t is not None else (args.steps or 0) * sim.dt or sim.scene.world.t_end
+        self.every = args.frames_every or max(1, int(round(duration / sim.dt / 100)))  # ~100 frames
+        self.size = _size(args.size)
+        self.camera = args.camera
+        self.gif = args.gif
+        self.fps = max(1.0, min(50.0, 1.0 / (self.every * sim.dt)))
+        self._tmp = None
+        if args.frames:
+            self.folder = Path(args.frames)
+            self.folder.mkdir(parents=True, exist_ok=True)
+        else:
+            self._tmp = tempfile.TemporaryDirectory()
+            self.folder = Path(self._tmp.name)
+        self.paths: list[Path] = []
+
+    def __call__(self, sim) -> None:
+        from .render import render
+
+        path = self.folder / f"frame_{len(self.paths):05d}.png"
+        render(sim, path, camera=self.camera, size=self.size)
+        self.paths.append(path)
+
+    def close(self) -> None:
+        if self.gif and self.paths:
+            from PIL import Image
+
+            images = [Image.open(p).convert("P", palette=Image.ADAPTIVE) for p in self.paths]
+            images[0].save(self.gif, save_all=True, append_images=images[1:], duration=int(1000 / self.fps), loop=0)
+            print(f"wrote {self.gif} ({len(images)} frames)")
+        if self._tmp is None and self.paths:
+            print(f"wrote {len(self.paths)} frames to {self.folder}")
+        if self._tmp is not None:
+            self._tmp.cleanup()
 
 
 class _Progress:

@@ -195,12 +195,15 @@ class Simulation:
         until: str | None = None,
         record_every: int = 0,
         progress: Callable[[float, float], None] | None = None,
+        every: int = 0,
+        on_every: Callable[["Simulation"], None] | None = None,
     ) -> Recording:
         """Advance by ``t`` seconds or ``steps`` steps (default: the scene's ``world.t_end``).
 
         ``until="rest"`` stops early once every ball is at rest or out of bounds; ``until="landed"``
         once every tracked ball has landed. ``record_every=K`` samples x and ω every K steps.
-        ``progress(t_done, t_total)`` is called between chunks.
+        ``progress(t_done, t_total)`` is called between chunks; ``on_every(sim)`` every ``every``
+        steps (e.g. to render a frame).
         """
         if until not in (None, "rest", "landed"):
             raise ValueError(f"until must be None, 'rest' or 'landed' (got {until!r})")
@@ -214,6 +217,8 @@ class Simulation:
             rec.x.append(self.x)
             rec.w.append(self.w)
         chunk = int(record_every) if record_every else max(1, min(steps, int(round(0.05 / self.dt)) or 1))
+        if every and on_every is not None:
+            chunk = math.gcd(chunk, int(every)) if record_every else int(every)
         done = 0
         while done < steps:
             k = min(chunk, steps - done)
@@ -223,6 +228,8 @@ class Simulation:
                 rec.t.append(self.t)
                 rec.x.append(self.x)
                 rec.w.append(self.w)
+            if every and on_every is not None and done % every == 0:
+                on_every(self)
             if progress is not None:
                 progress(done * self.dt, steps * self.dt)
             if until is not None and self._finished(until):
