@@ -116,6 +116,24 @@ def test_break_shot_top_view_snapshot(rack, tmp_path):
     compare_with_baseline(out, "break_shot_top.png", tmp_path)
 
 
+@needs_ggui
+def test_ball_pit_snapshot(tmp_path):
+    # 100,000 balls in their bin at the start of the pour (seeded random fill: always the same)
+    pit = tg.Simulation.from_scene("ball_pit")
+    out = tmp_path / "ball_pit.png"
+    assert R.render(pit, out, camera="iso", size=SIZE, backend="ggui") == "ggui"
+    compare_with_baseline(out, "ball_pit_iso.png", tmp_path)
+
+
+@needs_ggui
+def test_terrain_snapshot(tmp_path):
+    # generated hills (seed 11) with bunkers, fairway and rough, and 400 balls above them
+    hills = tg.Simulation.from_scene("terrain_3d")
+    out = tmp_path / "terrain.png"
+    assert R.render(hills, out, camera="iso", size=SIZE, backend="ggui") == "ggui"
+    compare_with_baseline(out, "terrain_3d_iso.png", tmp_path)
+
+
 # -- where balls appear ---------------------------------------------------------------------------
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_flying_ball_appears_where_it_is_projected(lab, tmp_path, backend):
