@@ -507,6 +507,32 @@ def _trail_segments(trail: np.ndarray | None, x: np.ndarray, colors: np.ndarray)
     return seg[ok], col[ok]
 
 
+WIND_COLOR = (0.15, 0.35, 0.95)
+"""Colour of the wind indicator."""
+
+
+def _wind_arrow(wind: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Segments (k, 2, 3) and colours (k, 3) of an arrow showing the wind, centred high in the scene.
+
+    Its length grows with the speed, |w|/(|w| + 5 m/s) of a third of the scene's extent; no arrow
+    in still air.
+    """
+    speed = float(np.linalg.norm(wind))
+    if speed == 0.0 or not np.all(np.isfinite(wind)):
+        return np.zeros((0, 2, 3)), np.zeros((0, 3))
+    extent = max(float(np.max(hi - lo)), 1e-6)
+    d = wind / speed
+    length = 0.33 * extent * speed / (speed + 5.0)
+    center = 0.5 * (lo + hi)
+    tail = np.array([center[0], hi[1] - 0.1 * (hi[1] - lo[1]), center[2]]) - 0.5 * length * d
+    head = tail + length * d
+    side = np.cross(d, [0.0, 1.0, 0.0])
+    side = side / np.linalg.norm(side) if np.linalg.norm(side) > 1e-9 else np.array([1.0, 0.0, 0.0])
+    up = np.cross(side, d)  # barbs in two planes: the head reads from any camera
+    seg = np.array([[tail, head]] + [[head, head - 0.3 * length * (d + 0.5 * b)] for b in (side, -side, up, -up)])
+    return seg, np.tile(WIND_COLOR, (len(seg), 1))
+
+
 def _build_frame(sim: "Simulation", view: View, color_by: Any, trails: Any, min_px: float,
                  value_range: tuple[float, float] | None, follow: bool = False) -> _Frame:
     x = sim.x
@@ -523,6 +549,8 @@ def _build_frame(sim: "Simulation", view: View, color_by: Any, trails: Any, min_
         tiles = tiles + list(t_tiles)
         tile_n, tile_c = np.concatenate([tile_n, t_n]), np.concatenate([tile_c, t_c])
     seg, seg_c = _trail_segments(trail, x, colors)
+    w_seg, w_col = _wind_arrow(np.asarray(sim.scene.air.wind, float), lo, hi)
+    seg, seg_c = np.concatenate([seg, w_seg]), np.concatenate([seg_c, w_col])
     dist = np.linalg.norm(x - np.asarray(view.position), axis=1)
     drawn = np.maximum(radius, float(min_px) * dist / view.focal_px)
     right, _, fwd = view.basis()
