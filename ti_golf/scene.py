@@ -47,6 +47,14 @@ def _suggest(name: str, candidates: Iterable[str]) -> str:
     return f" (did you mean '{close[0]}'?)" if close else ""
 
 
+_LISTS = {
+    "vec3": (3, "a list of 3 numbers{unit}, e.g. [0, 0, 0]"),
+    "vec2": (2, "a list of 2 numbers{unit}, e.g. [1, 1]"),
+    "list2": (2, "a list [min, max] of 2 numbers{unit}"),
+}
+"""Schema kinds that are fixed-length lists of finite numbers: (length, how the error describes them)."""
+
+
 def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
     """Check the type of one value against its schema entry and return it normalised."""
     kind = key.kind
@@ -69,33 +77,14 @@ def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
     elif kind in ("str", "text"):
         if not isinstance(value, str):
             raise_config(source, dotted, f"must be a string (got {value!r})")
-    elif kind == "vec3":
+    elif kind in _LISTS:
+        count, shape = _LISTS[kind]
         if (
             not isinstance(value, (list, tuple))
-            or len(value) != 3
+            or len(value) != count
             or any(isinstance(c, bool) or not isinstance(c, (int, float)) for c in value)
         ):
-            raise_config(source, dotted, f"must be a list of 3 numbers{_unit(key)}, e.g. [0, 0, 0] (got {value!r})")
-        value = tuple(float(c) for c in value)
-        if not all(math.isfinite(c) for c in value):
-            raise_config(source, dotted, f"must hold finite numbers (got {list(value)!r})")
-    elif kind == "vec2":
-        if (
-            not isinstance(value, (list, tuple))
-            or len(value) != 2
-            or any(isinstance(c, bool) or not isinstance(c, (int, float)) for c in value)
-        ):
-            raise_config(source, dotted, f"must be a list of 2 numbers{_unit(key)}, e.g. [1, 1] (got {value!r})")
-        value = tuple(float(c) for c in value)
-        if not all(math.isfinite(c) for c in value):
-            raise_config(source, dotted, f"must hold finite numbers (got {list(value)!r})")
-    elif kind == "list2":
-        if (
-            not isinstance(value, (list, tuple))
-            or len(value) != 2
-            or any(isinstance(c, bool) or not isinstance(c, (int, float)) for c in value)
-        ):
-            raise_config(source, dotted, f"must be a list [min, max] of 2 numbers{_unit(key)} (got {value!r})")
+            raise_config(source, dotted, f"must be {shape.format(unit=_unit(key))} (got {value!r})")
         value = tuple(float(c) for c in value)
         if not all(math.isfinite(c) for c in value):
             raise_config(source, dotted, f"must hold finite numbers (got {list(value)!r})")
