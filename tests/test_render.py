@@ -117,6 +117,15 @@ def test_break_shot_top_view_snapshot(rack, tmp_path):
 
 
 @needs_ggui
+def test_ball_pit_snapshot(tmp_path):
+    # 100,000 balls in their bin at the start of the pour (seeded random fill: always the same)
+    pit = tg.Simulation.from_scene("ball_pit")
+    out = tmp_path / "ball_pit.png"
+    assert R.render(pit, out, camera="iso", size=SIZE, backend="ggui") == "ggui"
+    compare_with_baseline(out, "ball_pit_iso.png", tmp_path)
+
+
+@needs_ggui
 def test_terrain_snapshot(tmp_path):
     # generated hills (seed 11) with bunkers, fairway and rough, and 400 balls above them
     hills = tg.Simulation.from_scene("terrain_3d")

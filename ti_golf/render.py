@@ -577,7 +577,6 @@ class _GGUIState:
         self.camera: Any = None
         self.canvas: Any = None
         self.failed: str | None = None
-        self.mesh_fields: dict[int, tuple[Any, Any, Any]] = {}
         self.noted: set[str] = set()
 
 
@@ -675,40 +674,56 @@ def _close_window() -> None:
         shutil.rmtree(scratch, ignore_errors=True)
 
 
-def _mesh_fields(n_vertices: int) -> tuple[Any, Any, Any]:
-    """Cached f32 vertex, normal and colour fields with room for ``n_vertices`` (a power of two)."""
-    import taichi as ti
-
-    cap = 1 << max(14, (n_vertices - 1).bit_length())  # one kernel compile in practice
-    if cap not in _ggui.mesh_fields:
-        _ggui.mesh_fields[cap] = (ti.Vector.field(3, ti.f32, cap), ti.Vector.field(3, ti.f32, cap),
-                                  ti.Vector.field(3, ti.f32, cap))
-    return _ggui.mesh_fields[cap]
+# GGUI's vertex layout: 12 float32 per vertex (position 0:3, normal or particle radius 3:6, texture
+# coordinates 6:8, RGBA colour 8:12), as Taichi's own staging code fills it.
+_VBO_STRIDE = 12
 
 
-class _quiet_taichi:
-    """Taichi at log level 'error' while GGUI's own f32 copy kernels compile under f64 defaults
-    (they warn "Assign may lose precision" about their own constants)."""
-
-    LEVELS = ("trace", "debug", "info", "warn", "error", "critical")
-
-    def __enter__(self) -> "_quiet_taichi":
-        import taichi as ti
-
-        self.level = next((lv for lv in self.LEVELS if ti.is_logging_effective(lv)), "info")
-        if self.LEVELS.index(self.level) < self.LEVELS.index("error"):
-            ti.set_logging_level("error")
-        return self
-
-    def __exit__(self, *exc: Any) -> None:
-        import taichi as ti
-
-        ti.set_logging_level(self.level)
+def _vbo(points: np.ndarray, colors: np.ndarray, normals: np.ndarray | None = None,
+         radius: np.ndarray | None = None) -> np.ndarray:
+    """One GGUI vertex buffer, shape (n, 12) float32, built in numpy (no Taichi kernel runs)."""
+    vbo = np.zeros((len(points), _VBO_STRIDE), np.float32)
+    vbo[:, 0:3] = points
+    if normals is not None:
+        vbo[:, 3:6] = normals
+    if radius is not None:
+        vbo[:, 3] = radius
+    vbo[:, 8:11] = colors
+    vbo[:, 11] = 1.0
+    return vbo
 
 
-def _render_ggui(frame: _Frame, path: str) -> None:
-    with _quiet_taichi():
-        _draw_ggui(frame, path)
+class _GGUIDraw:
+    """Hands GGUI vertex and index buffers that stay alive until the picture is saved.
+
+    Taichi 1.7's ``SceneV2.mesh/particles/lines`` copy the data into a numpy staging array that
+    they drop on return, yet GGUI reads it only at ``canvas.scene()``: the memory may be reused by
+    then, and a mesh came out missing or shifted about once in 60 pictures. Here the buffers are
+    built in numpy, passed to GGUI's C++ scene directly and held in :attr:`keep` until
+    ``save_image`` has returned.
+    """
+
+    def __init__(self, scene: Any) -> None:
+        from taichi.ui.utils import get_field_info
+
+        self.scene, self.info, self.keep = scene.scene, get_field_info, []
+
+    def _hold(self, *arrays: np.ndarray | None) -> list[Any]:
+        self.keep.extend(a for a in arrays if a is not None)
+        return [self.info(a) for a in arrays]
+
+    def mesh(self, vbo: np.ndarray, indices: np.ndarray) -> None:
+        vbo_info, idx_info = self._hold(vbo, indices)
+        self.scene.mesh(vbo_info, True, idx_info, (0.5, 0.5, 0.5), True,  # per-vertex colour, two-sided
+                        len(indices), 0, len(vbo), 0, False)  # index count/offset, vertex count/offset, wireframe
+
+    def lines(self, vbo: np.ndarray, width: float) -> None:
+        vbo_info, idx_info = self._hold(vbo, None)
+        self.scene.lines(vbo_info, idx_info, True, (0.5, 0.5, 0.5), width, len(vbo), 0, len(vbo), 0)
+
+    def particles(self, vbo: np.ndarray) -> None:
+        (vbo_info,) = self._hold(vbo)
+        self.scene.particles(vbo_info, True, True, (0.5, 0.5, 0.5), float(vbo[:, 3].max()), len(vbo), 0)
 
 
 def _draw_ggui(frame: _Frame, path: str) -> None:
@@ -728,36 +743,30 @@ def _draw_ggui(frame: _Frame, path: str) -> None:
     scene.set_camera(cam)
     scene.ambient_light((AMBIENT,) * 3)
     scene.point_light(tuple(map(float, frame.light)), (LIGHT,) * 3)
+    draw = _GGUIDraw(scene)
     if frame.tiles:
         counts = np.array([len(poly) for poly in frame.tiles])
         starts = np.r_[0, np.cumsum(counts)[:-1]]
-        n_vertices = int(counts.sum())
-        verts, norms, cols = _mesh_fields(n_vertices)
-        pad = np.zeros((verts.shape[0] - n_vertices, 3), np.float32)
-        verts.from_numpy(np.concatenate([np.concatenate(frame.tiles).astype(np.float32), pad]))
-        norms.from_numpy(np.concatenate([np.repeat(frame.tile_normals, counts, axis=0).astype(np.float32), pad]))
-        cols.from_numpy(np.concatenate([np.repeat(frame.tile_colors, counts, axis=0).astype(np.float32), pad]))
         fans = []
         for k in np.unique(counts):  # fan triangulation of the convex polygons with k corners
             first = starts[counts == k][:, None]
             j = np.arange(1, k - 1)[None, :]
             fans.append(np.stack(np.broadcast_arrays(first, first + j, first + j + 1), axis=-1).reshape(-1))
-        idx = np.concatenate(fans).astype(np.int32)
-        scene.mesh(verts, indices=idx, normals=norms, per_vertex_color=cols, two_sided=True,
-                   vertex_count=n_vertices, index_count=len(idx))
+        draw.mesh(_vbo(np.concatenate(frame.tiles), np.repeat(frame.tile_colors, counts, axis=0),
+                       normals=np.repeat(frame.tile_normals, counts, axis=0)),
+                  np.ascontiguousarray(np.concatenate(fans), np.int32))
     if len(frame.segments):
-        scene.lines(np.ascontiguousarray(frame.segments.reshape(-1, 3), np.float32), width=frame.line_px,
-                    per_vertex_color=np.ascontiguousarray(np.repeat(frame.segment_colors, 2, axis=0), np.float32))
+        draw.lines(_vbo(frame.segments.reshape(-1, 3), np.repeat(frame.segment_colors, 2, axis=0)),
+                   float(frame.line_px))
     if len(frame.centers):
         # GGUI 1.7 scales sprite radii by width/height (it uses the window width where the height
         # belongs): divide by the aspect ratio so a ball is drawn at its true size.
         aspect = view.size[0] / view.size[1]
-        radius = np.ascontiguousarray(frame.radius / aspect, np.float32)
-        scene.particles(np.ascontiguousarray(frame.centers, np.float32), radius=float(radius.max()),
-                        per_vertex_color=np.ascontiguousarray(frame.colors, np.float32), per_vertex_radius=radius)
+        draw.particles(_vbo(frame.centers, frame.colors, radius=frame.radius / aspect))
     canvas.set_background_color(BACKGROUND_COLOR)
     canvas.scene(scene)
     window.save_image(path)
+    draw.keep.clear()
 
 
 # -- matplotlib -----------------------------------------------------------------------------------
@@ -891,7 +900,7 @@ def render(sim: "Simulation", path: str | os.PathLike[str], camera: str | View =
             _note(f"GGUI pictures are only drawn with the CPU backend (this process runs on {other_arch})")
         elif backend != "matplotlib":
             try:
-                _render_ggui(frame, tmp)
+                _draw_ggui(frame, tmp)
                 used = "ggui"
             except _GGUIUnavailable as exc:
                 if backend == "ggui":
