@@ -765,8 +765,18 @@ def _draw_ggui(frame: _Frame, path: str) -> None:
         draw.particles(_vbo(frame.centers, frame.colors, radius=frame.radius / aspect))
     canvas.set_background_color(BACKGROUND_COLOR)
     canvas.scene(scene)
-    window.save_image(path)
+    rgba = window.get_image_buffer_as_numpy()  # (width, height, 4) float32 in [0, 1], y up
     draw.keep.clear()
+    _write_png(rgba, path)
+
+
+def _write_png(rgba: np.ndarray, path: str) -> None:
+    """Write GGUI's (width, height, 4) float buffer as an RGB PNG with Pillow at fast compression
+    (Taichi's own ``save_image`` takes about 0.1 s for 1280x720)."""
+    from PIL import Image
+
+    rgb = np.clip(rgba[:, ::-1, :3].transpose(1, 0, 2) * 255.0 + 0.5, 0.0, 255.0).astype(np.uint8)
+    Image.fromarray(rgb).save(path, format="PNG", compress_level=1)
 
 
 # -- matplotlib -----------------------------------------------------------------------------------
