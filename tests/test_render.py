@@ -192,10 +192,43 @@ def test_a_wall_seen_from_its_solid_side_is_cut_away(tmp_path, backend):
     assert matches(img, R.FLYING_COLOR).sum() > 100
 
 
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_hole_and_flag_appear_where_the_hole_is(tmp_path, backend):
+    # putting_green: the cup at (6, 0) on the terrain, a 2.13 m flagstick; seen from above and the side
+    green = tg.Simulation.from_scene("putting_green")
+    cup, _, _, flag_h = R._hole(green)
+    assert cup[1] == pytest.approx(float(green.model.terrain.height(6.0, 0.0)))  # on the surface
+    view = R.View(position=(6.0, 6.0, 0.0), lookat=(6.0, 0.0, 0.0), up=(1.0, 0.0, 0.0), size=SIZE)
+    out = tmp_path / f"hole_top_{backend}.png"
+    R.render(green, out, camera=view, size=SIZE, backend=backend)
+    img = read_png(out)
+    (px, py), = view.project(cup[None])[0]
+    dark = np.nonzero(img.max(axis=2) < 0.12)
+    assert len(dark[0]) >= 4, f"no cup in {out}"
+    assert np.hypot(dark[1].mean() + 0.5 - px, dark[0].mean() + 0.5 - py) < 3.0  # centred on the hole
+    side = R.View(position=(6.0, 1.0, 8.0), lookat=(6.0, 1.0, 0.0), size=SIZE)
+    out = tmp_path / f"flag_side_{backend}.png"
+    R.render(green, out, camera=side, size=SIZE, backend=backend)
+    img = read_png(out)
+    red = matches(img, R.FLAG_COLOR)
+    assert red.sum() > 30, f"no flag in {out}"
+    (_, y_top), (_, y_cup) = side.project(np.array([cup + [0.0, flag_h, 0.0], cup]))[0]
+    rows = np.nonzero(red)[0]
+    assert y_top - 1 <= rows.min() and rows.max() <= y_cup  # the flag flies at the top of the stick
+    assert rows.mean() < 0.5 * (y_top + y_cup)
+
+
+def test_no_hole_no_flag(rack, tmp_path):
+    out = tmp_path / "rack.png"
+    R.render(rack, out, camera="iso", size=SIZE, backend="matplotlib")
+    assert not matches(read_png(out), R.FLAG_COLOR).any()
+    assert R._hole(rack) is None
+
+
 def test_status_colours_are_distinct_from_each_other_and_the_scenery():
     colors = list(R.STATUS_COLORS.values())
     assert len(set(colors)) == 4
-    scenery = [R.BACKGROUND_COLOR, *R.GROUND_COLORS, *R.WALL_COLORS, *R.TERRAIN_COLORS]
+    scenery = [R.BACKGROUND_COLOR, *R.GROUND_COLORS, *R.WALL_COLORS, *R.TERRAIN_COLORS, R.FLAG_COLOR, R.FLAGSTICK_COLOR]
     for i, c in enumerate(colors):
         for other in colors[i + 1:] + scenery:
             assert not matches(np.array([[other]], float), c, cos_min=0.98).any(), (c, other)

@@ -146,6 +146,10 @@ BAD_VALUES = {
     "angle_above_90": ("launch", "angle_deg", "100", "launch.angle_deg", ["[-90, 90]"]),
     "sweep_range_backwards": ("sweep", "angles", '"36:30:0.1"', "sweep.angles", ["STOP must be >= START"]),
     "sweep_range_step_zero": ("sweep", "angles", '"36:37:0"', "sweep.angles", ["STEP must be > 0"]),
+    # the hole: a position is required, the cup has a size
+    "hole_without_position": ("hole", "radius", "0.054", "hole.position", ["required", "[x, z]"]),
+    "hole_radius_zero": ("hole", "radius", "0", "hole.radius", ["> 0"]),
+    "hole_flag_negative": ("hole", "flag_height", "-1", "hole.flag_height", [">= 0"]),
 }
 
 

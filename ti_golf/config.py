@@ -195,6 +195,17 @@ SCHEMA: dict[str, dict[str, Key]] = {
                 "needs one level fewer than there are surfaces"),
         ]
     },
+    "hole": {
+        k.name: k
+        for k in [
+            Key("position", "vec2", None, "m",
+                "the cup's centre [x, z] (required); it sits on the terrain, else on the ground or the first "
+                "upward-facing plane"),
+            Key("radius", "float", 0.054, "m", "cup radius (regulation: 108 mm across)", _positive, "> 0"),
+            Key("flag_height", "float", 2.13, "m", "flagstick height above the cup (2.13 m = 7 ft is usual; 0: none)",
+                _non_negative, ">= 0"),
+        ]
+    },
 }
 
 #: Top-level keys that are not tables.
@@ -383,6 +394,15 @@ class TerrainConfig:
 
 
 @dataclass(frozen=True)
+class HoleConfig:
+    """The ``[hole]`` table: a cup at ``position`` [x, z] [m] on the course, and its flagstick."""
+
+    position: tuple[float, float]
+    radius: float = _default("hole", "radius")
+    flag_height: float = _default("hole", "flag_height")
+
+
+@dataclass(frozen=True)
 class Surface:
     """A terrain surface type (``[[surfaces]]``): its own restitution, friction and rolling resistance
     (``None``: the ``[contact]`` value)."""
@@ -451,7 +471,7 @@ class Scene:
     """A validated scene: everything static a simulation needs.
 
     ``launch`` is ``None`` when the scene has no ``[launch]`` table (no launched ball), ``terrain``
-    when it has no ``[terrain]`` table.
+    when it has no ``[terrain]`` table, ``hole`` when it has no ``[hole]`` table.
     """
 
     name: str = "scene"
@@ -468,6 +488,7 @@ class Scene:
     planes: tuple[Plane, ...] = ()
     terrain: TerrainConfig | None = None
     surfaces: tuple[Surface, ...] = ()
+    hole: HoleConfig | None = None
 
     def launch_position(self) -> Vec3:
         """Launch point [m]: the scene's, or the ball resting on the ground (the terrain, if any) at x = z = 0."""

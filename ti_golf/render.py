@@ -84,6 +84,11 @@ WALL_COLORS = ((0.72, 0.70, 0.66), (0.64, 0.62, 0.58))
 """Checker colours of other planes: two greys."""
 TERRAIN_COLORS = ((0.30, 0.50, 0.24), (0.62, 0.66, 0.40))
 """Terrain colours from its lowest to its highest point: dark green to dry grass."""
+HOLE_COLOR = (0.03, 0.03, 0.03)
+"""The cup: near black."""
+FLAG_COLOR = (0.90, 0.08, 0.10)
+"""The flag: red, on a white stick (``FLAGSTICK_COLOR``)."""
+FLAGSTICK_COLOR = (0.97, 0.97, 0.97)
 AMBIENT = 0.45
 LIGHT = 0.65
 TRAIL_WHITEN = 0.5
@@ -219,10 +224,60 @@ def _terrain(sim: "Simulation") -> tuple[np.ndarray, np.ndarray, np.ndarray] | N
     return h, origin, spacing
 
 
+def _hole(sim: "Simulation") -> tuple[np.ndarray, np.ndarray, float, float] | None:
+    """The scene's cup as (centre (3,) on the course, surface normal (3,), radius, flag height) [m],
+    or None. The centre sits on the terrain, else on the first upward-facing plane (the ground)."""
+    hole = getattr(sim.scene, "hole", None)
+    if hole is None:
+        return None
+    x, z = map(float, hole.position)
+    t = getattr(sim.model, "terrain", None)
+    if t is not None:
+        return (np.array([x, float(t.height(x, z)), z]), np.asarray(t.normal(x, z), float).reshape(3),
+                float(hole.radius), float(hole.flag_height))
+    y, n = 0.0, np.array([0.0, 1.0, 0.0])
+    for p, m in zip(np.asarray(sim.model.plane_p, float), np.asarray(sim.model.plane_n, float)):
+        if m[1] > 0.7:  # the ground: y where the plane meets the vertical through (x, z)
+            y, n = float(p[1] - (m[0] * (x - p[0]) + m[2] * (z - p[2])) / m[1]), m / np.linalg.norm(m)
+            break
+    return np.array([x, y, z]), n, float(hole.radius), float(hole.flag_height)
+
+
+def _hole_parts(sim: "Simulation", view: View, min_px: float) -> tuple[list[np.ndarray], np.ndarray, np.ndarray,
+                                                                       np.ndarray, np.ndarray]:
+    """The cup (a dark disc just above the surface, at least ``min_px`` pixels across), the
+    flagstick (a segment) and the flag (a triangle flying downwind, else along +x): tiles, tile
+    normals, tile colours, segments (k, 2, 3) and segment colours."""
+    got = _hole(sim)
+    if got is None:
+        return [], np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 2, 3)), np.zeros((0, 3))
+    c, n, r, flag_h = got
+    a, b = _plane_basis(n)
+    dist = float(np.linalg.norm(c - np.asarray(view.position)))
+    r = max(r, min_px * dist / view.focal_px)
+    ang = np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)[:, None]
+    disc = c + 0.02 * r * n + r * (np.cos(ang) * a + np.sin(ang) * b)
+    tiles, normals, colors = [disc], [n], [HOLE_COLOR]
+    seg, seg_c = np.zeros((0, 2, 3)), np.zeros((0, 3))
+    if flag_h > 0:
+        up = np.array([0.0, 1.0, 0.0])
+        top = c + flag_h * up
+        wind = np.asarray(sim.scene.air.wind, float) * np.array([1.0, 0.0, 1.0])
+        d = wind / np.linalg.norm(wind) if np.linalg.norm(wind) > 1e-9 else np.array([1.0, 0.0, 0.0])
+        tiles.append(np.array([top, top - 0.2 * flag_h * up, top + 0.3 * flag_h * d - 0.1 * flag_h * up]))
+        normals.append(np.cross(d, up))
+        colors.append(FLAG_COLOR)
+        seg, seg_c = np.array([[c, top]]), np.array([FLAGSTICK_COLOR])
+    return tiles, np.array(normals), np.array(colors), seg, seg_c
+
+
 def _bounds(sim: "Simulation", trail: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     """The box a camera is fitted to: balls, trails, and the ground (planes or terrain) under them."""
     x = sim.x
     pts = x if trail is None else np.concatenate([x, trail.reshape(-1, 3)])
+    hole = _hole(sim)
+    if hole is not None:  # the cup and the top of its flagstick are in view too
+        pts = np.concatenate([pts, [hole[0], hole[0] + [0.0, hole[3], 0.0]]])
     radius = sim.model.radius_np
     lo, hi = _scene_bounds(pts, radius, sim.model.plane_p, sim.model.plane_n)
     terr = _terrain(sim)
@@ -548,9 +603,12 @@ def _build_frame(sim: "Simulation", view: View, color_by: Any, trails: Any, min_
         t_tiles, t_n, t_c = _terrain_tiles(*terr)
         tiles = tiles + list(t_tiles)
         tile_n, tile_c = np.concatenate([tile_n, t_n]), np.concatenate([tile_c, t_c])
+    h_tiles, h_n, h_c, h_seg, h_seg_c = _hole_parts(sim, view, min_px)
+    tiles = tiles + h_tiles
+    tile_n, tile_c = np.concatenate([tile_n, h_n]), np.concatenate([tile_c, h_c])
     seg, seg_c = _trail_segments(trail, x, colors)
     w_seg, w_col = _wind_arrow(np.asarray(sim.scene.air.wind, float), lo, hi)
-    seg, seg_c = np.concatenate([seg, w_seg]), np.concatenate([seg_c, w_col])
+    seg, seg_c = np.concatenate([seg, w_seg, h_seg]), np.concatenate([seg_c, w_col, h_seg_c])
     dist = np.linalg.norm(x - np.asarray(view.position), axis=1)
     drawn = np.maximum(radius, float(min_px) * dist / view.focal_px)
     right, _, fwd = view.basis()

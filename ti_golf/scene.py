@@ -22,6 +22,7 @@ from .config import (
     SCHEMA,
     BallSpec,
     Block,
+    HoleConfig,
     Plane,
     Surface,
     TerrainConfig,
@@ -251,6 +252,10 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
             kwargs["sweep"] = SweepDefaults(**values)
         elif section == "terrain":
             kwargs["terrain"] = _terrain(values, sources, source)
+        elif section == "hole":
+            if "position" not in values:
+                raise_config(source, "hole.position", "is required (the cup's centre [x, z] in m)")
+            kwargs["hole"] = HoleConfig(**values)
         else:
             kwargs[section] = _SECTION_TYPES[section](**values)
     if "launch" not in doc:
