@@ -101,37 +101,34 @@ def rack():
 
 
 # -- snapshots ------------------------------------------------------------------------------------
+def snapshot(sim, name: str, tmp_path: Path, **kwargs) -> None:
+    """Draw ``sim`` with GGUI at SIZE and compare it with tests/baselines/``name``."""
+    out = tmp_path / name
+    assert R.render(sim, out, size=SIZE, backend="ggui", **kwargs) == "ggui"
+    compare_with_baseline(out, name, tmp_path)
+
+
 @needs_ggui
 def test_lab_trajectory_side_view_snapshot(lab, tmp_path):
     sim, rec = lab
-    out = tmp_path / "lab_side.png"
-    assert R.render(sim, out, camera="side", size=SIZE, trails=rec, backend="ggui") == "ggui"
-    compare_with_baseline(out, "lab_turbulent_side.png", tmp_path)
+    snapshot(sim, "lab_turbulent_side.png", tmp_path, camera="side", trails=rec)
 
 
 @needs_ggui
 def test_break_shot_top_view_snapshot(rack, tmp_path):
-    out = tmp_path / "break_top.png"
-    assert R.render(rack, out, camera="top", size=SIZE, backend="ggui") == "ggui"
-    compare_with_baseline(out, "break_shot_top.png", tmp_path)
+    snapshot(rack, "break_shot_top.png", tmp_path, camera="top")
 
 
 @needs_ggui
 def test_ball_pit_snapshot(tmp_path):
     # 100,000 balls in their bin at the start of the pour (seeded random fill: always the same)
-    pit = tg.Simulation.from_scene("ball_pit")
-    out = tmp_path / "ball_pit.png"
-    assert R.render(pit, out, camera="iso", size=SIZE, backend="ggui") == "ggui"
-    compare_with_baseline(out, "ball_pit_iso.png", tmp_path)
+    snapshot(tg.Simulation.from_scene("ball_pit"), "ball_pit_iso.png", tmp_path, camera="iso")
 
 
 @needs_ggui
 def test_terrain_snapshot(tmp_path):
     # generated hills (seed 11) with bunkers, fairway and rough, and 400 balls above them
-    hills = tg.Simulation.from_scene("terrain_3d")
-    out = tmp_path / "terrain.png"
-    assert R.render(hills, out, camera="iso", size=SIZE, backend="ggui") == "ggui"
-    compare_with_baseline(out, "terrain_3d_iso.png", tmp_path)
+    snapshot(tg.Simulation.from_scene("terrain_3d"), "terrain_3d_iso.png", tmp_path, camera="iso")
 
 
 # -- where balls appear ---------------------------------------------------------------------------
