@@ -22,7 +22,7 @@ class CollisionSolver:
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
     """
 
-    def __init__(self, model: Model, capacity: int = 16) -> None:
+    def __init__(self, model: Model, capacity: int = 8) -> None:
         self._model = model
         n = model.n
         r_max = float(model.radius_np.max())
