@@ -757,8 +757,8 @@ class _GGUIDraw:
     Taichi 1.7's ``SceneV2.mesh/particles/lines`` copy the data into a numpy staging array that
     they drop on return, yet GGUI reads it only at ``canvas.scene()``: the memory may be reused by
     then, and a mesh came out missing or shifted about once in 60 pictures. Here the buffers are
-    built in numpy, passed to GGUI's C++ scene directly and held in :attr:`keep` until
-    ``save_image`` has returned.
+    built in numpy, passed to GGUI's C++ scene directly and held in :attr:`keep` until the frame
+    has been drawn and read back.
     """
 
     def __init__(self, scene: Any) -> None:
