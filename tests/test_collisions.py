@@ -46,13 +46,21 @@ def test_grid_neighbours_equal_brute_force(name):
     sim = tg.Simulation(scene(), x=x, radius=r, mass=0.045 * (r / 0.02) ** 3)
     solver: CollisionSolver = sim.solver
     solver.build(sim.state)
-    nbr, count = solver.neighbours.to_numpy(), solver.n_neighbours.to_numpy()
-    found = {(i, int(j)) for i in range(len(x)) for j in nbr[i, : count[i]]}
+    pairs = solver.pairs()
+    assert np.all(pairs[:, 0] < pairs[:, 1])  # each pair listed once, by the ball with the lower id
+    found = {(int(i), int(j)) for i, j in pairs} | {(int(j), int(i)) for i, j in pairs}
     expected = _brute_force_pairs(x, r, solver.skin)
     assert found == expected
     assert len(expected) > 0
+    upper, n_upper = solver.upper.to_numpy(), solver.n_upper.to_numpy()
+    lower, n_lower = solver.lower.to_numpy(), solver.n_lower.to_numpy()
+    width = upper.shape[1]
     for i in range(len(x)):  # lists are sorted by id: sums over them do not depend on threads
-        assert np.all(np.diff(nbr[i, : count[i]]) > 0)
+        assert np.all(np.diff(upper[i, : n_upper[i]]) > 0)
+        owners, entries = np.divmod(lower[i, : n_lower[i]], width)  # where each lower pair is stored
+        assert np.all(np.diff(owners) > 0)
+        assert set(owners.tolist()) == {j for (a, j) in expected if a == i and j < i}
+        assert np.all(upper[owners, entries] == i)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -189,14 +189,10 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False,
     sim, seconds = timed(terrain)
     scene = sim.scene
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    gather_rate = bare_gather_rate(sim.x)  # after the memory peak is read
     xn = sim.x
-    nbr, count = sim.solver.neighbours.to_numpy(), sim.solver.n_neighbours.to_numpy()
-    touching = 0
-    for k in range(nbr.shape[1]):
-        has = count > k
-        j = nbr[has, k]
-        d = np.linalg.norm(xn[has] - xn[j], axis=1)
-        touching += int(np.count_nonzero(d < 2 * 0.02 * 1.001))
+    i, j = sim.solver.pairs().T
+    touching = int(np.count_nonzero(np.linalg.norm(xn[i] - xn[j], axis=1) < 2 * 0.02 * 1.001))
     result = {
         "benchmark": "collide",
         "n": n,
@@ -206,20 +202,53 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False,
         "iterations": scene.contact.iterations,
         "ball_steps_per_s": n * steps / seconds,
         "ms_per_step": 1e3 * seconds / steps,
-        "contacts_per_ball": touching / n,
+        "contacts_per_ball": 2 * touching / n,
         "list_rebuilds": sim.solver.rebuilds,
         "floor": "terrain" if terrain else "plane",
         "peak_rss_bytes": peak,
         "bytes_per_ball_above_baseline": (peak - base_rss) / n,
     }
+    result["baselines"] = {"bare_gather_balls_per_s": gather_rate}
+    result["step_cost_in_bare_gathers"] = gather_rate / result["ball_steps_per_s"]
     if plane_seconds is not None:
-        result["baselines"] = {"plane_floor_ms_per_step": 1e3 * plane_seconds / steps}
+        result["baselines"]["plane_floor_ms_per_step"] = 1e3 * plane_seconds / steps
         result["terrain_overhead"] = seconds / plane_seconds - 1.0
         log(f"terrain floor vs plane floor: {100 * result['terrain_overhead']:+.1f} % time per step")
     log(f"ti_golf collide: {n} balls, {result['ms_per_step']:.2f} ms/step, {result['ball_steps_per_s']:.3g} ball-steps/s, "
         f"{result['contacts_per_ball']:.2f} contacts/ball, peak RSS {peak / 2**20:.0f} MiB "
         f"({result['bytes_per_ball_above_baseline']:.0f} B/ball above baseline), arch={info.arch}, {info.precision}")
+    log(f"baseline: a bare 12-neighbour gather runs at {gather_rate:.3g} balls/s; "
+        f"one collision step costs {result['step_cost_in_bare_gathers']:.1f} such passes")
     return result
+
+
+def bare_gather_rate(x: np.ndarray, repeats: int = 5) -> float:
+    """Balls per second of a bare contact gather on the same positions ``x`` (n, 3): every ball sums
+    x_i − x_j over a fixed 12-entry list of lattice neighbours (memory traffic, no physics). It is
+    the yardstick of the collision benchmark, measured in the same run: one collision step costs
+    ``bare_gather_rate / ball_steps_per_s`` such passes, a ratio that survives a noisy machine."""
+    import taichi as ti
+
+    from .physics.baseline import bare_gather
+    from .physics.types import vec3
+
+    n = len(x)
+    side = max(2, int(np.ceil(np.sqrt(n / 16.0))))
+    offsets = np.array([1, side, side * side, side + 1, side * side + 1, side * side + side])
+    nbr = (np.arange(n)[:, None] + np.concatenate([offsets, -offsets])[None, :]) % n
+    xs = ti.ndarray(vec3, n)
+    xs.from_numpy(x.astype(xs.to_numpy().dtype))
+    table = ti.ndarray(ti.i32, nbr.shape)
+    table.from_numpy(nbr.astype(np.int32))
+    out = ti.ndarray(vec3, n)
+    bare_gather(xs, table, out)  # compile
+    ti.sync()
+
+    def run() -> None:
+        bare_gather(xs, table, out)
+        ti.sync()
+
+    return n / _best_time(run, repeats)
 
 
 def _rss_bytes() -> int:

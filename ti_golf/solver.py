@@ -18,18 +18,18 @@ class CollisionSolver:
     Attributes:
         cell: grid cell size [m]: the largest diameter plus the skin.
         skin: neighbour-list skin [m] (``contact.skin`` × largest radius).
-        capacity: width of the neighbour table (grows when a list overflows).
+        capacity: widths of the (upper, lower) neighbour tables (they grow when a list overflows).
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
     """
 
-    def __init__(self, model: Model, capacity: int = 8) -> None:
+    def __init__(self, model: Model, capacity: int = 4) -> None:
         self._model = model
         n = model.n
         r_max = float(model.radius_np.max())
         self.skin = model.scene.contact.skin * r_max
         self.cell = 2.0 * r_max + self.skin
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
-        self.capacity = capacity
+        self.capacity = (capacity, capacity)
         self.rebuilds = 0
         self.cell_ids = ti.ndarray(ti.types.vector(3, ti.i32), n)
         self.bucket = ti.ndarray(ti.i32, n)
@@ -39,47 +39,62 @@ class CollisionSolver:
         self.start = ti.ndarray(ti.i32, self.mask + 2)
         self.x_at_build = ti.ndarray(vec3, n)
         self.x_free = ti.ndarray(vec3, n)
-        self.v_a, self.w_a = ti.ndarray(vec3, n), ti.ndarray(vec3, n)
-        self.v_b, self.w_b = ti.ndarray(vec3, n), ti.ndarray(vec3, n)
-        self.neighbours = self.n_neighbours = self.lam = None
+        self.v_free = ti.ndarray(vec3, n)
+        self.upper = self.n_upper = self.lam = self.impulse = self.projection = None
+        self.lower, self.n_lower = None, ti.ndarray(ti.i32, n)
         self._spare = None
         # resting impulses of the planes and (one column more) the terrain
         self.lam_plane = ti.ndarray(float, (n, max(1, len(model.plane_p) + (model.terrain is not None))))
-        self.flag = ti.ndarray(ti.i32, 1)
+        self.flag = ti.ndarray(ti.i32, 2)
         self._valid = False
         self._rebuild = True
 
     def build(self, state: State) -> None:
-        """Sort balls into the hash grid and rebuild every neighbour list (widening the table if needed)."""
+        """Sort balls into the hash grid and rebuild every neighbour list (widening the tables if needed)."""
+        n = state.n
         grid.clear(self.count)
         grid.count_buckets(state.x, 1.0 / self.cell, self.mask, self.cell_ids, self.bucket, self.rank, self.count)
         grid.exclusive_scan(self.count, self.start)
         grid.scatter(self.bucket, self.rank, self.start, self.sorted_ids)
         while True:
-            new = self._spare_lists(state.n)
+            upper, n_upper, lam = self._spare_lists(n)
+            if self.lower is None or self.lower.shape[1] != self.capacity[1]:
+                self.lower = ti.ndarray(ti.i32, (n, self.capacity[1]))
             grid.clear(self.flag)
             grid.build_neighbours(state.x, self._model.radius, self.cell_ids, self.mask, self.skin, self.start,
-                                  self.sorted_ids, new[0], new[1], self.x_at_build, self.flag)
-            longest = int(self.flag.to_numpy()[0])
-            if longest <= self.capacity:
+                                  self.sorted_ids, upper, n_upper, self.lower, self.n_lower, self.x_at_build,
+                                  self.flag)
+            longest = self.flag.to_numpy()
+            if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
                 break
-            self.capacity = int(2 ** np.ceil(np.log2(longest)))
+            self.capacity = tuple(max(c, int(2 ** np.ceil(np.log2(k)))) for c, k in zip(self.capacity, longest))
+        grid.link_lower(upper, n_upper, self.lower, self.n_lower)
         if self._valid:
-            grid.carry_over(self.neighbours, self.n_neighbours, self.lam, *new)
+            grid.carry_over(self.upper, self.n_upper, self.lam, upper, n_upper, lam)
         else:
-            grid.clear2(new[2])
+            grid.clear2(lam)
         # the old lists become the spare for the next rebuild (no allocation per rebuild)
-        self._spare = (self.neighbours, self.n_neighbours, self.lam)
-        self.neighbours, self.n_neighbours, self.lam = new
+        self._spare = (self.upper, self.n_upper, self.lam)
+        self.upper, self.n_upper, self.lam = upper, n_upper, lam
+        if self.impulse is None or self.impulse.shape != upper.shape:
+            self.impulse = ti.ndarray(ti.types.vector(6, float), upper.shape)
+            self.projection = ti.ndarray(ti.types.vector(2, float), upper.shape)
         self.rebuilds += 1
         self._valid = True
 
     def _spare_lists(self, n: int) -> tuple:
-        """Neighbour table, counts and impulses of the current capacity, reusing the spare set."""
-        if self._spare is None or self._spare[0] is None or self._spare[0].shape[1] != self.capacity:
-            self._spare = (ti.ndarray(ti.i32, (n, self.capacity)), ti.ndarray(ti.i32, n),
-                           ti.ndarray(float, (n, self.capacity)))
+        """Upper neighbour table, counts and impulses of the current width, reusing the spare set."""
+        if self._spare is None or self._spare[0] is None or self._spare[0].shape[1] != self.capacity[0]:
+            self._spare = (ti.ndarray(ti.i32, (n, self.capacity[0])), ti.ndarray(ti.i32, n),
+                           ti.ndarray(float, (n, self.capacity[0])))
         return self._spare
+
+    def pairs(self) -> np.ndarray:
+        """The listed neighbour pairs (i, j), i < j, each once: int array of shape (n_pairs, 2)."""
+        upper, count = self.upper.to_numpy(), self.n_upper.to_numpy()
+        listed = np.arange(upper.shape[1])[None, :] < count[:, None]
+        i = np.broadcast_to(np.arange(len(count))[:, None], upper.shape)
+        return np.stack([i[listed], upper[listed]], axis=1)
 
     def step(self, model: Model, state: State) -> None:
         """Advance all balls by one step of ``model.dt``."""
@@ -91,8 +106,8 @@ class CollisionSolver:
             m.air, m.contact, m.gravity, m.dt, m.integrator, m.scene.contact.iterations, s.t, 0.5 * self.skin,
             w.v_rest, w.t_rest, m.radius, m.mass, m.launch_height, m.plane_p, m.plane_n, m.terrain_params, m.terrain_h,
             m.terrain_cells, m.surface_table,
-            self.neighbours, self.n_neighbours, self.x_at_build, self.lam, self.lam_plane,
-            s.x, s.v, s.w, s.status, s.rest_time, self.x_free, self.v_a, self.w_a, self.v_b, self.w_b,
+            self.upper, self.n_upper, self.lower, self.n_lower, self.x_at_build, self.lam, self.lam_plane,
+            s.x, s.v, s.w, s.status, s.rest_time, self.x_free, self.v_free, self.impulse, self.projection,
             s.landed, s.apex, s.t_land, s.land_x, s.land_v, self.flag,
         )
         s.x, self.x_free = self.x_free, s.x  # the kernel left the new positions in x_free

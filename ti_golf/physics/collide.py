@@ -1,33 +1,40 @@
 """One step of colliding balls in a single kernel (report Appendix B, every touching pair at once).
 
+Every pair of neighbours (a, b), a < b, is *owned* by ball a: it sits in a's upper neighbour list
+with its accumulated resting impulse ``lam`` and, during a sweep, the impulse ``P`` on a (−P acts
+on b). Ball b finds the pair through its lower list, which holds the slot of the pair in a's upper
+list. So each pair impulse is evaluated once per sweep, the two balls of a pair apply exactly
+opposite impulses (momentum is conserved to round-off), and every ball *gathers* its impulses in
+id order: no float atomics, results do not depend on thread order.
+
 The kernel's top-level loops run one after another, each over all balls in parallel:
 
 1. free flight: every awake ball flies under gravity and air forces (the integrator) to a
    predicted position; flight records (apex, landing) are updated;
 2. warm start: last step's *resting* contact impulses (and their friction) are applied again, so
-   a stack starts the step supported instead of re-learning its support every step;
-3. ``iterations`` Jacobi sweeps: each ball gathers the impulses of its touching neighbours,
-   computed from the velocities of the previous sweep, then those of the planes and of the
-   terrain (the plane of the patch under the ball, see :mod:`.terrain`). Every pair
-   impulse is evaluated with the lower id as body a, so the two balls of a pair apply exactly
-   opposite impulses (momentum is conserved to round-off) without float atomics, and results do
-   not depend on thread order;
-4. finish: positions from the final velocities (split at a plane's time of impact), position
-   projection of overlaps (B.18), status, rest detection and out-of-bounds (off the terrain), and
-   whether the neighbour lists must be rebuilt before the next step.
+   a stack starts the step supported instead of re-learning its support every step: a pair loop
+   (each owner evaluates its pairs) then a ball loop (each ball gathers them, then adds its
+   planes' and terrain's);
+3. ``iterations`` Jacobi sweeps, each a pair loop (impulses from the velocities of the previous
+   sweep) and a ball loop (gather, then the planes and the terrain: the plane of the patch under
+   the ball, see :mod:`.terrain`, applied in turn);
+4. finish (fused with the last sweep's ball loop): positions from the final velocities (split at
+   a plane's time of impact), position projection of overlaps (B.18), status, rest detection and
+   out-of-bounds (off the terrain), and whether the neighbour lists must be rebuilt before the
+   next step.
 """
 
 import taichi as ti
 
 from ..config import AT_REST, FLYING, OUT_OF_BOUNDS
 from .aero import V, W, X, coefficients, column
-from .contact import pair_impulse, plane_jolt, plane_position, rest_update, spin_jolt, warm_impulse
+from .contact import pair_impulse, plane_jolt, plane_position, rest_update, warm_impulse
 from .grid import int_table, real_table
 from .integrate import step_free, track_flight
 from .kernels import lane_state
 from .terrain import outside, surface, surface_contact, terrain_position
 from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, vec3,
-                    vec3_array)
+                    vec2_table, vec3_array, vec6_table)
 
 
 @ti.func
@@ -43,66 +50,121 @@ def pair_geometry(x: ti.template(), radius: ti.template(), a, b):
 
 
 @ti.func
-def gather(dv, dw, P, n, i_is_a, r_a, r_b, inv_ma, inv_mb):
-    """Add the pair impulse P (on a; −P on b) to the velocity and spin jolts of ball i."""
-    if i_is_a:
-        dv += P * inv_ma
-        dw += spin_jolt(P, n, r_a, inv_ma)
-    else:
-        dv -= P * inv_mb
-        dw += spin_jolt(-P, -n, r_b, inv_mb)
-    return dv, dw
+def skip_pair(status: ti.template(), i, j):
+    """Whether the pair (i, j) gets no impulse: a ball is out of bounds, or both are at rest."""
+    return (status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS
+            or (status[i] == AT_REST and status[j] == AT_REST))
 
 
 @ti.func
-def sweep_ball(i, contact: ti.template(), h, v_inelastic, radius: ti.template(), mass: ti.template(),
-               plane_p: ti.template(), plane_n: ti.template(), terrain, heights: ti.template(),
-               terrain_cells: ti.template(), surface_table: ti.template(),
-               status: ti.template(), x: ti.template(), x_free: ti.template(),
-               neighbours: ti.template(), n_neighbours: ti.template(), lam: ti.template(),
-               lam_plane: ti.template(), v_in: ti.template(), w_in: ti.template(), v_out: ti.template(),
-               w_out: ti.template()):
-    """One Jacobi sweep for ball i: gather its pair impulses, then its plane impulses, then the
-    terrain's (the plane of the patch under its free-flight end point; its resting impulse is kept
-    in the column after the planes' in ``lam_plane``)."""
-    vi, wi = v_in[i], w_in[i]
-    if status[i] != OUT_OF_BOUNDS:
-        dv, dw = vec3(0.0), vec3(0.0)
-        for k in range(n_neighbours[i]):
-            j = neighbours[i, k]
-            if status[j] != OUT_OF_BOUNDS and (status[i] != AT_REST or status[j] != AT_REST):
-                a, b = ti.min(i, j), ti.max(i, j)  # evaluate every pair as (lower id, higher id)
-                n, gap, ok = pair_geometry(x, radius, a, b)
-                if ok:
-                    inv_ma, inv_mb = 1.0 / mass[a], 1.0 / mass[b]
-                    P, lam_ab, _ = pair_impulse(n, gap, v_in[a], w_in[a], radius[a], inv_ma, v_in[b], w_in[b],
-                                                radius[b], inv_mb, lam[i, k], contact.e, contact.mu, v_inelastic, h,
-                                                contact.relax)
-                    lam[i, k] = lam_ab  # both balls of the pair store the same value
-                    dv, dw = gather(dv, dw, P, n, i == a, radius[a], radius[b], inv_ma, inv_mb)
-            elif status[j] == OUT_OF_BOUNDS:
-                lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
-        vi += dv
-        wi += dw
-        for p in range(plane_p.shape[0]):
-            n = plane_n[p]
-            gap = (x[i] - plane_p[p]).dot(n) - radius[i]
-            P, lam_p, _ = pair_impulse(n, gap, vi, wi, radius[i], 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0,
-                                       lam_plane[i, p], contact.e, contact.mu, v_inelastic, h)
+def owned_pairs(i, warm: ti.template(), final: ti.template(), contact: ti.template(), h, v_inelastic,
+                radius: ti.template(), mass: ti.template(), status: ti.template(), x: ti.template(),
+                upper: ti.template(), n_upper: ti.template(), lam: ti.template(), J: ti.template(), G: ti.template(),
+                v: ti.template(), w: ti.template()):
+    """The pairs of ball i with its neighbours j = upper[i, k] > i, from the current velocities:
+    the impulse P on i (−P acts on j) of the warm start (``warm``: the resting impulse ``lam``
+    with its friction) or of a Jacobi sweep (which updates ``lam``), stored as
+    J[i, k] = (P, n̂ × P) with n̂ the unit normal from j to i. With ``final`` (the last sweep) also
+    G[i, k] = (q·n̂, gap): the surface gap [m] and q = k_p·overlap/(1/m_i + 1/m_j), the pair's
+    position projection (B.18: ball i moves by q/m_i along n̂, which is k_p·m_red·Δx, and j by
+    q/m_j the other way)."""
+    for k in range(n_upper[i]):
+        j = upper[i, k]
+        n, gap, ok = pair_geometry(x, radius, i, j)
+        inv_mi, inv_mj = 1.0 / mass[i], 1.0 / mass[j]
+        P = vec3(0.0)
+        if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
+            lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
+        elif ok and not skip_pair(status, i, j):
+            if ti.static(warm):
+                if lam[i, k] > 0.0:
+                    P = warm_impulse(n, v[i], w[i], radius[i], v[j], w[j], radius[j], inv_mi + inv_mj, lam[i, k],
+                                     contact.mu)
+            else:
+                P, lam[i, k], _ = pair_impulse(n, gap, v[i], w[i], radius[i], inv_mi, v[j], w[j], radius[j], inv_mj,
+                                               lam[i, k], contact.e, contact.mu, v_inelastic, h, contact.relax)
+        J[i, k] = ti.Vector([P[0], P[1], P[2], n[0], n[1], n[2]])
+        if ti.static(final):
+            q = 0.0
+            if ok and gap < 0.0:
+                q = -contact.k_p * gap / (inv_mi + inv_mj)
+            G[i, k] = ti.Vector([q, gap])
+
+
+@ti.func
+def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), upper: ti.template(),
+           n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), J: ti.template(), G: ti.template()):
+    """What ball i gets from all its pairs, summed in id order (lower then upper): (Δv [m/s],
+    Δω [rad/s], and with ``final`` the position projection Δx [m] and whether it touches a ball:
+    a gap below 1 % of its radius).
+
+    An impulse ±P at the contact point −r·n̂ᵢ of a solid sphere (n̂ᵢ = ±n̂ from the other ball to
+    i) gives Δv = ±P/m and Δω = (−r n̂ᵢ) × (±P)·5/(2 m r²) = −(5/(2 m r))·(n̂ × P) for both balls
+    of the pair (n̂ᵢ and the sign of P flip together)."""
+    P, T, q_n = vec3(0.0), vec3(0.0), vec3(0.0)
+    touching = 0
+    r = radius[i]
+    width = upper.shape[1]
+    for m in range(n_lower[i]):
+        slot = lower[i, m]
+        j, k = slot // width, slot % width  # the pair's owner j < i stores it
+        Jk = J[j, k]
+        P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])
+        P -= P_k
+        T += n_k.cross(P_k)
+        if ti.static(final):
+            q_n -= G[j, k][0] * n_k
+            touching |= G[j, k][1] < 0.01 * r
+    for k in range(n_upper[i]):
+        Jk = J[i, k]
+        P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])
+        P += P_k
+        T += n_k.cross(P_k)
+        if ti.static(final):
+            q_n += G[i, k][0] * n_k
+            touching |= G[i, k][1] < 0.01 * r
+    inv_m = 1.0 / mass[i]
+    return P * inv_m, T * (-2.5 * inv_m / r), q_n * inv_m, touching
+
+
+@ti.func
+def surface_impulses(i, warm: ti.template(), vi, wi, contact: ti.template(), h, v_inelastic, radius: ti.template(),
+                     plane_p: ti.template(), plane_n: ti.template(), terrain: ti.template(), heights: ti.template(),
+                     terrain_cells: ti.template(), surface_table: ti.template(), x: ti.template(),
+                     x_free: ti.template(), lam_plane: ti.template()):
+    """Ball i's contacts with the planes, then the terrain (the plane of the patch under its
+    free-flight end point; its resting impulse is kept in the column after the planes' in
+    ``lam_plane``), applied in turn to (vi, wi): the warm start (``warm``) or a sweep. Returns (v, ω)."""
+    r = radius[i]
+    for p in range(plane_n.shape[0]):
+        n = plane_n[p]
+        if ti.static(warm):
+            if lam_plane[i, p] > 0.0:
+                P = warm_impulse(n, vi, wi, r, vec3(0.0), vec3(0.0), 0.0, 1.0, lam_plane[i, p], contact.mu)
+                vi, wi = plane_jolt(P, lam_plane[i, p], vi, wi, r, n, contact.mu_roll)
+        else:
+            gap = (x[i] - plane_p[p]).dot(n) - r
+            P, lam_p, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam_plane[i, p],
+                                       contact.e, contact.mu, v_inelastic, h)
             if P.dot(n) != 0.0:
-                vi, wi = plane_jolt(P, lam_p - lam_plane[i, p], vi, wi, radius[i], n, contact.mu_roll)
+                vi, wi = plane_jolt(P, lam_p - lam_plane[i, p], vi, wi, r, n, contact.mu_roll)
             lam_plane[i, p] = lam_p
-        if terrain.on != 0:
-            q = plane_p.shape[0]
+    if terrain.on != 0:
+        q = plane_n.shape[0]
+        if ti.static(not warm) or lam_plane[i, q] > 0.0:
             pt, n = surface(heights, terrain, x_free[i])
             ct = surface_contact(contact, surface_table, terrain_cells, heights, terrain, x_free[i])
-            gap = (x[i] - pt).dot(n) - radius[i]
-            P, lam_p, _ = pair_impulse(n, gap, vi, wi, radius[i], 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0,
-                                       lam_plane[i, q], ct.e, ct.mu, v_inelastic, h)
-            if P.dot(n) != 0.0:
-                vi, wi = plane_jolt(P, lam_p - lam_plane[i, q], vi, wi, radius[i], n, ct.mu_roll)
-            lam_plane[i, q] = lam_p
-    v_out[i], w_out[i] = vi, wi
+            if ti.static(warm):
+                P = warm_impulse(n, vi, wi, r, vec3(0.0), vec3(0.0), 0.0, 1.0, lam_plane[i, q], ct.mu)
+                vi, wi = plane_jolt(P, lam_plane[i, q], vi, wi, r, n, ct.mu_roll)
+            else:
+                gap = (x[i] - pt).dot(n) - r
+                P, lam_p, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam_plane[i, q],
+                                           ct.e, ct.mu, v_inelastic, h)
+                if P.dot(n) != 0.0:
+                    vi, wi = plane_jolt(P, lam_p - lam_plane[i, q], vi, wi, r, n, ct.mu_roll)
+                lam_plane[i, q] = lam_p
+    return vi, wi
 
 
 @ti.kernel
@@ -127,9 +189,12 @@ def collision_step(
     heights: float_grid,
     terrain_cells: int_grid,
     surface_table: float_grid,
-    # Neighbour lists (built by grid.build_neighbours) and their accumulated resting impulses:
-    neighbours: int_table,
-    n_neighbours: int_array,
+    # Neighbour lists (built by grid.build_neighbours and grid.link_lower), the pairs' accumulated
+    # resting impulses and the planes':
+    upper: int_table,
+    n_upper: int_array,
+    lower: int_table,
+    n_lower: int_array,
     x_at_build: vec3_array,
     lam: real_table,
     lam_plane: real_table,
@@ -141,10 +206,9 @@ def collision_step(
     rest_time: float_array,
     # Scratch:
     x_free: vec3_array,
-    v_a: vec3_array,
-    w_a: vec3_array,
-    v_b: vec3_array,
-    w_b: vec3_array,
+    v_free: vec3_array,
+    J: vec6_table,
+    G: vec2_table,
     # Flight record in/out:
     landed: int_array,
     apex: float_array,
@@ -153,12 +217,12 @@ def collision_step(
     land_v: vec3_array,
     flag: int_array,
 ):
-    """Advance all balls by one step of ``h`` [s]. On return ``flag[0]`` is 1 when some ball may
-    come within reach of a ball missing from its neighbour list next step (rebuild the lists).
-    New positions are left in ``x_free`` (swap it with ``x``). With a terrain (``terrain.on``;
-    ``heights`` its grid, else any 2×2 array; ``lam_plane`` then has a column more than there are
-    planes) a ball that leaves the grid's extent or falls below ``terrain.kill`` is put out of
-    bounds (velocities zeroed)."""
+    """Advance all balls by one step of ``h`` [s] (``iterations`` ≥ 1 Jacobi sweeps). On return
+    ``flag[0]`` is 1 when some ball may come within reach of a ball missing from its neighbour
+    lists next step (rebuild the lists). New positions are left in ``x_free`` (swap it with ``x``).
+    With a terrain (``terrain.on``; ``heights`` its grid, else any 2×2 array; ``lam_plane`` then
+    has a column more than there are planes) a ball that leaves the grid's extent or falls below
+    ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` and ``G`` (the pairs' impulses and projections) have the shape of ``upper``."""
     v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
     # 1. free flight (v, w become the free-flight velocities)
     for i in range(x.shape[0]):
@@ -170,91 +234,71 @@ def collision_step(
             x1, v1, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
             landed[i], apex[i], t_land[i], land_x[i], land_v[i] = track_flight(
                 xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i], land_v[i])
-        x_free[i], v[i], w[i] = x1, v1, w1
+        x_free[i], v_free[i], v[i], w[i] = x1, v1, v1, w1
     # 2. warm start with last step's resting impulses
     for i in range(x.shape[0]):
-        vi, wi = v[i], w[i]
-        if status[i] != OUT_OF_BOUNDS:
-            dv, dw = vec3(0.0), vec3(0.0)
-            for k in range(n_neighbours[i]):
-                if lam[i, k] > 0.0 and status[neighbours[i, k]] != OUT_OF_BOUNDS:
-                    j = neighbours[i, k]
-                    a, b = ti.min(i, j), ti.max(i, j)
-                    n, _, ok = pair_geometry(x, radius, a, b)
-                    if ok:
-                        inv_ma, inv_mb = 1.0 / mass[a], 1.0 / mass[b]
-                        P = warm_impulse(n, v[a], w[a], radius[a], v[b], w[b], radius[b], inv_ma + inv_mb,
-                                         lam[i, k], contact.mu)
-                        dv, dw = gather(dv, dw, P, n, i == a, radius[a], radius[b], inv_ma, inv_mb)
-            vi += dv
-            wi += dw
-            for p in range(plane_n.shape[0]):
-                if lam_plane[i, p] > 0.0:
-                    n = plane_n[p]
-                    P = warm_impulse(n, vi, wi, radius[i], vec3(0.0), vec3(0.0), 0.0, 1.0, lam_plane[i, p], contact.mu)
-                    vi, wi = plane_jolt(P, lam_plane[i, p], vi, wi, radius[i], n, contact.mu_roll)
-            if terrain.on != 0:
-                q = plane_n.shape[0]
-                if lam_plane[i, q] > 0.0:
-                    _, n = surface(heights, terrain, x_free[i])
-                    ct = surface_contact(contact, surface_table, terrain_cells, heights, terrain, x_free[i])
-                    P = warm_impulse(n, vi, wi, radius[i], vec3(0.0), vec3(0.0), 0.0, 1.0, lam_plane[i, q], ct.mu)
-                    vi, wi = plane_jolt(P, lam_plane[i, q], vi, wi, radius[i], n, ct.mu_roll)
-        v_b[i], w_b[i] = vi, wi
-    # 3. Jacobi sweeps, ping-pong between the (v_a, w_a) and (v_b, w_b) buffers
-    for k in ti.static(range(iterations)):
-        if ti.static(k % 2 == 0):
-            for i in range(x.shape[0]):
-                sweep_ball(i, contact, h, v_inelastic, radius, mass, plane_p, plane_n, terrain, heights, terrain_cells,
-                           surface_table, status, x,
-                           x_free, neighbours, n_neighbours, lam, lam_plane, v_b, w_b, v_a, w_a)
-        else:
-            for i in range(x.shape[0]):
-                sweep_ball(i, contact, h, v_inelastic, radius, mass, plane_p, plane_n, terrain, heights, terrain_cells,
-                           surface_table, status, x,
-                           x_free, neighbours, n_neighbours, lam, lam_plane, v_a, w_a, v_b, w_b)
-    # 4. positions, projections, status, rest; then whether the lists stay valid
+        owned_pairs(i, True, False, contact, h, v_inelastic, radius, mass, status, x, upper, n_upper, lam, J, G, v, w)
     for i in range(x.shape[0]):
-        st = status[i]
-        v_final, w_final = v_a[i], w_a[i]
-        if ti.static(iterations % 2 == 0):
-            v_final, w_final = v_b[i], w_b[i]
-        x1 = x[i]
-        if st != OUT_OF_BOUNDS:
-            xi, ri = x[i], radius[i]
-            x1 = x_free[i] + h * (v_final - v[i])
-            touching = 0
-            for p in range(plane_p.shape[0]):
-                x1 = plane_position(xi, x_free[i], x1, v[i], v_final, ri, plane_p[p], plane_n[p], contact.k_p, h)
-                if (x1 - plane_p[p]).dot(plane_n[p]) - ri < 0.01 * ri:
-                    touching = 1
-            if terrain.on != 0:
-                pt, nt = surface(heights, terrain, x_free[i])
-                x1 = plane_position(xi, x_free[i], x1, v[i], v_final, ri, pt, nt, contact.k_p, h)
-                x1 = terrain_position(xi, x1, pt, nt, ri, heights, terrain)
-                if (x1 - pt).dot(nt) - ri < 0.01 * ri:
-                    touching = 1
-            for k in range(n_neighbours[i]):  # position projection k_p·m_red·Δx·n̂ (B.18)
-                j = neighbours[i, k]
-                d = xi - x[j]
-                dist = d.norm()
-                overlap = ri + radius[j] - dist
-                if overlap > -0.01 * ri:
-                    touching = 1
-                if overlap > 0.0 and dist > 0.0:
-                    x1 += contact.k_p * mass[j] / (mass[i] + mass[j]) * overlap * (d / dist)
-            if st == AT_REST and (v_final.norm() > 0.0 or w_final.norm() > 0.0):
-                st = FLYING  # woken by an impulse
-            if st != AT_REST:
-                st, rest_time[i] = rest_update(touching, v_final, w_final, ri, rest_time[i], h, v_rest, t_rest)
-                if st == AT_REST:
-                    v_final, w_final = vec3(0.0), vec3(0.0)
-                    x1 = xi
-            if terrain.on != 0 and outside(heights, terrain, x1):
-                st = OUT_OF_BOUNDS
-                v_final, w_final = vec3(0.0), vec3(0.0)
-            status[i] = st
-        x_free[i] = x1
-        v[i], w[i] = v_final, w_final
-        if (x1 - x_at_build[i]).norm() + 2.0 * h * v_final.norm() > half_skin:
-            flag[0] = 1
+        if status[i] != OUT_OF_BOUNDS:
+            dv, dw, _, _ = gather(i, False, radius, mass, upper, n_upper, lower, n_lower, J, G)
+            v[i], w[i] = surface_impulses(i, True, v[i] + dv, w[i] + dw, contact, h, v_inelastic, radius, plane_p,
+                                          plane_n, terrain, heights, terrain_cells, surface_table, x, x_free,
+                                          lam_plane)
+    # 3. Jacobi sweeps: the pairs' impulses from the velocities of the previous sweep, then each
+    # ball gathers them and meets its planes; the last sweep's ball loop also finishes the step (4.)
+    for s in ti.static(range(iterations)):
+        for i in range(x.shape[0]):
+            owned_pairs(i, False, ti.static(s == iterations - 1), contact, h, v_inelastic, radius, mass, status, x, upper, n_upper, lam, J, G, v, w)
+        for i in range(x.shape[0]):
+            st = status[i]
+            if st != OUT_OF_BOUNDS:
+                dv, dw, dx, touching = gather(i, ti.static(s == iterations - 1), radius, mass, upper, n_upper, lower, n_lower, J, G)
+                v_new, w_new = surface_impulses(i, False, v[i] + dv, w[i] + dw, contact, h, v_inelastic, radius,
+                                                plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
+                                                x, x_free, lam_plane)
+                if ti.static(s < iterations - 1):
+                    v[i], w[i] = v_new, w_new
+                else:
+                    finish(i, v_new, w_new, dx, touching, contact, h, half_skin, v_rest, t_rest, radius, plane_p,
+                           plane_n, terrain, heights, x_at_build, x, v, w, status, rest_time, x_free, v_free, flag)
+
+
+@ti.func
+def finish(i, v_final, w_final, dx, touching, contact: ti.template(), h, half_skin, v_rest, t_rest,
+           radius: ti.template(), plane_p: ti.template(), plane_n: ti.template(), terrain: ti.template(),
+           heights: ti.template(), x_at_build: ti.template(), x: ti.template(), v: ti.template(), w: ti.template(),
+           status: ti.template(), rest_time: ti.template(), x_free: ti.template(), v_free: ti.template(),
+           flag: ti.template()):
+    """End of the step for ball i (not out of bounds) with its final velocities, the position
+    projection ``dx`` of its ball overlaps and whether it ``touching`` a ball: new position in
+    ``x_free`` (split at a plane's time of impact, overlaps projected out), status, rest timer,
+    out-of-bounds; sets ``flag[0]`` when the neighbour lists must be rebuilt before the next step."""
+    st = status[i]
+    xi, ri = x[i], radius[i]
+    x1 = x_free[i] + h * (v_final - v_free[i])
+    for p in range(plane_p.shape[0]):
+        x1 = plane_position(xi, x_free[i], x1, v_free[i], v_final, ri, plane_p[p], plane_n[p], contact.k_p, h)
+        if (x1 - plane_p[p]).dot(plane_n[p]) - ri < 0.01 * ri:
+            touching = 1
+    if terrain.on != 0:
+        pt, nt = surface(heights, terrain, x_free[i])
+        x1 = plane_position(xi, x_free[i], x1, v_free[i], v_final, ri, pt, nt, contact.k_p, h)
+        x1 = terrain_position(xi, x1, pt, nt, ri, heights, terrain)
+        if (x1 - pt).dot(nt) - ri < 0.01 * ri:
+            touching = 1
+    x1 += dx  # position projection k_p·m_red·Δx·n̂ of the ball overlaps (B.18)
+    if st == AT_REST and (v_final.norm() > 0.0 or w_final.norm() > 0.0):
+        st = FLYING  # woken by an impulse
+    if st != AT_REST:
+        st, rest_time[i] = rest_update(touching, v_final, w_final, ri, rest_time[i], h, v_rest, t_rest)
+        if st == AT_REST:
+            v_final, w_final = vec3(0.0), vec3(0.0)
+            x1 = xi
+    if terrain.on != 0 and outside(heights, terrain, x1):
+        st = OUT_OF_BOUNDS
+        v_final, w_final = vec3(0.0), vec3(0.0)
+    status[i] = st
+    x_free[i] = x1
+    v[i], w[i] = v_final, w_final
+    if (x1 - x_at_build[i]).norm() + 2.0 * h * v_final.norm() > half_skin:
+        flag[0] = 1

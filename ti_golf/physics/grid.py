@@ -9,7 +9,10 @@ other buckets. Building the grid is a counting sort of ball ids by bucket:
 3. ``scatter``: ball ids sorted by bucket.
 
 ``build_neighbours`` then lists, for every ball, the balls within r_a + r_b + skin in its own and
-the 26 adjacent cells, sorted by id (so sums over neighbours do not depend on thread order).
+the 26 adjacent cells, sorted by id (so sums over neighbours do not depend on thread order), in
+two halves: the *upper* list (higher ids: the pairs the ball owns, each evaluated once per sweep)
+and the *lower* list (lower ids), which ``link_lower`` turns into the slots where the owners
+store the pairs' impulses, so each ball gathers its impulses without float atomics.
 A neighbour list stays valid until some ball has moved, or could move within a step, more than
 half the skin since the build.
 """
@@ -31,9 +34,9 @@ def cell_of(x, inv_cell):
 
 @ti.func
 def bucket_of(c, mask):
-    """Hash of integer cell coordinates into [0, mask]."""
-    h = (ti.cast(c[0], ti.u32) * ti.u32(73856093)) ^ (ti.cast(c[1], ti.u32) * ti.u32(19349663)) ^ (
-        ti.cast(c[2], ti.u32) * ti.u32(83492791))
+    """Hash of integer cell coordinates into [0, mask]: linear in the x index, so a row of cells
+    along x fills consecutive buckets (their starts share a cache line; see ``build_neighbours``)."""
+    h = ti.cast(c[0], ti.u32) + ti.cast(c[1], ti.u32) * ti.u32(19349663) + ti.cast(c[2], ti.u32) * ti.u32(83492791)
     return ti.cast(h & ti.cast(mask, ti.u32), ti.i32)
 
 
@@ -88,58 +91,97 @@ def build_neighbours(
     start: int_array,
     sorted_ids: int_array,
     # out:
-    neighbours: int_table,
-    n_neighbours: int_array,
+    upper: int_table,
+    n_upper: int_array,
+    lower: int_table,
+    n_lower: int_array,
     x_at_build: vec3_array,
     longest: int_array,
 ):
-    """Neighbour lists (ascending ids) of balls closer than r_a + r_b + skin; ``longest[0]`` gets
-    the longest list found (it may exceed the table's width: the caller then rebuilds wider)."""
-    capacity = neighbours.shape[1]
+    """Split neighbour lists of the balls closer than r_a + r_b + skin, each sorted by id:
+    ``upper[i]`` holds the neighbours j > i (ball i owns those pairs), ``lower[i]`` the neighbours
+    j < i (finished by :func:`link_lower`). ``longest[0]``/``longest[1]`` get the longest upper and
+    lower lists found (they may exceed the tables' widths: the caller then rebuilds wider)."""
+    cap_up, cap_low = upper.shape[1], lower.shape[1]
     for idx in range(x.shape[0]):
         i = sorted_ids[idx]  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         xi = x[i]
         ri = radius[i]
         c = cell[i]
-        n = 0
-        for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2), (-1, 2)))):
-            cc = c + d
-            b = bucket_of(cc, mask)
-            for k in range(start[b], start[b + 1]):
-                j = sorted_ids[k]
-                if j != i and (cell[j] == cc).all():  # not a ball of another cell in the same bucket
-                    reach = ri + radius[j] + skin
-                    if (x[j] - xi).norm_sqr() < reach * reach:
-                        if n < capacity:  # insertion keeps the list sorted by id
-                            m = n
-                            while m > 0 and neighbours[i, m - 1] > j:
-                                neighbours[i, m] = neighbours[i, m - 1]
-                                m -= 1
-                            neighbours[i, m] = j
-                        n += 1
-        n_neighbours[i] = ti.min(n, capacity)
+        n_up, n_low = 0, 0
+        for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2)))):
+            # the row of three cells c + (−1…1, dy, dz): consecutive buckets, one range unless it wraps
+            row = c + ti.Vector([-1, d[0], d[1]])
+            b = bucket_of(row, mask)
+            for part in range(2):
+                lo, hi = start[b], start[ti.min(b + 3, mask + 1)]
+                if part == 1:
+                    lo, hi = start[0], start[ti.max(b + 3 - (mask + 1), 0)]
+                for k in range(lo, hi):
+                    j = sorted_ids[k]
+                    cj = cell[j]
+                    # a ball of the row (not of another cell sharing its buckets), within reach
+                    if j != i and cj[1] == row[1] and cj[2] == row[2] and ti.abs(cj[0] - c[0]) <= 1:
+                        reach = ri + radius[j] + skin
+                        if (x[j] - xi).norm_sqr() < reach * reach:
+                            if j > i:
+                                insert_sorted(upper, i, n_up, cap_up, j)
+                                n_up += 1
+                            else:
+                                insert_sorted(lower, i, n_low, cap_low, j)
+                                n_low += 1
+        n_upper[i] = ti.min(n_up, cap_up)
+        n_lower[i] = ti.min(n_low, cap_low)
         x_at_build[i] = xi
-        ti.atomic_max(longest[0], n)
+        ti.atomic_max(longest[0], n_up)
+        ti.atomic_max(longest[1], n_low)
+
+
+@ti.func
+def insert_sorted(table: ti.template(), i, n, capacity, j):
+    """Insert id j into row i of ``table`` holding n ids in ascending order (dropped when full)."""
+    if n < capacity:
+        m = n
+        while m > 0 and table[i, m - 1] > j:
+            table[i, m] = table[i, m - 1]
+            m -= 1
+        table[i, m] = j
+
+
+@ti.kernel
+def link_lower(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array):
+    """Replace each lower neighbour j of ball i by the slot of the pair in j's upper list,
+    ``j · width + k`` with ``upper[j, k] = i`` (``width`` = upper.shape[1]): the ball that owns a
+    pair stores its impulse there, and the other ball gathers it from there."""
+    width = upper.shape[1]
+    for i in range(lower.shape[0]):
+        for m in range(n_lower[i]):
+            j = lower[i, m]
+            slot = -1
+            for k in range(n_upper[j]):
+                if upper[j, k] == i:
+                    slot = j * width + k
+            lower[i, m] = slot
 
 
 @ti.kernel
 def carry_over(
-    old_neighbours: int_table,
+    old_upper: int_table,
     old_count: int_array,
     old_lam: real_table,
-    neighbours: int_table,
-    n_neighbours: int_array,
+    upper: int_table,
+    n_upper: int_array,
     lam: real_table,
 ):
-    """Carry each pair's accumulated impulse from the old to the new neighbour lists (both sorted
+    """Carry each pair's accumulated impulse from the old to the new upper lists (both sorted
     by id: a merge per ball); new pairs start at zero."""
-    for i in range(n_neighbours.shape[0]):
+    for i in range(n_upper.shape[0]):
         k_old = 0
-        for k in range(n_neighbours[i]):
-            j = neighbours[i, k]
-            while k_old < old_count[i] and old_neighbours[i, k_old] < j:
+        for k in range(n_upper[i]):
+            j = upper[i, k]
+            while k_old < old_count[i] and old_upper[i, k_old] < j:
                 k_old += 1
             value = 0.0
-            if k_old < old_count[i] and old_neighbours[i, k_old] == j:
+            if k_old < old_count[i] and old_upper[i, k_old] == j:
                 value = old_lam[i, k_old]
             lam[i, k] = value
