@@ -88,6 +88,20 @@ def test_unequal_masses_with_restitution(e):
     np.testing.assert_allclose(sim.v[:, 0], [v1, v2], atol=1e-12)
 
 
+def test_overlap_is_projected_out_in_proportion_to_the_other_mass():
+    # B.18: an overlap Δx is reduced by k_p·m_red·Δx·n̂ per ball and step, m_red = m_other/(m_a + m_b);
+    # balls at rest get no impulse, so after one step only the projection has moved them
+    k_p, m1, m2, overlap = 0.2, 0.045, 0.135, 0.004
+    sc = scene(f"contact.k_p={k_p}")
+    x = np.array([[0.0, 1.0, 0.0], [0.04 - overlap, 1.0, 0.0]])
+    sim = tg.Simulation(sc, x=x, mass=[m1, m2])
+    sim.step(1)
+    np.testing.assert_allclose(sim.x[:, 0], [-k_p * m2 / (m1 + m2) * overlap, x[1, 0] + k_p * m1 / (m1 + m2) * overlap],
+                               rtol=0, atol=1e-15)
+    np.testing.assert_allclose(sim.v, 0.0, atol=0)  # no impulse between balls that do not approach
+    assert m1 * sim.x[0, 0] + m2 * sim.x[1, 0] == pytest.approx(m2 * x[1, 0], abs=1e-15)  # centre of mass kept
+
+
 def test_oblique_hit_without_friction_keeps_tangential_velocity():
     # centres offset along z: the impulse acts along the line of centres only (μ = 0)
     sim = _collide(scene("contact.e=1"), v=[[2.0, 0, 0.7], [0, 0, 0]], offset=(0.0, 0.0, 0.025))

@@ -78,7 +78,7 @@ class CollisionSolver:
         self.upper, self.n_upper, self.lam = upper, n_upper, lam
         if self.impulse is None or self.impulse.shape != upper.shape:
             self.impulse = ti.ndarray(ti.types.vector(6, float), upper.shape)
-            self.projection = ti.ndarray(ti.types.vector(2, float), upper.shape)
+            self.projection = ti.ndarray(float, upper.shape)
         self.rebuilds += 1
         self._valid = True
 

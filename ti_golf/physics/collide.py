@@ -34,7 +34,7 @@ from .integrate import step_free, track_flight
 from .kernels import lane_state
 from .terrain import outside, surface, surface_contact, terrain_position
 from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, vec3,
-                    vec2_table, vec3_array, vec6_table)
+                    vec3_array, vec6_table)
 
 
 @ti.func
@@ -64,10 +64,11 @@ def owned_pairs(i, warm: ti.template(), final: ti.template(), contact: ti.templa
     """The pairs of ball i with its neighbours j = upper[i, k] > i, from the current velocities:
     the impulse P on i (−P acts on j) of the warm start (``warm``: the resting impulse ``lam``
     with its friction) or of a Jacobi sweep (which updates ``lam``), stored as
-    J[i, k] = (P, n̂ × P) with n̂ the unit normal from j to i. With ``final`` (the last sweep) also
-    G[i, k] = (q·n̂, gap): the surface gap [m] and q = k_p·overlap/(1/m_i + 1/m_j), the pair's
-    position projection (B.18: ball i moves by q/m_i along n̂, which is k_p·m_red·Δx, and j by
-    q/m_j the other way)."""
+    J[i, k] = (P, n̂) with n̂ the unit normal from j to i. With ``final`` (the last sweep) also
+    G[i, k]: for an overlapping pair q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position
+    projection (B.18: ball i moves by q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the
+    other way); for a pair apart, −gap ≤ 0 (the surface gap [m]: the balls touch while it is below
+    1 % of a radius)."""
     for k in range(n_upper[i]):
         j = upper[i, k]
         n, gap, ok = pair_geometry(x, radius, i, j)
@@ -85,10 +86,12 @@ def owned_pairs(i, warm: ti.template(), final: ti.template(), contact: ti.templa
                                                lam[i, k], contact.e, contact.mu, v_inelastic, h, contact.relax)
         J[i, k] = ti.Vector([P[0], P[1], P[2], n[0], n[1], n[2]])
         if ti.static(final):
-            q = 0.0
-            if ok and gap < 0.0:
-                q = -contact.k_p * gap / (inv_mi + inv_mj)
-            G[i, k] = ti.Vector([q, gap])
+            g = -gap
+            if gap < 0.0:
+                g = 0.0
+                if ok:
+                    g = -contact.k_p * gap / (inv_mi + inv_mj)
+            G[i, k] = g
 
 
 @ti.func
@@ -113,16 +116,16 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
         P -= P_k
         T += n_k.cross(P_k)
         if ti.static(final):
-            q_n -= G[j, k][0] * n_k
-            touching |= G[j, k][1] < 0.01 * r
+            q_n -= ti.max(G[j, k], 0.0) * n_k
+            touching |= G[j, k] > -0.01 * r
     for k in range(n_upper[i]):
         Jk = J[i, k]
         P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])
         P += P_k
         T += n_k.cross(P_k)
         if ti.static(final):
-            q_n += G[i, k][0] * n_k
-            touching |= G[i, k][1] < 0.01 * r
+            q_n += ti.max(G[i, k], 0.0) * n_k
+            touching |= G[i, k] > -0.01 * r
     inv_m = 1.0 / mass[i]
     return P * inv_m, T * (-2.5 * inv_m / r), q_n * inv_m, touching
 
@@ -208,7 +211,7 @@ def collision_step(
     x_free: vec3_array,
     v_free: vec3_array,
     J: vec6_table,
-    G: vec2_table,
+    G: real_table,
     # Flight record in/out:
     landed: int_array,
     apex: float_array,
