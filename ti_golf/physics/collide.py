@@ -225,7 +225,8 @@ def collision_step(
     lists next step (rebuild the lists). New positions are left in ``x_free`` (swap it with ``x``).
     With a terrain (``terrain.on``; ``heights`` its grid, else any 2×2 array; ``lam_plane`` then
     has a column more than there are planes) a ball that leaves the grid's extent or falls below
-    ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` and ``G`` (the pairs' impulses and projections) have the shape of ``upper``."""
+    ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` and ``G`` (the pairs'
+    impulses and projections, see :func:`owned_pairs`) have the shape of ``upper``."""
     v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
     # 1. free flight (v, w become the free-flight velocities)
     for i in range(x.shape[0]):
@@ -250,16 +251,17 @@ def collision_step(
     # 3. Jacobi sweeps: the pairs' impulses from the velocities of the previous sweep, then each
     # ball gathers them and meets its planes; the last sweep's ball loop also finishes the step (4.)
     for s in ti.static(range(iterations)):
+        last = ti.static(s == iterations - 1)
         for i in range(x.shape[0]):
-            owned_pairs(i, False, ti.static(s == iterations - 1), contact, h, v_inelastic, radius, mass, status, x, upper, n_upper, lam, J, G, v, w)
+            owned_pairs(i, False, last, contact, h, v_inelastic, radius, mass, status, x, upper, n_upper, lam, J, G,
+                        v, w)
         for i in range(x.shape[0]):
-            st = status[i]
-            if st != OUT_OF_BOUNDS:
-                dv, dw, dx, touching = gather(i, ti.static(s == iterations - 1), radius, mass, upper, n_upper, lower, n_lower, J, G)
+            if status[i] != OUT_OF_BOUNDS:
+                dv, dw, dx, touching = gather(i, last, radius, mass, upper, n_upper, lower, n_lower, J, G)
                 v_new, w_new = surface_impulses(i, False, v[i] + dv, w[i] + dw, contact, h, v_inelastic, radius,
                                                 plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
                                                 x, x_free, lam_plane)
-                if ti.static(s < iterations - 1):
+                if ti.static(not last):
                     v[i], w[i] = v_new, w_new
                 else:
                     finish(i, v_new, w_new, dx, touching, contact, h, half_skin, v_rest, t_rest, radius, plane_p,
