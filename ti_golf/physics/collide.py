@@ -9,16 +9,17 @@ id order: no float atomics, results do not depend on thread order.
 
 The kernel's top-level loops run one after another, each over all balls in parallel:
 
-1. free flight: every awake ball flies under gravity and air forces (the integrator) to a
-   predicted position; flight records (apex, landing) are updated;
-2. warm start: last step's *resting* contact impulses (and their friction) are applied again, so
-   a stack starts the step supported instead of re-learning its support every step: a pair loop
-   (each owner evaluates its pairs) then a ball loop (each ball gathers them, then adds its
-   planes' and terrain's);
-3. ``iterations`` Jacobi sweeps, each a pair loop (impulses from the velocities of the previous
-   sweep) and a ball loop (gather, then the planes and the terrain: the plane of the patch under
-   the ball, see :mod:`.terrain`, applied in turn);
-4. finish (fused with the last sweep's ball loop): positions from the final velocities (split at
+1. free flight and warm start: every awake ball flies under gravity and air forces (the
+   integrator) to a predicted position, and flight records (apex, landing) are updated; then
+   last step's *resting* impulses are applied again (ball pairs along their normals, planes and
+   terrain with their friction), so a stack starts the step supported instead of re-learning its
+   support every step. The ball pairs' part reads only start-of-step positions and ``lam``, which
+   this loop does not write, so it needs no loop of its own;
+2. ``iterations`` Jacobi sweeps, each a pair loop (impulses from the velocities of the previous
+   sweep; the first sweep computes each pair's normal and gap, the others read them back) and a
+   ball loop (gather, then the planes and the terrain: the plane of the patch under the ball,
+   see :mod:`.terrain`, applied in turn);
+3. finish (fused with the last sweep's ball loop): positions from the final velocities (split at
    a plane's time of impact), position projection of overlaps (B.18), status, rest detection and
    out-of-bounds (off the terrain), and whether the neighbour lists must be rebuilt before the
    next step.
@@ -39,14 +40,13 @@ from .types import (AirParams, ContactParams, TerrainParams, float_array, float_
 
 @ti.func
 def pair_geometry(x: ti.template(), radius: ti.template(), a, b):
-    """Unit normal from ball b to ball a, their surface gap [m], and whether the normal is defined."""
+    """Unit normal from ball b to ball a (zero when their centres coincide) and their surface gap [m]."""
     d = x[a] - x[b]
     dist = d.norm()
-    n = vec3(0.0, 1.0, 0.0)
-    ok = dist > 0.0
-    if ok:
+    n = vec3(0.0)
+    if dist > 0.0:
         n = d / dist
-    return n, dist - radius[a] - radius[b], ok
+    return n, dist - radius[a] - radius[b]
 
 
 @ti.func
@@ -57,33 +57,36 @@ def skip_pair(status: ti.template(), i, j):
 
 
 @ti.func
-def owned_pairs(i, warm: ti.template(), final: ti.template(), contact: ti.template(), h, v_inelastic,
+def owned_pairs(i, first: ti.template(), final: ti.template(), contact: ti.template(), h, v_inelastic,
                 radius: ti.template(), mass: ti.template(), status: ti.template(), x: ti.template(),
                 upper: ti.template(), n_upper: ti.template(), lam: ti.template(), J: ti.template(), G: ti.template(),
                 v: ti.template(), w: ti.template()):
-    """The pairs of ball i with its neighbours j = upper[i, k] > i, from the current velocities:
-    the impulse P on i (−P acts on j) of the warm start (``warm``: the resting impulse ``lam``
-    with its friction) or of a Jacobi sweep (which updates ``lam``), stored as
-    J[i, k] = (P, n̂) with n̂ the unit normal from j to i. With ``final`` (the last sweep) also
-    G[i, k]: for an overlapping pair q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position
-    projection (B.18: ball i moves by q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the
-    other way); for a pair apart, −gap ≤ 0 (the surface gap [m]: the balls touch while it is below
-    1 % of a radius)."""
+    """One Jacobi sweep over the pairs of ball i with its neighbours j = upper[i, k] > i: the
+    impulse P on i (−P acts on j) from the current velocities (which updates the resting impulse
+    ``lam``), stored as J[i, k] = (P, n̂) with n̂ the unit normal from j to i.
+
+    Positions do not change during the sweeps, so the ``first`` sweep computes each pair's normal
+    and gap from ``x`` (and keeps the gap in G[i, k]); later sweeps read them back (no square
+    root, no neighbour position). With ``final`` (the last sweep) G[i, k] becomes, for an
+    overlapping pair, q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position projection (B.18:
+    ball i moves by q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the other way); for a
+    pair apart, −gap ≤ 0 (the surface gap [m]: the balls touch while it is below 1 % of a radius)."""
     for k in range(n_upper[i]):
         j = upper[i, k]
-        n, gap, ok = pair_geometry(x, radius, i, j)
+        n, gap = vec3(0.0), 0.0
+        if ti.static(first):
+            n, gap = pair_geometry(x, radius, i, j)
+        else:
+            Jk = J[i, k]
+            n, gap = vec3(Jk[3], Jk[4], Jk[5]), G[i, k]
+        ok = n.norm_sqr() > 0.0
         inv_mi, inv_mj = 1.0 / mass[i], 1.0 / mass[j]
         P = vec3(0.0)
         if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
             lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
         elif ok and not skip_pair(status, i, j):
-            if ti.static(warm):
-                if lam[i, k] > 0.0:
-                    P = warm_impulse(n, v[i], w[i], radius[i], v[j], w[j], radius[j], inv_mi + inv_mj, lam[i, k],
-                                     contact.mu)
-            else:
-                P, lam[i, k], _ = pair_impulse(n, gap, v[i], w[i], radius[i], inv_mi, v[j], w[j], radius[j], inv_mj,
-                                               lam[i, k], contact.e, contact.mu, v_inelastic, h, contact.relax)
+            P, lam[i, k], _ = pair_impulse(n, gap, v[i], w[i], radius[i], inv_mi, v[j], w[j], radius[j], inv_mj,
+                                           lam[i, k], contact.e, contact.mu, v_inelastic, h, contact.relax)
         J[i, k] = ti.Vector([P[0], P[1], P[2], n[0], n[1], n[2]])
         if ti.static(final):
             g = -gap
@@ -92,6 +95,38 @@ def owned_pairs(i, warm: ti.template(), final: ti.template(), contact: ti.templa
                 if ok:
                     g = -contact.k_p * gap / (inv_mi + inv_mj)
             G[i, k] = g
+        elif ti.static(first):
+            G[i, k] = gap
+
+
+@ti.func
+def warm_start(i, x: ti.template(), mass: ti.template(), status: ti.template(), upper: ti.template(),
+               n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), lam: ti.template()):
+    """Δv [m/s] of ball i from last step's resting impulses λ of its ball pairs, each along the
+    pair's normal at the start of the step, summed in id order (lower then upper). A normal
+    impulse gives no spin; friction is left to the sweeps. Reads only what the free-flight loop
+    does not write (start-of-step positions, status, λ), so it runs inside that loop."""
+    P = vec3(0.0)
+    width = upper.shape[1]
+    for m in range(n_lower[i]):
+        slot = lower[i, m]
+        j, k = slot // width, slot % width  # the pair's owner j < i keeps its λ
+        P += resting_impulse(x, status, i, j, lam[j, k])
+    for k in range(n_upper[i]):
+        P += resting_impulse(x, status, i, upper[i, k], lam[i, k])
+    return P / mass[i]
+
+
+@ti.func
+def resting_impulse(x: ti.template(), status: ti.template(), i, j, lam):
+    """λ·n̂ [N·s] on ball i from its pair with j (n̂ from j to i), or zero when the pair gets no impulse."""
+    P = vec3(0.0)
+    if lam > 0.0 and not skip_pair(status, i, j):
+        d = x[i] - x[j]
+        dist = d.norm()
+        if dist > 0.0:
+            P = lam / dist * d
+    return P
 
 
 @ti.func
@@ -228,7 +263,8 @@ def collision_step(
     ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` and ``G`` (the pairs'
     impulses and projections, see :func:`owned_pairs`) have the shape of ``upper``."""
     v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
-    # 1. free flight (v, w become the free-flight velocities)
+    # 1. free flight to x_free, v_free, then the warm start: last step's resting impulses (ball
+    # pairs, planes and terrain) applied again, so a stack starts the step supported
     for i in range(x.shape[0]):
         xi = x[i]
         x1, v1, w1 = xi, vec3(0.0), vec3(0.0)
@@ -238,22 +274,19 @@ def collision_step(
             x1, v1, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
             landed[i], apex[i], t_land[i], land_x[i], land_v[i] = track_flight(
                 xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i], land_v[i])
-        x_free[i], v_free[i], v[i], w[i] = x1, v1, v1, w1
-    # 2. warm start with last step's resting impulses
-    for i in range(x.shape[0]):
-        owned_pairs(i, True, False, contact, h, v_inelastic, radius, mass, status, x, upper, n_upper, lam, J, G, v, w)
-    for i in range(x.shape[0]):
+        x_free[i], v_free[i] = x1, v1
         if status[i] != OUT_OF_BOUNDS:
-            dv, dw, _, _ = gather(i, False, radius, mass, upper, n_upper, lower, n_lower, J, G)
-            v[i], w[i] = surface_impulses(i, True, v[i] + dv, w[i] + dw, contact, h, v_inelastic, radius, plane_p,
-                                          plane_n, terrain, heights, terrain_cells, surface_table, x, x_free,
-                                          lam_plane)
-    # 3. Jacobi sweeps: the pairs' impulses from the velocities of the previous sweep, then each
-    # ball gathers them and meets its planes; the last sweep's ball loop also finishes the step (4.)
+            v1 += warm_start(i, x, mass, status, upper, n_upper, lower, n_lower, lam)
+            v1, w1 = surface_impulses(i, True, v1, w1, contact, h, v_inelastic, radius, plane_p, plane_n, terrain,
+                                      heights, terrain_cells, surface_table, x, x_free, lam_plane)
+        v[i], w[i] = v1, w1
+    # 2. Jacobi sweeps: the pairs' impulses from the velocities of the previous sweep, then each
+    # ball gathers them and meets its planes; the last sweep's ball loop also finishes the step (3.)
     for s in ti.static(range(iterations)):
+        first = ti.static(s == 0)
         last = ti.static(s == iterations - 1)
         for i in range(x.shape[0]):
-            owned_pairs(i, False, last, contact, h, v_inelastic, radius, mass, status, x, upper, n_upper, lam, J, G,
+            owned_pairs(i, first, last, contact, h, v_inelastic, radius, mass, status, x, upper, n_upper, lam, J, G,
                         v, w)
         for i in range(x.shape[0]):
             if status[i] != OUT_OF_BOUNDS:
