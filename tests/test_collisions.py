@@ -63,6 +63,30 @@ def test_grid_neighbours_equal_brute_force(name):
         assert np.all(upper[owners, entries] == i)
 
 
+def test_rebuild_keeps_each_pairs_resting_impulse():
+    # the warm start needs each pair's accumulated impulse λ to survive a rebuild of the lists
+    # (rebuilt in place, widened when a list overflows): the same pair keeps the same λ
+    x, r = _random_sets()["clustered"]
+    sc = scene("world.gravity=[0,-9.81,0]", "world.ground=true", "contact.mu=0.3")
+    sim = tg.Simulation(sc, x=x[:400] * 0.3 + [0, 0.2, 0], radius=np.full(400, 0.02))
+    sim.run(t=0.3)  # a heap on the ground: many pairs with λ > 0
+    solver: CollisionSolver = sim.solver
+
+    def lam_by_pair():
+        upper, n_upper, lam = solver.upper.to_numpy(), solver.n_upper.to_numpy(), solver.lam.to_numpy()
+        return {(i, int(upper[i, k])): lam[i, k] for i in range(len(n_upper)) for k in range(n_upper[i])}
+
+    before = lam_by_pair()
+    assert sum(v > 0 for v in before.values()) > 20
+    for capacity in (solver.capacity, (1, 1)):  # in place, then from width 1 (widened again)
+        solver.capacity = capacity
+        solver.build(sim.state)
+        after = lam_by_pair()
+        assert all(after[p] == before.get(p, 0.0) for p in after)  # pairs new to the lists start at 0
+        assert sum(after[p] > 0 for p in after) == sum(before[p] > 0 for p in before)  # no pressing pair lost
+        before = after
+
+
 # ---------------------------------------------------------------------------------------------
 # Two balls against closed form
 # ---------------------------------------------------------------------------------------------

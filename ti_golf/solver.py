@@ -22,7 +22,7 @@ class CollisionSolver:
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
     """
 
-    def __init__(self, model: Model, capacity: int = 4) -> None:
+    def __init__(self, model: Model, capacity: int = 1) -> None:
         self._model = model
         n = model.n
         r_max = float(model.radius_np.max())
@@ -31,7 +31,6 @@ class CollisionSolver:
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
         self.capacity = (capacity, capacity)
         self.rebuilds = 0
-        self.cell_ids = ti.ndarray(ti.types.vector(3, ti.i32), n)
         self.bucket = ti.ndarray(ti.i32, n)
         self.rank = ti.ndarray(ti.i32, n)
         self.sorted_ids = ti.ndarray(ti.i32, n)
@@ -40,9 +39,8 @@ class CollisionSolver:
         self.x_at_build = ti.ndarray(vec3, n)
         self.x_free = ti.ndarray(vec3, n)
         self.v_free = ti.ndarray(vec3, n)
-        self.upper = self.n_upper = self.lam = self.impulse = self.projection = None
-        self.lower, self.n_lower = None, ti.ndarray(ti.i32, n)
-        self._spare = None
+        self.n_upper, self.n_lower = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
+        self.upper = self.lower = self.lam = self.impulse = self.projection = None
         # resting impulses of the planes and (one column more) the terrain
         self.lam_plane = ti.ndarray(float, (n, max(1, len(model.plane_p) + (model.terrain is not None))))
         self.flag = ti.ndarray(ti.i32, 2)
@@ -50,44 +48,44 @@ class CollisionSolver:
         self._rebuild = True
 
     def build(self, state: State) -> None:
-        """Sort balls into the hash grid and rebuild every neighbour list (widening the tables if needed)."""
+        """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
+        pair's accumulated impulse over (the tables widen to the longest list when one overflows)."""
         n = state.n
         grid.clear(self.count)
-        grid.count_buckets(state.x, 1.0 / self.cell, self.mask, self.cell_ids, self.bucket, self.rank, self.count)
+        grid.count_buckets(state.x, 1.0 / self.cell, self.mask, self.bucket, self.rank, self.count)
         grid.exclusive_scan(self.count, self.start)
         grid.scatter(self.bucket, self.rank, self.start, self.sorted_ids)
+        stashed = None
+        if self._valid:  # the pair impulses are scratch between steps: they keep the old lists' λ
+            stashed = self.impulse
+            grid.stash(self.upper, self.n_upper, self.lam, stashed)
         while True:
-            upper, n_upper, lam = self._spare_lists(n)
+            if self.upper is None or self.upper.shape[1] != self.capacity[0]:
+                self.upper = ti.ndarray(ti.i32, (n, self.capacity[0]))
+                self.lam = ti.ndarray(float, (n, self.capacity[0]))
             if self.lower is None or self.lower.shape[1] != self.capacity[1]:
                 self.lower = ti.ndarray(ti.i32, (n, self.capacity[1]))
             grid.clear(self.flag)
-            grid.build_neighbours(state.x, self._model.radius, self.cell_ids, self.mask, self.skin, self.start,
-                                  self.sorted_ids, upper, n_upper, self.lower, self.n_lower, self.x_at_build,
-                                  self.flag)
+            grid.build_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, self.skin, self.start,
+                                  self.sorted_ids, self.upper, self.n_upper, self.lower, self.n_lower,
+                                  self.x_at_build, self.flag)
             longest = self.flag.to_numpy()
             if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
                 break
-            self.capacity = tuple(max(c, int(2 ** np.ceil(np.log2(k)))) for c, k in zip(self.capacity, longest))
-        grid.link_lower(upper, n_upper, self.lower, self.n_lower)
-        if self._valid:
-            grid.carry_over(self.upper, self.n_upper, self.lam, upper, n_upper, lam)
+            # widen to the longest list found (no power-of-two padding: memory follows the pile)
+            self.capacity = tuple(max(c, int(k)) for c, k in zip(self.capacity, longest))
+        grid.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
+        if stashed is not None:
+            grid.carry_over(stashed, self.upper, self.n_upper, self.lam)
+            stashed = None
         else:
-            grid.clear2(lam)
-        # the old lists become the spare for the next rebuild (no allocation per rebuild)
-        self._spare = (self.upper, self.n_upper, self.lam)
-        self.upper, self.n_upper, self.lam = upper, n_upper, lam
-        if self.impulse is None or self.impulse.shape != upper.shape:
-            self.impulse = ti.ndarray(ti.types.vector(6, float), upper.shape)
-            self.projection = ti.ndarray(float, upper.shape)
+            grid.clear2(self.lam)
+        if self.impulse is None or self.impulse.shape != self.upper.shape:
+            self.impulse = self.projection = None  # free the old tables before allocating
+            self.impulse = ti.ndarray(ti.types.vector(6, float), self.upper.shape)
+            self.projection = ti.ndarray(float, self.upper.shape)
         self.rebuilds += 1
         self._valid = True
-
-    def _spare_lists(self, n: int) -> tuple:
-        """Upper neighbour table, counts and impulses of the current width, reusing the spare set."""
-        if self._spare is None or self._spare[0] is None or self._spare[0].shape[1] != self.capacity[0]:
-            self._spare = (ti.ndarray(ti.i32, (n, self.capacity[0])), ti.ndarray(ti.i32, n),
-                           ti.ndarray(float, (n, self.capacity[0])))
-        return self._spare
 
     def pairs(self) -> np.ndarray:
         """The listed neighbour pairs (i, j), i < j, each once: int array of shape (n_pairs, 2)."""

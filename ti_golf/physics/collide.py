@@ -182,11 +182,12 @@ def surface_impulses(i, warm: ti.template(), vi, wi, contact: ti.template(), h, 
                 vi, wi = plane_jolt(P, lam_plane[i, p], vi, wi, r, n, contact.mu_roll)
         else:
             gap = (x[i] - plane_p[p]).dot(n) - r
-            P, lam_p, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam_plane[i, p],
-                                       contact.e, contact.mu, v_inelastic, h)
-            if P.dot(n) != 0.0:
-                vi, wi = plane_jolt(P, lam_p - lam_plane[i, p], vi, wi, r, n, contact.mu_roll)
-            lam_plane[i, p] = lam_p
+            if gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam_plane[i, p] > 0.0:  # else no impulse (pair_impulse)
+                P, lam_p, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam_plane[i, p],
+                                           contact.e, contact.mu, v_inelastic, h)
+                if P.dot(n) != 0.0:
+                    vi, wi = plane_jolt(P, lam_p - lam_plane[i, p], vi, wi, r, n, contact.mu_roll)
+                lam_plane[i, p] = lam_p
     if terrain.on != 0:
         q = plane_n.shape[0]
         if ti.static(not warm) or lam_plane[i, q] > 0.0:

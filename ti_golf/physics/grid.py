@@ -19,10 +19,9 @@ half the skin since the build.
 
 import taichi as ti
 
-from .types import float_array, int_array, real, vec3_array
+from .types import float_array, int_array, real, vec3_array, vec6_table
 
 int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
-ivec3_array = ti.types.ndarray(dtype=ti.types.vector(3, ti.i32), ndim=1)
 real_table = ti.types.ndarray(dtype=real, ndim=2)
 
 
@@ -55,13 +54,11 @@ def clear2(a: real_table):
 
 
 @ti.kernel
-def count_buckets(x: vec3_array, inv_cell: float, mask: ti.i32, cell: ivec3_array, bucket: int_array,
-                  rank: int_array, count: int_array):
-    """Cell and bucket of every ball and its rank among the balls of that bucket."""
+def count_buckets(x: vec3_array, inv_cell: float, mask: ti.i32, bucket: int_array, rank: int_array,
+                  count: int_array):
+    """Bucket of every ball and its rank among the balls of that bucket."""
     for i in range(x.shape[0]):
-        c = cell_of(x[i], inv_cell)
-        b = bucket_of(c, mask)
-        cell[i] = c
+        b = bucket_of(cell_of(x[i], inv_cell), mask)
         bucket[i] = b
         rank[i] = ti.atomic_add(count[b], 1)
 
@@ -85,7 +82,7 @@ def scatter(bucket: int_array, rank: int_array, start: int_array, sorted_ids: in
 def build_neighbours(
     x: vec3_array,
     radius: float_array,
-    cell: ivec3_array,
+    inv_cell: float,
     mask: ti.i32,
     skin: float,
     start: int_array,
@@ -107,7 +104,7 @@ def build_neighbours(
         i = sorted_ids[idx]  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         xi = x[i]
         ri = radius[i]
-        c = cell[i]
+        c = cell_of(xi, inv_cell)  # recomputed, not stored: 12 bytes per ball less
         n_up, n_low = 0, 0
         for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2)))):
             # the row of three cells c + (−1…1, dy, dz): consecutive buckets, one range unless it wraps
@@ -119,11 +116,12 @@ def build_neighbours(
                     lo, hi = start[0], start[ti.max(b + 3 - (mask + 1), 0)]
                 for k in range(lo, hi):
                     j = sorted_ids[k]
-                    cj = cell[j]
+                    xj = x[j]
+                    cj = cell_of(xj, inv_cell)
                     # a ball of the row (not of another cell sharing its buckets), within reach
                     if j != i and cj[1] == row[1] and cj[2] == row[2] and ti.abs(cj[0] - c[0]) <= 1:
                         reach = ri + radius[j] + skin
-                        if (x[j] - xi).norm_sqr() < reach * reach:
+                        if (xj - xi).norm_sqr() < reach * reach:
                             if j > i:
                                 insert_sorted(upper, i, n_up, cap_up, j)
                                 n_up += 1
@@ -165,23 +163,35 @@ def link_lower(upper: int_table, n_upper: int_array, lower: int_table, n_lower: 
 
 
 @ti.kernel
-def carry_over(
-    old_upper: int_table,
-    old_count: int_array,
-    old_lam: real_table,
-    upper: int_table,
-    n_upper: int_array,
-    lam: real_table,
-):
-    """Carry each pair's accumulated impulse from the old to the new upper lists (both sorted
-    by id: a merge per ball); new pairs start at zero."""
+def stash(upper: int_table, n_upper: int_array, lam: real_table, scratch: vec6_table):
+    """Keep every pair's (neighbour id, accumulated impulse) in ``scratch`` (a table of upper's shape
+    that is free between steps: the pair impulses) so the lists can be rebuilt in place; the id is
+    split in two halves below 2¹² so it is exact in f32 as well. Unused slots get the id −1."""
+    for i, k in scratch:
+        j = -1
+        if k < n_upper[i]:
+            j = upper[i, k]
+        scratch[i, k] = ti.Vector([lam[i, k], j // 4096, j % 4096, 0.0, 0.0, 0.0], dt=real)
+
+
+@ti.kernel
+def carry_over(stashed: vec6_table, upper: int_table, n_upper: int_array, lam: real_table):
+    """Carry each pair's accumulated impulse from the stashed old lists (see :func:`stash`) to the
+    new upper lists (both sorted by id: a merge per ball); new pairs start at zero."""
     for i in range(n_upper.shape[0]):
         k_old = 0
+        n_old = stashed.shape[1]
         for k in range(n_upper[i]):
             j = upper[i, k]
-            while k_old < old_count[i] and old_upper[i, k_old] < j:
+            while k_old < n_old and stashed_id(stashed, i, k_old) >= 0 and stashed_id(stashed, i, k_old) < j:
                 k_old += 1
             value = 0.0
-            if k_old < old_count[i] and old_upper[i, k_old] == j:
-                value = old_lam[i, k_old]
+            if k_old < n_old and stashed_id(stashed, i, k_old) == j:
+                value = stashed[i, k_old][0]
             lam[i, k] = value
+
+
+@ti.func
+def stashed_id(stashed: ti.template(), i, k):
+    """The neighbour id kept by :func:`stash` in slot (i, k) (−1: unused)."""
+    return ti.cast(stashed[i, k][1], ti.i32) * 4096 + ti.cast(stashed[i, k][2], ti.i32)
