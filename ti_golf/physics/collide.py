@@ -14,11 +14,12 @@ The kernel's top-level loops run one after another, each over all balls in paral
    last step's *resting* impulses are applied again (ball pairs along their normals, planes and
    terrain with their friction), so a stack starts the step supported instead of re-learning its
    support every step. The ball pairs' part reads only start-of-step positions and ``lam``, which
-   this loop does not write, so it needs no loop of its own;
+   this loop does not write, so it needs no loop of its own; the same reads give each owned
+   pair's normal and gap, stored for the sweeps (positions do not change during them);
 2. ``iterations`` Jacobi sweeps, each a pair loop (impulses from the velocities of the previous
-   sweep; the first sweep computes each pair's normal and gap, the others read them back) and a
-   ball loop (gather, then the planes and the terrain: the plane of the patch under the ball,
-   see :mod:`.terrain`, applied in turn);
+   sweep, with the normals and gaps that the first loop stored) and a ball loop (gather, then the
+   planes and the terrain: the plane of the patch under the ball, see :mod:`.terrain`, applied
+   in turn);
 3. finish (fused with the last sweep's ball loop): positions from the final velocities (split at
    a plane's time of impact), position projection of overlaps (B.18), status, rest detection and
    out-of-bounds (off the terrain), and whether the neighbour lists must be rebuilt before the
@@ -57,28 +58,22 @@ def skip_pair(status: ti.template(), i, j):
 
 
 @ti.func
-def owned_pairs(i, first: ti.template(), final: ti.template(), contact: ti.template(), h, v_inelastic,
-                radius: ti.template(), mass: ti.template(), status: ti.template(), x: ti.template(),
-                upper: ti.template(), n_upper: ti.template(), lam: ti.template(), J: ti.template(), G: ti.template(),
-                v: ti.template(), w: ti.template()):
+def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic, radius: ti.template(),
+                mass: ti.template(), status: ti.template(), upper: ti.template(), n_upper: ti.template(),
+                lam: ti.template(), J: ti.template(), G: ti.template(), v: ti.template(), w: ti.template()):
     """One Jacobi sweep over the pairs of ball i with its neighbours j = upper[i, k] > i: the
     impulse P on i (−P acts on j) from the current velocities (which updates the resting impulse
-    ``lam``), stored as J[i, k] = (P, n̂) with n̂ the unit normal from j to i.
+    ``lam``), stored as J[i, k] = (P, n̂). The unit normal n̂ from j to i and the surface gap (in
+    G[i, k]) were stored by :func:`warm_start` (positions do not change during the sweeps).
 
-    Positions do not change during the sweeps, so the ``first`` sweep computes each pair's normal
-    and gap from ``x`` (and keeps the gap in G[i, k]); later sweeps read them back (no square
-    root, no neighbour position). With ``final`` (the last sweep) G[i, k] becomes, for an
-    overlapping pair, q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position projection (B.18:
-    ball i moves by q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the other way); for a
-    pair apart, −gap ≤ 0 (the surface gap [m]: the balls touch while it is below 1 % of a radius)."""
+    With ``final`` (the last sweep) G[i, k] becomes, for an overlapping pair,
+    q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position projection (B.18: ball i moves by
+    q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the other way); for a pair apart,
+    −gap ≤ 0 (the surface gap [m]: the balls touch while it is below 1 % of a radius)."""
     for k in range(n_upper[i]):
         j = upper[i, k]
-        n, gap = vec3(0.0), 0.0
-        if ti.static(first):
-            n, gap = pair_geometry(x, radius, i, j)
-        else:
-            Jk = J[i, k]
-            n, gap = vec3(Jk[3], Jk[4], Jk[5]), G[i, k]
+        Jk = J[i, k]
+        n, gap = vec3(Jk[3], Jk[4], Jk[5]), G[i, k]
         ok = n.norm_sqr() > 0.0
         inv_mi, inv_mj = 1.0 / mass[i], 1.0 / mass[j]
         P = vec3(0.0)
@@ -95,37 +90,40 @@ def owned_pairs(i, first: ti.template(), final: ti.template(), contact: ti.templ
                 if ok:
                     g = -contact.k_p * gap / (inv_mi + inv_mj)
             G[i, k] = g
-        elif ti.static(first):
-            G[i, k] = gap
 
 
 @ti.func
-def warm_start(i, x: ti.template(), mass: ti.template(), status: ti.template(), upper: ti.template(),
-               n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), lam: ti.template()):
+def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), status: ti.template(),
+               upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(),
+               lam: ti.template(), J: ti.template(), G: ti.template()):
     """Δv [m/s] of ball i from last step's resting impulses λ of its ball pairs, each along the
     pair's normal at the start of the step, summed in id order (lower then upper). A normal
-    impulse gives no spin; friction is left to the sweeps. Reads only what the free-flight loop
-    does not write (start-of-step positions, status, λ), so it runs inside that loop."""
+    impulse gives no spin; friction is left to the sweeps. Also stores the geometry of the pairs
+    ball i owns for the sweeps: J[i, k] = (0, n̂) and G[i, k] = the surface gap [m]. Reads only
+    what the free-flight loop does not write (start-of-step positions, status, λ), so it runs
+    inside that loop."""
     P = vec3(0.0)
     width = upper.shape[1]
     for m in range(n_lower[i]):
         slot = lower[i, m]
         j, k = slot // width, slot % width  # the pair's owner j < i keeps its λ
-        P += resting_impulse(x, status, i, j, lam[j, k])
+        n, _ = pair_geometry(x, radius, i, j)
+        P += resting_impulse(status, i, j, n, lam[j, k])
     for k in range(n_upper[i]):
-        P += resting_impulse(x, status, i, upper[i, k], lam[i, k])
+        j = upper[i, k]
+        n, gap = pair_geometry(x, radius, i, j)
+        J[i, k] = ti.Vector([0.0, 0.0, 0.0, n[0], n[1], n[2]])
+        G[i, k] = gap
+        P += resting_impulse(status, i, j, n, lam[i, k])
     return P / mass[i]
 
 
 @ti.func
-def resting_impulse(x: ti.template(), status: ti.template(), i, j, lam):
+def resting_impulse(status: ti.template(), i, j, n, lam):
     """λ·n̂ [N·s] on ball i from its pair with j (n̂ from j to i), or zero when the pair gets no impulse."""
     P = vec3(0.0)
     if lam > 0.0 and not skip_pair(status, i, j):
-        d = x[i] - x[j]
-        dist = d.norm()
-        if dist > 0.0:
-            P = lam / dist * d
+        P = lam * n
     return P
 
 
@@ -276,19 +274,18 @@ def collision_step(
             landed[i], apex[i], t_land[i], land_x[i], land_v[i] = track_flight(
                 xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i], land_v[i])
         x_free[i], v_free[i] = x1, v1
+        dv = warm_start(i, x, radius, mass, status, upper, n_upper, lower, n_lower, lam, J, G)
         if status[i] != OUT_OF_BOUNDS:
-            v1 += warm_start(i, x, mass, status, upper, n_upper, lower, n_lower, lam)
+            v1 += dv
             v1, w1 = surface_impulses(i, True, v1, w1, contact, h, v_inelastic, radius, plane_p, plane_n, terrain,
                                       heights, terrain_cells, surface_table, x, x_free, lam_plane)
         v[i], w[i] = v1, w1
     # 2. Jacobi sweeps: the pairs' impulses from the velocities of the previous sweep, then each
     # ball gathers them and meets its planes; the last sweep's ball loop also finishes the step (3.)
     for s in ti.static(range(iterations)):
-        first = ti.static(s == 0)
         last = ti.static(s == iterations - 1)
         for i in range(x.shape[0]):
-            owned_pairs(i, first, last, contact, h, v_inelastic, radius, mass, status, x, upper, n_upper, lam, J, G,
-                        v, w)
+            owned_pairs(i, last, contact, h, v_inelastic, radius, mass, status, upper, n_upper, lam, J, G, v, w)
         for i in range(x.shape[0]):
             if status[i] != OUT_OF_BOUNDS:
                 dv, dw, dx, touching = gather(i, last, radius, mass, upper, n_upper, lower, n_lower, J, G)
