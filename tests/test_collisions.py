@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import ti_golf as tg
+from ti_golf.config import AT_REST
 from ti_golf.solver import CollisionSolver
 
 # no gravity, air, walls or friction unless a test says otherwise
@@ -207,6 +208,28 @@ def test_column_of_ten_balls_stands():
     assert sim.x[-1, 1] > 0.38 - 0.01 * 0.02
     np.testing.assert_allclose(sim.x[:, [0, 2]], 0.0, atol=1e-9)  # still a column
     assert np.all(np.diff(sim.x[:, 1]) > 0.04 - 0.01 * 0.02)  # no pair overlaps by 1 % of a radius
+    assert sim.counts()["at_rest"] == 10  # and it has come to rest, not to a limit cycle
+
+
+@pytest.mark.parametrize("iterations", [2, 4])
+def test_a_calm_column_falls_asleep_in_one_step(iterations):
+    # island-like sleeping: a ball's rest timer counts on from the least timer of the balls it
+    # touches, so a column falls asleep as a whole, with either sweep count; a lowest ball put to
+    # sleep alone would feel no gravity while the balls above it still move, and the column would
+    # keep rocking (and sink) instead of resting
+    sc = tg.load_scene("lab_vacuum", ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3",
+                                      f"contact.iterations={iterations}"])
+    x = np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)])
+    sim = tg.Simulation(sc, x=x)
+    asleep_at = np.full(10, -1)
+    for k in range(1, 2001):  # 2 s
+        sim.step(1)
+        at_rest = sim.state.status.to_numpy() == AT_REST
+        asleep_at[at_rest & (asleep_at < 0)] = k
+        if at_rest.all():
+            break
+    assert np.all(asleep_at == asleep_at[0]) and asleep_at[0] > 0, asleep_at
+    assert asleep_at[0] * 0.001 >= sc.world.t_rest  # no earlier than t_rest after the drop
 
 
 def test_pile_settles_without_deep_overlaps():

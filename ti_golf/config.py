@@ -126,7 +126,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
             Key("ground_height", "float", 0.0, "m", "height of the ground plane"),
             Key("v_rest", "float", 0.01, "m/s", "a touching ball slower than this (and R|ω| below it) may come to rest",
                 _non_negative, ">= 0"),
-            Key("t_rest", "float", 0.2, "s", "how long a ball must stay below v_rest before it is put at rest",
+            Key("t_rest", "float", 0.2, "s",
+                "how long a ball and the balls it touches must stay below v_rest before they are put at rest",
                 _non_negative, ">= 0"),
         ]
     },

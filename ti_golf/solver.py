@@ -39,6 +39,7 @@ class CollisionSolver:
         self.x_at_build = ti.ndarray(vec3, n)
         self.x_free = ti.ndarray(vec3, n)
         self.v_free = ti.ndarray(vec3, n)
+        self.calm = ti.ndarray(float, n)  # least rest timer of each ball and the balls it touches [s]
         self.n_upper, self.n_lower = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
         self.upper = self.lower = self.lam = self.impulse = self.projection = None
         # resting impulses of the planes and (one column more) the terrain
@@ -105,7 +106,7 @@ class CollisionSolver:
             w.v_rest, w.t_rest, m.radius, m.mass, m.launch_height, m.plane_p, m.plane_n, m.terrain_params, m.terrain_h,
             m.terrain_cells, m.surface_table,
             self.upper, self.n_upper, self.lower, self.n_lower, self.x_at_build, self.lam, self.lam_plane,
-            s.x, s.v, s.w, s.status, s.rest_time, self.x_free, self.v_free, self.impulse, self.projection,
+            s.x, s.v, s.w, s.status, s.rest_time, self.x_free, self.v_free, self.calm, self.impulse, self.projection,
             s.landed, s.apex, s.t_land, s.land_x, s.land_v, self.flag,
         )
         s.x, self.x_free = self.x_free, s.x  # the kernel left the new positions in x_free

@@ -32,7 +32,7 @@ from ..config import AT_REST, FLYING, OUT_OF_BOUNDS
 from .aero import V, W, X, coefficients, column
 from .contact import pair_impulse, plane_jolt, plane_position, rest_update, warm_impulse
 from .grid import int_table, real_table
-from .integrate import step_free, track_flight
+from .integrate import IN_FLIGHT, step_free, track_flight
 from .kernels import lane_state
 from .terrain import outside, surface, surface_contact, terrain_position
 from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, vec3,
@@ -94,28 +94,41 @@ def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic,
 
 @ti.func
 def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), status: ti.template(),
-               upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(),
-               lam: ti.template(), J: ti.template(), G: ti.template()):
+               rest_time: ti.template(), upper: ti.template(), n_upper: ti.template(), lower: ti.template(),
+               n_lower: ti.template(), lam: ti.template(), J: ti.template(), G: ti.template()):
     """Δv [m/s] of ball i from last step's resting impulses λ of its ball pairs, each along the
     pair's normal at the start of the step, summed in id order (lower then upper). A normal
     impulse gives no spin; friction is left to the sweeps. Also stores the geometry of the pairs
     ball i owns for the sweeps: J[i, k] = (0, n̂) and G[i, k] = the surface gap [m]. Reads only
-    what the free-flight loop does not write (start-of-step positions, status, λ), so it runs
-    inside that loop."""
+    what the free-flight loop does not write (start-of-step positions, status, λ, rest timers),
+    so it runs inside that loop. Returns (Δv, the calm time [s] of ball i: the least rest timer
+    of the ball and the balls it touches, see :func:`finish`)."""
     P = vec3(0.0)
+    calm = rest_time[i]
     width = upper.shape[1]
     for m in range(n_lower[i]):
         slot = lower[i, m]
         j, k = slot // width, slot % width  # the pair's owner j < i keeps its λ
-        n, _ = pair_geometry(x, radius, i, j)
+        n, gap = pair_geometry(x, radius, i, j)
         P += resting_impulse(status, i, j, n, lam[j, k])
+        calm = island_calm(calm, gap, radius[i], status[j], rest_time[j])
     for k in range(n_upper[i]):
         j = upper[i, k]
         n, gap = pair_geometry(x, radius, i, j)
         J[i, k] = ti.Vector([0.0, 0.0, 0.0, n[0], n[1], n[2]])
         G[i, k] = gap
         P += resting_impulse(status, i, j, n, lam[i, k])
-    return P / mass[i]
+        calm = island_calm(calm, gap, radius[i], status[j], rest_time[j])
+    return P / mass[i], calm
+
+
+@ti.func
+def island_calm(calm, gap, r, status_j, rest_time_j):
+    """The calm time [s] so far, lowered to the rest timer of a neighbour that touches the ball
+    (surface gap below 1 % of its radius ``r``) and is not out of bounds."""
+    if gap < 0.01 * r and status_j != OUT_OF_BOUNDS:
+        calm = ti.min(calm, rest_time_j)
+    return calm
 
 
 @ti.func
@@ -244,6 +257,7 @@ def collision_step(
     # Scratch:
     x_free: vec3_array,
     v_free: vec3_array,
+    calm: float_array,
     J: vec6_table,
     G: real_table,
     # Flight record in/out:
@@ -271,10 +285,11 @@ def collision_step(
             coef = coefficients(air, ti.Vector([radius[i]]), ti.Vector([mass[i]]))
             S1 = step_free(lane_state(xi, v[i], w[i]), h, integrator, coef, air, gravity)
             x1, v1, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
-            landed[i], apex[i], t_land[i], land_x[i], land_v[i] = track_flight(
-                xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i], land_v[i])
+            if landed[i] == IN_FLIGHT:  # a landed ball's record is final: neither read nor written
+                landed[i], apex[i], t_land[i], land_x[i], land_v[i] = track_flight(
+                    xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i], land_v[i])
         x_free[i], v_free[i] = x1, v1
-        dv = warm_start(i, x, radius, mass, status, upper, n_upper, lower, n_lower, lam, J, G)
+        dv, calm[i] = warm_start(i, x, radius, mass, status, rest_time, upper, n_upper, lower, n_lower, lam, J, G)
         if status[i] != OUT_OF_BOUNDS:
             v1 += dv
             v1, w1 = surface_impulses(i, True, v1, w1, contact, h, v_inelastic, radius, plane_p, plane_n, terrain,
@@ -296,15 +311,16 @@ def collision_step(
                     v[i], w[i] = v_new, w_new
                 else:
                     finish(i, v_new, w_new, dx, touching, contact, h, half_skin, v_rest, t_rest, radius, plane_p,
-                           plane_n, terrain, heights, x_at_build, x, v, w, status, rest_time, x_free, v_free, flag)
+                           plane_n, terrain, heights, x_at_build, x, v, w, status, rest_time, calm, x_free, v_free,
+                           flag)
 
 
 @ti.func
 def finish(i, v_final, w_final, dx, touching, contact: ti.template(), h, half_skin, v_rest, t_rest,
            radius: ti.template(), plane_p: ti.template(), plane_n: ti.template(), terrain: ti.template(),
            heights: ti.template(), x_at_build: ti.template(), x: ti.template(), v: ti.template(), w: ti.template(),
-           status: ti.template(), rest_time: ti.template(), x_free: ti.template(), v_free: ti.template(),
-           flag: ti.template()):
+           status: ti.template(), rest_time: ti.template(), calm: ti.template(), x_free: ti.template(),
+           v_free: ti.template(), flag: ti.template()):
     """End of the step for ball i (not out of bounds) with its final velocities, the position
     projection ``dx`` of its ball overlaps and whether it ``touching`` a ball: new position in
     ``x_free`` (split at a plane's time of impact, overlaps projected out), status, rest timer,
@@ -326,7 +342,11 @@ def finish(i, v_final, w_final, dx, touching, contact: ti.template(), h, half_sk
     if st == AT_REST and (v_final.norm() > 0.0 or w_final.norm() > 0.0):
         st = FLYING  # woken by an impulse
     if st != AT_REST:
-        st, rest_time[i] = rest_update(touching, v_final, w_final, ri, rest_time[i], h, v_rest, t_rest)
+        # island-like sleeping: the timer counts on from the least timer of the balls touching
+        # this one at the start of the step (``calm``), so the balls of a calm group reach t_rest
+        # together and fall asleep in the same step, and a ball pressed by a moving one stays
+        # awake (asleep, it would feel no gravity and the balls above it would keep rocking)
+        st, rest_time[i] = rest_update(touching, v_final, w_final, ri, calm[i], h, v_rest, t_rest)
         if st == AT_REST:
             v_final, w_final = vec3(0.0), vec3(0.0)
             x1 = xi
