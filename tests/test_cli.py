@@ -23,6 +23,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 import ti_golf
+from ti_golf.bench import pile_scene
 from ti_golf.config import SCHEMA, TOP_LEVEL
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -265,6 +266,21 @@ def test_bench_sweep_json():
     assert isinstance(result["baselines"], dict) and result["baselines"]
     for name, rate in result["baselines"].items():
         assert isinstance(rate, (int, float)) and not isinstance(rate, bool) and rate > 0, name
+
+
+@pytest.mark.parametrize("flags", [(), ("--asleep",)], ids=["awake", "asleep"])
+def test_bench_collide_json(flags):
+    proc = ok(run_cli("bench", "collide", "--n", "512", "--steps", "3", "--json", *flags))
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert result["n"] == 512 and result["steps"] == 3 and result["asleep"] == bool(flags)
+    for key in ("ball_steps_per_s", "ms_per_step", "peak_rss_bytes"):
+        assert result[key] > 0, key
+    _, x = pile_scene(512)  # a cubic lattice of touching balls: its face neighbours are its contacts
+    d = np.linalg.norm(x[:, None] - x[None], axis=-1)
+    lattice_contacts = np.count_nonzero((d > 0) & (d < 2 * 0.02 * 1.001)) / 512
+    assert result["contacts_per_ball"] == pytest.approx(lattice_contacts, rel=0.02)  # the pile still stands
+    assert result["baselines"]["bare_gather_balls_per_s"] > 0
+    assert ("asleep_speedup" in result) == bool(flags)  # with its awake baseline timed in the same run
 
 
 # ----------------------------------------------------------------------------------------------

@@ -232,6 +232,31 @@ def test_a_calm_column_falls_asleep_in_one_step(iterations):
     assert asleep_at[0] * 0.001 >= sc.world.t_rest  # no earlier than t_rest after the drop
 
 
+def test_a_sleeping_column_stays_put_until_a_ball_lands_on_it():
+    # balls asleep whose neighbours are all asleep are skipped by the sweeps and stay exactly where
+    # they are (README: "put at rest and stays exactly where it is"); a ball falling onto the top of
+    # the column enters its neighbour list, wakes it, and comes to rest on it (no tunnelling)
+    sc = tg.load_scene("lab_vacuum", ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3"])
+    x = np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)] + [[0.0, 2.0, 0.0]])
+    sim = tg.Simulation(sc, x=x)
+    sim.step(450)  # the column is asleep after 0.35 s (see above); the ball falls 1.58 m in 0.57 s
+    status = sim.state.status.to_numpy()
+    assert np.all(status[:10] == AT_REST) and status[10] != AT_REST
+    column = sim.x[:10].copy()
+    woken = False
+    while sim.x[10, 1] > 0.45:
+        sim.step(1)
+        np.testing.assert_array_equal(sim.x[:10], column)  # asleep: not moved by a single bit
+    for _ in range(20):  # the impact wakes the top of the column
+        sim.step(1)
+        woken |= sim.state.status.to_numpy()[9] != AT_REST
+    assert woken
+    sim.run(t=5.0)
+    assert sim.counts()["at_rest"] == 11  # the column with its new top ball rests again, as a whole
+    np.testing.assert_allclose(sim.x[:, [0, 2]], 0.0, atol=1e-9)  # still a column, the new ball on top ...
+    assert np.all(np.diff(sim.x[:, 1]) > 0.04 - 0.01 * 0.02)  # ... and no pair overlaps by 1 % of a radius
+
+
 def test_pile_settles_without_deep_overlaps():
     # balls poured into a bin settle with no pair overlapping by more than 5 % of a radius
     # (inelastic balls and 8 sweeps: with restitution the Jacobi sweeps leave a pile agitated,

@@ -154,12 +154,14 @@ def pile_scene(n: int, terrain: bool = False) -> tuple[Scene, np.ndarray]:
     return scene, x
 
 
-def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False,
+def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asleep: bool = False,
                   log: Callable[[str], None] = print) -> dict[str, Any]:
     """Time the full collision step (flight forces, grid, ball–ball and plane contacts) on a dense pile.
 
     With ``terrain`` the floor is a flat height field, and the same pile on the plane floor is
     timed in the same run as the baseline (``terrain_overhead``: relative extra time per step).
+    With ``asleep`` every ball of the pile is at rest, as a settled pile ends up, and the same pile
+    awake is timed in the same run as the baseline (``asleep_speedup``).
     """
     import resource
 
@@ -174,19 +176,23 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False,
         del warm
     base_rss = _rss_bytes()
 
-    def timed(floor: bool) -> tuple[Any, float]:
+    def timed(floor: bool, sleeping: bool) -> tuple[Any, float]:
         scene, x = pile_scene(n, floor)
         sim = Simulation(scene, x=x)
         sim.step(10)  # settle the first contacts, build the lists
+        if sleeping:
+            put_to_sleep(sim)
+            sim.step(1)
         t0 = time.perf_counter()
         sim.step(steps)
         return sim, time.perf_counter() - t0
 
-    plane_seconds = None
+    plane_seconds = awake_seconds = None  # the baselines, timed first (the peak memory is the last run's)
     if terrain:
-        plane_sim, plane_seconds = timed(False)
-        del plane_sim
-    sim, seconds = timed(terrain)
+        plane_seconds = timed(False, asleep)[1]
+    if asleep:
+        awake_seconds = timed(terrain, False)[1]
+    sim, seconds = timed(terrain, asleep)
     scene = sim.scene
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
     gather_rate = bare_gather_rate(sim.x)  # after the memory peak is read
@@ -205,6 +211,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False,
         "contacts_per_ball": 2 * touching / n,
         "list_rebuilds": sim.solver.rebuilds,
         "floor": "terrain" if terrain else "plane",
+        "asleep": asleep,
         "peak_rss_bytes": peak,
         "bytes_per_ball_above_baseline": (peak - base_rss) / n,
     }
@@ -214,12 +221,28 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False,
         result["baselines"]["plane_floor_ms_per_step"] = 1e3 * plane_seconds / steps
         result["terrain_overhead"] = seconds / plane_seconds - 1.0
         log(f"terrain floor vs plane floor: {100 * result['terrain_overhead']:+.1f} % time per step")
+    if awake_seconds is not None:
+        result["baselines"]["awake_ms_per_step"] = 1e3 * awake_seconds / steps
+        result["asleep_speedup"] = awake_seconds / seconds
+        log(f"the pile asleep vs awake: {result['asleep_speedup']:.2f}x faster per step")
     log(f"ti_golf collide: {n} balls, {result['ms_per_step']:.2f} ms/step, {result['ball_steps_per_s']:.3g} ball-steps/s, "
         f"{result['contacts_per_ball']:.2f} contacts/ball, peak RSS {peak / 2**20:.0f} MiB "
         f"({result['bytes_per_ball_above_baseline']:.0f} B/ball above baseline), arch={info.arch}, {info.precision}")
     log(f"baseline: a bare 12-neighbour gather runs at {gather_rate:.3g} balls/s; "
         f"one collision step costs {result['step_cost_in_bare_gathers']:.1f} such passes")
     return result
+
+
+def put_to_sleep(sim: Any) -> None:
+    """Put every ball of ``sim`` at rest (zero velocity and spin, rest timer at ``t_rest``)."""
+    from .config import AT_REST
+
+    s, n = sim.state, sim.n
+    f = s.v.to_numpy().dtype
+    s.v.from_numpy(np.zeros((n, 3), f))
+    s.w.from_numpy(np.zeros((n, 3), f))
+    s.status.from_numpy(np.full(n, AT_REST, np.int32))
+    s.rest_time.from_numpy(np.full(n, sim.scene.world.t_rest, f))
 
 
 def bare_gather_rate(x: np.ndarray, repeats: int = 5) -> float:

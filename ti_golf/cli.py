@@ -96,6 +96,9 @@ def build_parser() -> argparse.ArgumentParser:
     bc.add_argument("--steps", type=int, default=50, help="timed steps (default 50)")
     bc.add_argument("--terrain", action="store_true",
                     help="a flat height-field floor instead of the plane (the plane is timed too, as baseline)")
+    bc.add_argument("--asleep", action="store_true",
+                    help="every ball of the pile at rest, as a settled pile ends up (the pile awake is timed too, "
+                         "as baseline)")
     bc.add_argument("--json", action="store_true", help="end with one line of JSON")
     _runtime_options(bc)
     br = bsub.add_parser("render", help="seconds per off-screen frame of N balls over a terrain")
@@ -329,7 +332,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     elif args.bench == "collide":
         if args.n < 2 or args.steps <= 0:
             raise ConfigError("--n" if args.n < 2 else "--steps", None, "must be >= 2 balls and > 0 steps")
-        result = bench_collide(n=args.n, steps=args.steps, terrain=args.terrain)
+        result = bench_collide(n=args.n, steps=args.steps, terrain=args.terrain, asleep=args.asleep)
     else:
         if not args.dt > 0:
             raise ConfigError("--dt", None, f"must be > 0 (got {args.dt})")

@@ -38,6 +38,8 @@ from .terrain import outside, surface, surface_contact, terrain_position
 from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, vec3,
                     vec3_array, vec6_table)
 
+QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
+
 
 @ti.func
 def pair_geometry(x: ti.template(), radius: ti.template(), a, b):
@@ -102,9 +104,12 @@ def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), 
     ball i owns for the sweeps: J[i, k] = (0, n̂) and G[i, k] = the surface gap [m]. Reads only
     what the free-flight loop does not write (start-of-step positions, status, λ, rest timers),
     so it runs inside that loop. Returns (Δv, the calm time [s] of ball i: the least rest timer
-    of the ball and the balls it touches, see :func:`finish`)."""
+    of the ball and the balls it touches, see :func:`finish`; or ``QUIET`` for a ball at rest
+    whose listed neighbours are all at rest or out of bounds: nothing can touch it this step, so
+    the step leaves it exactly as it is and the sweeps skip it)."""
     P = vec3(0.0)
     calm = rest_time[i]
+    quiet = status[i] == AT_REST
     width = upper.shape[1]
     for m in range(n_lower[i]):
         slot = lower[i, m]
@@ -112,6 +117,7 @@ def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), 
         n, gap = pair_geometry(x, radius, i, j)
         P += resting_impulse(status, i, j, n, lam[j, k])
         calm = island_calm(calm, gap, radius[i], status[j], rest_time[j])
+        quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
     for k in range(n_upper[i]):
         j = upper[i, k]
         n, gap = pair_geometry(x, radius, i, j)
@@ -119,6 +125,9 @@ def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), 
         G[i, k] = gap
         P += resting_impulse(status, i, j, n, lam[i, k])
         calm = island_calm(calm, gap, radius[i], status[j], rest_time[j])
+        quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
+    if quiet:
+        calm = QUIET
     return P / mass[i], calm
 
 
@@ -290,19 +299,25 @@ def collision_step(
                     xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i], land_v[i])
         x_free[i], v_free[i] = x1, v1
         dv, calm[i] = warm_start(i, x, radius, mass, status, rest_time, upper, n_upper, lower, n_lower, lam, J, G)
-        if status[i] != OUT_OF_BOUNDS:
+        if status[i] != OUT_OF_BOUNDS and calm[i] != QUIET:
             v1 += dv
             v1, w1 = surface_impulses(i, True, v1, w1, contact, h, v_inelastic, radius, plane_p, plane_n, terrain,
                                       heights, terrain_cells, surface_table, x, x_free, lam_plane)
         v[i], w[i] = v1, w1
     # 2. Jacobi sweeps: the pairs' impulses from the velocities of the previous sweep, then each
-    # ball gathers them and meets its planes; the last sweep's ball loop also finishes the step (3.)
+    # ball gathers them and meets its planes; the last sweep's ball loop also finishes the step (3.).
+    # A quiet ball gets no impulse (its pairs are skipped) and stays where it is; the last pair
+    # pass still visits its pairs, for the projections its awake neighbours gather
     for s in ti.static(range(iterations)):
         last = ti.static(s == iterations - 1)
         for i in range(x.shape[0]):
-            owned_pairs(i, last, contact, h, v_inelastic, radius, mass, status, upper, n_upper, lam, J, G, v, w)
+            if ti.static(last) or calm[i] != QUIET:
+                owned_pairs(i, last, contact, h, v_inelastic, radius, mass, status, upper, n_upper, lam, J, G, v, w)
         for i in range(x.shape[0]):
-            if status[i] != OUT_OF_BOUNDS:
+            if calm[i] == QUIET:
+                if ti.static(last):
+                    x_free[i] = x[i]
+            elif status[i] != OUT_OF_BOUNDS:
                 dv, dw, dx, touching = gather(i, last, radius, mass, upper, n_upper, lower, n_lower, J, G)
                 v_new, w_new = surface_impulses(i, False, v[i] + dv, w[i] + dw, contact, h, v_inelastic, radius,
                                                 plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
