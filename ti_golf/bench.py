@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import json
 import time
 from dataclasses import replace
@@ -187,18 +188,16 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         sim.step(steps)
         return sim, time.perf_counter() - t0
 
-    plane_seconds = awake_seconds = None  # the baselines, timed first (the peak memory is the last run's)
-    if terrain:
-        plane_seconds = timed(False, asleep)[1]
-    if asleep:
-        awake_seconds = timed(terrain, False)[1]
     sim, seconds = timed(terrain, asleep)
-    scene = sim.scene
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-    gather_rate = bare_gather_rate(sim.x)  # after the memory peak is read
-    xn = sim.x
+    scene, xn, rebuilds = sim.scene, sim.x, sim.solver.rebuilds
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # before any baseline runs
     i, j = sim.solver.pairs().T
     touching = int(np.count_nonzero(np.linalg.norm(xn[i] - xn[j], axis=1) < 2 * 0.02 * 1.001))
+    del sim
+    gc.collect()
+    plane_seconds = timed(False, asleep)[1] if terrain else None  # the baselines, timed in the same run
+    awake_seconds = timed(terrain, False)[1] if asleep else None
+    gather_rate = bare_gather_rate(xn)
     result = {
         "benchmark": "collide",
         "n": n,
@@ -209,7 +208,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         "ball_steps_per_s": n * steps / seconds,
         "ms_per_step": 1e3 * seconds / steps,
         "contacts_per_ball": 2 * touching / n,
-        "list_rebuilds": sim.solver.rebuilds,
+        "list_rebuilds": rebuilds,
         "floor": "terrain" if terrain else "plane",
         "asleep": asleep,
         "peak_rss_bytes": peak,
