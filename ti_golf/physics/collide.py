@@ -15,7 +15,9 @@ The kernel's top-level loops run one after another, each over all balls in paral
    terrain with their friction), so a stack starts the step supported instead of re-learning its
    support every step. The ball pairs' part reads only start-of-step positions and ``lam``, which
    this loop does not write, so it needs no loop of its own; the same reads give each owned
-   pair's normal and gap, stored for the sweeps (positions do not change during them);
+   pair's normal and gap, stored for the sweeps (positions do not change during them), and each
+   ball's calm time for island-like sleeping (a *quiet* ball, at rest among balls at rest, is
+   then skipped by the sweeps);
 2. ``iterations`` Jacobi sweeps, each a pair loop (impulses from the velocities of the previous
    sweep, with the normals and gaps that the first loop stored) and a ball loop (gather, then the
    planes and the terrain: the plane of the patch under the ball, see :mod:`.terrain`, applied
