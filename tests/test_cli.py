@@ -268,11 +268,12 @@ def test_bench_sweep_json():
         assert isinstance(rate, (int, float)) and not isinstance(rate, bool) and rate > 0, name
 
 
-@pytest.mark.parametrize("flags", [(), ("--asleep",)], ids=["awake", "asleep"])
+@pytest.mark.parametrize("flags", [(), ("--asleep", "--iterations", "8")], ids=["awake", "asleep-8-sweeps"])
 def test_bench_collide_json(flags):
     proc = ok(run_cli("bench", "collide", "--n", "512", "--steps", "3", "--json", *flags))
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     assert result["n"] == 512 and result["steps"] == 3 and result["asleep"] == bool(flags)
+    assert result["iterations"] == (8 if flags else 4)
     for key in ("ball_steps_per_s", "ms_per_step", "peak_rss_bytes"):
         assert result[key] > 0, key
     _, x = pile_scene(512)  # a cubic lattice of touching balls: its face neighbours are its contacts
@@ -281,6 +282,14 @@ def test_bench_collide_json(flags):
     assert result["contacts_per_ball"] == pytest.approx(lattice_contacts, rel=0.02)  # the pile still stands
     assert result["baselines"]["bare_gather_balls_per_s"] > 0
     assert ("asleep_speedup" in result) == bool(flags)  # with its awake baseline timed in the same run
+
+
+@pytest.mark.parametrize("option, value, fragment", [("--iterations", "0", "[1, 100]"), ("--steps", "0", "> 0 steps"),
+                                                     ("--n", "1", ">= 2 balls")])
+def test_bench_collide_bad_option_exits_2(option, value, fragment):
+    proc = run_cli("bench", "collide", option, value)
+    assert proc.returncode == 2, (proc.stdout, proc.stderr)
+    assert option in proc.stderr and fragment in proc.stderr and "Traceback" not in proc.stderr
 
 
 # ----------------------------------------------------------------------------------------------

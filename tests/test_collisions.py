@@ -55,10 +55,11 @@ def test_grid_neighbours_equal_brute_force(name):
     assert len(expected) > 0
     upper, n_upper = solver.upper.to_numpy(), solver.n_upper.to_numpy()
     lower, n_lower = solver.lower.to_numpy(), solver.n_lower.to_numpy()
-    width = upper.shape[1]
+    assert upper.shape[1] <= 1 << solver.slot_bits
     for i in range(len(x)):  # lists are sorted by id: sums over them do not depend on threads
         assert np.all(np.diff(upper[i, : n_upper[i]]) > 0)
-        owners, entries = np.divmod(lower[i, : n_lower[i]], width)  # where each lower pair is stored
+        slots = lower[i, : n_lower[i]]  # where each lower pair is stored: owner · 2^bits + column
+        owners, entries = slots >> solver.slot_bits, slots & ((1 << solver.slot_bits) - 1)
         assert np.all(np.diff(owners) > 0)
         assert set(owners.tolist()) == {j for (a, j) in expected if a == i and j < i}
         assert np.all(upper[owners, entries] == i)

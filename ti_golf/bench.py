@@ -119,12 +119,12 @@ def to_json(result: dict[str, Any]) -> str:
     return json.dumps(clean(result))
 
 
-def pile_scene(n: int, terrain: bool = False) -> tuple[Scene, np.ndarray]:
+def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scene, np.ndarray]:
     """A dense pile: n balls on a cubic lattice of touching balls in a square bin, resting on the floor.
 
     Every inner ball touches six neighbours. With ``terrain`` the floor is a flat height field
-    instead of a plane (same results, the terrain's cost). Returns the scene (planes, full contact
-    model, air, no sleeping) and the positions (n, 3).
+    instead of a plane (same results, the terrain's cost); ``iterations`` Jacobi sweeps per step.
+    Returns the scene (planes, full contact model, air, no sleeping) and the positions (n, 3).
     """
     from .config import Contact, Plane, TerrainConfig
 
@@ -148,7 +148,7 @@ def pile_scene(n: int, terrain: bool = False) -> tuple[Scene, np.ndarray]:
         air=Air(rho=1.2, gamma=2, C_D=0.3),
         launch=None,
         world=World(dt=0.001, integrator="semi_implicit", ground=False, v_rest=0.0),
-        contact=Contact(e=0.0, mu=0.3, k_p=0.2, iterations=4),
+        contact=Contact(e=0.0, mu=0.3, k_p=0.2, iterations=iterations),
         planes=planes,
         terrain=floor,
     )
@@ -156,7 +156,7 @@ def pile_scene(n: int, terrain: bool = False) -> tuple[Scene, np.ndarray]:
 
 
 def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asleep: bool = False,
-                  log: Callable[[str], None] = print) -> dict[str, Any]:
+                  iterations: int = 4, log: Callable[[str], None] = print) -> dict[str, Any]:
     """Time the full collision step (flight forces, grid, ball–ball and plane contacts) on a dense pile.
 
     With ``terrain`` the floor is a flat height field, and the same pile on the plane floor is
@@ -171,14 +171,14 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
 
     info = ensure_init()
     for floor in (False, True) if terrain else (False,):
-        small, xs = pile_scene(64, floor)
+        small, xs = pile_scene(64, floor, iterations)
         warm = Simulation(small, x=xs)  # compile every kernel before measuring memory and time
         warm.step(3)
         del warm
     base_rss = _rss_bytes()
 
     def timed(floor: bool, sleeping: bool) -> tuple[Any, float]:
-        scene, x = pile_scene(n, floor)
+        scene, x = pile_scene(n, floor, iterations)
         sim = Simulation(scene, x=x)
         sim.step(10)  # settle the first contacts, build the lists
         if sleeping:

@@ -99,6 +99,8 @@ def build_parser() -> argparse.ArgumentParser:
     bc.add_argument("--asleep", action="store_true",
                     help="every ball of the pile at rest, as a settled pile ends up (the pile awake is timed too, "
                          "as baseline)")
+    bc.add_argument("--iterations", type=int, default=4,
+                    help="Jacobi sweeps per step (default 4, the scenes' default; a deep pile at rest needs 8)")
     bc.add_argument("--json", action="store_true", help="end with one line of JSON")
     _runtime_options(bc)
     br = bsub.add_parser("render", help="seconds per off-screen frame of N balls over a terrain")
@@ -332,7 +334,10 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     elif args.bench == "collide":
         if args.n < 2 or args.steps <= 0:
             raise ConfigError("--n" if args.n < 2 else "--steps", None, "must be >= 2 balls and > 0 steps")
-        result = bench_collide(n=args.n, steps=args.steps, terrain=args.terrain, asleep=args.asleep)
+        if not 1 <= args.iterations <= 100:
+            raise ConfigError("--iterations", None, f"must be in [1, 100] (got {args.iterations})")
+        result = bench_collide(n=args.n, steps=args.steps, terrain=args.terrain, asleep=args.asleep,
+                               iterations=args.iterations)
     else:
         if not args.dt > 0:
             raise ConfigError("--dt", None, f"must be > 0 (got {args.dt})")

@@ -9,6 +9,7 @@ import taichi as ti
 from .model import Model
 from .physics import collide, grid
 from .physics.types import vec3
+from .errors import SimulationError
 from .state import State
 
 
@@ -75,6 +76,9 @@ class CollisionSolver:
                 break
             # widen to the longest list found (no power-of-two padding: memory follows the pile)
             self.capacity = tuple(max(c, int(k)) for c, k in zip(self.capacity, longest))
+        if (n - 1) << self.slot_bits >= 2**31:
+            raise SimulationError(f"{n} balls with up to {self.capacity[0]} neighbours each are more than the "
+                                  f"neighbour lists can address (n × 2^{self.slot_bits} must stay below 2^31)")
         grid.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
         if stashed is not None:
             grid.carry_over(stashed, self.upper, self.n_upper, self.lam)
@@ -87,6 +91,12 @@ class CollisionSolver:
             self.projection = ti.ndarray(float, self.upper.shape)
         self.rebuilds += 1
         self._valid = True
+
+    @property
+    def slot_bits(self) -> int:
+        """Low bits of a lower-list entry that hold the pair's column in its owner's upper list (the
+        owner's id is in the bits above; see ``grid.slot_bits``)."""
+        return max(0, int(self.capacity[0] - 1).bit_length())
 
     def pairs(self) -> np.ndarray:
         """The listed neighbour pairs (i, j), i < j, each once: int array of shape (n_pairs, 2)."""

@@ -33,7 +33,7 @@ import taichi as ti
 from ..config import AT_REST, FLYING, OUT_OF_BOUNDS
 from .aero import V, W, X, coefficients, column
 from .contact import pair_impulse, plane_jolt, plane_position, rest_update, warm_impulse
-from .grid import int_table, real_table
+from .grid import int_table, owner_slot, real_table, slot_bits
 from .integrate import IN_FLIGHT, step_free, track_flight
 from .kernels import lane_state
 from .terrain import outside, surface, surface_contact, terrain_position
@@ -112,10 +112,10 @@ def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), 
     P = vec3(0.0)
     calm = rest_time[i]
     quiet = status[i] == AT_REST
-    width = upper.shape[1]
+    bits = slot_bits(upper.shape[1])
     for m in range(n_lower[i]):
         slot = lower[i, m]
-        j, k = slot // width, slot % width  # the pair's owner j < i keeps its λ
+        j, k = owner_slot(slot, bits)  # the pair's owner j < i keeps its λ
         n, gap = pair_geometry(x, radius, i, j)
         P += resting_impulse(status, i, j, n, lam[j, k])
         calm = island_calm(calm, gap, radius[i], status[j], rest_time[j])
@@ -164,10 +164,10 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
     P, T, q_n = vec3(0.0), vec3(0.0), vec3(0.0)
     touching = 0
     r = radius[i]
-    width = upper.shape[1]
+    bits = slot_bits(upper.shape[1])
     for m in range(n_lower[i]):
         slot = lower[i, m]
-        j, k = slot // width, slot % width  # the pair's owner j < i stores it
+        j, k = owner_slot(slot, bits)  # the pair's owner j < i stores it
         Jk = J[j, k]
         P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])
         P -= P_k

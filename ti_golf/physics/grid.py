@@ -146,19 +146,36 @@ def insert_sorted(table: ti.template(), i, n, capacity, j):
         table[i, m] = j
 
 
+@ti.func
+def slot_bits(width):
+    """Bits of a lower-list slot that hold the column k < ``width`` of the pair in its owner's
+    upper list (the owner's id is in the bits above): decoding a slot is then a shift and a mask,
+    not an integer division (which costs tens of cycles, several times per ball and sweep)."""
+    bits = 0
+    while (1 << bits) < width:
+        bits += 1
+    return bits
+
+
+@ti.func
+def owner_slot(slot, bits):
+    """(owner j, column k) of a pair from its lower-list slot ``j · 2^bits + k``."""
+    return slot >> bits, slot & ((1 << bits) - 1)
+
+
 @ti.kernel
 def link_lower(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array):
     """Replace each lower neighbour j of ball i by the slot of the pair in j's upper list,
-    ``j · width + k`` with ``upper[j, k] = i`` (``width`` = upper.shape[1]): the ball that owns a
+    ``j · 2^bits + k`` with ``upper[j, k] = i`` (see :func:`slot_bits`): the ball that owns a
     pair stores its impulse there, and the other ball gathers it from there."""
-    width = upper.shape[1]
+    bits = slot_bits(upper.shape[1])
     for i in range(lower.shape[0]):
         for m in range(n_lower[i]):
             j = lower[i, m]
             slot = -1
             for k in range(n_upper[j]):
                 if upper[j, k] == i:
-                    slot = j * width + k
+                    slot = (j << bits) | k
             lower[i, m] = slot
 
 
