@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
+from .errors import SimulationError
 from .model import Model
 from .physics import collide, grid
 from .physics.types import vec3
-from .errors import SimulationError
 from .state import State
 
 
