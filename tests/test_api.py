@@ -112,3 +112,19 @@ def test_f32_precision_meets_a_looser_accuracy():
     assert out.returncode == 0, out.stderr
     carry = float(out.stdout.split("carry ")[1].split(" m")[0])
     assert carry == pytest.approx(212.243, abs=0.01)  # report Appendix A, f32 round-off ~1e-5
+
+
+def test_plain_compile_restores_the_compiler_setting():
+    # the sweep kernel compiles without Taichi's advanced passes (minutes less on first use); the
+    # setting must come back for every other kernel, also when the launch inside fails
+    import taichi as ti
+
+    from ti_golf.runtime import ensure_init, plain_compile
+
+    ensure_init()
+    cfg = ti.lang.impl.current_cfg()
+    before = cfg.advanced_optimization
+    with pytest.raises(RuntimeError), plain_compile():
+        assert cfg.advanced_optimization is False
+        raise RuntimeError("a failed launch")
+    assert cfg.advanced_optimization == before

@@ -11,6 +11,7 @@ import contextlib
 import io
 import os
 import sys
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")  # keep stdout clean (JSON output)
@@ -97,3 +98,26 @@ def np_float():
     import numpy as np
 
     return np.float64 if ensure_init().precision == "f64" else np.float32
+
+
+@contextlib.contextmanager
+def plain_compile() -> Iterator[None]:
+    """Kernels first launched inside are compiled without Taichi's advanced IR optimisation.
+
+    For the lane-unrolled sweep kernel (``physics.kernels.fly_to_landing``): its body is long
+    straight-line code (every lane of every RK4 stage spelled out), and Taichi's own IR passes
+    grow much faster than linearly with it. Measured cold on the 2-core CPU of the benchmarks
+    (Taichi 1.7.4): the 8-lane f64 kernel took about 80 s to compile and the 16-lane f32 one over
+    6 minutes and 7 GB, against 8 s and 18 s with these passes off; LLVM still optimises the
+    code, and the kernels ran no slower (1.25e5 against 8.5e4 trajectories/s in one pair of f64
+    runs; 2.1e5 in f32 with 16 lanes). The collision step keeps the passes: there they buy about
+    10 % speed for 5x the compile time (27 s against 5 s).
+    """
+    ensure_init()
+    cfg = ti.lang.impl.current_cfg()
+    before = cfg.advanced_optimization
+    cfg.advanced_optimization = False
+    try:
+        yield
+    finally:
+        cfg.advanced_optimization = before

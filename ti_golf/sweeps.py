@@ -13,7 +13,7 @@ import numpy as np
 from .config import Scene, backspin_axis
 from .errors import ConfigError, SimulationError
 from .results import CSV_COLUMNS, Flight
-from .runtime import ensure_init, np_float
+from .runtime import ensure_init, np_float, plain_compile
 from .scene import load_scene
 
 
@@ -143,9 +143,10 @@ def fly(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, record_eve
     traj = np.zeros((n0, n_samples, 3) if record_every else (1, 1, 3), f)
     air = AirParams(rho=a.rho, gamma=a.gamma, C_D=a.C_D, C_M=a.C_M, omega_M=a.omega_M, C_omega=a.C_omega,
                     wind=vec3(*a.wind))
-    kernels.fly_to_landing(air, vec3(*wld.gravity), wld.dt, INTEGRATOR_CODES[wld.integrator], lanes, wld.t_max,
-                           int(record_every), radius, mass, order.astype(np.int32), arr(x0), arr(v0), arr(w0),
-                           landed, apex, t_land, land_x, land_v, traj)
+    with plain_compile():  # minutes less of compiling on first use, see runtime.plain_compile
+        kernels.fly_to_landing(air, vec3(*wld.gravity), wld.dt, INTEGRATOR_CODES[wld.integrator], lanes,
+                               wld.t_max, int(record_every), radius, mass, order.astype(np.int32), arr(x0), arr(v0),
+                               arr(w0), landed, apex, t_land, land_x, land_v, traj)
     out = dict(landed=landed, apex=apex, t_land=t_land, land_x=land_x, land_v=land_v)
     if record_every:
         out["traj"] = traj
