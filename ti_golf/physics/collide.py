@@ -50,7 +50,7 @@ def pair_geometry(x: ti.template(), radius: ti.template(), a, b):
     dist = d.norm()
     n = vec3(0.0)
     if dist > 0.0:
-        n = d / dist
+        n = d * (1.0 / dist)
     return n, dist - radius[a] - radius[b]
 
 
@@ -74,12 +74,13 @@ def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic,
     q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position projection (B.18: ball i moves by
     q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the other way); for a pair apart,
     −gap ≤ 0 (the surface gap [m]: the balls touch while it is below 1 % of a radius)."""
+    inv_mi = 1.0 / mass[i]
     for k in range(n_upper[i]):
         j = upper[i, k]
         Jk = J[i, k]
         n, gap = vec3(Jk[3], Jk[4], Jk[5]), G[i, k]
         ok = n.norm_sqr() > 0.0
-        inv_mi, inv_mj = 1.0 / mass[i], 1.0 / mass[j]
+        inv_mj = 1.0 / mass[j]
         P = vec3(0.0)
         if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
             lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)

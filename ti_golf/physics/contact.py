@@ -45,6 +45,7 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
     P = vec3(0.0)
     touching = 0
     inv_m = inv_m_a + inv_m_b
+    m_eff = 1.0 / inv_m  # the pair's effective mass (m_red·m_a); one division, not one per use
     v_n = (v_a - v_b).dot(n)
     j_n = 0.0
     if gap + h * ti.min(v_n, 0.0) < 0.0:
@@ -54,41 +55,43 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
             # pile, noise must not turn into bounces; a real impact is much larger
             lasting = lam * inv_m > -0.25 * v_n
             if -v_n < v_inelastic or lasting:
-                j_n = -v_n / inv_m
+                j_n = -v_n * m_eff
                 if lasting:
                     j_n *= relax
                 lam += j_n
             elif e == 0.0:
-                j_n = -v_n / inv_m  # a plastic impact (not a supporting contact: not accumulated)
+                j_n = -v_n * m_eff  # a plastic impact (not a supporting contact: not accumulated)
             else:
-                j_n = -(1.0 + e) * v_n / inv_m
+                j_n = -(1.0 + e) * v_n * m_eff
     if v_n > 0.0 and lam > 0.0:
-        j_n = -ti.min(lam, relax * v_n / inv_m)
+        j_n = -ti.min(lam, relax * v_n * m_eff)
         lam += j_n
     if j_n != 0.0:
         P = j_n * n
         if j_n > 0.0:
-            P += friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, inv_m / relax, mu * j_n)
+            P += friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, relax * m_eff, mu * j_n)
     return P, lam, touching
 
 
 @ti.func
-def friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, inv_m, bound):
+def friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff, bound):
     """Friction impulse on a [N·s], at most ``bound`` and at most what stops the contact-point slip
-    (solid spheres: an impulse P changes the slip by (7/2)·(1/m_a + 1/m_b)·P)."""
+    (solid spheres: an impulse P changes the slip by (7/2)·(1/m_a + 1/m_b)·P, so the stopping
+    impulse is (2/7)·m_eff·slip with the effective mass m_eff = 1/(1/m_a + 1/m_b))."""
     slip = v_a + w_a.cross(-r_a * n) - v_b - w_b.cross(r_b * n)
     slip_t = slip - slip.dot(n) * n
     s = slip_t.norm()
     P = vec3(0.0)
     if s > _TINY:
-        P = -ti.min(bound, s / (3.5 * inv_m)) * (slip_t / s)
+        P = -ti.min(bound, s * m_eff * (2.0 / 7.0)) * (slip_t * (1.0 / s))
     return P
 
 
 @ti.func
-def warm_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, inv_m, lam, mu):
-    """The impulse that re-applies a pair's resting normal impulse ``lam`` with its friction."""
-    return lam * n + friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, inv_m, mu * lam)
+def warm_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff, lam, mu):
+    """The impulse that re-applies a pair's resting normal impulse ``lam`` with its friction
+    (``m_eff``: the pair's effective mass, see :func:`friction_impulse`)."""
+    return lam * n + friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff, mu * lam)
 
 
 @ti.func
