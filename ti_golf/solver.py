@@ -76,9 +76,9 @@ class CollisionSolver:
                 break
             # widen to the longest list found (no power-of-two padding: memory follows the pile)
             self.capacity = tuple(max(c, int(k)) for c, k in zip(self.capacity, longest))
-        if (n - 1) << self.slot_bits >= 2**31:
+        if n << self.slot_bits > 2**31:  # the largest slot, (n − 1)·2^bits + 2^bits − 1, must fit an i32
             raise SimulationError(f"{n} balls with up to {self.capacity[0]} neighbours each are more than the "
-                                  f"neighbour lists can address (n × 2^{self.slot_bits} must stay below 2^31)")
+                                  f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)")
         grid.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
         if stashed is not None:
             grid.carry_over(stashed, self.upper, self.n_upper, self.lam)
