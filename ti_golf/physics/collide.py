@@ -100,7 +100,7 @@ def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic,
 @ti.func
 def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), status: ti.template(),
                rest_time: ti.template(), upper: ti.template(), n_upper: ti.template(), lower: ti.template(),
-               n_lower: ti.template(), lam: ti.template(), J: ti.template(), G: ti.template()):
+               n_lower: ti.template(), bits, lam: ti.template(), J: ti.template(), G: ti.template()):
     """Δv [m/s] of ball i from last step's resting impulses λ of its ball pairs, each along the
     pair's normal at the start of the step, summed in id order (lower then upper). A normal
     impulse gives no spin; friction is left to the sweeps. Also stores the geometry of the pairs
@@ -113,7 +113,6 @@ def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), 
     P = vec3(0.0)
     calm = rest_time[i]
     quiet = status[i] == AT_REST
-    bits = slot_bits(upper.shape[1])
     for m in range(n_lower[i]):
         slot = lower[i, m]
         j, k = owner_slot(slot, bits)  # the pair's owner j < i keeps its λ
@@ -154,7 +153,8 @@ def resting_impulse(status: ti.template(), i, j, n, lam):
 
 @ti.func
 def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), upper: ti.template(),
-           n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), J: ti.template(), G: ti.template()):
+           n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits, J: ti.template(),
+           G: ti.template()):
     """What ball i gets from all its pairs, summed in id order (lower then upper): (Δv [m/s],
     Δω [rad/s], and with ``final`` the position projection Δx [m] and whether it touches a ball:
     a gap below 1 % of its radius).
@@ -165,7 +165,6 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
     P, T, q_n = vec3(0.0), vec3(0.0), vec3(0.0)
     touching = 0
     r = radius[i]
-    bits = slot_bits(upper.shape[1])
     for m in range(n_lower[i]):
         slot = lower[i, m]
         j, k = owner_slot(slot, bits)  # the pair's owner j < i stores it
@@ -288,6 +287,7 @@ def collision_step(
     ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` and ``G`` (the pairs'
     impulses and projections, see :func:`owned_pairs`) have the shape of ``upper``."""
     v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
+    bits = slot_bits(upper.shape[1])  # lower-list slots: owner · 2^bits + column (once, not per ball)
     # 1. free flight to x_free, v_free, then the warm start: last step's resting impulses (ball
     # pairs, planes and terrain) applied again, so a stack starts the step supported
     for i in range(x.shape[0]):
@@ -301,7 +301,8 @@ def collision_step(
                 landed[i], apex[i], t_land[i], land_x[i], land_v[i] = track_flight(
                     xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i], land_v[i])
         x_free[i], v_free[i] = x1, v1
-        dv, calm[i] = warm_start(i, x, radius, mass, status, rest_time, upper, n_upper, lower, n_lower, lam, J, G)
+        dv, calm[i] = warm_start(i, x, radius, mass, status, rest_time, upper, n_upper, lower, n_lower, bits,
+                                 lam, J, G)
         if status[i] != OUT_OF_BOUNDS and calm[i] != QUIET:
             v1 += dv
             v1, w1 = surface_impulses(i, True, v1, w1, contact, h, v_inelastic, radius, plane_p, plane_n, terrain,
@@ -321,7 +322,7 @@ def collision_step(
                 if ti.static(last):
                     x_free[i] = x[i]
             elif status[i] != OUT_OF_BOUNDS:
-                dv, dw, dx, touching = gather(i, last, radius, mass, upper, n_upper, lower, n_lower, J, G)
+                dv, dw, dx, touching = gather(i, last, radius, mass, upper, n_upper, lower, n_lower, bits, J, G)
                 v_new, w_new = surface_impulses(i, False, v[i] + dv, w[i] + dw, contact, h, v_inelastic, radius,
                                                 plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
                                                 x, x_free, lam_plane)
