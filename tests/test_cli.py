@@ -24,6 +24,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 import ti_golf
 from ti_golf.bench import pile_scene
+from ti_golf.solver import SERIAL_MAX_BALLS
 from ti_golf.config import SCHEMA, TOP_LEVEL
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -268,20 +269,25 @@ def test_bench_sweep_json():
         assert isinstance(rate, (int, float)) and not isinstance(rate, bool) and rate > 0, name
 
 
-@pytest.mark.parametrize("flags", [(), ("--asleep", "--iterations", "8")], ids=["awake", "asleep-8-sweeps"])
-def test_bench_collide_json(flags):
-    proc = ok(run_cli("bench", "collide", "--n", "512", "--steps", "3", "--json", *flags))
+@pytest.mark.parametrize("n, flags", [(512, ()), (512, ("--asleep", "--iterations", "8")), (64, ())],
+                         ids=["awake", "asleep-8-sweeps", "serial"])
+def test_bench_collide_json(n, flags):
+    proc = ok(run_cli("bench", "collide", "--n", str(n), "--steps", "3", "--json", *flags))
     result = json.loads(proc.stdout.strip().splitlines()[-1])
-    assert result["n"] == 512 and result["steps"] == 3 and result["asleep"] == bool(flags)
+    assert result["n"] == n and result["steps"] == 3 and result["asleep"] == bool(flags)
     assert result["iterations"] == (8 if flags else 4)
     for key in ("ball_steps_per_s", "ms_per_step", "peak_rss_bytes"):
         assert result[key] > 0, key
-    _, x = pile_scene(512)  # a cubic lattice of touching balls: its face neighbours are its contacts
+    _, x = pile_scene(n)  # a cubic lattice of touching balls: its face neighbours are its contacts
     d = np.linalg.norm(x[:, None] - x[None], axis=-1)
-    lattice_contacts = np.count_nonzero((d > 0) & (d < 2 * 0.02 * 1.001)) / 512
+    lattice_contacts = np.count_nonzero((d > 0) & (d < 2 * 0.02 * 1.001)) / n
     assert result["contacts_per_ball"] == pytest.approx(lattice_contacts, rel=0.02)  # the pile still stands
     assert result["baselines"]["bare_gather_balls_per_s"] > 0
     assert ("asleep_speedup" in result) == bool(flags)  # with its awake baseline timed in the same run
+    # few balls are stepped serially, with one parallel launch per step timed in the same run
+    assert result["serial"] == (n <= SERIAL_MAX_BALLS) and ("serial_speedup" in result) == result["serial"]
+    if result["serial"]:
+        assert result["baselines"]["parallel_ms_per_step"] > 0
 
 
 @pytest.mark.parametrize("option, value, fragment", [("--iterations", "0", "[1, 100]"), ("--steps", "0", "> 0 steps"),

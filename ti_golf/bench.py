@@ -162,24 +162,35 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     With ``terrain`` the floor is a flat height field, and the same pile on the plane floor is
     timed in the same run as the baseline (``terrain_overhead``: relative extra time per step).
     With ``asleep`` every ball of the pile is at rest, as a settled pile ends up, and the same pile
-    awake is timed in the same run as the baseline (``asleep_speedup``).
+    awake is timed in the same run as the baseline (``asleep_speedup``). A pile small enough to be
+    stepped serially (``serial``, see ``solver.SERIAL_MAX_BALLS``) is also timed stepped in
+    parallel, one launch per step, as the baseline (``serial_speedup``).
     """
     import resource
 
     from .runtime import ensure_init
     from .sim import Simulation
+    from .solver import CollisionSolver, steps_serially
 
     info = ensure_init()
+    serial = steps_serially(n)
+
+    def pile(m: int, floor: bool, parallel: bool = False) -> Simulation:
+        scene, x = pile_scene(m, floor, iterations)
+        sim = Simulation(scene, x=x)
+        if parallel:
+            sim.solver = CollisionSolver(sim.model, serial=False)
+        return sim
+
     for floor in (False, True) if terrain else (False,):
-        small, xs = pile_scene(64, floor, iterations)
-        warm = Simulation(small, x=xs)  # compile every kernel before measuring memory and time
-        warm.step(3)
-        del warm
+        for parallel in (False, True) if serial else (True,):  # compile every kernel before timing
+            warm = pile(64, floor, parallel)
+            warm.step(3)
+            del warm
     base_rss = _rss_bytes()
 
-    def timed(floor: bool, sleeping: bool) -> tuple[Any, float]:
-        scene, x = pile_scene(n, floor, iterations)
-        sim = Simulation(scene, x=x)
+    def timed(floor: bool, sleeping: bool, parallel: bool = False) -> tuple[Any, float]:
+        sim = pile(n, floor, parallel)
         sim.step(10)  # settle the first contacts, build the lists
         if sleeping:
             put_to_sleep(sim)
@@ -197,6 +208,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     gc.collect()
     plane_seconds = timed(False, asleep)[1] if terrain else None  # the baselines, timed in the same run
     awake_seconds = timed(terrain, False)[1] if asleep else None
+    parallel_seconds = timed(terrain, asleep, parallel=True)[1] if serial else None
     gather_rate = bare_gather_rate(xn)
     result = {
         "benchmark": "collide",
@@ -209,6 +221,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         "ms_per_step": 1e3 * seconds / steps,
         "contacts_per_ball": 2 * touching / n,
         "list_rebuilds": rebuilds,
+        "serial": serial,  # stepped serially, many steps per launch (few balls; see solver.SERIAL_MAX_BALLS)
         "floor": "terrain" if terrain else "plane",
         "asleep": asleep,
         "peak_rss_bytes": peak,
@@ -224,6 +237,10 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         result["baselines"]["awake_ms_per_step"] = 1e3 * awake_seconds / steps
         result["asleep_speedup"] = awake_seconds / seconds
         log(f"the pile asleep vs awake: {result['asleep_speedup']:.2f}x faster per step")
+    if parallel_seconds is not None:
+        result["baselines"]["parallel_ms_per_step"] = 1e3 * parallel_seconds / steps
+        result["serial_speedup"] = parallel_seconds / seconds
+        log(f"stepped serially vs one parallel launch per step: {result['serial_speedup']:.1f}x faster per step")
     log(f"ti_golf collide: {n} balls, {result['ms_per_step']:.2f} ms/step, {result['ball_steps_per_s']:.3g} ball-steps/s, "
         f"{result['contacts_per_ball']:.2f} contacts/ball, peak RSS {peak / 2**20:.0f} MiB "
         f"({result['bytes_per_ball_above_baseline']:.0f} B/ball above baseline), arch={info.arch}, {info.precision}")

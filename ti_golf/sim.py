@@ -159,8 +159,7 @@ class Simulation:
 
         m, s, w = self.model, self.state, self.scene.world
         if self.solver is not None:
-            for _ in range(int(n)):
-                self.solver.step(m, s)
+            self.solver.advance(m, s, int(n))
         else:
             kernels.advance(
                 m.air, m.contact, m.gravity, m.dt, m.integrator, int(n), s.t, w.v_rest, w.t_rest, m.radius, m.mass,

@@ -10,7 +10,22 @@ from .errors import SimulationError
 from .model import Model
 from .physics import collide, grid
 from .physics.types import vec3
+from .runtime import ensure_init, plain_compile
 from .state import State
+
+
+SERIAL_MAX_BALLS = 256
+"""Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
+(``serial`` in ``collide.collision_step``): for so few balls the parallel step is mostly launch overhead.
+Measured on the 2-core benchmark machine: 0.02 against 2.1 ms per step for 16 balls in a pile,
+0.25 against 1.7 ms for 256; and for 256 balls flying apart fast (lists rebuilt every step, which
+costs n² distance tests here), 0.7 against 2.6 ms; for 512 such balls the parallel step wins."""
+
+
+def steps_serially(n: int) -> bool:
+    """Whether :class:`CollisionSolver` steps ``n`` balls serially by default: few balls, on the CPU
+    (a GPU would run the serial loop on one slow thread)."""
+    return n <= SERIAL_MAX_BALLS and ensure_init().arch in ("x64", "arm64")
 
 
 class CollisionSolver:
@@ -21,15 +36,21 @@ class CollisionSolver:
         skin: neighbour-list skin [m] (``contact.skin`` × largest radius).
         capacity: widths of the (upper, lower) neighbour tables (they grow when a list overflows).
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
+        serial: whether steps run serially, many per launch, with the lists rebuilt in the kernel
+            by testing every pair (default: :func:`steps_serially`); else one parallel launch
+            per step, with the hash grid. Both give the same lists and bit-identical steps.
     """
 
-    def __init__(self, model: Model, capacity: int = 1) -> None:
+    def __init__(self, model: Model, capacity: int = 1, serial: bool | None = None) -> None:
         self._model = model
         n = model.n
         r_max = float(model.radius_np.max())
         self.skin = model.scene.contact.skin * r_max
         self.cell = 2.0 * r_max + self.skin
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
+        self.serial = steps_serially(n) if serial is None else bool(serial)
+        if self.serial:  # tables wide enough for every other ball: the kernel's lists cannot overflow
+            capacity = max(capacity, n - 1, 1)
         self.capacity = (capacity, capacity)
         self.rebuilds = 0
         self.bucket = ti.ndarray(ti.i32, n)
@@ -105,13 +126,39 @@ class CollisionSolver:
         i = np.broadcast_to(np.arange(len(count))[:, None], upper.shape)
         return np.stack([i[listed], upper[listed]], axis=1)
 
-    def step(self, model: Model, state: State) -> None:
-        """Advance all balls by one step of ``model.dt``."""
+    def advance(self, model: Model, state: State, steps: int) -> None:
+        """Advance all balls by ``steps`` steps of ``model.dt``: serially in one launch, or one
+        parallel launch per step (see ``serial``)."""
+        if self.serial:
+            self._advance_serially(model, state, int(steps))
+        else:
+            for _ in range(int(steps)):
+                self._step_in_parallel(model, state)
+
+    def _advance_serially(self, model: Model, state: State, steps: int) -> None:
+        width = max(1, state.n - 1)
+        if not self._valid or self.upper.shape[1] < width:  # first step, or lists built narrower since
+            self.capacity = (width, width)
+            self.build(state)
+            grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
+        with plain_compile():  # 6 s against 50 s of compiling on first use, and as fast (see runtime.plain_compile)
+            self.rebuilds += collide.collision_step(*self._arguments(model, state), True, steps, self.skin)
+        for _ in range(steps):
+            state.t += model.dt  # as one step at a time adds it, to the same round-off
+
+    def _step_in_parallel(self, model: Model, state: State) -> None:
         if not self._valid or self._rebuild:
             self.build(state)
-        m, s, w = model, state, model.scene.world
         grid.clear(self.flag)
-        collide.collision_step(
+        collide.collision_step(*self._arguments(model, state), False, 1, self.skin)
+        state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
+        state.t += model.dt
+        self._rebuild = bool(self.flag.to_numpy()[0])
+
+    def _arguments(self, m: Model, s: State) -> tuple:
+        """The arguments of ``collide.collision_step`` before ``serial``."""
+        w = m.scene.world
+        return (
             m.air, m.contact, m.gravity, m.dt, m.integrator, m.scene.contact.iterations, s.t, 0.5 * self.skin,
             w.v_rest, w.t_rest, m.radius, m.mass, m.launch_height, m.plane_p, m.plane_n, m.terrain_params, m.terrain_h,
             m.terrain_cells, m.surface_table,
@@ -119,6 +166,3 @@ class CollisionSolver:
             s.x, s.v, s.w, s.status, s.rest_time, self.x_free, self.v_free, self.calm, self.impulse, self.projection,
             s.landed, s.apex, s.t_land, s.land_x, s.land_v, self.flag,
         )
-        s.x, self.x_free = self.x_free, s.x  # the kernel left the new positions in x_free
-        s.t += m.dt
-        self._rebuild = bool(self.flag.to_numpy()[0])

@@ -26,6 +26,11 @@ The kernel's top-level loops run one after another, each over all balls in paral
    a plane's time of impact), position projection of overlaps (B.18), status, rest detection and
    out-of-bounds (off the terrain), and whether the neighbour lists must be rebuilt before the
    next step.
+
+:func:`collision_step` launches these loops in parallel, one step per launch; for a few balls,
+its ``serial`` variant runs the same loops (:func:`step_balls`) one ball after another, many
+steps per launch, and rebuilds the lists itself by testing every pair: the same step, bit for
+bit, without the launch overhead that dominates a step of a few balls.
 """
 
 import taichi as ti
@@ -33,7 +38,7 @@ import taichi as ti
 from ..config import AT_REST, FLYING, OUT_OF_BOUNDS
 from .aero import V, W, X, coefficients, column
 from .contact import pair_impulse, plane_jolt, plane_position, rest_update, warm_impulse
-from .grid import int_table, owner_slot, real_table, slot_bits
+from .grid import int_table, owner_slot, real_table, relist_all_pairs, slot_bits
 from .integrate import IN_FLIGHT, step_free, track_flight
 from .kernels import lane_state
 from .terrain import outside, surface, surface_contact, terrain_position
@@ -278,14 +283,70 @@ def collision_step(
     land_x: vec3_array,
     land_v: vec3_array,
     flag: int_array,
-):
-    """Advance all balls by one step of ``h`` [s] (``iterations`` ≥ 1 Jacobi sweeps). On return
-    ``flag[0]`` is 1 when some ball may come within reach of a ball missing from its neighbour
-    lists next step (rebuild the lists). New positions are left in ``x_free`` (swap it with ``x``).
+    serial: ti.template(),
+    steps: ti.i32,
+    skin: float,
+) -> ti.i32:
+    """Advance all balls by ``steps`` steps of ``h`` [s] (``iterations`` ≥ 1 Jacobi sweeps).
+
+    In parallel (``serial`` False) the kernel takes exactly one step (``steps`` and ``skin`` are
+    not read; it returns 0). On return ``flag[0]`` is 1 when some ball may come within reach of a
+    ball missing from its neighbour lists next step (rebuild the lists), and the new positions
+    are left in ``x_free`` (swap it with ``x``).
+
+    With ``serial`` the balls are stepped one after another, ``steps`` steps in one launch: for
+    scenes so small that a launch (tens of arguments, about 0.5 ms from Python) and rebuilding the
+    lists through the grid's kernels cost far more than the step itself. Each step is the parallel
+    one on the same data, the time advanced by ``h`` from ``t0`` as the caller advances it; the
+    neighbour lists are rebuilt in the kernel by testing every pair (:func:`grid.relist_all_pairs`,
+    ``skin`` [m]) whenever ``flag[0]`` asks for it at the start of a step, so the tables must be
+    n − 1 wide; new positions are copied to ``x`` after every step. Returns how many times the
+    lists were rebuilt.
+
     With a terrain (``terrain.on``; ``heights`` its grid, else any 2×2 array; ``lam_plane`` then
     has a column more than there are planes) a ball that leaves the grid's extent or falls below
     ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` and ``G`` (the pairs'
     impulses and projections, see :func:`owned_pairs`) have the shape of ``upper``."""
+    rebuilt = 0
+    if ti.static(not serial):
+        step_balls(
+            air, contact, gravity, h, integrator, iterations, t0, half_skin, v_rest, t_rest, radius, mass,
+            launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper, n_upper, lower,
+            n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J, G, landed, apex,
+            t_land, land_x, land_v, flag,
+        )
+    else:
+        t = t0
+        ti.loop_config(serialize=True)
+        for _ in range(steps):
+            if flag[0] != 0:
+                relist_all_pairs(x, radius, skin, upper, n_upper, lower, n_lower, x_at_build, lam, J)
+                rebuilt += 1
+                flag[0] = 0
+            step_balls(
+                air, contact, gravity, h, integrator, iterations, t, half_skin, v_rest, t_rest, radius, mass,
+                launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper, n_upper, lower,
+                n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J, G, landed,
+                apex, t_land, land_x, land_v, flag,
+            )
+            for i in range(x.shape[0]):
+                x[i] = x_free[i]
+            t += h
+    return rebuilt
+
+
+@ti.func
+def step_balls(air: ti.template(), contact: ti.template(), gravity: ti.template(), h, integrator: ti.template(),
+               iterations: ti.template(), t0, half_skin, v_rest, t_rest, radius: ti.template(), mass: ti.template(),
+               launch_height: ti.template(), plane_p: ti.template(), plane_n: ti.template(), terrain: ti.template(),
+               heights: ti.template(), terrain_cells: ti.template(), surface_table: ti.template(),
+               upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(),
+               x_at_build: ti.template(), lam: ti.template(), lam_plane: ti.template(), x: ti.template(),
+               v: ti.template(), w: ti.template(), status: ti.template(), rest_time: ti.template(),
+               x_free: ti.template(), v_free: ti.template(), calm: ti.template(), J: ti.template(), G: ti.template(),
+               landed: ti.template(), apex: ti.template(), t_land: ti.template(), land_x: ti.template(),
+               land_v: ti.template(), flag: ti.template()):
+    """One step of all balls, the body of :func:`collision_step` (see there) in parallel and serially."""
     v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
     bits = slot_bits(upper.shape[1])  # lower-list slots: owner · 2^bits + column (once, not per ball)
     # 1. free flight to x_free, v_free, then the warm start: last step's resting impulses (ball
@@ -332,6 +393,8 @@ def collision_step(
                     finish(i, v_new, w_new, dx, touching, contact, h, half_skin, v_rest, t_rest, radius, plane_p,
                            plane_n, terrain, heights, x_at_build, x, v, w, status, rest_time, calm, x_free, v_free,
                            flag)
+
+
 
 
 @ti.func

@@ -165,26 +165,41 @@ def owner_slot(slot, bits):
 
 @ti.kernel
 def link_lower(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array):
+    """Replace each lower neighbour j of every ball by the slot of the pair in j's upper list
+    (see :func:`link_ball`)."""
+    bits = slot_bits(upper.shape[1])
+    for i in range(lower.shape[0]):
+        link_ball(i, bits, upper, n_upper, lower, n_lower)
+
+
+@ti.func
+def link_ball(i, bits, upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template()):
     """Replace each lower neighbour j of ball i by the slot of the pair in j's upper list,
     ``j · 2^bits + k`` with ``upper[j, k] = i`` (see :func:`slot_bits`): the ball that owns a
     pair stores its impulse there, and the other ball gathers it from there."""
-    bits = slot_bits(upper.shape[1])
-    for i in range(lower.shape[0]):
-        for m in range(n_lower[i]):
-            j = lower[i, m]
-            slot = -1
-            for k in range(n_upper[j]):
-                if upper[j, k] == i:
-                    slot = (j << bits) | k
-            lower[i, m] = slot
+    for m in range(n_lower[i]):
+        j = lower[i, m]
+        slot = -1
+        for k in range(n_upper[j]):
+            if upper[j, k] == i:
+                slot = (j << bits) | k
+        lower[i, m] = slot
 
 
 @ti.kernel
 def stash(upper: int_table, n_upper: int_array, lam: real_table, scratch: vec6_table):
-    """Keep every pair's (neighbour id, accumulated impulse) in ``scratch`` (a table of upper's shape
-    that is free between steps: the pair impulses) so the lists can be rebuilt in place; the id is
-    split in two halves below 2¹² so it is exact in f32 as well. Unused slots get the id −1."""
-    for i, k in scratch:
+    """Keep every pair's (neighbour id, accumulated impulse) in ``scratch`` (see :func:`stash_ball`)."""
+    for i in range(scratch.shape[0]):
+        stash_ball(i, upper, n_upper, lam, scratch)
+
+
+@ti.func
+def stash_ball(i, upper: ti.template(), n_upper: ti.template(), lam: ti.template(), scratch: ti.template()):
+    """Keep the (neighbour id, accumulated impulse) of every pair that ball i owns in row i of
+    ``scratch`` (a table of upper's shape that is free between steps: the pair impulses) so the
+    lists can be rebuilt in place; the id is split in two halves below 2¹² so it is exact in f32
+    as well. Unused slots get the id −1."""
+    for k in range(scratch.shape[1]):
         j = -1
         if k < n_upper[i]:
             j = upper[i, k]
@@ -193,22 +208,60 @@ def stash(upper: int_table, n_upper: int_array, lam: real_table, scratch: vec6_t
 
 @ti.kernel
 def carry_over(stashed: vec6_table, upper: int_table, n_upper: int_array, lam: real_table):
-    """Carry each pair's accumulated impulse from the stashed old lists (see :func:`stash`) to the
-    new upper lists (both sorted by id: a merge per ball); new pairs start at zero."""
+    """Carry each pair's accumulated impulse from the stashed old lists to the new ones (see :func:`carry_ball`)."""
     for i in range(n_upper.shape[0]):
-        k_old = 0
-        n_old = stashed.shape[1]
-        for k in range(n_upper[i]):
-            j = upper[i, k]
-            while k_old < n_old and stashed_id(stashed, i, k_old) >= 0 and stashed_id(stashed, i, k_old) < j:
-                k_old += 1
-            value = 0.0
-            if k_old < n_old and stashed_id(stashed, i, k_old) == j:
-                value = stashed[i, k_old][0]
-            lam[i, k] = value
+        carry_ball(i, stashed, upper, n_upper, lam)
+
+
+@ti.func
+def carry_ball(i, stashed: ti.template(), upper: ti.template(), n_upper: ti.template(), lam: ti.template()):
+    """Carry each accumulated impulse of ball i's pairs from the stashed old list (see
+    :func:`stash_ball`) to its new upper list (both sorted by id: a merge); new pairs start at zero."""
+    k_old = 0
+    n_old = stashed.shape[1]
+    for k in range(n_upper[i]):
+        j = upper[i, k]
+        while k_old < n_old and stashed_id(stashed, i, k_old) >= 0 and stashed_id(stashed, i, k_old) < j:
+            k_old += 1
+        value = 0.0
+        if k_old < n_old and stashed_id(stashed, i, k_old) == j:
+            value = stashed[i, k_old][0]
+        lam[i, k] = value
 
 
 @ti.func
 def stashed_id(stashed: ti.template(), i, k):
-    """The neighbour id kept by :func:`stash` in slot (i, k) (−1: unused)."""
+    """The neighbour id kept by :func:`stash_ball` in slot (i, k) (−1: unused)."""
     return ti.cast(stashed[i, k][1], ti.i32) * 4096 + ti.cast(stashed[i, k][2], ti.i32)
+
+
+@ti.func
+def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, upper: ti.template(), n_upper: ti.template(),
+                     lower: ti.template(), n_lower: ti.template(), x_at_build: ti.template(), lam: ti.template(),
+                     scratch: ti.template()):
+    """Rebuild the neighbour lists of a few balls in place without a grid, by testing every pair:
+    the lists, slots and carried-over impulses that ``build_neighbours``, ``link_lower`` and
+    ``carry_over`` give, in O(n²) work. The tables must be n − 1 wide (no list can overflow).
+    Meant for a serial loop (the ``serial`` variant of ``collide.collision_step``); ``scratch``
+    as in :func:`stash_ball`."""
+    for i in range(x.shape[0]):
+        stash_ball(i, upper, n_upper, lam, scratch)
+    for i in range(x.shape[0]):
+        xi, ri = x[i], radius[i]
+        n_up, n_low = 0, 0
+        for j in range(x.shape[0]):  # in id order: the lists come out sorted
+            reach = ri + radius[j] + skin
+            if j != i and (x[j] - xi).norm_sqr() < reach * reach:  # the test of build_neighbours
+                if j > i:
+                    upper[i, n_up] = j
+                    n_up += 1
+                else:
+                    lower[i, n_low] = j
+                    n_low += 1
+        n_upper[i], n_lower[i] = n_up, n_low
+        x_at_build[i] = xi
+    bits = slot_bits(upper.shape[1])
+    for i in range(x.shape[0]):
+        link_ball(i, bits, upper, n_upper, lower, n_lower)
+    for i in range(x.shape[0]):
+        carry_ball(i, scratch, upper, n_upper, lam)
