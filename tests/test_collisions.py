@@ -316,6 +316,20 @@ def test_serial_steps_equal_parallel_steps(name, steps):
         assert serial[0] == 10 and np.any(serial[4] != AT_REST)  # the column slept, the falling ball woke it
 
 
+@pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])
+def test_balls_moved_between_steps_collide_in_the_next_step(serial):
+    # assigning sim.x moves balls outside a step: the neighbour lists built before must not hide a
+    # pair that now touches. Ball 1 is put 0.1 mm from ball 0, closing at 1 m/s, so it meets ball 0
+    # within the next 0.5 ms step; with e = 1 and equal masses they exchange velocities (B.9) in it
+    sim = tg.Simulation(scene("contact.e=1"), x=[[0.0, 1.0, 0.0], [10.0, 1.0, 0.0]])
+    sim.solver = CollisionSolver(sim.model, serial=serial)
+    sim.step(3)  # lists built with the balls 10 m apart: no pair
+    sim.x = [[0.0, 1.0, 0.0], [0.0401, 1.0, 0.0]]
+    sim.v = [[0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]
+    sim.step(1)
+    np.testing.assert_allclose(sim.v, [[-1.0, 0, 0], [0, 0, 0]], atol=1e-12)
+
+
 def test_runs_are_deterministic():
     def run():
         sim = _gas(scene("contact.e=0.6", "contact.mu=0.4", "world.gravity=[0,-9.81,0]", "world.ground=true"), n=800)

@@ -117,6 +117,8 @@ class Simulation:
         if name != "x":
             self._wake()
         getattr(self.state, name).from_numpy(arr)
+        if name == "x" and self.solver is not None:
+            self.solver.invalidate()  # moved balls may now touch balls missing from their lists
 
     x = property(lambda self: self._vectors("x"), lambda self, a: self._assign("x", a),
                  doc="Ball centres [m], a copy, shape (N, 3); assign to move balls.")

@@ -113,6 +113,12 @@ class CollisionSolver:
         self.rebuilds += 1
         self._valid = True
 
+    def invalidate(self) -> None:
+        """Rebuild the neighbour lists before the next step (balls were moved between steps), each
+        pair that stays listed keeping its accumulated impulse."""
+        self._rebuild = True
+        self.flag.from_numpy(np.array([1, 0], dtype=np.int32))  # the serial kernel's request
+
     @property
     def slot_bits(self) -> int:
         """Low bits of a lower-list entry that hold the pair's column in its owner's upper list (the
