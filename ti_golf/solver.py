@@ -148,7 +148,8 @@ class CollisionSolver:
             self.build(state)
             grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
         with plain_compile():  # 6 s against 50 s of compiling on first use, and as fast (see runtime.plain_compile)
-            self.rebuilds += collide.collision_step(*self._arguments(model, state), True, steps, self.skin)
+            self.rebuilds += collide.collision_step(*self._arguments(model, state), True, steps, self.skin,
+                                                     model.dt)
         for _ in range(steps):
             state.t += model.dt  # as one step at a time adds it, to the same round-off
 
@@ -156,7 +157,7 @@ class CollisionSolver:
         if not self._valid or self._rebuild:
             self.build(state)
         grid.clear(self.flag)
-        collide.collision_step(*self._arguments(model, state), False, 1, self.skin)
+        collide.collision_step(*self._arguments(model, state), False, 1, self.skin, model.dt)
         state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
         state.t += model.dt
         self._rebuild = bool(self.flag.to_numpy()[0])

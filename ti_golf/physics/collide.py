@@ -42,8 +42,8 @@ from .grid import int_table, owner_slot, real_table, relist_all_pairs, slot_bits
 from .integrate import IN_FLIGHT, step_free, track_flight
 from .kernels import lane_state
 from .terrain import outside, surface, surface_contact, terrain_position
-from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, vec3,
-                    vec3_array, vec6_table)
+from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, real,
+                    vec3, vec3_array, vec6_table)
 
 QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
 
@@ -242,7 +242,7 @@ def collision_step(
     h: float,
     integrator: ti.template(),
     iterations: ti.template(),
-    t0: float,
+    t0: ti.f64,
     half_skin: float,
     v_rest: float,
     t_rest: float,
@@ -286,6 +286,7 @@ def collision_step(
     serial: ti.template(),
     steps: ti.i32,
     skin: float,
+    dt: ti.f64,
 ) -> ti.i32:
     """Advance all balls by ``steps`` steps of ``h`` [s] (``iterations`` ≥ 1 Jacobi sweeps).
 
@@ -297,7 +298,8 @@ def collision_step(
     With ``serial`` the balls are stepped one after another, ``steps`` steps in one launch: for
     scenes so small that a launch (tens of arguments, about 0.5 ms from Python) and rebuilding the
     lists through the grid's kernels cost far more than the step itself. Each step is the parallel
-    one on the same data, the time advanced by ``h`` from ``t0`` as the caller advances it; the
+    one on the same data, the time [s] advanced by ``dt`` (``h`` before rounding to the float
+    type) from ``t0`` in f64, as the caller advances it between parallel steps; the
     neighbour lists are rebuilt in the kernel by testing every pair (:func:`grid.relist_all_pairs`,
     ``skin`` [m]) whenever ``flag[0]`` asks for it at the start of a step, so the tables must be
     n − 1 wide; new positions are copied to ``x`` after every step. Returns how many times the
@@ -310,10 +312,10 @@ def collision_step(
     rebuilt = 0
     if ti.static(not serial):
         step_balls(
-            air, contact, gravity, h, integrator, iterations, t0, half_skin, v_rest, t_rest, radius, mass,
-            launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper, n_upper, lower,
-            n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J, G, landed, apex,
-            t_land, land_x, land_v, flag,
+            air, contact, gravity, h, integrator, iterations, ti.cast(t0, real), half_skin, v_rest, t_rest, radius,
+            mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper, n_upper,
+            lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J, G, landed,
+            apex, t_land, land_x, land_v, flag,
         )
     else:
         t = t0
@@ -324,14 +326,14 @@ def collision_step(
                 rebuilt += 1
                 flag[0] = 0
             step_balls(
-                air, contact, gravity, h, integrator, iterations, t, half_skin, v_rest, t_rest, radius, mass,
-                launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper, n_upper, lower,
-                n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J, G, landed,
-                apex, t_land, land_x, land_v, flag,
+                air, contact, gravity, h, integrator, iterations, ti.cast(t, real), half_skin, v_rest, t_rest,
+                radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper,
+                n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm,
+                J, G, landed, apex, t_land, land_x, land_v, flag,
             )
             for i in range(x.shape[0]):
                 x[i] = x_free[i]
-            t += h
+            t += dt
     return rebuilt
 
 
