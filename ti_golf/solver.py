@@ -74,10 +74,6 @@ class CollisionSolver:
         """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
         pair's accumulated impulse over (the tables widen to the longest list when one overflows)."""
         n = state.n
-        grid.clear(self.count)
-        grid.count_buckets(state.x, 1.0 / self.cell, self.mask, self.bucket, self.rank, self.count)
-        grid.exclusive_scan(self.count, self.start)
-        grid.scatter(self.bucket, self.rank, self.start, self.sorted_ids)
         stashed = None
         if self._valid:  # the pair impulses are scratch between steps: they keep the old lists' λ
             stashed = self.impulse
@@ -88,23 +84,22 @@ class CollisionSolver:
                 self.lam = ti.ndarray(float, (n, self.capacity[0]))
             if self.lower is None or self.lower.shape[1] != self.capacity[1]:
                 self.lower = ti.ndarray(ti.i32, (n, self.capacity[1]))
-            grid.clear(self.flag)
-            grid.build_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, self.skin, self.start,
-                                  self.sorted_ids, self.upper, self.n_upper, self.lower, self.n_lower,
-                                  self.x_at_build, self.flag)
-            longest = self.flag.to_numpy()
+            longest = grid.list_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, self.skin,
+                                           self.bucket, self.rank, self.count, self.start, self.sorted_ids,
+                                           self.upper, self.n_upper, self.lower, self.n_lower, self.x_at_build,
+                                           self.flag)
             if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
                 break
             # widen to the longest list found (no power-of-two padding: memory follows the pile)
-            self.capacity = tuple(max(c, int(k)) for c, k in zip(self.capacity, longest))
+            self.capacity = (max(self.capacity[0], int(longest[0])), max(self.capacity[1], int(longest[1])))
         if n << self.slot_bits > 2**31:  # the largest slot, (n − 1)·2^bits + 2^bits − 1, must fit an i32
             raise SimulationError(f"{n} balls with up to {self.capacity[0]} neighbours each are more than the "
                                   f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)")
-        grid.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
         if stashed is not None:
-            grid.carry_over(stashed, self.upper, self.n_upper, self.lam)
+            grid.link_and_carry(self.upper, self.n_upper, self.lower, self.n_lower, stashed, self.lam)
             stashed = None
         else:
+            grid.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
             grid.clear2(self.lam)
         if self.impulse is None or self.impulse.shape != self.upper.shape:
             self.impulse = self.projection = None  # free the old tables before allocating
@@ -156,11 +151,10 @@ class CollisionSolver:
     def _step_in_parallel(self, model: Model, state: State) -> None:
         if not self._valid or self._rebuild:
             self.build(state)
-        grid.clear(self.flag)
-        collide.collision_step(*self._arguments(model, state), False, 1, self.skin, model.dt)
+        rebuild = collide.collision_step(*self._arguments(model, state), False, 1, self.skin, model.dt)
         state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
         state.t += model.dt
-        self._rebuild = bool(self.flag.to_numpy()[0])
+        self._rebuild = bool(rebuild)
 
     def _arguments(self, m: Model, s: State) -> tuple:
         """The arguments of ``collide.collision_step`` before ``serial``."""

@@ -255,7 +255,7 @@ def collision_step(
     heights: float_grid,
     terrain_cells: int_grid,
     surface_table: float_grid,
-    # Neighbour lists (built by grid.build_neighbours and grid.link_lower), the pairs' accumulated
+    # Neighbour lists (built by grid.list_neighbours and grid.link_lower), the pairs' accumulated
     # resting impulses and the planes':
     upper: int_table,
     n_upper: int_array,
@@ -290,10 +290,10 @@ def collision_step(
 ) -> ti.i32:
     """Advance all balls by ``steps`` steps of ``h`` [s] (``iterations`` ≥ 1 Jacobi sweeps).
 
-    In parallel (``serial`` False) the kernel takes exactly one step (``steps`` and ``skin`` are
-    not read; it returns 0). On return ``flag[0]`` is 1 when some ball may come within reach of a
-    ball missing from its neighbour lists next step (rebuild the lists), and the new positions
-    are left in ``x_free`` (swap it with ``x``).
+    In parallel (``serial`` False) the kernel takes exactly one step (``steps``, ``skin`` and
+    ``dt`` are not read) and returns 1 (also left in ``flag[0]``) when some ball may come within
+    reach of a ball missing from its neighbour lists next step: rebuild the lists. The new
+    positions are left in ``x_free`` (swap it with ``x``).
 
     With ``serial`` the balls are stepped one after another, ``steps`` steps in one launch: for
     scenes so small that a launch (tens of arguments, about 0.5 ms from Python) and rebuilding the
@@ -309,21 +309,23 @@ def collision_step(
     has a column more than there are planes) a ball that leaves the grid's extent or falls below
     ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` and ``G`` (the pairs'
     impulses and projections, see :func:`owned_pairs`) have the shape of ``upper``."""
-    rebuilt = 0
+    result = 0
     if ti.static(not serial):
+        flag[0] = 0
         step_balls(
             air, contact, gravity, h, integrator, iterations, ti.cast(t0, real), half_skin, v_rest, t_rest, radius,
             mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper, n_upper,
             lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J, G, landed,
             apex, t_land, land_x, land_v, flag,
         )
+        result = flag[0]
     else:
         t = t0
         ti.loop_config(serialize=True)
         for _ in range(steps):
             if flag[0] != 0:
                 relist_all_pairs(x, radius, skin, upper, n_upper, lower, n_lower, x_at_build, lam, J)
-                rebuilt += 1
+                result += 1
                 flag[0] = 0
             step_balls(
                 air, contact, gravity, h, integrator, iterations, ti.cast(t, real), half_skin, v_rest, t_rest,
@@ -334,7 +336,7 @@ def collision_step(
             for i in range(x.shape[0]):
                 x[i] = x_free[i]
             t += dt
-    return rebuilt
+    return result
 
 
 @ti.func

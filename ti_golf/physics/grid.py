@@ -2,17 +2,13 @@
 
 Cells are cubes of side ``cell`` (the largest diameter plus the skin), hashed into a table of
 ``mask + 1`` buckets (a power of two), so the world is unbounded: far-apart balls simply land in
-other buckets. Building the grid is a counting sort of ball ids by bucket:
-
-1. ``count_buckets``: each ball's bucket and its rank inside it (an integer atomic add);
-2. ``exclusive_scan``: bucket starts (a serial scan: ``PrefixSumExecutor`` does not run on CPU);
-3. ``scatter``: ball ids sorted by bucket.
-
-``build_neighbours`` then lists, for every ball, the balls within r_a + r_b + skin in its own and
-the 26 adjacent cells, sorted by id (so sums over neighbours do not depend on thread order), in
-two halves: the *upper* list (higher ids: the pairs the ball owns, each evaluated once per sweep)
-and the *lower* list (lower ids), which ``link_lower`` turns into the slots where the owners
-store the pairs' impulses, so each ball gathers its impulses without float atomics.
+other buckets. ``list_neighbours`` builds the grid, a counting sort of ball ids by bucket, and
+then lists, for every ball, the balls within r_a + r_b + skin in its own and the 26 adjacent
+cells, sorted by id (so sums over neighbours do not depend on thread order), in two halves: the
+*upper* list (higher ids: the pairs the ball owns, each evaluated once per sweep) and the
+*lower* list (lower ids), which ``link_lower`` (or ``link_and_carry``, which also carries each
+pair's accumulated impulse over from the old lists) turns into the slots where the owners store
+the pairs' impulses, so each ball gathers its impulses without float atomics.
 A neighbour list stays valid until some ball has moved, or could move within a step, more than
 half the skin since the build.
 """
@@ -34,7 +30,7 @@ def cell_of(x, inv_cell):
 @ti.func
 def bucket_of(c, mask):
     """Hash of integer cell coordinates into [0, mask]: linear in the x index, so a row of cells
-    along x fills consecutive buckets (their starts share a cache line; see ``build_neighbours``)."""
+    along x fills consecutive buckets (their starts share a cache line; see ``list_ball``)."""
     h = ti.cast(c[0], ti.u32) + ti.cast(c[1], ti.u32) * ti.u32(19349663) + ti.cast(c[2], ti.u32) * ti.u32(83492791)
     return ti.cast(h & ti.cast(mask, ti.u32), ti.i32)
 
@@ -54,37 +50,16 @@ def clear2(a: real_table):
 
 
 @ti.kernel
-def count_buckets(x: vec3_array, inv_cell: float, mask: ti.i32, bucket: int_array, rank: int_array,
-                  count: int_array):
-    """Bucket of every ball and its rank among the balls of that bucket."""
-    for i in range(x.shape[0]):
-        b = bucket_of(cell_of(x[i], inv_cell), mask)
-        bucket[i] = b
-        rank[i] = ti.atomic_add(count[b], 1)
-
-
-@ti.kernel
-def exclusive_scan(count: int_array, start: int_array):
-    """start[b] = count[0] + … + count[b − 1]; start has one more entry than count."""
-    ti.loop_config(serialize=True)
-    for b in range(count.shape[0]):
-        start[b + 1] = start[b] + count[b]
-
-
-@ti.kernel
-def scatter(bucket: int_array, rank: int_array, start: int_array, sorted_ids: int_array):
-    """Ball ids grouped by bucket: sorted_ids[start[b] : start[b + 1]] are the balls of bucket b."""
-    for i in range(bucket.shape[0]):
-        sorted_ids[start[bucket[i]] + rank[i]] = i
-
-
-@ti.kernel
-def build_neighbours(
+def list_neighbours(
     x: vec3_array,
     radius: float_array,
     inv_cell: float,
     mask: ti.i32,
     skin: float,
+    # scratch:
+    bucket: int_array,
+    rank: int_array,
+    count: int_array,
     start: int_array,
     sorted_ids: int_array,
     # out:
@@ -94,45 +69,73 @@ def build_neighbours(
     n_lower: int_array,
     x_at_build: vec3_array,
     longest: int_array,
-):
-    """Split neighbour lists of the balls closer than r_a + r_b + skin, each sorted by id:
-    ``upper[i]`` holds the neighbours j > i (ball i owns those pairs), ``lower[i]`` the neighbours
-    j < i (finished by :func:`link_lower`). ``longest[0]``/``longest[1]`` get the longest upper and
-    lower lists found (they may exceed the tables' widths: the caller then rebuilds wider)."""
-    cap_up, cap_low = upper.shape[1], lower.shape[1]
+) -> ti.types.vector(2, ti.i32):
+    """Sort the balls into the hash grid, then list every ball's neighbours closer than
+    r_a + r_b + skin, each list sorted by id: ``upper[i]`` holds the neighbours j > i (ball i owns
+    those pairs), ``lower[i]`` the neighbours j < i (to be turned into slots by :func:`link_lower`
+    or :func:`link_and_carry`). One launch (a launch from Python costs about 0.1 ms; the grid
+    took five). The counting sort: each ball's bucket and its rank among the balls of that bucket
+    (an integer atomic add), the buckets' starts (a serial scan: ``PrefixSumExecutor`` does not
+    run on CPU; ``start`` has one entry more than ``count``), then the ball ids grouped by bucket:
+    ``sorted_ids[start[b] : start[b + 1]]`` are the balls of bucket b. Returns the longest upper
+    and lower lists found, also left in ``longest[0:2]`` (they may exceed the tables' widths: the
+    caller then rebuilds wider)."""
+    longest[0], longest[1] = 0, 0
+    for b in range(count.shape[0]):
+        count[b] = 0
+    for i in range(x.shape[0]):
+        b = bucket_of(cell_of(x[i], inv_cell), mask)
+        bucket[i] = b
+        rank[i] = ti.atomic_add(count[b], 1)
+    ti.loop_config(serialize=True)
+    for b in range(count.shape[0]):
+        start[b + 1] = start[b] + count[b]
+    for i in range(x.shape[0]):
+        sorted_ids[start[bucket[i]] + rank[i]] = i
     for idx in range(x.shape[0]):
         i = sorted_ids[idx]  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
-        xi = x[i]
-        ri = radius[i]
-        c = cell_of(xi, inv_cell)  # recomputed, not stored: 12 bytes per ball less
-        n_up, n_low = 0, 0
-        for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2)))):
-            # the row of three cells c + (−1…1, dy, dz): consecutive buckets, one range unless it wraps
-            row = c + ti.Vector([-1, d[0], d[1]])
-            b = bucket_of(row, mask)
-            for part in range(2):
-                lo, hi = start[b], start[ti.min(b + 3, mask + 1)]
-                if part == 1:
-                    lo, hi = start[0], start[ti.max(b + 3 - (mask + 1), 0)]
-                for k in range(lo, hi):
-                    j = sorted_ids[k]
-                    xj = x[j]
-                    cj = cell_of(xj, inv_cell)
-                    # a ball of the row (not of another cell sharing its buckets), within reach
-                    if j != i and cj[1] == row[1] and cj[2] == row[2] and ti.abs(cj[0] - c[0]) <= 1:
-                        reach = ri + radius[j] + skin
-                        if (xj - xi).norm_sqr() < reach * reach:
-                            if j > i:
-                                insert_sorted(upper, i, n_up, cap_up, j)
-                                n_up += 1
-                            else:
-                                insert_sorted(lower, i, n_low, cap_low, j)
-                                n_low += 1
-        n_upper[i] = ti.min(n_up, cap_up)
-        n_lower[i] = ti.min(n_low, cap_low)
-        x_at_build[i] = xi
+        n_up, n_low = list_ball(i, x, radius, inv_cell, mask, skin, start, sorted_ids, upper, lower)
+        n_upper[i] = ti.min(n_up, upper.shape[1])
+        n_lower[i] = ti.min(n_low, lower.shape[1])
+        x_at_build[i] = x[i]
         ti.atomic_max(longest[0], n_up)
         ti.atomic_max(longest[1], n_low)
+    return ti.Vector([longest[0], longest[1]])
+
+
+@ti.func
+def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, skin, start: ti.template(),
+              sorted_ids: ti.template(), upper: ti.template(), lower: ti.template()):
+    """Ball i's neighbours in its own and the 26 adjacent cells, into its rows of ``upper`` and
+    ``lower`` in id order (as many as fit). Returns how many there are (n_upper, n_lower)."""
+    cap_up, cap_low = upper.shape[1], lower.shape[1]
+    xi = x[i]
+    ri = radius[i]
+    c = cell_of(xi, inv_cell)  # recomputed, not stored: 12 bytes per ball less
+    n_up, n_low = 0, 0
+    for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2)))):
+        # the row of three cells c + (−1…1, dy, dz): consecutive buckets, one range unless it wraps
+        row = c + ti.Vector([-1, d[0], d[1]])
+        b = bucket_of(row, mask)
+        for part in range(2):
+            lo, hi = start[b], start[ti.min(b + 3, mask + 1)]
+            if part == 1:
+                lo, hi = start[0], start[ti.max(b + 3 - (mask + 1), 0)]
+            for k in range(lo, hi):
+                j = sorted_ids[k]
+                xj = x[j]
+                cj = cell_of(xj, inv_cell)
+                # a ball of the row (not of another cell sharing its buckets), within reach
+                if j != i and cj[1] == row[1] and cj[2] == row[2] and ti.abs(cj[0] - c[0]) <= 1:
+                    reach = ri + radius[j] + skin
+                    if (xj - xi).norm_sqr() < reach * reach:
+                        if j > i:
+                            insert_sorted(upper, i, n_up, cap_up, j)
+                            n_up += 1
+                        else:
+                            insert_sorted(lower, i, n_low, cap_low, j)
+                            n_low += 1
+    return n_up, n_low
 
 
 @ti.func
@@ -207,9 +210,14 @@ def stash_ball(i, upper: ti.template(), n_upper: ti.template(), lam: ti.template
 
 
 @ti.kernel
-def carry_over(stashed: vec6_table, upper: int_table, n_upper: int_array, lam: real_table):
-    """Carry each pair's accumulated impulse from the stashed old lists to the new ones (see :func:`carry_ball`)."""
-    for i in range(n_upper.shape[0]):
+def link_and_carry(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array, stashed: vec6_table,
+                   lam: real_table):
+    """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
+    :func:`stash` and :func:`carry_ball`) to the new ones, in one launch (neither writes what the
+    other reads)."""
+    bits = slot_bits(upper.shape[1])
+    for i in range(lower.shape[0]):
+        link_ball(i, bits, upper, n_upper, lower, n_lower)
         carry_ball(i, stashed, upper, n_upper, lam)
 
 
@@ -240,8 +248,8 @@ def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, upper: ti.te
                      lower: ti.template(), n_lower: ti.template(), x_at_build: ti.template(), lam: ti.template(),
                      scratch: ti.template()):
     """Rebuild the neighbour lists of a few balls in place without a grid, by testing every pair:
-    the lists, slots and carried-over impulses that ``build_neighbours``, ``link_lower`` and
-    ``carry_over`` give, in O(n²) work. The tables must be n − 1 wide (no list can overflow).
+    the lists, slots and carried-over impulses that ``list_neighbours`` and ``link_and_carry``
+    give, in O(n²) work. The tables must be n − 1 wide (no list can overflow).
     Meant for a serial loop (the ``serial`` variant of ``collide.collision_step``); ``scratch``
     as in :func:`stash_ball`."""
     for i in range(x.shape[0]):
@@ -251,7 +259,7 @@ def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, upper: ti.te
         n_up, n_low = 0, 0
         for j in range(x.shape[0]):  # in id order: the lists come out sorted
             reach = ri + radius[j] + skin
-            if j != i and (x[j] - xi).norm_sqr() < reach * reach:  # the test of build_neighbours
+            if j != i and (x[j] - xi).norm_sqr() < reach * reach:  # the test of list_ball
                 if j > i:
                     upper[i, n_up] = j
                     n_up += 1
