@@ -319,3 +319,19 @@ def test_bogus_arch_env_exits_2_naming_allowed_backends(bogus_arch):
 
 def test_bogus_arch_env_error_names_the_variable(bogus_arch):
     assert "TI_GOLF_ARCH" in bogus_arch.stderr, bogus_arch.stderr
+
+
+def test_the_first_run_on_a_machine_is_announced(tmp_path):
+    # a new user's first commands pause while Taichi compiles the kernels: the CLI says so while
+    # Taichi's kernel cache is empty, and no more once it holds a kernel (here the command then
+    # stops at the unknown scene, exit 2, before compiling anything)
+    cache = tmp_path / "ticache"
+    env = {"TI_OFFLINE_CACHE_FILE_PATH": str(cache)}
+    cold = run_cli("run", "no_such_scene", "--arch", "cpu", env=env)
+    assert cold.returncode == 2 and "no_such_scene" in cold.stderr
+    assert "first run on this machine" in cold.stderr and str(cache) in cold.stderr
+    cache.mkdir(exist_ok=True)
+    (cache / "Tkernel.tic").write_bytes(b"")
+    warm = run_cli("run", "no_such_scene", "--arch", "cpu", env=env)
+    assert warm.returncode == 2 and "no_such_scene" in warm.stderr
+    assert "first run" not in warm.stderr

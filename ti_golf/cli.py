@@ -118,6 +118,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``ti-golf`` and ``python -m ti_golf``; returns the exit code."""
     args = build_parser().parse_args(argv)
+    from . import runtime
+
+    runtime.announce_first_compile = True
     try:
         if getattr(args, "arch", None) or getattr(args, "precision", None):
             from .runtime import init

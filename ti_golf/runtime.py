@@ -36,6 +36,10 @@ class RuntimeInfo:
 
 _info: RuntimeInfo | None = None
 
+announce_first_compile = False
+"""Set by the CLI: :func:`init` then says on stderr when Taichi's kernel cache is still empty, so
+a new user knows why the first commands on a machine pause (compiling, up to a minute in all)."""
+
 
 def _resolve(arch: str | None, precision: str | None) -> tuple[str, str]:
     arch_from = "--arch" if arch else "TI_GOLF_ARCH"
@@ -80,7 +84,18 @@ def init(arch: str | None = None, precision: str | None = None, *, debug: bool =
             print(line, file=sys.stderr)
     actual = ti.lang.impl.current_cfg().arch
     _info = RuntimeInfo(requested_arch=want_arch, arch=str(actual).split(".")[-1], precision=want_prec)
+    if announce_first_compile and not kernels_cached():
+        print("ti-golf: first run on this machine: Taichi compiles the kernels as they are first used "
+              f"(up to a minute in all) and keeps them in {ti.lang.impl.current_cfg().offline_cache_file_path}",
+              file=sys.stderr)
     return _info
+
+
+def kernels_cached() -> bool:
+    """Whether Taichi's offline kernel cache holds any compiled kernel (after :func:`init`)."""
+    from pathlib import Path
+
+    return any(Path(ti.lang.impl.current_cfg().offline_cache_file_path).glob("*.tic"))
 
 
 def ensure_init() -> RuntimeInfo:
