@@ -16,10 +16,11 @@ from .state import State
 
 SERIAL_MAX_BALLS = 256
 """Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
-(``serial`` in ``collide.collision_step``): for so few balls the parallel step is mostly launch overhead.
-Measured on the 2-core benchmark machine: 0.02 against 2.1 ms per step for 16 balls in a pile,
-0.25 against 1.7 ms for 256; and for 256 balls flying apart fast (lists rebuilt every step, which
-costs n² distance tests here), 0.7 against 2.6 ms; for 512 such balls the parallel step wins."""
+(``serial`` in ``collide.collision_step``): for so few balls a parallel step is mostly launch
+overhead. Measured with ``ti-golf bench collide`` on the 2-core benchmark machine: 0.005 against
+0.77 ms per step for 16 balls in a pile, 0.11 against 0.93 ms for 256. With the lists rebuilt
+every step (balls flying apart: n² distance tests each time, serially) the two are even at 400
+balls, and for 512 the parallel step wins."""
 
 
 def steps_serially(n: int) -> bool:
