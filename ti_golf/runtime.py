@@ -126,7 +126,7 @@ def plain_compile() -> Iterator[None]:
     6 minutes and 7 GB, against 8 s and 18 s with these passes off; LLVM still optimises the
     code, and the kernels ran no slower (1.25e5 against 8.5e4 trajectories/s in one pair of f64
     runs; 2.1e5 in f32 with 16 lanes). Likewise for the collision step of small scenes (the
-    ``serial`` variant of ``physics.collide.collision_step``): 50 s against 6 s, and 3.6 against
+    ``serial`` variant of ``physics.collide.collision_step``): 50 s against 5–6 s, and 3.6 against
     4.5 µs per step of a six-ball cradle. The parallel collision step keeps the passes: there
     they buy about 10 % speed for 5x the compile time (27 s against 5 s).
     """

@@ -143,7 +143,7 @@ class CollisionSolver:
             self.capacity = (width, width)
             self.build(state)
             grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
-        with plain_compile():  # 6 s against 50 s of compiling on first use, and as fast (see runtime.plain_compile)
+        with plain_compile():  # 5 s against 50 s of compiling on first use, and as fast (see runtime.plain_compile)
             self.rebuilds += collide.collision_step(*self._arguments(model, state), True, steps, self.skin,
                                                      model.dt)
         for _ in range(steps):

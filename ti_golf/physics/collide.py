@@ -313,10 +313,10 @@ def collision_step(
     if ti.static(not serial):
         flag[0] = 0
         step_balls(
-            air, contact, gravity, h, integrator, iterations, ti.cast(t0, real), half_skin, v_rest, t_rest, radius,
-            mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper, n_upper,
-            lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J, G, landed,
-            apex, t_land, land_x, land_v, flag,
+            serial, air, contact, gravity, h, integrator, iterations, ti.cast(t0, real), half_skin, v_rest, t_rest,
+            radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper,
+            n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J,
+            G, landed, apex, t_land, land_x, land_v, flag,
         )
         result = flag[0]
     else:
@@ -328,7 +328,7 @@ def collision_step(
                 result += 1
                 flag[0] = 0
             step_balls(
-                air, contact, gravity, h, integrator, iterations, ti.cast(t, real), half_skin, v_rest, t_rest,
+                serial, air, contact, gravity, h, integrator, iterations, ti.cast(t, real), half_skin, v_rest, t_rest,
                 radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper,
                 n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm,
                 J, G, landed, apex, t_land, land_x, land_v, flag,
@@ -340,13 +340,13 @@ def collision_step(
 
 
 @ti.func
-def step_balls(air: ti.template(), contact: ti.template(), gravity: ti.template(), h, integrator: ti.template(),
-               iterations: ti.template(), t0, half_skin, v_rest, t_rest, radius: ti.template(), mass: ti.template(),
-               launch_height: ti.template(), plane_p: ti.template(), plane_n: ti.template(), terrain: ti.template(),
-               heights: ti.template(), terrain_cells: ti.template(), surface_table: ti.template(),
-               upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(),
-               x_at_build: ti.template(), lam: ti.template(), lam_plane: ti.template(), x: ti.template(),
-               v: ti.template(), w: ti.template(), status: ti.template(), rest_time: ti.template(),
+def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template(), gravity: ti.template(), h,
+               integrator: ti.template(), iterations: ti.template(), t0, half_skin, v_rest, t_rest,
+               radius: ti.template(), mass: ti.template(), launch_height: ti.template(), plane_p: ti.template(),
+               plane_n: ti.template(), terrain: ti.template(), heights: ti.template(), terrain_cells: ti.template(),
+               surface_table: ti.template(), upper: ti.template(), n_upper: ti.template(), lower: ti.template(),
+               n_lower: ti.template(), x_at_build: ti.template(), lam: ti.template(), lam_plane: ti.template(),
+               x: ti.template(), v: ti.template(), w: ti.template(), status: ti.template(), rest_time: ti.template(),
                x_free: ti.template(), v_free: ti.template(), calm: ti.template(), J: ti.template(), G: ti.template(),
                landed: ti.template(), apex: ti.template(), t_land: ti.template(), land_x: ti.template(),
                land_v: ti.template(), flag: ti.template()):
@@ -373,32 +373,55 @@ def step_balls(air: ti.template(), contact: ti.template(), gravity: ti.template(
             v1, w1 = surface_impulses(i, True, v1, w1, contact, h, v_inelastic, radius, plane_p, plane_n, terrain,
                                       heights, terrain_cells, surface_table, x, x_free, lam_plane)
         v[i], w[i] = v1, w1
-    # 2. Jacobi sweeps: the pairs' impulses from the velocities of the previous sweep, then each
-    # ball gathers them and meets its planes; the last sweep's ball loop also finishes the step (3.).
-    # A quiet ball gets no impulse (its pairs are skipped) and stays where it is; the last pair
-    # pass still visits its pairs, for the projections its awake neighbours gather
-    for s in ti.static(range(iterations)):
-        last = ti.static(s == iterations - 1)
-        for i in range(x.shape[0]):
-            if ti.static(last) or calm[i] != QUIET:
-                owned_pairs(i, last, contact, h, v_inelastic, radius, mass, status, upper, n_upper, lam, J, G, v, w)
-        for i in range(x.shape[0]):
-            if calm[i] == QUIET:
-                if ti.static(last):
-                    x_free[i] = x[i]
-            elif status[i] != OUT_OF_BOUNDS:
-                dv, dw, dx, touching = gather(i, last, radius, mass, upper, n_upper, lower, n_lower, bits, J, G)
-                v_new, w_new = surface_impulses(i, False, v[i] + dv, w[i] + dw, contact, h, v_inelastic, radius,
-                                                plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
-                                                x, x_free, lam_plane)
-                if ti.static(not last):
-                    v[i], w[i] = v_new, w_new
-                else:
-                    finish(i, v_new, w_new, dx, touching, contact, h, half_skin, v_rest, t_rest, radius, plane_p,
-                           plane_n, terrain, heights, x_at_build, x, v, w, status, rest_time, calm, x_free, v_free,
-                           flag)
+    # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
+    if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
+        for _ in range(iterations - 1):
+            sweep(False,
+                  contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
+                  heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
+                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J, G, flag)
+    else:  # unrolled, so that each sweep's loops stay top-level loops (parallel)
+        for _ in ti.static(range(iterations - 1)):
+            sweep(False,
+                  contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
+                  heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
+                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J, G, flag)
+    sweep(True,
+          contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain, heights,
+          terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam, lam_plane, x, v, w,
+          status, rest_time, x_free, v_free, calm, J, G, flag)
 
 
+@ti.func
+def sweep(last: ti.template(), contact: ti.template(), h, v_inelastic, half_skin, v_rest, t_rest,
+          radius: ti.template(), mass: ti.template(), plane_p: ti.template(), plane_n: ti.template(),
+          terrain: ti.template(), heights: ti.template(), terrain_cells: ti.template(), surface_table: ti.template(),
+          upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits,
+          x_at_build: ti.template(), lam: ti.template(), lam_plane: ti.template(), x: ti.template(),
+          v: ti.template(), w: ti.template(), status: ti.template(), rest_time: ti.template(), x_free: ti.template(),
+          v_free: ti.template(), calm: ti.template(), J: ti.template(), G: ti.template(), flag: ti.template()):
+    """One Jacobi sweep: the pairs' impulses from the velocities of the previous sweep, then each
+    ball gathers them and meets its planes; the ``last`` sweep's ball loop also finishes the step.
+    A quiet ball gets no impulse (its pairs are skipped) and stays where it is; the last pair pass
+    still visits its pairs, for the projections its awake neighbours gather."""
+    for i in range(x.shape[0]):
+        if ti.static(last) or calm[i] != QUIET:
+            owned_pairs(i, last, contact, h, v_inelastic, radius, mass, status, upper, n_upper, lam, J, G, v, w)
+    for i in range(x.shape[0]):
+        if calm[i] == QUIET:
+            if ti.static(last):
+                x_free[i] = x[i]
+        elif status[i] != OUT_OF_BOUNDS:
+            dv, dw, dx, touching = gather(i, last, radius, mass, upper, n_upper, lower, n_lower, bits, J, G)
+            v_new, w_new = surface_impulses(i, False, v[i] + dv, w[i] + dw, contact, h, v_inelastic, radius,
+                                            plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
+                                            x, x_free, lam_plane)
+            if ti.static(not last):
+                v[i], w[i] = v_new, w_new
+            else:
+                finish(i, v_new, w_new, dx, touching, contact, h, half_skin, v_rest, t_rest, radius, plane_p,
+                       plane_n, terrain, heights, x_at_build, x, v, w, status, rest_time, calm, x_free, v_free,
+                       flag)
 
 
 @ti.func
