@@ -225,7 +225,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         "floor": "terrain" if terrain else "plane",
         "asleep": asleep,
         "peak_rss_bytes": peak,
-        # the kernel's high-water mark can lag the current RSS by a few pages: no negative growth for a tiny pile
+        # the OS's high-water mark (ru_maxrss) can lag the current RSS by a few pages: no negative growth
         "bytes_per_ball_above_baseline": max(peak - base_rss, 0) / n,
     }
     result["baselines"] = {"bare_gather_balls_per_s": gather_rate}
