@@ -327,11 +327,11 @@ def test_the_first_run_on_a_machine_is_announced(tmp_path):
     # stops at the unknown scene, exit 2, before compiling anything)
     cache = tmp_path / "ticache"
     env = {"TI_OFFLINE_CACHE_FILE_PATH": str(cache)}
-    cold = run_cli("run", "no_such_scene", "--arch", "cpu", env=env)
+    cold = run_cli("run", "no_such_scene", env=env)
     assert cold.returncode == 2 and "no_such_scene" in cold.stderr
     assert "first run on this machine" in cold.stderr and str(cache) in cold.stderr
     cache.mkdir(exist_ok=True)
     (cache / "Tkernel.tic").write_bytes(b"")
-    warm = run_cli("run", "no_such_scene", "--arch", "cpu", env=env)
+    warm = run_cli("run", "no_such_scene", env=env)
     assert warm.returncode == 2 and "no_such_scene" in warm.stderr
     assert "first run" not in warm.stderr

@@ -122,10 +122,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     runtime.announce_first_compile = True
     try:
-        if getattr(args, "arch", None) or getattr(args, "precision", None):
-            from .runtime import init
-
-            init(args.arch, args.precision)
+        if args.command not in ("scenes", "keys"):  # before any output: a first run's notice comes first
+            runtime.init(getattr(args, "arch", None), getattr(args, "precision", None))
         return _COMMANDS[args.command](args)
     except ConfigError as exc:
         print(f"ti-golf: error: {exc}", file=sys.stderr)
