@@ -11,6 +11,7 @@ import json
 import math
 import re
 import subprocess
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -224,6 +225,35 @@ def test_run_spin_decay_npz_and_plot(tmp_path):
     assert np.all(np.diff(spin) < 0)
     assert png_path.read_bytes().startswith(PNG_SIGNATURE)
     assert "1 flying" in proc.stdout
+
+
+def test_run_reports_the_deepest_overlap(tmp_path):
+    # two balls at rest overlapping by Δx = 4 mm (20 % of a radius), no gravity: one step moves each
+    # by k_p·m_red·Δx (B.18, m_red = 1/2) apart and leaves (1 − k_p)·Δx = 3.2 mm (16 %) with k_p = 0.2
+    scene = tmp_path / "overlap.toml"
+    scene.write_text(textwrap.dedent("""\
+        [ball]
+        radius = 0.02
+        mass = 0.045
+        [air]
+        rho = 0.0
+        [world]
+        dt = 0.001
+        gravity = [0.0, 0.0, 0.0]
+        ground = false
+        [contact]
+        k_p = 0.2
+        [[balls]]
+        position = [0.0, 1.0, 0.0]
+        [[balls]]
+        position = [0.036, 1.0, 0.0]
+        """))
+    proc = ok(run_cli("run", str(scene), "--steps", "1"))
+    m = re.search(r"deepest overlap: ([0-9.]+) % of a radius \(([0-9.]+) mm, balls 0 and 1\)", proc.stdout)
+    assert m, proc.stdout
+    assert float(m[1]) == pytest.approx(16.0, abs=0.05) and float(m[2]) == pytest.approx(3.2, abs=0.005)
+    scene.write_text(scene.read_text().replace("0.036", "0.041"))  # 1 mm apart
+    assert "no two balls overlap" in ok(run_cli("run", str(scene), "--steps", "1")).stdout
 
 
 # ----------------------------------------------------------------------------------------------

@@ -330,6 +330,42 @@ def test_balls_moved_between_steps_collide_in_the_next_step(serial):
     np.testing.assert_allclose(sim.v, [[-1.0, 0, 0], [0, 0, 0]], atol=1e-12)
 
 
+@pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])
+def test_deepest_overlap_names_the_pair_on_the_current_positions(serial):
+    # overlap Δx = r_a + r_b − |x_a − x_b| (B.18), also as a fraction of the smaller radius. Balls 0
+    # and 1 (r = 2 and 3 cm, 4.5 cm apart) overlap by 5 mm, 25 % of 2 cm; balls 2 and 3 by 0.5 mm,
+    # 2.5 %; ball 4 is alone
+    x = [[0.0, 1.0, 0.0], [0.045, 1.0, 0.0], [0.2, 1.0, 0.0], [0.2, 1.0, 0.0395], [5.0, 1.0, 0.0]]
+    sim = tg.Simulation(scene(), x=x, radius=[0.02, 0.03, 0.02, 0.02, 0.02])
+    sim.solver = CollisionSolver(sim.model, serial=serial)
+    d = sim.deepest_overlap()  # before any step: measured on lists built for these positions
+    assert (d.i, d.j) == (0, 1)
+    assert d.depth == pytest.approx(0.005, rel=1e-12) and d.fraction == pytest.approx(0.25, rel=1e-12)
+    sim.step(2)
+    sim.x = [*x[:4], [0.2, 1.0, -0.028]]  # ball 4 moved into ball 2 between steps: 12 mm, 60 %
+    d = sim.deepest_overlap()
+    assert (d.i, d.j) == (2, 4) and d.fraction == pytest.approx(0.6, rel=1e-12)
+    sim.x = [[10.0 * k, 1.0, 0.0] for k in range(5)]
+    assert sim.deepest_overlap() is None
+
+
+@pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])
+def test_measuring_overlaps_does_not_change_the_run(serial):
+    # deepest_overlap builds the lists when they are stale; the next step must then be the step it
+    # would have been (same lists, same carried impulses): compared bit for bit on a gas under gravity
+    def run(measure):
+        sim = _gas(scene("contact.e=0.6", "contact.mu=0.4", "world.gravity=[0,-9.81,0]", "world.ground=true"), n=200)
+        sim.solver = CollisionSolver(sim.model, serial=serial)
+        for _ in range(20):
+            if measure:
+                sim.deepest_overlap()
+            sim.step(10)
+        return sim.x, sim.v, sim.w
+
+    for a, b in zip(run(False), run(True)):
+        np.testing.assert_array_equal(a, b)
+
+
 def test_runs_are_deterministic():
     def run():
         sim = _gas(scene("contact.e=0.6", "contact.mu=0.4", "world.gravity=[0,-9.81,0]", "world.ground=true"), n=800)

@@ -19,7 +19,7 @@ from .config import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING, Scene
 from .errors import ConfigError, SimulationError, TiGolfError
 from .runtime import init
 from .scene import load_scene
-from .sim import Recording, Simulation
+from .sim import Overlap, Recording, Simulation
 from .sweeps import SweepResult, sweep
 
 __all__ = [
@@ -27,6 +27,7 @@ __all__ = [
     "ConfigError",
     "FLYING",
     "OUT_OF_BOUNDS",
+    "Overlap",
     "ROLLING",
     "Recording",
     "Scene",

@@ -255,6 +255,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     counts = sim.counts()
     print(f"{sim.scene.name}: {sim.n} ball(s), t = {sim.t:.4g} s in {elapsed:.2f} s; "
           + ", ".join(f"{counts[name]} {name.replace('_', ' ')}" for name in STATUS_NAMES.values()))
+    if sim.solver is not None:
+        deepest = sim.deepest_overlap()
+        print("no two balls overlap" if deepest is None else
+              f"deepest overlap: {100 * deepest.fraction:.3g} % of a radius ({1e3 * deepest.depth:.3g} mm, "
+              f"balls {deepest.i} and {deepest.j})")
     f = sim.flight()
     x = sim.x
     for i in np.flatnonzero(f.landed)[:10]:

@@ -33,6 +33,17 @@ class Recording:
         return {"traj_t": np.asarray(self.t), "traj_x": np.asarray(self.x), "traj_w": np.asarray(self.w)}
 
 
+@dataclass(frozen=True)
+class Overlap:
+    """The deepest overlap between two balls: r_i + r_j − |x_i − x_j| [m] and as a fraction of the
+    smaller radius (the report's Δx, B.18, which the position projection removes step by step)."""
+
+    depth: float
+    fraction: float
+    i: int
+    j: int
+
+
 class Simulation:
     """Many balls under the scene's air, gravity and ground, advanced by data-parallel kernels.
 
@@ -142,6 +153,27 @@ class Simulation:
         """How many balls are flying, rolling, at rest and out of bounds."""
         s = self.status
         return {name: int(np.count_nonzero(s == code)) for code, name in STATUS_NAMES.items()}
+
+    def deepest_overlap(self) -> Overlap | None:
+        """The pair of balls that overlap the most now, or ``None`` when no two balls overlap (or
+        the balls do not collide: one ball, or ``world.collisions`` off). Balls out of bounds are
+        left out (frozen, nothing pushes them apart). Every pair close enough to touch is in the
+        neighbour lists, so only listed pairs are measured (the lists are built first if no step
+        has built them for these positions)."""
+        if self.solver is None:
+            return None
+        self.solver.ensure_lists(self.state)
+        i, j = self.solver.pairs().T
+        status = self.status
+        keep = (status[i] != OUT_OF_BOUNDS) & (status[j] != OUT_OF_BOUNDS)
+        i, j = i[keep], j[keep]
+        x, r = self.x, self.model.radius_np
+        depth = r[i] + r[j] - np.linalg.norm(x[i] - x[j], axis=1)
+        if depth.size == 0 or depth.max() <= 0.0:
+            return None
+        fraction = depth / np.minimum(r[i], r[j])
+        k = int(np.argmax(fraction))
+        return Overlap(float(depth[k]), float(fraction[k]), int(i[k]), int(j[k]))
 
     def flight(self) -> Flight:
         """Landing outcomes of the tracked balls (NaN where not landed yet)."""

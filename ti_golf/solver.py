@@ -109,6 +109,20 @@ class CollisionSolver:
         self.rebuilds += 1
         self._valid = True
 
+    def ensure_lists(self, state: State) -> None:
+        """Build the neighbour lists for the current positions unless they still hold every pair in
+        reach: before the first step, after balls were moved (:meth:`invalidate`), or when the last
+        step asked for a rebuild. The next step then starts from these lists, as it would have
+        built them itself (same lists, same step)."""
+        stale = not self._valid or (self.flag.to_numpy()[0] != 0 if self.serial else self._rebuild)
+        if not stale:
+            return
+        if self.serial:
+            self.capacity = (max(self.capacity[0], state.n - 1, 1),) * 2
+        self.build(state)
+        grid.clear(self.flag)  # build() left the longest lists there
+        self._rebuild = False
+
     def invalidate(self) -> None:
         """Rebuild the neighbour lists before the next step (balls were moved between steps), each
         pair that stays listed keeping its accumulated impulse."""
