@@ -150,7 +150,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
                 "neighbour-list skin as a fraction of the largest radius (lists are rebuilt when a ball moves skin/2)",
                 lambda v: None if 0 < v <= 2 else "must be in (0, 2]", "(0, 2]"),
             Key("v_bounce", "float", 0.05, "m/s",
-                "normal approach speeds below v_bounce + 2|g|h are treated as inelastic (no micro-bounces)",
+                "normal approach speeds below v_bounce + 2|g|h are treated as inelastic (no micro-bounces) "
+                "and as resting contacts, whose impulse carries over to the next step",
                 _non_negative, ">= 0"),
         ]
     },
