@@ -257,9 +257,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
           + ", ".join(f"{counts[name]} {name.replace('_', ' ')}" for name in STATUS_NAMES.values()))
     if sim.solver is not None:
         deepest = sim.deepest_overlap()
-        print("no two balls overlap" if deepest is None else
-              f"deepest overlap: {100 * deepest.fraction:.3g} % of a radius ({1e3 * deepest.depth:.3g} mm, "
-              f"balls {deepest.i} and {deepest.j})")
+        if deepest is None:
+            print("no two balls overlap")
+        elif deepest.fraction < 1e-6:  # resting contacts left at round-off
+            print("no two balls overlap by more than a millionth of a radius")
+        else:
+            print(f"deepest overlap: {100 * deepest.fraction:.3g} % of a radius ({1e3 * deepest.depth:.3g} mm, "
+                  f"balls {deepest.i} and {deepest.j})")
     f = sim.flight()
     x = sim.x
     for i in np.flatnonzero(f.landed)[:10]:
