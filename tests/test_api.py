@@ -128,3 +128,17 @@ def test_plain_compile_restores_the_compiler_setting():
         assert cfg.advanced_optimization is False
         raise RuntimeError("a failed launch")
     assert cfg.advanced_optimization == before
+
+
+def test_a_putt_is_not_a_flight_but_a_lob_is():
+    # carry, apex and landing describe a ball that leaves the ground: a putt (launch angle 0) rolls
+    # over the green and must not report a landing at t = 0 with zero carry; a lob from the same
+    # spot (45°, 6 m/s) flies: its carry is the range v0²/g in vacuo (3.67 m), shortened by less
+    # than 5 % by the drag at these speeds
+    putt = tg.Simulation.from_scene("putting_green")
+    putt.run(t=1.0)
+    assert not putt.flight().landed[0] and np.isnan(putt.flight().carry[0])
+    lob = tg.Simulation.from_scene("putting_green", ["launch.angle_deg=45", "launch.speed=6"])
+    lob.run(t=2.0)
+    f = lob.flight()
+    assert f.landed[0] and 0.95 * 6.0**2 / 9.81 < f.carry[0] < 6.0**2 / 9.81

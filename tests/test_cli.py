@@ -256,6 +256,19 @@ def test_run_reports_the_deepest_overlap(tmp_path):
     assert "no two balls overlap" in ok(run_cli("run", str(scene), "--steps", "1")).stdout
 
 
+def test_run_reports_the_distance_to_the_hole(tmp_path):
+    # a scene with a [hole] ends with each ball's horizontal distance from the cup, as the saved
+    # state gives it
+    out = tmp_path / "putt.npz"
+    proc = ok(run_cli("run", "putting_green", "--t", "3", "--out", str(out)))
+    m = re.search(r"ball 0: ([0-9.]+) m from the hole at x = 6 m, z = 0 m", proc.stdout)
+    assert m, proc.stdout
+    with np.load(out) as d:
+        x = d["x"][0]
+    assert float(m[1]) == pytest.approx(math.hypot(x[0] - 6.0, x[2]), abs=0.005)
+    assert "carry" not in proc.stdout  # a putt is not a flight
+
+
 # ----------------------------------------------------------------------------------------------
 # table
 # ----------------------------------------------------------------------------------------------

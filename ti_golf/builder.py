@@ -41,8 +41,9 @@ def build_balls(scene: Scene) -> Balls:
     R, M = scene.ball.radius, scene.ball.mass
     if scene.launch is not None:
         L = scene.launch
+        # a shot that leaves the ground is a flight (carry, apex, landing); a putt (angle 0) is not
         parts.append(_one(scene.launch_position(), launch_velocity(L.speed, L.angle_deg, L.direction_deg), L.spin,
-                          R, M, True))
+                          R, M, L.angle_deg > 0.0))
     for spec in scene.balls:
         parts.append(_one(spec.position, spec.velocity, spec.spin, spec.radius or R, spec.mass or M, False))
     for i, block in enumerate(scene.blocks):
@@ -103,6 +104,6 @@ def _block_balls(scene: Scene, block: Block, index: int) -> Balls:
         spin = rng.uniform(*block.backspin, n)
         v = v + np.array([launch_velocity(s, a, d) for s, a, d in zip(speed, angle, direction)])
         w = w + spin[:, None] * np.array([backspin_axis(d) for d in direction])
-        track[:] = True
+        track[:] = angle > 0.0
     return Balls(x, v, w, radius, mass, track)
 
