@@ -325,6 +325,7 @@ def test_bench_collide_json(n, flags):
     d = np.linalg.norm(x[:, None] - x[None], axis=-1)
     lattice_contacts = np.count_nonzero((d > 0) & (d < 2 * 0.02 * 1.001)) / n
     assert result["contacts_per_ball"] == pytest.approx(lattice_contacts, rel=0.02)  # the pile still stands
+    assert 0.0 <= result["deepest_overlap"] < 0.05  # and keeps the bound (5 % of a radius)
     assert result["baselines"]["bare_gather_balls_per_s"] > 0
     assert ("asleep_speedup" in result) == bool(flags)  # with its awake baseline timed in the same run
     # few balls are stepped serially, with one parallel launch per step timed in the same run

@@ -204,6 +204,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # before any baseline runs
     i, j = sim.solver.pairs().T
     touching = int(np.count_nonzero(np.linalg.norm(xn[i] - xn[j], axis=1) < 2 * 0.02 * 1.001))
+    deepest = sim.deepest_overlap()  # speed is only worth quoting while the pile keeps its shape
     del sim
     gc.collect()
     plane_seconds = timed(False, asleep)[1] if terrain else None  # the baselines, timed in the same run
@@ -220,6 +221,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         "ball_steps_per_s": n * steps / seconds,
         "ms_per_step": 1e3 * seconds / steps,
         "contacts_per_ball": 2 * touching / n,
+        "deepest_overlap": 0.0 if deepest is None else deepest.fraction,  # share of a radius, after the timed steps
         "list_rebuilds": rebuilds,
         "serial": serial,  # stepped serially, many steps per launch (few balls; see solver.SERIAL_MAX_BALLS)
         "floor": "terrain" if terrain else "plane",
@@ -243,7 +245,8 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         result["serial_speedup"] = parallel_seconds / seconds
         log(f"stepped serially vs one parallel launch per step: {result['serial_speedup']:.1f}x faster per step")
     log(f"ti_golf collide: {n} balls, {result['ms_per_step']:.2f} ms/step, {result['ball_steps_per_s']:.3g} ball-steps/s, "
-        f"{result['contacts_per_ball']:.2f} contacts/ball, peak RSS {peak / 2**20:.0f} MiB "
+        f"{result['contacts_per_ball']:.2f} contacts/ball, deepest overlap {100 * result['deepest_overlap']:.2g} % "
+        f"of a radius, peak RSS {peak / 2**20:.0f} MiB "
         f"({result['bytes_per_ball_above_baseline']:.0f} B/ball above baseline), arch={info.arch}, {info.precision}")
     log(f"baseline: a bare 12-neighbour gather runs at {gather_rate:.3g} balls/s; "
         f"one collision step costs {result['step_cost_in_bare_gathers']:.1f} such passes")
