@@ -265,17 +265,17 @@ def _cmd_run(args: argparse.Namespace) -> int:
             print(f"deepest overlap: {100 * deepest.fraction:.3g} % of a radius ({1e3 * deepest.depth:.3g} mm, "
                   f"balls {deepest.i} and {deepest.j})")
     f = sim.flight()
-    x = sim.x
+    x, status = sim.x, sim.status
     for i in np.flatnonzero(f.landed)[:10]:
         print(f"ball {i}: carry {f.carry[i]:.3f} m, apex {f.apex[i]:.2f} m, flight {f.flight_time[i]:.3f} s, "
               f"lands at {f.landing_angle[i]:.1f} deg, {f.landing_speed[i]:.2f} m/s; now at "
-              f"x = {x[i, 0]:.2f} m, z = {x[i, 2]:.2f} m ({STATUS_NAMES[int(sim.status[i])].replace('_', ' ')})")
+              f"x = {x[i, 0]:.2f} m, z = {x[i, 2]:.2f} m ({STATUS_NAMES[int(status[i])].replace('_', ' ')})")
     hole = sim.scene.hole
     if hole is not None:
         away = np.hypot(x[:, 0] - hole.position[0], x[:, 2] - hole.position[1])
         for i in range(min(sim.n, 10)):
             print(f"ball {i}: {away[i]:.2f} m from the hole at x = {hole.position[0]:g} m, z = {hole.position[1]:g} m "
-                  f"({STATUS_NAMES[int(sim.status[i])].replace('_', ' ')})")
+                  f"({STATUS_NAMES[int(status[i])].replace('_', ' ')})")
     if args.out:
         print(f"wrote {args.out}")
     if args.plot and rec is not None:
