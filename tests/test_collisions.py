@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import ti_golf as tg
-from ti_golf.config import AT_REST
+from ti_golf.config import AT_REST, Plane
 from ti_golf.solver import CollisionSolver
 
 # no gravity, air, walls or friction unless a test says otherwise
@@ -343,6 +343,24 @@ def test_balls_moved_between_steps_collide_in_the_next_step(serial):
     sim.v = [[0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]
     sim.step(1)
     np.testing.assert_allclose(sim.v, [[-1.0, 0, 0], [0, 0, 0]], atol=1e-12)
+
+
+@pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])
+def test_a_fast_ball_meets_a_wall_it_reaches_within_the_step(serial):
+    # A step skips the planes of a ball too far from all of them to reach one at its speed
+    # (collide.plane_clearance). Ball 0 is 10 mm from the wall of a three-plane box and flies at it
+    # at 30 m/s: it gets there within the 0.5 ms step (15 mm of flight). The wall jolts it by
+    # −(1 + e)·v_n (B.11, m_red = 1) and the step is split at the time of impact, 2/3 of the way:
+    # it ends 10 − (1/3)·0.5 ms·15 m/s = 2.5 mm from the wall. Ball 1, 20 mm away, flies on.
+    sc = dataclasses.replace(scene("contact.e=0.5", "contact.v_bounce=0"),
+                             planes=(Plane((0.5, 0, 0), (-1, 0, 0)), Plane((0, -5, 0), (0, 1, 0)),
+                                     Plane((0, 0, -5), (0, 0, 1))))
+    wall = 0.5 - sc.ball.radius  # where a centre touches the wall
+    sim = tg.Simulation(sc, x=[[wall - 0.010, 1.0, 0.0], [wall - 0.020, 2.0, 0.0]], v=[[30.0, 0, 0], [30.0, 0, 0]])
+    sim.solver = CollisionSolver(sim.model, serial=serial)
+    sim.step(1)
+    np.testing.assert_allclose(sim.v, [[-15.0, 0, 0], [30.0, 0, 0]], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(sim.x[:, 0] - wall, [-0.0025, -0.005], rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])

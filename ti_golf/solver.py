@@ -63,6 +63,7 @@ class CollisionSolver:
         self.x_free = ti.ndarray(vec3, n)
         self.v_free = ti.ndarray(vec3, n)
         self.calm = ti.ndarray(float, n)  # least rest timer of each ball and the balls it touches [s]
+        self.clear = ti.ndarray(float, n)  # least gap of each ball to the planes [m] (collide.plane_clearance)
         self.n_upper, self.n_lower = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
         self.upper = self.lower = self.lam = self.impulse = self.projection = None
         # resting impulses of the planes and (one column more) the terrain
@@ -179,6 +180,6 @@ class CollisionSolver:
             w.v_rest, w.t_rest, m.radius, m.mass, m.launch_height, m.plane_p, m.plane_n, m.terrain_params, m.terrain_h,
             m.terrain_cells, m.surface_table,
             self.upper, self.n_upper, self.lower, self.n_lower, self.x_at_build, self.lam, self.lam_plane,
-            s.x, s.v, s.w, s.status, s.rest_time, self.x_free, self.v_free, self.calm, self.impulse, self.projection,
-            s.landed, s.apex, s.t_land, s.land_x, s.land_v, self.flag,
+            s.x, s.v, s.w, s.status, s.rest_time, self.x_free, self.v_free, self.calm, self.clear, self.impulse,
+            self.projection, s.landed, s.apex, s.t_land, s.land_x, s.land_v, self.flag,
         )

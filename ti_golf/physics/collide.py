@@ -17,7 +17,8 @@ The kernel's top-level loops run one after another, each over all balls in paral
    this loop does not write, so it needs no loop of its own; the same reads give each owned
    pair's normal and gap, stored for the sweeps (positions do not change during them), and each
    ball's calm time for island-like sleeping (a *quiet* ball, at rest among balls at rest, is
-   then skipped by the sweeps);
+   then skipped by the sweeps) and its clearance from the planes (the sweeps skip the planes of
+   a ball that cannot reach one within the step);
 2. ``iterations`` Jacobi sweeps, each a pair loop (impulses from the velocities of the previous
    sweep, with the normals and gaps that the first loop stored) and a ball loop (gather, then the
    planes and the terrain: the plane of the patch under the ball, see :mod:`.terrain`, applied
@@ -46,6 +47,8 @@ from .types import (AirParams, ContactParams, TerrainParams, float_array, float_
                     vec3, vec3_array, vec6_table)
 
 QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
+FAR = 1e30  # the plane clearance of a ball when there are no planes (see plane_clearance)
+NEAR = -1.0  # the plane clearance of a ball resting on a plane: its planes are always visited
 
 
 @ti.func
@@ -148,6 +151,31 @@ def island_calm(calm, gap, r, status_j, rest_time_j):
 
 
 @ti.func
+def plane_clearance(i, x: ti.template(), radius: ti.template(), plane_p: ti.template(), plane_n: ti.template(),
+                    lam_plane: ti.template()):
+    """The least surface gap [m] of ball i to the planes at the start of the step (``FAR`` with
+    no planes), or ``NEAR`` when it keeps a resting impulse on one of them. A plane's gap at any
+    point y is at least this less |y − x_i| (the normals are unit vectors), which lets the sweeps
+    and :func:`finish` skip the planes of a ball that cannot reach any of them (most balls of a
+    pile in a bin) without changing any result."""
+    c = FAR
+    for p in range(plane_n.shape[0]):
+        c = ti.min(c, (x[i] - plane_p[p]).dot(plane_n[p]) - radius[i])
+        if lam_plane[i, p] > 0.0:
+            c = NEAR
+    return c
+
+
+@ti.func
+def beyond_reach(clear, r, reach_sqr):
+    """Whether a ball of radius ``r`` with plane clearance ``clear`` (:func:`plane_clearance`) stays
+    more than 2 % of a radius from every plane while it moves at most sqrt(``reach_sqr``) [m]: it
+    can neither touch one nor count as touching one (below 1 %), with room for round-off."""
+    c = clear - 0.02 * r
+    return c > 0.0 and c * c > reach_sqr
+
+
+@ti.func
 def resting_impulse(status: ti.template(), i, j, n, lam):
     """λ·n̂ [N·s] on ball i from its pair with j (n̂ from j to i), or zero when the pair gets no impulse."""
     P = vec3(0.0)
@@ -193,15 +221,22 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
 
 
 @ti.func
-def surface_impulses(i, warm: ti.template(), vi, wi, contact: ti.template(), h, v_inelastic, radius: ti.template(),
-                     plane_p: ti.template(), plane_n: ti.template(), terrain: ti.template(), heights: ti.template(),
-                     terrain_cells: ti.template(), surface_table: ti.template(), x: ti.template(),
-                     x_free: ti.template(), lam_plane: ti.template()):
+def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), contact: ti.template(), h, v_inelastic,
+                     radius: ti.template(), plane_p: ti.template(), plane_n: ti.template(), terrain: ti.template(),
+                     heights: ti.template(), terrain_cells: ti.template(), surface_table: ti.template(),
+                     x: ti.template(), x_free: ti.template(), lam_plane: ti.template()):
     """Ball i's contacts with the planes, then the terrain (the plane of the patch under its
     free-flight end point; its resting impulse is kept in the column after the planes' in
-    ``lam_plane``), applied in turn to (vi, wi): the warm start (``warm``) or a sweep. Returns (v, ω)."""
+    ``lam_plane``), applied in turn to (vi, wi): the warm start (``warm``) or a sweep. A sweep skips
+    the planes when the ball is too far from all of them (``clear[i]``, see :func:`plane_clearance`)
+    to touch one within the step at its speed, and marks the ball ``NEAR`` once it rests on one
+    (that resting impulse must be visited in later sweeps, to be given back). Returns (v, ω)."""
     r = radius[i]
-    for p in range(plane_n.shape[0]):
+    n_planes = plane_n.shape[0]
+    if ti.static(not warm):
+        if beyond_reach(clear[i], r, h * h * vi.norm_sqr()):
+            n_planes = 0
+    for p in range(n_planes):
         n = plane_n[p]
         if ti.static(warm):
             if lam_plane[i, p] > 0.0:
@@ -215,6 +250,8 @@ def surface_impulses(i, warm: ti.template(), vi, wi, contact: ti.template(), h, 
                 if P.dot(n) != 0.0:
                     vi, wi = plane_jolt(P, lam_p - lam_plane[i, p], vi, wi, r, n, contact.mu_roll)
                 lam_plane[i, p] = lam_p
+                if lam_p > 0.0:
+                    clear[i] = NEAR
     if terrain.on != 0:
         q = plane_n.shape[0]
         if ti.static(not warm) or lam_plane[i, q] > 0.0:
@@ -274,6 +311,7 @@ def collision_step(
     x_free: vec3_array,
     v_free: vec3_array,
     calm: float_array,
+    clear: float_array,
     J: vec6_table,
     G: real_table,
     # Flight record in/out:
@@ -315,8 +353,8 @@ def collision_step(
         step_balls(
             serial, air, contact, gravity, h, integrator, iterations, ti.cast(t0, real), half_skin, v_rest, t_rest,
             radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper,
-            n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J,
-            G, landed, apex, t_land, land_x, land_v, flag,
+            n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm,
+            clear, J, G, landed, apex, t_land, land_x, land_v, flag,
         )
         result = flag[0]
     else:
@@ -331,7 +369,7 @@ def collision_step(
                 serial, air, contact, gravity, h, integrator, iterations, ti.cast(t, real), half_skin, v_rest, t_rest,
                 radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper,
                 n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm,
-                J, G, landed, apex, t_land, land_x, land_v, flag,
+                clear, J, G, landed, apex, t_land, land_x, land_v, flag,
             )
             for i in range(x.shape[0]):
                 x[i] = x_free[i]
@@ -347,7 +385,8 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
                surface_table: ti.template(), upper: ti.template(), n_upper: ti.template(), lower: ti.template(),
                n_lower: ti.template(), x_at_build: ti.template(), lam: ti.template(), lam_plane: ti.template(),
                x: ti.template(), v: ti.template(), w: ti.template(), status: ti.template(), rest_time: ti.template(),
-               x_free: ti.template(), v_free: ti.template(), calm: ti.template(), J: ti.template(), G: ti.template(),
+               x_free: ti.template(), v_free: ti.template(), calm: ti.template(), clear: ti.template(),
+               J: ti.template(), G: ti.template(),
                landed: ti.template(), apex: ti.template(), t_land: ti.template(), land_x: ti.template(),
                land_v: ti.template(), flag: ti.template()):
     """One step of all balls, the body of :func:`collision_step` (see there) in parallel and serially."""
@@ -366,12 +405,13 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
                 landed[i], apex[i], t_land[i], land_x[i], land_v[i] = track_flight(
                     xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i], land_v[i])
         x_free[i], v_free[i] = x1, v1
+        clear[i] = plane_clearance(i, x, radius, plane_p, plane_n, lam_plane)
         dv, calm[i] = warm_start(i, x, radius, mass, status, rest_time, upper, n_upper, lower, n_lower, bits,
                                  lam, J, G)
         if status[i] != OUT_OF_BOUNDS and calm[i] != QUIET:
             v1 += dv
-            v1, w1 = surface_impulses(i, True, v1, w1, contact, h, v_inelastic, radius, plane_p, plane_n, terrain,
-                                      heights, terrain_cells, surface_table, x, x_free, lam_plane)
+            v1, w1 = surface_impulses(i, True, v1, w1, clear, contact, h, v_inelastic, radius, plane_p, plane_n,
+                                      terrain, heights, terrain_cells, surface_table, x, x_free, lam_plane)
         v[i], w[i] = v1, w1
     # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
     if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
@@ -379,17 +419,17 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
             sweep(False,
                   contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
                   heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
-                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J, G, flag)
+                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, G, flag)
     else:  # unrolled, so that each sweep's loops stay top-level loops (parallel)
         for _ in ti.static(range(iterations - 1)):
             sweep(False,
                   contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
                   heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
-                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, J, G, flag)
+                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, G, flag)
     sweep(True,
           contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain, heights,
           terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam, lam_plane, x, v, w,
-          status, rest_time, x_free, v_free, calm, J, G, flag)
+          status, rest_time, x_free, v_free, calm, clear, J, G, flag)
 
 
 @ti.func
@@ -399,7 +439,8 @@ def sweep(last: ti.template(), contact: ti.template(), h, v_inelastic, half_skin
           upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits,
           x_at_build: ti.template(), lam: ti.template(), lam_plane: ti.template(), x: ti.template(),
           v: ti.template(), w: ti.template(), status: ti.template(), rest_time: ti.template(), x_free: ti.template(),
-          v_free: ti.template(), calm: ti.template(), J: ti.template(), G: ti.template(), flag: ti.template()):
+          v_free: ti.template(), calm: ti.template(), clear: ti.template(), J: ti.template(), G: ti.template(),
+          flag: ti.template()):
     """One Jacobi sweep: the pairs' impulses from the velocities of the previous sweep, then each
     ball gathers them and meets its planes; the ``last`` sweep's ball loop also finishes the step.
     A quiet ball gets no impulse (its pairs are skipped) and stays where it is; the last pair pass
@@ -413,23 +454,23 @@ def sweep(last: ti.template(), contact: ti.template(), h, v_inelastic, half_skin
                 x_free[i] = x[i]
         elif status[i] != OUT_OF_BOUNDS:
             dv, dw, dx, touching = gather(i, last, radius, mass, upper, n_upper, lower, n_lower, bits, J, G)
-            v_new, w_new = surface_impulses(i, False, v[i] + dv, w[i] + dw, contact, h, v_inelastic, radius,
+            v_new, w_new = surface_impulses(i, False, v[i] + dv, w[i] + dw, clear, contact, h, v_inelastic, radius,
                                             plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
                                             x, x_free, lam_plane)
             if ti.static(not last):
                 v[i], w[i] = v_new, w_new
             else:
                 finish(i, v_new, w_new, dx, touching, contact, h, half_skin, v_rest, t_rest, radius, plane_p,
-                       plane_n, terrain, heights, x_at_build, x, v, w, status, rest_time, calm, x_free, v_free,
-                       flag)
+                       plane_n, terrain, heights, x_at_build, x, v, w, status, rest_time, calm, clear, x_free,
+                       v_free, flag)
 
 
 @ti.func
 def finish(i, v_final, w_final, dx, touching, contact: ti.template(), h, half_skin, v_rest, t_rest,
            radius: ti.template(), plane_p: ti.template(), plane_n: ti.template(), terrain: ti.template(),
            heights: ti.template(), x_at_build: ti.template(), x: ti.template(), v: ti.template(), w: ti.template(),
-           status: ti.template(), rest_time: ti.template(), calm: ti.template(), x_free: ti.template(),
-           v_free: ti.template(), flag: ti.template()):
+           status: ti.template(), rest_time: ti.template(), calm: ti.template(), clear: ti.template(),
+           x_free: ti.template(), v_free: ti.template(), flag: ti.template()):
     """End of the step for ball i (not out of bounds) with its final velocities, the position
     projection ``dx`` of its ball overlaps and whether it ``touching`` a ball: new position in
     ``x_free`` (split at a plane's time of impact, overlaps projected out), status, rest timer,
@@ -437,7 +478,10 @@ def finish(i, v_final, w_final, dx, touching, contact: ti.template(), h, half_sk
     st = status[i]
     xi, ri = x[i], radius[i]
     x1 = x_free[i] + h * (v_final - v_free[i])
-    for p in range(plane_p.shape[0]):
+    n_planes = plane_p.shape[0]  # none when no plane is within reach of the flight or the end point
+    if beyond_reach(clear[i], ri, ti.max((x_free[i] - xi).norm_sqr(), (x1 - xi).norm_sqr())):
+        n_planes = 0
+    for p in range(n_planes):
         x1 = plane_position(xi, x_free[i], x1, v_free[i], v_final, ri, plane_p[p], plane_n[p], contact.k_p, h)
         if (x1 - plane_p[p]).dot(plane_n[p]) - ri < 0.01 * ri:
             touching = 1
