@@ -200,8 +200,9 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         return sim, time.perf_counter() - t0
 
     sim, seconds = timed(terrain, asleep)
+    # the high-water mark of the simulation itself: before the copies below and any baseline run
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
     scene, xn, rebuilds = sim.scene, sim.x, sim.solver.rebuilds
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # before any baseline runs
     i, j = sim.solver.pairs().T
     touching = int(np.count_nonzero(np.linalg.norm(xn[i] - xn[j], axis=1) < 2 * 0.02 * 1.001))
     deepest = sim.deepest_overlap()  # speed is only worth quoting while the pile keeps its shape

@@ -19,6 +19,7 @@ class Model:
         n: number of balls.
         radius: ball radii [m], shape (N,), Taichi ndarray.
         mass: ball masses [kg], shape (N,), Taichi ndarray.
+        radius_np, mass_np: the same as read-only float64 numpy arrays (N,).
         launch_height: height whose downward crossing counts as landing [m], shape (N,).
         air, contact: kernel-argument structs (AirParams, ContactParams).
         gravity: g [m/s²], vec3.
@@ -44,8 +45,8 @@ class Model:
         self.mass.from_numpy(np.asarray(mass, dtype=f))
         self.launch_height = ti.ndarray(float, self.n)
         self.launch_height.from_numpy(np.asarray(launch_height, dtype=f))
-        self.radius_np = np.asarray(radius, dtype=float)
-        self.mass_np = np.asarray(mass, dtype=float)
+        self.radius_np = _compact(radius)
+        self.mass_np = _compact(mass)
         a, c, w = scene.air, scene.contact, scene.world
         self.air = AirParams(rho=a.rho, gamma=a.gamma, C_D=a.C_D, C_M=a.C_M, omega_M=a.omega_M,
                              C_omega=a.C_omega, wind=vec3(*a.wind))
@@ -78,3 +79,15 @@ class Model:
         surfaces = scene.surfaces or (Surface(),)
         self.surface_table = np.array([[c.e if sf.e is None else sf.e, c.mu if sf.mu is None else sf.mu,
                                         c.mu_roll if sf.mu_roll is None else sf.mu_roll] for sf in surfaces], dtype=f)
+
+
+def _compact(values: np.ndarray) -> np.ndarray:
+    """A read-only float64 copy of per-ball ``values`` (N,); when all are equal, as in most scenes, a
+    broadcast view of one number, which takes no memory per ball (8 bytes per ball and array less
+    for a million balls of one kind)."""
+    a = np.asarray(values, dtype=np.float64).reshape(-1)
+    if a.size > 1 and np.all(a == a[0]):
+        return np.broadcast_to(a[:1], a.shape)  # a broadcast view is read-only
+    a = a.copy()
+    a.flags.writeable = False
+    return a
