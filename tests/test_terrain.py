@@ -15,6 +15,7 @@ import pytest
 
 import ti_golf as tg
 from ti_golf import ConfigError
+from ti_golf.solver import CollisionSolver
 from ti_golf.terrain import Terrain, build_terrain, generate_heights
 from tests.conftest import run_cli
 
@@ -302,6 +303,28 @@ def test_no_ball_ends_below_hills_at_100_mps(collisions):
     assert np.count_nonzero(last_met >= 0) < 0.05 * sim.n  # left out: a handful of balls
     assert touched.sum() > 150  # most balls did hit the hills (at 5 to 100 m/s into the surface)
     assert sim.counts()["out_of_bounds"] > 0  # and some bounced off the grid
+
+
+@pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])
+def test_a_ball_over_a_steep_slope_meets_it_within_the_step(tmp_path, serial):
+    # A step skips the terrain of a ball that cannot reach it (collide.surface_clearance): the
+    # bound must allow for the tilt of the patch, whose plane lies closer to a ball than the
+    # height above the cell's top node. A 60° slope rises to its top node at x = 1 m; a ball 45 mm
+    # above that node (x = 0.999 m), falling at 10 m/s without gravity or friction, is
+    # (45 + 1.7)/2 − 20 = 3.4 mm from the slope's plane and closes at 5 m/s: it meets it within
+    # the 1 ms step (its height alone, 25 mm above the node's level, would say it cannot). With
+    # e = 0 the normal velocity is taken away (B.9): v = (0, −10, 0) − (v·n̂)n̂ with
+    # n̂ = (−√3, 1, 0)/2, v·n̂ = −5 m/s.
+    slope = math.sqrt(3.0)
+    np.save(tmp_path / "ramp.npy", np.repeat([[0.0], [slope], [slope]], 3, axis=1))  # h(x) = √3·min(x, 1)
+    sc = scene(world={"gravity": [0.0, 0.0, 0.0]}, contact={"e": 0.0, "mu": 0.0},
+               terrain={"kind": "file", "file": str(tmp_path / "ramp.npy"), "size": [2.0, 2.0]},
+               balls=[{"position": [0.999, slope + 0.045, 1.0], "velocity": [0.0, -10.0, 0.0]},
+                      {"position": [1.5, 3.0, 1.0]}])
+    sim = tg.Simulation(sc)
+    sim.solver = CollisionSolver(sim.model, serial=serial)
+    sim.step(1)
+    np.testing.assert_allclose(sim.v[0], [-2.5 * slope, -7.5, 0.0], rtol=0, atol=1e-9)
 
 
 # ---------------------------------------------------------------------------------------------

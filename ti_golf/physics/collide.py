@@ -17,8 +17,8 @@ The kernel's top-level loops run one after another, each over all balls in paral
    this loop does not write, so it needs no loop of its own; the same reads give each owned
    pair's normal and gap, stored for the sweeps (positions do not change during them), and each
    ball's calm time for island-like sleeping (a *quiet* ball, at rest among balls at rest, is
-   then skipped by the sweeps) and its clearance from the planes (the sweeps skip the planes of
-   a ball that cannot reach one within the step);
+   then skipped by the sweeps) and its clearance from the planes and the terrain (the sweeps
+   skip them for a ball that cannot reach one within the step);
 2. ``iterations`` Jacobi sweeps, each a pair loop (impulses from the velocities of the previous
    sweep, with the normals and gaps that the first loop stored) and a ball loop (gather, then the
    planes and the terrain: the plane of the patch under the ball, see :mod:`.terrain`, applied
@@ -42,13 +42,13 @@ from .contact import pair_impulse, plane_jolt, plane_position, rest_update, warm
 from .grid import int_table, owner_slot, real_table, relist_all_pairs, slot_bits
 from .integrate import IN_FLIGHT, step_free, track_flight
 from .kernels import lane_state
-from .terrain import outside, surface, surface_contact, terrain_position
+from .terrain import outside, same_cell, surface, surface_contact, terrain_clearance, terrain_position
 from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, real,
                     vec3, vec3_array, vec6_table)
 
 QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
-FAR = 1e30  # the plane clearance of a ball when there are no planes (see plane_clearance)
-NEAR = -1.0  # the plane clearance of a ball resting on a plane: its planes are always visited
+FAR = 1e30  # the surface clearance of a ball when there are no planes and no terrain (see surface_clearance)
+NEAR = -1.0  # the surface clearance of a ball resting on a plane or the terrain: it always visits them
 
 
 @ti.func
@@ -151,26 +151,36 @@ def island_calm(calm, gap, r, status_j, rest_time_j):
 
 
 @ti.func
-def plane_clearance(i, x: ti.template(), radius: ti.template(), plane_p: ti.template(), plane_n: ti.template(),
-                    lam_plane: ti.template()):
-    """The least surface gap [m] of ball i to the planes at the start of the step (``FAR`` with
-    no planes), or ``NEAR`` when it keeps a resting impulse on one of them. A plane's gap at any
-    point y is at least this less |y − x_i| (the normals are unit vectors), which lets the sweeps
-    and :func:`finish` skip the planes of a ball that cannot reach any of them (most balls of a
-    pile in a bin) without changing any result."""
+def surface_clearance(i, x: ti.template(), x_free_i, radius: ti.template(), plane_p: ti.template(),
+                      plane_n: ti.template(), terrain: ti.template(), heights: ti.template(),
+                      lam_plane: ti.template()):
+    """The least surface gap [m] of ball i to the planes at the start of the step and, with a
+    terrain, a lower bound on its gap to the terrain less its free-flight displacement (see
+    :func:`terrain.terrain_clearance`; the free-flight end point ``x_free_i``); ``FAR`` with
+    neither, ``NEAR`` when the ball keeps a resting impulse on one of them. A plane's gap at any
+    point y is at least the plane clearance less |y − x_i| (the normals are unit vectors), a
+    terrain patch's at least the terrain clearance less twice that (the patch is taken under a
+    moved point too). This lets the sweeps and :func:`finish` skip the planes and the terrain of a
+    ball that cannot reach any of them (most balls of a pile) without changing any result."""
     c = FAR
     for p in range(plane_n.shape[0]):
         c = ti.min(c, (x[i] - plane_p[p]).dot(plane_n[p]) - radius[i])
         if lam_plane[i, p] > 0.0:
             c = NEAR
+    if terrain.on != 0:
+        if lam_plane[i, plane_n.shape[0]] > 0.0:
+            c = NEAR
+        elif c != NEAR:
+            c = ti.min(c, terrain_clearance(heights, terrain, x[i], x_free_i, radius[i]))
     return c
 
 
 @ti.func
 def beyond_reach(clear, r, reach_sqr):
-    """Whether a ball of radius ``r`` with plane clearance ``clear`` (:func:`plane_clearance`) stays
-    more than 2 % of a radius from every plane while it moves at most sqrt(``reach_sqr``) [m]: it
-    can neither touch one nor count as touching one (below 1 %), with room for round-off."""
+    """Whether a ball of radius ``r`` with surface clearance ``clear`` (:func:`surface_clearance`)
+    stays more than 2 % of a radius from every plane and the terrain while its gaps shrink by at
+    most sqrt(``reach_sqr``) [m]: it can neither touch one nor count as touching one (below 1 %),
+    with room for round-off."""
     c = clear - 0.02 * r
     return c > 0.0 and c * c > reach_sqr
 
@@ -228,14 +238,16 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
     """Ball i's contacts with the planes, then the terrain (the plane of the patch under its
     free-flight end point; its resting impulse is kept in the column after the planes' in
     ``lam_plane``), applied in turn to (vi, wi): the warm start (``warm``) or a sweep. A sweep skips
-    the planes when the ball is too far from all of them (``clear[i]``, see :func:`plane_clearance`)
+    them when the ball is too far from all of them (``clear[i]``, see :func:`surface_clearance`)
     to touch one within the step at its speed, and marks the ball ``NEAR`` once it rests on one
     (that resting impulse must be visited in later sweeps, to be given back). Returns (v, ω)."""
     r = radius[i]
-    n_planes = plane_n.shape[0]
+    far = False
     if ti.static(not warm):
-        if beyond_reach(clear[i], r, h * h * vi.norm_sqr()):
-            n_planes = 0
+        far = beyond_reach(clear[i], r, h * h * vi.norm_sqr())
+    n_planes = plane_n.shape[0]
+    if far:
+        n_planes = 0
     for p in range(n_planes):
         n = plane_n[p]
         if ti.static(warm):
@@ -252,7 +264,7 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
                 lam_plane[i, p] = lam_p
                 if lam_p > 0.0:
                     clear[i] = NEAR
-    if terrain.on != 0:
+    if terrain.on != 0 and not far:
         q = plane_n.shape[0]
         if ti.static(not warm) or lam_plane[i, q] > 0.0:
             pt, n = surface(heights, terrain, x_free[i])
@@ -267,6 +279,8 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
                 if P.dot(n) != 0.0:
                     vi, wi = plane_jolt(P, lam_p - lam_plane[i, q], vi, wi, r, n, ct.mu_roll)
                 lam_plane[i, q] = lam_p
+                if lam_p > 0.0:
+                    clear[i] = NEAR
     return vi, wi
 
 
@@ -405,7 +419,7 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
                 landed[i], apex[i], t_land[i], land_x[i], land_v[i] = track_flight(
                     xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i], land_v[i])
         x_free[i], v_free[i] = x1, v1
-        clear[i] = plane_clearance(i, x, radius, plane_p, plane_n, lam_plane)
+        clear[i] = surface_clearance(i, x, x1, radius, plane_p, plane_n, terrain, heights, lam_plane)
         dv, calm[i] = warm_start(i, x, radius, mass, status, rest_time, upper, n_upper, lower, n_lower, bits,
                                  lam, J, G)
         if status[i] != OUT_OF_BOUNDS and calm[i] != QUIET:
@@ -478,14 +492,21 @@ def finish(i, v_final, w_final, dx, touching, contact: ti.template(), h, half_sk
     st = status[i]
     xi, ri = x[i], radius[i]
     x1 = x_free[i] + h * (v_final - v_free[i])
-    n_planes = plane_p.shape[0]  # none when no plane is within reach of the flight or the end point
-    if beyond_reach(clear[i], ri, ti.max((x_free[i] - xi).norm_sqr(), (x1 - xi).norm_sqr())):
+    # no plane or terrain patch within reach of the flight or the end point (see surface_clearance)
+    moved = ti.max((x_free[i] - xi).norm_sqr(), (x1 - xi).norm_sqr())
+    far = False
+    if terrain.on == 0:
+        far = beyond_reach(clear[i], ri, moved)
+    else:
+        far = beyond_reach(clear[i], ri, 4.0 * moved) and same_cell(heights, terrain, xi, x1)
+    n_planes = plane_p.shape[0]
+    if far:
         n_planes = 0
     for p in range(n_planes):
         x1 = plane_position(xi, x_free[i], x1, v_free[i], v_final, ri, plane_p[p], plane_n[p], contact.k_p, h)
         if (x1 - plane_p[p]).dot(plane_n[p]) - ri < 0.01 * ri:
             touching = 1
-    if terrain.on != 0:
+    if terrain.on != 0 and not far:
         pt, nt = surface(heights, terrain, x_free[i])
         x1 = plane_position(xi, x_free[i], x1, v_free[i], v_final, ri, pt, nt, contact.k_p, h)
         x1 = terrain_position(xi, x1, pt, nt, ri, heights, terrain)

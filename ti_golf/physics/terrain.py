@@ -63,6 +63,39 @@ def surface(heights: ti.template(), terrain, x):
 
 
 @ti.func
+def terrain_clearance(heights: ti.template(), terrain, x, x_free, radius):
+    """A lower bound [m] on the surface gap of a ball of ``radius`` at x [m] to the plane of any
+    patch point of the cell under x (:func:`surface`), less the ball's free-flight displacement
+    |x_free − x|; or −1 when x_free lies over another cell or the ball is not above the cell's
+    highest node. A patch plane at q has the normal (−h_x, 1, −h_z)/N, N = √(1 + h_x² + h_z²), so
+    for x above the cell's top node by a > 0, with |(h_x, h_z)| ≤ S in the cell and q within d of
+    x horizontally: gap ≥ (a − S·d)/√(1 + S²) − radius ≥ a/√(1 + S²) − d − radius once
+    a > S·d; a point y within D of x is then at least D less. Lets a step skip the terrain for
+    balls that cannot reach it (a pile on a height-field floor) without changing any result."""
+    c = -1.0
+    i, k, _, _ = cell_under(heights, terrain, x)
+    i2, k2, _, _ = cell_under(heights, terrain, x_free)
+    if i == i2 and k == k2:
+        h00, h10 = heights[i, k], heights[i + 1, k]
+        h01, h11 = heights[i, k + 1], heights[i + 1, k + 1]
+        above = x[1] - terrain.origin[1] - ti.max(ti.max(h00, h10), ti.max(h01, h11))
+        sx = ti.max(ti.abs(h10 - h00), ti.abs(h11 - h01)) / terrain.dx
+        sz = ti.max(ti.abs(h01 - h00), ti.abs(h11 - h10)) / terrain.dz
+        if above > 0.0:
+            c = above / ti.sqrt(1.0 + sx * sx + sz * sz) - radius - (x_free - x).norm()
+    return c
+
+
+@ti.func
+def same_cell(heights: ti.template(), terrain, x, y):
+    """Whether the points x and y [m] lie over the same grid cell (clamped at the edges, see
+    :func:`cell_under`)."""
+    i, k, _, _ = cell_under(heights, terrain, x)
+    i2, k2, _, _ = cell_under(heights, terrain, y)
+    return i == i2 and k == k2
+
+
+@ti.func
 def outside(heights: ti.template(), terrain, x):
     """Whether a ball at x [m] is out of bounds: its (x, z) off the grid or y below ``terrain.kill``."""
     ex = terrain.dx * (heights.shape[0] - 1)
