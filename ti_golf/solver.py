@@ -59,6 +59,7 @@ class CollisionSolver:
         self.sorted_ids = ti.ndarray(ti.i32, n)
         self.count = ti.ndarray(ti.i32, self.mask + 1)
         self.start = ti.ndarray(ti.i32, self.mask + 2)
+        self.chunk_start = ti.ndarray(ti.i32, grid.scan_chunks(self.mask + 1))
         self.x_at_build = ti.ndarray(vec3, n)
         self.x_free = ti.ndarray(vec3, n)
         self.v_free = ti.ndarray(vec3, n)
@@ -87,9 +88,9 @@ class CollisionSolver:
             if self.lower is None or self.lower.shape[1] != self.capacity[1]:
                 self.lower = ti.ndarray(ti.i32, (n, self.capacity[1]))
             longest = grid.list_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, self.skin,
-                                           self.bucket, self.rank, self.count, self.start, self.sorted_ids,
-                                           self.upper, self.n_upper, self.lower, self.n_lower, self.x_at_build,
-                                           self.flag)
+                                           self.bucket, self.rank, self.count, self.start, self.chunk_start,
+                                           self.sorted_ids, self.upper, self.n_upper, self.lower, self.n_lower,
+                                           self.x_at_build, self.flag)
             if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
                 break
             # widen to the longest list found (no power-of-two padding: memory follows the pile)

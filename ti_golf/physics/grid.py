@@ -61,6 +61,7 @@ def list_neighbours(
     rank: int_array,
     count: int_array,
     start: int_array,
+    chunk_start: int_array,
     sorted_ids: int_array,
     # out:
     upper: int_table,
@@ -75,8 +76,8 @@ def list_neighbours(
     those pairs), ``lower[i]`` the neighbours j < i (to be turned into slots by :func:`link_lower`
     or :func:`link_and_carry`). One launch (a launch from Python costs about 0.1 ms; the grid
     took five). The counting sort: each ball's bucket and its rank among the balls of that bucket
-    (an integer atomic add), the buckets' starts (a serial scan: ``PrefixSumExecutor`` does not
-    run on CPU; ``start`` has one entry more than ``count``), then the ball ids grouped by bucket:
+    (an integer atomic add), the buckets' starts (:func:`bucket_starts`; ``start`` has one entry
+    more than ``count``, ``chunk_start`` is its scratch), then the ball ids grouped by bucket:
     ``sorted_ids[start[b] : start[b + 1]]`` are the balls of bucket b. Returns the longest upper
     and lower lists found, also left in ``longest[0:2]`` (they may exceed the tables' widths: the
     caller then rebuilds wider)."""
@@ -87,9 +88,7 @@ def list_neighbours(
         b = bucket_of(cell_of(x[i], inv_cell), mask)
         bucket[i] = b
         rank[i] = ti.atomic_add(count[b], 1)
-    ti.loop_config(serialize=True)
-    for b in range(count.shape[0]):
-        start[b + 1] = start[b] + count[b]
+    bucket_starts(count, start, chunk_start)
     for i in range(x.shape[0]):
         sorted_ids[start[bucket[i]] + rank[i]] = i
     for idx in range(x.shape[0]):
@@ -101,6 +100,48 @@ def list_neighbours(
         ti.atomic_max(longest[0], n_up)
         ti.atomic_max(longest[1], n_low)
     return ti.Vector([longest[0], longest[1]])
+
+
+SCAN_CHUNKS = 4096
+"""Most chunks the buckets' scan (:func:`bucket_starts`) splits the buckets into: the length of its
+one serial loop, far below the 65,535 iterations after which Taichi's Vulkan backend silently
+stops a serial loop."""
+
+
+def scan_chunks(buckets: int) -> int:
+    """Length of the ``chunk_start`` scratch of :func:`list_neighbours` for ``buckets`` buckets:
+    chunks of at least 64 buckets, at most ``SCAN_CHUNKS`` of them, plus one entry."""
+    return max(1, min(SCAN_CHUNKS, buckets // 64)) + 1
+
+
+@ti.func
+def bucket_starts(count: ti.template(), start: ti.template(), chunk_start: ti.template()):
+    """start[b + 1] = count[0] + … + count[b] with start[0] = 0 (an exclusive scan of the bucket
+    counts), in three loops: the sums of chunks of buckets, in parallel; a serial scan of those
+    sums into ``chunk_start`` (as many entries as there are chunks, plus one); each chunk's
+    running sum from its start, in parallel. No loop runs long on one thread: a single-thread
+    scan of all buckets (2^21 of them for a million balls) would crawl on a GPU, and Taichi's
+    Vulkan backend stops a serial loop after 65,535 iterations without a word, which left most
+    balls of a large pile without neighbours (``PrefixSumExecutor`` does not run on CPU).
+    Integer sums: the same result on every backend and thread count."""
+    n_chunks = chunk_start.shape[0] - 1
+    size = (count.shape[0] + n_chunks - 1) // n_chunks
+    for c in range(n_chunks):
+        total = 0
+        for b in range(c * size, ti.min((c + 1) * size, count.shape[0])):
+            total += count[b]
+        chunk_start[c + 1] = total
+        if c == 0:
+            chunk_start[0] = 0
+            start[0] = 0
+    ti.loop_config(serialize=True)
+    for c in range(n_chunks):
+        chunk_start[c + 1] += chunk_start[c]
+    for c in range(n_chunks):
+        running = chunk_start[c]
+        for b in range(c * size, ti.min((c + 1) * size, count.shape[0])):
+            running += count[b]
+            start[b + 1] = running
 
 
 @ti.func
