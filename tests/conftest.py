@@ -12,6 +12,18 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "scenes"
 
+TEST_ARCH = os.environ.get("TI_GOLF_TEST_ARCH", "cpu")
+"""The backend of the whole session: CPU unless ``TI_GOLF_TEST_ARCH`` names another, to run the
+suite on a GPU (``TI_GOLF_TEST_ARCH=cuda make test``). Also the default of the processes the tests
+start, and of any kernel a test module launches while it is collected."""
+os.environ["TI_GOLF_ARCH"] = TEST_ARCH
+
+ON_CPU = TEST_ARCH == "cpu"
+SERIAL_OR_PARALLEL = pytest.mark.parametrize(
+    "serial", [pytest.param(True, marks=pytest.mark.skipif(not ON_CPU, reason="serial stepping runs on the CPU only")),
+               False], ids=["serial", "parallel"])
+"""Run a test with the collision step forced serial (``CollisionSolver(serial=True)``) and parallel."""
+
 
 @pytest.fixture(scope="session", autouse=True)
 def taichi_runtime():
@@ -19,7 +31,7 @@ def taichi_runtime():
     backend or precision start a subprocess)."""
     import ti_golf
 
-    return ti_golf.init("cpu", "f64")
+    return ti_golf.init(TEST_ARCH, "f64")
 
 
 def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 600) -> subprocess.CompletedProcess:

@@ -12,12 +12,13 @@ import math
 
 import numpy as np
 import pytest
+from conftest import SERIAL_OR_PARALLEL
 
 import ti_golf as tg
+from tests.conftest import run_cli
 from ti_golf import ConfigError
 from ti_golf.solver import CollisionSolver
 from ti_golf.terrain import Terrain, build_terrain, generate_heights
-from tests.conftest import run_cli
 
 G = 9.81
 R = 0.02
@@ -305,7 +306,7 @@ def test_no_ball_ends_below_hills_at_100_mps(collisions):
     assert sim.counts()["out_of_bounds"] > 0  # and some bounced off the grid
 
 
-@pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])
+@SERIAL_OR_PARALLEL
 def test_a_ball_over_a_steep_slope_meets_it_within_the_step(tmp_path, serial):
     # A step skips the terrain of a ball that cannot reach it (collide.surface_clearance): the
     # bound must allow for the tilt of the patch, whose plane lies closer to a ball than the

@@ -103,6 +103,11 @@ def ensure_init() -> RuntimeInfo:
     return _info if _info is not None else init()
 
 
+def on_cpu() -> bool:
+    """Whether the kernels run on a CPU backend (initialising with the defaults if need be)."""
+    return ensure_init().arch in ("x64", "arm64")
+
+
 def info() -> RuntimeInfo | None:
     """The current runtime, or ``None`` before :func:`init`."""
     return _info
@@ -134,7 +139,7 @@ def plain_compile() -> Iterator[None]:
     passes), and Taichi's SPIR-V code generator (Vulkan) cannot compile the sweep kernel without
     them at all ("Not supported").
     """
-    if ensure_init().arch not in ("x64", "arm64"):
+    if not on_cpu():
         yield
         return
     cfg = ti.lang.impl.current_cfg()

@@ -10,7 +10,7 @@ from .errors import SimulationError
 from .model import Model
 from .physics import collide, grid
 from .physics.types import vec3
-from .runtime import ensure_init, plain_compile
+from .runtime import on_cpu, plain_compile
 from .state import State
 
 
@@ -26,7 +26,7 @@ balls, and for 512 the parallel step wins."""
 def steps_serially(n: int) -> bool:
     """Whether :class:`CollisionSolver` steps ``n`` balls serially by default: few balls, on the CPU
     (a GPU would run the serial loop on one slow thread)."""
-    return n <= SERIAL_MAX_BALLS and ensure_init().arch in ("x64", "arm64")
+    return n <= SERIAL_MAX_BALLS and on_cpu()
 
 
 class CollisionSolver:
@@ -38,8 +38,9 @@ class CollisionSolver:
         capacity: widths of the (upper, lower) neighbour tables (they grow when a list overflows).
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
         serial: whether steps run serially, many per launch, with the lists rebuilt in the kernel
-            by testing every pair (default: :func:`steps_serially`); else one parallel launch
-            per step, with the hash grid. Both give the same lists and bit-identical steps.
+            by testing every pair (default: :func:`steps_serially`; CPU backends only); else one
+            parallel launch per step, with the hash grid. Both give the same lists and
+            bit-identical steps.
     """
 
     def __init__(self, model: Model, capacity: int = 1, serial: bool | None = None) -> None:
@@ -50,6 +51,8 @@ class CollisionSolver:
         self.cell = 2.0 * r_max + self.skin
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
         self.serial = steps_serially(n) if serial is None else bool(serial)
+        if self.serial and not on_cpu():
+            raise ValueError("serial stepping runs on the CPU backend only (on a GPU it would run on one thread)")
         if self.serial:  # tables wide enough for every other ball: the kernel's lists cannot overflow
             capacity = max(capacity, n - 1, 1)
         self.capacity = (capacity, capacity)

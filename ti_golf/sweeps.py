@@ -13,7 +13,7 @@ import numpy as np
 from .config import Scene, backspin_axis
 from .errors import ConfigError, SimulationError
 from .results import CSV_COLUMNS, Flight
-from .runtime import ensure_init, np_float, plain_compile
+from .runtime import ensure_init, np_float, on_cpu, plain_compile
 from .scene import load_scene
 
 
@@ -103,10 +103,9 @@ def default_lanes() -> int:
     Measured with ``ti-golf bench sweep`` on a 2-core AVX-512 machine: 2, 4 and 8 lanes gave about
     0.49, 0.49 and 0.80 million trajectories/s in f64; GPUs already run one ball per SIMT lane.
     """
-    info = ensure_init()
-    if info.arch not in ("x64", "arm64"):
+    if not on_cpu():
         return 1
-    return 8 if info.precision == "f64" else 16
+    return 8 if ensure_init().precision == "f64" else 16
 
 
 def fly(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, record_every: int = 0,
