@@ -266,16 +266,20 @@ def _cmd_run(args: argparse.Namespace) -> int:
                   f"balls {deepest.i} and {deepest.j})")
     f = sim.flight()
     x, status = sim.x, sim.status
+
+    def state_of(i: int) -> str:  # "at rest", "out of bounds", ...
+        return STATUS_NAMES[int(status[i])].replace("_", " ")
+
     for i in np.flatnonzero(f.landed)[:10]:
         print(f"ball {i}: carry {f.carry[i]:.3f} m, apex {f.apex[i]:.2f} m, flight {f.flight_time[i]:.3f} s, "
               f"lands at {f.landing_angle[i]:.1f} deg, {f.landing_speed[i]:.2f} m/s; now at "
-              f"x = {x[i, 0]:.2f} m, z = {x[i, 2]:.2f} m ({STATUS_NAMES[int(status[i])].replace('_', ' ')})")
+              f"x = {x[i, 0]:.2f} m, z = {x[i, 2]:.2f} m ({state_of(i)})")
     hole = sim.scene.hole
     if hole is not None:
         away = np.hypot(x[:, 0] - hole.position[0], x[:, 2] - hole.position[1])
         for i in range(min(sim.n, 10)):
             print(f"ball {i}: {away[i]:.2f} m from the hole at x = {hole.position[0]:g} m, z = {hole.position[1]:g} m "
-                  f"({STATUS_NAMES[int(status[i])].replace('_', ' ')})")
+                  f"({state_of(i)})")
     if args.out:
         print(f"wrote {args.out}")
     if args.plot and rec is not None:
