@@ -156,7 +156,7 @@ def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scen
 
 
 def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asleep: bool = False,
-                  iterations: int = 4, log: Callable[[str], None] = print) -> dict[str, Any]:
+                  shuffled: bool = False, iterations: int = 4, log: Callable[[str], None] = print) -> dict[str, Any]:
     """Time the full collision step (flight forces, grid, ball–ball and plane contacts) on a dense pile.
 
     With ``terrain`` the floor is a flat height field, and the same pile on the plane floor is
@@ -165,6 +165,9 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     awake is timed in the same run as the baseline (``asleep_speedup``). A pile small enough to be
     stepped serially (``serial``, see ``solver.SERIAL_MAX_BALLS``) is also timed stepped in
     parallel, one launch per step, as the baseline (``serial_speedup``).
+    With ``shuffled`` the balls are numbered in a random order, as in a pile poured from a random
+    fill, and the same pile kept in that order (no reordering, see ``CollisionSolver.reorder``) is
+    timed in the same run as the baseline (``reorder_speedup``).
     """
     import resource
 
@@ -175,22 +178,26 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     info = ensure_init()
     serial = steps_serially(n)
 
-    def pile(m: int, floor: bool, parallel: bool = False) -> Simulation:
+    def pile(m: int, floor: bool, parallel: bool = False, reorder: bool | None = None) -> Simulation:
         scene, x = pile_scene(m, floor, iterations)
+        if shuffled:
+            x = x[np.random.default_rng(0).permutation(m)]
         sim = Simulation(scene, x=x)
-        if parallel:
-            sim.solver = CollisionSolver(sim.model, serial=False)
+        if parallel or reorder is not None:
+            sim.solver = CollisionSolver(sim.model, serial=False if parallel else None, reorder=reorder)
         return sim
 
-    for floor in (False, True) if terrain else (False,):
-        for parallel in (False, True) if serial else (True,):  # compile every kernel before timing
-            warm = pile(64, floor, parallel)
-            warm.step(3)
+    for floor in (False, True) if terrain else (False,):  # compile every kernel before timing
+        for parallel, reorder in ((False, None),) * serial + ((True, False), (True, True)):
+            warm = pile(64, floor, parallel, reorder)
+            warm.step(2)
+            warm.solver.invalidate()  # a rebuild that carries the pairs' impulses over
+            warm.step(1)
             del warm
     base_rss = _rss_bytes()
 
-    def timed(floor: bool, sleeping: bool, parallel: bool = False) -> tuple[Any, float]:
-        sim = pile(n, floor, parallel)
+    def timed(floor: bool, sleeping: bool, parallel: bool = False, reorder: bool | None = None) -> tuple[Any, float]:
+        sim = pile(n, floor, parallel, reorder)
         sim.step(10)  # settle the first contacts, build the lists
         if sleeping:
             put_to_sleep(sim)
@@ -202,7 +209,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     sim, seconds = timed(terrain, asleep)
     # the high-water mark of the simulation itself: before the copies below and any baseline run
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-    scene, xn, rebuilds = sim.scene, sim.x, sim.solver.rebuilds
+    scene, xn, rebuilds, sim_reordered = sim.scene, sim.x, sim.solver.rebuilds, sim.solver.reorder
     i, j = sim.solver.pairs().T
     touching = int(np.count_nonzero(np.linalg.norm(xn[i] - xn[j], axis=1) < 2 * 0.02 * 1.001))
     deepest = sim.deepest_overlap()  # speed is only worth quoting while the pile keeps its shape
@@ -211,6 +218,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     plane_seconds = timed(False, asleep)[1] if terrain else None  # the baselines, timed in the same run
     awake_seconds = timed(terrain, False)[1] if asleep else None
     parallel_seconds = timed(terrain, asleep, parallel=True)[1] if serial else None
+    in_id_order_seconds = timed(terrain, asleep, reorder=False)[1] if shuffled and not serial else None
     gather_rate = bare_gather_rate(xn)
     result = {
         "benchmark": "collide",
@@ -227,6 +235,8 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         "serial": serial,  # stepped serially, many steps per launch (few balls; see solver.SERIAL_MAX_BALLS)
         "floor": "terrain" if terrain else "plane",
         "asleep": asleep,
+        "shuffled": shuffled,
+        "reordered": sim_reordered,
         "peak_rss_bytes": peak,
         # the OS's high-water mark (ru_maxrss) can lag the current RSS by a few pages: no negative growth
         "bytes_per_ball_above_baseline": max(peak - base_rss, 0) / n,
@@ -241,6 +251,10 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         result["baselines"]["awake_ms_per_step"] = 1e3 * awake_seconds / steps
         result["asleep_speedup"] = awake_seconds / seconds
         log(f"the pile asleep vs awake: {result['asleep_speedup']:.2f}x faster per step")
+    if in_id_order_seconds is not None:
+        result["baselines"]["not_reordered_ms_per_step"] = 1e3 * in_id_order_seconds / steps
+        result["reorder_speedup"] = in_id_order_seconds / seconds
+        log(f"stored in the grid's order vs left in random id order: {result['reorder_speedup']:.2f}x faster per step")
     if parallel_seconds is not None:
         result["baselines"]["parallel_ms_per_step"] = 1e3 * parallel_seconds / steps
         result["serial_speedup"] = parallel_seconds / seconds

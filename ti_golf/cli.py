@@ -99,6 +99,10 @@ def build_parser() -> argparse.ArgumentParser:
     bc.add_argument("--asleep", action="store_true",
                     help="every ball of the pile at rest, as a settled pile ends up (the pile awake is timed too, "
                          "as baseline)")
+    bc.add_argument("--shuffled", action="store_true",
+                    help="the pile's balls numbered in a random order, as a pile poured from a random fill is "
+                         "(the same pile left in that order, not stored in the grid's order, is timed too, as "
+                         "baseline)")
     bc.add_argument("--iterations", type=int, default=4,
                     help="Jacobi sweeps per step (default 4, the scenes' default; a deep pile at rest needs 8)")
     bc.add_argument("--json", action="store_true", help="end with one line of JSON")
@@ -357,7 +361,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         if not 1 <= args.iterations <= 100:
             raise ConfigError("--iterations", None, f"must be in [1, 100] (got {args.iterations})")
         result = bench_collide(n=args.n, steps=args.steps, terrain=args.terrain, asleep=args.asleep,
-                               iterations=args.iterations)
+                               shuffled=args.shuffled, iterations=args.iterations)
     else:
         if not args.dt > 0:
             raise ConfigError("--dt", None, f"must be > 0 (got {args.dt})")

@@ -19,8 +19,10 @@ class Model:
         n: number of balls.
         radius: ball radii [m], shape (N,), Taichi ndarray.
         mass: ball masses [kg], shape (N,), Taichi ndarray.
-        radius_np, mass_np: the same as read-only float64 numpy arrays (N,).
+        radius_np, mass_np: the same as read-only float64 numpy arrays (N,), by ball id.
         launch_height: height whose downward crossing counts as landing [m], shape (N,).
+        The Taichi arrays ``PER_BALL`` follow the state's storage order (``State.order``): a
+        collision solver may store the balls in another order than their ids.
         air, contact: kernel-argument structs (AirParams, ContactParams).
         gravity: g [m/s²], vec3.
         integrator: the integrator code (a compile-time constant of the kernels).
@@ -34,6 +36,9 @@ class Model:
         terrain_h: the terrain's heights (nx, nz) [m] as a Taichi ndarray (a 2×2 zero grid
             without a terrain: kernels always take one).
     """
+
+    PER_BALL = ("radius", "mass", "launch_height")
+    """The per-ball Taichi arrays."""
 
     def __init__(self, scene: Scene, radius: np.ndarray, mass: np.ndarray, launch_height: np.ndarray) -> None:
         f = np_float()

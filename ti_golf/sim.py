@@ -120,14 +120,14 @@ class Simulation:
         return self.model.dt
 
     def _vectors(self, name: str) -> np.ndarray:
-        return getattr(self.state, name).to_numpy().astype(np.float64)
+        return self.state.read(name).astype(np.float64)
 
     def _assign(self, name: str, value: np.ndarray) -> None:
         """Overwrite x, v or w; a changed velocity or spin wakes balls at rest."""
         arr = _as_vectors(value, name, self.n).astype(np_float())
         if name != "x":
             self._wake()
-        getattr(self.state, name).from_numpy(arr)
+        self.state.write(name, arr)
         if name == "x" and self.solver is not None:
             self.solver.invalidate()  # moved balls may now touch balls missing from their lists
 
@@ -141,7 +141,7 @@ class Simulation:
     @property
     def status(self) -> np.ndarray:
         """Per-ball status codes (ti_golf.config: FLYING, ROLLING, AT_REST, OUT_OF_BOUNDS), shape (N,)."""
-        return self.state.status.to_numpy()
+        return self.state.read("status")
 
     @property
     def terrain(self):
@@ -213,8 +213,9 @@ class Simulation:
         if self._check_buf is None:
             self._check_buf = ti.ndarray(ti.i32, 1)
         kernels.first_nonfinite(self.state.x, self.state.v, self.state.w, self._check_buf)
-        bad = int(self._check_buf.to_numpy()[0])
-        if bad < self.n:
+        if int(self._check_buf.to_numpy()[0]) < self.n:
+            finite = np.isfinite(self.x).all(axis=1) & np.isfinite(self.v).all(axis=1) & np.isfinite(self.w).all(axis=1)
+            bad = int(np.argmin(finite))  # the lowest ball id (balls may be stored in another order)
             raise SimulationError(
                 f"ball {bad} went non-finite at t = {self.t:.6g} s (x, v or ω is NaN or infinite); "
                 "try a smaller world.dt or check the scene's parameters",
@@ -273,7 +274,7 @@ class Simulation:
         if until == "rest":
             s = self.status
             return bool(np.all((s == AT_REST) | (s == OUT_OF_BOUNDS)))
-        landed = self.state.landed.to_numpy()
+        landed = self.state.landed.to_numpy()  # storage order: only all() is asked
         return bool(np.all(landed != 0))
 
     def save(self, path: str | os.PathLike[str], recording: Recording | None = None) -> None:

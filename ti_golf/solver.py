@@ -23,6 +23,11 @@ every step (balls flying apart: n² distance tests each time, serially) the two 
 balls, and for 512 the parallel step wins."""
 
 
+REORDER_MIN_BALLS = 8192
+"""From this many balls on, the parallel step stores the balls in grid order (see
+:attr:`CollisionSolver.reorder`): smaller piles stay in the CPU's caches whatever their order."""
+
+
 def steps_serially(n: int) -> bool:
     """Whether :class:`CollisionSolver` steps ``n`` balls serially by default: few balls, on the CPU
     (a GPU would run the serial loop on one slow thread)."""
@@ -41,9 +46,19 @@ class CollisionSolver:
             by testing every pair (default: :func:`steps_serially`; CPU backends only); else one
             parallel launch per step, with the hash grid. Both give the same lists and
             bit-identical steps.
+        reorder: whether every list build also stores the balls in the grid's order, so that
+            balls close in space lie close in memory (default: from ``REORDER_MIN_BALLS`` balls
+            on, parallel steps only). A pile whose ids are in no spatial order (a random fill,
+            balls that have mixed) otherwise fetches every neighbour from a cache line of its
+            own. Each per-ball array of the state and the model is gathered into the new order
+            (``State.order`` records it; :class:`~ti_golf.sim.Simulation` reads and writes by
+            ball id), and the pairs keep their accumulated impulses. The physics is the same, but
+            sums over a ball's neighbours run in another order: results differ from a run
+            without reordering by round-off, and two runs of a scene still agree bit for bit.
     """
 
-    def __init__(self, model: Model, capacity: int = 1, serial: bool | None = None) -> None:
+    def __init__(self, model: Model, capacity: int = 1, serial: bool | None = None,
+                 reorder: bool | None = None) -> None:
         self._model = model
         n = model.n
         r_max = float(model.radius_np.max())
@@ -53,6 +68,9 @@ class CollisionSolver:
         self.serial = steps_serially(n) if serial is None else bool(serial)
         if self.serial and not on_cpu():
             raise ValueError("serial stepping runs on the CPU backend only (on a GPU it would run on one thread)")
+        self.reorder = (n >= REORDER_MIN_BALLS and not self.serial) if reorder is None else bool(reorder)
+        if self.reorder and self.serial:
+            raise ValueError("serial stepping keeps the balls in id order (reorder=False)")
         if self.serial:  # tables wide enough for every other ball: the kernel's lists cannot overflow
             capacity = max(capacity, n - 1, 1)
         self.capacity = (capacity, capacity)
@@ -75,6 +93,8 @@ class CollisionSolver:
         self.flag = ti.ndarray(ti.i32, 2)
         self._valid = False
         self._rebuild = True
+        self._order: np.ndarray | None = None  # the state's storage order at the last build (see pairs)
+        self._hash = None  # the grid hash's (origin, stride) at the last build (grid.hash_strides)
 
     def build(self, state: State) -> None:
         """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
@@ -84,16 +104,22 @@ class CollisionSolver:
         if self._valid:  # the pair impulses are scratch between steps: they keep the old lists' λ
             stashed = self.impulse
             grid.stash(self.upper, self.n_upper, self.lam, stashed)
+        bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
+        self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, self.mask + 1))
+        if self.reorder:
+            self._store_in_grid_order(state)
+        self._order = state.order
         while True:
             if self.upper is None or self.upper.shape[1] != self.capacity[0]:
                 self.upper = ti.ndarray(ti.i32, (n, self.capacity[0]))
                 self.lam = ti.ndarray(float, (n, self.capacity[0]))
             if self.lower is None or self.lower.shape[1] != self.capacity[1]:
                 self.lower = ti.ndarray(ti.i32, (n, self.capacity[1]))
-            longest = grid.list_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, self.skin,
+            longest = grid.list_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, *self._hash,
+                                           self.skin,
                                            self.bucket, self.rank, self.count, self.start, self.chunk_start,
                                            self.sorted_ids, self.upper, self.n_upper, self.lower, self.n_lower,
-                                           self.x_at_build, self.flag)
+                                           self.x_at_build, self.flag, self.reorder)
             if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
                 break
             # widen to the longest list found (no power-of-two padding: memory follows the pile)
@@ -102,7 +128,9 @@ class CollisionSolver:
             raise SimulationError(f"{n} balls with up to {self.capacity[0]} neighbours each are more than the "
                                   f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)")
         if stashed is not None:
-            grid.link_and_carry(self.upper, self.n_upper, self.lower, self.n_lower, stashed, self.lam)
+            # after a reorder, sorted_ids still maps each ball to its index in the stashed lists
+            grid.link_and_carry(self.upper, self.n_upper, self.lower, self.n_lower, stashed, self.lam, self.reorder,
+                                self.sorted_ids)
             stashed = None
         else:
             grid.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
@@ -113,6 +141,29 @@ class CollisionSolver:
             self.projection = ti.ndarray(float, self.upper.shape)
         self.rebuilds += 1
         self._valid = True
+
+    def _store_in_grid_order(self, state: State) -> None:
+        """Gather every per-ball array of ``state`` and the model into the grid's order (see
+        ``reorder``): ball p of the new order is ball ``sorted_ids[p]`` of the old one, and the
+        grid's bucket starts stay valid for :func:`grid.list_neighbours` (``stored_sorted``).
+        Scratch arrays of the same type take the gathered values and the old arrays become scratch,
+        so no array is allocated."""
+        grid.storage_order(state.x, 1.0 / self.cell, self.mask, *self._hash, self.bucket, self.rank, self.count,
+                           self.start, self.chunk_start, self.sorted_ids)
+        order = self.sorted_ids
+        spares = [self.v_free, self.calm, self.bucket]  # scratch between steps: a vec3, a float and an int array
+        per_ball = [(state, name) for name in State.PER_BALL] + [(self._model, name) for name in Model.PER_BALL]
+        for owner, name in per_ball:
+            values = getattr(owner, name)
+            k = next(k for k, a in enumerate(spares) if (a.dtype, a.element_shape) == (values.dtype, values.element_shape))
+            grid.gather(values, order, spares[k])
+            setattr(owner, name, spares[k])
+            spares[k] = values
+        self.v_free, self.calm, self.bucket = spares
+        for column in range(self.lam_plane.shape[1]):
+            grid.gather_column(self.lam_plane, column, order, self.calm)
+        step = order.to_numpy()
+        state.order = step if state.order is None else state.order[step]
 
     def ensure_lists(self, state: State) -> None:
         """Build the neighbour lists for the current positions unless they still hold every pair in
@@ -141,11 +192,16 @@ class CollisionSolver:
         return max(0, int(self.capacity[0] - 1).bit_length())
 
     def pairs(self) -> np.ndarray:
-        """The listed neighbour pairs (i, j), i < j, each once: int array of shape (n_pairs, 2)."""
+        """The listed neighbour pairs (i, j) by ball id, each once, sorted: int array of shape (n_pairs, 2)
+        with i < j."""
         upper, count = self.upper.to_numpy(), self.n_upper.to_numpy()
         listed = np.arange(upper.shape[1])[None, :] < count[:, None]
         i = np.broadcast_to(np.arange(len(count))[:, None], upper.shape)
-        return np.stack([i[listed], upper[listed]], axis=1)
+        pairs = np.stack([i[listed], upper[listed]], axis=1)
+        if self._order is not None:  # storage indices to ball ids
+            pairs = np.sort(self._order[pairs], axis=1)
+            pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+        return pairs
 
     def advance(self, model: Model, state: State, steps: int) -> None:
         """Advance all balls by ``steps`` steps of ``model.dt``: serially in one launch, or one

@@ -19,6 +19,11 @@ from .types import float_array, int_array, real, vec3_array, vec6_table
 
 int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
 real_table = ti.types.ndarray(dtype=real, ndim=2)
+ivec3 = ti.types.vector(3, ti.i32)
+
+SCATTERED_HASH = (1, 19349663, 83492791)
+"""Strides of the cell coordinates (x, y, z) in the hash of a grid whose balls are too spread out
+for a dense one (see :func:`hash_strides`)."""
 
 
 @ti.func
@@ -28,11 +33,42 @@ def cell_of(x, inv_cell):
 
 
 @ti.func
-def bucket_of(c, mask):
-    """Hash of integer cell coordinates into [0, mask]: linear in the x index, so a row of cells
-    along x fills consecutive buckets (their starts share a cache line; see ``list_ball``)."""
-    h = ti.cast(c[0], ti.u32) + ti.cast(c[1], ti.u32) * ti.u32(19349663) + ti.cast(c[2], ti.u32) * ti.u32(83492791)
+def bucket_of(c, mask, origin, stride):
+    """Hash of integer cell coordinates into [0, mask]: (c − origin)·stride, wrapping around, with
+    stride 1 along x, so a row of cells along x fills consecutive buckets (their starts share a
+    cache line; see ``list_ball``). See :func:`hash_strides` for ``origin`` and ``stride``."""
+    d = c - origin
+    h = (ti.cast(d[0], ti.u32) * ti.cast(stride[0], ti.u32) + ti.cast(d[1], ti.u32) * ti.cast(stride[1], ti.u32)
+         + ti.cast(d[2], ti.u32) * ti.cast(stride[2], ti.u32))
     return ti.cast(h & ti.cast(mask, ti.u32), ti.i32)
+
+
+@ti.kernel
+def cell_bounds(x: vec3_array, inv_cell: float) -> ti.types.vector(6, ti.i32):
+    """The least (first three) and greatest (last three) cell coordinates of the balls (integer
+    atomics: the same on every thread order)."""
+    lo, hi = ti.Vector([2147483647] * 3), ti.Vector([-2147483647] * 3)
+    for i in range(x.shape[0]):
+        c = cell_of(x[i], inv_cell)
+        ti.atomic_min(lo, c)
+        ti.atomic_max(hi, c)
+    return ti.Vector([lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]])
+
+
+def hash_strides(bounds, buckets: int) -> tuple[tuple[int, int, int], tuple[int, int, int]]:
+    """(origin, stride) of the grid's hash for balls in the cells ``bounds`` (:func:`cell_bounds`).
+
+    When the box of cells around the balls, one cell wider on every side (the cells a ball's
+    neighbours are looked for in), has no more cells than there are ``buckets``, the hash numbers
+    that box's cells one after another, x fastest, then z, then y: no two cells share a bucket,
+    and the grid's order (:func:`storage_order`) is the box's rows and layers in turn, so that a
+    ball's neighbours in the rows beside and above it lie close in memory too. Else (balls spread
+    far apart) the cells are hashed with ``SCATTERED_HASH``, still linear in x."""
+    lo, hi = [int(b) for b in bounds[:3]], [int(b) for b in bounds[3:]]
+    ext = [h - lo_ + 3 for lo_, h in zip(lo, hi)]
+    if ext[0] * ext[1] * ext[2] <= buckets:
+        return (lo[0] - 1, lo[1] - 1, lo[2] - 1), (1, ext[0] * ext[2], ext[0])
+    return (0, 0, 0), SCATTERED_HASH
 
 
 @ti.kernel
@@ -55,6 +91,8 @@ def list_neighbours(
     radius: float_array,
     inv_cell: float,
     mask: ti.i32,
+    origin: ivec3,
+    stride: ivec3,
     skin: float,
     # scratch:
     bucket: int_array,
@@ -70,6 +108,7 @@ def list_neighbours(
     n_lower: int_array,
     x_at_build: vec3_array,
     longest: int_array,
+    stored_sorted: ti.template(),
 ) -> ti.types.vector(2, ti.i32):
     """Sort the balls into the hash grid, then list every ball's neighbours closer than
     r_a + r_b + skin, each list sorted by id: ``upper[i]`` holds the neighbours j > i (ball i owns
@@ -80,26 +119,91 @@ def list_neighbours(
     more than ``count``, ``chunk_start`` is its scratch), then the ball ids grouped by bucket:
     ``sorted_ids[start[b] : start[b + 1]]`` are the balls of bucket b. Returns the longest upper
     and lower lists found, also left in ``longest[0:2]`` (they may exceed the tables' widths: the
-    caller then rebuilds wider)."""
+    caller then rebuilds wider).
+
+    With ``stored_sorted`` the balls are stored in bucket order already (:func:`storage_order`,
+    then every per-ball array gathered into that order): ball p is the p-th of the sort, ``start``
+    still holds the buckets' starts, and the sort is skipped (``sorted_ids`` is not read)."""
     longest[0], longest[1] = 0, 0
-    for b in range(count.shape[0]):
-        count[b] = 0
-    for i in range(x.shape[0]):
-        b = bucket_of(cell_of(x[i], inv_cell), mask)
-        bucket[i] = b
-        rank[i] = ti.atomic_add(count[b], 1)
-    bucket_starts(count, start, chunk_start)
-    for i in range(x.shape[0]):
-        sorted_ids[start[bucket[i]] + rank[i]] = i
+    if ti.static(not stored_sorted):
+        counting_sort(x, inv_cell, mask, origin, stride, bucket, rank, count, start, chunk_start, sorted_ids)
     for idx in range(x.shape[0]):
-        i = sorted_ids[idx]  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
-        n_up, n_low = list_ball(i, x, radius, inv_cell, mask, skin, start, sorted_ids, upper, lower)
+        i = idx  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
+        if ti.static(not stored_sorted):
+            i = sorted_ids[idx]
+        n_up, n_low = list_ball(i, x, radius, inv_cell, mask, origin, stride, skin, start, sorted_ids, upper, lower,
+                                stored_sorted)
         n_upper[i] = ti.min(n_up, upper.shape[1])
         n_lower[i] = ti.min(n_low, lower.shape[1])
         x_at_build[i] = x[i]
         ti.atomic_max(longest[0], n_up)
         ti.atomic_max(longest[1], n_low)
     return ti.Vector([longest[0], longest[1]])
+
+
+@ti.func
+def counting_sort(x: ti.template(), inv_cell, mask, origin, stride, bucket: ti.template(), rank: ti.template(),
+                  count: ti.template(), start: ti.template(), chunk_start: ti.template(), sorted_ids: ti.template()):
+    """The grid's counting sort (see :func:`list_neighbours`): ``sorted_ids[start[b] : start[b + 1]]``
+    are the balls of bucket b, in the order their threads took ranks (an integer atomic add)."""
+    for b in range(count.shape[0]):
+        count[b] = 0
+    for i in range(x.shape[0]):
+        b = bucket_of(cell_of(x[i], inv_cell), mask, origin, stride)
+        bucket[i] = b
+        rank[i] = ti.atomic_add(count[b], 1)
+    bucket_starts(count, start, chunk_start)
+    for i in range(x.shape[0]):
+        sorted_ids[start[bucket[i]] + rank[i]] = i
+
+
+@ti.kernel
+def storage_order(x: vec3_array, inv_cell: float, mask: ti.i32, origin: ivec3, stride: ivec3, bucket: int_array,
+                  rank: int_array, count: int_array, start: int_array, chunk_start: int_array, sorted_ids: int_array):
+    """The order in which to store the balls so that neighbours lie close in memory: ``sorted_ids``
+    lists the ball ids bucket by bucket (the grid's counting sort), and within a bucket by
+    position, y then z then x (then id), as the buckets of a dense hash run (:func:`hash_strides`),
+    so the order does not depend on thread scheduling. The balls of each row of cells, and of
+    the rows a ball's neighbours lie in, end up in runs of consecutive indices; and of two
+    neighbours the one stored later lies above, behind or to the right, so a ball of a lattice
+    owns exactly its three pairs in +x, +y and +z (an order by id within a cell would give some
+    balls six, and the pair tables, as wide as the longest list, twice the width)."""
+    counting_sort(x, inv_cell, mask, origin, stride, bucket, rank, count, start, chunk_start, sorted_ids)
+    for b in range(count.shape[0]):  # a bucket holds a few balls: an insertion sort
+        for k in range(start[b] + 1, start[b + 1]):
+            j = sorted_ids[k]
+            m = k
+            while m > start[b] and stored_after(x, sorted_ids[m - 1], j):
+                sorted_ids[m] = sorted_ids[m - 1]
+                m -= 1
+            sorted_ids[m] = j
+
+
+@ti.func
+def stored_after(x: ti.template(), a, b):
+    """Whether ball a goes after ball b in a bucket of :func:`storage_order`: by y, z, x, then id."""
+    after = a > b
+    for axis in ti.static((0, 2, 1)):  # the least significant first: each later axis overrides
+        if x[a][axis] != x[b][axis]:
+            after = x[a][axis] > x[b][axis]
+    return after
+
+
+@ti.kernel
+def gather(src: ti.types.ndarray(), order: int_array, dst: ti.types.ndarray()):
+    """dst[p] = src[order[p]]: per-ball data into a new storage order (any element type)."""
+    for p in range(dst.shape[0]):
+        dst[p] = src[order[p]]
+
+
+@ti.kernel
+def gather_column(table: ti.types.ndarray(), column: ti.i32, order: int_array, dst: ti.types.ndarray()):
+    """Column ``column`` of a per-ball table into the storage order ``order``, in place, through the
+    per-ball scratch ``dst`` (two loops: every entry is read before any is written)."""
+    for p in range(dst.shape[0]):
+        dst[p] = table[order[p], column]
+    for p in range(dst.shape[0]):
+        table[p, column] = dst[p]
 
 
 SCAN_CHUNKS = 4096
@@ -145,10 +249,11 @@ def bucket_starts(count: ti.template(), start: ti.template(), chunk_start: ti.te
 
 
 @ti.func
-def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, skin, start: ti.template(),
-              sorted_ids: ti.template(), upper: ti.template(), lower: ti.template()):
+def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin, stride, skin, start: ti.template(),
+              sorted_ids: ti.template(), upper: ti.template(), lower: ti.template(), stored_sorted: ti.template()):
     """Ball i's neighbours in its own and the 26 adjacent cells, into its rows of ``upper`` and
-    ``lower`` in id order (as many as fit). Returns how many there are (n_upper, n_lower)."""
+    ``lower`` in id order (as many as fit; ``stored_sorted``: see :func:`list_neighbours`).
+    Returns how many there are (n_upper, n_lower)."""
     cap_up, cap_low = upper.shape[1], lower.shape[1]
     xi = x[i]
     ri = radius[i]
@@ -157,13 +262,15 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, skin, 
     for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2)))):
         # the row of three cells c + (−1…1, dy, dz): consecutive buckets, one range unless it wraps
         row = c + ti.Vector([-1, d[0], d[1]])
-        b = bucket_of(row, mask)
+        b = bucket_of(row, mask, origin, stride)
         for part in range(2):
             lo, hi = start[b], start[ti.min(b + 3, mask + 1)]
             if part == 1:
                 lo, hi = start[0], start[ti.max(b + 3 - (mask + 1), 0)]
             for k in range(lo, hi):
-                j = sorted_ids[k]
+                j = k
+                if ti.static(not stored_sorted):
+                    j = sorted_ids[k]
                 xj = x[j]
                 cj = cell_of(xj, inv_cell)
                 # a ball of the row (not of another cell sharing its buckets), within reach
@@ -252,14 +359,18 @@ def stash_ball(i, upper: ti.template(), n_upper: ti.template(), lam: ti.template
 
 @ti.kernel
 def link_and_carry(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array, stashed: vec6_table,
-                   lam: real_table):
+                   lam: real_table, moved: ti.template(), old_id: int_array):
     """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
     :func:`stash` and :func:`carry_ball`) to the new ones, in one launch (neither writes what the
-    other reads)."""
+    other reads). With ``moved`` the balls were stored in a new order since the stash: ball i was
+    ball ``old_id[i]`` of the stashed lists (see :func:`carry_moved_ball`)."""
     bits = slot_bits(upper.shape[1])
     for i in range(lower.shape[0]):
         link_ball(i, bits, upper, n_upper, lower, n_lower)
-        carry_ball(i, stashed, upper, n_upper, lam)
+        if ti.static(moved):
+            carry_moved_ball(i, stashed, upper, n_upper, lam, old_id)
+        else:
+            carry_ball(i, stashed, upper, n_upper, lam)
 
 
 @ti.func
@@ -275,6 +386,27 @@ def carry_ball(i, stashed: ti.template(), upper: ti.template(), n_upper: ti.temp
         value = 0.0
         if k_old < n_old and stashed_id(stashed, i, k_old) == j:
             value = stashed[i, k_old][0]
+        lam[i, k] = value
+
+
+@ti.func
+def carry_moved_ball(i, stashed: ti.template(), upper: ti.template(), n_upper: ti.template(), lam: ti.template(),
+                     old_id: ti.template()):
+    """:func:`carry_ball` after the balls were stored in a new order: the pair (i, j) of the new
+    lists was the pair of the old ids a = old_id[i] and b = old_id[j], owned by the lower of the
+    two, so its impulse is looked up in that ball's stashed row (sorted by id: the search stops at
+    the first id past the other one); new pairs start at zero."""
+    for k in range(n_upper[i]):
+        a, b = old_id[i], old_id[upper[i, k]]
+        if a > b:
+            a, b = b, a
+        value = 0.0
+        for k_old in range(stashed.shape[1]):
+            j_old = stashed_id(stashed, a, k_old)
+            if j_old < 0 or j_old > b:
+                break
+            if j_old == b:
+                value = stashed[a, k_old][0]
         lam[i, k] = value
 
 
