@@ -165,8 +165,8 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     awake is timed in the same run as the baseline (``asleep_speedup``). A pile small enough to be
     stepped serially (``serial``, see ``solver.SERIAL_MAX_BALLS``) is also timed stepped in
     parallel, one launch per step, as the baseline (``serial_speedup``).
-    With ``shuffled`` the balls are numbered in a random order, as in a pile poured from a random
-    fill, and the same pile kept in that order (no reordering, see ``CollisionSolver.reorder``) is
+    With ``shuffled`` the balls are numbered in a random order, as balls given in no spatial order
+    are, and the same pile kept in that order (no reordering, see ``CollisionSolver.reorder``) is
     timed in the same run as the baseline (``reorder_speedup``).
     """
     import resource

@@ -100,7 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="every ball of the pile at rest, as a settled pile ends up (the pile awake is timed too, "
                          "as baseline)")
     bc.add_argument("--shuffled", action="store_true",
-                    help="the pile's balls numbered in a random order, as a pile poured from a random fill is "
+                    help="the pile's balls numbered in a random order, as balls given in no spatial order are "
                          "(the same pile left in that order, not stored in the grid's order, is timed too, as "
                          "baseline)")
     bc.add_argument("--iterations", type=int, default=4,

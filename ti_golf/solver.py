@@ -48,9 +48,9 @@ class CollisionSolver:
             bit-identical steps.
         reorder: whether every list build also stores the balls in the grid's order, so that
             balls close in space lie close in memory (default: from ``REORDER_MIN_BALLS`` balls
-            on, parallel steps only). A pile whose ids are in no spatial order (a random fill,
-            balls that have mixed) otherwise fetches every neighbour from a cache line of its
-            own. Each per-ball array of the state and the model is gathered into the new order
+            on, parallel steps only). A pile whose ids are in no spatial order (balls passed in
+            any order, balls that have mixed) otherwise fetches every neighbour from a cache line
+            of its own. Each per-ball array of the state and the model is gathered into the new order
             (``State.order`` records it; :class:`~ti_golf.sim.Simulation` reads and writes by
             ball id), and the pairs keep their accumulated impulses. The physics is the same, but
             sums over a ball's neighbours run in another order: results differ from a run
