@@ -201,6 +201,39 @@ def test_balls_stored_in_grid_order_step_as_in_id_order():
         np.testing.assert_array_equal(grid_order.solver.pairs(), id_order.solver.pairs())
 
 
+@pytest.mark.parametrize("serial, reorder", [pytest.param(True, False, marks=pytest.mark.skipif(
+    not ON_CPU, reason="serial stepping runs on the CPU only")), (False, False), (False, True)],
+    ids=["serial", "parallel", "grid_order"])
+def test_a_pile_that_tracks_no_flight_keeps_no_flight_record_and_steps_the_same(serial, reorder):
+    # the flight record (apex, landing, the launch heights it is measured from) is bookkeeping that
+    # never feeds back into the step: a pile of balls that are not tracked, as a scene's
+    # [[blocks]] without launch ranges are, keeps one entry per record instead of one per ball and
+    # must step bit for bit as the same pile with every ball tracked, rebuilt (and, stored in the
+    # grid's order, gathered anew) every 5 steps
+    sc, x = pile_scene(200 if serial else 600)
+    x = x + np.random.default_rng(5).uniform(-1e-4, 1e-4, x.shape)  # so the pile shifts and lists change
+    runs = []
+    for track in (True, False):
+        sim = tg.Simulation(sc, x=x, track=track)
+        sim.solver = CollisionSolver(sim.model, serial=serial, reorder=reorder)
+        for _ in range(6):
+            sim.step(5)
+            sim.solver.invalidate()
+        runs.append(sim)
+    tracked, untracked = runs
+    for name in ("x", "v", "w", "status"):
+        np.testing.assert_array_equal(getattr(untracked, name), getattr(tracked, name))
+    assert tracked.flight().apex.shape == (len(x),) and np.all(np.isfinite(tracked.flight().apex))
+    st = untracked.state
+    assert not st.tracking and st.apex.shape == st.land_x.shape == untracked.model.launch_height.shape == (1,)
+    assert untracked.launch_x is None
+    f = untracked.flight()
+    assert f.apex.shape == (len(x),) and not f.landed.any()
+    assert np.all(np.isnan(f.apex)) and np.all(np.isnan(f.carry)) and np.all(np.isnan(f.flight_time))
+    untracked.run(steps=100, until="landed")  # no tracked ball is in flight: done at once
+    assert untracked.t == pytest.approx(tracked.t + 0.05)  # one chunk of 0.05 s, the first check
+
+
 def test_rebuild_keeps_each_pairs_resting_impulse():
     # the warm start needs each pair's accumulated impulse λ to survive a rebuild of the lists
     # (rebuilt in place, widened when a list overflows): the same pair keeps the same λ

@@ -182,7 +182,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         scene, x = pile_scene(m, floor, iterations)
         if shuffled:
             x = x[np.random.default_rng(0).permutation(m)]
-        sim = Simulation(scene, x=x)
+        sim = Simulation(scene, x=x, track=False)  # a pile keeps no flight records, as a scene's [[blocks]]
         if parallel or reorder is not None:
             sim.solver = CollisionSolver(sim.model, serial=False if parallel else None, reorder=reorder)
         return sim

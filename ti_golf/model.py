@@ -20,8 +20,9 @@ class Model:
         radius: ball radii [m], shape (N,), Taichi ndarray.
         mass: ball masses [kg], shape (N,), Taichi ndarray.
         radius_np, mass_np: the same as read-only float64 numpy arrays (N,), by ball id.
-        launch_height: height whose downward crossing counts as landing [m], shape (N,).
-        The Taichi arrays ``PER_BALL`` follow the state's storage order (``State.order``): a
+        launch_height: height whose downward crossing counts as landing [m], shape (N,), or (1,)
+            when no ball's flight is tracked (``State.tracking``: the kernels then do not read it).
+        The Taichi arrays of :meth:`per_ball` follow the state's storage order (``State.order``): a
         collision solver may store the balls in another order than their ids.
         air, contact: kernel-argument structs (AirParams, ContactParams).
         gravity: g [m/s²], vec3.
@@ -40,6 +41,11 @@ class Model:
     PER_BALL = ("radius", "mass", "launch_height")
     """The per-ball Taichi arrays."""
 
+    def per_ball(self) -> list[str]:
+        """The names of the Taichi arrays that hold an entry per ball (``launch_height`` only while
+        some ball is tracked)."""
+        return [name for name in self.PER_BALL if getattr(self, name).shape[0] == self.n]
+
     def __init__(self, scene: Scene, radius: np.ndarray, mass: np.ndarray, launch_height: np.ndarray) -> None:
         f = np_float()
         self.scene = scene
@@ -48,7 +54,7 @@ class Model:
         self.radius.from_numpy(np.asarray(radius, dtype=f))
         self.mass = ti.ndarray(float, self.n)
         self.mass.from_numpy(np.asarray(mass, dtype=f))
-        self.launch_height = ti.ndarray(float, self.n)
+        self.launch_height = ti.ndarray(float, len(launch_height))
         self.launch_height.from_numpy(np.asarray(launch_height, dtype=f))
         self.radius_np = _compact(radius)
         self.mass_np = _compact(mass)

@@ -29,7 +29,8 @@ class Flight:
         landed: True where the ball came back down through its launch height.
         carry: horizontal distance from the launch point to the landing point [m].
         landing_x, landing_z: landing point [m].
-        apex: highest point of the ball's centre [m] (absolute height).
+        apex: highest point of the ball's centre [m] (absolute height), so far while in flight;
+            NaN for a ball whose flight is not tracked.
         flight_time: time from launch to landing [s].
         landing_angle: descent angle below the horizontal at landing [deg].
         landing_speed: speed at landing [m/s].
@@ -49,7 +50,8 @@ class Flight:
         cls, launch_x: np.ndarray, landed: np.ndarray, apex: np.ndarray, t_land: np.ndarray,
         land_x: np.ndarray, land_v: np.ndarray,
     ) -> "Flight":
-        """Build from the kernels' raw record: launch points (N, 3), flags, apex, landing time, point, velocity."""
+        """Build from the kernels' raw record: launch points (N, 3), flags (−1 not tracked, 0 in
+        flight, 1 landed), apex, landing time, point, velocity."""
         ok = np.asarray(landed) == 1
         nan = np.where(ok, 1.0, np.nan)
         d = (land_x - launch_x) * nan[:, None]
@@ -60,7 +62,7 @@ class Flight:
             carry=np.hypot(d[:, 0], d[:, 2]),
             landing_x=land_x[:, 0] * nan,
             landing_z=land_x[:, 2] * nan,
-            apex=np.asarray(apex, dtype=float),
+            apex=np.where(np.asarray(landed) < 0, np.nan, np.asarray(apex, dtype=float)),  # −1: not tracked
             flight_time=np.asarray(t_land, dtype=float) * nan,
             landing_angle=np.degrees(np.arctan2(-v[:, 1], v_h)),
             landing_speed=np.linalg.norm(v, axis=1),

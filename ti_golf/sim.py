@@ -84,11 +84,12 @@ class Simulation:
         w = np.zeros((n, 3)) if w is None else _as_vectors(w, "w", n)
         radius = _per_ball(scene.ball.radius if radius is None else radius, n, "radius")
         mass = _per_ball(scene.ball.mass if mass is None else mass, n, "mass")
-        self.model = Model(scene, radius, mass, launch_height=x[:, 1])
-        self.state = State(n)
+        tracking = bool(np.any(track))  # else no flight record is kept (a pile: 96 bytes per ball less in f64)
+        self.model = Model(scene, radius, mass, launch_height=x[:, 1] if tracking else np.zeros(1))
+        self.state = State(n, tracking)
         self.state.reset(x, v, w, track)
-        self.launch_x = x.copy()
-        """Launch points [m], shape (N, 3): carry is measured from here."""
+        self.launch_x = x.copy() if tracking else None
+        """Launch points [m], shape (N, 3): carry is measured from here; ``None`` when no ball is tracked."""
         self._check_buf = None
         self.solver = None
         """The CollisionSolver when balls can collide (several balls and ``world.collisions``)."""
@@ -176,9 +177,10 @@ class Simulation:
         return Overlap(float(depth[k]), float(fraction[k]), int(i[k]), int(j[k]))
 
     def flight(self) -> Flight:
-        """Landing outcomes of the tracked balls (NaN where not landed yet)."""
+        """Landing outcomes of the tracked balls (NaN where not landed yet, and for balls not tracked)."""
         a = self.state.numpy()
-        return Flight.from_arrays(self.launch_x, a["landed"], a["apex"], a["t_land"], a["land_x"], a["land_v"])
+        launch_x = self.launch_x if self.launch_x is not None else np.full((self.n, 3), np.nan)
+        return Flight.from_arrays(launch_x, a["landed"], a["apex"], a["t_land"], a["land_x"], a["land_v"])
 
     def _wake(self) -> None:
         s = self.state.status.to_numpy()

@@ -78,7 +78,6 @@ class CollisionSolver:
         self.bucket = ti.ndarray(ti.i32, n)
         self.rank = ti.ndarray(ti.i32, n)
         self.sorted_ids = ti.ndarray(ti.i32, n)
-        self.count = ti.ndarray(ti.i32, self.mask + 1)
         self.start = ti.ndarray(ti.i32, self.mask + 2)
         self.chunk_start = ti.ndarray(ti.i32, grid.scan_chunks(self.mask + 1))
         self.x_at_build = ti.ndarray(vec3, n)
@@ -117,7 +116,7 @@ class CollisionSolver:
                 self.lower = ti.ndarray(ti.i32, (n, self.capacity[1]))
             longest = grid.list_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, *self._hash,
                                            self.skin,
-                                           self.bucket, self.rank, self.count, self.start, self.chunk_start,
+                                           self.bucket, self.rank, self.start, self.chunk_start,
                                            self.sorted_ids, self.upper, self.n_upper, self.lower, self.n_lower,
                                            self.x_at_build, self.flag, self.reorder)
             if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
@@ -148,11 +147,11 @@ class CollisionSolver:
         grid's bucket starts stay valid for :func:`grid.list_neighbours` (``stored_sorted``).
         Scratch arrays of the same type take the gathered values and the old arrays become scratch,
         so no array is allocated."""
-        grid.storage_order(state.x, 1.0 / self.cell, self.mask, *self._hash, self.bucket, self.rank, self.count,
+        grid.storage_order(state.x, 1.0 / self.cell, self.mask, *self._hash, self.bucket, self.rank,
                            self.start, self.chunk_start, self.sorted_ids)
         order = self.sorted_ids
         spares = [self.v_free, self.calm, self.bucket]  # scratch between steps: a vec3, a float and an int array
-        per_ball = [(state, name) for name in State.PER_BALL] + [(self._model, name) for name in Model.PER_BALL]
+        per_ball = [(state, name) for name in state.per_ball()] + [(self._model, name) for name in self._model.per_ball()]
         for owner, name in per_ball:
             values = getattr(owner, name)
             k = next(k for k, a in enumerate(spares) if (a.dtype, a.element_shape) == (values.dtype, values.element_shape))

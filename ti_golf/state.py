@@ -28,6 +28,9 @@ class State:
         apex: highest centre height so far [m], shape (N,).
         t_land: landing time [s], shape (N,).
         land_x, land_v: landing point [m] and velocity [m/s], shape (N,), vec3.
+        tracking: whether any ball's flight is recorded. Without, the ``FLIGHT`` arrays hold one
+            entry each, which the kernels do not read (72 bytes per ball less in f64 for a pile,
+            with the model's launch heights), and :meth:`read` gives the record of untracked balls.
         t: simulated time [s] (a Python float).
         order: the storage order: ``order[p]`` is the id of the ball stored at index p of every
             per-ball array (numpy int32 (N,)); ``None`` while the balls are stored in id order.
@@ -35,21 +38,25 @@ class State:
             ``CollisionSolver.reorder``); :meth:`to_ids` and :meth:`from_ids` convert.
     """
 
-    PER_BALL = ("x", "v", "w", "status", "rest_time", "landed", "apex", "t_land", "land_x", "land_v")
+    FLIGHT = ("landed", "apex", "t_land", "land_x", "land_v")
+    """The flight record's arrays (one entry each while no ball is tracked)."""
+    PER_BALL = ("x", "v", "w", "status", "rest_time") + FLIGHT
     """The per-ball arrays, all in storage order."""
 
-    def __init__(self, n: int) -> None:
+    def __init__(self, n: int, tracking: bool = True) -> None:
         self.n = int(n)
+        self.tracking = bool(tracking)
         self.x = ti.ndarray(vec3, self.n)
         self.v = ti.ndarray(vec3, self.n)
         self.w = ti.ndarray(vec3, self.n)
         self.status = ti.ndarray(ti.i32, self.n)
         self.rest_time = ti.ndarray(float, self.n)
-        self.landed = ti.ndarray(ti.i32, self.n)
-        self.apex = ti.ndarray(float, self.n)
-        self.t_land = ti.ndarray(float, self.n)
-        self.land_x = ti.ndarray(vec3, self.n)
-        self.land_v = ti.ndarray(vec3, self.n)
+        m = self.n if self.tracking else 1
+        self.landed = ti.ndarray(ti.i32, m)
+        self.apex = ti.ndarray(float, m)
+        self.t_land = ti.ndarray(float, m)
+        self.land_x = ti.ndarray(vec3, m)
+        self.land_v = ti.ndarray(vec3, m)
         self.t = 0.0
         self.order: np.ndarray | None = None
 
@@ -65,27 +72,42 @@ class State:
         """Per-ball values by ball id (first axis N) rearranged into storage order."""
         return a if self.order is None else a[self.order]
 
+    def per_ball(self) -> list[str]:
+        """The names of the arrays that hold an entry per ball (the flight record's only while tracking)."""
+        return [name for name in self.PER_BALL if self.tracking or name not in self.FLIGHT]
+
     def read(self, name: str) -> np.ndarray:
-        """A copy of the per-ball array ``name`` (e.g. ``"x"``) as numpy, by ball id."""
-        return self.to_ids(getattr(self, name).to_numpy())
+        """A copy of the per-ball array ``name`` (e.g. ``"x"``) as numpy, by ball id. While no ball
+        is tracked, the flight record reads as that of balls not tracked (``landed`` −1, NaN)."""
+        a = getattr(self, name).to_numpy()
+        if name in self.FLIGHT and not self.tracking:
+            return np.full((self.n,) + a.shape[1:], NOT_TRACKED if name == "landed" else np.nan, a.dtype)
+        return self.to_ids(a)
 
     def write(self, name: str, a: np.ndarray) -> None:
         """Set the per-ball array ``name`` from numpy values given by ball id."""
         getattr(self, name).from_numpy(np.ascontiguousarray(self.from_ids(a)))
 
     def reset(self, x: np.ndarray, v: np.ndarray, w: np.ndarray, track: np.ndarray | bool = True) -> None:
-        """Set positions, velocities and spins (each (N, 3)); start flight tracking where ``track``."""
-        f = np_float()
-        x = np.ascontiguousarray(x, dtype=f).reshape(self.n, 3)
-        track = np.broadcast_to(np.asarray(track, dtype=bool), (self.n,))
-        values = {
-            "x": x, "v": np.asarray(v, dtype=f).reshape(self.n, 3), "w": np.asarray(w, dtype=f).reshape(self.n, 3),
-            "status": np.zeros(self.n, np.int32), "rest_time": np.zeros(self.n, f),
-            "landed": np.where(track, IN_FLIGHT, NOT_TRACKED).astype(np.int32), "apex": x[:, 1].copy(),
-            "t_land": np.zeros(self.n, f), "land_x": x.copy(), "land_v": np.zeros((self.n, 3), f),
-        }
-        for name in self.PER_BALL:
-            self.write(name, values[name])
+        """Set positions, velocities and spins (each (N, 3)); start flight tracking where ``track``
+        (ignored while not ``tracking``). One array at a time, so that few numpy copies of a
+        large pile live at once."""
+        f, n = np_float(), self.n
+        x = np.ascontiguousarray(x, dtype=f).reshape(n, 3)
+        self.write("x", x)
+        self.write("v", np.asarray(v, dtype=f).reshape(n, 3))
+        self.write("w", np.asarray(w, dtype=f).reshape(n, 3))
+        self.status.from_numpy(np.zeros(n, np.int32))  # the same in every storage order
+        self.rest_time.from_numpy(np.zeros(n, f))
+        if self.tracking:
+            track = np.broadcast_to(np.asarray(track, dtype=bool), (n,))
+            self.write("landed", np.where(track, IN_FLIGHT, NOT_TRACKED).astype(np.int32))
+            self.write("apex", x[:, 1].copy())
+            self.t_land.from_numpy(np.zeros(n, f))
+            self.write("land_x", x)
+            self.land_v.from_numpy(np.zeros((n, 3), f))
+        else:
+            self.landed.from_numpy(np.full(1, NOT_TRACKED, np.int32))
         self.t = 0.0
 
     def numpy(self) -> dict[str, np.ndarray]:

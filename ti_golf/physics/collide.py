@@ -328,7 +328,7 @@ def collision_step(
     clear: float_array,
     J: vec6_table,
     G: real_table,
-    # Flight record in/out:
+    # Flight record in/out (with launch_height: one entry each when no ball is tracked, then not read):
     landed: int_array,
     apex: float_array,
     t_land: float_array,
@@ -406,6 +406,7 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
     """One step of all balls, the body of :func:`collision_step` (see there) in parallel and serially."""
     v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
     bits = slot_bits(upper.shape[1])  # lower-list slots: owner · 2^bits + column (once, not per ball)
+    tracking = landed.shape[0] == x.shape[0]
     # 1. free flight to x_free, v_free, then the warm start: last step's resting impulses (ball
     # pairs, planes and terrain) applied again, so a stack starts the step supported
     for i in range(x.shape[0]):
@@ -415,9 +416,11 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
             coef = coefficients(air, ti.Vector([radius[i]]), ti.Vector([mass[i]]))
             S1 = step_free(lane_state(xi, v[i], w[i]), h, integrator, coef, air, gravity)
             x1, v1, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
-            if landed[i] == IN_FLIGHT:  # a landed ball's record is final: neither read nor written
-                landed[i], apex[i], t_land[i], land_x[i], land_v[i] = track_flight(
-                    xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i], land_v[i])
+            if tracking:  # else the flight records hold one entry each, not read (see State.tracking)
+                if landed[i] == IN_FLIGHT:  # a landed ball's record is final: neither read nor written
+                    landed[i], apex[i], t_land[i], land_x[i], land_v[i] = track_flight(
+                        xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i],
+                        land_v[i])
         x_free[i], v_free[i] = x1, v1
         clear[i] = surface_clearance(i, x, x1, radius, plane_p, plane_n, terrain, heights, lam_plane)
         dv, calm[i] = warm_start(i, x, radius, mass, status, rest_time, upper, n_upper, lower, n_lower, bits,

@@ -97,7 +97,6 @@ def list_neighbours(
     # scratch:
     bucket: int_array,
     rank: int_array,
-    count: int_array,
     start: int_array,
     chunk_start: int_array,
     sorted_ids: int_array,
@@ -115,8 +114,8 @@ def list_neighbours(
     those pairs), ``lower[i]`` the neighbours j < i (to be turned into slots by :func:`link_lower`
     or :func:`link_and_carry`). One launch (a launch from Python costs about 0.1 ms; the grid
     took five). The counting sort: each ball's bucket and its rank among the balls of that bucket
-    (an integer atomic add), the buckets' starts (:func:`bucket_starts`; ``start`` has one entry
-    more than ``count``, ``chunk_start`` is its scratch), then the ball ids grouped by bucket:
+    (an integer atomic add, counting in ``start``), the buckets' starts (:func:`bucket_starts`;
+    ``start`` has one entry more than there are buckets, ``chunk_start`` is its scratch), then the ball ids grouped by bucket:
     ``sorted_ids[start[b] : start[b + 1]]`` are the balls of bucket b. Returns the longest upper
     and lower lists found, also left in ``longest[0:2]`` (they may exceed the tables' widths: the
     caller then rebuilds wider).
@@ -126,7 +125,7 @@ def list_neighbours(
     still holds the buckets' starts, and the sort is skipped (``sorted_ids`` is not read)."""
     longest[0], longest[1] = 0, 0
     if ti.static(not stored_sorted):
-        counting_sort(x, inv_cell, mask, origin, stride, bucket, rank, count, start, chunk_start, sorted_ids)
+        counting_sort(x, inv_cell, mask, origin, stride, bucket, rank, start, chunk_start, sorted_ids)
     for idx in range(x.shape[0]):
         i = idx  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         if ti.static(not stored_sorted):
@@ -143,23 +142,23 @@ def list_neighbours(
 
 @ti.func
 def counting_sort(x: ti.template(), inv_cell, mask, origin, stride, bucket: ti.template(), rank: ti.template(),
-                  count: ti.template(), start: ti.template(), chunk_start: ti.template(), sorted_ids: ti.template()):
+                  start: ti.template(), chunk_start: ti.template(), sorted_ids: ti.template()):
     """The grid's counting sort (see :func:`list_neighbours`): ``sorted_ids[start[b] : start[b + 1]]``
     are the balls of bucket b, in the order their threads took ranks (an integer atomic add)."""
-    for b in range(count.shape[0]):
-        count[b] = 0
+    for b in range(start.shape[0]):
+        start[b] = 0
     for i in range(x.shape[0]):
         b = bucket_of(cell_of(x[i], inv_cell), mask, origin, stride)
         bucket[i] = b
-        rank[i] = ti.atomic_add(count[b], 1)
-    bucket_starts(count, start, chunk_start)
+        rank[i] = ti.atomic_add(start[b + 1], 1)  # bucket b's count, until the scan turns it into a start
+    bucket_starts(start, chunk_start)
     for i in range(x.shape[0]):
         sorted_ids[start[bucket[i]] + rank[i]] = i
 
 
 @ti.kernel
 def storage_order(x: vec3_array, inv_cell: float, mask: ti.i32, origin: ivec3, stride: ivec3, bucket: int_array,
-                  rank: int_array, count: int_array, start: int_array, chunk_start: int_array, sorted_ids: int_array):
+                  rank: int_array, start: int_array, chunk_start: int_array, sorted_ids: int_array):
     """The order in which to store the balls so that neighbours lie close in memory: ``sorted_ids``
     lists the ball ids bucket by bucket (the grid's counting sort), and within a bucket by
     position, y then z then x (then id), as the buckets of a dense hash run (:func:`hash_strides`),
@@ -168,8 +167,8 @@ def storage_order(x: vec3_array, inv_cell: float, mask: ti.i32, origin: ivec3, s
     neighbours the one stored later lies above, behind or to the right, so a ball of a lattice
     owns exactly its three pairs in +x, +y and +z (an order by id within a cell would give some
     balls six, and the pair tables, as wide as the longest list, twice the width)."""
-    counting_sort(x, inv_cell, mask, origin, stride, bucket, rank, count, start, chunk_start, sorted_ids)
-    for b in range(count.shape[0]):  # a bucket holds a few balls: an insertion sort
+    counting_sort(x, inv_cell, mask, origin, stride, bucket, rank, start, chunk_start, sorted_ids)
+    for b in range(start.shape[0] - 1):  # a bucket holds a few balls: an insertion sort
         for k in range(start[b] + 1, start[b + 1]):
             j = sorted_ids[k]
             m = k
@@ -219,21 +218,23 @@ def scan_chunks(buckets: int) -> int:
 
 
 @ti.func
-def bucket_starts(count: ti.template(), start: ti.template(), chunk_start: ti.template()):
-    """start[b + 1] = count[0] + … + count[b] with start[0] = 0 (an exclusive scan of the bucket
-    counts), in three loops: the sums of chunks of buckets, in parallel; a serial scan of those
-    sums into ``chunk_start`` (as many entries as there are chunks, plus one); each chunk's
+def bucket_starts(start: ti.template(), chunk_start: ti.template()):
+    """The buckets' starts from their counts, in place: given start[0] = 0 and bucket b's count
+    c_b in start[b + 1], start[b + 1] becomes c_0 + … + c_b (an exclusive scan of the counts; one
+    array instead of two, 8 bytes per ball less), in three loops: the sums of chunks of buckets,
+    in parallel; a serial scan of those sums into ``chunk_start`` (as many entries as there are chunks, plus one); each chunk's
     running sum from its start, in parallel. No loop runs long on one thread: a single-thread
     scan of all buckets (2^21 of them for a million balls) would crawl on a GPU, and Taichi's
     Vulkan backend stops a serial loop after 65,535 iterations without a word, which left most
     balls of a large pile without neighbours (``PrefixSumExecutor`` does not run on CPU).
     Integer sums: the same result on every backend and thread count."""
     n_chunks = chunk_start.shape[0] - 1
-    size = (count.shape[0] + n_chunks - 1) // n_chunks
+    buckets = start.shape[0] - 1
+    size = (buckets + n_chunks - 1) // n_chunks
     for c in range(n_chunks):
         total = 0
-        for b in range(c * size, ti.min((c + 1) * size, count.shape[0])):
-            total += count[b]
+        for b in range(c * size, ti.min((c + 1) * size, buckets)):
+            total += start[b + 1]
         chunk_start[c + 1] = total
         if c == 0:
             chunk_start[0] = 0
@@ -243,8 +244,8 @@ def bucket_starts(count: ti.template(), start: ti.template(), chunk_start: ti.te
         chunk_start[c + 1] += chunk_start[c]
     for c in range(n_chunks):
         running = chunk_start[c]
-        for b in range(c * size, ti.min((c + 1) * size, count.shape[0])):
-            running += count[b]
+        for b in range(c * size, ti.min((c + 1) * size, buckets)):
+            running += start[b + 1]
             start[b + 1] = running
 
 

@@ -9,7 +9,7 @@ import taichi as ti
 from ..config import AT_REST, OUT_OF_BOUNDS
 from .aero import ROWS, SPIN, V, W, X, coefficients, column, row
 from .contact import plane_impulse, plane_position, rest_update
-from .integrate import IN_FLIGHT, LANDED, apex_in_step, landing_in_step, step_free, track_flight
+from .integrate import IN_FLIGHT, LANDED, NOT_TRACKED, apex_in_step, landing_in_step, step_free, track_flight
 from .terrain import outside, surface, surface_contact, terrain_position
 from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, vec3, vec3_array,
                     vec3_table)
@@ -147,7 +147,7 @@ def advance(
     w: vec3_array,
     status: int_array,
     rest_time: float_array,
-    # Flight record in/out:
+    # Flight record in/out (with launch_height: one entry each when no ball is tracked, then not read):
     landed: int_array,
     apex: float_array,
     t_land: float_array,
@@ -164,6 +164,7 @@ def advance(
     not touched.
     """
     v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
+    tracking = landed.shape[0] == x.shape[0]  # else no ball is tracked: one-entry flight records, not read
     for i in range(x.shape[0]):
         st = status[i]
         if st != AT_REST and st != OUT_OF_BOUNDS:
@@ -171,12 +172,13 @@ def advance(
             coef = coefficients(air, ti.Vector([r]), ti.Vector([mass[i]]))
             xi, vi, wi = x[i], v[i], w[i]
             rt = rest_time[i]
-            fl, top, tl, lx, lv = landed[i], apex[i], t_land[i], land_x[i], land_v[i]
+            fl, top, tl, lx, lv, level = NOT_TRACKED, 0.0, 0.0, vec3(0.0), vec3(0.0), 0.0
+            if tracking:
+                fl, top, tl, lx, lv, level = landed[i], apex[i], t_land[i], land_x[i], land_v[i], launch_height[i]
             for k in range(n_steps):
                 S1 = step_free(lane_state(xi, vi, wi), h, integrator, coef, air, gravity)
                 x_free, v_free, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
-                fl, top, tl, lx, lv = track_flight(xi, vi, x_free, v_free, h, t0 + k * h, launch_height[i], fl, top,
-                                                   tl, lx, lv)
+                fl, top, tl, lx, lv = track_flight(xi, vi, x_free, v_free, h, t0 + k * h, level, fl, top, tl, lx, lv)
                 v1 = v_free
                 touching = 0
                 for p in range(plane_p.shape[0]):
@@ -207,7 +209,8 @@ def advance(
                     break
             x[i], v[i], w[i] = xi, vi, wi
             status[i], rest_time[i] = st, rt
-            landed[i], apex[i], t_land[i], land_x[i], land_v[i] = fl, top, tl, lx, lv
+            if tracking:
+                landed[i], apex[i], t_land[i], land_x[i], land_v[i] = fl, top, tl, lx, lv
 
 
 @ti.kernel
