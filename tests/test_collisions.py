@@ -56,21 +56,70 @@ def test_grid_neighbours_equal_brute_force(name):
     solver: CollisionSolver = sim.solver
     solver.build(sim.state)
     pairs = solver.pairs()
-    assert np.all(pairs[:, 0] < pairs[:, 1])  # each pair listed once, by the ball with the lower id
+    assert np.all(pairs[:, 0] < pairs[:, 1])  # each pair reported once, by id
     found = {(int(i), int(j)) for i, j in pairs} | {(int(j), int(i)) for i, j in pairs}
     expected = _brute_force_pairs(x, r, solver.skin)
     assert found == expected
     assert len(expected) > 0
+    xs = sim.state.x.to_numpy()  # the positions the kernels saw (float type of the run)
     upper, n_upper = solver.upper.to_numpy(), solver.n_upper.to_numpy()
     lower, n_lower = solver.lower.to_numpy(), solver.n_lower.to_numpy()
     assert upper.shape[1] <= 1 << solver.slot_bits
     for i in range(len(x)):  # lists are sorted by id: sums over them do not depend on threads
         assert np.all(np.diff(upper[i, : n_upper[i]]) > 0)
+        assert set(upper[i, : n_upper[i]].tolist()) == {j for (a, j) in expected if a == i and _owns(xs, i, j)}
         slots = lower[i, : n_lower[i]]  # where each lower pair is stored: owner · 2^bits + column
         owners, entries = slots >> solver.slot_bits, slots & ((1 << solver.slot_bits) - 1)
         assert np.all(np.diff(owners) > 0)
-        assert set(owners.tolist()) == {j for (a, j) in expected if a == i and j < i}
+        assert set(owners.tolist()) == {j for (a, j) in expected if a == i and _owns(xs, j, i)}
         assert np.all(upper[owners, entries] == i)
+
+
+def _owns(x, i, j):
+    """Whether ball i owns its pair with j (grid.owns): j lies ahead along the axis of their
+    largest separation (the first of equals), or, at the same point, has the higher id."""
+    d = x[j] - x[i]
+    ahead = d[np.argmax(np.abs(d))]
+    return bool(ahead > 0 or (ahead == 0 and j > i))
+
+
+def test_each_ball_of_a_jostled_lattice_owns_three_pairs():
+    # ownership by the axis of largest separation: a ball of a cubic lattice owns its pairs in
+    # +x, +y and +z, whatever its shifts (so the pair tables stay three wide); ownership by id or
+    # storage order gives a ball a fourth pair whenever neighbours straddle a cell boundary
+    sc, x = pile_scene(4096)
+    x = x + np.random.default_rng(8).uniform(-4e-4, 4e-4, x.shape)  # 2 % of a radius either way: all listed
+    for reorder in (False, True):
+        sim = tg.Simulation(sc, x=x[np.random.default_rng(9).permutation(len(x))])
+        solver = _grid_ordered(sim) if reorder else sim.solver
+        solver.build(sim.state)
+        assert solver.capacity == (3, 3)
+        n_upper = sim.state.to_ids(solver.n_upper.to_numpy())
+        top, right, back = (np.isclose(sim.x[:, k], x[:, k].max(), atol=0.003) for k in (1, 0, 2))
+        np.testing.assert_array_equal(n_upper, 3 - top - right - back)
+
+
+def test_a_pair_that_changes_hands_keeps_its_resting_impulse():
+    # a pair is owned by the ball behind the other along their main axis; as two balls move
+    # round each other that axis changes, and the pair's λ must move to the other ball's list
+    sc = scene()
+    r = sc.ball.radius
+    s = 2.04 * r / np.sqrt(2.0)  # ball 1 at s·(1, 0.97) from ball 0, then at s·(0.97, −1): 2.01 r apart
+    before, after = np.array([1.0, 0.97, 0.0]), np.array([0.97, -1.0, 0.0])
+    for reorder in (False, True):
+        sim = tg.Simulation(sc, x=np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.0] + s * before]))
+        solver = _grid_ordered(sim) if reorder else sim.solver
+        solver.build(sim.state)
+        owner = int(sim.state.from_ids(np.arange(2))[0])  # ball 0 (behind along x) owns the pair
+        assert solver.n_upper.to_numpy()[owner] == 1
+        lam = solver.lam.to_numpy()
+        lam[owner, 0] = 0.25
+        solver.lam.from_numpy(lam)
+        sim.x = np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.0] + s * after])  # ball 1 now behind along y
+        solver.build(sim.state)
+        owner = int(sim.state.from_ids(np.arange(2))[1])
+        assert solver.n_upper.to_numpy()[owner] == 1 and solver.n_upper.to_numpy()[1 - owner] == 0
+        assert solver.lam.to_numpy()[owner, 0] == 0.25
 
 
 # A pile of 70,000 balls: its hash grid has 2^18 buckets, more than the 65,535 iterations after
@@ -245,7 +294,7 @@ def test_rebuild_keeps_each_pairs_resting_impulse():
 
     def lam_by_pair():
         upper, n_upper, lam = solver.upper.to_numpy(), solver.n_upper.to_numpy(), solver.lam.to_numpy()
-        return {(i, int(upper[i, k])): lam[i, k] for i in range(len(n_upper)) for k in range(n_upper[i])}
+        return {tuple(sorted((i, int(upper[i, k])))): lam[i, k] for i in range(len(n_upper)) for k in range(n_upper[i])}
 
     before = lam_by_pair()
     assert sum(v > 0 for v in before.values()) > 20

@@ -198,9 +198,9 @@ class CollisionSolver:
         i = np.broadcast_to(np.arange(len(count))[:, None], upper.shape)
         pairs = np.stack([i[listed], upper[listed]], axis=1)
         if self._order is not None:  # storage indices to ball ids
-            pairs = np.sort(self._order[pairs], axis=1)
-            pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
-        return pairs
+            pairs = self._order[pairs]
+        pairs = np.sort(pairs, axis=1)  # (owner, other) to (lower id, higher id)
+        return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
     def advance(self, model: Model, state: State, steps: int) -> None:
         """Advance all balls by ``steps`` steps of ``model.dt``: serially in one launch, or one

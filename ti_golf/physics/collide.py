@@ -1,9 +1,10 @@
 """One step of colliding balls in a single kernel (report Appendix B, every touching pair at once).
 
-Every pair of neighbours (a, b), a < b, is *owned* by ball a: it sits in a's upper neighbour list
-with its accumulated resting impulse ``lam`` and, during a sweep, the impulse ``P`` on a (−P acts
-on b). Ball b finds the pair through its lower list, which holds the slot of the pair in a's upper
-list. So each pair impulse is evaluated once per sweep, the two balls of a pair apply exactly
+Every pair of neighbours (a, b) is *owned* by one of them, say a (the ball behind the other along
+their main axis, see :func:`.grid.owns`): it sits in a's upper neighbour list with its
+accumulated resting impulse ``lam`` and, during a sweep, the impulse ``P`` on a (−P acts on b).
+Ball b finds the pair through its lower list, which holds the slot of the pair in a's upper list.
+So each pair impulse is evaluated once per sweep, the two balls of a pair apply exactly
 opposite impulses (momentum is conserved to round-off), and every ball *gathers* its impulses in
 id order: no float atomics, results do not depend on thread order.
 
@@ -73,7 +74,7 @@ def skip_pair(status: ti.template(), i, j):
 def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic, radius: ti.template(),
                 mass: ti.template(), status: ti.template(), upper: ti.template(), n_upper: ti.template(),
                 lam: ti.template(), J: ti.template(), G: ti.template(), v: ti.template(), w: ti.template()):
-    """One Jacobi sweep over the pairs of ball i with its neighbours j = upper[i, k] > i: the
+    """One Jacobi sweep over the pairs that ball i owns, with its neighbours j = upper[i, k]: the
     impulse P on i (−P acts on j) from the current velocities (which updates the resting impulse
     ``lam``), stored as J[i, k] = (P, n̂). The unit normal n̂ from j to i and the surface gap (in
     G[i, k]) were stored by :func:`warm_start` (positions do not change during the sweeps).
@@ -123,7 +124,7 @@ def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), 
     quiet = status[i] == AT_REST
     for m in range(n_lower[i]):
         slot = lower[i, m]
-        j, k = owner_slot(slot, bits)  # the pair's owner j < i keeps its λ
+        j, k = owner_slot(slot, bits)  # the pair's owner j keeps its λ
         n, gap = pair_geometry(x, radius, i, j)
         P += resting_impulse(status, i, j, n, lam[j, k])
         calm = island_calm(calm, gap, radius[i], status[j], rest_time[j])
@@ -210,7 +211,7 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
     r = radius[i]
     for m in range(n_lower[i]):
         slot = lower[i, m]
-        j, k = owner_slot(slot, bits)  # the pair's owner j < i stores it
+        j, k = owner_slot(slot, bits)  # the pair's owner j stores it
         Jk = J[j, k]
         P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])
         P -= P_k

@@ -5,8 +5,8 @@ Cells are cubes of side ``cell`` (the largest diameter plus the skin), hashed in
 other buckets. ``list_neighbours`` builds the grid, a counting sort of ball ids by bucket, and
 then lists, for every ball, the balls within r_a + r_b + skin in its own and the 26 adjacent
 cells, sorted by id (so sums over neighbours do not depend on thread order), in two halves: the
-*upper* list (higher ids: the pairs the ball owns, each evaluated once per sweep) and the
-*lower* list (lower ids), which ``link_lower`` (or ``link_and_carry``, which also carries each
+*upper* list (the pairs the ball owns, each evaluated once per sweep: see :func:`owns`) and the
+*lower* list (the pairs its neighbours own), which ``link_lower`` (or ``link_and_carry``, which also carries each
 pair's accumulated impulse over from the old lists) turns into the slots where the owners store
 the pairs' impulses, so each ball gathers its impulses without float atomics.
 A neighbour list stays valid until some ball has moved, or could move within a step, more than
@@ -110,8 +110,8 @@ def list_neighbours(
     stored_sorted: ti.template(),
 ) -> ti.types.vector(2, ti.i32):
     """Sort the balls into the hash grid, then list every ball's neighbours closer than
-    r_a + r_b + skin, each list sorted by id: ``upper[i]`` holds the neighbours j > i (ball i owns
-    those pairs), ``lower[i]`` the neighbours j < i (to be turned into slots by :func:`link_lower`
+    r_a + r_b + skin, each list sorted by id: ``upper[i]`` holds the neighbours whose pairs ball i
+    owns (:func:`owns`), ``lower[i]`` the others (to be turned into slots by :func:`link_lower`
     or :func:`link_and_carry`). One launch (a launch from Python costs about 0.1 ms; the grid
     took five). The counting sort: each ball's bucket and its rank among the balls of that bucket
     (an integer atomic add, counting in ``start``), the buckets' starts (:func:`bucket_starts`;
@@ -163,10 +163,7 @@ def storage_order(x: vec3_array, inv_cell: float, mask: ti.i32, origin: ivec3, s
     lists the ball ids bucket by bucket (the grid's counting sort), and within a bucket by
     position, y then z then x (then id), as the buckets of a dense hash run (:func:`hash_strides`),
     so the order does not depend on thread scheduling. The balls of each row of cells, and of
-    the rows a ball's neighbours lie in, end up in runs of consecutive indices; and of two
-    neighbours the one stored later lies above, behind or to the right, so a ball of a lattice
-    owns exactly its three pairs in +x, +y and +z (an order by id within a cell would give some
-    balls six, and the pair tables, as wide as the longest list, twice the width)."""
+    the rows a ball's neighbours lie in, end up in runs of consecutive indices."""
     counting_sort(x, inv_cell, mask, origin, stride, bucket, rank, start, chunk_start, sorted_ids)
     for b in range(start.shape[0] - 1):  # a bucket holds a few balls: an insertion sort
         for k in range(start[b] + 1, start[b + 1]):
@@ -278,13 +275,32 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin
                 if j != i and cj[1] == row[1] and cj[2] == row[2] and ti.abs(cj[0] - c[0]) <= 1:
                     reach = ri + radius[j] + skin
                     if (xj - xi).norm_sqr() < reach * reach:
-                        if j > i:
+                        if owns(xi, xj, i, j):
                             insert_sorted(upper, i, n_up, cap_up, j)
                             n_up += 1
                         else:
                             insert_sorted(lower, i, n_low, cap_low, j)
                             n_low += 1
     return n_up, n_low
+
+
+@ti.func
+def owns(xi, xj, i, j):
+    """Whether ball i (at ``xi``) owns its pair with ball j (at ``xj``): whether j lies ahead of i
+    along the axis on which the two centres differ most (the lower id when they coincide). Of
+    the two balls of a pair exactly one owns it (x_j − x_i is exactly −(x_i − x_j) in floating
+    point, so both find the same axis and opposite signs). Each ball of a cubic lattice owns
+    exactly its three pairs in +x, +y and +z however the lattice is jostled, and a random pile's
+    longest list, the width of the pair tables, is shorter than with ownership by storage order
+    (7-8 pairs against 10 in a 20,000-ball pour): an order along a grid flips for every pair
+    that straddles a cell boundary."""
+    d = xj - xi
+    ahead = d[0]  # the component of largest magnitude (the first of equals)
+    if ti.abs(d[1]) > ti.abs(ahead):
+        ahead = d[1]
+    if ti.abs(d[2]) > ti.abs(ahead):
+        ahead = d[2]
+    return ahead > 0.0 or (ahead == 0.0 and j > i)
 
 
 @ti.func
@@ -364,51 +380,43 @@ def link_and_carry(upper: int_table, n_upper: int_array, lower: int_table, n_low
     """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
     :func:`stash` and :func:`carry_ball`) to the new ones, in one launch (neither writes what the
     other reads). With ``moved`` the balls were stored in a new order since the stash: ball i was
-    ball ``old_id[i]`` of the stashed lists (see :func:`carry_moved_ball`)."""
+    ball ``old_id[i]`` of the stashed lists."""
     bits = slot_bits(upper.shape[1])
     for i in range(lower.shape[0]):
         link_ball(i, bits, upper, n_upper, lower, n_lower)
+        carry_ball(i, stashed, upper, n_upper, lam, old_id, moved)
+
+
+@ti.func
+def carry_ball(i, stashed: ti.template(), upper: ti.template(), n_upper: ti.template(), lam: ti.template(),
+               old_id: ti.template(), moved: ti.template()):
+    """Carry the accumulated impulse of each pair ball i owns in the new lists from the stashed old
+    ones (see :func:`stash_ball`); new pairs start at zero. The pair of balls a and b (their old
+    ids: ``old_id`` of i and j when ``moved``) is looked up in the row of its old owner, which is
+    a's, or b's when the pair changed hands (a pair's owner is the ball behind the other along
+    their main axis, see :func:`owns`, and that axis can change as the balls move)."""
+    for k in range(n_upper[i]):
+        a, b = i, upper[i, k]
         if ti.static(moved):
-            carry_moved_ball(i, stashed, upper, n_upper, lam, old_id)
-        else:
-            carry_ball(i, stashed, upper, n_upper, lam)
-
-
-@ti.func
-def carry_ball(i, stashed: ti.template(), upper: ti.template(), n_upper: ti.template(), lam: ti.template()):
-    """Carry each accumulated impulse of ball i's pairs from the stashed old list (see
-    :func:`stash_ball`) to its new upper list (both sorted by id: a merge); new pairs start at zero."""
-    k_old = 0
-    n_old = stashed.shape[1]
-    for k in range(n_upper[i]):
-        j = upper[i, k]
-        while k_old < n_old and stashed_id(stashed, i, k_old) >= 0 and stashed_id(stashed, i, k_old) < j:
-            k_old += 1
-        value = 0.0
-        if k_old < n_old and stashed_id(stashed, i, k_old) == j:
-            value = stashed[i, k_old][0]
+            a, b = old_id[a], old_id[b]
+        found, value = stashed_impulse(stashed, a, b)
+        if not found:
+            found, value = stashed_impulse(stashed, b, a)
         lam[i, k] = value
 
 
 @ti.func
-def carry_moved_ball(i, stashed: ti.template(), upper: ti.template(), n_upper: ti.template(), lam: ti.template(),
-                     old_id: ti.template()):
-    """:func:`carry_ball` after the balls were stored in a new order: the pair (i, j) of the new
-    lists was the pair of the old ids a = old_id[i] and b = old_id[j], owned by the lower of the
-    two, so its impulse is looked up in that ball's stashed row (sorted by id: the search stops at
-    the first id past the other one); new pairs start at zero."""
-    for k in range(n_upper[i]):
-        a, b = old_id[i], old_id[upper[i, k]]
-        if a > b:
-            a, b = b, a
-        value = 0.0
-        for k_old in range(stashed.shape[1]):
-            j_old = stashed_id(stashed, a, k_old)
-            if j_old < 0 or j_old > b:
-                break
-            if j_old == b:
-                value = stashed[a, k_old][0]
-        lam[i, k] = value
+def stashed_impulse(stashed: ti.template(), a, b):
+    """(whether, and with which accumulated impulse) the stashed row of ball a holds its pair with
+    ball b: a search of a row sorted by id, stopping at the first id past b."""
+    found, value = 0, 0.0
+    for k in range(stashed.shape[1]):
+        j = stashed_id(stashed, a, k)
+        if j < 0 or j > b:
+            break
+        if j == b:
+            found, value = 1, stashed[a, k][0]
+    return found, value
 
 
 @ti.func
@@ -434,7 +442,7 @@ def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, upper: ti.te
         for j in range(x.shape[0]):  # in id order: the lists come out sorted
             reach = ri + radius[j] + skin
             if j != i and (x[j] - xi).norm_sqr() < reach * reach:  # the test of list_ball
-                if j > i:
+                if owns(xi, x[j], i, j):
                     upper[i, n_up] = j
                     n_up += 1
                 else:
@@ -446,4 +454,4 @@ def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, upper: ti.te
     for i in range(x.shape[0]):
         link_ball(i, bits, upper, n_upper, lower, n_lower)
     for i in range(x.shape[0]):
-        carry_ball(i, scratch, upper, n_upper, lam)
+        carry_ball(i, scratch, upper, n_upper, lam, n_upper, False)
