@@ -52,7 +52,8 @@ class Simulation:
         x, v, w: initial positions [m], velocities [m/s], spins [rad/s], each (N, 3). Default: one
             ball launched as the scene's ``[launch]`` table says.
         radius, mass: per-ball radius [m] and mass [kg], scalars or (N,). Default: the scene's ball.
-        track: which balls get landing detection (carry, apex ...); default all.
+        track: which balls get landing detection (carry, apex ...); default all. When no ball is
+            tracked (a pile), no flight record is kept at all (``State.tracking``).
     """
 
     def __init__(
