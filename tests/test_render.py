@@ -252,6 +252,9 @@ def test_camera_presets_frame_the_balls(lab, rack):
     assert px[1, 0] > px[0, 0] and px[2, 1] > px[0, 1]  # top view: x to the right, +z down the picture
     follow = cases[4][1]
     assert follow.position[0] < sim.x[0, 0] < follow.lookat[0]  # behind ball 0, looking downrange
+    still = tg.Simulation(rack.scene, x=rack.x, track=False)  # ball 0 at rest, and no launch point kept
+    follow = R.camera_view(still, "follow", SIZE)
+    assert follow.position[0] < still.x[0, 0] < follow.lookat[0]  # then it looks along +x
 
 
 def test_ball_colours(rack):

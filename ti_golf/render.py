@@ -310,7 +310,7 @@ def camera_view(sim: "Simulation", camera: str | View = "iso", size: tuple[int, 
     p0 = x[0]
     v0 = sim.v[0]
     heading = np.array([v0[0], 0.0, v0[2]])
-    if np.linalg.norm(heading) < 1e-9:
+    if np.linalg.norm(heading) < 1e-9 and sim.launch_x is not None:  # None: no ball tracked, no launch point kept
         heading = np.array([p0[0] - sim.launch_x[0, 0], 0.0, p0[2] - sim.launch_x[0, 2]])
     if np.linalg.norm(heading) < 1e-9:
         heading = np.array([1.0, 0.0, 0.0])
