@@ -142,3 +142,15 @@ def test_a_putt_is_not_a_flight_but_a_lob_is():
     lob.run(t=2.0)
     f = lob.flight()
     assert f.landed[0] and 0.95 * 6.0**2 / 9.81 < f.carry[0] < 6.0**2 / 9.81
+
+
+def test_init_refuses_to_change_a_started_runtime():
+    # Taichi cannot switch backend, precision or debug checks in a running process: a second
+    # init that asks for another must say so, not return the running one as if it had obeyed
+    # (importing ti_golf.solver starts the runtime with the defaults; the tests start it first)
+    info = tg.init()
+    assert tg.init() is info
+    with pytest.raises(RuntimeError, match="debug off"):
+        tg.init(debug=True)
+    with pytest.raises(RuntimeError, match="start a new process"):
+        tg.init(precision="f32" if info.precision == "f64" else "f64")

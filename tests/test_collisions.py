@@ -171,6 +171,43 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(tmp_path):
     np.testing.assert_allclose(gpu["x"], sim.x, rtol=0, atol=1e-12)
 
 
+# Every array access of the grid's and the step's kernels checked against the array's bounds
+# (Taichi's debug mode), on balls that share cells, with and without the grid's order, tracked or
+# not (then the flight records hold one entry), stepped serially, in parallel and without collisions.
+_BOUNDS_CHECKED = textwrap.dedent("""
+    import numpy as np
+    import ti_golf as tg
+
+    tg.init(debug=True)  # before importing the kernels' modules, which initialise with the defaults
+    from ti_golf.bench import pile_scene
+    from ti_golf.solver import CollisionSolver
+
+    scene, x = pile_scene(300)
+    x = np.vstack([x[:1], [[0.021, 0.015, 0.021]], x[1:]])  # ball 1 shares ball 0's cell, below it: stored first
+    for track in (True, False):
+        for serial, reorder in ((True, False), (False, False), (False, True)):
+            sim = tg.Simulation(scene, x=x, track=track)
+            sim.solver = CollisionSolver(sim.model, serial=serial, reorder=reorder)
+            sim.step(3)
+            sim.x = sim.x[::-1]  # every ball moved: the lists are rebuilt, impulses carried
+            sim.step(2)
+    free = tg.Simulation(tg.load_scene("lab_vacuum", ["world.collisions=false"]), x=x[:5], track=False)
+    free.step(3)
+""")
+
+
+def test_kernels_stay_within_their_arrays(tmp_path):
+    # an access out of bounds reads or writes another array's memory: at best garbage, at worst a
+    # crash that depends on where the allocator put the arrays. The grid's insertion sort once
+    # read sorted_ids[-1] (Taichi evaluates both sides of an `and`), and that crashed a CI run.
+    script = tmp_path / "bounds_checked.py"
+    script.write_text(_BOUNDS_CHECKED)
+    env = {**os.environ, "TI_GOLF_ARCH": "cpu"}
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=900,
+                          check=False)
+    assert done.returncode == 0, done.stderr[-3000:]
+
+
 # ---------------------------------------------------------------------------------------------
 # Storage order: a large pile is stored in the grid's order (CollisionSolver.reorder)
 # ---------------------------------------------------------------------------------------------

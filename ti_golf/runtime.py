@@ -63,10 +63,12 @@ def init(arch: str | None = None, precision: str | None = None, *, debug: bool =
     global _info
     want_arch, want_prec = _resolve(arch, precision)
     if _info is not None:
-        if (arch and want_arch != _info.requested_arch) or (precision and want_prec != _info.precision):
+        if ((arch and want_arch != _info.requested_arch) or (precision and want_prec != _info.precision)
+                or (debug and not ti.lang.impl.current_cfg().debug)):
             raise RuntimeError(
-                f"ti_golf is already initialised with arch={_info.requested_arch}, precision={_info.precision}; "
-                "start a new process to change them"
+                f"ti_golf is already initialised with arch={_info.requested_arch}, precision={_info.precision}"
+                f"{'' if ti.lang.impl.current_cfg().debug else ', debug off'}; start a new process to change them "
+                "(importing ti_golf.solver or ti_golf.physics initialises with the defaults: call init first)"
             )
         return _info
     banner = io.StringIO()

@@ -151,7 +151,8 @@ class CollisionSolver:
                            self.start, self.chunk_start, self.sorted_ids)
         order = self.sorted_ids
         spares = [self.v_free, self.calm, self.bucket]  # scratch between steps: a vec3, a float and an int array
-        per_ball = [(state, name) for name in state.per_ball()] + [(self._model, name) for name in self._model.per_ball()]
+        model = self._model
+        per_ball = [(state, name) for name in state.per_ball()] + [(model, name) for name in model.per_ball()]
         for owner, name in per_ball:
             values = getattr(owner, name)
             k = next(k for k, a in enumerate(spares) if (a.dtype, a.element_shape) == (values.dtype, values.element_shape))

@@ -6,9 +6,9 @@ other buckets. ``list_neighbours`` builds the grid, a counting sort of ball ids 
 then lists, for every ball, the balls within r_a + r_b + skin in its own and the 26 adjacent
 cells, sorted by id (so sums over neighbours do not depend on thread order), in two halves: the
 *upper* list (the pairs the ball owns, each evaluated once per sweep: see :func:`owns`) and the
-*lower* list (the pairs its neighbours own), which ``link_lower`` (or ``link_and_carry``, which also carries each
-pair's accumulated impulse over from the old lists) turns into the slots where the owners store
-the pairs' impulses, so each ball gathers its impulses without float atomics.
+*lower* list (the pairs its neighbours own), which ``link_lower`` (or ``link_and_carry``, which
+also carries each pair's accumulated impulse over from the old lists) turns into the slots where
+the owners store the pairs' impulses, so each ball gathers its impulses without float atomics.
 A neighbour list stays valid until some ball has moved, or could move within a step, more than
 half the skin since the build.
 """
@@ -115,10 +115,10 @@ def list_neighbours(
     or :func:`link_and_carry`). One launch (a launch from Python costs about 0.1 ms; the grid
     took five). The counting sort: each ball's bucket and its rank among the balls of that bucket
     (an integer atomic add, counting in ``start``), the buckets' starts (:func:`bucket_starts`;
-    ``start`` has one entry more than there are buckets, ``chunk_start`` is its scratch), then the ball ids grouped by bucket:
-    ``sorted_ids[start[b] : start[b + 1]]`` are the balls of bucket b. Returns the longest upper
-    and lower lists found, also left in ``longest[0:2]`` (they may exceed the tables' widths: the
-    caller then rebuilds wider).
+    ``start`` has one entry more than there are buckets, ``chunk_start`` is its scratch), then the
+    ball ids grouped by bucket: ``sorted_ids[start[b] : start[b + 1]]`` are the balls of bucket b.
+    Returns the longest upper and lower lists found, also left in ``longest[0:2]`` (they may
+    exceed the tables' widths: the caller then rebuilds wider).
 
     With ``stored_sorted`` the balls are stored in bucket order already (:func:`storage_order`,
     then every per-ball array gathered into that order): ball p is the p-th of the sort, ``start``
@@ -169,7 +169,9 @@ def storage_order(x: vec3_array, inv_cell: float, mask: ti.i32, origin: ivec3, s
         for k in range(start[b] + 1, start[b + 1]):
             j = sorted_ids[k]
             m = k
-            while m > start[b] and stored_after(x, sorted_ids[m - 1], j):
+            while m > start[b]:  # not `m > start[b] and ...`: Taichi evaluates both sides of an `and`
+                if not stored_after(x, sorted_ids[m - 1], j):  # (sorted_ids[-1] would be read)
+                    break
                 sorted_ids[m] = sorted_ids[m - 1]
                 m -= 1
             sorted_ids[m] = j
@@ -219,12 +221,12 @@ def bucket_starts(start: ti.template(), chunk_start: ti.template()):
     """The buckets' starts from their counts, in place: given start[0] = 0 and bucket b's count
     c_b in start[b + 1], start[b + 1] becomes c_0 + … + c_b (an exclusive scan of the counts; one
     array instead of two, 8 bytes per ball less), in three loops: the sums of chunks of buckets,
-    in parallel; a serial scan of those sums into ``chunk_start`` (as many entries as there are chunks, plus one); each chunk's
-    running sum from its start, in parallel. No loop runs long on one thread: a single-thread
-    scan of all buckets (2^21 of them for a million balls) would crawl on a GPU, and Taichi's
-    Vulkan backend stops a serial loop after 65,535 iterations without a word, which left most
-    balls of a large pile without neighbours (``PrefixSumExecutor`` does not run on CPU).
-    Integer sums: the same result on every backend and thread count."""
+    in parallel; a serial scan of those sums into ``chunk_start`` (as many entries as there are
+    chunks, plus one); each chunk's running sum from its start, in parallel. No loop runs long on
+    one thread: a single-thread scan of all buckets (2^21 of them for a million balls) would crawl
+    on a GPU, and Taichi's Vulkan backend stops a serial loop after 65,535 iterations without a
+    word, which left most balls of a large pile without neighbours (``PrefixSumExecutor`` does not
+    run on CPU). Integer sums: the same result on every backend and thread count."""
     n_chunks = chunk_start.shape[0] - 1
     buckets = start.shape[0] - 1
     size = (buckets + n_chunks - 1) // n_chunks
@@ -308,7 +310,9 @@ def insert_sorted(table: ti.template(), i, n, capacity, j):
     """Insert id j into row i of ``table`` holding n ids in ascending order (dropped when full)."""
     if n < capacity:
         m = n
-        while m > 0 and table[i, m - 1] > j:
+        while m > 0:  # the test apart: Taichi evaluates both sides of an `and` (no table[i, -1])
+            if table[i, m - 1] <= j:
+                break
             table[i, m] = table[i, m - 1]
             m -= 1
         table[i, m] = j
