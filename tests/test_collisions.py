@@ -173,7 +173,8 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(tmp_path):
 
 # Every array access of the grid's and the step's kernels checked against the array's bounds
 # (Taichi's debug mode), on balls that share cells, with and without the grid's order, tracked or
-# not (then the flight records hold one entry), stepped serially, in parallel and without collisions.
+# not (then the flight records hold one entry), stepped serially, in parallel and without
+# collisions, and on the terrain.
 _BOUNDS_CHECKED = textwrap.dedent("""
     import numpy as np
     import ti_golf as tg
@@ -193,6 +194,8 @@ _BOUNDS_CHECKED = textwrap.dedent("""
             sim.step(2)
     free = tg.Simulation(tg.load_scene("lab_vacuum", ["world.collisions=false"]), x=x[:5], track=False)
     free.step(3)
+    for name in ("terrain_2d", "terrain_3d"):  # a height field: one ball alone, 400 colliding
+        tg.Simulation.from_scene(name).step(3)
 """)
 
 
