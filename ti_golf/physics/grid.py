@@ -458,4 +458,4 @@ def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, upper: ti.te
     for i in range(x.shape[0]):
         link_ball(i, bits, upper, n_upper, lower, n_lower)
     for i in range(x.shape[0]):
-        carry_ball(i, scratch, upper, n_upper, lam, n_upper, False)
+        carry_ball(i, scratch, upper, n_upper, lam, n_upper, False)  # ids unchanged: old_id (n_upper) unread
