@@ -30,9 +30,14 @@ def scene(*overrides: str) -> tg.Scene:
 # ---------------------------------------------------------------------------------------------
 # Neighbour search
 # ---------------------------------------------------------------------------------------------
-def _brute_force_pairs(x, r, skin):
+def _brute_force_pairs(x, r, skin, v=None, h=0.0):
+    # listed: surface gap below the skin, or below h·|v_a − v_b| when larger (grid.pair_reach: a
+    # pair that can close its gap within the step after a build must be listed by it)
     d = np.linalg.norm(x[:, None, :] - x[None, :, :], axis=-1)
-    close = d < r[:, None] + r[None, :] + skin
+    reach = np.full(d.shape, skin)
+    if v is not None:
+        reach = np.maximum(skin, h * np.linalg.norm(v[:, None, :] - v[None, :, :], axis=-1))
+    close = d < r[:, None] + r[None, :] + reach
     np.fill_diagonal(close, False)
     return {(i, j) for i, j in zip(*np.nonzero(close))}
 
@@ -49,18 +54,34 @@ def _random_sets():
             "far_apart": (far, np.full(len(far), 0.03)), "negative": (negative, mixed)}
 
 
+def _velocities(n, fast):
+    """Resting balls, or (``fast``) balls at up to 1 m/s with one in twenty at up to 40 m/s: 20 mm
+    per 0.5 ms step, ten times the skin of 2-cm balls."""
+    if not fast:
+        return np.zeros((n, 3))
+    rng = np.random.default_rng(5)
+    v = rng.uniform(-1.0, 1.0, (n, 3))
+    v[rng.random(n) < 0.05] *= 40.0
+    return v
+
+
+@pytest.mark.parametrize("fast", [False, True], ids=["at_rest", "fast"])
 @pytest.mark.parametrize("name", ["clustered", "sparse", "far_apart", "negative"])
-def test_grid_neighbours_equal_brute_force(name):
+def test_grid_neighbours_equal_brute_force(name, fast):
     x, r = _random_sets()[name]
-    sim = tg.Simulation(scene(), x=x, radius=r, mass=0.045 * (r / 0.02) ** 3)
+    v = _velocities(len(x), fast)
+    sim = tg.Simulation(scene(), x=x, v=v, radius=r, mass=0.045 * (r / 0.02) ** 3)
     solver: CollisionSolver = sim.solver
     solver.build(sim.state)
     pairs = solver.pairs()
     assert np.all(pairs[:, 0] < pairs[:, 1])  # each pair reported once, by id
     found = {(int(i), int(j)) for i, j in pairs} | {(int(j), int(i)) for i, j in pairs}
-    expected = _brute_force_pairs(x, r, solver.skin)
+    expected = _brute_force_pairs(x, r, solver.skin, v, sim.dt)
     assert found == expected
     assert len(expected) > 0
+    if fast and name != "sparse":  # the closing speeds list pairs the skin alone would not (the
+        # sparse set's balls are too far apart for that: there the lists must just miss nothing)
+        assert len(expected) > len(_brute_force_pairs(x, r, solver.skin))
     xs = sim.state.x.to_numpy()  # the positions the kernels saw (float type of the run)
     upper, n_upper = solver.upper.to_numpy(), solver.n_upper.to_numpy()
     lower, n_lower = solver.lower.to_numpy(), solver.n_lower.to_numpy()
@@ -600,6 +621,26 @@ def test_balls_moved_between_steps_collide_in_the_next_step(serial):
     sim.v = [[0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]
     sim.step(1)
     np.testing.assert_allclose(sim.v, [[-1.0, 0, 0], [0, 0, 0]], atol=1e-12)
+
+
+@SERIAL_OR_PARALLEL
+@pytest.mark.parametrize("gap", [0.003, 0.006, 0.0095])
+def test_a_fast_ball_meets_a_ball_it_reaches_within_the_step(serial, gap):
+    # Ball 0 flies at 20 m/s at ball 1, which rests `gap` away: 10 mm of flight per 0.5 ms step,
+    # more than the 2 mm skin, so the lists built before the step must list the pair by its closing
+    # speed (grid.pair_reach), or the balls meet only a step later, after flying into each other.
+    # Contact is speculative (gap + h·v_n < 0, B.5–B.9 on the whole step): with e = 1 and equal
+    # masses they exchange velocities in the first step, ball 0 stays where it was and ball 1
+    # moves h·20 m/s = 10 mm; they never overlap.
+    r = tg.load_scene("lab_vacuum").ball.radius
+    sim = tg.Simulation(scene("contact.e=1"), x=[[0.0, 1.0, 0.0], [2 * r + gap, 1.0, 0.0]], v=[[20.0, 0, 0], [0, 0, 0]])
+    sim.solver = CollisionSolver(sim.model, serial=serial)
+    x0 = sim.x.copy()
+    sim.step(1)
+    np.testing.assert_allclose(sim.v, [[0, 0, 0], [20.0, 0, 0]], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(sim.x - x0, [[0, 0, 0], [0.5e-3 * 20.0, 0, 0]], rtol=0, atol=1e-12)
+    sim.step(10)
+    assert sim.deepest_overlap() is None
 
 
 @SERIAL_OR_PARALLEL

@@ -38,7 +38,9 @@ class CollisionSolver:
     """Buffers and neighbour lists for stepping N colliding balls.
 
     Attributes:
-        cell: grid cell size [m]: the largest diameter plus the skin.
+        cell: grid cell size [m] at the last build: the largest diameter plus the skin, or plus
+            2h·v_max when the fastest pair could close more than the skin in a step (see
+            ``grid.cell_size``: pairs are listed by their closing speed too).
         skin: neighbour-list skin [m] (``contact.skin`` × largest radius).
         capacity: widths of the (upper, lower) neighbour tables (they grow when a list overflows).
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
@@ -61,9 +63,9 @@ class CollisionSolver:
                  reorder: bool | None = None) -> None:
         self._model = model
         n = model.n
-        r_max = float(model.radius_np.max())
-        self.skin = model.scene.contact.skin * r_max
-        self.cell = 2.0 * r_max + self.skin
+        self._r_max = float(model.radius_np.max())
+        self.skin = model.scene.contact.skin * self._r_max
+        self.cell = grid.cell_size(self._r_max, self.skin, model.dt, 0.0)
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
         self.serial = steps_serially(n) if serial is None else bool(serial)
         if self.serial and not on_cpu():
@@ -103,6 +105,10 @@ class CollisionSolver:
         if self._valid:  # the pair impulses are scratch between steps: they keep the old lists' λ
             stashed = self.impulse
             grid.stash(self.upper, self.n_upper, self.lam, stashed)
+        h = self._model.dt
+        v_max = float(grid.max_speed(state.v))
+        fast = grid.moving_fast(self.skin, h, v_max)  # some pair may close more than the skin in a step
+        self.cell = grid.cell_size(self._r_max, self.skin, h, v_max)
         bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
         self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, self.mask + 1))
         if self.reorder:
@@ -115,7 +121,7 @@ class CollisionSolver:
             if self.lower is None or self.lower.shape[1] != self.capacity[1]:
                 self.lower = ti.ndarray(ti.i32, (n, self.capacity[1]))
             longest = grid.list_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, *self._hash,
-                                           self.skin,
+                                           self.skin, state.v, h, int(fast),
                                            self.bucket, self.rank, self.start, self.chunk_start,
                                            self.sorted_ids, self.upper, self.n_upper, self.lower, self.n_lower,
                                            self.x_at_build, self.flag, self.reorder)

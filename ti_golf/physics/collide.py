@@ -377,7 +377,7 @@ def collision_step(
         ti.loop_config(serialize=True)
         for _ in range(steps):
             if flag[0] != 0:
-                relist_all_pairs(x, radius, skin, upper, n_upper, lower, n_lower, x_at_build, lam, J)
+                relist_all_pairs(x, radius, skin, v, h, upper, n_upper, lower, n_lower, x_at_build, lam, J)
                 result += 1
                 flag[0] = 0
             step_balls(

@@ -10,7 +10,12 @@ cells, sorted by id (so sums over neighbours do not depend on thread order), in 
 also carries each pair's accumulated impulse over from the old lists) turns into the slots where
 the owners store the pairs' impulses, so each ball gathers its impulses without float atomics.
 A neighbour list stays valid until some ball has moved, or could move within a step, more than
-half the skin since the build.
+half the skin since the build. A build also lists the pairs that can meet within the step that
+follows it: a pair is listed when its surface gap is below the larger of the skin and
+h·|v_a − v_b| (:func:`pair_reach`), and the cells are widened for the fastest pair
+(:func:`cell_size`). Otherwise a ball that moves farther than the skin in a step, as fast balls do
+(6 m/s is 3 mm per 0.5 ms step, against a skin of 2 mm for golf balls), would meet a ball
+missing from its lists only in the next step, after flying into it.
 """
 
 import taichi as ti
@@ -41,6 +46,45 @@ def bucket_of(c, mask, origin, stride):
     h = (ti.cast(d[0], ti.u32) * ti.cast(stride[0], ti.u32) + ti.cast(d[1], ti.u32) * ti.cast(stride[1], ti.u32)
          + ti.cast(d[2], ti.u32) * ti.cast(stride[2], ti.u32))
     return ti.cast(h & ti.cast(mask, ti.u32), ti.i32)
+
+
+def cell_size(r_max: float, skin: float, h: float, v_max: float) -> float:
+    """Side [m] of the grid's cells for balls of radii up to ``r_max`` [m] whose speeds are at most
+    ``v_max`` [m/s], with time step ``h`` [s]: no listed pair (:func:`pair_reach`) reaches beyond
+    the 26 cells around a ball's own. h·|v_a − v_b| ≤ 2h·v_max; the factor 1 + 1e-6 covers the
+    rounding of either side."""
+    return 2.0 * r_max + max(skin, 2.0 * h * v_max * (1.0 + 1e-6))
+
+
+def moving_fast(skin: float, h: float, v_max: float) -> bool:
+    """Whether some pair of balls with speeds up to ``v_max`` [m/s] may close more than the skin [m]
+    in a step of ``h`` [s], so that :func:`pair_reach` must read their velocities (else it is the
+    skin for every pair)."""
+    return 2.0 * h * v_max * (1.0 + 1e-6) > skin
+
+
+@ti.func
+def pair_reach(skin, h, v_a, v_b):
+    """The surface gap [m] below which a pair is listed: the skin, or h·|v_a − v_b| when larger, so
+    that a build lists every pair the speculative contact test (gap + h·v_n < 0, see
+    :func:`.contact.pair_impulse`) can take up in the step after it at the velocities of the build
+    (|v_n| ≤ |v_a − v_b|). Symmetric in a and b.
+
+    Twice that reach, a margin for what the sweeps add to the velocities, listed so many pairs
+    that are still apart in a pour that the Jacobi sweeps' simultaneous bounces (e > 0) fed on
+    themselves: with e = 0.3 the narrow ball pit of the tests blew up (10 to 2,000 m/s within
+    three steps). The steps between builds keep that margin from the skin (a ball may move half
+    of it, less 2h·|v|, before the lists are rebuilt)."""
+    return ti.max(skin, h * (v_a - v_b).norm())
+
+
+@ti.kernel
+def max_speed(v: vec3_array) -> real:
+    """The greatest speed [m/s] of the balls (a float atomic max: the same on every thread order)."""
+    s2 = 0.0
+    for i in range(v.shape[0]):
+        ti.atomic_max(s2, v[i].norm_sqr())
+    return ti.sqrt(s2)
 
 
 @ti.kernel
@@ -94,6 +138,9 @@ def list_neighbours(
     origin: ivec3,
     stride: ivec3,
     skin: float,
+    v: vec3_array,
+    h: float,
+    fast: ti.i32,
     # scratch:
     bucket: int_array,
     rank: int_array,
@@ -110,8 +157,9 @@ def list_neighbours(
     stored_sorted: ti.template(),
 ) -> ti.types.vector(2, ti.i32):
     """Sort the balls into the hash grid, then list every ball's neighbours closer than
-    r_a + r_b + skin, each list sorted by id: ``upper[i]`` holds the neighbours whose pairs ball i
-    owns (:func:`owns`), ``lower[i]`` the others (to be turned into slots by :func:`link_lower`
+    r_a + r_b + :func:`pair_reach` (with ``fast`` 0, the skin: see :func:`moving_fast`; ``h`` is
+    the time step [s], ``v`` the velocities), each list sorted by id: ``upper[i]`` holds the
+    neighbours whose pairs ball i owns (:func:`owns`), ``lower[i]`` the others (to be turned into slots by :func:`link_lower`
     or :func:`link_and_carry`). One launch (a launch from Python costs about 0.1 ms; the grid
     took five). The counting sort: each ball's bucket and its rank among the balls of that bucket
     (an integer atomic add, counting in ``start``), the buckets' starts (:func:`bucket_starts`;
@@ -130,8 +178,8 @@ def list_neighbours(
         i = idx  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         if ti.static(not stored_sorted):
             i = sorted_ids[idx]
-        n_up, n_low = list_ball(i, x, radius, inv_cell, mask, origin, stride, skin, start, sorted_ids, upper, lower,
-                                stored_sorted)
+        n_up, n_low = list_ball(i, x, radius, inv_cell, mask, origin, stride, skin, v, h, fast, start, sorted_ids,
+                                upper, lower, stored_sorted)
         n_upper[i] = ti.min(n_up, upper.shape[1])
         n_lower[i] = ti.min(n_low, lower.shape[1])
         x_at_build[i] = x[i]
@@ -249,8 +297,9 @@ def bucket_starts(start: ti.template(), chunk_start: ti.template()):
 
 
 @ti.func
-def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin, stride, skin, start: ti.template(),
-              sorted_ids: ti.template(), upper: ti.template(), lower: ti.template(), stored_sorted: ti.template()):
+def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin, stride, skin, v: ti.template(),
+              h, fast, start: ti.template(), sorted_ids: ti.template(), upper: ti.template(),
+              lower: ti.template(), stored_sorted: ti.template()):
     """Ball i's neighbours in its own and the 26 adjacent cells, into its rows of ``upper`` and
     ``lower`` in id order (as many as fit; ``stored_sorted``: see :func:`list_neighbours`).
     Returns how many there are (n_upper, n_lower)."""
@@ -275,7 +324,10 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin
                 cj = cell_of(xj, inv_cell)
                 # a ball of the row (not of another cell sharing its buckets), within reach
                 if j != i and cj[1] == row[1] and cj[2] == row[2] and ti.abs(cj[0] - c[0]) <= 1:
-                    reach = ri + radius[j] + skin
+                    gap_reach = skin
+                    if fast != 0:  # (else pair_reach is the skin for every pair: v not read)
+                        gap_reach = pair_reach(skin, h, v[i], v[j])
+                    reach = ri + radius[j] + gap_reach
                     if (xj - xi).norm_sqr() < reach * reach:
                         if owns(xi, xj, i, j):
                             insert_sorted(upper, i, n_up, cap_up, j)
@@ -430,9 +482,9 @@ def stashed_id(stashed: ti.template(), i, k):
 
 
 @ti.func
-def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, upper: ti.template(), n_upper: ti.template(),
-                     lower: ti.template(), n_lower: ti.template(), x_at_build: ti.template(), lam: ti.template(),
-                     scratch: ti.template()):
+def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, v: ti.template(), h, upper: ti.template(),
+                     n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), x_at_build: ti.template(),
+                     lam: ti.template(), scratch: ti.template()):
     """Rebuild the neighbour lists of a few balls in place without a grid, by testing every pair:
     the lists, slots and carried-over impulses that ``list_neighbours`` and ``link_and_carry``
     give, in O(n²) work. The tables must be n − 1 wide (no list can overflow).
@@ -444,7 +496,7 @@ def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, upper: ti.te
         xi, ri = x[i], radius[i]
         n_up, n_low = 0, 0
         for j in range(x.shape[0]):  # in id order: the lists come out sorted
-            reach = ri + radius[j] + skin
+            reach = ri + radius[j] + pair_reach(skin, h, v[i], v[j])
             if j != i and (x[j] - xi).norm_sqr() < reach * reach:  # the test of list_ball
                 if owns(xi, x[j], i, j):
                     upper[i, n_up] = j
