@@ -159,14 +159,14 @@ def list_neighbours(
     """Sort the balls into the hash grid, then list every ball's neighbours closer than
     r_a + r_b + :func:`pair_reach` (with ``fast`` 0, the skin: see :func:`moving_fast`; ``h`` is
     the time step [s], ``v`` the velocities), each list sorted by id: ``upper[i]`` holds the
-    neighbours whose pairs ball i owns (:func:`owns`), ``lower[i]`` the others (to be turned into slots by :func:`link_lower`
-    or :func:`link_and_carry`). One launch (a launch from Python costs about 0.1 ms; the grid
-    took five). The counting sort: each ball's bucket and its rank among the balls of that bucket
-    (an integer atomic add, counting in ``start``), the buckets' starts (:func:`bucket_starts`;
-    ``start`` has one entry more than there are buckets, ``chunk_start`` is its scratch), then the
-    ball ids grouped by bucket: ``sorted_ids[start[b] : start[b + 1]]`` are the balls of bucket b.
-    Returns the longest upper and lower lists found, also left in ``longest[0:2]`` (they may
-    exceed the tables' widths: the caller then rebuilds wider).
+    neighbours whose pairs ball i owns (:func:`owns`), ``lower[i]`` the others (to be turned into
+    slots by :func:`link_lower` or :func:`link_and_carry`). One launch (a launch from Python costs
+    about 0.1 ms; the grid took five). The counting sort: each ball's bucket and its rank among the
+    balls of that bucket (an integer atomic add, counting in ``start``), the buckets' starts
+    (:func:`bucket_starts`; ``start`` has one entry more than there are buckets, ``chunk_start`` is
+    its scratch), then the ball ids grouped by bucket: ``sorted_ids[start[b] : start[b + 1]]`` are
+    the balls of bucket b. Returns the longest upper and lower lists found, also left in
+    ``longest[0:2]`` (they may exceed the tables' widths: the caller then rebuilds wider).
 
     With ``stored_sorted`` the balls are stored in bucket order already (:func:`storage_order`,
     then every per-ball array gathered into that order): ball p is the p-th of the sort, ``start``
