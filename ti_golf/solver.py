@@ -65,7 +65,7 @@ class CollisionSolver:
         n = model.n
         self._r_max = float(model.radius_np.max())
         self.skin = model.scene.contact.skin * self._r_max
-        self.cell = grid.cell_size(self._r_max, self.skin, model.dt, 0.0)
+        self.cell = grid.cell_size(self._r_max, self.skin, model.dt, 0.0)[0]
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
         self.serial = steps_serially(n) if serial is None else bool(serial)
         if self.serial and not on_cpu():
@@ -107,8 +107,7 @@ class CollisionSolver:
             grid.stash(self.upper, self.n_upper, self.lam, stashed)
         h = self._model.dt
         v_max = float(grid.max_speed(state.v))
-        fast = grid.moving_fast(self.skin, h, v_max)  # some pair may close more than the skin in a step
-        self.cell = grid.cell_size(self._r_max, self.skin, h, v_max)
+        self.cell, fast = grid.cell_size(self._r_max, self.skin, h, v_max)  # fast: pairs listed by closing speed
         bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
         self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, self.mask + 1))
         if self.reorder:

@@ -1,8 +1,8 @@
 """Uniform hash grid and neighbour lists.
 
-Cells are cubes of side ``cell`` (the largest diameter plus the skin), hashed into a table of
-``mask + 1`` buckets (a power of two), so the world is unbounded: far-apart balls simply land in
-other buckets. ``list_neighbours`` builds the grid, a counting sort of ball ids by bucket, and
+Cells are cubes of side ``cell`` (the largest diameter plus the skin, or more while balls move
+fast: see below), hashed into a table of ``mask + 1`` buckets (a power of two), so the world is
+unbounded: far-apart balls simply land in other buckets. ``list_neighbours`` builds the grid, a counting sort of ball ids by bucket, and
 then lists, for every ball, the balls within r_a + r_b + skin in its own and the 26 adjacent
 cells, sorted by id (so sums over neighbours do not depend on thread order), in two halves: the
 *upper* list (the pairs the ball owns, each evaluated once per sweep: see :func:`owns`) and the
@@ -48,19 +48,14 @@ def bucket_of(c, mask, origin, stride):
     return ti.cast(h & ti.cast(mask, ti.u32), ti.i32)
 
 
-def cell_size(r_max: float, skin: float, h: float, v_max: float) -> float:
+def cell_size(r_max: float, skin: float, h: float, v_max: float) -> tuple[float, bool]:
     """Side [m] of the grid's cells for balls of radii up to ``r_max`` [m] whose speeds are at most
-    ``v_max`` [m/s], with time step ``h`` [s]: no listed pair (:func:`pair_reach`) reaches beyond
-    the 26 cells around a ball's own. h·|v_a − v_b| ≤ 2h·v_max; the factor 1 + 1e-6 covers the
-    rounding of either side."""
-    return 2.0 * r_max + max(skin, 2.0 * h * v_max * (1.0 + 1e-6))
-
-
-def moving_fast(skin: float, h: float, v_max: float) -> bool:
-    """Whether some pair of balls with speeds up to ``v_max`` [m/s] may close more than the skin [m]
-    in a step of ``h`` [s], so that :func:`pair_reach` must read their velocities (else it is the
-    skin for every pair)."""
-    return 2.0 * h * v_max * (1.0 + 1e-6) > skin
+    ``v_max`` [m/s], with time step ``h`` [s], so that no listed pair (:func:`pair_reach`) reaches
+    beyond the 26 cells around a ball's own; and whether some pair may close more than the skin
+    [m] in a step, so that :func:`pair_reach` must read the velocities (else it is the skin for
+    every pair). h·|v_a − v_b| ≤ 2h·v_max; the factor 1 + 1e-6 covers the rounding of either side."""
+    closing = 2.0 * h * v_max * (1.0 + 1e-6)
+    return 2.0 * r_max + max(skin, closing), closing > skin
 
 
 @ti.func
@@ -157,7 +152,7 @@ def list_neighbours(
     stored_sorted: ti.template(),
 ) -> ti.types.vector(2, ti.i32):
     """Sort the balls into the hash grid, then list every ball's neighbours closer than
-    r_a + r_b + :func:`pair_reach` (with ``fast`` 0, the skin: see :func:`moving_fast`; ``h`` is
+    r_a + r_b + :func:`pair_reach` (with ``fast`` 0, the skin: see :func:`cell_size`; ``h`` is
     the time step [s], ``v`` the velocities), each list sorted by id: ``upper[i]`` holds the
     neighbours whose pairs ball i owns (:func:`owns`), ``lower[i]`` the others (to be turned into
     slots by :func:`link_lower` or :func:`link_and_carry`). One launch (a launch from Python costs
