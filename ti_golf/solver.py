@@ -88,7 +88,7 @@ class CollisionSolver:
         self.calm = ti.ndarray(float, n)  # least rest timer of each ball and the balls it touches [s]
         self.clear = ti.ndarray(float, n)  # least gap of each ball to the planes [m] (collide.plane_clearance)
         self.n_upper, self.n_lower = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
-        self.upper = self.lower = self.lam = self.impulse = self.projection = None
+        self.upper = self.lower = self.lam = self.impulse = self.impact = None
         # resting impulses of the planes and (one column more) the terrain
         self.lam_plane = ti.ndarray(float, (n, max(1, len(model.plane_p) + (model.terrain is not None))))
         self.flag = ti.ndarray(ti.i32, 2)
@@ -140,9 +140,11 @@ class CollisionSolver:
             grid.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
             grid.clear2(self.lam)
         if self.impulse is None or self.impulse.shape != self.upper.shape:
-            self.impulse = self.projection = None  # free the old tables before allocating
-            self.impulse = ti.ndarray(ti.types.vector(6, float), self.upper.shape)
-            self.projection = ti.ndarray(float, self.upper.shape)
+            self.impulse = self.impact = None  # free the old tables before allocating
+            # each pair's impulse, normal, and gap or projection in a sweep (collide.owned_pairs)
+            self.impulse = ti.ndarray(ti.types.vector(7, float), self.upper.shape)
+            # whether a pair's impulse is an impact, and each ball's first impact (collide.impact_keys)
+            self.impact = ti.ndarray(ti.i32, (n, self.upper.shape[1] + 1))
         self.rebuilds += 1
         self._valid = True
 
@@ -246,5 +248,5 @@ class CollisionSolver:
             m.terrain_cells, m.surface_table,
             self.upper, self.n_upper, self.lower, self.n_lower, self.x_at_build, self.lam, self.lam_plane,
             s.x, s.v, s.w, s.status, s.rest_time, self.x_free, self.v_free, self.calm, self.clear, self.impulse,
-            self.projection, s.landed, s.apex, s.t_land, s.land_x, s.land_v, self.flag,
+            self.impact, s.landed, s.apex, s.t_land, s.land_x, s.land_v, self.flag,
         )

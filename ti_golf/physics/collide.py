@@ -23,7 +23,8 @@ The kernel's top-level loops run one after another, each over all balls in paral
 2. ``iterations`` Jacobi sweeps, each a pair loop (impulses from the velocities of the previous
    sweep, with the normals and gaps that the first loop stored) and a ball loop (gather, then the
    planes and the terrain: the plane of the patch under the ball, see :mod:`.terrain`, applied
-   in turn);
+   in turn); between the two, in a sweep where pairs met as impacts, each ball finds its first
+   impact, so that a ball takes one impact per sweep (:func:`matched`);
 3. finish (fused with the last sweep's ball loop): positions from the final velocities (split at
    a plane's time of impact), position projection of overlaps (B.18), status, rest detection and
    out-of-bounds (off the terrain), and whether the neighbour lists must be rebuilt before the
@@ -39,13 +40,13 @@ import taichi as ti
 
 from ..config import AT_REST, FLYING, OUT_OF_BOUNDS
 from .aero import V, W, X, coefficients, column
-from .contact import pair_impulse, plane_jolt, plane_position, rest_update, warm_impulse
+from .contact import PRESSED, pair_impulse, plane_jolt, plane_position, rest_update, warm_impulse
 from .grid import int_table, owner_slot, real_table, relist_all_pairs, slot_bits
 from .integrate import IN_FLIGHT, step_free, track_flight
 from .kernels import lane_state
 from .terrain import outside, same_cell, surface, surface_contact, terrain_clearance, terrain_position
 from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, real,
-                    vec3, vec3_array, vec6_table)
+                    vec3, vec3_array, vec7_table)
 
 QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
 FAR = 1e30  # the surface clearance of a ball when there are no planes and no terrain (see surface_clearance)
@@ -73,13 +74,17 @@ def skip_pair(status: ti.template(), i, j):
 @ti.func
 def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic, radius: ti.template(),
                 mass: ti.template(), status: ti.template(), upper: ti.template(), n_upper: ti.template(),
-                lam: ti.template(), J: ti.template(), G: ti.template(), v: ti.template(), w: ti.template()):
+                lam: ti.template(), J: ti.template(), v: ti.template(), w: ti.template(),
+                impact: ti.template(), flag: ti.template()):
     """One Jacobi sweep over the pairs that ball i owns, with its neighbours j = upper[i, k]: the
     impulse P on i (−P acts on j) from the current velocities (which updates the resting impulse
-    ``lam``), stored as J[i, k] = (P, n̂). The unit normal n̂ from j to i and the surface gap (in
-    G[i, k]) were stored by :func:`warm_start` (positions do not change during the sweeps).
+    ``lam``), stored as J[i, k] = (P, n̂, gap). The unit normal n̂ from j to i and the surface gap
+    [m] were stored there by :func:`warm_start` (positions do not change during the sweeps).
+    An impact (see :func:`.contact.pair_impulse`) is marked in ``impact[i, k]`` (and ``flag[1]`` set,
+    so that :func:`impact_keys` looks for the balls' first impacts; :func:`gather` takes one impact
+    per ball, see :func:`matched`).
 
-    With ``final`` (the last sweep) G[i, k] becomes, for an overlapping pair,
+    With ``final`` (the last sweep) the gap's place, J[i, k][6], takes, for an overlapping pair,
     q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position projection (B.18: ball i moves by
     q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the other way); for a pair apart,
     −gap ≤ 0 (the surface gap [m]: the balls touch while it is below 1 % of a radius)."""
@@ -87,33 +92,40 @@ def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic,
     for k in range(n_upper[i]):
         j = upper[i, k]
         Jk = J[i, k]
-        n, gap = vec3(Jk[3], Jk[4], Jk[5]), G[i, k]
+        n, gap = vec3(Jk[3], Jk[4], Jk[5]), Jk[6]
         ok = n.norm_sqr() > 0.0
         inv_mj = 1.0 / mass[j]
         P = vec3(0.0)
+        kick = 0
         if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
             lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
         elif ok and not skip_pair(status, i, j):
-            P, lam[i, k], _ = pair_impulse(n, gap, v[i], w[i], radius[i], inv_mi, v[j], w[j], radius[j], inv_mj,
-                                           lam[i, k], contact.e, contact.mu, v_inelastic, h, contact.relax)
-        J[i, k] = ti.Vector([P[0], P[1], P[2], n[0], n[1], n[2]])
+            P, lam[i, k], _, kick = pair_impulse(n, gap, v[i], w[i], radius[i], inv_mi, v[j], w[j], radius[j],
+                                                 inv_mj, lam[i, k], contact.e, contact.mu, v_inelastic, h,
+                                                 contact.relax)
+            if kick != 0:
+                flag[1] = 1  # every thread that writes, writes 1
+        g = gap
         if ti.static(final):
             g = -gap
             if gap < 0.0:
                 g = 0.0
                 if ok:
                     g = -contact.k_p * gap / (inv_mi + inv_mj)
-            G[i, k] = g
+        J[i, k] = ti.Vector([P[0], P[1], P[2], n[0], n[1], n[2], g])
+        impact[i, k] = kick
 
 
 @ti.func
 def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), status: ti.template(),
                rest_time: ti.template(), upper: ti.template(), n_upper: ti.template(), lower: ti.template(),
-               n_lower: ti.template(), bits, lam: ti.template(), J: ti.template(), G: ti.template()):
+               n_lower: ti.template(), bits, lam: ti.template(), J: ti.template(),
+               impact: ti.template()):
     """Δv [m/s] of ball i from last step's resting impulses λ of its ball pairs, each along the
     pair's normal at the start of the step, summed in id order (lower then upper). A normal
     impulse gives no spin; friction is left to the sweeps. Also stores the geometry of the pairs
-    ball i owns for the sweeps: J[i, k] = (0, n̂) and G[i, k] = the surface gap [m]. Reads only
+    ball i owns for the sweeps: J[i, k] = (0, n̂, the surface gap [m]) and no impact
+    (``impact[i, k]``, read by :func:`gather`). Reads only
     what the free-flight loop does not write (start-of-step positions, status, λ, rest timers),
     so it runs inside that loop. Returns (Δv, the calm time [s] of ball i: the least rest timer
     of the ball and the balls it touches, see :func:`finish`; or ``QUIET`` for a ball at rest
@@ -132,8 +144,8 @@ def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), 
     for k in range(n_upper[i]):
         j = upper[i, k]
         n, gap = pair_geometry(x, radius, i, j)
-        J[i, k] = ti.Vector([0.0, 0.0, 0.0, n[0], n[1], n[2]])
-        G[i, k] = gap
+        J[i, k] = ti.Vector([0.0, 0.0, 0.0, n[0], n[1], n[2], gap])
+        impact[i, k] = 0
         P += resting_impulse(status, i, j, n, lam[i, k])
         calm = island_calm(calm, gap, radius[i], status[j], rest_time[j])
         quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
@@ -196,16 +208,67 @@ def resting_impulse(status: ti.template(), i, j, n, lam):
 
 
 @ti.func
+def impact_keys(i, upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits,
+                impact: ti.template()):
+    """Keep in the last column of ``impact`` the greatest key of ball i's impacts in this sweep (0
+    when it has none): the key of a pair is its slot in the pair tables, owner·2^bits + column
+    (as in the lower lists, see :func:`.grid.owner_slot`), plus one. Gathered from the pairs'
+    marks (:func:`owned_pairs`), as the impulses are: no atomics."""
+    key = 0
+    for m in range(n_lower[i]):
+        slot = lower[i, m]
+        j, k = owner_slot(slot, bits)
+        if impact[j, k] != 0:
+            key = ti.max(key, slot + 1)
+    for k in range(n_upper[i]):
+        if impact[i, k] != 0:
+            key = ti.max(key, (i << bits) + k + 1)
+    impact[i, impact.shape[1] - 1] = key
+
+
+@ti.func
+def matched(impact: ti.template(), a, b, key):
+    """Whether the impact of balls a and b with ``key`` (see :func:`impact_keys`) is taken in this
+    sweep: it is the first of both balls' impacts in the sweep's order, the greatest key.
+
+    A Jacobi sweep evaluates every pair from the same velocities, so a ball that meets several
+    balls at once would take each impact's whole jolt, as if the others were not there: a ball at
+    v into two touching balls at ±30° with e = 1 would leave at −v/2 and send both off at
+    0.87 v, 75 % more kinetic energy than it brought. So each sweep takes, for every ball, at most
+    one of its impacts, a binary collision by B.9 that keeps kinetic energy with e = 1 and loses
+    some with e < 1; the others are evaluated again in the next sweep, from the velocities that
+    collision left (the next step's sweeps when this was the last). The impacts are taken one
+    after another in a fixed order, as if the balls had met a moment apart."""
+    c = impact.shape[1] - 1
+    return impact[a, c] == key and impact[b, c] == key
+
+
+@ti.func
+def contact_state(g, r, m_i, m_j, k_p):
+    """0, 1 or ``PRESSED`` (see :func:`gather`) for a pair whose last-sweep J[·, ·][6] is ``g``
+    (the projection q ≥ 0 of an overlap, or minus the gap: see :func:`owned_pairs`), seen from
+    ball i of radius ``r``."""
+    state = 0
+    if g > -0.01 * r:
+        state = 1
+        if g * (1.0 / m_i + 1.0 / m_j) > 0.01 * r * k_p:
+            state = PRESSED
+    return state
+
+
+@ti.func
 def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), upper: ti.template(),
            n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits, J: ti.template(),
-           G: ti.template()):
+           impact: ti.template(), impacts, k_p):
     """What ball i gets from all its pairs, summed in id order (lower then upper): (Δv [m/s],
     Δω [rad/s], and with ``final`` the position projection Δx [m] and whether it touches a ball:
-    a gap below 1 % of its radius).
+    0 when no gap is below 1 % of its radius, ``PRESSED`` when some ball overlaps it by more than
+    that (the overlap is q·(1/m_i + 1/m_j)/k_p, q the pair's projection in J), else 1).
 
     An impulse ±P at the contact point −r·n̂ᵢ of a solid sphere (n̂ᵢ = ±n̂ from the other ball to
     i) gives Δv = ±P/m and Δω = (−r n̂ᵢ) × (±P)·5/(2 m r²) = −(5/(2 m r))·(n̂ × P) for both balls
-    of the pair (n̂ᵢ and the sign of P flip together)."""
+    of the pair (n̂ᵢ and the sign of P flip together). Of a ball's impacts, only the one
+    :func:`matched` in this sweep acts (``impacts``: whether the sweep has any, ``flag[1]``)."""
     P, T, q_n = vec3(0.0), vec3(0.0), vec3(0.0)
     touching = 0
     r = radius[i]
@@ -214,19 +277,25 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
         j, k = owner_slot(slot, bits)  # the pair's owner j stores it
         Jk = J[j, k]
         P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])
+        if impacts != 0:  # (the marks are read only in a sweep that has impacts)
+            if impact[j, k] != 0 and not matched(impact, i, j, slot + 1):
+                P_k = vec3(0.0)
         P -= P_k
         T += n_k.cross(P_k)
         if ti.static(final):
-            q_n -= ti.max(G[j, k], 0.0) * n_k
-            touching |= G[j, k] > -0.01 * r
+            q_n -= ti.max(Jk[6], 0.0) * n_k
+            touching = ti.max(touching, contact_state(Jk[6], r, mass[i], mass[j], k_p))
     for k in range(n_upper[i]):
         Jk = J[i, k]
         P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])
+        if impacts != 0:
+            if impact[i, k] != 0 and not matched(impact, i, upper[i, k], (i << bits) + k + 1):
+                P_k = vec3(0.0)
         P += P_k
         T += n_k.cross(P_k)
         if ti.static(final):
-            q_n += ti.max(G[i, k], 0.0) * n_k
-            touching |= G[i, k] > -0.01 * r
+            q_n += ti.max(Jk[6], 0.0) * n_k
+            touching = ti.max(touching, contact_state(Jk[6], r, mass[i], mass[upper[i, k]], k_p))
     inv_m = 1.0 / mass[i]
     return P * inv_m, T * (-2.5 * inv_m / r), q_n * inv_m, touching
 
@@ -258,8 +327,8 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
         else:
             gap = (x[i] - plane_p[p]).dot(n) - r
             if gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam_plane[i, p] > 0.0:  # else no impulse (pair_impulse)
-                P, lam_p, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam_plane[i, p],
-                                           contact.e, contact.mu, v_inelastic, h)
+                P, lam_p, _, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0,
+                                                 lam_plane[i, p], contact.e, contact.mu, v_inelastic, h)
                 if P.dot(n) != 0.0:
                     vi, wi = plane_jolt(P, lam_p - lam_plane[i, p], vi, wi, r, n, contact.mu_roll)
                 lam_plane[i, p] = lam_p
@@ -275,8 +344,8 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
                 vi, wi = plane_jolt(P, lam_plane[i, q], vi, wi, r, n, ct.mu_roll)
             else:
                 gap = (x[i] - pt).dot(n) - r
-                P, lam_p, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam_plane[i, q],
-                                           ct.e, ct.mu, v_inelastic, h)
+                P, lam_p, _, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0,
+                                                 lam_plane[i, q], ct.e, ct.mu, v_inelastic, h)
                 if P.dot(n) != 0.0:
                     vi, wi = plane_jolt(P, lam_p - lam_plane[i, q], vi, wi, r, n, ct.mu_roll)
                 lam_plane[i, q] = lam_p
@@ -327,8 +396,8 @@ def collision_step(
     v_free: vec3_array,
     calm: float_array,
     clear: float_array,
-    J: vec6_table,
-    G: real_table,
+    J: vec7_table,
+    impact: int_table,
     # Flight record in/out (with launch_height: one entry each when no ball is tracked, then not read):
     landed: int_array,
     apex: float_array,
@@ -360,8 +429,10 @@ def collision_step(
 
     With a terrain (``terrain.on``; ``heights`` its grid, else any 2×2 array; ``lam_plane`` then
     has a column more than there are planes) a ball that leaves the grid's extent or falls below
-    ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` and ``G`` (the pairs'
-    impulses and projections, see :func:`owned_pairs`) have the shape of ``upper``."""
+    ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` (the pairs' impulses, normals
+    and gaps or projections, see :func:`owned_pairs`) has the shape of ``upper``, ``impact`` two
+    column more (see :func:`impact_keys`). The kernel takes 32 arrays, as many as Taichi's Vulkan
+    backend passes to a kernel (with more its launch crashes); merge arrays before adding one."""
     result = 0
     if ti.static(not serial):
         flag[0] = 0
@@ -369,7 +440,7 @@ def collision_step(
             serial, air, contact, gravity, h, integrator, iterations, ti.cast(t0, real), half_skin, v_rest, t_rest,
             radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper,
             n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm,
-            clear, J, G, landed, apex, t_land, land_x, land_v, flag,
+            clear, J, impact, landed, apex, t_land, land_x, land_v, flag,
         )
         result = flag[0]
     else:
@@ -384,7 +455,7 @@ def collision_step(
                 serial, air, contact, gravity, h, integrator, iterations, ti.cast(t, real), half_skin, v_rest, t_rest,
                 radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper,
                 n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm,
-                clear, J, G, landed, apex, t_land, land_x, land_v, flag,
+                clear, J, impact, landed, apex, t_land, land_x, land_v, flag,
             )
             for i in range(x.shape[0]):
                 x[i] = x_free[i]
@@ -401,7 +472,7 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
                n_lower: ti.template(), x_at_build: ti.template(), lam: ti.template(), lam_plane: ti.template(),
                x: ti.template(), v: ti.template(), w: ti.template(), status: ti.template(), rest_time: ti.template(),
                x_free: ti.template(), v_free: ti.template(), calm: ti.template(), clear: ti.template(),
-               J: ti.template(), G: ti.template(),
+               J: ti.template(), impact: ti.template(),
                landed: ti.template(), apex: ti.template(), t_land: ti.template(), land_x: ti.template(),
                land_v: ti.template(), flag: ti.template()):
     """One step of all balls, the body of :func:`collision_step` (see there) in parallel and serially."""
@@ -425,7 +496,7 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
         x_free[i], v_free[i] = x1, v1
         clear[i] = surface_clearance(i, x, x1, radius, plane_p, plane_n, terrain, heights, lam_plane)
         dv, calm[i] = warm_start(i, x, radius, mass, status, rest_time, upper, n_upper, lower, n_lower, bits,
-                                 lam, J, G)
+                                 lam, J, impact)
         if status[i] != OUT_OF_BOUNDS and calm[i] != QUIET:
             v1 += dv
             v1, w1 = surface_impulses(i, True, v1, w1, clear, contact, h, v_inelastic, radius, plane_p, plane_n,
@@ -433,21 +504,23 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
         v[i], w[i] = v1, w1
     # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
     if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
-        for _ in range(iterations - 1):
+        for s in range(iterations - 1):
             sweep(False,
                   contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
                   heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
-                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, G, flag)
+                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, impact,
+                  flag)
     else:  # unrolled, so that each sweep's loops stay top-level loops (parallel)
-        for _ in ti.static(range(iterations - 1)):
+        for s in ti.static(range(iterations - 1)):
             sweep(False,
                   contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
                   heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
-                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, G, flag)
+                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, impact,
+                  flag)
     sweep(True,
           contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain, heights,
           terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam, lam_plane, x, v, w,
-          status, rest_time, x_free, v_free, calm, clear, J, G, flag)
+          status, rest_time, x_free, v_free, calm, clear, J, impact, flag)
 
 
 @ti.func
@@ -457,21 +530,29 @@ def sweep(last: ti.template(), contact: ti.template(), h, v_inelastic, half_skin
           upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits,
           x_at_build: ti.template(), lam: ti.template(), lam_plane: ti.template(), x: ti.template(),
           v: ti.template(), w: ti.template(), status: ti.template(), rest_time: ti.template(), x_free: ti.template(),
-          v_free: ti.template(), calm: ti.template(), clear: ti.template(), J: ti.template(), G: ti.template(),
-          flag: ti.template()):
+          v_free: ti.template(), calm: ti.template(), clear: ti.template(), J: ti.template(),
+          impact: ti.template(), flag: ti.template()):
     """One Jacobi sweep: the pairs' impulses from the velocities of the previous sweep, then each
     ball gathers them and meets its planes; the ``last`` sweep's ball loop also finishes the step.
+    Between the two, when the pairs marked impacts (``flag[1]``), every ball finds its first
+    impact (:func:`impact_keys`, :func:`matched`).
     A quiet ball gets no impulse (its pairs are skipped) and stays where it is; the last pair pass
     still visits its pairs, for the projections its awake neighbours gather."""
+    flag[1] = 0
     for i in range(x.shape[0]):
         if ti.static(last) or calm[i] != QUIET:
-            owned_pairs(i, last, contact, h, v_inelastic, radius, mass, status, upper, n_upper, lam, J, G, v, w)
+            owned_pairs(i, last, contact, h, v_inelastic, radius, mass, status, upper, n_upper, lam, J, v, w,
+                        impact, flag)
+    for i in range(x.shape[0]):
+        if flag[1] != 0:  # (a loop inside the test would not run in parallel)
+            impact_keys(i, upper, n_upper, lower, n_lower, bits, impact)
     for i in range(x.shape[0]):
         if calm[i] == QUIET:
             if ti.static(last):
                 x_free[i] = x[i]
         elif status[i] != OUT_OF_BOUNDS:
-            dv, dw, dx, touching = gather(i, last, radius, mass, upper, n_upper, lower, n_lower, bits, J, G)
+            dv, dw, dx, touching = gather(i, last, radius, mass, upper, n_upper, lower, n_lower, bits, J,
+                                          impact, flag[1], contact.k_p)
             v_new, w_new = surface_impulses(i, False, v[i] + dv, w[i] + dw, clear, contact, h, v_inelastic, radius,
                                             plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
                                             x, x_free, lam_plane)
@@ -509,13 +590,13 @@ def finish(i, v_final, w_final, dx, touching, contact: ti.template(), h, half_sk
     for p in range(n_planes):
         x1 = plane_position(xi, x_free[i], x1, v_free[i], v_final, ri, plane_p[p], plane_n[p], contact.k_p, h)
         if (x1 - plane_p[p]).dot(plane_n[p]) - ri < 0.01 * ri:
-            touching = 1
+            touching = ti.max(touching, 1)
     if terrain.on != 0 and not far:
         pt, nt = surface(heights, terrain, x_free[i])
         x1 = plane_position(xi, x_free[i], x1, v_free[i], v_final, ri, pt, nt, contact.k_p, h)
         x1 = terrain_position(xi, x1, pt, nt, ri, heights, terrain)
         if (x1 - pt).dot(nt) - ri < 0.01 * ri:
-            touching = 1
+            touching = ti.max(touching, 1)
     x1 += dx  # position projection k_p·m_red·Δx·n̂ of the ball overlaps (B.18)
     if st == AT_REST and (v_final.norm() > 0.0 or w_final.norm() > 0.0):
         st = FLYING  # woken by an impulse

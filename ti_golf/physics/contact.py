@@ -33,17 +33,20 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
     ``n``: unit normal from b to a; ``gap``: surface distance [m] (negative when overlapping);
     ``inv_m_b = 0`` and ``r_b = 0`` make b a plane. ``lam`` is the pair's accumulated *resting*
     normal impulse [N·s] (warm-started from the last step). An approaching pair gets the report's
-    jolt −(1+e)·m_red·v_n; a slow approach (below ``v_inelastic``), or one between bodies already
-    pressing on each other (``lam`` at least a quarter of the impact's impulse), is inelastic and
-    adds to ``lam`` (in a pile, noise must not turn into bounces); a separating pair gives back at most ``lam`` (so a warm start that pushed too hard is
-    undone, but elastic impacts are never pulled back). Coulomb friction, bounded by μ times the
-    normal impulse of this sweep, can at most stop the slip at the contact point.
+    jolt −(1+e)·m_red·v_n (B.9), an *impact*; a slow approach (below ``v_inelastic``), or one
+    between bodies already pressing on each other (``lam`` at least a quarter of the impact's
+    impulse), is inelastic and adds to ``lam`` (in a pile, noise must not turn into bounces); a
+    separating pair gives back at most ``lam`` (so a warm start that pushed too hard is undone,
+    but impacts are never pulled back). Coulomb friction, bounded by μ times the normal impulse
+    of this sweep, can at most stop the slip at the contact point.
     ``relax`` ∈ (0, 1] scales the impulses of lasting contacts in a Jacobi sweep: a ball pressed by
     many neighbours at once would otherwise receive all their corrections together and overshoot.
-    Returns (P, lam, touching).
+    Returns (P, lam, touching, impact): ``impact`` is 1 when P is an impact's jolt, which a Jacobi
+    sweep shares out among a ball's simultaneous impacts (see :func:`.collide.impact_share`).
     """
     P = vec3(0.0)
     touching = 0
+    impact = 0
     inv_m = inv_m_a + inv_m_b
     m_eff = 1.0 / inv_m  # the pair's effective mass (m_red·m_a); one division, not one per use
     v_n = (v_a - v_b).dot(n)
@@ -59,10 +62,9 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
                 if lasting:
                     j_n *= relax
                 lam += j_n
-            elif e == 0.0:
-                j_n = -v_n * m_eff  # a plastic impact (not a supporting contact: not accumulated)
             else:
-                j_n = -(1.0 + e) * v_n * m_eff
+                impact = 1
+                j_n = -(1.0 + e) * v_n * m_eff  # e = 0: a plastic impact (not a support: not accumulated)
     if v_n > 0.0 and lam > 0.0:
         j_n = -ti.min(lam, relax * v_n * m_eff)
         lam += j_n
@@ -70,7 +72,7 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
         P = j_n * n
         if j_n > 0.0:
             P += friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, relax * m_eff, mu * j_n)
-    return P, lam, touching
+    return P, lam, touching, impact
 
 
 @ti.func
@@ -115,8 +117,8 @@ def rolling_resistance(v, radius, mu_roll, j_n, n):
 def plane_impulse(x, v, w, radius, p, n, contact, v_inelastic, h):
     """Velocity and spin of a ball after its contact with the plane (p, n̂). Returns (v, ω, touching)."""
     gap = (x - p).dot(n) - radius
-    P, lam, touching = pair_impulse(n, gap, v, w, radius, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0, contact.e,
-                                    contact.mu, v_inelastic, h)
+    P, lam, touching, _ = pair_impulse(n, gap, v, w, radius, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0, contact.e,
+                                       contact.mu, v_inelastic, h)
     if touching != 0 and P.dot(n) > 0.0:
         v, w = plane_jolt(P, lam, v, w, radius, n, contact.mu_roll)
     return v, w, touching
@@ -158,12 +160,18 @@ def plane_position(x, x_free, x1, v_free, v, radius, p, n, k_p, h):
     return x1
 
 
+PRESSED = 2
+"""``touching`` of a ball that another ball overlaps by more than 1 % of its radius: the position
+projection (B.18) is still pushing them apart, so it is not at rest (see :func:`rest_update`)."""
+
+
 @ti.func
 def rest_update(touching, v, w, radius, rest_time, h, v_rest, t_rest):
-    """Status and rest timer of a ball after a step: a touching ball whose speed and R|ω| stay
-    below ``v_rest`` [m/s] for ``t_rest`` [s] is put at rest. Returns (status, rest_time)."""
+    """Status and rest timer of a ball after a step: a touching ball (``touching`` 1; not
+    ``PRESSED``) whose speed and R|ω| stay below ``v_rest`` [m/s] for ``t_rest`` [s] is put at
+    rest. Returns (status, rest_time)."""
     rt = 0.0
-    if touching != 0 and v.norm() < v_rest and radius * w.norm() < v_rest:
+    if touching == 1 and v.norm() < v_rest and radius * w.norm() < v_rest:
         rt = rest_time + h
     st = ROLLING if touching != 0 else FLYING
     if rt >= t_rest and touching != 0:

@@ -20,7 +20,7 @@ missing from its lists only in the next step, after flying into it.
 
 import taichi as ti
 
-from .types import float_array, int_array, real, vec3_array, vec6_table
+from .types import float_array, int_array, real, vec3_array, vec7_table
 
 int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
 real_table = ti.types.ndarray(dtype=real, ndim=2)
@@ -406,7 +406,7 @@ def link_ball(i, bits, upper: ti.template(), n_upper: ti.template(), lower: ti.t
 
 
 @ti.kernel
-def stash(upper: int_table, n_upper: int_array, lam: real_table, scratch: vec6_table):
+def stash(upper: int_table, n_upper: int_array, lam: real_table, scratch: vec7_table):
     """Keep every pair's (neighbour id, accumulated impulse) in ``scratch`` (see :func:`stash_ball`)."""
     for i in range(scratch.shape[0]):
         stash_ball(i, upper, n_upper, lam, scratch)
@@ -422,11 +422,11 @@ def stash_ball(i, upper: ti.template(), n_upper: ti.template(), lam: ti.template
         j = -1
         if k < n_upper[i]:
             j = upper[i, k]
-        scratch[i, k] = ti.Vector([lam[i, k], j // 4096, j % 4096, 0.0, 0.0, 0.0], dt=real)
+        scratch[i, k] = ti.Vector([lam[i, k], j // 4096, j % 4096, 0.0, 0.0, 0.0, 0.0], dt=real)
 
 
 @ti.kernel
-def link_and_carry(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array, stashed: vec6_table,
+def link_and_carry(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array, stashed: vec7_table,
                    lam: real_table, moved: ti.template(), old_id: int_array):
     """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
     :func:`stash` and :func:`carry_ball`) to the new ones, in one launch (neither writes what the
