@@ -259,7 +259,7 @@ def contact_state(g, r, m_i, m_j, k_p):
 @ti.func
 def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), upper: ti.template(),
            n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits, J: ti.template(),
-           impact: ti.template(), impacts, k_p):
+           impact: ti.template(), any_impact, k_p):
     """What ball i gets from all its pairs, summed in id order (lower then upper): (Δv [m/s],
     Δω [rad/s], and with ``final`` the position projection Δx [m] and whether it touches a ball:
     0 when no gap is below 1 % of its radius, ``PRESSED`` when some ball overlaps it by more than
@@ -268,7 +268,7 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
     An impulse ±P at the contact point −r·n̂ᵢ of a solid sphere (n̂ᵢ = ±n̂ from the other ball to
     i) gives Δv = ±P/m and Δω = (−r n̂ᵢ) × (±P)·5/(2 m r²) = −(5/(2 m r))·(n̂ × P) for both balls
     of the pair (n̂ᵢ and the sign of P flip together). Of a ball's impacts, only the one
-    :func:`matched` in this sweep acts (``impacts``: whether the sweep has any, ``flag[1]``)."""
+    :func:`matched` in this sweep acts (``any_impact``: whether the sweep has any, ``flag[1]``)."""
     P, T, q_n = vec3(0.0), vec3(0.0), vec3(0.0)
     touching = 0
     r = radius[i]
@@ -277,7 +277,7 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
         j, k = owner_slot(slot, bits)  # the pair's owner j stores it
         Jk = J[j, k]
         P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])
-        if impacts != 0:  # (the marks are read only in a sweep that has impacts)
+        if any_impact != 0:  # (the marks are read only in a sweep that has impacts)
             if impact[j, k] != 0 and not matched(impact, i, j, slot + 1):
                 P_k = vec3(0.0)
         P -= P_k
@@ -288,7 +288,7 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
     for k in range(n_upper[i]):
         Jk = J[i, k]
         P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])
-        if impacts != 0:
+        if any_impact != 0:
             if impact[i, k] != 0 and not matched(impact, i, upper[i, k], (i << bits) + k + 1):
                 P_k = vec3(0.0)
         P += P_k
@@ -327,8 +327,8 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
         else:
             gap = (x[i] - plane_p[p]).dot(n) - r
             if gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam_plane[i, p] > 0.0:  # else no impulse (pair_impulse)
-                P, lam_p, _, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0,
-                                                 lam_plane[i, p], contact.e, contact.mu, v_inelastic, h)
+                P, lam_p, _, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam_plane[i, p],
+                                              contact.e, contact.mu, v_inelastic, h)
                 if P.dot(n) != 0.0:
                     vi, wi = plane_jolt(P, lam_p - lam_plane[i, p], vi, wi, r, n, contact.mu_roll)
                 lam_plane[i, p] = lam_p
@@ -344,8 +344,8 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
                 vi, wi = plane_jolt(P, lam_plane[i, q], vi, wi, r, n, ct.mu_roll)
             else:
                 gap = (x[i] - pt).dot(n) - r
-                P, lam_p, _, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0,
-                                                 lam_plane[i, q], ct.e, ct.mu, v_inelastic, h)
+                P, lam_p, _, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam_plane[i, q],
+                                              ct.e, ct.mu, v_inelastic, h)
                 if P.dot(n) != 0.0:
                     vi, wi = plane_jolt(P, lam_p - lam_plane[i, q], vi, wi, r, n, ct.mu_roll)
                 lam_plane[i, q] = lam_p
@@ -430,7 +430,7 @@ def collision_step(
     With a terrain (``terrain.on``; ``heights`` its grid, else any 2×2 array; ``lam_plane`` then
     has a column more than there are planes) a ball that leaves the grid's extent or falls below
     ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` (the pairs' impulses, normals
-    and gaps or projections, see :func:`owned_pairs`) has the shape of ``upper``, ``impact`` two
+    and gaps or projections, see :func:`owned_pairs`) has the shape of ``upper``, ``impact`` one
     column more (see :func:`impact_keys`). The kernel takes 32 arrays, as many as Taichi's Vulkan
     backend passes to a kernel (with more its launch crashes); merge arrays before adding one."""
     result = 0
@@ -504,19 +504,17 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
         v[i], w[i] = v1, w1
     # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
     if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
-        for s in range(iterations - 1):
+        for _ in range(iterations - 1):
             sweep(False,
                   contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
                   heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
-                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, impact,
-                  flag)
+                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, impact, flag)
     else:  # unrolled, so that each sweep's loops stay top-level loops (parallel)
-        for s in ti.static(range(iterations - 1)):
+        for _ in ti.static(range(iterations - 1)):
             sweep(False,
                   contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
                   heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
-                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, impact,
-                  flag)
+                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, impact, flag)
     sweep(True,
           contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain, heights,
           terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam, lam_plane, x, v, w,

@@ -41,8 +41,8 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
     of this sweep, can at most stop the slip at the contact point.
     ``relax`` ∈ (0, 1] scales the impulses of lasting contacts in a Jacobi sweep: a ball pressed by
     many neighbours at once would otherwise receive all their corrections together and overshoot.
-    Returns (P, lam, touching, impact): ``impact`` is 1 when P is an impact's jolt, which a Jacobi
-    sweep shares out among a ball's simultaneous impacts (see :func:`.collide.impact_share`).
+    Returns (P, lam, touching, impact): ``impact`` is 1 when P is an impact's jolt (a Jacobi sweep
+    takes one of a ball's simultaneous impacts at a time, see :func:`.collide.matched`).
     """
     P = vec3(0.0)
     touching = 0
