@@ -244,15 +244,17 @@ def matched(impact: ti.template(), a, b, key):
 
 
 @ti.func
-def contact_state(g, r, m_i, m_j, k_p):
-    """0, 1 or ``PRESSED`` (see :func:`gather`) for a pair whose last-sweep J[·, ·][6] is ``g``
-    (the projection q ≥ 0 of an overlap, or minus the gap: see :func:`owned_pairs`), seen from
-    ball i of radius ``r``."""
+def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p):
+    """0, 1 or ``PRESSED`` (see :func:`gather`) for the pair of ball i (radius ``r``, 1/m_i
+    ``inv_m_i``) with ball j whose last-sweep J[·, ·][6] is ``g`` (the projection q ≥ 0 of an
+    overlap, or minus the gap: see :func:`owned_pairs`). Ball j's mass is read only for an
+    overlap (this runs for every pair of the step's last sweep)."""
     state = 0
     if g > -0.01 * r:
         state = 1
-        if g * (1.0 / m_i + 1.0 / m_j) > 0.01 * r * k_p:
-            state = PRESSED
+        if g > 0.0:
+            if g * (inv_m_i + 1.0 / mass[j]) > 0.01 * r * k_p:
+                state = PRESSED
     return state
 
 
@@ -272,6 +274,7 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
     P, T, q_n = vec3(0.0), vec3(0.0), vec3(0.0)
     touching = 0
     r = radius[i]
+    inv_m = 1.0 / mass[i]
     for m in range(n_lower[i]):
         slot = lower[i, m]
         j, k = owner_slot(slot, bits)  # the pair's owner j stores it
@@ -284,7 +287,7 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
         T += n_k.cross(P_k)
         if ti.static(final):
             q_n -= ti.max(Jk[6], 0.0) * n_k
-            touching = ti.max(touching, contact_state(Jk[6], r, mass[i], mass[j], k_p))
+            touching = ti.max(touching, contact_state(Jk[6], r, inv_m, mass, j, k_p))
     for k in range(n_upper[i]):
         Jk = J[i, k]
         P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])
@@ -295,8 +298,7 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
         T += n_k.cross(P_k)
         if ti.static(final):
             q_n += ti.max(Jk[6], 0.0) * n_k
-            touching = ti.max(touching, contact_state(Jk[6], r, mass[i], mass[upper[i, k]], k_p))
-    inv_m = 1.0 / mass[i]
+            touching = ti.max(touching, contact_state(Jk[6], r, inv_m, mass, upper[i, k], k_p))
     return P * inv_m, T * (-2.5 * inv_m / r), q_n * inv_m, touching
 
 
