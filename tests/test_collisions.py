@@ -56,16 +56,22 @@ def _random_sets():
 
 def _velocities(n, fast):
     """Resting balls, or (``fast``) balls at up to 1 m/s with one in twenty at up to 40 m/s: 20 mm
-    per 0.5 ms step, ten times the skin of 2-cm balls."""
+    per 0.5 ms step, ten times the skin of 2-cm balls; or (``few_fast``) balls at up to 1 m/s with
+    six at 150 to 3,000 m/s, moving 1.5 to 30 of the largest diameters in two steps (grid.FAST_MAX)."""
     if not fast:
         return np.zeros((n, 3))
     rng = np.random.default_rng(5)
     v = rng.uniform(-1.0, 1.0, (n, 3))
-    v[rng.random(n) < 0.05] *= 40.0
+    if fast == "few_fast":
+        few = rng.choice(n, 6, replace=False)
+        u = rng.normal(size=(6, 3))
+        v[few] = u / np.linalg.norm(u, axis=1)[:, None] * np.array([150, 300, 600, 1000, 2000, 3000])[:, None]
+    else:
+        v[rng.random(n) < 0.05] *= 40.0
     return v
 
 
-@pytest.mark.parametrize("fast", [False, True], ids=["at_rest", "fast"])
+@pytest.mark.parametrize("fast", [False, True, "few_fast"], ids=["at_rest", "fast", "few_fast"])
 @pytest.mark.parametrize("name", ["clustered", "sparse", "far_apart", "negative"])
 def test_grid_neighbours_equal_brute_force(name, fast):
     x, r = _random_sets()[name]
@@ -73,6 +79,13 @@ def test_grid_neighbours_equal_brute_force(name, fast):
     sim = tg.Simulation(scene(), x=x, v=v, radius=r, mass=0.045 * (r / 0.02) ** 3)
     solver: CollisionSolver = sim.solver
     solver.build(sim.state)
+    # a few balls faster than a diameter (or the skin) in two steps are listed apart (each tests
+    # every ball), and the cells stay as small as the others need: at most 2·r_max + max(skin,
+    # 2·r_max); with many fast balls (one in twenty), or none, the cells are widened for the fastest pair
+    n_fast = int(np.sum(2 * sim.dt * np.linalg.norm(v, axis=1) > max(solver.skin, 2 * r.max())))
+    assert solver.n_fast == (n_fast if n_fast <= 32 else 0)
+    if fast == "few_fast":
+        assert solver.n_fast == 6 and solver.cell <= 2 * r.max() + max(solver.skin, 2 * r.max())
     pairs = solver.pairs()
     assert np.all(pairs[:, 0] < pairs[:, 1])  # each pair reported once, by id
     found = {(int(i), int(j)) for i, j in pairs} | {(int(j), int(i)) for i, j in pairs}
@@ -576,7 +589,7 @@ def test_deep_pile_settles_without_deep_overlaps(e):
 
 
 @pytest.mark.parametrize("name, steps", [("break_shot", 600), ("newtons_cradle", 600), ("terrain_3d", 400),
-                                         ("sleeping_column", 900)])
+                                         ("sleeping_column", 900), ("fast_into_pile", 40)])
 @pytest.mark.skipif(not ON_CPU, reason="serial stepping runs on the CPU only")
 def test_serial_steps_equal_parallel_steps(name, steps):
     # few balls step serially, many steps per launch, with their lists rebuilt in the kernel by
@@ -585,20 +598,29 @@ def test_serial_steps_equal_parallel_steps(name, steps):
     # same arithmetic per ball and the same order of every sum, so bit-identical results, whatever
     # the chunks of steps per launch. The scenes cover a break (fast balls: lists rebuilt nearly
     # every step), the cradle, a terrain with surface types and out-of-bounds balls, and balls
-    # that fall asleep and are woken
+    # that fall asleep and are woken, and a ball shot at 60 m/s into a pile (the grid lists it apart
+    # from the others: grid.FAST_MAX)
+    v = None
     if name == "sleeping_column":
         sc = tg.load_scene("lab_vacuum", ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3"])
         x = np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)] + [[0.0, 2.0, 0.0]])  # see the test above
+    elif name == "fast_into_pile":
+        sc, x = pile_scene(200)
+        x = np.vstack([x, [x[:, 0].mean() - 0.05, x[:, 1].max() + 0.1, x[:, 2].mean() + 0.03]])
+        v = np.zeros_like(x)
+        v[-1] = [5.0, -60.0, 0.0]
     else:
         sc, x = tg.load_scene(name), None
     runs = []
     for serial in (True, False):
-        sim = tg.Simulation(sc, x=x) if x is not None else tg.Simulation(sc)
+        sim = tg.Simulation(sc, x=x, v=v) if x is not None else tg.Simulation(sc)
         sim.solver = CollisionSolver(sim.model, serial=serial)
         done, asleep = 0, 0
         for chunk in (1, 2, 37, 410, steps):  # launches of one, a few and many steps
             k = min(chunk, steps - done)
             sim.step(k)
+            if name == "fast_into_pile" and done == 0:
+                assert sim.solver.n_fast == 1  # the first build listed the shot ball apart
             done += k
             asleep = max(asleep, int(np.sum(sim.status == AT_REST)))
         st = sim.state
@@ -708,6 +730,31 @@ def test_a_fast_ball_dropped_onto_a_plastic_pile_does_not_bounce_back():
         assert _kinetic_energy(sim) < e0
         assert sim.v[-1, 1] < 0.05 * 70.0
     assert _kinetic_energy(sim) < 0.05 * e0
+
+
+def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypatch):
+    # The pair tables are as wide as the longest neighbour list. A ball at 2,000 m/s (2 m per 1 ms
+    # step) above a pile has every ball of it within reach, so every ball's tables would widen to
+    # hundreds of entries: with a million balls that is hundreds of gigabytes. The solver must stop
+    # with a SimulationError that names the ball and its speed before it allocates tables larger
+    # than half the memory available; here "available" is made small, and the same run without
+    # that limit steps on.
+    import ti_golf.solver as solver_module
+
+    pile, x = pile_scene(400)
+    x = np.vstack([x, [[x[:, 0].mean(), x[:, 1].max() + 0.1, x[:, 2].mean()]]])
+    v = np.zeros_like(x)
+    v[-1] = [0.0, -2000.0, 0.0]
+    narrow = solver_module.table_bytes(len(x), (8, 8))  # room for lists of eight, not for the 400 in reach
+    monkeypatch.setattr(solver_module, "available_memory", lambda: 2 * narrow)
+    sim = tg.Simulation(pile, x=x, v=v, track=False)
+    sim.solver = CollisionSolver(sim.model, serial=False)
+    with pytest.raises(tg.SimulationError, match=r"Ball 400 reaches farthest .*speed 2000 m/s") as err:
+        sim.step(1)
+    assert err.value.balls == [400]
+    monkeypatch.setattr(solver_module, "available_memory", lambda: None)  # memory unknown: no limit
+    sim.step(1)
+    assert max(sim.solver.capacity) >= 400
 
 
 def test_the_break_shot_adds_no_kinetic_energy():

@@ -3,6 +3,8 @@ sweeps and the end-of-step position update, in that fixed order (see physics/col
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import taichi as ti
 
@@ -10,9 +12,8 @@ from .errors import SimulationError
 from .model import Model
 from .physics import collide, grid
 from .physics.types import vec3
-from .runtime import on_cpu, plain_compile
+from .runtime import np_float, on_cpu, plain_compile
 from .state import State
-
 
 SERIAL_MAX_BALLS = 256
 """Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
@@ -26,6 +27,34 @@ balls, and for 512 the parallel step wins."""
 REORDER_MIN_BALLS = 8192
 """From this many balls on, the parallel step stores the balls in grid order (see
 :attr:`CollisionSolver.reorder`): smaller piles stay in the CPU's caches whatever their order."""
+
+
+def table_bytes(n: int, widths: tuple[int, int]) -> int:
+    """Bytes of the neighbour and pair tables of ``n`` balls with lists ``widths`` (upper, lower)
+    wide: per upper entry the neighbour, its resting impulse, the sweep's 7-vector (impulse,
+    normal, gap) and the impact mark; per lower entry a slot; per ball its first impact."""
+    f = np.dtype(np_float()).itemsize
+    return n * (widths[0] * (8 + 8 * f) + widths[1] * 4 + 4)
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to new allocations (Linux: MemAvailable), or ``None`` if unknown."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, OSError, ValueError):
+        return None
+
+
+def _size(nbytes: float) -> str:
+    """A byte count for people: MiB below a GiB, else GiB."""
+    return f"{nbytes / 2**20:.1f} MiB" if nbytes < 2**30 else f"{nbytes / 2**30:.1f} GiB"
 
 
 def steps_serially(n: int) -> bool:
@@ -92,6 +121,8 @@ class CollisionSolver:
         # resting impulses of the planes and (one column more) the terrain
         self.lam_plane = ti.ndarray(float, (n, max(1, len(model.plane_p) + (model.terrain is not None))))
         self.flag = ti.ndarray(ti.i32, 2)
+        self.fast_ids = ti.ndarray(ti.i32, grid.FAST_MAX + 1)  # the fast balls (grid.speeds) and their count
+        self.n_fast = 0
         self._valid = False
         self._rebuild = True
         self._order: np.ndarray | None = None  # the state's storage order at the last build (see pairs)
@@ -106,12 +137,17 @@ class CollisionSolver:
             stashed = self.impulse
             grid.stash(self.upper, self.n_upper, self.lam, stashed)
         h = self._model.dt
-        v_max = float(grid.max_speed(state.v))
-        self.cell, fast = grid.cell_size(self._r_max, self.skin, h, v_max)  # fast: pairs listed by closing speed
+        v_cut = grid.fast_speed(self._r_max, self.skin, h)
+        v_max, v_slow, n_fast = (float(s) for s in grid.speeds(state.v, v_cut, self.fast_ids))
+        self.n_fast = int(n_fast) if n_fast <= grid.FAST_MAX else 0  # a few fast balls are listed apart
+        # the cells hold every pair of the other balls; fast: their pairs are listed by closing speed too
+        self.cell, fast = grid.cell_size(self._r_max, self.skin, h, v_slow if self.n_fast else v_max)
         bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
         self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, self.mask + 1))
         if self.reorder:
             self._store_in_grid_order(state)
+            if self.n_fast:  # the fast balls' new indices
+                grid.speeds(state.v, v_cut, self.fast_ids)
         self._order = state.order
         while True:
             if self.upper is None or self.upper.shape[1] != self.capacity[0]:
@@ -120,14 +156,16 @@ class CollisionSolver:
             if self.lower is None or self.lower.shape[1] != self.capacity[1]:
                 self.lower = ti.ndarray(ti.i32, (n, self.capacity[1]))
             longest = grid.list_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, *self._hash,
-                                           self.skin, state.v, h, int(fast),
+                                           self.skin, state.v, h, int(fast), v_cut, self.fast_ids, self.n_fast,
                                            self.bucket, self.rank, self.start, self.chunk_start,
                                            self.sorted_ids, self.upper, self.n_upper, self.lower, self.n_lower,
                                            self.x_at_build, self.flag, self.reorder)
             if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
                 break
             # widen to the longest list found (no power-of-two padding: memory follows the pile)
-            self.capacity = (max(self.capacity[0], int(longest[0])), max(self.capacity[1], int(longest[1])))
+            wider = (max(self.capacity[0], int(longest[0])), max(self.capacity[1], int(longest[1])))
+            self._check_table_memory(state, wider)
+            self.capacity = wider
         if n << self.slot_bits > 2**31:  # the largest slot, (n − 1)·2^bits + 2^bits − 1, must fit an i32
             raise SimulationError(f"{n} balls with up to {self.capacity[0]} neighbours each are more than the "
                                   f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)")
@@ -147,6 +185,30 @@ class CollisionSolver:
             self.impact = ti.ndarray(ti.i32, (n, self.upper.shape[1] + 1))
         self.rebuilds += 1
         self._valid = True
+
+    def _check_table_memory(self, state: State, widths: tuple[int, int]) -> None:
+        """Raise :class:`SimulationError` before pair tables of ``widths`` (upper, lower) take more
+        than half the memory available (:func:`available_memory`), naming the ball that reaches
+        farthest within a step (r + h·|v|): the tables are as wide as the longest list, so one
+        ball shot at 1,000 m/s into a pile of 20,000 (3,100 balls within its reach of one 1 ms
+        step) would make them take gigabytes, and then swap or be killed, losing the run."""
+        need = table_bytes(state.n, widths)
+        avail = available_memory()
+        if avail is None or need <= 0.5 * avail:
+            return
+        h = self._model.dt
+        speed = np.linalg.norm(state.v.to_numpy(), axis=1)
+        radius = self._model.radius.to_numpy()
+        k = int(np.argmax(radius + h * speed))
+        ball = int(state.order[k]) if state.order is not None else k
+        raise SimulationError(
+            f"the neighbour lists would take {_size(need)}, more than half the {_size(avail)} of memory "
+            f"available: a ball has {max(widths):,} balls within reach of one step, and the pair tables are as "
+            f"wide as the longest list. Ball {ball} reaches farthest (radius {radius[k]:.4g} m, speed "
+            f"{speed[k]:.4g} m/s: {h * speed[k]:.4g} m per step of {h:g} s); lower world.dt, or that ball's "
+            "speed or radius",
+            [ball],
+        )
 
     def _store_in_grid_order(self, state: State) -> None:
         """Gather every per-ball array of ``state`` and the model into the grid's order (see

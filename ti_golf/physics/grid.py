@@ -15,7 +15,10 @@ follows it: a pair is listed when its surface gap is below the larger of the ski
 h·|v_a − v_b| (:func:`pair_reach`), and the cells are widened for the fastest pair
 (:func:`cell_size`). Otherwise a ball that moves farther than the skin in a step, as fast balls do
 (6 m/s is 3 mm per 0.5 ms step, against a skin of 2 mm for golf balls), would meet a ball
-missing from its lists only in the next step, after flying into it.
+missing from its lists only in the next step, after flying into it. A few balls much faster than
+the rest (at most ``FAST_MAX``, moving more than a diameter in two steps: :func:`fast_speed`)
+are listed apart instead, each tested against every ball (:func:`list_ball`), so that the cells
+stay small for the rest.
 """
 
 import taichi as ti
@@ -73,13 +76,48 @@ def pair_reach(skin, h, v_a, v_b):
     return ti.max(skin, h * (v_a - v_b).norm())
 
 
+FAST_MAX = 32
+"""Most *fast* balls (see :func:`speeds`) whose pairs are listed ball by ball; with more, the cells
+are widened for the fastest pair instead (:func:`cell_size`): a thousand balls hit at once are
+spread out, and big cells cost them little."""
+
+
+def fast_speed(r_max: float, skin: float, h: float) -> float:
+    """The speed [m/s] above which a ball is *fast*: 2h·|v| exceeds the larger of the skin and the
+    largest diameter ``2·r_max`` [m], so a pair with it could close by more than that within a
+    step (``h`` [s]). Below it, cells are at most 2·r_max + max(skin, 2·r_max) wide."""
+    return max(skin, 2.0 * r_max) / (2.0 * h)
+
+
 @ti.kernel
-def max_speed(v: vec3_array) -> real:
-    """The greatest speed [m/s] of the balls (a float atomic max: the same on every thread order)."""
-    s2 = 0.0
+def speeds(v: vec3_array, v_cut: real, fast_ids: int_array) -> ti.types.vector(3, real):
+    """(the greatest speed [m/s], the greatest speed of the balls not faster than ``v_cut``, how many
+    are faster). The ids of the first ``fast_ids.shape[0] − 1`` faster balls go to ``fast_ids`` in
+    no particular order, their count to its last entry (integer atomics; float atomic maxima,
+    the same on every thread order)."""
+    s2, slow2 = 0.0, 0.0
+    last = fast_ids.shape[0] - 1
+    fast_ids[last] = 0
     for i in range(v.shape[0]):
-        ti.atomic_max(s2, v[i].norm_sqr())
-    return ti.sqrt(s2)
+        q = v[i].norm_sqr()
+        ti.atomic_max(s2, q)
+        if q > v_cut * v_cut:  # as :func:`is_fast` tests it
+            k = ti.atomic_add(fast_ids[last], 1)
+            if k < last:
+                fast_ids[k] = i
+        else:
+            ti.atomic_max(slow2, q)
+    return ti.Vector([ti.sqrt(s2), ti.sqrt(slow2), ti.cast(fast_ids[last], real)])
+
+
+@ti.func
+def is_fast(v: ti.template(), i, v_cut, n_fast):
+    """Whether ball i is one of the ``n_fast`` fast balls (faster than ``v_cut``, see :func:`speeds`);
+    its velocity is read only when there are any."""
+    fast = False
+    if n_fast > 0:
+        fast = v[i].norm_sqr() > v_cut * v_cut
+    return fast
 
 
 @ti.kernel
@@ -136,6 +174,9 @@ def list_neighbours(
     v: vec3_array,
     h: float,
     fast: ti.i32,
+    v_cut: float,
+    fast_ids: int_array,
+    n_fast: ti.i32,
     # scratch:
     bucket: int_array,
     rank: int_array,
@@ -153,7 +194,9 @@ def list_neighbours(
 ) -> ti.types.vector(2, ti.i32):
     """Sort the balls into the hash grid, then list every ball's neighbours closer than
     r_a + r_b + :func:`pair_reach` (with ``fast`` 0, the skin: see :func:`cell_size`; ``h`` is
-    the time step [s], ``v`` the velocities), each list sorted by id: ``upper[i]`` holds the
+    the time step [s], ``v`` the velocities), each list sorted by id (the ``n_fast`` balls faster
+    than ``v_cut`` whose ids are in ``fast_ids``, see :func:`speeds`, are listed apart: see
+    :func:`list_ball`): ``upper[i]`` holds the
     neighbours whose pairs ball i owns (:func:`owns`), ``lower[i]`` the others (to be turned into
     slots by :func:`link_lower` or :func:`link_and_carry`). One launch (a launch from Python costs
     about 0.1 ms; the grid took five). The counting sort: each ball's bucket and its rank among the
@@ -173,8 +216,8 @@ def list_neighbours(
         i = idx  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         if ti.static(not stored_sorted):
             i = sorted_ids[idx]
-        n_up, n_low = list_ball(i, x, radius, inv_cell, mask, origin, stride, skin, v, h, fast, start, sorted_ids,
-                                upper, lower, stored_sorted)
+        n_up, n_low = list_ball(i, x, radius, inv_cell, mask, origin, stride, skin, v, h, fast, v_cut, fast_ids,
+                                n_fast, start, sorted_ids, upper, lower, stored_sorted)
         n_upper[i] = ti.min(n_up, upper.shape[1])
         n_lower[i] = ti.min(n_low, lower.shape[1])
         x_at_build[i] = x[i]
@@ -293,43 +336,67 @@ def bucket_starts(start: ti.template(), chunk_start: ti.template()):
 
 @ti.func
 def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin, stride, skin, v: ti.template(),
-              h, fast, start: ti.template(), sorted_ids: ti.template(), upper: ti.template(),
-              lower: ti.template(), stored_sorted: ti.template()):
-    """Ball i's neighbours in its own and the 26 adjacent cells, into its rows of ``upper`` and
-    ``lower`` in id order (as many as fit; ``stored_sorted``: see :func:`list_neighbours`).
-    Returns how many there are (n_upper, n_lower)."""
-    cap_up, cap_low = upper.shape[1], lower.shape[1]
+              h, fast, v_cut, fast_ids: ti.template(), n_fast, start: ti.template(), sorted_ids: ti.template(),
+              upper: ti.template(), lower: ti.template(), stored_sorted: ti.template()):
+    """Ball i's neighbours into its rows of ``upper`` and ``lower`` in id order (as many as fit;
+    ``stored_sorted``: see :func:`list_neighbours`). Returns how many there are (n_upper, n_lower).
+
+    The balls in its own and the 26 adjacent cells, but for the fast balls (:func:`is_fast`):
+    those are tested by every ball, and a fast ball tests every ball. So one ball shot into a
+    pile does not widen the cells of all (a 70 m/s ball with a 1 ms step would make them 4.5
+    diameters wide: 90 times as many balls tested), and both balls of every pair still test it,
+    with the same :func:`pair_reach`."""
     xi = x[i]
     ri = radius[i]
-    c = cell_of(xi, inv_cell)  # recomputed, not stored: 12 bytes per ball less
     n_up, n_low = 0, 0
-    for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2)))):
-        # the row of three cells c + (−1…1, dy, dz): consecutive buckets, one range unless it wraps
-        row = c + ti.Vector([-1, d[0], d[1]])
-        b = bucket_of(row, mask, origin, stride)
-        for part in range(2):
-            lo, hi = start[b], start[ti.min(b + 3, mask + 1)]
-            if part == 1:
-                lo, hi = start[0], start[ti.max(b + 3 - (mask + 1), 0)]
-            for k in range(lo, hi):
-                j = k
-                if ti.static(not stored_sorted):
-                    j = sorted_ids[k]
-                xj = x[j]
-                cj = cell_of(xj, inv_cell)
-                # a ball of the row (not of another cell sharing its buckets), within reach
-                if j != i and cj[1] == row[1] and cj[2] == row[2] and ti.abs(cj[0] - c[0]) <= 1:
-                    gap_reach = skin
-                    if fast != 0:  # (else pair_reach is the skin for every pair: v not read)
-                        gap_reach = pair_reach(skin, h, v[i], v[j])
-                    reach = ri + radius[j] + gap_reach
-                    if (xj - xi).norm_sqr() < reach * reach:
-                        if owns(xi, xj, i, j):
-                            insert_sorted(upper, i, n_up, cap_up, j)
-                            n_up += 1
-                        else:
-                            insert_sorted(lower, i, n_low, cap_low, j)
-                            n_low += 1
+    if is_fast(v, i, v_cut, n_fast):
+        for j in range(x.shape[0]):
+            if j != i:
+                n_up, n_low = list_pair(i, j, xi, x[j], ri + radius[j], skin, v, h, 1, upper, lower, n_up, n_low)
+    else:
+        c = cell_of(xi, inv_cell)  # recomputed, not stored: 12 bytes per ball less
+        for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2)))):
+            # the row of three cells c + (−1…1, dy, dz): consecutive buckets, one range unless it wraps
+            row = c + ti.Vector([-1, d[0], d[1]])
+            b = bucket_of(row, mask, origin, stride)
+            for part in range(2):
+                lo, hi = start[b], start[ti.min(b + 3, mask + 1)]
+                if part == 1:
+                    lo, hi = start[0], start[ti.max(b + 3 - (mask + 1), 0)]
+                for k in range(lo, hi):
+                    j = k
+                    if ti.static(not stored_sorted):
+                        j = sorted_ids[k]
+                    xj = x[j]
+                    cj = cell_of(xj, inv_cell)
+                    # a ball of the row (not of another cell sharing its buckets), not a fast one
+                    if (j != i and cj[1] == row[1] and cj[2] == row[2] and ti.abs(cj[0] - c[0]) <= 1
+                            and not is_fast(v, j, v_cut, n_fast)):
+                        n_up, n_low = list_pair(i, j, xi, xj, ri + radius[j], skin, v, h, fast, upper, lower, n_up,
+                                                n_low)
+        for f in range(n_fast):
+            j = fast_ids[f]
+            n_up, n_low = list_pair(i, j, xi, x[j], ri + radius[j], skin, v, h, 1, upper, lower, n_up, n_low)
+    return n_up, n_low
+
+
+@ti.func
+def list_pair(i, j, xi, xj, r_sum, skin, v: ti.template(), h, fast, upper: ti.template(), lower: ti.template(),
+              n_up, n_low):
+    """Ball j into ball i's ``upper`` or ``lower`` row (by :func:`owns`) when their surface gap is
+    below :func:`pair_reach` (the skin when ``fast`` is 0; ``r_sum``: r_i + r_j [m]). Returns the
+    rows' new lengths (n_up, n_low); an entry beyond a row's width is counted, not stored."""
+    gap_reach = skin
+    if fast != 0:  # (else pair_reach is the skin for every pair: v not read)
+        gap_reach = pair_reach(skin, h, v[i], v[j])
+    reach = r_sum + gap_reach
+    if (xj - xi).norm_sqr() < reach * reach:
+        if owns(xi, xj, i, j):
+            insert_sorted(upper, i, n_up, upper.shape[1], j)
+            n_up += 1
+        else:
+            insert_sorted(lower, i, n_low, lower.shape[1], j)
+            n_low += 1
     return n_up, n_low
 
 
