@@ -170,12 +170,19 @@ _GPU_PILE = textwrap.dedent("""
         sys.exit(77)  # Taichi fell back to another backend: nothing to compare
     scene, x = pile_scene(70_000)
     x = x + np.random.default_rng(5).uniform(-0.002, 0.002, x.shape)
-    sim = tg.Simulation(scene, x=x)
-    sim.solver = CollisionSolver(sim.model, serial=False)
-    sim.solver.build(sim.state)
-    pairs = sim.solver.pairs()
-    sim.step(2)
-    np.savez(sys.argv[1], x0=x, pairs=pairs, x=sim.x)
+    # and the same pile with a ball shot into its top, kept in id order (see the test)
+    x_shot = np.vstack([x, [x[:, 0].mean(), x[:, 1].max() + 0.03, x[:, 2].mean()]])
+    v_shot = np.zeros_like(x_shot)
+    v_shot[-1] = [0.0, -60.0, 0.0]
+    runs = {}
+    for name, positions, velocities, reorder in (("", x, None, None), ("_shot", x_shot, v_shot, False)):
+        sim = tg.Simulation(scene, x=positions, v=velocities)
+        sim.solver = CollisionSolver(sim.model, serial=False, reorder=reorder)
+        sim.solver.build(sim.state)
+        runs["pairs" + name] = sim.solver.pairs()
+        sim.step(2)
+        runs["x" + name] = sim.x
+    np.savez(sys.argv[1], x0=x, x0_shot=x_shot, v0_shot=v_shot, **runs)
 """)
 
 
@@ -183,7 +190,12 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(tmp_path):
     # Vulkan is the GPU backend that CI can run (in software, mesa's lavapipe): it compiles the
     # kernels as a GPU does, every loop in parallel. The grid once scanned its bucket counts in a
     # serial loop, and there Taichi's Vulkan backend stops after 65,535 iterations without a
-    # word: most balls of this pile then had no neighbours, and it fell through itself.
+    # word: most balls of this pile then had no neighbours, and it fell through itself. Then a ball
+    # is shot into the pile's top: on the CPU the grid lists it apart (grid.FAST_MAX), testing it
+    # against all 70,001 balls in one thread, which on Vulkan would stop at 65,535 (its
+    # neighbours, in the top layers, come last); there the cells are widened for it instead. Both
+    # must list the same pairs and take the same step; that pile is kept in id order, since the
+    # grid's order follows the cells, and the order of a ball's simultaneous impacts the storage.
     out = tmp_path / "gpu.npz"
     script = tmp_path / "gpu_pile.py"
     script.write_text(_GPU_PILE)
@@ -194,15 +206,20 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(tmp_path):
         pytest.skip("Taichi cannot start its Vulkan backend here (apt-get install mesa-vulkan-drivers)")
     assert done.returncode == 0, done.stderr[-2000:]
     gpu = np.load(out)
-    sim = tg.Simulation(pile_scene(70_000)[0], x=gpu["x0"])
-    sim.solver = CollisionSolver(sim.model, serial=False)
-    sim.solver.build(sim.state)
-    assert len(gpu["pairs"]) > 2 * 70_000  # about three pairs per ball in the lattice
-    np.testing.assert_array_equal(gpu["pairs"], sim.solver.pairs())
-    sim.step(2)
-    # the same step, up to the round-off of f64 square roots and divisions (a GPU need not round
-    # them as the CPU does): 2e-16 m measured; a missed pair would leave overlaps of ~0.1 mm
-    np.testing.assert_allclose(gpu["x"], sim.x, rtol=0, atol=1e-12)
+    for name, v, reorder in (("", None, None), ("_shot", gpu["v0_shot"], False)):
+        sim = tg.Simulation(pile_scene(70_000)[0], x=gpu["x0" + name], v=v)
+        sim.solver = CollisionSolver(sim.model, serial=False, reorder=reorder)
+        sim.solver.build(sim.state)
+        assert sim.solver.n_fast == (1 if name else 0)
+        pairs = gpu["pairs" + name]
+        assert len(pairs) > 2 * 70_000  # about three pairs per ball in the lattice
+        if name:
+            assert np.sum(pairs == 70_000) > 10  # the shot ball's pairs (h·v = 6 cm: two layers deep)
+        np.testing.assert_array_equal(pairs, sim.solver.pairs())
+        sim.step(2)
+        # the same step, up to the round-off of f64 square roots and divisions (a GPU need not round
+        # them as the CPU does): 2e-16 m measured; a missed pair would leave overlaps of ~0.1 mm
+        np.testing.assert_allclose(gpu["x" + name], sim.x, rtol=0, atol=1e-12)
 
 
 # Every array access of the grid's and the step's kernels checked against the array's bounds
@@ -226,6 +243,13 @@ _BOUNDS_CHECKED = textwrap.dedent("""
             sim.step(3)
             sim.x = sim.x[::-1]  # every ball moved: the lists are rebuilt, impulses carried
             sim.step(2)
+    v = np.zeros_like(x)
+    v[-1] = [0.0, -60.0, 0.0]  # a fast ball, listed apart by the grid (grid.FAST_MAX)
+    for reorder in (False, True):
+        sim = tg.Simulation(scene, x=x, v=v, track=False)
+        sim.solver = CollisionSolver(sim.model, serial=False, reorder=reorder)
+        sim.step(3)
+        assert sim.solver.rebuilds > 1
     free = tg.Simulation(tg.load_scene("lab_vacuum", ["world.collisions=false"]), x=x[:5], track=False)
     free.step(3)
     for name in ("terrain_2d", "terrain_3d"):  # a height field: one ball alone, 400 colliding

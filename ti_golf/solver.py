@@ -139,7 +139,7 @@ class CollisionSolver:
         h = self._model.dt
         v_cut = grid.fast_speed(self._r_max, self.skin, h)
         v_max, v_slow, n_fast = (float(s) for s in grid.speeds(state.v, v_cut, self.fast_ids))
-        self.n_fast = int(n_fast) if n_fast <= grid.FAST_MAX else 0  # a few fast balls are listed apart
+        self.n_fast = int(n_fast) if n_fast <= grid.FAST_MAX and on_cpu() else 0  # a few are listed apart
         # the cells hold every pair of the other balls; fast: their pairs are listed by closing speed too
         self.cell, fast = grid.cell_size(self._r_max, self.skin, h, v_slow if self.n_fast else v_max)
         bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
