@@ -71,6 +71,7 @@ class CollisionSolver:
             2h·v_max when the fastest pair could close more than the skin in a step (see
             ``grid.cell_size``: pairs are listed by their closing speed too).
         skin: neighbour-list skin [m] (``contact.skin`` × largest radius).
+        n_fast: how many fast balls the last build listed apart (``grid.FAST_MAX``; CPU backends).
         capacity: widths of the (upper, lower) neighbour tables (they grow when a list overflows).
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
         serial: whether steps run serially, many per launch, with the lists rebuilt in the kernel
