@@ -58,11 +58,14 @@ def _random_sets():
 def _velocities(n, fast):
     """Resting balls, or (``fast``) balls at up to 1 m/s with one in twenty at up to 40 m/s: 20 mm
     per 0.5 ms step, ten times the skin of 2-cm balls; or (``few_fast``) balls at up to 1 m/s with
-    six at 150 to 3,000 m/s, moving 1.5 to 30 of the largest diameters in two steps (grid.FAST_MAX)."""
+    six at 150 to 3,000 m/s, moving 1.5 to 30 of the largest diameters in two steps
+    (grid.APART_MAX); or (``few_big``) balls at up to 1 m/s."""
     if not fast:
         return np.zeros((n, 3))
     rng = np.random.default_rng(5)
     v = rng.uniform(-1.0, 1.0, (n, 3))
+    if fast == "few_big":
+        return v
     if fast == "few_fast":
         few = rng.choice(n, 6, replace=False)
         u = rng.normal(size=(6, 3))
@@ -72,30 +75,47 @@ def _velocities(n, fast):
     return v
 
 
-@pytest.mark.parametrize("fast", [False, True, "few_fast"], ids=["at_rest", "fast", "few_fast"])
+@pytest.mark.parametrize("fast", [False, True, "few_fast", "few_big"], ids=["at_rest", "fast", "few_fast", "few_big"])
 @pytest.mark.parametrize("name", ["clustered", "sparse", "far_apart", "negative"])
 def test_grid_neighbours_equal_brute_force(name, fast):
     x, r = _random_sets()[name]
+    if fast == "few_big":  # five boulders, 3 to 67 times the radius of the rest
+        r = r.copy()
+        r[np.random.default_rng(6).choice(len(r), 5, replace=False)] = [0.15, 0.3, 0.6, 1.0, 2.0]
     v = _velocities(len(x), fast)
     sim = tg.Simulation(scene(), x=x, v=v, radius=r, mass=0.045 * (r / 0.02) ** 3)
     solver: CollisionSolver = sim.solver
     solver.build(sim.state)
-    # a few balls faster than a diameter (or the skin) in two steps are listed apart (each tests
-    # every ball), and the cells stay as small as the others need: at most 2·r_max + max(skin,
-    # 2·r_max); with many fast balls (one in twenty), or none, the cells are widened for the fastest pair
-    # (on CPU backends only: see grid.FAST_MAX)
-    n_fast = int(np.sum(2 * sim.dt * np.linalg.norm(v, axis=1) > max(solver.skin, 2 * r.max())))
-    assert solver.n_fast == (n_fast if n_fast <= grid.FAST_MAX and ON_CPU else 0)
-    if fast == "few_fast" and ON_CPU:
-        assert solver.n_fast == 6 and solver.cell <= 2 * r.max() + max(solver.skin, 2 * r.max())
+    # a few balls more than twice the size of all but the 32 biggest (grid.APART_MAX), or faster
+    # than a diameter of the rest (or the skin) in two steps, are set apart: they own none of their
+    # pairs with the others (see _owns), and on CPU backends they are listed apart (each tests
+    # every ball), so that the cells and the skin are as small as the others need: the rest's
+    # largest radius r_ref sets the skin, and the cells are at most 2·r_ref + max(skin, 2·r_ref).
+    # With many fast balls (one in twenty), or none, or on a GPU, the cells are sized for the
+    # fastest pair and the largest ball
+    r_desc = np.sort(r)[::-1]
+    r_cut = 2 * r_desc[grid.APART_MAX] if r_desc[0] > 2 * r_desc[grid.APART_MAX] else np.inf
+    r_ref = r[r <= r_cut].max()
+    assert solver.skin == pytest.approx(sim.scene.contact.skin * r_ref, rel=1e-12)
+    fast_balls = 2 * sim.dt * np.linalg.norm(v, axis=1) > max(solver.skin, 2 * r_ref)
+    apart = fast_balls | (r > r_cut)  # they own no pair with the others, on every backend
+    if np.sum(apart) > grid.APART_MAX:
+        apart[:] = False
+    assert solver.n_apart == np.sum(apart)
+    if fast in ("few_fast", "few_big") and ON_CPU:
+        assert solver.n_apart == {"few_fast": 6, "few_big": 5}[fast]
+        assert solver.cell <= 2 * r_ref + max(solver.skin, 2 * r_ref)
+        if fast == "few_big":
+            assert solver.cell < 0.25 * (2 * r.max())  # not sized for the boulders
     pairs = solver.pairs()
     assert np.all(pairs[:, 0] < pairs[:, 1])  # each pair reported once, by id
     found = {(int(i), int(j)) for i, j in pairs} | {(int(j), int(i)) for i, j in pairs}
     expected = _brute_force_pairs(x, r, solver.skin, v, sim.dt)
     assert found == expected
     assert len(expected) > 0
-    if fast and name != "sparse":  # the closing speeds list pairs the skin alone would not (the
-        # sparse set's balls are too far apart for that: there the lists must just miss nothing)
+    if fast in (True, "few_fast") and name != "sparse":
+        # the closing speeds list pairs the skin alone would not (the sparse set's balls are too
+        # far apart for that: there the lists must just miss nothing)
         assert len(expected) > len(_brute_force_pairs(x, r, solver.skin))
     xs = sim.state.x.to_numpy()  # the positions the kernels saw (float type of the run)
     upper, n_upper = solver.upper.to_numpy(), solver.n_upper.to_numpy()
@@ -103,17 +123,21 @@ def test_grid_neighbours_equal_brute_force(name, fast):
     assert upper.shape[1] <= 1 << solver.slot_bits
     for i in range(len(x)):  # lists are sorted by id: sums over them do not depend on threads
         assert np.all(np.diff(upper[i, : n_upper[i]]) > 0)
-        assert set(upper[i, : n_upper[i]].tolist()) == {j for (a, j) in expected if a == i and _owns(xs, i, j)}
+        assert set(upper[i, : n_upper[i]].tolist()) == {j for (a, j) in expected if a == i and _owns(xs, i, j, apart)}
         slots = lower[i, : n_lower[i]]  # where each lower pair is stored: owner · 2^bits + column
         owners, entries = slots >> solver.slot_bits, slots & ((1 << solver.slot_bits) - 1)
         assert np.all(np.diff(owners) > 0)
-        assert set(owners.tolist()) == {j for (a, j) in expected if a == i and _owns(xs, j, i)}
+        assert set(owners.tolist()) == {j for (a, j) in expected if a == i and _owns(xs, j, i, apart)}
         assert np.all(upper[owners, entries] == i)
 
 
-def _owns(x, i, j):
-    """Whether ball i owns its pair with j (grid.owns): j lies ahead along the axis of their
-    largest separation (the first of equals), or, at the same point, has the higher id."""
+def _owns(x, i, j, apart):
+    """Whether ball i owns its pair with j (grid.owns): j is listed apart and i is not (``apart``:
+    bool (n,); so a boulder's hundreds of pairs do not widen the upper table, which keeps each
+    pair's impulse), or neither or both are and j lies ahead along the axis of their largest
+    separation (the first of equals), or, at the same point, has the higher id."""
+    if apart[i] != apart[j]:
+        return bool(apart[j])
     d = x[j] - x[i]
     ahead = d[np.argmax(np.abs(d))]
     return bool(ahead > 0 or (ahead == 0 and j > i))
@@ -193,10 +217,10 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(tmp_path):
     # kernels as a GPU does, every loop in parallel. The grid once scanned its bucket counts in a
     # serial loop, and there Taichi's Vulkan backend stops after 65,535 iterations without a
     # word: most balls of this pile then had no neighbours, and it fell through itself. Then a ball
-    # is shot into the pile's top: on the CPU the grid lists it apart (grid.FAST_MAX), testing it
+    # is shot into the pile's top: on the CPU the grid lists it apart (grid.APART_MAX), testing it
     # against all 70,001 balls in one thread, which on Vulkan would stop at 65,535 (its
-    # neighbours, in the top layers, come last); there the cells are widened for it instead. Both
-    # must list the same pairs and take the same step; that pile is kept in id order, since the
+    # neighbours, in the top layers, come last); there the cells are widened for it instead. On
+    # both it owns none of its pairs (grid.owns). Both must list the same pairs and take the same step; that pile is kept in id order, since the
     # grid's order follows the cells, and the order of a ball's simultaneous impacts the storage.
     out = tmp_path / "gpu.npz"
     script = tmp_path / "gpu_pile.py"
@@ -212,7 +236,7 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(tmp_path):
         sim = tg.Simulation(pile_scene(70_000)[0], x=gpu["x0" + name], v=v)
         sim.solver = CollisionSolver(sim.model, serial=False, reorder=reorder)
         sim.solver.build(sim.state)
-        assert sim.solver.n_fast == (1 if name and ON_CPU else 0)
+        assert sim.solver.n_apart == (1 if name else 0)
         pairs = gpu["pairs" + name]
         assert len(pairs) > 2 * 70_000  # about three pairs per ball in the lattice
         if name:
@@ -246,11 +270,17 @@ _BOUNDS_CHECKED = textwrap.dedent("""
             sim.x = sim.x[::-1]  # every ball moved: the lists are rebuilt, impulses carried
             sim.step(2)
     v = np.zeros_like(x)
-    v[-1] = [0.0, -60.0, 0.0]  # a fast ball, listed apart by the grid (grid.FAST_MAX)
-    for reorder in (False, True):
-        sim = tg.Simulation(scene, x=x, v=v, track=False)
+    v[-1] = [0.0, -60.0, 0.0]  # a fast ball, listed apart by the grid (grid.APART_MAX)
+    r = np.full(len(x), 0.02)
+    r[-1] = 0.2  # or a boulder, listed apart too
+    for big, reorder in ((False, False), (False, True), (True, False), (True, True)):
+        sim = tg.Simulation(scene, x=x, v=None if big else v, radius=r if big else None, track=False)
         sim.solver = CollisionSolver(sim.model, serial=False, reorder=reorder)
-        sim.step(3)
+        sim.step(1)
+        assert sim.solver.n_apart == 1  # the first build set the ball apart
+        sim.step(2)
+        sim.x = sim.x + [0.0, 0.003, 0.0]  # every ball moved: the lists are rebuilt
+        sim.step(1)
         assert sim.solver.rebuilds > 1
     free = tg.Simulation(tg.load_scene("lab_vacuum", ["world.collisions=false"]), x=x[:5], track=False)
     free.step(3)
@@ -615,7 +645,7 @@ def test_deep_pile_settles_without_deep_overlaps(e):
 
 
 @pytest.mark.parametrize("name, steps", [("break_shot", 600), ("newtons_cradle", 600), ("terrain_3d", 400),
-                                         ("sleeping_column", 900), ("fast_into_pile", 40)])
+                                         ("sleeping_column", 900), ("fast_into_pile", 40), ("boulder_into_pile", 40)])
 @pytest.mark.skipif(not ON_CPU, reason="serial stepping runs on the CPU only")
 def test_serial_steps_equal_parallel_steps(name, steps):
     # few balls step serially, many steps per launch, with their lists rebuilt in the kernel by
@@ -624,9 +654,9 @@ def test_serial_steps_equal_parallel_steps(name, steps):
     # same arithmetic per ball and the same order of every sum, so bit-identical results, whatever
     # the chunks of steps per launch. The scenes cover a break (fast balls: lists rebuilt nearly
     # every step), the cradle, a terrain with surface types and out-of-bounds balls, and balls
-    # that fall asleep and are woken, and a ball shot at 60 m/s into a pile (the grid lists it apart
-    # from the others: grid.FAST_MAX)
-    v = None
+    # that fall asleep and are woken, and a ball shot at 60 m/s into a pile or a boulder five times
+    # the size of the others dropped on it (the grid lists them apart: grid.APART_MAX)
+    v, r, m = None, None, None
     if name == "sleeping_column":
         sc = tg.load_scene("lab_vacuum", ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3"])
         x = np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)] + [[0.0, 2.0, 0.0]])  # see the test above
@@ -635,18 +665,26 @@ def test_serial_steps_equal_parallel_steps(name, steps):
         x = np.vstack([x, [x[:, 0].mean() - 0.05, x[:, 1].max() + 0.1, x[:, 2].mean() + 0.03]])
         v = np.zeros_like(x)
         v[-1] = [5.0, -60.0, 0.0]
+    elif name == "boulder_into_pile":
+        sc, x = pile_scene(200)
+        x = np.vstack([x, [x[:, 0].mean() - 0.01, x[:, 1].max() + 0.125, x[:, 2].mean() + 0.02]])
+        v = np.zeros_like(x)
+        v[-1] = [0.3, -2.0, 0.0]  # 5 mm above the pile's top at 2 m/s: it lands within three steps
+        r = np.full(len(x), 0.02)
+        r[-1] = 0.1
+        m = sc.ball.mass * (r / 0.02) ** 3
     else:
         sc, x = tg.load_scene(name), None
     runs = []
     for serial in (True, False):
-        sim = tg.Simulation(sc, x=x, v=v) if x is not None else tg.Simulation(sc)
+        sim = tg.Simulation(sc, x=x, v=v, radius=r, mass=m) if x is not None else tg.Simulation(sc)
         sim.solver = CollisionSolver(sim.model, serial=serial)
         done, asleep = 0, 0
         for chunk in (1, 2, 37, 410, steps):  # launches of one, a few and many steps
             k = min(chunk, steps - done)
             sim.step(k)
-            if name == "fast_into_pile" and done == 0:
-                assert sim.solver.n_fast == 1  # the first build listed the shot ball apart
+            if name in ("fast_into_pile", "boulder_into_pile") and done == 0:
+                assert sim.solver.n_apart == 1  # the first build listed the shot ball or the boulder apart
             done += k
             asleep = max(asleep, int(np.sum(sim.status == AT_REST)))
         st = sim.state

@@ -69,9 +69,15 @@ class CollisionSolver:
     Attributes:
         cell: grid cell size [m] at the last build: the largest diameter plus the skin, or plus
             2h·v_max when the fastest pair could close more than the skin in a step (see
-            ``grid.cell_size``: pairs are listed by their closing speed too).
-        skin: neighbour-list skin [m] (``contact.skin`` × largest radius).
-        n_fast: how many fast balls the last build listed apart (``grid.FAST_MAX``; CPU backends).
+            ``grid.cell_size``: pairs are listed by their closing speed too); both of the balls
+            not listed apart when some are (``n_apart``).
+        skin: neighbour-list skin [m] (``contact.skin`` × ``r_ref``).
+        r_cut, r_ref: balls bigger than ``r_cut`` [m] are listed apart, and ``r_ref`` [m] is the
+            largest radius of the others (``grid.size_cut``: infinite, and the largest radius,
+            unless a few balls are more than twice the size of the rest).
+        n_apart: how many balls, much faster or bigger than the rest, the last build set apart
+            (``grid.APART_MAX``): they own none of their pairs with the others, and on CPU
+            backends they are listed apart.
         capacity: widths of the (upper, lower) neighbour tables (they grow when a list overflows).
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
         serial: whether steps run serially, many per launch, with the lists rebuilt in the kernel
@@ -94,7 +100,9 @@ class CollisionSolver:
         self._model = model
         n = model.n
         self._r_max = float(model.radius_np.max())
-        self.skin = model.scene.contact.skin * self._r_max
+        self.r_cut, self.r_ref = grid.size_cut(model.radius_np)
+        self.skin = model.scene.contact.skin * self.r_ref
+        self.v_cut = grid.fast_speed(self.r_ref, self.skin, model.dt)  # faster balls are listed apart
         self.cell = grid.cell_size(self._r_max, self.skin, model.dt, 0.0)[0]
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
         self.serial = steps_serially(n) if serial is None else bool(serial)
@@ -122,8 +130,8 @@ class CollisionSolver:
         # resting impulses of the planes and (one column more) the terrain
         self.lam_plane = ti.ndarray(float, (n, max(1, len(model.plane_p) + (model.terrain is not None))))
         self.flag = ti.ndarray(ti.i32, 2)
-        self.fast_ids = ti.ndarray(ti.i32, grid.FAST_MAX + 1)  # the fast balls (grid.speeds) and their count
-        self.n_fast = 0
+        self.apart_ids = ti.ndarray(ti.i32, grid.APART_MAX + 1)  # the balls listed apart (grid.apart_balls), count
+        self.n_apart = 0
         self._valid = False
         self._rebuild = True
         self._order: np.ndarray | None = None  # the state's storage order at the last build (see pairs)
@@ -138,17 +146,21 @@ class CollisionSolver:
             stashed = self.impulse
             grid.stash(self.upper, self.n_upper, self.lam, stashed)
         h = self._model.dt
-        v_cut = grid.fast_speed(self._r_max, self.skin, h)
-        v_max, v_slow, n_fast = (float(s) for s in grid.speeds(state.v, v_cut, self.fast_ids))
-        self.n_fast = int(n_fast) if n_fast <= grid.FAST_MAX and on_cpu() else 0  # a few are listed apart
+        v_max, v_rest, n_apart = (float(s) for s in grid.apart_balls(state.v, self._model.radius, self.v_cut,
+                                                                      self.r_cut, self.apart_ids))
+        self.n_apart = int(n_apart) if n_apart <= grid.APART_MAX else 0  # a few own no pair with the others
+        scan_apart = self.n_apart > 0 and on_cpu()  # and are listed apart (see grid.APART_MAX)
         # the cells hold every pair of the other balls; fast: their pairs are listed by closing speed too
-        self.cell, fast = grid.cell_size(self._r_max, self.skin, h, v_slow if self.n_fast else v_max)
+        if scan_apart:
+            self.cell, fast = grid.cell_size(self.r_ref, self.skin, h, v_rest)
+        else:
+            self.cell, fast = grid.cell_size(self._r_max, self.skin, h, v_max)
         bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
         self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, self.mask + 1))
         if self.reorder:
             self._store_in_grid_order(state)
-            if self.n_fast:  # the fast balls' new indices
-                grid.speeds(state.v, v_cut, self.fast_ids)
+            if scan_apart:  # their new indices
+                grid.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
         self._order = state.order
         while True:
             if self.upper is None or self.upper.shape[1] != self.capacity[0]:
@@ -157,8 +169,8 @@ class CollisionSolver:
             if self.lower is None or self.lower.shape[1] != self.capacity[1]:
                 self.lower = ti.ndarray(ti.i32, (n, self.capacity[1]))
             longest = grid.list_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, *self._hash,
-                                           self.skin, state.v, h, int(fast), v_cut, self.fast_ids, self.n_fast,
-                                           self.bucket, self.rank, self.start, self.chunk_start,
+                                           self.skin, state.v, h, int(fast), self.v_cut, self.r_cut, self.apart_ids,
+                                           self.n_apart, int(scan_apart), self.bucket, self.rank, self.start, self.chunk_start,
                                            self.sorted_ids, self.upper, self.n_upper, self.lower, self.n_lower,
                                            self.x_at_build, self.flag, self.reorder)
             if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
@@ -290,14 +302,15 @@ class CollisionSolver:
             grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
         with plain_compile():  # 5 s against 50 s of compiling on first use, and as fast (see runtime.plain_compile)
             self.rebuilds += collide.collision_step(*self._arguments(model, state), True, steps, self.skin,
-                                                     model.dt)
+                                                     model.dt, self.v_cut, self.r_cut)
         for _ in range(steps):
             state.t += model.dt  # as one step at a time adds it, to the same round-off
 
     def _step_in_parallel(self, model: Model, state: State) -> None:
         if not self._valid or self._rebuild:
             self.build(state)
-        rebuild = collide.collision_step(*self._arguments(model, state), False, 1, self.skin, model.dt)
+        rebuild = collide.collision_step(*self._arguments(model, state), False, 1, self.skin, model.dt, self.v_cut,
+                                         self.r_cut)
         state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
         state.t += model.dt
         self._rebuild = bool(rebuild)

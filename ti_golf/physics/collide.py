@@ -411,11 +411,13 @@ def collision_step(
     steps: ti.i32,
     skin: float,
     dt: ti.f64,
+    v_cut: float,
+    r_cut: float,
 ) -> ti.i32:
     """Advance all balls by ``steps`` steps of ``h`` [s] (``iterations`` ≥ 1 Jacobi sweeps).
 
-    In parallel (``serial`` False) the kernel takes exactly one step (``steps``, ``skin`` and
-    ``dt`` are not read) and returns 1 (also left in ``flag[0]``) when some ball may come within
+    In parallel (``serial`` False) the kernel takes exactly one step (``steps``, ``skin``, ``dt``,
+    ``v_cut`` and ``r_cut`` are not read) and returns 1 (also left in ``flag[0]``) when some ball may come within
     reach of a ball missing from its neighbour lists next step: rebuild the lists. The new
     positions are left in ``x_free`` (swap it with ``x``).
 
@@ -425,7 +427,8 @@ def collision_step(
     one on the same data, the time [s] advanced by ``dt`` (``h`` before rounding to the float
     type) from ``t0`` in f64, as the caller advances it between parallel steps; the
     neighbour lists are rebuilt in the kernel by testing every pair (:func:`grid.relist_all_pairs`,
-    ``skin`` [m]) whenever ``flag[0]`` asks for it at the start of a step, so the tables must be
+    ``skin`` [m]; the balls faster than ``v_cut`` [m/s] or bigger than ``r_cut`` [m] own no pair
+    with the others, as in the grid's lists: see :func:`grid.owns`) whenever ``flag[0]`` asks for it at the start of a step, so the tables must be
     n − 1 wide; new positions are copied to ``x`` after every step. Returns how many times the
     lists were rebuilt.
 
@@ -450,7 +453,8 @@ def collision_step(
         ti.loop_config(serialize=True)
         for _ in range(steps):
             if flag[0] != 0:
-                relist_all_pairs(x, radius, skin, v, h, upper, n_upper, lower, n_lower, x_at_build, lam, J)
+                relist_all_pairs(x, radius, skin, v, h, v_cut, r_cut, upper, n_upper, lower, n_lower, x_at_build, lam,
+                                 J)
                 result += 1
                 flag[0] = 0
             step_balls(

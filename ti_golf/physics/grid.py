@@ -15,12 +15,16 @@ follows it: a pair is listed when its surface gap is below the larger of the ski
 h·|v_a − v_b| (:func:`pair_reach`), and the cells are widened for the fastest pair
 (:func:`cell_size`). Otherwise a ball that moves farther than the skin in a step, as fast balls do
 (6 m/s is 3 mm per 0.5 ms step, against a skin of 2 mm for golf balls), would meet a ball
-missing from its lists only in the next step, after flying into it. A few balls much faster than
-the rest (at most ``FAST_MAX``, moving more than a diameter in two steps: :func:`fast_speed`)
-are listed apart instead on CPU backends, each tested against every ball (:func:`list_ball`), so
-that the cells stay small for the rest.
+missing from its lists only in the next step, after flying into it. A few balls much faster or
+bigger than the rest (at most ``APART_MAX``: moving more than a diameter in two steps, see
+:func:`fast_speed`, or more than twice the size of the rest, see :func:`size_cut`) are listed
+apart instead on CPU backends, each tested against every ball (:func:`list_ball`), so that the
+cells stay small for the rest.
 """
 
+import math
+
+import numpy as np
 import taichi as ti
 
 from .types import float_array, int_array, real, vec3_array, vec7_table
@@ -76,52 +80,74 @@ def pair_reach(skin, h, v_a, v_b):
     return ti.max(skin, h * (v_a - v_b).norm())
 
 
-FAST_MAX = 32
-"""Most *fast* balls (see :func:`speeds`) whose pairs are listed ball by ball; with more, the cells
-are widened for the fastest pair instead (:func:`cell_size`): a thousand balls hit at once are
-spread out, and big cells cost them little. On CPU backends only (``CollisionSolver.build``): a
-fast ball tests every ball in one thread, and Taichi's Vulkan backend stops the loops of a thread
-after 65,535 iterations in all, nested or not, without a word (measured with Taichi 1.7.4 and
+APART_MAX = 32
+"""Most balls set *apart* (see :func:`apart_balls`: much faster or bigger than the rest), which
+own none of their pairs with the others (see :func:`owns`) and whose pairs are listed ball by
+ball; with more, the cells are sized for the fastest pair and the largest ball instead
+(:func:`cell_size`): a thousand balls hit at once are spread out, and big cells cost them
+little. Their pairs are listed ball by ball on CPU backends only (``CollisionSolver.build``): a
+ball listed apart tests every ball in one thread, and Taichi's Vulkan backend stops the loops of a thread after
+65,535 iterations in all, nested or not, without a word (measured with Taichi 1.7.4 and
 lavapipe: the ball shot into the 70,001-ball pile of the GPU test lost 7 of its pairs); on a GPU,
 many threads make wide cells cheap anyway."""
 
 
-def fast_speed(r_max: float, skin: float, h: float) -> float:
+def size_cut(radius: np.ndarray) -> tuple[float, float]:
+    """(r_cut, r_ref) [m] for balls of ``radius`` (n,) [m]: a ball bigger than r_cut, twice the
+    radius of the (``APART_MAX`` + 1)-th biggest ball, is listed apart (at most ``APART_MAX`` of
+    them), and r_ref, the largest radius of the other balls, sizes the cells and the skin. So a
+    boulder dropped into a pit of golf balls does not make every cell as wide as the boulder (a
+    0.5 m ball among 131,072 2-cm balls made every ball test about 15,000 candidates, 20 s per
+    rebuild). Without such outliers, r_cut is infinite and r_ref the largest radius."""
+    r = np.sort(np.asarray(radius, dtype=float))[::-1]
+    if len(r) <= APART_MAX:
+        return math.inf, float(r[0])
+    r_cut = 2.0 * float(r[APART_MAX])
+    if r[0] <= r_cut:
+        return math.inf, float(r[0])
+    return r_cut, float(r[r <= r_cut][0])
+
+
+def fast_speed(r_ref: float, skin: float, h: float) -> float:
     """The speed [m/s] above which a ball is *fast*: 2h·|v| exceeds the larger of the skin and the
-    largest diameter ``2·r_max`` [m], so a pair with it could close by more than that within a
-    step (``h`` [s]). Below it, cells are at most 2·r_max + max(skin, 2·r_max) wide."""
-    return max(skin, 2.0 * r_max) / (2.0 * h)
+    largest diameter ``2·r_ref`` [m] of the balls not listed apart for their size (see
+    :func:`size_cut`), so a pair with it could close by more than that within a step (``h`` [s]).
+    Below it, cells are at most 2·r_ref + max(skin, 2·r_ref) wide."""
+    return max(skin, 2.0 * r_ref) / (2.0 * h)
 
 
 @ti.kernel
-def speeds(v: vec3_array, v_cut: real, fast_ids: int_array) -> ti.types.vector(3, real):
-    """(the greatest speed [m/s], the greatest speed of the balls not faster than ``v_cut``, how many
-    are faster). The ids of the first ``fast_ids.shape[0] − 1`` faster balls go to ``fast_ids`` in
-    no particular order, their count to its last entry (integer atomics; float atomic maxima,
-    the same on every thread order)."""
-    s2, slow2 = 0.0, 0.0
-    last = fast_ids.shape[0] - 1
-    fast_ids[last] = 0
+def apart_balls(v: vec3_array, radius: float_array, v_cut: real, r_cut: real,
+                apart_ids: int_array) -> ti.types.vector(3, real):
+    """(the greatest speed [m/s], the greatest speed of the balls not listed apart, how many are
+    listed apart): the balls faster than ``v_cut`` or bigger than ``r_cut`` (see
+    :func:`is_apart`). The indices of the first ``apart_ids.shape[0] − 1`` of them go to
+    ``apart_ids`` in no particular order, their count to its last entry (integer atomics; float
+    atomic maxima, the same on every thread order)."""
+    s2, rest2 = 0.0, 0.0
+    last = apart_ids.shape[0] - 1
+    apart_ids[last] = 0
     for i in range(v.shape[0]):
         q = v[i].norm_sqr()
         ti.atomic_max(s2, q)
-        if q > v_cut * v_cut:  # as :func:`is_fast` tests it
-            k = ti.atomic_add(fast_ids[last], 1)
+        if q > v_cut * v_cut or radius[i] > r_cut:  # as :func:`is_apart` tests it
+            k = ti.atomic_add(apart_ids[last], 1)
             if k < last:
-                fast_ids[k] = i
+                apart_ids[k] = i
         else:
-            ti.atomic_max(slow2, q)
-    return ti.Vector([ti.sqrt(s2), ti.sqrt(slow2), ti.cast(fast_ids[last], real)])
+            ti.atomic_max(rest2, q)
+    return ti.Vector([ti.sqrt(s2), ti.sqrt(rest2), ti.cast(apart_ids[last], real)])
 
 
 @ti.func
-def is_fast(v: ti.template(), i, v_cut, n_fast):
-    """Whether ball i is one of the ``n_fast`` fast balls (faster than ``v_cut``, see :func:`speeds`);
-    its velocity is read only when there are any."""
-    fast = False
-    if n_fast > 0:
-        fast = v[i].norm_sqr() > v_cut * v_cut
-    return fast
+def is_apart(v: ti.template(), radius: ti.template(), i, v_cut, r_cut, n_apart):
+    """Whether ball i is one of the ``n_apart`` balls set apart (faster than ``v_cut`` or bigger
+    than ``r_cut``, see :func:`apart_balls`); its velocity and radius are read only when there
+    are any."""
+    apart = False
+    if n_apart > 0:
+        apart = v[i].norm_sqr() > v_cut * v_cut or radius[i] > r_cut
+    return apart
 
 
 @ti.kernel
@@ -179,8 +205,10 @@ def list_neighbours(
     h: float,
     fast: ti.i32,
     v_cut: float,
-    fast_ids: int_array,
-    n_fast: ti.i32,
+    r_cut: float,
+    apart_ids: int_array,
+    n_apart: ti.i32,
+    scan_apart: ti.i32,
     # scratch:
     bucket: int_array,
     rank: int_array,
@@ -198,9 +226,10 @@ def list_neighbours(
 ) -> ti.types.vector(2, ti.i32):
     """Sort the balls into the hash grid, then list every ball's neighbours closer than
     r_a + r_b + :func:`pair_reach` (with ``fast`` 0, the skin: see :func:`cell_size`; ``h`` is
-    the time step [s], ``v`` the velocities), each list sorted by id (the ``n_fast`` balls faster
-    than ``v_cut`` whose ids are in ``fast_ids``, see :func:`speeds`, are listed apart: see
-    :func:`list_ball`): ``upper[i]`` holds the
+    the time step [s], ``v`` the velocities), each list sorted by id (the ``n_apart`` balls faster
+    than ``v_cut`` or bigger than ``r_cut`` whose indices are in ``apart_ids``, see
+    :func:`apart_balls`, own none of their pairs with the others, and with ``scan_apart`` they
+    are listed apart: see :func:`list_ball`): ``upper[i]`` holds the
     neighbours whose pairs ball i owns (:func:`owns`), ``lower[i]`` the others (to be turned into
     slots by :func:`link_lower` or :func:`link_and_carry`). One launch (a launch from Python costs
     about 0.1 ms; the grid took five). The counting sort: each ball's bucket and its rank among the
@@ -220,8 +249,8 @@ def list_neighbours(
         i = idx  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         if ti.static(not stored_sorted):
             i = sorted_ids[idx]
-        n_up, n_low = list_ball(i, x, radius, inv_cell, mask, origin, stride, skin, v, h, fast, v_cut, fast_ids,
-                                n_fast, start, sorted_ids, upper, lower, stored_sorted)
+        n_up, n_low = list_ball(i, x, radius, inv_cell, mask, origin, stride, skin, v, h, fast, v_cut, r_cut,
+                                apart_ids, n_apart, scan_apart, start, sorted_ids, upper, lower, stored_sorted)
         n_upper[i] = ti.min(n_up, upper.shape[1])
         n_lower[i] = ti.min(n_low, lower.shape[1])
         x_at_build[i] = x[i]
@@ -340,23 +369,27 @@ def bucket_starts(start: ti.template(), chunk_start: ti.template()):
 
 @ti.func
 def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin, stride, skin, v: ti.template(),
-              h, fast, v_cut, fast_ids: ti.template(), n_fast, start: ti.template(), sorted_ids: ti.template(),
-              upper: ti.template(), lower: ti.template(), stored_sorted: ti.template()):
+              h, fast, v_cut, r_cut, apart_ids: ti.template(), n_apart, scan_apart, start: ti.template(),
+              sorted_ids: ti.template(), upper: ti.template(), lower: ti.template(), stored_sorted: ti.template()):
     """Ball i's neighbours into its rows of ``upper`` and ``lower`` in id order (as many as fit;
     ``stored_sorted``: see :func:`list_neighbours`). Returns how many there are (n_upper, n_lower).
 
-    The balls in its own and the 26 adjacent cells, but for the fast balls (:func:`is_fast`):
-    those are tested by every ball, and a fast ball tests every ball. So one ball shot into a
-    pile does not widen the cells of all (a 70 m/s ball with a 1 ms step would make them 4.5
-    diameters wide: 90 times as many balls tested), and both balls of every pair still test it,
-    with the same :func:`pair_reach`."""
+    The balls in its own and the 26 adjacent cells, but, with ``scan_apart``, for the balls
+    listed apart (:func:`is_apart`): those are tested by every ball, and a ball listed apart tests
+    every ball. So one ball shot into a pile does not widen the cells of all (a 70 m/s ball with a
+    1 ms step would make them 4.5 diameters wide: 90 times as many balls tested), nor does one
+    boulder (see :func:`size_cut`), and both balls of every pair still test it, with the same
+    :func:`pair_reach`. Without ``scan_apart`` (a GPU, see ``APART_MAX``) the cells are sized
+    for all balls, and the balls apart still own none of their pairs with the others."""
     xi = x[i]
     ri = radius[i]
     n_up, n_low = 0, 0
-    if is_fast(v, i, v_cut, n_fast):
+    apart_i = is_apart(v, radius, i, v_cut, r_cut, n_apart)
+    if apart_i and scan_apart != 0:
         for j in range(x.shape[0]):
             if j != i:
-                n_up, n_low = list_pair(i, j, xi, x[j], ri + radius[j], skin, v, h, 1, upper, lower, n_up, n_low)
+                n_up, n_low = list_pair(i, j, xi, x[j], ri + radius[j], skin, v, h, 1, True,
+                                        is_apart(v, radius, j, v_cut, r_cut, n_apart), upper, lower, n_up, n_low)
     else:
         c = cell_of(xi, inv_cell)  # recomputed, not stored: 12 bytes per ball less
         for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2)))):
@@ -373,29 +406,32 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin
                         j = sorted_ids[k]
                     xj = x[j]
                     cj = cell_of(xj, inv_cell)
-                    # a ball of the row (not of another cell sharing its buckets), not a fast one
+                    apart_j = is_apart(v, radius, j, v_cut, r_cut, n_apart)
+                    # a ball of the row (not of another cell sharing its buckets), not one listed apart
                     if (j != i and cj[1] == row[1] and cj[2] == row[2] and ti.abs(cj[0] - c[0]) <= 1
-                            and not is_fast(v, j, v_cut, n_fast)):
-                        n_up, n_low = list_pair(i, j, xi, xj, ri + radius[j], skin, v, h, fast, upper, lower, n_up,
-                                                n_low)
-        for f in range(n_fast):
-            j = fast_ids[f]
-            n_up, n_low = list_pair(i, j, xi, x[j], ri + radius[j], skin, v, h, 1, upper, lower, n_up, n_low)
+                            and not (apart_j and scan_apart != 0)):
+                        n_up, n_low = list_pair(i, j, xi, xj, ri + radius[j], skin, v, h, fast, apart_i, apart_j,
+                                                upper, lower, n_up, n_low)
+        for f in range(n_apart * scan_apart):
+            j = apart_ids[f]
+            n_up, n_low = list_pair(i, j, xi, x[j], ri + radius[j], skin, v, h, 1, False, True, upper, lower, n_up,
+                                    n_low)
     return n_up, n_low
 
 
 @ti.func
-def list_pair(i, j, xi, xj, r_sum, skin, v: ti.template(), h, fast, upper: ti.template(), lower: ti.template(),
-              n_up, n_low):
-    """Ball j into ball i's ``upper`` or ``lower`` row (by :func:`owns`) when their surface gap is
-    below :func:`pair_reach` (the skin when ``fast`` is 0; ``r_sum``: r_i + r_j [m]). Returns the
-    rows' new lengths (n_up, n_low); an entry beyond a row's width is counted, not stored."""
+def list_pair(i, j, xi, xj, r_sum, skin, v: ti.template(), h, fast, apart_i, apart_j, upper: ti.template(),
+              lower: ti.template(), n_up, n_low):
+    """Ball j into ball i's ``upper`` or ``lower`` row (by :func:`owns`; ``apart_i``, ``apart_j``:
+    whether they are listed apart) when their surface gap is below :func:`pair_reach` (the skin
+    when ``fast`` is 0; ``r_sum``: r_i + r_j [m]). Returns the rows' new lengths (n_up, n_low); an
+    entry beyond a row's width is counted, not stored."""
     gap_reach = skin
     if fast != 0:  # (else pair_reach is the skin for every pair: v not read)
         gap_reach = pair_reach(skin, h, v[i], v[j])
     reach = r_sum + gap_reach
     if (xj - xi).norm_sqr() < reach * reach:
-        if owns(xi, xj, i, j):
+        if owns(xi, xj, i, j, apart_i, apart_j):
             insert_sorted(upper, i, n_up, upper.shape[1], j)
             n_up += 1
         else:
@@ -405,7 +441,7 @@ def list_pair(i, j, xi, xj, r_sum, skin, v: ti.template(), h, fast, upper: ti.te
 
 
 @ti.func
-def owns(xi, xj, i, j):
+def owns(xi, xj, i, j, apart_i, apart_j):
     """Whether ball i (at ``xi``) owns its pair with ball j (at ``xj``): whether j lies ahead of i
     along the axis on which the two centres differ most (the lower id when they coincide). Of
     the two balls of a pair exactly one owns it (x_j − x_i is exactly −(x_i − x_j) in floating
@@ -413,14 +449,24 @@ def owns(xi, xj, i, j):
     exactly its three pairs in +x, +y and +z however the lattice is jostled, and a random pile's
     longest list, the width of the pair tables, is shorter than with ownership by storage order
     (7-8 pairs against 10 in a 20,000-ball pour): an order along a grid flips for every pair
-    that straddles a cell boundary."""
-    d = xj - xi
-    ahead = d[0]  # the component of largest magnitude (the first of equals)
-    if ti.abs(d[1]) > ti.abs(ahead):
-        ahead = d[1]
-    if ti.abs(d[2]) > ti.abs(ahead):
-        ahead = d[2]
-    return ahead > 0.0 or (ahead == 0.0 and j > i)
+    that straddles a cell boundary.
+
+    But a ball listed apart (``apart_j``; see :func:`is_apart`) never owns a pair with a ball
+    that is not (``apart_i`` false): a boulder sunk into a pile touches hundreds of balls, and the
+    upper table, which keeps each pair's impulse and geometry (72 bytes a pair in f64), is as wide
+    as the longest upper list for every ball; the lower table keeps 4 bytes a pair."""
+    owner = False
+    if apart_i != apart_j:
+        owner = apart_j
+    else:
+        d = xj - xi
+        ahead = d[0]  # the component of largest magnitude (the first of equals)
+        if ti.abs(d[1]) > ti.abs(ahead):
+            ahead = d[1]
+        if ti.abs(d[2]) > ti.abs(ahead):
+            ahead = d[2]
+        owner = ahead > 0.0 or (ahead == 0.0 and j > i)
+    return owner
 
 
 @ti.func
@@ -548,23 +594,30 @@ def stashed_id(stashed: ti.template(), i, k):
 
 
 @ti.func
-def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, v: ti.template(), h, upper: ti.template(),
-                     n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), x_at_build: ti.template(),
-                     lam: ti.template(), scratch: ti.template()):
+def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, v: ti.template(), h, v_cut, r_cut,
+                     upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(),
+                     x_at_build: ti.template(), lam: ti.template(), scratch: ti.template()):
     """Rebuild the neighbour lists of a few balls in place without a grid, by testing every pair:
     the lists, slots and carried-over impulses that ``list_neighbours`` and ``link_and_carry``
-    give, in O(n²) work. The tables must be n − 1 wide (no list can overflow).
-    Meant for a serial loop (the ``serial`` variant of ``collide.collision_step``); ``scratch``
-    as in :func:`stash_ball`."""
+    give on a CPU backend (with the same owners: the balls faster than ``v_cut`` or bigger than
+    ``r_cut`` are listed apart unless there are more than ``APART_MAX``), in O(n²) work. The
+    tables must be n − 1 wide (no list can overflow). Meant for a serial loop (the ``serial``
+    variant of ``collide.collision_step``); ``scratch`` as in :func:`stash_ball`."""
+    n_apart = 0
     for i in range(x.shape[0]):
         stash_ball(i, upper, n_upper, lam, scratch)
+        if v[i].norm_sqr() > v_cut * v_cut or radius[i] > r_cut:  # as apart_balls counts them
+            n_apart += 1
+    if n_apart > APART_MAX:
+        n_apart = 0
     for i in range(x.shape[0]):
         xi, ri = x[i], radius[i]
+        apart_i = is_apart(v, radius, i, v_cut, r_cut, n_apart)
         n_up, n_low = 0, 0
         for j in range(x.shape[0]):  # in id order: the lists come out sorted
             reach = ri + radius[j] + pair_reach(skin, h, v[i], v[j])
             if j != i and (x[j] - xi).norm_sqr() < reach * reach:  # the test of list_ball
-                if owns(xi, x[j], i, j):
+                if owns(xi, x[j], i, j, apart_i, is_apart(v, radius, j, v_cut, r_cut, n_apart)):
                     upper[i, n_up] = j
                     n_up += 1
                 else:
