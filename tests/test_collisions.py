@@ -124,7 +124,7 @@ def test_grid_neighbours_equal_brute_force(name, fast):
     for i in range(len(x)):  # lists are sorted by id: sums over them do not depend on threads
         assert np.all(np.diff(upper[i, : n_upper[i]]) > 0)
         assert set(upper[i, : n_upper[i]].tolist()) == {j for (a, j) in expected if a == i and _owns(xs, i, j, apart)}
-        slots = lower[i, : n_lower[i]]  # where each lower pair is stored: owner · 2^bits + column
+        slots = lower[: n_lower[i], i]  # where each lower pair is stored: owner · 2^bits + column
         owners, entries = slots >> solver.slot_bits, slots & ((1 << solver.slot_bits) - 1)
         assert np.all(np.diff(owners) > 0)
         assert set(owners.tolist()) == {j for (a, j) in expected if a == i and _owns(xs, j, i, apart)}
@@ -141,6 +141,34 @@ def _owns(x, i, j, apart):
     d = x[j] - x[i]
     ahead = d[np.argmax(np.abs(d))]
     return bool(ahead > 0 or (ahead == 0 and j > i))
+
+
+def test_a_boulder_owns_none_of_its_pairs_so_the_impulse_table_stays_narrow():
+    # the upper table keeps each pair's impulse and geometry (72 bytes a pair in f64) and is as
+    # wide as the longest upper list, for every ball; a ball set apart (grid.APART_MAX: here a
+    # boulder five times the radius of the rest) owns none of its pairs with the others
+    # (grid.owns), so the ~100 balls within its reach each own one pair more, and its long list
+    # goes to the lower table (4 bytes a link). By the axis rule alone it would own about half of
+    # them (the balls ahead of it), and every ball's row would be that wide.
+    sc, x = pile_scene(4096)
+    centre = x.mean(axis=0)
+    x = np.vstack([x, centre])  # lists only: no step is taken with it inside the pile
+    r = np.full(len(x), 0.02)
+    r[-1] = 0.1
+    sim = tg.Simulation(sc, x=x, radius=r)
+    solver = sim.solver
+    solver.build(sim.state)
+    assert solver.n_apart == 1 and solver.reorder is False  # (storage index = ball id)
+    reach = r[-1] + r[:-1] + solver.skin
+    within = set(np.flatnonzero(np.linalg.norm(x[:-1] - centre, axis=1) < reach).tolist())
+    assert len(within) > 80
+    n_upper, n_lower = solver.n_upper.to_numpy(), solver.n_lower.to_numpy()
+    assert n_upper[-1] == 0 and n_lower[-1] == len(within)
+    owners = solver.lower.to_numpy()[: n_lower[-1], len(x) - 1] >> solver.slot_bits
+    assert set(owners.tolist()) == within
+    assert solver.capacity[0] <= 4  # a lattice ball's three pairs and the boulder's
+    ahead = sum(_owns(x, len(x) - 1, j, np.zeros(len(x), bool)) for j in within)
+    assert ahead > 30  # what the boulder would own by the axis rule
 
 
 def test_each_ball_of_a_jostled_lattice_owns_three_pairs():

@@ -57,6 +57,11 @@ def _size(nbytes: float) -> str:
     return f"{nbytes / 2**20:.1f} MiB" if nbytes < 2**30 else f"{nbytes / 2**30:.1f} GiB"
 
 
+LONG_LOWER = 16
+"""Longest lower list (see ``CollisionSolver.build``) that widens the lower table exactly; a
+longer one, a ball set apart (``grid.APART_MAX``) touching many, widens it with room to grow."""
+
+
 def steps_serially(n: int) -> bool:
     """Whether :class:`CollisionSolver` steps ``n`` balls serially by default: few balls, on the CPU
     (a GPU would run the serial loop on one slow thread)."""
@@ -166,8 +171,8 @@ class CollisionSolver:
             if self.upper is None or self.upper.shape[1] != self.capacity[0]:
                 self.upper = ti.ndarray(ti.i32, (n, self.capacity[0]))
                 self.lam = ti.ndarray(float, (n, self.capacity[0]))
-            if self.lower is None or self.lower.shape[1] != self.capacity[1]:
-                self.lower = ti.ndarray(ti.i32, (n, self.capacity[1]))
+            if self.lower is None or self.lower.shape[0] != self.capacity[1]:
+                self.lower = ti.ndarray(ti.i32, (self.capacity[1], n))  # column i: ball i's list (see grid)
             longest = grid.list_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, *self._hash,
                                            self.skin, state.v, h, int(fast), self.v_cut, self.r_cut, self.apart_ids,
                                            self.n_apart, int(scan_apart), self.bucket, self.rank, self.start, self.chunk_start,
@@ -175,8 +180,13 @@ class CollisionSolver:
                                            self.x_at_build, self.flag, self.reorder)
             if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
                 break
-            # widen to the longest list found (no power-of-two padding: memory follows the pile)
-            wider = (max(self.capacity[0], int(longest[0])), max(self.capacity[1], int(longest[1])))
+            # widen to the longest list found (no power-of-two padding: memory follows the pile), but
+            # for a lower list of more than LONG_LOWER links (4 bytes each): a boulder's, which grows
+            # as it sinks into a pile, with a quarter more room, so that it does not list and
+            # allocate twice every step
+            low = int(longest[1])
+            low += low // 4 if low > LONG_LOWER else 0
+            wider = (max(self.capacity[0], int(longest[0])), max(self.capacity[1], low))
             self._check_table_memory(state, wider)
             self.capacity = wider
         if n << self.slot_bits > 2**31:  # the largest slot, (n − 1)·2^bits + 2^bits − 1, must fit an i32

@@ -135,7 +135,7 @@ def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), 
     calm = rest_time[i]
     quiet = status[i] == AT_REST
     for m in range(n_lower[i]):
-        slot = lower[i, m]
+        slot = lower[m, i]
         j, k = owner_slot(slot, bits)  # the pair's owner j keeps its λ
         n, gap = pair_geometry(x, radius, i, j)
         P += resting_impulse(status, i, j, n, lam[j, k])
@@ -216,7 +216,7 @@ def impact_keys(i, upper: ti.template(), n_upper: ti.template(), lower: ti.templ
     marks (:func:`owned_pairs`), as the impulses are: no atomics."""
     key = 0
     for m in range(n_lower[i]):
-        slot = lower[i, m]
+        slot = lower[m, i]
         j, k = owner_slot(slot, bits)
         if impact[j, k] != 0:
             key = ti.max(key, slot + 1)
@@ -276,7 +276,7 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
     r = radius[i]
     inv_m = 1.0 / mass[i]
     for m in range(n_lower[i]):
-        slot = lower[i, m]
+        slot = lower[m, i]
         j, k = owner_slot(slot, bits)  # the pair's owner j stores it
         Jk = J[j, k]
         P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])

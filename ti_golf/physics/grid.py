@@ -229,9 +229,12 @@ def list_neighbours(
     the time step [s], ``v`` the velocities), each list sorted by id (the ``n_apart`` balls faster
     than ``v_cut`` or bigger than ``r_cut`` whose indices are in ``apart_ids``, see
     :func:`apart_balls`, own none of their pairs with the others, and with ``scan_apart`` they
-    are listed apart: see :func:`list_ball`): ``upper[i]`` holds the
-    neighbours whose pairs ball i owns (:func:`owns`), ``lower[i]`` the others (to be turned into
-    slots by :func:`link_lower` or :func:`link_and_carry`). One launch (a launch from Python costs
+    are listed apart: see :func:`list_ball`): row i of ``upper`` holds the neighbours whose pairs
+    ball i owns (:func:`owns`), column i of ``lower`` the others (to be turned into slots by
+    :func:`link_lower` or :func:`link_and_carry`). ``lower`` is stored transposed, (width, n), so
+    that the few first entries of consecutive balls lie side by side however wide one ball's list
+    makes it (a boulder's hundreds: with rows, every ball's list fell on cache lines and pages of
+    its own, and the sweeps' gathers took four times as long). One launch (a launch from Python costs
     about 0.1 ms; the grid took five). The counting sort: each ball's bucket and its rank among the
     balls of that bucket (an integer atomic add, counting in ``start``), the buckets' starts
     (:func:`bucket_starts`; ``start`` has one entry more than there are buckets, ``chunk_start`` is
@@ -252,7 +255,7 @@ def list_neighbours(
         n_up, n_low = list_ball(i, x, radius, inv_cell, mask, origin, stride, skin, v, h, fast, v_cut, r_cut,
                                 apart_ids, n_apart, scan_apart, start, sorted_ids, upper, lower, stored_sorted)
         n_upper[i] = ti.min(n_up, upper.shape[1])
-        n_lower[i] = ti.min(n_low, lower.shape[1])
+        n_lower[i] = ti.min(n_low, lower.shape[0])
         x_at_build[i] = x[i]
         ti.atomic_max(longest[0], n_up)
         ti.atomic_max(longest[1], n_low)
@@ -432,10 +435,10 @@ def list_pair(i, j, xi, xj, r_sum, skin, v: ti.template(), h, fast, apart_i, apa
     reach = r_sum + gap_reach
     if (xj - xi).norm_sqr() < reach * reach:
         if owns(xi, xj, i, j, apart_i, apart_j):
-            insert_sorted(upper, i, n_up, upper.shape[1], j)
+            insert_sorted(upper, i, n_up, upper.shape[1], j, False)
             n_up += 1
         else:
-            insert_sorted(lower, i, n_low, lower.shape[1], j)
+            insert_sorted(lower, i, n_low, lower.shape[0], j, True)
             n_low += 1
     return n_up, n_low
 
@@ -470,16 +473,25 @@ def owns(xi, xj, i, j, apart_i, apart_j):
 
 
 @ti.func
-def insert_sorted(table: ti.template(), i, n, capacity, j):
-    """Insert id j into row i of ``table`` holding n ids in ascending order (dropped when full)."""
+def insert_sorted(table: ti.template(), i, n, capacity, j, transposed: ti.template()):
+    """Insert id j into row i of ``table`` (column i when ``transposed``) holding n ids in ascending
+    order (dropped when full)."""
     if n < capacity:
         m = n
         while m > 0:  # the test apart: Taichi evaluates both sides of an `and` (no table[i, -1])
-            if table[i, m - 1] <= j:
-                break
-            table[i, m] = table[i, m - 1]
+            if ti.static(transposed):
+                if table[m - 1, i] <= j:
+                    break
+                table[m, i] = table[m - 1, i]
+            else:
+                if table[i, m - 1] <= j:
+                    break
+                table[i, m] = table[i, m - 1]
             m -= 1
-        table[i, m] = j
+        if ti.static(transposed):
+            table[m, i] = j
+        else:
+            table[i, m] = j
 
 
 @ti.func
@@ -504,7 +516,7 @@ def link_lower(upper: int_table, n_upper: int_array, lower: int_table, n_lower: 
     """Replace each lower neighbour j of every ball by the slot of the pair in j's upper list
     (see :func:`link_ball`)."""
     bits = slot_bits(upper.shape[1])
-    for i in range(lower.shape[0]):
+    for i in range(lower.shape[1]):
         link_ball(i, bits, upper, n_upper, lower, n_lower)
 
 
@@ -514,12 +526,12 @@ def link_ball(i, bits, upper: ti.template(), n_upper: ti.template(), lower: ti.t
     ``j · 2^bits + k`` with ``upper[j, k] = i`` (see :func:`slot_bits`): the ball that owns a
     pair stores its impulse there, and the other ball gathers it from there."""
     for m in range(n_lower[i]):
-        j = lower[i, m]
+        j = lower[m, i]
         slot = -1
         for k in range(n_upper[j]):
             if upper[j, k] == i:
                 slot = (j << bits) | k
-        lower[i, m] = slot
+        lower[m, i] = slot
 
 
 @ti.kernel
@@ -550,7 +562,7 @@ def link_and_carry(upper: int_table, n_upper: int_array, lower: int_table, n_low
     other reads). With ``moved`` the balls were stored in a new order since the stash: ball i was
     ball ``old_id[i]`` of the stashed lists."""
     bits = slot_bits(upper.shape[1])
-    for i in range(lower.shape[0]):
+    for i in range(lower.shape[1]):
         link_ball(i, bits, upper, n_upper, lower, n_lower)
         carry_ball(i, stashed, upper, n_upper, lam, old_id, moved)
 
@@ -621,7 +633,7 @@ def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, v: ti.templa
                     upper[i, n_up] = j
                     n_up += 1
                 else:
-                    lower[i, n_low] = j
+                    lower[n_low, i] = j
                     n_low += 1
         n_upper[i], n_lower[i] = n_up, n_low
         x_at_build[i] = xi
