@@ -348,8 +348,18 @@ def test_bench_collide_json(n, flags):
         assert result["baselines"]["parallel_ms_per_step"] > 0
 
 
+def test_bench_collide_with_a_boulder_times_the_pile_alone_too():
+    proc = ok(run_cli("bench", "collide", "--n", "512", "--steps", "3", "--boulder", "0.1", "--json"))
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert result["boulder_radius"] == 0.1 and result["n"] == 512  # the pile's balls (the boulder comes on top)
+    assert result["baselines"]["pile_alone_ms_per_step"] > 0
+    assert result["boulder_slowdown"] == pytest.approx(
+        result["ms_per_step"] / result["baselines"]["pile_alone_ms_per_step"], rel=1e-3)
+
+
 @pytest.mark.parametrize("option, value, fragment", [("--iterations", "0", "[1, 100]"), ("--steps", "0", "> 0 steps"),
-                                                     ("--n", "1", ">= 2 balls")])
+                                                     ("--n", "1", ">= 2 balls"), ("--boulder", "-0.1", "[0, 10] m"),
+                                                     ("--boulder", "nan", "[0, 10] m")])
 def test_bench_collide_bad_option_exits_2(option, value, fragment):
     proc = run_cli("bench", "collide", option, value)
     assert proc.returncode == 2, (proc.stdout, proc.stderr)

@@ -155,8 +155,24 @@ def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scen
     return scene, x
 
 
+def drop_boulder(scene: Scene, x: np.ndarray, radius: float,
+                 speed: float = 3.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A ball of ``radius`` [m], as dense as the scene's balls, 5 mm above the middle of the top
+    of the pile at ``x`` (n, 3) [m], falling at ``speed`` [m/s]: a boulder thrown into a ball pit.
+    Returns the positions, velocities, radii and masses of the n + 1 balls (the boulder last)."""
+    r, m = scene.ball.radius, scene.ball.mass
+    centre = [x[:, 0].mean(), x[:, 1].max() + r + 0.005 + radius, x[:, 2].mean()]
+    x = np.vstack([x, centre])
+    v = np.zeros_like(x)
+    v[-1, 1] = -speed
+    radii = np.full(len(x), r)
+    radii[-1] = radius
+    return x, v, radii, m * (radii / r) ** 3
+
+
 def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asleep: bool = False,
-                  shuffled: bool = False, iterations: int = 4, log: Callable[[str], None] = print) -> dict[str, Any]:
+                  shuffled: bool = False, iterations: int = 4, boulder: float = 0.0,
+                  log: Callable[[str], None] = print) -> dict[str, Any]:
     """Time the full collision step (flight forces, grid, ball–ball and plane contacts) on a dense pile.
 
     With ``terrain`` the floor is a flat height field, and the same pile on the plane floor is
@@ -168,6 +184,9 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     With ``shuffled`` the balls are numbered in a random order, as balls given in no spatial order
     are, and the same pile kept in that order (no reordering, see ``CollisionSolver.reorder``) is
     timed in the same run as the baseline (``reorder_speedup``).
+    With ``boulder`` [m] a ball of that radius is dropped onto the pile at 3 m/s (see
+    :func:`drop_boulder`; it lands within the untimed first steps and sinks in during the timed
+    ones), and the pile alone is timed in the same run as the baseline (``boulder_slowdown``).
     """
     import resource
 
@@ -178,11 +197,16 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     info = ensure_init()
     serial = steps_serially(n)
 
-    def pile(m: int, floor: bool, parallel: bool = False, reorder: bool | None = None) -> Simulation:
+    def pile(m: int, floor: bool, parallel: bool = False, reorder: bool | None = None,
+             with_boulder: bool = boulder > 0) -> Simulation:
         scene, x = pile_scene(m, floor, iterations)
         if shuffled:
             x = x[np.random.default_rng(0).permutation(m)]
-        sim = Simulation(scene, x=x, track=False)  # a pile keeps no flight records, as a scene's [[blocks]]
+        v = radius = mass = None
+        if with_boulder:
+            x, v, radius, mass = drop_boulder(scene, x, boulder)
+        # a pile keeps no flight records, as a scene's [[blocks]]
+        sim = Simulation(scene, x=x, v=v, radius=radius, mass=mass, track=False)
         if parallel or reorder is not None:
             sim.solver = CollisionSolver(sim.model, serial=False if parallel else None, reorder=reorder)
         return sim
@@ -196,8 +220,9 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
             del warm
     base_rss = _rss_bytes()
 
-    def timed(floor: bool, sleeping: bool, parallel: bool = False, reorder: bool | None = None) -> tuple[Any, float]:
-        sim = pile(n, floor, parallel, reorder)
+    def timed(floor: bool, sleeping: bool, parallel: bool = False, reorder: bool | None = None,
+              with_boulder: bool = boulder > 0) -> tuple[Any, float]:
+        sim = pile(n, floor, parallel, reorder, with_boulder)
         sim.step(10)  # settle the first contacts, build the lists
         if sleeping:
             put_to_sleep(sim)
@@ -219,6 +244,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     awake_seconds = timed(terrain, False)[1] if asleep else None
     parallel_seconds = timed(terrain, asleep, parallel=True)[1] if serial else None
     in_id_order_seconds = timed(terrain, asleep, reorder=False)[1] if shuffled and not serial else None
+    alone_seconds = timed(terrain, asleep, with_boulder=False)[1] if boulder > 0 else None
     gather_rate = bare_gather_rate(xn)
     result = {
         "benchmark": "collide",
@@ -236,6 +262,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         "floor": "terrain" if terrain else "plane",
         "asleep": asleep,
         "shuffled": shuffled,
+        "boulder_radius": boulder,
         "reordered": sim_reordered,
         "peak_rss_bytes": peak,
         # the OS's high-water mark (ru_maxrss) can lag the current RSS by a few pages: no negative growth
@@ -255,6 +282,10 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         result["baselines"]["not_reordered_ms_per_step"] = 1e3 * in_id_order_seconds / steps
         result["reorder_speedup"] = in_id_order_seconds / seconds
         log(f"stored in the grid's order vs left in random id order: {result['reorder_speedup']:.2f}x faster per step")
+    if alone_seconds is not None:
+        result["baselines"]["pile_alone_ms_per_step"] = 1e3 * alone_seconds / steps
+        result["boulder_slowdown"] = seconds / alone_seconds
+        log(f"with a {boulder:g} m boulder vs the pile alone: {result['boulder_slowdown']:.2f}x the time per step")
     if parallel_seconds is not None:
         result["baselines"]["parallel_ms_per_step"] = 1e3 * parallel_seconds / steps
         result["serial_speedup"] = parallel_seconds / seconds

@@ -103,6 +103,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the pile's balls numbered in a random order, as balls given in no spatial order are "
                          "(the same pile left in that order, not stored in the grid's order, is timed too, as "
                          "baseline)")
+    bc.add_argument("--boulder", type=float, default=0.0, metavar="R",
+                    help="a ball of radius R [m], as dense as the golf balls, dropped at 3 m/s onto the pile (the "
+                         "pile alone is timed too, as baseline)")
     bc.add_argument("--iterations", type=int, default=4,
                     help="Jacobi sweeps per step (default 4, the scenes' default; a deep pile at rest needs 8)")
     bc.add_argument("--json", action="store_true", help="end with one line of JSON")
@@ -360,8 +363,10 @@ def _cmd_bench(args: argparse.Namespace) -> int:
             raise ConfigError("--n" if args.n < 2 else "--steps", None, "must be >= 2 balls and > 0 steps")
         if not 1 <= args.iterations <= 100:
             raise ConfigError("--iterations", None, f"must be in [1, 100] (got {args.iterations})")
+        if not 0.0 <= args.boulder <= 10.0:  # (also false for NaN)
+            raise ConfigError("--boulder", None, f"must be a radius in [0, 10] m (got {args.boulder})")
         result = bench_collide(n=args.n, steps=args.steps, terrain=args.terrain, asleep=args.asleep,
-                               shuffled=args.shuffled, iterations=args.iterations)
+                               shuffled=args.shuffled, iterations=args.iterations, boulder=args.boulder)
     else:
         if not args.dt > 0:
             raise ConfigError("--dt", None, f"must be > 0 (got {args.dt})")
