@@ -147,8 +147,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
                 "Jacobi relaxation of resting ball–ball impulses (1: full; lower is steadier in dense piles)",
                 lambda v: None if 0 < v <= 1 else "must be in (0, 1]", "(0, 1]"),
             Key("skin", "float", 0.1, "-",
-                "neighbour-list skin as a fraction of the largest radius, bar a few much bigger balls (lists are rebuilt when "
-                "a ball moves skin/2)",
+                "neighbour-list skin as a fraction of the largest radius, bar a few much bigger balls "
+                "(lists are rebuilt when a ball moves skin/2)",
                 lambda v: None if 0 < v <= 2 else "must be in (0, 2]", "(0, 2]"),
             Key("v_bounce", "float", 0.05, "m/s",
                 "normal approach speeds below v_bounce + 2|g|h are treated as inelastic (no micro-bounces) "
