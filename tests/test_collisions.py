@@ -248,8 +248,9 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(tmp_path):
     # is shot into the pile's top: on the CPU the grid lists it apart (grid.APART_MAX), testing it
     # against all 70,001 balls in one thread, which on Vulkan would stop at 65,535 (its
     # neighbours, in the top layers, come last); there the cells are widened for it instead. On
-    # both it owns none of its pairs (grid.owns). Both must list the same pairs and take the same step; that pile is kept in id order, since the
-    # grid's order follows the cells, and the order of a ball's simultaneous impacts the storage.
+    # both it owns none of its pairs (grid.owns). Both must list the same pairs and take the same
+    # step; that pile is kept in id order, since the grid's order follows the cells, and the order
+    # of a ball's simultaneous impacts the storage.
     out = tmp_path / "gpu.npz"
     script = tmp_path / "gpu_pile.py"
     script.write_text(_GPU_PILE)

@@ -175,9 +175,9 @@ class CollisionSolver:
                 self.lower = ti.ndarray(ti.i32, (self.capacity[1], n))  # column i: ball i's list (see grid)
             longest = grid.list_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, *self._hash,
                                            self.skin, state.v, h, int(fast), self.v_cut, self.r_cut, self.apart_ids,
-                                           self.n_apart, int(scan_apart), self.bucket, self.rank, self.start, self.chunk_start,
-                                           self.sorted_ids, self.upper, self.n_upper, self.lower, self.n_lower,
-                                           self.x_at_build, self.flag, self.reorder)
+                                           self.n_apart, int(scan_apart), self.bucket, self.rank, self.start,
+                                           self.chunk_start, self.sorted_ids, self.upper, self.n_upper, self.lower,
+                                           self.n_lower, self.x_at_build, self.flag, self.reorder)
             if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
                 break
             # widen to the longest list found (no power-of-two padding: memory follows the pile), but

@@ -428,9 +428,9 @@ def collision_step(
     type) from ``t0`` in f64, as the caller advances it between parallel steps; the
     neighbour lists are rebuilt in the kernel by testing every pair (:func:`grid.relist_all_pairs`,
     ``skin`` [m]; the balls faster than ``v_cut`` [m/s] or bigger than ``r_cut`` [m] own no pair
-    with the others, as in the grid's lists: see :func:`grid.owns`) whenever ``flag[0]`` asks for it at the start of a step, so the tables must be
-    n − 1 wide; new positions are copied to ``x`` after every step. Returns how many times the
-    lists were rebuilt.
+    with the others, as in the grid's lists: see :func:`grid.owns`) whenever ``flag[0]`` asks for
+    it at the start of a step, so the tables must be n − 1 wide; new positions are copied to ``x``
+    after every step. Returns how many times the lists were rebuilt.
 
     With a terrain (``terrain.on``; ``heights`` its grid, else any 2×2 array; ``lam_plane`` then
     has a column more than there are planes) a ball that leaves the grid's extent or falls below
