@@ -17,9 +17,10 @@ h·|v_a − v_b| (:func:`pair_reach`), and the cells are widened for the fastest
 (6 m/s is 3 mm per 0.5 ms step, against a skin of 2 mm for golf balls), would meet a ball
 missing from its lists only in the next step, after flying into it. A few balls much faster or
 bigger than the rest (at most ``APART_MAX``: moving more than a diameter in two steps, see
-:func:`fast_speed`, or more than twice the size of the rest, see :func:`size_cut`) are listed
-apart instead on CPU backends, each tested against every ball (:func:`list_ball`), so that the
-cells stay small for the rest.
+:func:`fast_speed`, or more than twice the size of the rest, see :func:`size_cut`) are set
+apart: they own none of their pairs with the others (:func:`owns`), and on CPU backends they are
+listed apart, each tested against every ball (:func:`list_ball`), so that the cells stay small
+for the rest.
 """
 
 import math
@@ -86,19 +87,19 @@ own none of their pairs with the others (see :func:`owns`) and whose pairs are l
 ball; with more, the cells are sized for the fastest pair and the largest ball instead
 (:func:`cell_size`): a thousand balls hit at once are spread out, and big cells cost them
 little. Their pairs are listed ball by ball on CPU backends only (``CollisionSolver.build``): a
-ball listed apart tests every ball in one thread, and Taichi's Vulkan backend stops the loops of a thread after
-65,535 iterations in all, nested or not, without a word (measured with Taichi 1.7.4 and
+ball listed apart tests every ball in one thread, and Taichi's Vulkan backend stops the loops of
+a thread after 65,535 iterations in all, nested or not, without a word (measured with Taichi 1.7.4 and
 lavapipe: the ball shot into the 70,001-ball pile of the GPU test lost 7 of its pairs); on a GPU,
 many threads make wide cells cheap anyway."""
 
 
 def size_cut(radius: np.ndarray) -> tuple[float, float]:
     """(r_cut, r_ref) [m] for balls of ``radius`` (n,) [m]: a ball bigger than r_cut, twice the
-    radius of the (``APART_MAX`` + 1)-th biggest ball, is listed apart (at most ``APART_MAX`` of
+    radius of the (``APART_MAX`` + 1)-th biggest ball, is set apart (at most ``APART_MAX`` of
     them), and r_ref, the largest radius of the other balls, sizes the cells and the skin. So a
     boulder dropped into a pit of golf balls does not make every cell as wide as the boulder (a
-    0.5 m ball among 131,072 2-cm balls made every ball test about 15,000 candidates, 20 s per
-    rebuild). Without such outliers, r_cut is infinite and r_ref the largest radius."""
+    0.5 m ball on a pile of 131,072 2-cm balls made a rebuild of the lists take 20 s, against
+    0.1 s). Without such outliers, r_cut is infinite and r_ref the largest radius."""
     r = np.sort(np.asarray(radius, dtype=float))[::-1]
     if len(r) <= APART_MAX:
         return math.inf, float(r[0])
@@ -110,7 +111,7 @@ def size_cut(radius: np.ndarray) -> tuple[float, float]:
 
 def fast_speed(r_ref: float, skin: float, h: float) -> float:
     """The speed [m/s] above which a ball is *fast*: 2h·|v| exceeds the larger of the skin and the
-    largest diameter ``2·r_ref`` [m] of the balls not listed apart for their size (see
+    largest diameter ``2·r_ref`` [m] of the balls not set apart for their size (see
     :func:`size_cut`), so a pair with it could close by more than that within a step (``h`` [s]).
     Below it, cells are at most 2·r_ref + max(skin, 2·r_ref) wide."""
     return max(skin, 2.0 * r_ref) / (2.0 * h)
@@ -119,8 +120,8 @@ def fast_speed(r_ref: float, skin: float, h: float) -> float:
 @ti.kernel
 def apart_balls(v: vec3_array, radius: float_array, v_cut: real, r_cut: real,
                 apart_ids: int_array) -> ti.types.vector(3, real):
-    """(the greatest speed [m/s], the greatest speed of the balls not listed apart, how many are
-    listed apart): the balls faster than ``v_cut`` or bigger than ``r_cut`` (see
+    """(the greatest speed [m/s], the greatest speed of the balls not set apart, how many are set
+    apart): the balls faster than ``v_cut`` or bigger than ``r_cut`` (see
     :func:`is_apart`). The indices of the first ``apart_ids.shape[0] − 1`` of them go to
     ``apart_ids`` in no particular order, their count to its last entry (integer atomics; float
     atomic maxima, the same on every thread order)."""
@@ -618,7 +619,7 @@ def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, v: ti.templa
     n_apart = 0
     for i in range(x.shape[0]):
         stash_ball(i, upper, n_upper, lam, scratch)
-        if v[i].norm_sqr() > v_cut * v_cut or radius[i] > r_cut:  # as apart_balls counts them
+        if is_apart(v, radius, i, v_cut, r_cut, 1):  # as apart_balls counts them
             n_apart += 1
     if n_apart > APART_MAX:
         n_apart = 0
