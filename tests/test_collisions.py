@@ -850,6 +850,33 @@ def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypa
     assert max(sim.solver.capacity) >= 400
 
 
+def test_a_build_past_the_vulkan_loop_cap_stops_the_run_and_names_the_ball():
+    # Taichi's Vulkan backend stops a thread's loops after grid.LOOP_CAP iterations without a word.
+    # There the cells are sized for the biggest ball, and around a boulder in a large pile they hold
+    # more balls than that: listing one ball's neighbours would stop short and lose pairs. The grid
+    # bounds each thread's iterations (candidates, the 18 bucket ranges and the sorted insertions'
+    # shifts), and the solver stops the run with a SimulationError naming the ball that sizes the
+    # cells. Here the cap is set low: the boulder's thread passes it (it tests all 401 balls on a
+    # CPU, and on a GPU every thread does), the lattice's threads (about 30 candidates) do not.
+    pile, x = pile_scene(400)
+    x = np.vstack([x, [[x[:, 0].mean(), x[:, 1].max() + 0.3, x[:, 2].mean()]]])
+    r = np.full(len(x), 0.02)
+    r[-1] = 0.2
+    sim = tg.Simulation(pile, x=x, radius=r, track=False)
+    sim.solver = CollisionSolver(sim.model, serial=False)
+    assert sim.solver.loop_cap == (grid.LOOP_CAP if tg.init().arch == "vulkan" else None)
+    sim.solver.loop_cap = 300
+    with pytest.raises(tg.SimulationError, match=r"Vulkan backend stops .* Ball 400 reaches farthest \(radius 0.2 m"
+                       ) as err:
+        sim.step(1)
+    assert err.value.balls == [400]
+    alone = tg.Simulation(pile, x=x[:-1], track=False)
+    alone.solver = CollisionSolver(alone.model, serial=False)
+    alone.solver.loop_cap = 300
+    alone.step(2)
+    assert alone.solver.rebuilds >= 1
+
+
 def test_the_break_shot_adds_no_kinetic_energy():
     # The cue ball reaches the rack of 15 touching balls after about 165 ms; the break is a cascade
     # of simultaneous impacts (e = 0.92, friction on the table): it may only lose kinetic energy

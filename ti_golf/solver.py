@@ -12,7 +12,7 @@ from .errors import SimulationError
 from .model import Model
 from .physics import collide, grid
 from .physics.types import vec3
-from .runtime import np_float, on_cpu, plain_compile
+from .runtime import ensure_init, np_float, on_cpu, plain_compile
 from .state import State
 
 SERIAL_MAX_BALLS = 256
@@ -83,6 +83,8 @@ class CollisionSolver:
         n_apart: how many balls, much faster or bigger than the rest, the last build set apart
             (``grid.APART_MAX``): they own none of their pairs with the others, and on CPU
             backends they are listed apart.
+        loop_cap: on Taichi's Vulkan backend, the loop iterations after which a thread stops (see
+            ``grid.LOOP_CAP``): a build that needs more stops the run; ``None`` elsewhere.
         capacity: widths of the (upper, lower) neighbour tables (they grow when a list overflows).
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
         serial: whether steps run serially, many per launch, with the lists rebuilt in the kernel
@@ -137,6 +139,8 @@ class CollisionSolver:
         self.flag = ti.ndarray(ti.i32, 2)
         self.apart_ids = ti.ndarray(ti.i32, grid.APART_MAX + 1)  # the balls listed apart (grid.apart_balls), count
         self.n_apart = 0
+        # the loop iterations after which a thread stops its loops without a word (grid.LOOP_CAP)
+        self.loop_cap = grid.LOOP_CAP if ensure_init().arch == "vulkan" else None
         self._valid = False
         self._rebuild = True
         self._order: np.ndarray | None = None  # the state's storage order at the last build (see pairs)
@@ -189,6 +193,7 @@ class CollisionSolver:
             wider = (max(self.capacity[0], int(longest[0])), max(self.capacity[1], low))
             self._check_table_memory(state, wider)
             self.capacity = wider
+        self._check_loop_cap(state, int(longest[2]))
         if n << self.slot_bits > 2**31:  # the largest slot, (n − 1)·2^bits + 2^bits − 1, must fit an i32
             raise SimulationError(f"{n} balls with up to {self.capacity[0]} neighbours each are more than the "
                                   f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)")
@@ -219,19 +224,39 @@ class CollisionSolver:
         avail = available_memory()
         if avail is None or need <= 0.5 * avail:
             return
+        ball, farthest = self._farthest_reaching(state)
+        raise SimulationError(
+            f"the neighbour lists would take {_size(need)}, more than half the {_size(avail)} of memory "
+            f"available: a ball has {max(widths):,} balls within reach of one step, and the pair tables are as "
+            f"wide as the longest list. {farthest}; lower world.dt, or that ball's speed or radius",
+            [ball],
+        )
+
+    def _check_loop_cap(self, state: State, loops: int) -> None:
+        """Raise :class:`SimulationError` when a build ran a thread's loops past ``loop_cap`` (see
+        ``grid.LOOP_CAP``; ``loops``: the bound :func:`grid.list_neighbours` returns): on Taichi's
+        Vulkan backend that thread stopped without a word, and pairs are missing from the lists."""
+        if self.loop_cap is None or loops <= self.loop_cap:
+            return
+        ball, farthest = self._farthest_reaching(state)
+        raise SimulationError(
+            f"listing the neighbours of a ball took up to {loops:,} loop iterations in one thread, and Taichi's "
+            f"Vulkan backend stops a thread's loops after {self.loop_cap:,} without a word: pairs would be "
+            f"missed. The cells are {self.cell:.4g} m wide for the largest ball and the fastest pair. "
+            f"{farthest}; run on the CPU or CUDA backend (--arch), or lower that ball's radius or speed",
+            [ball],
+        )
+
+    def _farthest_reaching(self, state: State) -> tuple[int, str]:
+        """(id, a sentence naming it) of the ball that reaches farthest within a step (r + h·|v|):
+        the one that widens the lists, and on a GPU the cells."""
         h = self._model.dt
         speed = np.linalg.norm(state.v.to_numpy(), axis=1)
         radius = self._model.radius.to_numpy()
         k = int(np.argmax(radius + h * speed))
         ball = int(state.order[k]) if state.order is not None else k
-        raise SimulationError(
-            f"the neighbour lists would take {_size(need)}, more than half the {_size(avail)} of memory "
-            f"available: a ball has {max(widths):,} balls within reach of one step, and the pair tables are as "
-            f"wide as the longest list. Ball {ball} reaches farthest (radius {radius[k]:.4g} m, speed "
-            f"{speed[k]:.4g} m/s: {h * speed[k]:.4g} m per step of {h:g} s); lower world.dt, or that ball's "
-            "speed or radius",
-            [ball],
-        )
+        return ball, (f"Ball {ball} reaches farthest (radius {radius[k]:.4g} m, speed {speed[k]:.4g} m/s: "
+                      f"{h * speed[k]:.4g} m per step of {h:g} s)")
 
     def _store_in_grid_order(self, state: State) -> None:
         """Gather every per-ball array of ``state`` and the model into the grid's order (see

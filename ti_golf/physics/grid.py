@@ -93,6 +93,14 @@ lavapipe: the ball shot into the 70,001-ball pile of the GPU test lost 7 of its 
 many threads make wide cells cheap anyway."""
 
 
+LOOP_CAP = 65_535
+"""Loop iterations after which a thread of Taichi's Vulkan backend stops all its loops, nested or
+not, without a word (measured with Taichi 1.7.4 and lavapipe: 70,001 iterations ran 65,535 flat
+and 65,505 nested in blocks). Listing a ball's neighbours loops over every ball of its 27 cells,
+so a build whose largest bound (:func:`list_neighbours`) exceeds it on that backend has lost
+pairs, and ``CollisionSolver.build`` stops the run instead."""
+
+
 def size_cut(radius: np.ndarray) -> tuple[float, float]:
     """(r_cut, r_ref) [m] for balls of ``radius`` (n,) [m]: a ball bigger than r_cut, twice the
     radius of the (``APART_MAX`` + 1)-th biggest ball, is set apart (at most ``APART_MAX`` of
@@ -224,7 +232,7 @@ def list_neighbours(
     x_at_build: vec3_array,
     longest: int_array,
     stored_sorted: ti.template(),
-) -> ti.types.vector(2, ti.i32):
+) -> ti.types.vector(3, ti.i32):
     """Sort the balls into the hash grid, then list every ball's neighbours closer than
     r_a + r_b + :func:`pair_reach` (with ``fast`` 0, the skin: see :func:`cell_size`; ``h`` is
     the time step [s], ``v`` the velocities), each list sorted by id (the ``n_apart`` balls faster
@@ -241,26 +249,29 @@ def list_neighbours(
     (:func:`bucket_starts`; ``start`` has one entry more than there are buckets, ``chunk_start`` is
     its scratch), then the ball ids grouped by bucket: ``sorted_ids[start[b] : start[b + 1]]`` are
     the balls of bucket b. Returns the longest upper and lower lists found, also left in
-    ``longest[0:2]`` (they may exceed the tables' widths: the caller then rebuilds wider).
+    ``longest[0:2]`` (they may exceed the tables' widths: the caller then rebuilds wider), and a
+    bound on the most loop iterations a ball's thread ran (see ``LOOP_CAP``).
 
     With ``stored_sorted`` the balls are stored in bucket order already (:func:`storage_order`,
     then every per-ball array gathered into that order): ball p is the p-th of the sort, ``start``
     still holds the buckets' starts, and the sort is skipped (``sorted_ids`` is not read)."""
     longest[0], longest[1] = 0, 0
+    most_loops = 0
     if ti.static(not stored_sorted):
         counting_sort(x, inv_cell, mask, origin, stride, bucket, rank, start, chunk_start, sorted_ids)
     for idx in range(x.shape[0]):
         i = idx  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         if ti.static(not stored_sorted):
             i = sorted_ids[idx]
-        n_up, n_low = list_ball(i, x, radius, inv_cell, mask, origin, stride, skin, v, h, fast, v_cut, r_cut,
-                                apart_ids, n_apart, scan_apart, start, sorted_ids, upper, lower, stored_sorted)
+        n_up, n_low, loops = list_ball(i, x, radius, inv_cell, mask, origin, stride, skin, v, h, fast, v_cut, r_cut,
+                                       apart_ids, n_apart, scan_apart, start, sorted_ids, upper, lower, stored_sorted)
         n_upper[i] = ti.min(n_up, upper.shape[1])
         n_lower[i] = ti.min(n_low, lower.shape[0])
         x_at_build[i] = x[i]
         ti.atomic_max(longest[0], n_up)
         ti.atomic_max(longest[1], n_low)
-    return ti.Vector([longest[0], longest[1]])
+        ti.atomic_max(most_loops, loops)
+    return ti.Vector([longest[0], longest[1], most_loops])
 
 
 @ti.func
@@ -376,7 +387,8 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin
               h, fast, v_cut, r_cut, apart_ids: ti.template(), n_apart, scan_apart, start: ti.template(),
               sorted_ids: ti.template(), upper: ti.template(), lower: ti.template(), stored_sorted: ti.template()):
     """Ball i's neighbours into its rows of ``upper`` and ``lower`` in id order (as many as fit;
-    ``stored_sorted``: see :func:`list_neighbours`). Returns how many there are (n_upper, n_lower).
+    ``stored_sorted``: see :func:`list_neighbours`). Returns how many there are (n_upper, n_lower)
+    and a bound on the iterations of the thread's loops (see ``LOOP_CAP``).
 
     The balls in its own and the 26 adjacent cells, but, with ``scan_apart``, for the balls
     listed apart (:func:`is_apart`): those are tested by every ball, and a ball listed apart tests
@@ -389,7 +401,9 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin
     ri = radius[i]
     n_up, n_low = 0, 0
     apart_i = is_apart(v, radius, i, v_cut, r_cut, n_apart)
+    tested = 0  # candidates tested, for the bound on the thread's loop iterations (see LOOP_CAP)
     if apart_i and scan_apart != 0:
+        tested = x.shape[0]
         for j in range(x.shape[0]):
             if j != i:
                 n_up, n_low = list_pair(i, j, xi, x[j], ri + radius[j], skin, v, h, 1, True,
@@ -404,6 +418,7 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin
                 lo, hi = start[b], start[ti.min(b + 3, mask + 1)]
                 if part == 1:
                     lo, hi = start[0], start[ti.max(b + 3 - (mask + 1), 0)]
+                tested += hi - lo
                 for k in range(lo, hi):
                     j = k
                     if ti.static(not stored_sorted):
@@ -420,7 +435,9 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin
             j = apart_ids[f]
             n_up, n_low = list_pair(i, j, xi, x[j], ri + radius[j], skin, v, h, 1, False, True, upper, lower, n_up,
                                     n_low)
-    return n_up, n_low
+        tested += 18 + n_apart * scan_apart
+    # the insertions' shifts: at most n(n − 1)/2 for a list of n
+    return n_up, n_low, tested + (n_up * n_up + n_low * n_low) // 2
 
 
 @ti.func
