@@ -270,26 +270,24 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     }
     result["baselines"] = {"bare_gather_balls_per_s": gather_rate}
     result["step_cost_in_bare_gathers"] = gather_rate / result["ball_steps_per_s"]
-    if plane_seconds is not None:
-        result["baselines"]["plane_floor_ms_per_step"] = 1e3 * plane_seconds / steps
-        result["terrain_overhead"] = seconds / plane_seconds - 1.0
-        log(f"terrain floor vs plane floor: {100 * result['terrain_overhead']:+.1f} % time per step")
-    if awake_seconds is not None:
-        result["baselines"]["awake_ms_per_step"] = 1e3 * awake_seconds / steps
-        result["asleep_speedup"] = awake_seconds / seconds
-        log(f"the pile asleep vs awake: {result['asleep_speedup']:.2f}x faster per step")
-    if in_id_order_seconds is not None:
-        result["baselines"]["not_reordered_ms_per_step"] = 1e3 * in_id_order_seconds / steps
-        result["reorder_speedup"] = in_id_order_seconds / seconds
-        log(f"stored in the grid's order vs left in random id order: {result['reorder_speedup']:.2f}x faster per step")
-    if alone_seconds is not None:
-        result["baselines"]["pile_alone_ms_per_step"] = 1e3 * alone_seconds / steps
-        result["boulder_slowdown"] = seconds / alone_seconds
-        log(f"with a {boulder:g} m boulder vs the pile alone: {result['boulder_slowdown']:.2f}x the time per step")
-    if parallel_seconds is not None:
-        result["baselines"]["parallel_ms_per_step"] = 1e3 * parallel_seconds / steps
-        result["serial_speedup"] = parallel_seconds / seconds
-        log(f"stepped serially vs one parallel launch per step: {result['serial_speedup']:.1f}x faster per step")
+    # the baselines timed in the same run: (its seconds, key of its ms per step, key of the ratio, the
+    # ratio from (seconds, its seconds), the line that says it)
+    for base, key, name, ratio, say in (
+        (plane_seconds, "plane_floor_ms_per_step", "terrain_overhead", lambda s, b: s / b - 1.0,
+         lambda q: f"terrain floor vs plane floor: {100 * q:+.1f} % time per step"),
+        (awake_seconds, "awake_ms_per_step", "asleep_speedup", lambda s, b: b / s,
+         lambda q: f"the pile asleep vs awake: {q:.2f}x faster per step"),
+        (in_id_order_seconds, "not_reordered_ms_per_step", "reorder_speedup", lambda s, b: b / s,
+         lambda q: f"stored in the grid's order vs left in random id order: {q:.2f}x faster per step"),
+        (alone_seconds, "pile_alone_ms_per_step", "boulder_slowdown", lambda s, b: s / b,
+         lambda q: f"with a {boulder:g} m boulder vs the pile alone: {q:.2f}x the time per step"),
+        (parallel_seconds, "parallel_ms_per_step", "serial_speedup", lambda s, b: b / s,
+         lambda q: f"stepped serially vs one parallel launch per step: {q:.1f}x faster per step"),
+    ):
+        if base is not None:
+            result["baselines"][key] = 1e3 * base / steps
+            result[name] = ratio(seconds, base)
+            log(say(result[name]))
     log(f"ti_golf collide: {n} balls, {result['ms_per_step']:.2f} ms/step, {result['ball_steps_per_s']:.3g} ball-steps/s, "
         f"{result['contacts_per_ball']:.2f} contacts/ball, deepest overlap {100 * result['deepest_overlap']:.2g} % "
         f"of a radius, peak RSS {peak / 2**20:.0f} MiB "
