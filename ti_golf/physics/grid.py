@@ -386,9 +386,9 @@ def bucket_starts(start: ti.template(), chunk_start: ti.template()):
 def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin, stride, skin, v: ti.template(),
               h, fast, v_cut, r_cut, apart_ids: ti.template(), n_apart, scan_apart, start: ti.template(),
               sorted_ids: ti.template(), upper: ti.template(), lower: ti.template(), stored_sorted: ti.template()):
-    """Ball i's neighbours into its rows of ``upper`` and ``lower`` in id order (as many as fit;
-    ``stored_sorted``: see :func:`list_neighbours`). Returns how many there are (n_upper, n_lower)
-    and a bound on the iterations of the thread's loops (see ``LOOP_CAP``).
+    """Ball i's neighbours into its row of ``upper`` and its column of ``lower`` in id order (as
+    many as fit; ``stored_sorted``: see :func:`list_neighbours`). Returns how many there are
+    (n_upper, n_lower) and a bound on the iterations of the thread's loops (see ``LOOP_CAP``).
 
     The balls in its own and the 26 adjacent cells, but, with ``scan_apart``, for the balls
     listed apart (:func:`is_apart`): those are tested by every ball, and a ball listed apart tests
