@@ -147,7 +147,7 @@ def _owns(x, i, j, apart):
 
 
 def test_a_boulder_owns_none_of_its_pairs_so_the_impulse_table_stays_narrow():
-    # the upper table keeps each pair's impulse and geometry (72 bytes a pair in f64) and is as
+    # the upper table keeps each pair's impulse and geometry (52 bytes a pair in f64) and is as
     # wide as the longest upper list, for every ball; a ball set apart (grid.APART_MAX: here a
     # boulder five times the radius of the rest) owns none of its pairs with the others
     # (grid.owns), so the ~100 balls within its reach each own one pair more, and its long list

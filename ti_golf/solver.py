@@ -31,10 +31,10 @@ REORDER_MIN_BALLS = 8192
 
 def table_bytes(n: int, widths: tuple[int, int]) -> int:
     """Bytes of the neighbour and pair tables of ``n`` balls with lists ``widths`` (upper, lower)
-    wide: per upper entry the neighbour, its resting impulse, the sweep's 7-vector (impulse,
-    normal, gap) and the impact mark; per lower entry a slot; per ball its first impact."""
+    wide: per upper entry the neighbour, its resting impulse and the sweep's 5-vector (impulse,
+    inverse distance, gap); per lower entry a slot."""
     f = np.dtype(np_float()).itemsize
-    return n * (widths[0] * (8 + 8 * f) + widths[1] * 4 + 4)
+    return n * (widths[0] * (4 + 6 * f) + widths[1] * 4)
 
 
 def available_memory() -> int | None:
@@ -133,7 +133,8 @@ class CollisionSolver:
         self.calm = ti.ndarray(float, n)  # least rest timer of each ball and the balls it touches [s]
         self.clear = ti.ndarray(float, n)  # least gap of each ball to the planes [m] (collide.plane_clearance)
         self.n_upper, self.n_lower = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
-        self.upper = self.lower = self.lam = self.impulse = self.impact = None
+        self.upper = self.lower = self.lam = self.impulse = None
+        self.impact = ti.ndarray(ti.i32, n)  # each ball's first impact in a sweep (collide.impact_keys)
         # resting impulses of the planes and (one column more) the terrain
         self.lam_plane = ti.ndarray(float, (n, max(1, len(model.plane_p) + (model.terrain is not None))))
         self.flag = ti.ndarray(ti.i32, 2)
@@ -206,11 +207,9 @@ class CollisionSolver:
             grid.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
             grid.clear2(self.lam)
         if self.impulse is None or self.impulse.shape != self.upper.shape:
-            self.impulse = self.impact = None  # free the old tables before allocating
-            # each pair's impulse, normal, and gap or projection in a sweep (collide.owned_pairs)
-            self.impulse = ti.ndarray(ti.types.vector(7, float), self.upper.shape)
-            # whether a pair's impulse is an impact, and each ball's first impact (collide.impact_keys)
-            self.impact = ti.ndarray(ti.i32, (n, self.upper.shape[1] + 1))
+            self.impulse = None  # free the old table before allocating
+            # each pair's impulse, inverse distance, and gap or projection in a sweep (collide.owned_pairs)
+            self.impulse = ti.ndarray(ti.types.vector(5, float), self.upper.shape)
         self.rebuilds += 1
         self._valid = True
 

@@ -45,8 +45,8 @@ from .grid import int_table, owner_slot, real_table, relist_all_pairs, slot_bits
 from .integrate import IN_FLIGHT, step_free, track_flight
 from .kernels import lane_state
 from .terrain import outside, same_cell, surface, surface_contact, terrain_clearance, terrain_position
-from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, real,
-                    vec3, vec3_array, vec7_table)
+from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, pair_table,
+                    real, vec3, vec3_array)
 
 QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
 FAR = 1e30  # the surface clearance of a ball when there are no planes and no terrain (see surface_clearance)
@@ -55,13 +55,23 @@ NEAR = -1.0  # the surface clearance of a ball resting on a plane or the terrain
 
 @ti.func
 def pair_geometry(x: ti.template(), radius: ti.template(), a, b):
-    """Unit normal from ball b to ball a (zero when their centres coincide) and their surface gap [m]."""
-    d = x[a] - x[b]
-    dist = d.norm()
-    n = vec3(0.0)
+    """(1/|x_a − x_b| [1/m], zero when the centres of balls a and b coincide, and their surface
+    gap [m]); :func:`pair_normal` turns the first into the unit normal."""
+    dist = (x[a] - x[b]).norm()
+    inv = 0.0
     if dist > 0.0:
-        n = d * (1.0 / dist)
-    return n, dist - radius[a] - radius[b]
+        inv = 1.0 / dist
+    return inv, dist - radius[a] - radius[b]
+
+
+@ti.func
+def pair_normal(x_a, x_b, inv):
+    """Unit normal from ball b at ``x_b`` to ball a at ``x_a`` [m] (zero when their centres
+    coincide), from their inverse distance ``inv`` (:func:`pair_geometry`). The sweeps keep
+    ``inv`` rather than the normal (one float a pair rather than three) and recompute the normal
+    from the start-of-step positions, which do not change during them: bit for bit the normal
+    that the warm start used."""
+    return (x_a - x_b) * inv
 
 
 @ti.func
@@ -72,27 +82,29 @@ def skip_pair(status: ti.template(), i, j):
 
 
 @ti.func
-def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic, radius: ti.template(),
-                mass: ti.template(), status: ti.template(), upper: ti.template(), n_upper: ti.template(),
-                lam: ti.template(), J: ti.template(), v: ti.template(), w: ti.template(),
-                impact: ti.template(), flag: ti.template()):
+def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic, x: ti.template(),
+                radius: ti.template(), mass: ti.template(), status: ti.template(), upper: ti.template(),
+                n_upper: ti.template(), lam: ti.template(), J: ti.template(), v: ti.template(), w: ti.template(),
+                flag: ti.template()):
     """One Jacobi sweep over the pairs that ball i owns, with its neighbours j = upper[i, k]: the
     impulse P on i (−P acts on j) from the current velocities (which updates the resting impulse
-    ``lam``), stored as J[i, k] = (P, n̂, gap). The unit normal n̂ from j to i and the surface gap
-    [m] were stored there by :func:`warm_start` (positions do not change during the sweeps).
-    An impact (see :func:`.contact.pair_impulse`) is marked in ``impact[i, k]`` (and ``flag[1]`` set,
-    so that :func:`impact_keys` looks for the balls' first impacts; :func:`gather` takes one impact
-    per ball, see :func:`matched`).
+    ``lam``), stored as J[i, k] = (P, 1/|x_i − x_j|, gap). The inverse distance [1/m], which gives
+    the unit normal n̂ from j to i (:func:`pair_normal`), and the surface gap [m] were stored there
+    by :func:`warm_start` (positions do not change during the sweeps).
+    An impact (see :func:`.contact.pair_impulse`) is marked by the inverse distance's sign, negative
+    (:func:`impact_mark`; and ``flag[1]`` is set, so that :func:`impact_keys` looks for the balls'
+    first impacts; :func:`gather` takes one impact per ball, see :func:`matched`).
 
-    With ``final`` (the last sweep) the gap's place, J[i, k][6], takes, for an overlapping pair,
+    With ``final`` (the last sweep) the gap's place, J[i, k][4], takes, for an overlapping pair,
     q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position projection (B.18: ball i moves by
     q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the other way); for a pair apart,
     −gap ≤ 0 (the surface gap [m]: the balls touch while it is below 1 % of a radius)."""
-    inv_mi = 1.0 / mass[i]
+    inv_mi, xi = 1.0 / mass[i], x[i]
     for k in range(n_upper[i]):
         j = upper[i, k]
         Jk = J[i, k]
-        n, gap = vec3(Jk[3], Jk[4], Jk[5]), Jk[6]
+        inv = ti.abs(Jk[3])  # (the mark of an impact in the last sweep, see impact_mark)
+        n, gap = pair_normal(xi, x[j], inv), Jk[4]
         ok = n.norm_sqr() > 0.0
         inv_mj = 1.0 / mass[j]
         P = vec3(0.0)
@@ -112,41 +124,49 @@ def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic,
                 g = 0.0
                 if ok:
                     g = -contact.k_p * gap / (inv_mi + inv_mj)
-        J[i, k] = ti.Vector([P[0], P[1], P[2], n[0], n[1], n[2], g])
-        impact[i, k] = kick
+        if kick != 0:
+            inv = -inv
+        J[i, k] = ti.Vector([P[0], P[1], P[2], inv, g])
+
+
+@ti.func
+def impact_mark(Jk):
+    """Whether the pair whose sweep entry (:func:`owned_pairs`) is ``Jk`` met as an impact in the
+    sweep: its stored inverse distance is then negative. The sign is the mark, so that no table
+    of marks is kept (the inverse distance is positive for every pair that gets an impact: the
+    centres of the pair's balls are apart)."""
+    return Jk[3] < 0.0
 
 
 @ti.func
 def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), status: ti.template(),
                rest_time: ti.template(), upper: ti.template(), n_upper: ti.template(), lower: ti.template(),
-               n_lower: ti.template(), bits, lam: ti.template(), J: ti.template(),
-               impact: ti.template()):
+               n_lower: ti.template(), bits, lam: ti.template(), J: ti.template()):
     """Δv [m/s] of ball i from last step's resting impulses λ of its ball pairs, each along the
     pair's normal at the start of the step, summed in id order (lower then upper). A normal
     impulse gives no spin; friction is left to the sweeps. Also stores the geometry of the pairs
-    ball i owns for the sweeps: J[i, k] = (0, n̂, the surface gap [m]) and no impact
-    (``impact[i, k]``, read by :func:`gather`). Reads only
+    ball i owns for the sweeps: J[i, k] = (0, 1/|x_i − x_j|, the surface gap [m]), which marks
+    no impact (:func:`impact_mark`). Reads only
     what the free-flight loop does not write (start-of-step positions, status, λ, rest timers),
     so it runs inside that loop. Returns (Δv, the calm time [s] of ball i: the least rest timer
     of the ball and the balls it touches, see :func:`finish`; or ``QUIET`` for a ball at rest
     whose listed neighbours are all at rest or out of bounds: nothing can touch it this step, so
     the step leaves it exactly as it is and the sweeps skip it)."""
     P = vec3(0.0)
-    calm = rest_time[i]
+    calm, xi = rest_time[i], x[i]
     quiet = status[i] == AT_REST
     for m in range(n_lower[i]):
         slot = lower[m, i]
         j, k = owner_slot(slot, bits)  # the pair's owner j keeps its λ
-        n, gap = pair_geometry(x, radius, i, j)
-        P += resting_impulse(status, i, j, n, lam[j, k])
+        inv, gap = pair_geometry(x, radius, i, j)
+        P += resting_impulse(status, i, j, pair_normal(xi, x[j], inv), lam[j, k])
         calm = island_calm(calm, gap, radius[i], status[j], rest_time[j])
         quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
     for k in range(n_upper[i]):
         j = upper[i, k]
-        n, gap = pair_geometry(x, radius, i, j)
-        J[i, k] = ti.Vector([0.0, 0.0, 0.0, n[0], n[1], n[2], gap])
-        impact[i, k] = 0
-        P += resting_impulse(status, i, j, n, lam[i, k])
+        inv, gap = pair_geometry(x, radius, i, j)
+        J[i, k] = ti.Vector([0.0, 0.0, 0.0, inv, gap])
+        P += resting_impulse(status, i, j, pair_normal(xi, x[j], inv), lam[i, k])
         calm = island_calm(calm, gap, radius[i], status[j], rest_time[j])
         quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
     if quiet:
@@ -208,22 +228,22 @@ def resting_impulse(status: ti.template(), i, j, n, lam):
 
 
 @ti.func
-def impact_keys(i, upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits,
+def impact_keys(i, n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits, J: ti.template(),
                 impact: ti.template()):
-    """Keep in the last column of ``impact`` the greatest key of ball i's impacts in this sweep (0
-    when it has none): the key of a pair is its slot in the pair tables, owner·2^bits + column
-    (as in the lower lists, see :func:`.grid.owner_slot`), plus one. Gathered from the pairs'
-    marks (:func:`owned_pairs`), as the impulses are: no atomics."""
+    """Keep in ``impact[i]`` the greatest key of ball i's impacts in this sweep (0 when it has
+    none): the key of a pair is its slot in the pair tables, owner·2^bits + column (as in the
+    lower lists, see :func:`.grid.owner_slot`), plus one. Gathered from the pairs' marks
+    (:func:`impact_mark`), as the impulses are: no atomics."""
     key = 0
     for m in range(n_lower[i]):
         slot = lower[m, i]
         j, k = owner_slot(slot, bits)
-        if impact[j, k] != 0:
+        if impact_mark(J[j, k]):
             key = ti.max(key, slot + 1)
     for k in range(n_upper[i]):
-        if impact[i, k] != 0:
+        if impact_mark(J[i, k]):
             key = ti.max(key, (i << bits) + k + 1)
-    impact[i, impact.shape[1] - 1] = key
+    impact[i] = key
 
 
 @ti.func
@@ -239,14 +259,13 @@ def matched(impact: ti.template(), a, b, key):
     some with e < 1; the others are evaluated again in the next sweep, from the velocities that
     collision left (the next step's sweeps when this was the last). The impacts are taken one
     after another in a fixed order, as if the balls had met a moment apart."""
-    c = impact.shape[1] - 1
-    return impact[a, c] == key and impact[b, c] == key
+    return impact[a] == key and impact[b] == key
 
 
 @ti.func
 def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p):
     """0, 1 or ``PRESSED`` (see :func:`gather`) for the pair of ball i (radius ``r``, 1/m_i
-    ``inv_m_i``) with ball j whose last-sweep J[·, ·][6] is ``g`` (the projection q ≥ 0 of an
+    ``inv_m_i``) with ball j whose last-sweep J[·, ·][4] is ``g`` (the projection q ≥ 0 of an
     overlap, or minus the gap: see :func:`owned_pairs`). Ball j's mass is read only for an
     overlap (this runs for every pair of the step's last sweep)."""
     state = 0
@@ -259,7 +278,7 @@ def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p):
 
 
 @ti.func
-def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), upper: ti.template(),
+def gather(i, final: ti.template(), x: ti.template(), radius: ti.template(), mass: ti.template(), upper: ti.template(),
            n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits, J: ti.template(),
            impact: ti.template(), any_impact, k_p):
     """What ball i gets from all its pairs, summed in id order (lower then upper): (Δv [m/s],
@@ -274,31 +293,31 @@ def gather(i, final: ti.template(), radius: ti.template(), mass: ti.template(), 
     P, T, q_n = vec3(0.0), vec3(0.0), vec3(0.0)
     touching = 0
     r = radius[i]
-    inv_m = 1.0 / mass[i]
+    inv_m, xi = 1.0 / mass[i], x[i]
     for m in range(n_lower[i]):
         slot = lower[m, i]
         j, k = owner_slot(slot, bits)  # the pair's owner j stores it
         Jk = J[j, k]
-        P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])
+        P_k, n_k = Jk.xyz, pair_normal(x[j], xi, ti.abs(Jk[3]))
         if any_impact != 0:  # (the marks are read only in a sweep that has impacts)
-            if impact[j, k] != 0 and not matched(impact, i, j, slot + 1):
+            if impact_mark(Jk) and not matched(impact, i, j, slot + 1):
                 P_k = vec3(0.0)
         P -= P_k
         T += n_k.cross(P_k)
         if ti.static(final):
-            q_n -= ti.max(Jk[6], 0.0) * n_k
-            touching = ti.max(touching, contact_state(Jk[6], r, inv_m, mass, j, k_p))
+            q_n -= ti.max(Jk[4], 0.0) * n_k
+            touching = ti.max(touching, contact_state(Jk[4], r, inv_m, mass, j, k_p))
     for k in range(n_upper[i]):
         Jk = J[i, k]
-        P_k, n_k = Jk.xyz, vec3(Jk[3], Jk[4], Jk[5])
+        P_k, n_k = Jk.xyz, pair_normal(xi, x[upper[i, k]], ti.abs(Jk[3]))
         if any_impact != 0:
-            if impact[i, k] != 0 and not matched(impact, i, upper[i, k], (i << bits) + k + 1):
+            if impact_mark(Jk) and not matched(impact, i, upper[i, k], (i << bits) + k + 1):
                 P_k = vec3(0.0)
         P += P_k
         T += n_k.cross(P_k)
         if ti.static(final):
-            q_n += ti.max(Jk[6], 0.0) * n_k
-            touching = ti.max(touching, contact_state(Jk[6], r, inv_m, mass, upper[i, k], k_p))
+            q_n += ti.max(Jk[4], 0.0) * n_k
+            touching = ti.max(touching, contact_state(Jk[4], r, inv_m, mass, upper[i, k], k_p))
     return P * inv_m, T * (-2.5 * inv_m / r), q_n * inv_m, touching
 
 
@@ -398,8 +417,8 @@ def collision_step(
     v_free: vec3_array,
     calm: float_array,
     clear: float_array,
-    J: vec7_table,
-    impact: int_table,
+    J: pair_table,
+    impact: int_array,
     # Flight record in/out (with launch_height: one entry each when no ball is tracked, then not read):
     landed: int_array,
     apex: float_array,
@@ -434,9 +453,9 @@ def collision_step(
 
     With a terrain (``terrain.on``; ``heights`` its grid, else any 2×2 array; ``lam_plane`` then
     has a column more than there are planes) a ball that leaves the grid's extent or falls below
-    ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` (the pairs' impulses, normals
-    and gaps or projections, see :func:`owned_pairs`) has the shape of ``upper``, ``impact`` one
-    column more (see :func:`impact_keys`). The kernel takes 32 arrays, as many as Taichi's Vulkan
+    ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` (the pairs' impulses, inverse
+    distances and gaps or projections, see :func:`owned_pairs`) has the shape of ``upper``;
+    ``impact`` holds a key per ball (see :func:`impact_keys`). The kernel takes 32 arrays, as many as Taichi's Vulkan
     backend passes to a kernel (with more its launch crashes); merge arrays before adding one."""
     result = 0
     if ti.static(not serial):
@@ -502,7 +521,7 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
         x_free[i], v_free[i] = x1, v1
         clear[i] = surface_clearance(i, x, x1, radius, plane_p, plane_n, terrain, heights, lam_plane)
         dv, calm[i] = warm_start(i, x, radius, mass, status, rest_time, upper, n_upper, lower, n_lower, bits,
-                                 lam, J, impact)
+                                 lam, J)
         if status[i] != OUT_OF_BOUNDS and calm[i] != QUIET:
             v1 += dv
             v1, w1 = surface_impulses(i, True, v1, w1, clear, contact, h, v_inelastic, radius, plane_p, plane_n,
@@ -545,17 +564,17 @@ def sweep(last: ti.template(), contact: ti.template(), h, v_inelastic, half_skin
     flag[1] = 0
     for i in range(x.shape[0]):
         if ti.static(last) or calm[i] != QUIET:
-            owned_pairs(i, last, contact, h, v_inelastic, radius, mass, status, upper, n_upper, lam, J, v, w,
-                        impact, flag)
+            owned_pairs(i, last, contact, h, v_inelastic, x, radius, mass, status, upper, n_upper, lam, J, v, w,
+                        flag)
     for i in range(x.shape[0]):
         if flag[1] != 0:  # (a loop inside the test would not run in parallel)
-            impact_keys(i, upper, n_upper, lower, n_lower, bits, impact)
+            impact_keys(i, n_upper, lower, n_lower, bits, J, impact)
     for i in range(x.shape[0]):
         if calm[i] == QUIET:
             if ti.static(last):
                 x_free[i] = x[i]
         elif status[i] != OUT_OF_BOUNDS:
-            dv, dw, dx, touching = gather(i, last, radius, mass, upper, n_upper, lower, n_lower, bits, J,
+            dv, dw, dx, touching = gather(i, last, x, radius, mass, upper, n_upper, lower, n_lower, bits, J,
                                           impact, flag[1], contact.k_p)
             v_new, w_new = surface_impulses(i, False, v[i] + dv, w[i] + dw, clear, contact, h, v_inelastic, radius,
                                             plane_p, plane_n, terrain, heights, terrain_cells, surface_table,

@@ -28,7 +28,7 @@ import math
 import numpy as np
 import taichi as ti
 
-from .types import float_array, int_array, real, vec3_array, vec7_table
+from .types import float_array, int_array, pair_table, real, vec3_array
 
 int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
 real_table = ti.types.ndarray(dtype=real, ndim=2)
@@ -474,7 +474,7 @@ def owns(xi, xj, i, j, apart_i, apart_j):
 
     But a ball listed apart (``apart_j``; see :func:`is_apart`) never owns a pair with a ball
     that is not (``apart_i`` false): a boulder sunk into a pile touches hundreds of balls, and the
-    upper table, which keeps each pair's impulse and geometry (72 bytes a pair in f64), is as wide
+    upper table, which keeps each pair's impulse and geometry (52 bytes a pair in f64), is as wide
     as the longest upper list for every ball; the lower table keeps 4 bytes a pair."""
     owner = False
     if apart_i != apart_j:
@@ -553,7 +553,7 @@ def link_ball(i, bits, upper: ti.template(), n_upper: ti.template(), lower: ti.t
 
 
 @ti.kernel
-def stash(upper: int_table, n_upper: int_array, lam: real_table, scratch: vec7_table):
+def stash(upper: int_table, n_upper: int_array, lam: real_table, scratch: pair_table):
     """Keep every pair's (neighbour id, accumulated impulse) in ``scratch`` (see :func:`stash_ball`)."""
     for i in range(scratch.shape[0]):
         stash_ball(i, upper, n_upper, lam, scratch)
@@ -569,11 +569,11 @@ def stash_ball(i, upper: ti.template(), n_upper: ti.template(), lam: ti.template
         j = -1
         if k < n_upper[i]:
             j = upper[i, k]
-        scratch[i, k] = ti.Vector([lam[i, k], j // 4096, j % 4096, 0.0, 0.0, 0.0, 0.0], dt=real)
+        scratch[i, k] = ti.Vector([lam[i, k], j // 4096, j % 4096, 0.0, 0.0], dt=real)
 
 
 @ti.kernel
-def link_and_carry(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array, stashed: vec7_table,
+def link_and_carry(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array, stashed: pair_table,
                    lam: real_table, moved: ti.template(), old_id: int_array):
     """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
     :func:`stash` and :func:`carry_ball`) to the new ones, in one launch (neither writes what the

@@ -37,7 +37,7 @@ vec3_array = ti.types.ndarray(dtype=vec3, ndim=1)
 float_array = ti.types.ndarray(dtype=real, ndim=1)
 int_array = ti.types.ndarray(dtype=ti.i32, ndim=1)
 vec3_table = ti.types.ndarray(dtype=vec3, ndim=2)
-vec7_table = ti.types.ndarray(dtype=ti.types.vector(7, real), ndim=2)
+pair_table = ti.types.ndarray(dtype=ti.types.vector(5, real), ndim=2)
 float_grid = ti.types.ndarray(dtype=real, ndim=2)
 
 TerrainParams = ti.types.struct(
