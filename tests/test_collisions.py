@@ -853,6 +853,21 @@ def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypa
     assert max(sim.solver.capacity) >= 400
 
 
+def test_the_memory_guard_counts_the_bytes_the_pair_tables_take():
+    # table_bytes is the memory guard's estimate (above) and the README's byte count: it must
+    # match the tables the solver allocates, whatever they keep per pair (neighbour, resting
+    # impulse, the sweep's impulse, inverse distance and gap, and the links of the other balls).
+    import ti_golf.solver as solver_module
+
+    pile, x = pile_scene(400)
+    sim = tg.Simulation(pile, x=x, track=False)
+    sim.solver = CollisionSolver(sim.model, serial=False)
+    sim.step(1)
+    s = sim.solver
+    allocated = sum(a.to_numpy().nbytes for a in (s.upper, s.lower, s.lam, s.impulse))
+    assert s.capacity[0] >= 3 and allocated == solver_module.table_bytes(len(x), s.capacity)
+
+
 def test_a_build_past_the_vulkan_loop_cap_stops_the_run_and_names_the_ball():
     # Taichi's Vulkan backend stops a thread's loops after grid.LOOP_CAP iterations without a word.
     # There the cells are sized for the biggest ball, and around a boulder in a large pile they hold
