@@ -33,7 +33,7 @@ demo: setup system-deps
 	$(TIGOLF) render break_shot --steps 400 --camera iso --trails --out $(OUT)/break_shot_3d.png
 
 test: setup system-deps
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q --durations=15
 
 bench: setup
 	$(TIGOLF) bench sweep --json
