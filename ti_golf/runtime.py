@@ -135,7 +135,10 @@ def plain_compile() -> Iterator[None]:
     runs; 2.1e5 in f32 with 16 lanes). Likewise for the collision step of small scenes (the
     ``serial`` variant of ``physics.collide.collision_step``): 50 s against 5–6 s, and 3.6 against
     4.5 µs per step of a six-ball cradle. The parallel collision step keeps the passes: there
-    they buy about 10 % speed for 5x the compile time (27 s against 5 s).
+    they buy about 10 % speed for 5x the compile time (27 s against 5 s). With 8 sweeps (the
+    ``ball_pit`` scene) they cost more and buy more: 146 s against 12 s of compiling, and the
+    step's kernels took 46.4–51.0 ms per step of a 65,536-ball pile with them, 64.5–71.1 without
+    (sums of kernel-profiler minima, two alternating runs each, 2026-11-22 on a slow day).
 
     On the CPU only: elsewhere kernels have one lane (short bodies, quick to compile with the
     passes), and Taichi's SPIR-V code generator (Vulkan) cannot compile the sweep kernel without
