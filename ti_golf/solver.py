@@ -11,7 +11,7 @@ import taichi as ti
 from .errors import SimulationError
 from .model import Model
 from .physics import collide, grid
-from .physics.types import vec3
+from .physics.types import pair_entry, vec3
 from .runtime import ensure_init, np_float, on_cpu, plain_compile
 from .state import State
 
@@ -209,7 +209,7 @@ class CollisionSolver:
         if self.impulse is None or self.impulse.shape != self.upper.shape:
             self.impulse = None  # free the old table before allocating
             # each pair's impulse, inverse distance, and gap or projection in a sweep (collide.owned_pairs)
-            self.impulse = ti.ndarray(ti.types.vector(5, float), self.upper.shape)
+            self.impulse = ti.ndarray(pair_entry, self.upper.shape)
         self.rebuilds += 1
         self._valid = True
 

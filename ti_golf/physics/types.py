@@ -37,7 +37,9 @@ vec3_array = ti.types.ndarray(dtype=vec3, ndim=1)
 float_array = ti.types.ndarray(dtype=real, ndim=1)
 int_array = ti.types.ndarray(dtype=ti.i32, ndim=1)
 vec3_table = ti.types.ndarray(dtype=vec3, ndim=2)
-pair_table = ti.types.ndarray(dtype=ti.types.vector(5, real), ndim=2)
+pair_entry = ti.types.vector(5, real)
+"""A pair's entry in a sweep: its impulse [N·s], inverse distance [1/m] and gap [m] (see collide.owned_pairs)."""
+pair_table = ti.types.ndarray(dtype=pair_entry, ndim=2)
 float_grid = ti.types.ndarray(dtype=real, ndim=2)
 
 TerrainParams = ti.types.struct(
