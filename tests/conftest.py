@@ -25,6 +25,24 @@ SERIAL_OR_PARALLEL = pytest.mark.parametrize(
 """Run a test with the collision step forced serial (``CollisionSolver(serial=True)``) and parallel."""
 
 
+_exit_status: list[int] = []
+
+
+def pytest_sessionfinish(session, exitstatus):
+    _exit_status.append(int(exitstatus))
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_unconfigure(config):
+    """The test process ends as ``ti-golf`` does (``runtime.exit_process``): once pytest has
+    reported, without the C++ static destructors of Taichi's runtime that can crash a normal exit
+    and turn a passing run into a failing exit status."""
+    if _exit_status:
+        from ti_golf import runtime
+
+        runtime.exit_process(_exit_status[0])
+
+
 @pytest.fixture(scope="session", autouse=True)
 def taichi_runtime():
     """The only ti.init of the test session goes through ti_golf.runtime (tests needing another

@@ -122,6 +122,19 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def run() -> None:
+    """The ``ti-golf`` command and ``python -m ti_golf``: :func:`main`, whose code the process then
+    exits with (see ``runtime.exit_process``: Taichi's runtime can crash the normal exit)."""
+    try:
+        code = main()
+    except BrokenPipeError:  # the reader of stdout left (``ti-golf scenes | head``): no traceback
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        code = 1
+    from . import runtime
+
+    runtime.exit_process(code)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``ti-golf`` and ``python -m ti_golf``; returns the exit code."""
     args = build_parser().parse_args(argv)
@@ -472,4 +485,4 @@ _COMMANDS = {
 }
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    run()
