@@ -730,6 +730,47 @@ def test_serial_steps_equal_parallel_steps(name, steps):
         assert serial[0] == 10 and np.any(serial[4] != AT_REST)  # the column slept, the falling ball woke it
 
 
+def test_a_step_split_into_launches_equals_the_unrolled_step(monkeypatch):
+    # a parallel step of more than solver.UNROLL_MAX_SWEEPS sweeps is split into launches: the
+    # free flight, warm start and first sweeps, more sweeps, the last sweep (solver.sweep_launches).
+    # The loops and the arithmetic are those of the unrolled step, in the same order, so the
+    # results must be the same bit for bit: here a boulder dropped on a pile (impacts, a ball
+    # listed apart, lists rebuilt) with the default 4 sweeps, once in one launch and once in two
+    from ti_golf import solver
+    from ti_golf.physics import collide
+
+    assert solver.sweep_launches(8) == [(True, 4, False), (False, 3, True)]
+    assert solver.sweep_launches(9) == [(True, 4, False), (False, 4, False), (False, 0, True)]
+    sc, x = pile_scene(300)
+    x = np.vstack([x, [x[:, 0].mean() - 0.01, x[:, 1].max() + 0.125, x[:, 2].mean() + 0.02]])
+    v = np.zeros_like(x)
+    v[-1] = [0.3, -2.0, 0.0]
+    r = np.full(len(x), 0.02)
+    r[-1] = 0.1
+    m = sc.ball.mass * (r / 0.02) ** 3
+    kernel, launches = collide.collision_step, []
+
+    def counted(*args):
+        launches.append(args[-8:-5])  # (warm, sweeps, last)
+        return kernel(*args)
+
+    monkeypatch.setattr(collide, "collision_step", counted)
+    runs = []
+    for unroll_max in (4, 2):
+        monkeypatch.setattr(solver, "UNROLL_MAX_SWEEPS", unroll_max)
+        launches.clear()
+        sim = tg.Simulation(sc, x=x, v=v, radius=r, mass=m)
+        sim.solver = CollisionSolver(sim.model, serial=False)
+        sim.step(40)
+        assert launches == 40 * ([(True, 3, True)] if unroll_max == 4 else [(True, 2, False), (False, 1, True)])
+        st = sim.state
+        runs.append((sim.x, sim.v, sim.w, st.status.to_numpy(), st.rest_time.to_numpy(), sim.solver.rebuilds))
+    assert runs[0][-1] > 1  # the lists were rebuilt
+    assert np.abs(runs[0][1]).max() > 0.1  # and the boulder hit the pile: balls move
+    for a, b in zip(*runs):
+        np.testing.assert_array_equal(a, b)
+
+
 @SERIAL_OR_PARALLEL
 def test_balls_moved_between_steps_collide_in_the_next_step(serial):
     # assigning sim.x moves balls outside a step: the neighbour lists built before must not hide a

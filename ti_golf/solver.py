@@ -29,6 +29,31 @@ REORDER_MIN_BALLS = 8192
 :attr:`CollisionSolver.reorder`): smaller piles stay in the CPU's caches whatever their order."""
 
 
+UNROLL_MAX_SWEEPS = 4
+"""Most Jacobi sweeps in one kernel launch of a parallel step: a step of more
+(``contact.iterations``) is split into launches of at most this many sweeps each
+(:func:`sweep_launches`). Compiling a kernel grows faster than the sweeps unrolled in it:
+measured on first use, from an empty kernel cache, for a 512-ball pile on the 2-core benchmark
+machine (the whole run, the grid's kernels included): 32 s with 2 sweeps in one launch, 51 s with
+4 and 156 s (and 1.7 GB of memory) with 8. Each launch more costs about 0.7 ms (the kernel's
+32 arrays and parameter structs, set from Python): with a sweep per launch, the 8 sweeps of a
+512-ball pile took 11 ms per step against 4.2 unrolled."""
+
+
+def sweep_launches(iterations: int) -> list[tuple[bool, int, bool]]:
+    """The launches of one parallel step of ``iterations`` Jacobi sweeps, as the ``(warm, sweeps,
+    last)`` arguments of ``collide.collision_step``: the sweeps in order, at most
+    ``UNROLL_MAX_SWEEPS`` per launch; the first launch also takes the free flight and the warm start,
+    and the one with the last sweep finishes the step. Any split gives the same step, bit for bit."""
+    launches, first = [], 1
+    while first <= iterations:
+        end = min(first + UNROLL_MAX_SWEEPS - 1, iterations)
+        last = end == iterations
+        launches.append((first == 1, end - first + 1 - int(last), last))
+        first = end + 1
+    return launches
+
+
 def table_bytes(n: int, widths: tuple[int, int]) -> int:
     """Bytes of the neighbour and pair tables of ``n`` balls with lists ``widths`` (upper, lower)
     wide: per upper entry the neighbour, its resting impulse and the sweep's 5-vector (impulse,
@@ -335,7 +360,8 @@ class CollisionSolver:
             self.build(state)
             grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
         with plain_compile():  # 5 s against 50 s of compiling on first use, and as fast (see runtime.plain_compile)
-            self.rebuilds += collide.collision_step(*self._arguments(model, state), True, steps, self.skin,
+            self.rebuilds += collide.collision_step(*self._arguments(model, state), True, True,
+                                                     model.scene.contact.iterations - 1, True, steps, self.skin,
                                                      model.dt, self.v_cut, self.r_cut)
         for _ in range(steps):
             state.t += model.dt  # as one step at a time adds it, to the same round-off
@@ -343,8 +369,10 @@ class CollisionSolver:
     def _step_in_parallel(self, model: Model, state: State) -> None:
         if not self._valid or self._rebuild:
             self.build(state)
-        rebuild = collide.collision_step(*self._arguments(model, state), False, 1, self.skin, model.dt, self.v_cut,
-                                         self.r_cut)
+        arguments = self._arguments(model, state)
+        for warm, sweeps, last in sweep_launches(model.scene.contact.iterations):
+            rebuild = collide.collision_step(*arguments, False, warm, sweeps, last, 1, self.skin, model.dt,
+                                             self.v_cut, self.r_cut)
         state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
         state.t += model.dt
         self._rebuild = bool(rebuild)
@@ -353,7 +381,7 @@ class CollisionSolver:
         """The arguments of ``collide.collision_step`` before ``serial``."""
         w = m.scene.world
         return (
-            m.air, m.contact, m.gravity, m.dt, m.integrator, m.scene.contact.iterations, s.t, 0.5 * self.skin,
+            m.air, m.contact, m.gravity, m.dt, m.integrator, s.t, 0.5 * self.skin,
             w.v_rest, w.t_rest, m.radius, m.mass, m.launch_height, m.plane_p, m.plane_n, m.terrain_params, m.terrain_h,
             m.terrain_cells, m.surface_table,
             self.upper, self.n_upper, self.lower, self.n_lower, self.x_at_build, self.lam, self.lam_plane,

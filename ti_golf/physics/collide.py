@@ -30,10 +30,11 @@ The kernel's top-level loops run one after another, each over all balls in paral
    out-of-bounds (off the terrain), and whether the neighbour lists must be rebuilt before the
    next step.
 
-:func:`collision_step` launches these loops in parallel, one step per launch; for a few balls,
-its ``serial`` variant runs the same loops (:func:`step_balls`) one ball after another, many
-steps per launch, and rebuilds the lists itself by testing every pair: the same step, bit for
-bit, without the launch overhead that dominates a step of a few balls.
+:func:`collision_step` launches these loops in parallel, one step per launch (with many
+sweeps, a few launches: see ``solver.sweep_launches``); for a few balls, its ``serial``
+variant runs the same loops (:func:`step_balls`) one ball after another, many steps per launch,
+and rebuilds the lists itself by testing every pair: the same step, bit for bit, without the
+launch overhead that dominates a step of a few balls.
 """
 
 import taichi as ti
@@ -112,9 +113,9 @@ def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic,
         if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
             lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
         elif ok and not skip_pair(status, i, j):
-            P, lam[i, k], _, kick = pair_impulse(n, gap, v[i], w[i], radius[i], inv_mi, v[j], w[j], radius[j],
-                                                 inv_mj, lam[i, k], contact.e, contact.mu, v_inelastic, h,
-                                                 contact.relax)
+            P, lam[i, k], _, kick = pair_impulse(n, gap, v[i], w[i], radius[i], inv_mi, v[j], w[j],
+                                                 radius[j], inv_mj, lam[i, k], contact.e, contact.mu,
+                                                 v_inelastic, h, contact.relax)
             if kick != 0:
                 flag[1] = 1  # every thread that writes, writes 1
         g = gap
@@ -383,7 +384,6 @@ def collision_step(
     gravity: vec3,
     h: float,
     integrator: ti.template(),
-    iterations: ti.template(),
     t0: ti.f64,
     half_skin: float,
     v_rest: float,
@@ -427,18 +427,26 @@ def collision_step(
     land_v: vec3_array,
     flag: int_array,
     serial: ti.template(),
+    warm: ti.template(),
+    sweeps: ti.template(),
+    last: ti.template(),
     steps: ti.i32,
     skin: float,
     dt: ti.f64,
     v_cut: float,
     r_cut: float,
 ) -> ti.i32:
-    """Advance all balls by ``steps`` steps of ``h`` [s] (``iterations`` ≥ 1 Jacobi sweeps).
+    """Advance all balls by ``steps`` steps of ``h`` [s]: the free flight and warm start (with
+    ``warm``), ``sweeps`` Jacobi sweeps, then (with ``last``) the last sweep, which finishes the
+    step. A whole step of ``iterations`` sweeps is ``(True, iterations − 1, True)``.
 
-    In parallel (``serial`` False) the kernel takes exactly one step (``steps``, ``skin``, ``dt``,
-    ``v_cut`` and ``r_cut`` are not read) and returns 1 (also left in ``flag[0]``) when some ball may come within
-    reach of a ball missing from its neighbour lists next step: rebuild the lists. The new
-    positions are left in ``x_free`` (swap it with ``x``).
+    In parallel (``serial`` False) the kernel takes exactly one step, or the part of one that
+    ``warm``, ``sweeps`` and ``last`` name, so that a step of many sweeps can be split into
+    launches (see ``solver.sweep_launches``; ``steps``, ``skin``, ``dt``, ``v_cut`` and ``r_cut``
+    are not read). It returns 1 (also left in ``flag[0]``) when some ball may come within reach of
+    a ball missing from its neighbour lists next step: rebuild the lists (read it after the
+    ``last`` part; the ``warm`` part clears it). The new positions are left in ``x_free`` (swap it with
+    ``x``).
 
     With ``serial`` the balls are stepped one after another, ``steps`` steps in one launch: for
     scenes so small that a launch (tens of arguments, about 0.5 ms from Python) and rebuilding the
@@ -459,12 +467,13 @@ def collision_step(
     backend passes to a kernel (with more its launch crashes); merge arrays before adding one."""
     result = 0
     if ti.static(not serial):
-        flag[0] = 0
+        if ti.static(warm):
+            flag[0] = 0
         step_balls(
-            serial, air, contact, gravity, h, integrator, iterations, ti.cast(t0, real), half_skin, v_rest, t_rest,
-            radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper,
-            n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm,
-            clear, J, impact, landed, apex, t_land, land_x, land_v, flag,
+            serial, warm, sweeps, last, air, contact, gravity, h, integrator, ti.cast(t0, real), half_skin, v_rest,
+            t_rest, radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
+            upper, n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free,
+            calm, clear, J, impact, landed, apex, t_land, land_x, land_v, flag,
         )
         result = flag[0]
     else:
@@ -477,10 +486,10 @@ def collision_step(
                 result += 1
                 flag[0] = 0
             step_balls(
-                serial, air, contact, gravity, h, integrator, iterations, ti.cast(t, real), half_skin, v_rest, t_rest,
-                radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table, upper,
-                n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free, calm,
-                clear, J, impact, landed, apex, t_land, land_x, land_v, flag,
+                serial, warm, sweeps, last, air, contact, gravity, h, integrator, ti.cast(t, real), half_skin, v_rest,
+                t_rest, radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
+                upper, n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free,
+                calm, clear, J, impact, landed, apex, t_land, land_x, land_v, flag,
             )
             for i in range(x.shape[0]):
                 x[i] = x_free[i]
@@ -489,8 +498,9 @@ def collision_step(
 
 
 @ti.func
-def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template(), gravity: ti.template(), h,
-               integrator: ti.template(), iterations: ti.template(), t0, half_skin, v_rest, t_rest,
+def step_balls(serial: ti.template(), warm: ti.template(), sweeps: ti.template(), last: ti.template(),
+               air: ti.template(), contact: ti.template(), gravity: ti.template(), h, integrator: ti.template(), t0,
+               half_skin, v_rest, t_rest,
                radius: ti.template(), mass: ti.template(), launch_height: ti.template(), plane_p: ti.template(),
                plane_n: ti.template(), terrain: ti.template(), heights: ti.template(), terrain_cells: ti.template(),
                surface_table: ti.template(), upper: ti.template(), n_upper: ti.template(), lower: ti.template(),
@@ -500,12 +510,49 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
                J: ti.template(), impact: ti.template(),
                landed: ti.template(), apex: ti.template(), t_land: ti.template(), land_x: ti.template(),
                land_v: ti.template(), flag: ti.template()):
-    """One step of all balls, the body of :func:`collision_step` (see there) in parallel and serially."""
+    """One step of all balls, the body of :func:`collision_step` (see there) in parallel and serially,
+    or the part of it that ``warm``, ``sweeps`` and ``last`` name."""
     v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
     bits = slot_bits(upper.shape[1])  # lower-list slots: owner · 2^bits + column (once, not per ball)
+    if ti.static(warm):
+        start_step(air, contact, gravity, h, integrator, t0, v_inelastic, bits, radius, mass, launch_height, plane_p,
+                   plane_n, terrain, heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, lam,
+                   lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, landed, apex, t_land,
+                   land_x, land_v)
+    # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
+    if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
+        for _ in range(sweeps):
+            sweep(False,
+                  contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
+                  heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
+                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, impact, flag)
+    else:  # unrolled, so that each sweep's loops stay top-level loops (parallel)
+        for _ in ti.static(range(sweeps)):
+            sweep(False,
+                  contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
+                  heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
+                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, impact, flag)
+    if ti.static(last):
+        sweep(True,
+              contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain, heights,
+              terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam, lam_plane, x, v,
+              w, status, rest_time, x_free, v_free, calm, clear, J, impact, flag)
+
+
+@ti.func
+def start_step(air: ti.template(), contact: ti.template(), gravity: ti.template(), h, integrator: ti.template(), t0,
+               v_inelastic, bits, radius: ti.template(), mass: ti.template(), launch_height: ti.template(),
+               plane_p: ti.template(), plane_n: ti.template(), terrain: ti.template(), heights: ti.template(),
+               terrain_cells: ti.template(), surface_table: ti.template(), upper: ti.template(),
+               n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), lam: ti.template(),
+               lam_plane: ti.template(), x: ti.template(), v: ti.template(), w: ti.template(), status: ti.template(),
+               rest_time: ti.template(), x_free: ti.template(), v_free: ti.template(), calm: ti.template(),
+               clear: ti.template(), J: ti.template(), landed: ti.template(), apex: ti.template(),
+               t_land: ti.template(), land_x: ti.template(), land_v: ti.template()):
+    """1. Free flight of every ball to ``x_free``, ``v_free``, then the warm start: last step's
+    resting impulses (ball pairs, planes and terrain) applied again, so a stack starts the step
+    supported (see the module's docstring)."""
     tracking = landed.shape[0] == x.shape[0]
-    # 1. free flight to x_free, v_free, then the warm start: last step's resting impulses (ball
-    # pairs, planes and terrain) applied again, so a stack starts the step supported
     for i in range(x.shape[0]):
         xi = x[i]
         x1, v1, w1 = xi, vec3(0.0), vec3(0.0)
@@ -527,23 +574,6 @@ def step_balls(serial: ti.template(), air: ti.template(), contact: ti.template()
             v1, w1 = surface_impulses(i, True, v1, w1, clear, contact, h, v_inelastic, radius, plane_p, plane_n,
                                       terrain, heights, terrain_cells, surface_table, x, x_free, lam_plane)
         v[i], w[i] = v1, w1
-    # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
-    if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
-        for _ in range(iterations - 1):
-            sweep(False,
-                  contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
-                  heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
-                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, impact, flag)
-    else:  # unrolled, so that each sweep's loops stay top-level loops (parallel)
-        for _ in ti.static(range(iterations - 1)):
-            sweep(False,
-                  contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
-                  heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
-                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, impact, flag)
-    sweep(True,
-          contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain, heights,
-          terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam, lam_plane, x, v, w,
-          status, rest_time, x_free, v_free, calm, clear, J, impact, flag)
 
 
 @ti.func
