@@ -894,6 +894,22 @@ def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypa
     assert max(sim.solver.capacity) >= 400
 
 
+def test_balls_all_alike_share_one_radius_and_one_mass():
+    # the model keeps one radius and one mass when every ball has the same (8 bytes per ball each
+    # in f64; README, "Where the f64 bytes go"), and one per ball when they vary; the kernels read
+    # both through types.of_ball, and a storage reorder gathers only the per-ball ones
+    pile, x = pile_scene(50)
+    alike = tg.Simulation(pile, x=x, track=False)
+    assert alike.model.radius.shape == (1,) and alike.model.mass.shape == (1,)
+    assert alike.model.per_ball() == []
+    r = np.full(len(x), 0.02)
+    r[7] = 0.019
+    mixed = tg.Simulation(pile, x=x, radius=r, track=False)
+    assert mixed.model.radius.shape == (50,) and mixed.model.mass.shape == (1,)
+    assert mixed.model.per_ball() == ["radius"]
+    np.testing.assert_array_equal(mixed.model.radius.to_numpy(), r)
+
+
 def test_the_memory_guard_counts_the_bytes_the_pair_tables_take():
     # table_bytes is the memory guard's estimate (above) and the README's byte count: it must
     # match the tables the solver allocates, whatever they keep per pair (neighbour, resting

@@ -17,8 +17,10 @@ class Model:
     Attributes:
         scene: the validated scene.
         n: number of balls.
-        radius: ball radii [m], shape (N,), Taichi ndarray.
-        mass: ball masses [kg], shape (N,), Taichi ndarray.
+        radius: ball radii [m], Taichi ndarray of shape (N,), or (1,) when all balls have the same
+            radius, as in most scenes (kernels read it with ``physics.types.of_ball``): 8 bytes
+            per ball less in f64.
+        mass: ball masses [kg], shape (N,), or (1,) when all balls have the same mass.
         radius_np, mass_np: the same as read-only float64 numpy arrays (N,), by ball id.
         launch_height: height whose downward crossing counts as landing [m], shape (N,), or (1,)
             when no ball's flight is tracked (``State.tracking``: the kernels then do not read it).
@@ -42,18 +44,16 @@ class Model:
     """The per-ball Taichi arrays."""
 
     def per_ball(self) -> list[str]:
-        """The names of the Taichi arrays that hold an entry per ball (``launch_height`` only while
-        some ball is tracked)."""
+        """The names of the Taichi arrays that hold an entry per ball (``radius`` and ``mass`` only
+        while they vary, ``launch_height`` only while some ball is tracked)."""
         return [name for name in self.PER_BALL if getattr(self, name).shape[0] == self.n]
 
     def __init__(self, scene: Scene, radius: np.ndarray, mass: np.ndarray, launch_height: np.ndarray) -> None:
         f = np_float()
         self.scene = scene
         self.n = int(len(radius))
-        self.radius = ti.ndarray(float, self.n)
-        self.radius.from_numpy(np.asarray(radius, dtype=f))
-        self.mass = ti.ndarray(float, self.n)
-        self.mass.from_numpy(np.asarray(mass, dtype=f))
+        self.radius = _shared_or_per_ball(radius)
+        self.mass = _shared_or_per_ball(mass)
         self.launch_height = ti.ndarray(float, len(launch_height))
         self.launch_height.from_numpy(np.asarray(launch_height, dtype=f))
         self.radius_np = _compact(radius)
@@ -90,6 +90,17 @@ class Model:
         surfaces = scene.surfaces or (Surface(),)
         self.surface_table = np.array([[c.e if sf.e is None else sf.e, c.mu if sf.mu is None else sf.mu,
                                         c.mu_roll if sf.mu_roll is None else sf.mu_roll] for sf in surfaces], dtype=f)
+
+
+def _shared_or_per_ball(values: np.ndarray) -> ti.Ndarray:
+    """A Taichi array of per-ball ``values`` (N,) in the float type, or of one entry when all are
+    equal (see ``physics.types.of_ball``)."""
+    a = np.asarray(values, dtype=np_float()).reshape(-1)
+    if a.size > 1 and np.all(a == a[0]):
+        a = a[:1]
+    out = ti.ndarray(float, a.size)
+    out.from_numpy(a)
+    return out
 
 
 def _compact(values: np.ndarray) -> np.ndarray:

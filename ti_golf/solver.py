@@ -276,7 +276,7 @@ class CollisionSolver:
         the one that widens the lists, and on a GPU the cells."""
         h = self._model.dt
         speed = np.linalg.norm(state.v.to_numpy(), axis=1)
-        radius = self._model.radius.to_numpy()
+        radius = np.broadcast_to(self._model.radius.to_numpy(), speed.shape)  # one entry when all are alike
         k = int(np.argmax(radius + h * speed))
         ball = int(state.order[k]) if state.order is not None else k
         return ball, (f"Ball {ball} reaches farthest (radius {radius[k]:.4g} m, speed {speed[k]:.4g} m/s: "

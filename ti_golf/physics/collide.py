@@ -46,8 +46,8 @@ from .grid import int_table, owner_slot, real_table, relist_all_pairs, slot_bits
 from .integrate import IN_FLIGHT, step_free, track_flight
 from .kernels import lane_state
 from .terrain import outside, same_cell, surface, surface_contact, terrain_clearance, terrain_position
-from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, pair_table,
-                    real, vec3, vec3_array)
+from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, of_ball,
+                    pair_table, real, vec3, vec3_array)
 
 QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
 FAR = 1e30  # the surface clearance of a ball when there are no planes and no terrain (see surface_clearance)
@@ -62,7 +62,7 @@ def pair_geometry(x: ti.template(), radius: ti.template(), a, b):
     inv = 0.0
     if dist > 0.0:
         inv = 1.0 / dist
-    return inv, dist - radius[a] - radius[b]
+    return inv, dist - of_ball(radius, a) - of_ball(radius, b)
 
 
 @ti.func
@@ -100,21 +100,21 @@ def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic,
     q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position projection (B.18: ball i moves by
     q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the other way); for a pair apart,
     −gap ≤ 0 (the surface gap [m]: the balls touch while it is below 1 % of a radius)."""
-    inv_mi, xi = 1.0 / mass[i], x[i]
+    inv_mi, xi = 1.0 / of_ball(mass, i), x[i]
     for k in range(n_upper[i]):
         j = upper[i, k]
         Jk = J[i, k]
         inv = ti.abs(Jk[3])  # (the mark of an impact in the last sweep, see impact_mark)
         n, gap = pair_normal(xi, x[j], inv), Jk[4]
         ok = n.norm_sqr() > 0.0
-        inv_mj = 1.0 / mass[j]
+        inv_mj = 1.0 / of_ball(mass, j)
         P = vec3(0.0)
         kick = 0
         if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
             lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
         elif ok and not skip_pair(status, i, j):
-            P, lam[i, k], _, kick = pair_impulse(n, gap, v[i], w[i], radius[i], inv_mi, v[j], w[j],
-                                                 radius[j], inv_mj, lam[i, k], contact.e, contact.mu,
+            P, lam[i, k], _, kick = pair_impulse(n, gap, v[i], w[i], of_ball(radius, i), inv_mi, v[j], w[j],
+                                                 of_ball(radius, j), inv_mj, lam[i, k], contact.e, contact.mu,
                                                  v_inelastic, h, contact.relax)
             if kick != 0:
                 flag[1] = 1  # every thread that writes, writes 1
@@ -161,18 +161,18 @@ def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), 
         j, k = owner_slot(slot, bits)  # the pair's owner j keeps its λ
         inv, gap = pair_geometry(x, radius, i, j)
         P += resting_impulse(status, i, j, pair_normal(xi, x[j], inv), lam[j, k])
-        calm = island_calm(calm, gap, radius[i], status[j], rest_time[j])
+        calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j])
         quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
     for k in range(n_upper[i]):
         j = upper[i, k]
         inv, gap = pair_geometry(x, radius, i, j)
         J[i, k] = ti.Vector([0.0, 0.0, 0.0, inv, gap])
         P += resting_impulse(status, i, j, pair_normal(xi, x[j], inv), lam[i, k])
-        calm = island_calm(calm, gap, radius[i], status[j], rest_time[j])
+        calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j])
         quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
     if quiet:
         calm = QUIET
-    return P / mass[i], calm
+    return P / of_ball(mass, i), calm
 
 
 @ti.func
@@ -198,14 +198,14 @@ def surface_clearance(i, x: ti.template(), x_free_i, radius: ti.template(), plan
     ball that cannot reach any of them (most balls of a pile) without changing any result."""
     c = FAR
     for p in range(plane_n.shape[0]):
-        c = ti.min(c, (x[i] - plane_p[p]).dot(plane_n[p]) - radius[i])
+        c = ti.min(c, (x[i] - plane_p[p]).dot(plane_n[p]) - of_ball(radius, i))
         if lam_plane[i, p] > 0.0:
             c = NEAR
     if terrain.on != 0:
         if lam_plane[i, plane_n.shape[0]] > 0.0:
             c = NEAR
         elif c != NEAR:
-            c = ti.min(c, terrain_clearance(heights, terrain, x[i], x_free_i, radius[i]))
+            c = ti.min(c, terrain_clearance(heights, terrain, x[i], x_free_i, of_ball(radius, i)))
     return c
 
 
@@ -273,7 +273,7 @@ def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p):
     if g > -0.01 * r:
         state = 1
         if g > 0.0:
-            if g * (inv_m_i + 1.0 / mass[j]) > 0.01 * r * k_p:
+            if g * (inv_m_i + 1.0 / of_ball(mass, j)) > 0.01 * r * k_p:
                 state = PRESSED
     return state
 
@@ -293,8 +293,8 @@ def gather(i, final: ti.template(), x: ti.template(), radius: ti.template(), mas
     :func:`matched` in this sweep acts (``any_impact``: whether the sweep has any, ``flag[1]``)."""
     P, T, q_n = vec3(0.0), vec3(0.0), vec3(0.0)
     touching = 0
-    r = radius[i]
-    inv_m, xi = 1.0 / mass[i], x[i]
+    r = of_ball(radius, i)
+    inv_m, xi = 1.0 / of_ball(mass, i), x[i]
     for m in range(n_lower[i]):
         slot = lower[m, i]
         j, k = owner_slot(slot, bits)  # the pair's owner j stores it
@@ -333,7 +333,7 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
     them when the ball is too far from all of them (``clear[i]``, see :func:`surface_clearance`)
     to touch one within the step at its speed, and marks the ball ``NEAR`` once it rests on one
     (that resting impulse must be visited in later sweeps, to be given back). Returns (v, ω)."""
-    r = radius[i]
+    r = of_ball(radius, i)
     far = False
     if ti.static(not warm):
         far = beyond_reach(clear[i], r, h * h * vi.norm_sqr())
@@ -557,7 +557,7 @@ def start_step(air: ti.template(), contact: ti.template(), gravity: ti.template(
         xi = x[i]
         x1, v1, w1 = xi, vec3(0.0), vec3(0.0)
         if status[i] != AT_REST and status[i] != OUT_OF_BOUNDS:
-            coef = coefficients(air, ti.Vector([radius[i]]), ti.Vector([mass[i]]))
+            coef = coefficients(air, ti.Vector([of_ball(radius, i)]), ti.Vector([of_ball(mass, i)]))
             S1 = step_free(lane_state(xi, v[i], w[i]), h, integrator, coef, air, gravity)
             x1, v1, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
             if tracking:  # else the flight records hold one entry each, not read (see State.tracking)
@@ -628,7 +628,7 @@ def finish(i, v_final, w_final, dx, touching, contact: ti.template(), h, half_sk
     ``x_free`` (split at a plane's time of impact, overlaps projected out), status, rest timer,
     out-of-bounds; sets ``flag[0]`` when the neighbour lists must be rebuilt before the next step."""
     st = status[i]
-    xi, ri = x[i], radius[i]
+    xi, ri = x[i], of_ball(radius, i)
     x1 = x_free[i] + h * (v_final - v_free[i])
     # no plane or terrain patch within reach of the flight or the end point (see surface_clearance)
     moved = ti.max((x_free[i] - xi).norm_sqr(), (x1 - xi).norm_sqr())

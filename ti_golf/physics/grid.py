@@ -28,7 +28,7 @@ import math
 import numpy as np
 import taichi as ti
 
-from .types import float_array, int_array, pair_table, real, vec3_array
+from .types import float_array, int_array, of_ball, pair_table, real, vec3_array
 
 int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
 real_table = ti.types.ndarray(dtype=real, ndim=2)
@@ -139,7 +139,7 @@ def apart_balls(v: vec3_array, radius: float_array, v_cut: real, r_cut: real,
     for i in range(v.shape[0]):
         q = v[i].norm_sqr()
         ti.atomic_max(s2, q)
-        if q > v_cut * v_cut or radius[i] > r_cut:  # as :func:`is_apart` tests it
+        if q > v_cut * v_cut or of_ball(radius, i) > r_cut:  # as :func:`is_apart` tests it
             k = ti.atomic_add(apart_ids[last], 1)
             if k < last:
                 apart_ids[k] = i
@@ -155,7 +155,7 @@ def is_apart(v: ti.template(), radius: ti.template(), i, v_cut, r_cut, n_apart):
     are any."""
     apart = False
     if n_apart > 0:
-        apart = v[i].norm_sqr() > v_cut * v_cut or radius[i] > r_cut
+        apart = v[i].norm_sqr() > v_cut * v_cut or of_ball(radius, i) > r_cut
     return apart
 
 
@@ -398,7 +398,7 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin
     :func:`pair_reach`. Without ``scan_apart`` (a GPU, see ``APART_MAX``) the cells are sized
     for all balls, and the balls apart still own none of their pairs with the others."""
     xi = x[i]
-    ri = radius[i]
+    ri = of_ball(radius, i)
     n_up, n_low = 0, 0
     apart_i = is_apart(v, radius, i, v_cut, r_cut, n_apart)
     tested = 0  # candidates tested, for the bound on the thread's loop iterations (see LOOP_CAP)
@@ -406,7 +406,7 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin
         tested = x.shape[0]
         for j in range(x.shape[0]):
             if j != i:
-                n_up, n_low = list_pair(i, j, xi, x[j], ri + radius[j], skin, v, h, 1, True,
+                n_up, n_low = list_pair(i, j, xi, x[j], ri + of_ball(radius, j), skin, v, h, 1, True,
                                         is_apart(v, radius, j, v_cut, r_cut, n_apart), upper, lower, n_up, n_low)
     else:
         c = cell_of(xi, inv_cell)  # recomputed, not stored: 12 bytes per ball less
@@ -429,12 +429,12 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin
                     # a ball of the row (not of another cell sharing its buckets), not one listed apart
                     if (j != i and cj[1] == row[1] and cj[2] == row[2] and ti.abs(cj[0] - c[0]) <= 1
                             and not (apart_j and scan_apart != 0)):
-                        n_up, n_low = list_pair(i, j, xi, xj, ri + radius[j], skin, v, h, fast, apart_i, apart_j,
-                                                upper, lower, n_up, n_low)
+                        n_up, n_low = list_pair(i, j, xi, xj, ri + of_ball(radius, j), skin, v, h, fast, apart_i,
+                                                apart_j, upper, lower, n_up, n_low)
         for f in range(n_apart * scan_apart):
             j = apart_ids[f]
-            n_up, n_low = list_pair(i, j, xi, x[j], ri + radius[j], skin, v, h, 1, False, True, upper, lower, n_up,
-                                    n_low)
+            n_up, n_low = list_pair(i, j, xi, x[j], ri + of_ball(radius, j), skin, v, h, 1, False, True, upper, lower,
+                                    n_up, n_low)
         tested += 18 + n_apart * scan_apart
     # the insertions' shifts: at most n(n − 1)/2 for a list of n
     return n_up, n_low, tested + (n_up * n_up + n_low * n_low) // 2
@@ -641,11 +641,11 @@ def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, v: ti.templa
     if n_apart > APART_MAX:
         n_apart = 0
     for i in range(x.shape[0]):
-        xi, ri = x[i], radius[i]
+        xi, ri = x[i], of_ball(radius, i)
         apart_i = is_apart(v, radius, i, v_cut, r_cut, n_apart)
         n_up, n_low = 0, 0
         for j in range(x.shape[0]):  # in id order: the lists come out sorted
-            reach = ri + radius[j] + pair_reach(skin, h, v[i], v[j])
+            reach = ri + of_ball(radius, j) + pair_reach(skin, h, v[i], v[j])
             if j != i and (x[j] - xi).norm_sqr() < reach * reach:  # the test of list_ball
                 if owns(xi, x[j], i, j, apart_i, is_apart(v, radius, j, v_cut, r_cut, n_apart)):
                     upper[i, n_up] = j

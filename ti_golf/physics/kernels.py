@@ -11,8 +11,8 @@ from .aero import ROWS, SPIN, V, W, X, coefficients, column, row
 from .contact import plane_impulse, plane_position, rest_update
 from .integrate import IN_FLIGHT, LANDED, NOT_TRACKED, apex_in_step, landing_in_step, step_free, track_flight
 from .terrain import outside, surface, surface_contact, terrain_position
-from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, vec3, vec3_array,
-                    vec3_table)
+from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, of_ball,
+                    vec3, vec3_array, vec3_table)
 
 
 @ti.func
@@ -67,8 +67,8 @@ def fly_to_landing(
                 S[V + c, l] = v0[ids[l]][c]
                 S[W + c, l] = w0[ids[l]][c]
             S[SPIN, l] = w0[ids[l]].norm()
-            rad[l] = radius[ids[l]]
-            mas[l] = mass[ids[l]]
+            rad[l] = of_ball(radius, ids[l])
+            mas[l] = of_ball(mass, ids[l])
         coef = coefficients(air, rad, mas)
         level = row(S, 1)
         state = ti.Vector([IN_FLIGHT] * lanes, dt=ti.i32)
@@ -168,8 +168,8 @@ def advance(
     for i in range(x.shape[0]):
         st = status[i]
         if st != AT_REST and st != OUT_OF_BOUNDS:
-            r = radius[i]
-            coef = coefficients(air, ti.Vector([r]), ti.Vector([mass[i]]))
+            r = of_ball(radius, i)
+            coef = coefficients(air, ti.Vector([r]), ti.Vector([of_ball(mass, i)]))
             xi, vi, wi = x[i], v[i], w[i]
             rt = rest_time[i]
             fl, top, tl, lx, lv, level = NOT_TRACKED, 0.0, 0.0, vec3(0.0), vec3(0.0), 0.0

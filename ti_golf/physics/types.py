@@ -52,3 +52,10 @@ TerrainParams = ti.types.struct(
 """Height-field terrain parameters (see :mod:`ti_golf.physics.terrain`)."""
 int_grid = ti.types.ndarray(dtype=ti.i32, ndim=2)
 """2-D int array (terrain cell surface types)."""
+
+
+@ti.func
+def of_ball(a: ti.template(), i):
+    """Entry ``i`` of a per-ball array of shape (N,), or its only entry when every ball shares the
+    value (shape (1,): the radius and mass of balls all alike, see ``Model``)."""
+    return a[ti.min(i, a.shape[0] - 1)]
