@@ -146,6 +146,46 @@ def _owns(x, i, j, apart):
     return bool(ahead > 0 or (ahead == 0 and j > i))
 
 
+def test_a_ball_that_moved_past_half_the_skin_is_seen_wherever_it_is():
+    # the positions at the last list build are kept in f32 (collide.moved_past), which rounds
+    # them by up to 2^-24·|x|: 6e-3 m at 100 km, more than half the skin (1 mm). The rebuild test
+    # adds |x_build|·2^-23, so a ball that moved more than half the skin from where it was at
+    # the build is seen as such (lists rebuilt), near the origin and far from it, in every
+    # direction; and near the origin a ball that moved well within half the skin is not
+    import taichi as ti
+
+    from ti_golf.physics.collide import moved_past
+    from ti_golf.physics.types import vec3, vec3_array, vec3f, vec3f_array
+
+    def moved(x1, x_build, half_skin, out):
+        for i in range(x1.shape[0]):
+            out[i] = ti.cast(moved_past(x1[i], x_build[i], 0.0, half_skin), ti.i32)
+
+    # (this module's annotations are strings: from __future__ import annotations)
+    moved.__annotations__ = {"x1": vec3_array, "x_build": vec3f_array, "half_skin": float,
+                             "out": ti.types.ndarray(ti.i32, ndim=1)}
+    moved = ti.kernel(moved)
+
+    rng = np.random.default_rng(3)
+    n, half_skin = 20_000, 1e-3
+    scale = 10.0 ** rng.uniform(-1, 5, n)[:, None]  # 0.1 m to 100 km from the origin
+    p = rng.normal(size=(n, 3)) * scale
+    u = rng.normal(size=(n, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    out = ti.ndarray(ti.i32, n)
+    for step, expect in ((1.0001 * half_skin, 1), (0.9 * half_skin, 0)):
+        x1, xb = ti.ndarray(vec3, n), ti.ndarray(vec3f, n)
+        x1.from_numpy(p + step * u)
+        xb.from_numpy(p.astype(np.float32))
+        moved(x1, xb, half_skin, out)
+        seen = out.to_numpy()
+        if expect:
+            assert seen.all(), p[seen == 0][:3]
+        else:  # within half the skin: not seen where the margin is small (within 100 m of the origin)
+            near = np.linalg.norm(p, axis=1) < 100.0
+            assert not seen[near].any() and near.sum() > 1000
+
+
 def test_a_boulder_owns_none_of_its_pairs_so_the_impulse_table_stays_narrow():
     # the upper table keeps each pair's impulse and geometry (52 bytes a pair in f64) and is as
     # wide as the longest upper list, for every ball; a ball set apart (grid.APART_MAX: here a

@@ -11,7 +11,7 @@ import taichi as ti
 from .errors import SimulationError
 from .model import Model
 from .physics import collide, grid
-from .physics.types import pair_entry, vec3
+from .physics.types import pair_entry, vec3, vec3f
 from .runtime import ensure_init, np_float, on_cpu, plain_compile
 from .state import State
 
@@ -152,7 +152,7 @@ class CollisionSolver:
         self.sorted_ids = ti.ndarray(ti.i32, n)
         self.start = ti.ndarray(ti.i32, self.mask + 2)
         self.chunk_start = ti.ndarray(ti.i32, grid.scan_chunks(self.mask + 1))
-        self.x_at_build = ti.ndarray(vec3, n)
+        self.x_at_build = ti.ndarray(vec3f, n)  # f32: only tested against half the skin (collide.moved_past)
         self.x_free = ti.ndarray(vec3, n)
         self.v_free = ti.ndarray(vec3, n)
         self.calm = ti.ndarray(float, n)  # least rest timer of each ball and the balls it touches [s]

@@ -28,7 +28,15 @@ import math
 import numpy as np
 import taichi as ti
 
-from .types import float_array, int_array, of_ball, pair_table, real, vec3_array
+from .types import (
+    float_array,
+    int_array,
+    of_ball,
+    pair_table,
+    real,
+    vec3_array,
+    vec3f_array,
+)
 
 int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
 real_table = ti.types.ndarray(dtype=real, ndim=2)
@@ -229,7 +237,7 @@ def list_neighbours(
     n_upper: int_array,
     lower: int_table,
     n_lower: int_array,
-    x_at_build: vec3_array,
+    x_at_build: vec3f_array,
     longest: int_array,
     stored_sorted: ti.template(),
 ) -> ti.types.vector(3, ti.i32):
@@ -267,7 +275,7 @@ def list_neighbours(
                                        apart_ids, n_apart, scan_apart, start, sorted_ids, upper, lower, stored_sorted)
         n_upper[i] = ti.min(n_up, upper.shape[1])
         n_lower[i] = ti.min(n_low, lower.shape[0])
-        x_at_build[i] = x[i]
+        x_at_build[i] = ti.cast(x[i], ti.f32)
         ti.atomic_max(longest[0], n_up)
         ti.atomic_max(longest[1], n_low)
         ti.atomic_max(most_loops, loops)
@@ -654,7 +662,7 @@ def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, v: ti.templa
                     lower[n_low, i] = j
                     n_low += 1
         n_upper[i], n_lower[i] = n_up, n_low
-        x_at_build[i] = xi
+        x_at_build[i] = ti.cast(xi, ti.f32)
     bits = slot_bits(upper.shape[1])
     for i in range(x.shape[0]):
         link_ball(i, bits, upper, n_upper, lower, n_lower)

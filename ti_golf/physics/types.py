@@ -37,6 +37,10 @@ vec3_array = ti.types.ndarray(dtype=vec3, ndim=1)
 float_array = ti.types.ndarray(dtype=real, ndim=1)
 int_array = ti.types.ndarray(dtype=ti.i32, ndim=1)
 vec3_table = ti.types.ndarray(dtype=vec3, ndim=2)
+vec3f = ti.types.vector(3, ti.f32)
+"""3-vector of f32 whatever the precision (positions kept only to test how far balls moved, see
+``collide.moved_past``)."""
+vec3f_array = ti.types.ndarray(dtype=vec3f, ndim=1)
 pair_entry = ti.types.vector(5, real)
 """A pair's entry in a sweep: its impulse [N·s], inverse distance [1/m] and gap [m] (see collide.owned_pairs)."""
 pair_table = ti.types.ndarray(dtype=pair_entry, ndim=2)
