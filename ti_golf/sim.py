@@ -81,8 +81,8 @@ class Simulation:
             track = balls.track
         x = _as_vectors(x, "x")
         n = len(x)
-        v = np.zeros((n, 3)) if v is None else _as_vectors(v, "v", n)
-        w = np.zeros((n, 3)) if w is None else _as_vectors(w, "w", n)
+        v = None if v is None else _as_vectors(v, "v", n)  # None: at rest (no numpy zeros of a big pile)
+        w = None if w is None else _as_vectors(w, "w", n)
         radius = _per_ball(scene.ball.radius if radius is None else radius, n, "radius")
         mass = _per_ball(scene.ball.mass if mass is None else mass, n, "mass")
         tracking = bool(np.any(track))  # else no flight record is kept (a pile: 96 bytes per ball less in f64)
@@ -307,7 +307,9 @@ def _as_vectors(a: Any, name: str, n: int | None = None) -> np.ndarray:
 
 
 def _per_ball(a: Any, n: int, name: str) -> np.ndarray:
-    arr = np.broadcast_to(np.asarray(a, dtype=np.float64), (n,)).copy()
+    """Per-ball values (N,) from a scalar or an array, read-only: one number broadcast, when it is
+    one, takes no memory per ball (the model copies what it keeps)."""
+    arr = np.broadcast_to(np.asarray(a, dtype=np.float64), (n,))
     if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
         raise ValueError(f"{name} must be finite and > 0 for every ball")
     return arr

@@ -88,15 +88,19 @@ class State:
         """Set the per-ball array ``name`` from numpy values given by ball id."""
         getattr(self, name).from_numpy(np.ascontiguousarray(self.from_ids(a)))
 
-    def reset(self, x: np.ndarray, v: np.ndarray, w: np.ndarray, track: np.ndarray | bool = True) -> None:
-        """Set positions, velocities and spins (each (N, 3)); start flight tracking where ``track``
-        (ignored while not ``tracking``). One array at a time, so that few numpy copies of a
-        large pile live at once."""
+    def reset(self, x: np.ndarray, v: np.ndarray | None, w: np.ndarray | None,
+              track: np.ndarray | bool = True) -> None:
+        """Set positions, velocities and spins (each (N, 3); ``None``: zero); start flight tracking
+        where ``track`` (ignored while not ``tracking``). One array at a time, so that few numpy
+        copies of a large pile live at once."""
         f, n = np_float(), self.n
         x = np.ascontiguousarray(x, dtype=f).reshape(n, 3)
         self.write("x", x)
-        self.write("v", np.asarray(v, dtype=f).reshape(n, 3))
-        self.write("w", np.asarray(w, dtype=f).reshape(n, 3))
+        for name, values in (("v", v), ("w", w)):
+            if values is None:
+                getattr(self, name).fill(0.0)
+            else:
+                self.write(name, np.asarray(values, dtype=f).reshape(n, 3))
         self.status.from_numpy(np.zeros(n, np.int32))  # the same in every storage order
         self.rest_time.from_numpy(np.zeros(n, f))
         if self.tracking:
