@@ -147,7 +147,6 @@ class CollisionSolver:
             capacity = max(capacity, n - 1, 1)
         self.capacity = (capacity, capacity)
         self.rebuilds = 0
-        self.bucket = ti.ndarray(ti.i32, n)
         self.rank = ti.ndarray(ti.i32, n)
         self.sorted_ids = ti.ndarray(ti.i32, n)
         self.start = ti.ndarray(ti.i32, self.mask + 2)
@@ -207,7 +206,7 @@ class CollisionSolver:
                 self.lower = ti.ndarray(ti.i32, (self.capacity[1], n))  # column i: ball i's list (see grid)
             longest = grid.list_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, *self._hash,
                                            self.skin, state.v, h, int(fast), self.v_cut, self.r_cut, self.apart_ids,
-                                           self.n_apart, int(scan_apart), self.bucket, self.rank, self.start,
+                                           self.n_apart, int(scan_apart), self.rank, self.start,
                                            self.chunk_start, self.sorted_ids, self.upper, self.n_upper, self.lower,
                                            self.n_lower, self.x_at_build, self.flag, self.reorder)
             if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
@@ -290,10 +289,10 @@ class CollisionSolver:
         grid's bucket starts stay valid for :func:`grid.list_neighbours` (``stored_sorted``).
         Scratch arrays of the same type take the gathered values and the old arrays become scratch,
         so no array is allocated."""
-        grid.storage_order(state.x, 1.0 / self.cell, self.mask, *self._hash, self.bucket, self.rank,
+        grid.storage_order(state.x, 1.0 / self.cell, self.mask, *self._hash, self.rank,
                            self.start, self.chunk_start, self.sorted_ids)
         order = self.sorted_ids
-        spares = [self.v_free, self.calm, self.bucket]  # scratch between steps: a vec3, a float and an int array
+        spares = [self.v_free, self.calm, self.rank]  # scratch between steps: a vec3, a float and an int array
         model = self._model
         per_ball = [(state, name) for name in state.per_ball()] + [(model, name) for name in model.per_ball()]
         for owner, name in per_ball:
@@ -302,7 +301,7 @@ class CollisionSolver:
             grid.gather(values, order, spares[k])
             setattr(owner, name, spares[k])
             spares[k] = values
-        self.v_free, self.calm, self.bucket = spares
+        self.v_free, self.calm, self.rank = spares
         for column in range(self.lam_plane.shape[1]):
             grid.gather_column(self.lam_plane, column, order, self.calm)
         step = order.to_numpy()

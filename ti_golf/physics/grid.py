@@ -227,7 +227,6 @@ def list_neighbours(
     n_apart: ti.i32,
     scan_apart: ti.i32,
     # scratch:
-    bucket: int_array,
     rank: int_array,
     start: int_array,
     chunk_start: int_array,
@@ -252,10 +251,11 @@ def list_neighbours(
     that the few first entries of consecutive balls lie side by side however wide one ball's list
     makes it (a boulder's hundreds: with rows, every ball's list fell on cache lines and pages of
     its own, and the sweeps' gathers took four times as long). One launch (a launch from Python costs
-    about 0.1 ms; the grid took five). The counting sort: each ball's bucket and its rank among the
-    balls of that bucket (an integer atomic add, counting in ``start``), the buckets' starts
+    about 0.1 ms; the grid took five). The counting sort: each ball's rank among the balls of its
+    bucket (an integer atomic add, counting in ``start``), the buckets' starts
     (:func:`bucket_starts`; ``start`` has one entry more than there are buckets, ``chunk_start`` is
-    its scratch), then the ball ids grouped by bucket: ``sorted_ids[start[b] : start[b + 1]]`` are
+    its scratch), then the ball ids grouped by bucket (each ball's bucket hashed again, rather
+    than kept: 4 bytes per ball less): ``sorted_ids[start[b] : start[b + 1]]`` are
     the balls of bucket b. Returns the longest upper and lower lists found, also left in
     ``longest[0:2]`` (they may exceed the tables' widths: the caller then rebuilds wider), and a
     bound on the most loop iterations a ball's thread ran (see ``LOOP_CAP``).
@@ -266,7 +266,7 @@ def list_neighbours(
     longest[0], longest[1] = 0, 0
     most_loops = 0
     if ti.static(not stored_sorted):
-        counting_sort(x, inv_cell, mask, origin, stride, bucket, rank, start, chunk_start, sorted_ids)
+        counting_sort(x, inv_cell, mask, origin, stride, rank, start, chunk_start, sorted_ids)
     for idx in range(x.shape[0]):
         i = idx  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         if ti.static(not stored_sorted):
@@ -283,30 +283,29 @@ def list_neighbours(
 
 
 @ti.func
-def counting_sort(x: ti.template(), inv_cell, mask, origin, stride, bucket: ti.template(), rank: ti.template(),
-                  start: ti.template(), chunk_start: ti.template(), sorted_ids: ti.template()):
+def counting_sort(x: ti.template(), inv_cell, mask, origin, stride, rank: ti.template(), start: ti.template(),
+                  chunk_start: ti.template(), sorted_ids: ti.template()):
     """The grid's counting sort (see :func:`list_neighbours`): ``sorted_ids[start[b] : start[b + 1]]``
     are the balls of bucket b, in the order their threads took ranks (an integer atomic add)."""
     for b in range(start.shape[0]):
         start[b] = 0
     for i in range(x.shape[0]):
         b = bucket_of(cell_of(x[i], inv_cell), mask, origin, stride)
-        bucket[i] = b
         rank[i] = ti.atomic_add(start[b + 1], 1)  # bucket b's count, until the scan turns it into a start
     bucket_starts(start, chunk_start)
     for i in range(x.shape[0]):
-        sorted_ids[start[bucket[i]] + rank[i]] = i
+        sorted_ids[start[bucket_of(cell_of(x[i], inv_cell), mask, origin, stride)] + rank[i]] = i
 
 
 @ti.kernel
-def storage_order(x: vec3_array, inv_cell: float, mask: ti.i32, origin: ivec3, stride: ivec3, bucket: int_array,
-                  rank: int_array, start: int_array, chunk_start: int_array, sorted_ids: int_array):
+def storage_order(x: vec3_array, inv_cell: float, mask: ti.i32, origin: ivec3, stride: ivec3, rank: int_array,
+                  start: int_array, chunk_start: int_array, sorted_ids: int_array):
     """The order in which to store the balls so that neighbours lie close in memory: ``sorted_ids``
     lists the ball ids bucket by bucket (the grid's counting sort), and within a bucket by
     position, y then z then x (then id), as the buckets of a dense hash run (:func:`hash_strides`),
     so the order does not depend on thread scheduling. The balls of each row of cells, and of
     the rows a ball's neighbours lie in, end up in runs of consecutive indices."""
-    counting_sort(x, inv_cell, mask, origin, stride, bucket, rank, start, chunk_start, sorted_ids)
+    counting_sort(x, inv_cell, mask, origin, stride, rank, start, chunk_start, sorted_ids)
     for b in range(start.shape[0] - 1):  # a bucket holds a few balls: an insertion sort
         for k in range(start[b] + 1, start[b + 1]):
             j = sorted_ids[k]
