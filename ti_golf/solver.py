@@ -155,7 +155,7 @@ class CollisionSolver:
         self.x_free = ti.ndarray(vec3, n)
         self.v_free = ti.ndarray(vec3, n)
         self.calm = ti.ndarray(float, n)  # least rest timer of each ball and the balls it touches [s]
-        self.clear = ti.ndarray(float, n)  # least gap of each ball to the planes [m] (collide.plane_clearance)
+        self.clear = ti.ndarray(ti.f32, n)  # least gap of each ball to the planes [m] (collide.surface_clearance)
         self.n_upper, self.n_lower = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
         self.upper = self.lower = self.lam = self.impulse = None
         self.impact = ti.ndarray(ti.i32, n)  # each ball's first impact in a sweep (collide.impact_keys)

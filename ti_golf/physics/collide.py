@@ -46,8 +46,8 @@ from .grid import int_table, owner_slot, real_table, relist_all_pairs, slot_bits
 from .integrate import IN_FLIGHT, step_free, track_flight
 from .kernels import lane_state
 from .terrain import outside, same_cell, surface, surface_contact, terrain_clearance, terrain_position
-from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, of_ball,
-                    pair_table, real, vec3, vec3_array, vec3f_array)
+from .types import (AirParams, ContactParams, TerrainParams, f32_array, float_array, float_grid, int_array, int_grid,
+                    of_ball, pair_table, real, vec3, vec3_array, vec3f_array)
 
 QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
 FAR = 1e30  # the surface clearance of a ball when there are no planes and no terrain (see surface_clearance)
@@ -210,6 +210,18 @@ def surface_clearance(i, x: ti.template(), x_free_i, radius: ti.template(), plan
 
 
 @ti.func
+def rounded_down(c):
+    """``c`` [m] as an f32 no larger than ``c``, for the ``clear`` array (f32 whatever the
+    precision: 4 bytes per ball less in f64): a clearance may only err on the near side, where
+    it makes the ball visit planes that it cannot reach (no impulse, no change). In f64 the value
+    is first lowered by 2^-23·|c|, twice what rounding to f32 can add."""
+    low = c
+    if ti.static(real == ti.f64):
+        low = c - ti.abs(c) * 2.0**-23
+    return ti.cast(low, ti.f32)
+
+
+@ti.func
 def beyond_reach(clear, r, reach_sqr):
     """Whether a ball of radius ``r`` with surface clearance ``clear`` (:func:`surface_clearance`)
     stays more than 2 % of a radius from every plane and the terrain while its gaps shrink by at
@@ -355,7 +367,7 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
                     vi, wi = plane_jolt(P, lam_p - lam_plane[i, p], vi, wi, r, n, contact.mu_roll)
                 lam_plane[i, p] = lam_p
                 if lam_p > 0.0:
-                    clear[i] = NEAR
+                    clear[i] = ti.cast(NEAR, ti.f32)
     if terrain.on != 0 and not far:
         q = plane_n.shape[0]
         if ti.static(not warm) or lam_plane[i, q] > 0.0:
@@ -372,7 +384,7 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
                     vi, wi = plane_jolt(P, lam_p - lam_plane[i, q], vi, wi, r, n, ct.mu_roll)
                 lam_plane[i, q] = lam_p
                 if lam_p > 0.0:
-                    clear[i] = NEAR
+                    clear[i] = ti.cast(NEAR, ti.f32)
     return vi, wi
 
 
@@ -416,7 +428,7 @@ def collision_step(
     x_free: vec3_array,
     v_free: vec3_array,
     calm: float_array,
-    clear: float_array,
+    clear: f32_array,
     J: pair_table,
     impact: int_array,
     # Flight record in/out (with launch_height: one entry each when no ball is tracked, then not read):
@@ -566,7 +578,7 @@ def start_step(air: ti.template(), contact: ti.template(), gravity: ti.template(
                         xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i],
                         land_v[i])
         x_free[i], v_free[i] = x1, v1
-        clear[i] = surface_clearance(i, x, x1, radius, plane_p, plane_n, terrain, heights, lam_plane)
+        clear[i] = rounded_down(surface_clearance(i, x, x1, radius, plane_p, plane_n, terrain, heights, lam_plane))
         dv, calm[i] = warm_start(i, x, radius, mass, status, rest_time, upper, n_upper, lower, n_lower, bits,
                                  lam, J)
         if status[i] != OUT_OF_BOUNDS and calm[i] != QUIET:
