@@ -122,8 +122,7 @@ def release_freed_memory() -> None:
     Setting up a large simulation makes numpy copies of its balls (positions, velocities, radii
     given by id, converted to the float type), freed once Taichi holds them; glibc keeps much of
     such memory in the process. For the 131,072-ball bench pile that was 50–60 bytes per ball
-    of the process's resident memory for the rest of the run (2026-11-23). Takes a few
-    milliseconds."""
+    of the process's resident memory for the rest of the run (2026-11-23); the call took 0.2 ms."""
     if not sys.platform.startswith("linux"):
         return
     try:
@@ -174,10 +173,11 @@ def plain_compile() -> Iterator[None]:
     runs; 2.1e5 in f32 with 16 lanes). Likewise for the collision step of small scenes (the
     ``serial`` variant of ``physics.collide.collision_step``): 50 s against 5–6 s, and 3.6 against
     4.5 µs per step of a six-ball cradle. The parallel collision step keeps the passes: there
-    they buy about 10 % speed for 5x the compile time (27 s against 5 s). With 8 sweeps (the
-    ``ball_pit`` scene) they cost more and buy more: 146 s against 12 s of compiling, and the
-    step's kernels took 46.4–51.0 ms per step of a 65,536-ball pile with them, 64.5–71.1 without
-    (sums of kernel-profiler minima, two alternating runs each, 2026-11-22 on a slow day).
+    they buy about 10 % speed for 5x the compile time (27 s against 5 s). With 8 sweeps in one
+    kernel (the ``ball_pit`` scene, before a step was split into launches of at most 4 sweeps:
+    ``solver.UNROLL_MAX_SWEEPS``) they cost more and buy more: 146 s against 12 s of compiling,
+    and the step's kernels took 46.4–51.0 ms per step of a 65,536-ball pile with them, 64.5–71.1
+    without (sums of kernel-profiler minima, two alternating runs each, 2026-11-22 on a slow day).
 
     On the CPU only: elsewhere kernels have one lane (short bodies, quick to compile with the
     passes), and Taichi's SPIR-V code generator (Vulkan) cannot compile the sweep kernel without
