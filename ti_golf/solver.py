@@ -35,9 +35,9 @@ UNROLL_MAX_SWEEPS = 4
 (:func:`sweep_launches`). Compiling a kernel grows faster than the sweeps unrolled in it:
 measured on first use, from an empty kernel cache, for a 512-ball pile on the 2-core benchmark
 machine (the whole run, the grid's kernels included): 32 s with 2 sweeps in one launch, 51 s with
-4 and 156 s (and 1.7 GB of memory) with 8. Each launch more costs about 0.7 ms (the kernel's
-32 arrays and parameter structs, set from Python): with a sweep per launch, the 8 sweeps of a
-512-ball pile took 11 ms per step against 4.2 unrolled."""
+4 and 156 s (and 1.7 GB of memory) with 8, and 58 s (645 MB) in two launches of 4. Each launch
+costs up to 0.8 ms (the kernel's 32 arrays and parameter structs, set from Python): with a sweep
+per launch, the second step of that pile took 11.0 ms, against 4.2 unrolled and 4.3 in two."""
 
 
 def sweep_launches(iterations: int) -> list[tuple[bool, int, bool]]:
