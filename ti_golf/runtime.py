@@ -97,9 +97,10 @@ def init(arch: str | None = None, precision: str | None = None, *, debug: bool =
 
 
 def exit_process(code: int) -> NoReturn:
-    """End the process with exit status ``code`` after Python's own exit work (Taichi's runtime
-    reset, which writes the kernels compiled in this process to the offline cache; the ``atexit``
-    handlers; the streams flushed), but without the C++ static destructors that follow it.
+    """End the process with exit status ``code`` after Python's own exit work (the ``atexit``
+    handlers, such as the one that closes the GGUI window while the runtime still stands; then
+    Taichi's runtime reset, which writes the kernels compiled in this process to the offline
+    cache; the streams flushed), but without the C++ static destructors that follow it.
 
     With Taichi 1.7.4 on the CPU those destructors crash now and then, after the last line of
     output (SIGSEGV, SIGBUS or SIGABRT, no Python frame left to blame): on the 2-core benchmark
@@ -107,9 +108,9 @@ def exit_process(code: int) -> NoReturn:
     (or −7, −6) instead of 2 in 10 of 30 runs, and a bare ``ti.init`` then ``sys.exit`` in 1 of 30;
     ending this way, 0 of 40 (2026-11-23)."""
     try:
+        atexit._run_exitfuncs()
         if _info is not None:
             ti.reset()
-        atexit._run_exitfuncs()
     finally:
         sys.stdout.flush()
         sys.stderr.flush()
