@@ -46,8 +46,8 @@ from .grid import int_table, owner_slot, real_table, relist_all_pairs, slot_bits
 from .integrate import IN_FLIGHT, step_free, track_flight
 from .kernels import lane_state
 from .terrain import outside, same_cell, surface, surface_contact, terrain_clearance, terrain_position
-from .types import (AirParams, ContactParams, TerrainParams, f32_array, float_array, float_grid, int_array, int_grid,
-                    of_ball, pair_table, real, vec3, vec3_array, vec3f_array)
+from .types import (AirParams, ContactParams, TerrainParams, f32_array, f32_table, float_array, float_grid, int_array,
+                    int_grid, of_ball, pair_table, real, vec3, vec3_array, vec3f_array)
 
 QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
 FAR = 1e30  # the surface clearance of a ball when there are no planes and no terrain (see surface_clearance)
@@ -341,7 +341,10 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
                      x: ti.template(), x_free: ti.template(), lam_plane: ti.template()):
     """Ball i's contacts with the planes, then the terrain (the plane of the patch under its
     free-flight end point; its resting impulse is kept in the column after the planes' in
-    ``lam_plane``), applied in turn to (vi, wi): the warm start (``warm``) or a sweep. A sweep skips
+    ``lam_plane``, in f32: the planes' resting impulses are the only per-ball impulses a ball
+    keeps, 4 bytes instead of 8 per plane and ball; a ball rounds its own λ, so two balls on a
+    plane cannot disagree, and the next sweep or step corrects what the rounding left, 2^-24 of the
+    impulse), applied in turn to (vi, wi): the warm start (``warm``) or a sweep. A sweep skips
     them when the ball is too far from all of them (``clear[i]``, see :func:`surface_clearance`)
     to touch one within the step at its speed, and marks the ball ``NEAR`` once it rests on one
     (that resting impulse must be visited in later sweeps, to be given back). Returns (v, ω)."""
@@ -354,35 +357,37 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
         n_planes = 0
     for p in range(n_planes):
         n = plane_n[p]
+        lam0 = ti.cast(lam_plane[i, p], real)  # f32 in the table (see above)
         if ti.static(warm):
-            if lam_plane[i, p] > 0.0:
-                P = warm_impulse(n, vi, wi, r, vec3(0.0), vec3(0.0), 0.0, 1.0, lam_plane[i, p], contact.mu)
-                vi, wi = plane_jolt(P, lam_plane[i, p], vi, wi, r, n, contact.mu_roll)
+            if lam0 > 0.0:
+                P = warm_impulse(n, vi, wi, r, vec3(0.0), vec3(0.0), 0.0, 1.0, lam0, contact.mu)
+                vi, wi = plane_jolt(P, lam0, vi, wi, r, n, contact.mu_roll)
         else:
             gap = (x[i] - plane_p[p]).dot(n) - r
-            if gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam_plane[i, p] > 0.0:  # else no impulse (pair_impulse)
-                P, lam_p, _, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam_plane[i, p],
+            if gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam0 > 0.0:  # else no impulse (pair_impulse)
+                P, lam_p, _, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam0,
                                               contact.e, contact.mu, v_inelastic, h)
                 if P.dot(n) != 0.0:
-                    vi, wi = plane_jolt(P, lam_p - lam_plane[i, p], vi, wi, r, n, contact.mu_roll)
-                lam_plane[i, p] = lam_p
+                    vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n, contact.mu_roll)
+                lam_plane[i, p] = ti.cast(lam_p, ti.f32)
                 if lam_p > 0.0:
                     clear[i] = ti.cast(NEAR, ti.f32)
     if terrain.on != 0 and not far:
         q = plane_n.shape[0]
-        if ti.static(not warm) or lam_plane[i, q] > 0.0:
+        lam0 = ti.cast(lam_plane[i, q], real)
+        if ti.static(not warm) or lam0 > 0.0:
             pt, n = surface(heights, terrain, x_free[i])
             ct = surface_contact(contact, surface_table, terrain_cells, heights, terrain, x_free[i])
             if ti.static(warm):
-                P = warm_impulse(n, vi, wi, r, vec3(0.0), vec3(0.0), 0.0, 1.0, lam_plane[i, q], ct.mu)
-                vi, wi = plane_jolt(P, lam_plane[i, q], vi, wi, r, n, ct.mu_roll)
+                P = warm_impulse(n, vi, wi, r, vec3(0.0), vec3(0.0), 0.0, 1.0, lam0, ct.mu)
+                vi, wi = plane_jolt(P, lam0, vi, wi, r, n, ct.mu_roll)
             else:
                 gap = (x[i] - pt).dot(n) - r
-                P, lam_p, _, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam_plane[i, q],
+                P, lam_p, _, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam0,
                                               ct.e, ct.mu, v_inelastic, h)
                 if P.dot(n) != 0.0:
-                    vi, wi = plane_jolt(P, lam_p - lam_plane[i, q], vi, wi, r, n, ct.mu_roll)
-                lam_plane[i, q] = lam_p
+                    vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n, ct.mu_roll)
+                lam_plane[i, q] = ti.cast(lam_p, ti.f32)
                 if lam_p > 0.0:
                     clear[i] = ti.cast(NEAR, ti.f32)
     return vi, wi
@@ -417,7 +422,7 @@ def collision_step(
     n_lower: int_array,
     x_at_build: vec3f_array,
     lam: real_table,
-    lam_plane: real_table,
+    lam_plane: f32_table,
     # State in/out:
     x: vec3_array,
     v: vec3_array,

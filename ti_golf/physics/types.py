@@ -42,6 +42,7 @@ vec3f = ti.types.vector(3, ti.f32)
 ``collide.moved_past``)."""
 vec3f_array = ti.types.ndarray(dtype=vec3f, ndim=1)
 f32_array = ti.types.ndarray(dtype=ti.f32, ndim=1)
+f32_table = ti.types.ndarray(dtype=ti.f32, ndim=2)
 pair_entry = ti.types.vector(5, real)
 """A pair's entry in a sweep: its impulse [N·s], inverse distance [1/m] and gap [m] (see collide.owned_pairs)."""
 pair_table = ti.types.ndarray(dtype=pair_entry, ndim=2)
