@@ -341,10 +341,10 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
                      x: ti.template(), x_free: ti.template(), lam_plane: ti.template()):
     """Ball i's contacts with the planes, then the terrain (the plane of the patch under its
     free-flight end point; its resting impulse is kept in the column after the planes' in
-    ``lam_plane``, in f32: the planes' resting impulses are the only per-ball impulses a ball
-    keeps, 4 bytes instead of 8 per plane and ball; a ball rounds its own λ, so two balls on a
-    plane cannot disagree, and the next sweep or step corrects what the rounding left, 2^-24 of the
-    impulse), applied in turn to (vi, wi): the warm start (``warm``) or a sweep. A sweep skips
+    ``lam_plane``, in f32: 4 bytes instead of 8 for every ball and plane, though most balls touch
+    none; only the ball reads and writes its own λ, so nothing can disagree about it, and the next
+    sweep or step corrects what the rounding left, 2^-24 of the impulse), applied in turn to
+    (vi, wi): the warm start (``warm``) or a sweep. A sweep skips
     them when the ball is too far from all of them (``clear[i]``, see :func:`surface_clearance`)
     to touch one within the step at its speed, and marks the ball ``NEAR`` once it rests on one
     (that resting impulse must be visited in later sweeps, to be given back). Returns (v, ω)."""
