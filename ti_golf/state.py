@@ -101,15 +101,15 @@ class State:
                 getattr(self, name).fill(0.0)
             else:
                 self.write(name, np.asarray(values, dtype=f).reshape(n, 3))
-        self.status.from_numpy(np.zeros(n, np.int32))  # the same in every storage order
-        self.rest_time.from_numpy(np.zeros(n, f))
+        self.status.fill(0)  # zeros: the same in every storage order, and no numpy copies
+        self.rest_time.fill(0.0)
         if self.tracking:
             track = np.broadcast_to(np.asarray(track, dtype=bool), (n,))
             self.write("landed", np.where(track, IN_FLIGHT, NOT_TRACKED).astype(np.int32))
             self.write("apex", x[:, 1].copy())
-            self.t_land.from_numpy(np.zeros(n, f))
+            self.t_land.fill(0.0)
             self.write("land_x", x)
-            self.land_v.from_numpy(np.zeros((n, 3), f))
+            self.land_v.fill(0.0)
         else:
             self.landed.from_numpy(np.full(1, NOT_TRACKED, np.int32))
         self.t = 0.0
