@@ -32,10 +32,11 @@ class State:
             entry each, which the kernels do not read (72 bytes per ball less in f64 for a pile,
             with the model's launch heights), and :meth:`read` gives the record of untracked balls.
         t: simulated time [s] (a Python float).
-        order: the storage order: ``order[p]`` is the id of the ball stored at index p of every
-            per-ball array (numpy int32 (N,)); ``None`` while the balls are stored in id order.
-            A large pile is stored so that neighbours lie close in memory (see
-            ``CollisionSolver.reorder``); :meth:`to_ids` and :meth:`from_ids` convert.
+        ids: the storage order: ``ids[p]`` is the id of the ball stored at index p of every
+            per-ball array, shape (N,), i32; ``None`` while the balls are stored in id order. A large
+            pile is stored so that neighbours lie close in memory (see ``CollisionSolver.reorder``),
+            and ``ids`` is gathered with the other per-ball arrays (:meth:`per_ball`); :attr:`order`
+            reads it, :meth:`to_ids` and :meth:`from_ids` convert.
     """
 
     FLIGHT = ("landed", "apex", "t_land", "land_x", "land_v")
@@ -58,23 +59,32 @@ class State:
         self.land_x = ti.ndarray(vec3, m)
         self.land_v = ti.ndarray(vec3, m)
         self.t = 0.0
-        self.order: np.ndarray | None = None
+        self.ids: ti.Ndarray | None = None
+
+    @property
+    def order(self) -> np.ndarray | None:
+        """A copy of :attr:`ids` (numpy int32 (N,)), ``None`` while the balls are stored in id order."""
+        return None if self.ids is None else self.ids.to_numpy()
 
     def to_ids(self, a: np.ndarray) -> np.ndarray:
         """Per-ball values in storage order (first axis N) rearranged by ball id."""
-        if self.order is None:
+        order = self.order
+        if order is None:
             return a
         out = np.empty_like(a)
-        out[self.order] = a
+        out[order] = a
         return out
 
     def from_ids(self, a: np.ndarray) -> np.ndarray:
         """Per-ball values by ball id (first axis N) rearranged into storage order."""
-        return a if self.order is None else a[self.order]
+        order = self.order
+        return a if order is None else a[order]
 
     def per_ball(self) -> list[str]:
-        """The names of the arrays that hold an entry per ball (the flight record's only while tracking)."""
-        return [name for name in self.PER_BALL if self.tracking or name not in self.FLIGHT]
+        """The names of the arrays that hold an entry per ball and follow the storage order (the
+        flight record's only while tracking, ``ids`` once the balls are stored out of id order)."""
+        names = [name for name in self.PER_BALL if self.tracking or name not in self.FLIGHT]
+        return names + (["ids"] if self.ids is not None else [])
 
     def read(self, name: str) -> np.ndarray:
         """A copy of the per-ball array ``name`` (e.g. ``"x"``) as numpy, by ball id. While no ball
