@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from background import BackgroundRuns
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "scenes"
@@ -26,6 +27,11 @@ SERIAL_OR_PARALLEL = pytest.mark.parametrize(
 
 
 _exit_status: list[int] = []
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "background(key): the test uses the run `key` of tests/background.py, which "
+                                       "starts in the background when the session does")
 
 
 def pytest_sessionfinish(session, exitstatus):
@@ -50,6 +56,24 @@ def taichi_runtime():
     import ti_golf
 
     return ti_golf.init(TEST_ARCH, "f64")
+
+
+@pytest.fixture(scope="session", autouse=True)
+def background_runs(request, tmp_path_factory):
+    """The session's background runs (tests/background.py): those the selected tests mark start
+    with the session's first test, in the order the tests will run."""
+    import taichi as ti
+
+    cache = os.environ.get("TI_OFFLINE_CACHE_FILE_PATH") or ti.lang.impl.default_cfg().offline_cache_file_path
+    runs = BackgroundRuns(tmp_path_factory.mktemp("background"), str(cache).rstrip("/\\") + "-background")
+    runs.start([mark.args[0] for item in request.session.items for mark in item.iter_markers("background")])
+    yield runs
+    runs.stop()
+
+
+def cli(*args: str) -> list[str]:
+    """The command line of ``python -m ti_golf ARGS``."""
+    return [sys.executable, "-m", "ti_golf", *args]
 
 
 def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 600) -> subprocess.CompletedProcess:

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import background
 import numpy as np
 import pytest
+from conftest import SCENES, cli
 
 import ti_golf as tg
-from tests.conftest import SCENES, run_cli
 
 
 def test_step_inspect_modify_continue():
@@ -106,9 +107,13 @@ def test_every_scene_loads_and_runs(path):
         assert np.all(res.flight.landed)
 
 
-def test_f32_precision_meets_a_looser_accuracy():
+background.declare("sweep-f32", lambda _: (cli("sweep", "lab_turbulent", "--angles", "36.6", "--precision", "f32"), {}))
+
+
+@pytest.mark.background("sweep-f32")
+def test_f32_precision_meets_a_looser_accuracy(background_runs):
     # precision is chosen per process: run the CLI in f32 (another process, its own ti.init)
-    out = run_cli("sweep", "lab_turbulent", "--angles", "36.6", "--precision", "f32")
+    out = background_runs.result("sweep-f32")[0]
     assert out.returncode == 0, out.stderr
     carry = float(out.stdout.split("carry ")[1].split(" m")[0])
     assert carry == pytest.approx(212.243, abs=0.01)  # report Appendix A, f32 round-off ~1e-5

@@ -14,9 +14,10 @@ import subprocess
 import textwrap
 from pathlib import Path
 
+import background
 import numpy as np
 import pytest
-from conftest import SCENES, run_cli
+from conftest import SCENES, cli, run_cli
 
 try:  # Python >= 3.11
     import tomllib
@@ -326,10 +327,16 @@ def test_bench_sweep_json():
         assert isinstance(rate, (int, float)) and not isinstance(rate, bool) and rate > 0, name
 
 
-@pytest.mark.parametrize("n, flags", [(512, ()), (512, ("--asleep", "--iterations", "8")), (64, ())],
-                         ids=["awake", "asleep-8-sweeps", "serial"])
-def test_bench_collide_json(n, flags):
-    proc = ok(run_cli("bench", "collide", "--n", str(n), "--steps", "3", "--json", *flags))
+_BENCH_COLLIDE = {"awake": (512, ()), "asleep-8-sweeps": (512, ("--asleep", "--iterations", "8")), "serial": (64, ())}
+for _name, (_n, _flags) in _BENCH_COLLIDE.items():
+    background.declare(f"bench-collide-{_name}", lambda _, n=_n, flags=_flags: (
+        cli("bench", "collide", "--n", str(n), "--steps", "3", "--json", *flags), {}))
+
+
+@pytest.mark.parametrize("n, flags", [pytest.param(*args, id=name, marks=pytest.mark.background(f"bench-collide-{name}"))
+                                      for name, args in _BENCH_COLLIDE.items()])
+def test_bench_collide_json(n, flags, background_runs, request):
+    proc = ok(background_runs.result(f"bench-collide-{request.node.callspec.id}")[0])
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     assert result["n"] == n and result["steps"] == 3 and result["asleep"] == bool(flags)
     assert result["iterations"] == (8 if flags else 4)

@@ -4,11 +4,10 @@ conservation laws, Newton's cradle, stacking and determinism."""
 from __future__ import annotations
 
 import dataclasses
-import os
-import subprocess
-import sys
 import textwrap
+from pathlib import Path
 
+import background
 import numpy as np
 import pytest
 from conftest import ON_CPU, SERIAL_OR_PARALLEL
@@ -283,7 +282,17 @@ _GPU_PILE = textwrap.dedent("""
 """)
 
 
-def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(tmp_path):
+def _gpu_pile(workdir: Path) -> background.Command:
+    (workdir / "gpu_pile.py").write_text(_GPU_PILE)
+    return background.python(str(workdir / "gpu_pile.py"), str(workdir / "gpu.npz")), {
+        "TI_GOLF_ARCH": "vulkan", "TI_GOLF_PRECISION": "f64"}
+
+
+background.declare("gpu-pile", _gpu_pile, timeout=600)
+
+
+@pytest.mark.background("gpu-pile")
+def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(background_runs):
     # Vulkan is the GPU backend that CI can run (in software, mesa's lavapipe): it compiles the
     # kernels as a GPU does, every loop in parallel. The grid once scanned its bucket counts in a
     # serial loop, and there Taichi's Vulkan backend stops after 65,535 iterations without a
@@ -294,16 +303,11 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(tmp_path):
     # both it owns none of its pairs (grid.owns). Both must list the same pairs and take the same
     # step; that pile is kept in id order, since the grid's order follows the cells, and the order
     # of a ball's simultaneous impacts the storage.
-    out = tmp_path / "gpu.npz"
-    script = tmp_path / "gpu_pile.py"
-    script.write_text(_GPU_PILE)
-    env = {**os.environ, "TI_GOLF_ARCH": "vulkan", "TI_GOLF_PRECISION": "f64"}
-    done = subprocess.run([sys.executable, str(script), str(out)], capture_output=True, text=True, env=env,
-                          timeout=600, check=False)
+    done, workdir = background_runs.result("gpu-pile")
     if done.returncode == 77:
         pytest.skip("Taichi cannot start its Vulkan backend here (apt-get install mesa-vulkan-drivers)")
     assert done.returncode == 0, done.stderr[-2000:]
-    gpu = np.load(out)
+    gpu = np.load(workdir / "gpu.npz")
     for name, v, reorder in (("", None, None), ("_shot", gpu["v0_shot"], False)):
         sim = tg.Simulation(pile_scene(70_000)[0], x=gpu["x0" + name], v=v)
         sim.solver = CollisionSolver(sim.model, serial=False, reorder=reorder)
@@ -361,15 +365,20 @@ _BOUNDS_CHECKED = textwrap.dedent("""
 """)
 
 
-def test_kernels_stay_within_their_arrays(tmp_path):
+def _bounds_checked(workdir: Path) -> background.Command:
+    (workdir / "bounds_checked.py").write_text(_BOUNDS_CHECKED)
+    return background.python(str(workdir / "bounds_checked.py")), {"TI_GOLF_ARCH": "cpu"}
+
+
+background.declare("bounds-checked", _bounds_checked, timeout=900)
+
+
+@pytest.mark.background("bounds-checked")
+def test_kernels_stay_within_their_arrays(background_runs):
     # an access out of bounds reads or writes another array's memory: at best garbage, at worst a
     # crash that depends on where the allocator put the arrays. The grid's insertion sort once
     # read sorted_ids[-1] (Taichi evaluates both sides of an `and`), and that crashed a CI run.
-    script = tmp_path / "bounds_checked.py"
-    script.write_text(_BOUNDS_CHECKED)
-    env = {**os.environ, "TI_GOLF_ARCH": "cpu"}
-    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=900,
-                          check=False)
+    done = background_runs.result("bounds-checked")[0]
     assert done.returncode == 0, done.stderr[-3000:]
 
 
