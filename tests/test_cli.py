@@ -381,8 +381,13 @@ def test_the_bench_restarts_the_peak_memory_after_its_warm_up():
     assert after >= bench._rss_bytes() - 2**20  # the peak restarts from the current size (a page's lag aside)
 
 
-def test_bench_collide_with_a_boulder_times_the_pile_alone_too():
-    proc = ok(run_cli("bench", "collide", "--n", "512", "--steps", "3", "--boulder", "0.1", "--json"))
+background.declare("bench-collide-boulder", lambda _: (
+    cli("bench", "collide", "--n", "512", "--steps", "3", "--boulder", "0.1", "--json"), {}))
+
+
+@pytest.mark.background("bench-collide-boulder")
+def test_bench_collide_with_a_boulder_times_the_pile_alone_too(background_runs):
+    proc = ok(background_runs.result("bench-collide-boulder")[0])
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     assert result["boulder_radius"] == 0.1 and result["n"] == 512  # the pile's balls (the boulder comes on top)
     assert result["baselines"]["pile_alone_ms_per_step"] > 0
