@@ -79,5 +79,4 @@ def cli(*args: str) -> list[str]:
 def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 600) -> subprocess.CompletedProcess:
     """Run ``python -m ti_golf ARGS`` in a fresh process; returns the completed process (text mode)."""
     full_env = {**os.environ, **(env or {})}
-    return subprocess.run([sys.executable, "-m", "ti_golf", *args], capture_output=True, text=True,
-                          env=full_env, timeout=timeout, cwd=ROOT)
+    return subprocess.run(cli(*args), capture_output=True, text=True, env=full_env, timeout=timeout, cwd=ROOT)
