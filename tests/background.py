@@ -14,7 +14,7 @@ A module declares such a run with :func:`declare` (a key and a function that wri
 needs into its own directory and returns its command), and a test that uses it carries the marker
 ``@pytest.mark.background(key)``; the session fixture ``background_runs`` (conftest) starts the
 runs of the selected tests in the order the tests will run, and ``background_runs.result(key)``
-waits for one. A run no selected test marked (a test run alone with ``-k``, say) runs when asked for.
+waits for one. Those tests run last (conftest), so that every other test overlaps their runs. A run no selected test marked (a test run alone with ``-k``, say) runs when asked for.
 
 The runs keep their compiled kernels in an offline cache of their own (``<Taichi's cache
 path>-background``): Taichi locks its cache while a process reads or writes it and, when a lock

@@ -34,6 +34,12 @@ def pytest_configure(config):
                                        "starts in the background when the session does")
 
 
+def pytest_collection_modifyitems(session, config, items):
+    """The tests that wait for a background run (tests/background.py) go last, in their order:
+    their runs then overlap every other test, not only those before them in the files."""
+    items.sort(key=lambda item: item.get_closest_marker("background") is not None)  # a stable sort
+
+
 def pytest_sessionfinish(session, exitstatus):
     _exit_status.append(int(exitstatus))
 
