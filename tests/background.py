@@ -7,8 +7,8 @@ depend on the tests before them, so they can start as soon as the session does a
 another beside the main process, on the CI machine's second core; the test then only waits for
 its run's result and checks it. Measured on the 2-core CI machine from an empty kernel cache
 (2026-11-23): six of those runs took 387 of the suite's 922 seconds (the seventh, the boulder
-bench, 8.5: it loaded the kernels another had compiled), and the suite 577 seconds with all seven
-in the background, where the two streams end about together.
+bench, 8.5: it loaded the kernels another had compiled), and the suite 572 seconds with all seven
+in the background and their tests last.
 
 A module declares such a run with :func:`declare` (a key and a function that writes what the run
 needs into its own directory and returns its command), and a test that uses it carries the marker
