@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import math
 
+import background
 import numpy as np
 import pytest
-from conftest import SERIAL_OR_PARALLEL
+from conftest import SERIAL_OR_PARALLEL, cli, run_cli
 
 import ti_golf as tg
-from tests.conftest import run_cli
 from ti_golf import ConfigError
 from ti_golf.solver import CollisionSolver
 from ti_golf.terrain import Terrain, build_terrain, generate_heights
@@ -398,11 +398,17 @@ def test_save_writes_the_terrain(tmp_path):
     plain.save(tmp_path / "b.npz")
     with np.load(tmp_path / "b.npz") as d:
         assert not any(k.startswith("terrain") for k in d.files)
-    # and through the command line
-    out = tmp_path / "run.npz"
-    proc = run_cli("run", "terrain_3d", "--steps", "5", "--out", str(out))
+
+
+background.declare("run-terrain-3d", lambda workdir: (
+    cli("run", "terrain_3d", "--steps", "5", "--out", str(workdir / "run.npz")), {}))
+
+
+@pytest.mark.background("run-terrain-3d")
+def test_run_saves_the_terrain(background_runs):
+    proc, workdir = background_runs.result("run-terrain-3d")
     assert proc.returncode == 0, proc.stderr
-    with np.load(out) as d:
+    with np.load(workdir / "run.npz") as d:
         assert d["terrain_heights"].shape == (129, 129) and d["x"].shape == (400, 3)
         np.testing.assert_allclose(d["terrain_spacing"], [40.0 / 128, 40.0 / 128])
 
