@@ -263,6 +263,28 @@ def test_no_tunnelling_at_500_mps(velocity):
     assert sim.v[0, 1] != 0 or sim.x[0, 1] > 0.02  # it bounced back up
 
 
+@pytest.mark.parametrize("n_balls", [1, 2], ids=["advance", "collision_step"])
+def test_spin_about_the_normal_decays_at_five_halves_mu_roll_g_over_r(n_balls):
+    # reference: a ball spinning on the spot on level ground feels the torque μ_roll·N·R, so
+    # dω_y/dt = −(5/2)·μ_roll·g/R until it stops. The resting impulse is g·h every step, so the
+    # semi-implicit steps follow the line exactly (round-off only); the ball does not move.
+    mu_r, w0, h = 0.05, 30.0, 0.001
+    sc = tg.load_scene(data={"air": {"rho": 0.0}, "world": {"integrator": "semi_implicit", "dt": h},
+                             "contact": {"mu": 0.4, "mu_roll": mu_r}})
+    x0 = np.array([[0.0, 0.02, 0.0], [5.0, 0.02, 0.0]][:n_balls])
+    sim = tg.Simulation(sc, x=x0, w=[[0.0, w0, 0.0]] * n_balls, radius=0.02)
+    assert (sim.solver is not None) == (n_balls == 2)
+    rate = 2.5 * mu_r * G / 0.02
+    sim.step(1)  # the first step meets the ground (its resting impulse starts then)
+    for _ in range(3):
+        sim.step(100)
+        np.testing.assert_allclose(sim.w[:, 1], w0 - rate * sim.t, rtol=1e-12)
+    np.testing.assert_array_equal(sim.x, x0)
+    sim.run(t=w0 / rate)
+    np.testing.assert_array_equal(sim.w, 0.0)
+    assert sim.counts()["at_rest"] == n_balls
+
+
 def test_friction_spins_up_a_sliding_ball():
     # sliding without spin, friction builds spin until the ball rolls: ω_z = −v_x / R
     scene = lab("lab_vacuum", "world.integrator=semi_implicit", "world.dt=0.0005", "contact.mu_roll=0")

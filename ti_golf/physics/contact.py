@@ -13,7 +13,9 @@ along the unit normal n̂ (from b to a):
    the slip there (solid spheres, I = 2/5·mR²: a friction impulse P changes the slip by
    (7/2)(1/m_a + 1/m_b)·P), and changing both spins;
 4. (planes) rolling resistance while in resting contact, |Δv_t| ≤ μ_roll·j_n with Δω = n̂ × Δv/R,
-   which leaves the contact-point slip unchanged (a rolling ball decelerates at μ_roll·g);
+   which leaves the contact-point slip unchanged (a rolling ball decelerates at μ_roll·g), and the
+   like resistance to spin about the normal, |Δω_n| ≤ (5/2)·μ_roll·j_n/R (a ball spinning on the
+   spot stops, its spin falling at (5/2)·μ_roll·g/R);
 5. (planes) the step is split at the time of impact, so a bounce starts on the surface;
 6. position projection of what still overlaps, k_p·m_red·Δx·n̂ (B.18).
 """
@@ -114,6 +116,16 @@ def rolling_resistance(v, radius, mu_roll, j_n, n):
 
 
 @ti.func
+def pivot_resistance(w, radius, mu_roll, j_n, n):
+    """Δω [rad/s] that slows a ball's spin about the contact normal n̂ (pivoting on the spot) by at
+    most (5/2)·μ_roll·j_n/R: the turf resists it as it resists rolling, with a torque μ_roll·N·R
+    (I = 2/5·mR², j_n = N·dt/m [m/s]). It changes no velocity: spin about n̂ moves no contact point."""
+    w_n = w.dot(n)
+    stop = ti.min(ti.abs(w_n), 2.5 * mu_roll * ti.max(j_n, 0.0) / radius)
+    return -ti.math.sign(w_n) * stop * n
+
+
+@ti.func
 def plane_impulse(x, v, w, radius, p, n, contact, v_inelastic, h):
     """Velocity and spin of a ball after its contact with the plane (p, n̂). Returns (v, ω, touching)."""
     gap = (x - p).dot(n) - radius
@@ -127,13 +139,15 @@ def plane_impulse(x, v, w, radius, p, n, contact, v_inelastic, h):
 @ti.func
 def plane_jolt(P, lam, v, w, radius, n, mu_roll):
     """Apply a plane's impulse per unit mass P [m/s] to a ball and, when it is a resting impulse
-    (it added ``lam`` > 0), rolling resistance bounded by μ_roll·P·n̂. Returns (v, ω)."""
+    (it added ``lam`` > 0), rolling resistance bounded by μ_roll·P·n̂ and the like resistance to
+    spin about the normal (:func:`pivot_resistance`). Returns (v, ω)."""
     v_new = v + P
     w_new = w + spin_jolt(P, n, radius, 1.0)
     if lam > 0.0:
-        dv, dw = rolling_resistance(v_new, radius, mu_roll, P.dot(n), n)
+        j_n = P.dot(n)
+        dv, dw = rolling_resistance(v_new, radius, mu_roll, j_n, n)
         v_new += dv
-        w_new += dw
+        w_new += dw + pivot_resistance(w_new, radius, mu_roll, j_n, n)
     return v_new, w_new
 
 
