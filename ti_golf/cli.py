@@ -1,4 +1,4 @@
-"""Command line: ``ti-golf {scenes,keys,sweep,run,table,render,bench}``; ``main(argv) -> exit code``.
+"""Command line: ``ti-golf {scenes,keys,sweep,run,table,render,bench,play}``; ``main(argv) -> exit code``.
 
 Bad input exits with code 2 and one line naming the file, the key and what is allowed.
 """
@@ -119,6 +119,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .render_cli import add_parser as _add_render_parser
 
     _add_render_parser(sub)
+    from .play_cli import add_parser as _add_play_parser
+
+    _add_play_parser(sub)
     return p
 
 
@@ -474,8 +477,15 @@ def _cmd_render(args: argparse.Namespace) -> int:
     return cmd_render(args)
 
 
+def _cmd_play(args: argparse.Namespace) -> int:
+    from .play_cli import cmd_play
+
+    return cmd_play(args)
+
+
 _COMMANDS = {
     "render": _cmd_render,
+    "play": _cmd_play,
     "scenes": _cmd_scenes,
     "keys": _cmd_keys,
     "sweep": _cmd_sweep,

@@ -209,6 +209,22 @@ SCHEMA: dict[str, dict[str, Key]] = {
                 _non_negative, ">= 0"),
         ]
     },
+    "game": {
+        k.name: k
+        for k in [
+            Key("start", "vec2", None, "m",
+                "where the ball lies for the first stroke of `ti-golf play`, [x, z] on the terrain (default: a "
+                "random point of the course, from --seed)"),
+            Key("wind_max", "float", 0.0, "m/s",
+                "each stroke's wind blows level from a random direction at a random speed up to this (0: the "
+                "scene's air.wind throughout)", _non_negative, ">= 0"),
+            Key("max_strokes", "int", 20, "-", "the round ends unfinished after this many strokes",
+                lambda v: None if 1 <= v <= 1000 else "must be in [1, 1000]", "[1, 1000]"),
+            Key("shot_time", "float", 60.0, "s",
+                "longest a stroke is simulated; a ball still moving then is played from where it is",
+                _positive, "> 0"),
+        ]
+    },
 }
 
 #: Top-level keys that are not tables.
@@ -406,6 +422,16 @@ class HoleConfig:
 
 
 @dataclass(frozen=True)
+class GameConfig:
+    """The ``[game]`` table of ``ti-golf play`` (see :mod:`ti_golf.game`)."""
+
+    start: tuple[float, float] | None = _default("game", "start")
+    wind_max: float = _default("game", "wind_max")
+    max_strokes: int = _default("game", "max_strokes")
+    shot_time: float = _default("game", "shot_time")
+
+
+@dataclass(frozen=True)
 class Surface:
     """A terrain surface type (``[[surfaces]]``): its own restitution, friction and rolling resistance
     (``None``: the ``[contact]`` value)."""
@@ -492,6 +518,7 @@ class Scene:
     terrain: TerrainConfig | None = None
     surfaces: tuple[Surface, ...] = ()
     hole: HoleConfig | None = None
+    game: GameConfig = field(default_factory=GameConfig)
 
     def launch_position(self) -> Vec3:
         """Launch point [m]: the scene's, or the ball resting on the ground (the terrain, if any) at x = z = 0."""

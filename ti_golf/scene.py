@@ -30,6 +30,7 @@ from .config import (
     Air,
     Ball,
     Contact,
+    GameConfig,
     Key,
     Launch,
     Scene,
@@ -40,7 +41,7 @@ from .config import (
 )
 from .errors import ConfigError
 
-_SECTION_TYPES = {"air": Air, "ball": Ball, "launch": Launch, "world": World, "contact": Contact}
+_SECTION_TYPES = {"air": Air, "ball": Ball, "launch": Launch, "world": World, "contact": Contact, "game": GameConfig}
 
 
 def _suggest(name: str, candidates: Iterable[str]) -> str:

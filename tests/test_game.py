@@ -1,0 +1,264 @@
+"""The golf game: the cup's capture rule (closed form), rounds on a course, and ``ti-golf play``.
+
+References: the capture speed v_c(b) = 2·√(R_c² − b²)·√(g/(2r)) of a ball rolling straight across
+the cup (:mod:`ti_golf.cup`); the simulated roll of the same putt with no cup, for the game's verdicts.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import math
+
+import numpy as np
+import pytest
+
+import ti_golf as tg
+from ti_golf import cli
+from ti_golf.config import GameConfig
+from ti_golf.cup import capture_speed, drop_time, holed_at
+from ti_golf.game import HOLED, OUT, RESTS, GolfGame, Shot
+
+G = 9.81
+R = 0.02134  # golf ball
+R_CUP = 0.054  # regulation cup
+
+
+def green(**game) -> tg.Scene:
+    """A flat green 10 m × 6 m (y = 0) with the cup 3 m down +x from the ball, in vacuum."""
+    return tg.load_scene(data={
+        "description": "test green",
+        "air": {"rho": 0.0},
+        "ball": {"radius": R, "mass": 0.04593},
+        "world": {"integrator": "semi_implicit", "dt": 0.001},
+        "contact": {"e": 0.3, "mu": 0.4, "mu_roll": 0.05},
+        "terrain": {"kind": "generated", "amplitude": 0.0, "origin": [-2.0, 0.0, -3.0], "size": [10.0, 6.0],
+                    "resolution": [11, 7]},
+        "hole": {"position": [3.0, 0.0]},
+        "game": {"start": [0.0, 0.0], "max_strokes": 5, **game},
+    })
+
+
+# ---------------------------------------------------------------------------------------------
+# The capture rule on exact straight paths
+# ---------------------------------------------------------------------------------------------
+def straight_roll(speed: float, offset: float, dt: float = 0.005, phase: float = 0.37) -> tuple:
+    """A ball rolling along +x at ``speed``, ``offset`` from the cup's centre (at the origin), sampled
+    every ``dt`` from a start 0.5 m before the cup shifted by ``phase`` of a sample; gap 0 (rolling)."""
+    t = np.arange(0.0, 1.0 / speed + 0.3, dt)
+    x = np.zeros((len(t), 3))
+    x[:, 0] = -0.5 + speed * (t + phase * dt)
+    x[:, 1] = R
+    x[:, 2] = offset
+    return t, x, np.zeros(len(t))
+
+
+@pytest.mark.parametrize("offset", [0.0, 0.02, 0.045])
+def test_rolling_ball_drops_in_below_the_capture_speed_only(offset):
+    # reference: over the cup for the chord 2√(R_c² − b²) at speed v, it drops in when that time
+    # reaches t_drop = √(2r/g), i.e. below v_c(b). The path is straight, so the time over the cup
+    # between samples is exact: 1 % either side of v_c decides, whatever the sampling.
+    v_c = capture_speed(R_CUP, R, G, offset)
+    assert capture_speed(R_CUP, R, G) == pytest.approx(2 * R_CUP * math.sqrt(G / (2 * R)))
+    for factor, holed in ((0.99, True), (1.01, False)):
+        t, x, gap = straight_roll(factor * v_c, offset)
+        at = holed_at(t, x, gap, (0.0, 0.0), R_CUP, R, G)
+        assert (at is not None) == holed, (factor, v_c)
+        if holed:  # it drops t_drop after its centre passed over the rim
+            enter = (0.5 - math.sqrt(R_CUP**2 - offset**2)) / (factor * v_c) - 0.37 * 0.005
+            assert at == pytest.approx(enter + drop_time(R, G), abs=1e-12)
+
+
+def test_ball_beside_the_cup_or_flying_over_it_is_not_holed():
+    t, x, gap = straight_roll(0.5, R_CUP + 1e-3)  # slow, but it misses the cup by a millimetre
+    assert holed_at(t, x, gap, (0.0, 0.0), R_CUP, R, G) is None
+    t, x, gap = straight_roll(0.5, 0.0)
+    assert holed_at(t, x, gap + 0.2 * R, (0.0, 0.0), R_CUP, R, G) is None  # a fifth of a radius up
+
+
+def test_ball_coming_down_over_the_cup_drops_in_where_it_touches():
+    # a descending path: gap falls linearly from 5 cm to −1 cm while x crosses the cup. It drops in
+    # when its gap reaches R/10 over the cup, and not when that point lies beyond the rim.
+    t = np.linspace(0.0, 0.1, 11)
+    for x_touch, holed in ((0.03, True), (R_CUP + 0.01, False)):
+        gap = 0.05 - 0.6 * t
+        s = (0.05 - 0.1 * R) / 0.6  # when gap = R/10
+        x = np.zeros((11, 3))
+        x[:, 0] = x_touch + 2.0 * (t - s)
+        at = holed_at(t, x, gap, (0.0, 0.0), R_CUP, R, G)
+        assert (at is not None) == holed
+        if holed:
+            assert at == pytest.approx(s, abs=1e-12)
+
+
+def test_ball_that_stops_over_the_cup_is_holed():
+    t = np.arange(0.0, 0.05, 0.005)
+    x = np.tile([0.01, R, 0.0], (len(t), 1))
+    assert holed_at(t, x, np.zeros(len(t)), (0.0, 0.0), R_CUP, R, G) is not None
+
+
+# ---------------------------------------------------------------------------------------------
+# Rounds on a course
+# ---------------------------------------------------------------------------------------------
+def speed_at_the_cup(scene: tg.Scene, shot: Shot) -> float | None:
+    """The speed [m/s] at which the putt reaches the cup's near rim on the whole green (no cup), from
+    the simulated roll sampled every step; ``None`` when it stops short."""
+    ball = GolfGame(scene).ball
+    sim = tg.Simulation(scene, x=ball[None], v=shot.velocity()[None], track=False)
+    rec = sim.run(t=10.0, until="rest", record_every=1)
+    x = np.asarray(rec.x)[:, 0]
+    k = np.flatnonzero(x[:, 0] >= 3.0 - R_CUP)
+    return None if k.size == 0 else float((x[k[0], 0] - x[k[0] - 1, 0]) / scene.world.dt)
+
+
+def test_a_putt_drops_when_it_reaches_the_cup_slower_than_the_capture_speed():
+    # reference: the same putt rolled on the whole green (no cup), whose speed at the rim decides by
+    # v_c = 1.64 m/s through the centre. Speeds within 5 % of v_c are not asked.
+    sc = green()
+    v_c = capture_speed(R_CUP, R, G)
+    seen = set()
+    for kmh in (7.0, 10.0, 11.0, 14.0):  # rim speeds: none (stops short), 1.06, 1.40, 2.23 m/s
+        shot = Shot(0.0, kmh, 0.0, 0.0)
+        v = speed_at_the_cup(sc, shot)
+        game = GolfGame(sc)
+        stroke = game.play(shot)
+        if v is None:
+            assert stroke.outcome == RESTS and stroke.end[0] < 3.0 - R_CUP
+        else:
+            assert abs(v / v_c - 1.0) > 0.05, "choose another speed: too close to v_c to decide"
+            assert (stroke.outcome == HOLED) == (v < v_c), (kmh, v)
+        seen.add(stroke.outcome if v is None or v < v_c else "lipped over")
+        if stroke.outcome == HOLED:
+            assert game.over and game.outcome == HOLED and len(game.strokes) == 1
+            np.testing.assert_allclose(stroke.end[[0, 2]], [3.0, 0.0])
+            with pytest.raises(RuntimeError, match="over"):
+                game.play(shot)
+    assert seen == {RESTS, HOLED, "lipped over"}  # the speeds cover all three
+
+
+def test_out_of_bounds_ends_the_round():
+    game = GolfGame(green())
+    stroke = game.play(Shot(180.0, 30.0, 0.0, 0.0))  # toward the near edge, 2 m behind the ball
+    assert stroke.outcome == OUT and game.over and game.outcome == OUT
+    assert not game.terrain.contains(*stroke.end[[0, 2]]) or stroke.end[0] <= -2.0 + 1e-6
+
+
+def test_the_round_ends_after_max_strokes():
+    game = GolfGame(green(max_strokes=2))
+    for _ in range(2):
+        assert not game.over
+        stroke = game.play(Shot(90.0, 1.0, 0.0, 0.0))  # a nudge sideways
+        assert stroke.outcome == RESTS and stroke.number == len(game.strokes)
+    assert game.over and game.outcome == "no strokes left"
+
+
+def test_a_random_start_and_the_winds_follow_the_seed():
+    sc = tg.load_scene("golf_hole")
+    assert sc.game.start is not None  # the bundled hole starts at its tee; without one, at random:
+    free = dataclasses.replace(sc, game=GameConfig(wind_max=3.0))
+    a, b, c = GolfGame(free, seed=5), GolfGame(free, seed=5), GolfGame(free, seed=6)
+    np.testing.assert_array_equal(a.ball, b.ball)
+    np.testing.assert_array_equal(a.wind, b.wind)
+    assert not np.array_equal(a.ball, c.ball)
+    for g in (a, c):
+        assert g.terrain.contains(*g.ball[[0, 2]])
+        assert g.to_hole()[0] >= 0.25 * g.terrain.size.max()
+        assert g.terrain.gap(g.ball[None], g.radius)[0] == pytest.approx(0.0, abs=1e-12)  # resting on it
+        assert g.wind[1] == 0.0 and np.hypot(g.wind[0], g.wind[2]) <= 3.0
+
+
+def test_shot_conventions():
+    # direction from +x toward +z; backspin about d × ŷ gives lift: ω × v points up
+    shot = Shot(90.0, 36.0, 30.0, 3000.0)
+    v, w = shot.velocity(), shot.angular_velocity()
+    np.testing.assert_allclose(v, [0.0, 5.0, 10.0 * math.cos(math.radians(30.0))], atol=1e-12)
+    assert np.linalg.norm(w) == pytest.approx(3000.0 * 2 * math.pi / 60)
+    assert np.cross(w, v)[1] > 0.0 and abs(w @ v) < 1e-9
+
+
+# ---------------------------------------------------------------------------------------------
+# ti-golf play (in this process: main() returns the exit code)
+# ---------------------------------------------------------------------------------------------
+@pytest.fixture
+def green_file(tmp_path):
+    path = tmp_path / "green.toml"
+    path.write_text("""description = "test green"
+[air]
+rho = 0.0
+[ball]
+radius = 0.02134
+mass = 0.04593
+[world]
+integrator = "semi_implicit"
+dt = 0.001
+[contact]
+e = 0.3
+mu = 0.4
+mu_roll = 0.05
+[terrain]
+kind = "generated"
+amplitude = 0.0
+origin = [-2.0, 0.0, -3.0]
+size = [10.0, 6.0]
+resolution = [11, 7]
+[hole]
+position = [3.0, 0.0]
+[game]
+start = [0.0, 0.0]
+max_strokes = 5
+""")
+    return path
+
+
+def test_play_from_a_shots_file_holes_out_and_saves_the_round(green_file, tmp_path, capsys):
+    shots = tmp_path / "shots.txt"
+    shots.write_text("# a lag putt, then one at the hole\n90 2 0 0\nhole, 10, 0\n")
+    out, plot = tmp_path / "round.csv", tmp_path / "round.png"
+    assert cli.main(["play", str(green_file), "--shots", str(shots), "--out", str(out), "--plot", str(plot)]) == 0
+    text = capsys.readouterr().out
+    assert "dropped into the cup" in text and "Holed in 2 strokes." in text
+    rows = out.read_text().splitlines()
+    assert rows[0].startswith("stroke,direction_deg,speed_kmh") and len(rows) == 3
+    assert rows[2].split(",")[14] == "holed" and float(rows[2].split(",")[-1]) == 0.0
+    assert plot.stat().st_size > 10_000
+
+
+def test_play_asks_again_after_bad_answers_and_stops_at_the_end_of_input(green_file, capsys, monkeypatch):
+    answers = "north\n\n500\n4\nabc\n0\n\n"  # one answer a line, then the input ends
+    monkeypatch.setattr("sys.stdin", io.StringIO(answers))
+    assert cli.main(["play", str(green_file)]) == 0
+    text = capsys.readouterr().out
+    assert "direction must be a number (got 'north'); try again" in text
+    assert "key 'speed' must be a number in [0, 350] km/h (got 500.0); try again" in text
+    assert "loft must be a number (got 'abc'); try again" in text
+    assert "key 'spin' must be a number" not in text  # Enter: no spin
+    assert "Stroke 2:" in text  # the first stroke (4 km/h at the hole) was played
+    assert "The round ends unfinished (no more input) after 1 stroke" in text
+
+
+@pytest.mark.parametrize("content, needle", [
+    ("0 5 95 0\n", "shots.txt:1: key 'loft' must be a number in [-10, 90] deg (got 95.0)"),
+    ("0 5\n", "shots.txt:1: a stroke is 'direction speed loft [spin]'"),
+    ("\n0 fast 0\n", "shots.txt:2: key 'speed' must be a number (got 'fast')"),
+])
+def test_play_rejects_a_bad_shots_file_naming_the_line_and_field(green_file, tmp_path, capsys, content, needle):
+    shots = tmp_path / "shots.txt"
+    shots.write_text(content)
+    assert cli.main(["play", str(green_file), "--shots", str(shots)]) == 2
+    err = capsys.readouterr().err
+    assert needle in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("overrides, needle", [
+    (["--set", "hole.position=[30, 0]"], "key 'hole.position' must lie on the terrain (x in [-2, 8] m"),
+    (["--set", "game.start=[0, 9]"], "key 'game.start' must lie on the terrain"),
+    (["--set", "game.max_strokes=0"], "key 'game.max_strokes' must be in [1, 1000]"),
+])
+def test_play_rejects_a_bad_course(green_file, capsys, overrides, needle):
+    assert cli.main(["play", str(green_file), *overrides]) == 2
+    assert needle in capsys.readouterr().err
+
+
+def test_play_needs_a_course(capsys):
+    assert cli.main(["play", "break_shot"]) == 2
+    assert "is not a course: the golf game needs a [terrain] and a [hole]" in capsys.readouterr().err

@@ -1,0 +1,246 @@
+"""The golf game (report §2.5): a ball on a course, played stroke by stroke until it is holed or
+goes out of bounds.
+
+A scene is a course when it has a ``[terrain]`` and a ``[hole]``; its ``[game]`` table sets where
+the ball starts (else a random point of the course, as in the report), the wind of each stroke,
+the most strokes and how long a stroke may take. Each stroke is a :class:`Shot` as the report's
+player enters it (horizontal direction, speed in km/h, club loft, backspin in rpm), simulated with
+the scene's flight and terrain physics until the ball rests, leaves the course or drops into the
+cup (:mod:`ti_golf.cup`). :class:`GolfGame` holds the round; the console (:mod:`ti_golf.play_cli`)
+and any other front end only ask it for shots.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import AT_REST, OUT_OF_BOUNDS, Scene, backspin_axis, launch_velocity
+from .cup import LOW_GAP, holed_at
+from .errors import ConfigError
+
+KMH = 1.0 / 3.6
+"""m/s per km/h."""
+RPM = 2.0 * math.pi / 60.0
+"""rad/s per rpm."""
+
+HOLED, OUT, RESTS, MOVING = "holed", "out of bounds", "at rest", "still moving"
+"""Outcomes of a stroke."""
+
+
+@dataclass(frozen=True)
+class Field:
+    """One number of a shot: its name, unit and allowed range (both ends included)."""
+
+    name: str
+    unit: str
+    low: float
+    high: float
+    doc: str
+
+    def check(self, value: float, source: str) -> float:
+        """``value`` when it is a finite number in range, else a :class:`ConfigError` naming
+        ``source`` (the file and line, or the option), the field and the range."""
+        if not (math.isfinite(value) and self.low <= value <= self.high):
+            raise ConfigError(source, self.name, f"must be a number in [{self.low:g}, {self.high:g}] {self.unit} "
+                                                 f"(got {value!r})")
+        return float(value)
+
+
+SHOT_FIELDS = (
+    Field("direction", "deg", -360.0, 360.0, "horizontal direction, from +x toward +z"),
+    Field("speed", "km/h", 0.0, 350.0, "ball speed (a tour driver: about 270 km/h)"),
+    Field("loft", "deg", -10.0, 90.0, "launch angle above the horizontal (0 for a putt)"),
+    Field("spin", "rpm", -12000.0, 12000.0, "backspin (negative: topspin)"),
+)
+"""The four numbers the player enters for a stroke, in order (report §2.5)."""
+
+
+@dataclass(frozen=True)
+class Shot:
+    """A stroke as the player enters it: direction [deg] (from +x toward +z), ball speed [km/h],
+    loft (launch angle) [deg] and backspin [rpm]."""
+
+    direction: float
+    speed: float
+    loft: float
+    spin: float = 0.0
+
+    @classmethod
+    def checked(cls, values: tuple[float, ...] | list[float], source: str) -> Shot:
+        """A shot from its four numbers, each checked against :data:`SHOT_FIELDS`."""
+        return cls(*(f.check(float(v), source) for f, v in zip(SHOT_FIELDS, values)))
+
+    def velocity(self) -> np.ndarray:
+        """Launch velocity (3,) [m/s]."""
+        return np.array(launch_velocity(self.speed * KMH, self.loft, self.direction))
+
+    def angular_velocity(self) -> np.ndarray:
+        """Launch spin ω (3,) [rad/s]: backspin about the axis d × ŷ of the shot's direction d."""
+        return self.spin * RPM * np.array(backspin_axis(self.direction))
+
+
+@dataclass(frozen=True)
+class Stroke:
+    """One stroke played: the shot, the wind it met, and where the ball went.
+
+    ``t`` (S,) [s] and ``path`` (S, 3) [m] sample the ball from the hit until it rested, left the
+    course or dropped into the cup (then the path ends there and ``end`` is the cup).
+    """
+
+    number: int
+    shot: Shot
+    wind: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+    t: np.ndarray
+    path: np.ndarray
+    outcome: str
+    to_hole: float
+    carry: float
+    """Horizontal distance [m] from where the ball was hit to where it first came down (0 for a putt)."""
+
+    @property
+    def distance(self) -> float:
+        """Horizontal distance [m] from where the ball was hit to where it ended."""
+        return float(np.hypot(*(self.end - self.start)[[0, 2]]))
+
+    @property
+    def apex(self) -> float:
+        """Highest point of the path above the start [m]."""
+        return float(self.path[:, 1].max() - self.start[1])
+
+
+class GolfGame:
+    """A round on a course: the ball, the wind and the strokes so far.
+
+    Args:
+        scene: a scene with a ``[terrain]`` and a ``[hole]`` on it.
+        seed: seeds the random start (when ``game.start`` is not set) and the winds.
+    """
+
+    def __init__(self, scene: Scene, seed: int | None = None) -> None:
+        from .terrain import build_terrain
+
+        source = scene.path or scene.name
+        if scene.terrain is None or scene.hole is None:
+            missing = "[terrain]" if scene.terrain is None else "[hole]"
+            raise ConfigError(source, None, f"is not a course: the golf game needs a [terrain] and a [hole] "
+                                            f"(it has no {missing}; try the bundled scene golf_hole)")
+        self.scene = scene
+        self.terrain = build_terrain(scene.terrain, scene.path)
+        self.rng = np.random.default_rng(seed)
+        self.radius = scene.ball.radius
+        self.g = float(np.linalg.norm(scene.world.gravity))
+        hole = np.asarray(scene.hole.position, dtype=float)
+        if not self.terrain.contains(*hole):
+            raise ConfigError(source, "hole.position", f"must lie on the terrain (x in {self._span(0)}, "
+                                                       f"z in {self._span(2)}; got {list(hole)})")
+        self.cup = self._on_ground(hole)
+        if scene.game.start is not None:
+            start = np.asarray(scene.game.start, dtype=float)
+            if not self.terrain.contains(*start):
+                raise ConfigError(source, "game.start", f"must lie on the terrain (x in {self._span(0)}, "
+                                                        f"z in {self._span(2)}; got {list(start)})")
+        else:
+            start = self._random_start(hole)
+        self.ball = self._on_ground(start)
+        """Where the ball lies [m] (3,): its centre, resting on the terrain."""
+        self.strokes: list[Stroke] = []
+        self.outcome: str | None = None
+        """``None`` while the round goes on, else ``HOLED``, ``OUT`` or ``"no strokes left"``."""
+        self.wind = self._draw_wind()
+        """The wind of the next stroke [m/s] (3,)."""
+
+    def _span(self, axis: int) -> str:
+        lo = self.terrain.origin[axis]
+        return f"[{lo:g}, {lo + self.terrain.size[0 if axis == 0 else 1]:g}] m"
+
+    def _on_ground(self, xz: np.ndarray) -> np.ndarray:
+        """The centre (3,) of a ball resting on the terrain at horizontal point ``xz`` (its gap zero)."""
+        x, z = float(xz[0]), float(xz[1])
+        n_y = float(self.terrain.normal(x, z)[1])
+        return np.array([x, float(self.terrain.height(x, z)) + self.radius / n_y, z])
+
+    def _random_start(self, hole: np.ndarray) -> np.ndarray:
+        """A random point of the course, 10 % of its size in from the edges and at least a quarter of
+        the course's length from the hole (the report's game puts the ball anywhere)."""
+        lo = self.terrain.origin[[0, 2]] + 0.1 * self.terrain.size
+        hi = lo + 0.8 * self.terrain.size
+        far = 0.25 * float(self.terrain.size.max())
+        for _ in range(1000):
+            p = self.rng.uniform(lo, hi)
+            if np.hypot(*(p - hole)) >= far:
+                return p
+        return lo  # (a course too small for the rule: its corner)
+
+    def _draw_wind(self) -> np.ndarray:
+        """Level wind of up to ``game.wind_max`` from a random direction; the scene's wind when it is 0."""
+        w_max = self.scene.game.wind_max
+        if w_max <= 0.0:
+            return np.asarray(self.scene.air.wind, dtype=float)
+        speed, heading = self.rng.uniform(0.0, w_max), self.rng.uniform(0.0, 2.0 * math.pi)
+        return np.array([speed * math.cos(heading), 0.0, speed * math.sin(heading)])
+
+    @property
+    def over(self) -> bool:
+        """Whether the round has ended."""
+        return self.outcome is not None
+
+    def to_hole(self) -> tuple[float, float]:
+        """(horizontal distance [m], direction [deg] from +x toward +z) from the ball to the cup."""
+        d = (self.cup - self.ball)[[0, 2]]
+        return float(np.hypot(*d)), math.degrees(math.atan2(d[1], d[0]))
+
+    def play(self, shot: Shot) -> Stroke:
+        """Hit the ball: simulate the stroke, move the ball, end the round when it is holed, out of
+        bounds, or the last stroke allowed was played."""
+        from .sim import Simulation
+
+        if self.over:
+            raise RuntimeError(f"the round is over ({self.outcome})")
+        scene = dataclasses.replace(self.scene, air=dataclasses.replace(self.scene.air, wind=tuple(self.wind)))
+        sim = Simulation(scene, x=self.ball[None], v=shot.velocity()[None], w=shot.angular_velocity()[None],
+                         track=False)
+        every = max(1, round(0.005 / sim.dt))  # samples 5 ms apart: a 1.6 m/s putt moves 8 mm
+        rec = sim.run(t=scene.game.shot_time, until="rest", record_every=every)
+        t = np.asarray(rec.t)
+        path = np.asarray(rec.x)[:, 0, :]
+        out = int(sim.status[0]) == OUT_OF_BOUNDS
+        gap = self.terrain.gap(path, self.radius)
+        t_in = None if out else holed_at(t, path, gap, self.scene.hole.position, self.scene.hole.radius,
+                                         self.radius, self.g)
+        carry = _carry(path, gap < LOW_GAP * self.radius)
+        if t_in is not None:
+            keep = t < t_in
+            t, path = np.append(t[keep], t_in), np.vstack([path[keep], self.cup])
+            outcome, end = HOLED, self.cup.copy()
+        elif out:
+            outcome, end = OUT, path[-1].copy()
+        else:
+            outcome = RESTS if int(sim.status[0]) == AT_REST else MOVING
+            end = self._on_ground(path[-1][[0, 2]])
+        stroke = Stroke(len(self.strokes) + 1, shot, self.wind.copy(), self.ball.copy(), end, t - t[0], path,
+                        outcome, float(np.hypot(*(self.cup - end)[[0, 2]])), carry)
+        self.strokes.append(stroke)
+        self.ball = end
+        if outcome in (HOLED, OUT):
+            self.outcome = outcome
+        elif len(self.strokes) >= self.scene.game.max_strokes:
+            self.outcome = "no strokes left"
+        self.wind = self._draw_wind()
+        return stroke
+
+
+def _carry(path: np.ndarray, low: np.ndarray) -> float:
+    """Horizontal distance [m] from the first point of ``path`` (S, 3) to where the ball first came
+    down after being in the air (``low`` (S,): down on the ground); 0 when it never left it."""
+    up = np.flatnonzero(~low)
+    if up.size == 0:
+        return 0.0
+    down = np.flatnonzero(low[up[0]:])
+    k = up[0] + down[0] if down.size else len(path) - 1
+    return float(np.hypot(*(path[k] - path[0])[[0, 2]]))

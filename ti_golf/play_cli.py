@@ -1,0 +1,209 @@
+"""``ti-golf play``: the golf game in the console (report §2.5, ``playGolfC``).
+
+Before each stroke the player is told where the ball lies, how far and in which direction the hole
+is, and the wind, and is asked for the stroke's direction, speed, loft and spin; the round goes on
+until the ball is holed, goes out of bounds, the scene's ``game.max_strokes`` are played, or the
+input ends. ``--shots FILE`` plays the strokes listed in a file instead (one per line:
+``direction speed loft spin``, ``hole`` for the direction at the hole, ``#`` starts a comment).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import sys
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+from .errors import ConfigError
+from .game import SHOT_FIELDS, GolfGame, Shot, Stroke
+
+DEFAULT_SCENE = "golf_hole"
+
+PROMPT_DEFAULTS = {"spin": 0.0}
+"""Fields whose prompt takes Enter for a fixed default (the direction's default is at the hole)."""
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """Add the ``play`` subcommand to ``ti-golf``'s subparsers; returns its parser."""
+    from . import cli
+
+    p = sub.add_parser("play", help="play golf on a course scene, stroke by stroke, until the ball is holed")
+    p.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
+                   help=f"a course: a scene with [terrain] and [hole] (default {DEFAULT_SCENE})")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scene key with a TOML value, e.g. --set game.wind_max=0 (repeatable)")
+    p.add_argument("--seed", type=int, default=None,
+                   help="seed of the random start and winds (default: a new round every time)")
+    p.add_argument("--shots", metavar="FILE",
+                   help="play the strokes in FILE, one per line: direction speed loft spin "
+                        "(deg, km/h, deg, rpm; 'hole' aims at the hole)")
+    p.add_argument("--out", help="write the round as CSV, one row per stroke (rewritten after every stroke)")
+    p.add_argument("--plot", help="write a PNG map of the course with every stroke's path at the end")
+    cli._runtime_options(p)
+    return p
+
+
+def cmd_play(args: argparse.Namespace) -> int:
+    """Play a round of ``args.scene``; 0 when it ends (holed, out of bounds, no strokes or input left)."""
+    from . import cli
+    from .scene import load_scene
+
+    cli._check_writable(args.out, "--out")
+    cli._check_writable(args.plot, "--plot")
+    game = GolfGame(load_scene(args.scene, args.overrides), seed=args.seed)
+    shots = _file_shots(args.shots, game) if args.shots else _asked_shots(game, input, sys.stdin.isatty())
+    hole = game.scene.hole.position
+    print(f"{game.scene.name}: a cup {2000 * game.scene.hole.radius:.0f} mm across at x = {hole[0]:g} m, "
+          f"z = {hole[1]:g} m; directions are degrees from +x toward +z")
+    ended = "no more input"
+    try:
+        while not game.over:
+            print(_lie(game))
+            try:
+                shot = next(shots)
+            except StopIteration:
+                break
+            stroke = game.play(shot)
+            print(_result(stroke))
+            if args.out:
+                write_csv(game.strokes, args.out)
+    except KeyboardInterrupt:
+        ended = "interrupted"
+    print(_summary(game, ended))
+    if args.out:
+        write_csv(game.strokes, args.out)
+        print(f"wrote {args.out}")
+    if args.plot:
+        from .plots import plot_round
+
+        plot_round(game, args.plot, title=f"{game.scene.name}: {_summary(game, ended)}")
+        print(f"wrote {args.plot}")
+    return 130 if ended == "interrupted" and not game.over else 0
+
+
+def _lie(game: GolfGame) -> str:
+    """Where the ball lies, the hole and the wind, before a stroke."""
+    dist, bearing = game.to_hole()
+    w = game.wind
+    speed = math.hypot(w[0], w[2])
+    wind = (f"wind {speed:.1f} m/s toward {math.degrees(math.atan2(w[2], w[0])):.0f} deg" if speed > 0.05
+            else "no wind")
+    return (f"Stroke {len(game.strokes) + 1}: the ball lies at x = {game.ball[0]:.2f} m, z = {game.ball[2]:.2f} m, "
+            f"{dist:.2f} m from the hole (direction {bearing:.1f} deg); {wind}.")
+
+
+def _result(s: Stroke) -> str:
+    """What a stroke did."""
+    flew = f"carried {s.carry:.1f} m (apex {s.apex:.1f} m), " if s.carry >= 1.0 else ""  # (not a putt's hop)
+    if s.outcome == "holed":
+        return f"  {flew}went {s.distance:.1f} m and dropped into the cup!"
+    if s.outcome == "out of bounds":
+        return f"  {flew}went out of bounds at x = {s.end[0]:.1f} m, z = {s.end[2]:.1f} m."
+    moving = " (still moving when the stroke's time ran out)" if s.outcome == "still moving" else ""
+    return f"  {flew}went {s.distance:.1f} m; the ball is {s.to_hole:.2f} m from the hole{moving}."
+
+
+def _summary(game: GolfGame, ended: str) -> str:
+    """The round's last line."""
+    n = len(game.strokes)
+    strokes = f"{n} stroke{'s' if n != 1 else ''}"
+    if game.outcome == "holed":
+        return f"Holed in {strokes}."
+    if game.outcome == "out of bounds":
+        return f"Out of bounds after {strokes}."
+    if game.outcome is not None:
+        return f"No strokes left: {strokes} played, the ball lies {game.to_hole()[0]:.2f} m from the hole."
+    return f"The round ends unfinished ({ended}) after {strokes}, {game.to_hole()[0]:.2f} m from the hole."
+
+
+def _asked_shots(game: GolfGame, ask: Callable[[str], str], interactive: bool) -> Iterator[Shot]:
+    """Shots entered at the prompts, field by field; a bad value is explained and asked again.
+    Ends at the end of the input. Without a terminal (piped input) the answers are echoed."""
+    last: dict[str, float] = {}
+    while True:
+        values = []
+        for f in SHOT_FIELDS:
+            default = _default(f.name, game, last)
+            hint = f", Enter: {default:g}" if default is not None else ""
+            while True:
+                try:
+                    text = ask(f"  {f.name} [{f.unit}, {f.low:g} to {f.high:g}{hint}]: ").strip()
+                except EOFError:
+                    print()  # (the prompt's line)
+                    return
+                if not interactive:
+                    print(text)
+                try:
+                    value = default if text == "" and default is not None else _number(text, f.name, game)
+                    values.append(f.check(value, "input"))
+                    break
+                except (ConfigError, ValueError) as exc:
+                    print(f"  {exc}; try again")
+        last = dict(zip((f.name for f in SHOT_FIELDS), values))
+        yield Shot(*values)
+
+
+def _default(name: str, game: GolfGame, last: dict[str, float]) -> float | None:
+    """What Enter means at a prompt: at the hole for the direction, no spin, else the last stroke's."""
+    if name == "direction":
+        return round(game.to_hole()[1], 1)
+    return last.get(name, PROMPT_DEFAULTS.get(name))
+
+
+def _number(text: str, name: str, game: GolfGame) -> float:
+    """A field's value from its text: a number, or ``hole`` for the direction at the hole."""
+    if name == "direction" and text.lower() == "hole":
+        return game.to_hole()[1]
+    try:
+        return float(text)
+    except ValueError:
+        raise ValueError(f"{name} must be a number (got {text!r})") from None
+
+
+def _file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
+    """The shots of a ``--shots`` file, checked line by line (errors name the file, line and field)."""
+    try:
+        lines = Path(path).read_text().splitlines()
+    except OSError as exc:
+        raise ConfigError("--shots", None, f"cannot read {path!r}: {exc.strerror}") from None
+    parsed = []
+    for number, line in enumerate(lines, 1):
+        text = line.split("#", 1)[0].replace(",", " ").split()
+        if not text:
+            continue
+        source = f"{path}:{number}"
+        if len(text) not in (3, 4):
+            raise ConfigError(source, None, f"a stroke is 'direction speed loft [spin]' (got {line.strip()!r})")
+        for f, word in zip(SHOT_FIELDS, text):
+            if not (f.name == "direction" and word.lower() == "hole"):
+                try:
+                    f.check(float(word), source)
+                except ValueError:
+                    raise ConfigError(source, f.name, f"must be a number (got {word!r})") from None
+        parsed.append(text + ["0"] * (4 - len(text)))
+
+    def shots() -> Iterator[Shot]:  # (a direction 'hole' is taken from where the ball lies by then)
+        for text in parsed:
+            print("  " + " ".join(text))
+            yield Shot(*(_number(word, f.name, game) for f, word in zip(SHOT_FIELDS, text)))
+
+    return shots()
+
+
+CSV_COLUMNS = ("stroke", "direction_deg", "speed_kmh", "loft_deg", "spin_rpm", "wind_x_mps", "wind_z_mps",
+               "start_x_m", "start_z_m", "end_x_m", "end_y_m", "end_z_m", "carry_m", "distance_m", "outcome",
+               "to_hole_m")
+
+
+def write_csv(strokes: list[Stroke], path: str) -> None:
+    """The round as CSV, one row per stroke (:data:`CSV_COLUMNS`)."""
+    with open(path, "w", newline="") as f:
+        out = csv.writer(f)
+        out.writerow(CSV_COLUMNS)
+        for s in strokes:
+            out.writerow([s.number, f"{s.shot.direction:g}", f"{s.shot.speed:g}", f"{s.shot.loft:g}",
+                          f"{s.shot.spin:g}", f"{s.wind[0]:.3f}", f"{s.wind[2]:.3f}", f"{s.start[0]:.3f}",
+                          f"{s.start[2]:.3f}", f"{s.end[0]:.3f}", f"{s.end[1]:.3f}", f"{s.end[2]:.3f}",
+                          f"{s.carry:.3f}", f"{s.distance:.3f}", s.outcome, f"{s.to_hole:.3f}"])
