@@ -10,6 +10,7 @@ import dataclasses
 import io
 import math
 
+import background
 import numpy as np
 import pytest
 
@@ -179,10 +180,7 @@ def test_shot_conventions():
 # ---------------------------------------------------------------------------------------------
 # ti-golf play (in this process: main() returns the exit code)
 # ---------------------------------------------------------------------------------------------
-@pytest.fixture
-def green_file(tmp_path):
-    path = tmp_path / "green.toml"
-    path.write_text("""description = "test green"
+GREEN_TOML = """description = "test green"
 [air]
 rho = 0.0
 [ball]
@@ -206,7 +204,14 @@ position = [3.0, 0.0]
 [game]
 start = [0.0, 0.0]
 max_strokes = 5
-""")
+"""
+"""The green of :func:`green` as a scene file."""
+
+
+@pytest.fixture
+def green_file(tmp_path):
+    path = tmp_path / "green.toml"
+    path.write_text(GREEN_TOML)
     return path
 
 
@@ -262,3 +267,58 @@ def test_play_rejects_a_bad_course(green_file, capsys, overrides, needle):
 def test_play_needs_a_course(capsys):
     assert cli.main(["play", "break_shot"]) == 2
     assert "is not a course: the golf game needs a [terrain] and a [hole]" in capsys.readouterr().err
+
+
+def test_play_in_a_window_needs_a_display(green_file, capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert cli.main(["play", str(green_file), "--gui"]) == 2
+    assert "--gui: needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set)" in capsys.readouterr().err
+
+
+WINDOW_SCRIPT = """
+import sys
+from pathlib import Path
+import ti_golf as tg
+from ti_golf.render import ggui_available
+if not ggui_available():
+    sys.exit(77)
+tg.init()
+from ti_golf.game import GolfGame, Shot
+from ti_golf.game_gui import GolfWindow
+out = Path(sys.argv[1])
+game = GolfGame(tg.load_scene(out / "green.toml"))
+window = GolfWindow(game, (640, 360), show_window=False, replay_speed=1e9)
+window.frame()
+window.save(str(out / "before.png"))
+window.hit(Shot(game.to_hole()[1], 10.0, 0.0, 0.0))  # a putt that drops (see the tests above)
+window.frame()  # the replay ends in the first frame (1e9 times real time)
+window.frame()
+window.save(str(out / "after.png"))
+print(game.outcome, window.replay is None, repr(window.message))
+"""
+
+
+def _window_run(workdir):
+    (workdir / "green.toml").write_text(GREEN_TOML)
+    return background.python("-c", WINDOW_SCRIPT, str(workdir)), {}
+
+
+background.declare("game-window", _window_run)
+
+
+@pytest.mark.background("game-window")
+def test_the_game_window_plays_a_stroke_and_draws_the_course(background_runs):
+    # one GGUI window per process: a process of its own, hidden (show_window=False)
+    done, workdir = background_runs.succeeded("game-window", "GGUI needs Vulkan (apt-get install mesa-vulkan-drivers)")
+    assert done.stdout.split()[:2] == ["holed", "True"] and "dropped into the cup" in done.stdout
+    import matplotlib.image as mpimg
+
+    for name in ("before.png", "after.png"):
+        img = mpimg.imread(workdir / name)[..., :3]
+        assert img.shape == (360, 640, 3)
+        green_minus_blue = img[..., 1] - img[..., 2]
+        assert green_minus_blue[:60, 300:].mean() < 0.0  # the sky: pale blue
+        assert green_minus_blue[230:290, 250:400].mean() > 0.1  # the green, 12 m ahead, under the camera
+    panel = mpimg.imread(workdir / "after.png")[40:200, 20:200, :3]  # (ImGui lays it out in the first frame)
+    assert panel.mean() < 0.35  # the panel: dark, with its text and buttons

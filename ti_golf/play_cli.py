@@ -4,7 +4,8 @@ Before each stroke the player is told where the ball lies, how far and in which 
 is, and the wind, and is asked for the stroke's direction, speed, loft and spin; the round goes on
 until the ball is holed, goes out of bounds, the scene's ``game.max_strokes`` are played, or the
 input ends. ``--shots FILE`` plays the strokes listed in a file instead (one per line:
-``direction speed loft spin``, ``hole`` for the direction at the hole, ``#`` starts a comment).
+``direction speed loft spin``, ``hole`` for the direction at the hole, ``#`` starts a comment);
+``--gui`` plays in a window (:mod:`.game_gui`).
 """
 
 from __future__ import annotations
@@ -36,9 +37,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> argp
                    help="override a scene key with a TOML value, e.g. --set game.wind_max=0 (repeatable)")
     p.add_argument("--seed", type=int, default=None,
                    help="seed of the random start and winds (default: a new round every time)")
-    p.add_argument("--shots", metavar="FILE",
-                   help="play the strokes in FILE, one per line: direction speed loft spin "
-                        "(deg, km/h, deg, rpm; 'hole' aims at the hole)")
+    how = p.add_mutually_exclusive_group()
+    how.add_argument("--shots", metavar="FILE",
+                     help="play the strokes in FILE, one per line: direction speed loft spin "
+                          "(deg, km/h, deg, rpm; 'hole' aims at the hole)")
+    how.add_argument("--gui", action="store_true",
+                     help="play in a window: the course in 3-D, clubs and sliders, a camera to move")
     p.add_argument("--out", help="write the round as CSV, one row per stroke (rewritten after every stroke)")
     p.add_argument("--plot", help="write a PNG map of the course with every stroke's path at the end")
     cli._runtime_options(p)
@@ -53,6 +57,8 @@ def cmd_play(args: argparse.Namespace) -> int:
     cli._check_writable(args.out, "--out")
     cli._check_writable(args.plot, "--plot")
     game = GolfGame(load_scene(args.scene, args.overrides), seed=args.seed)
+    if args.gui:
+        return _play_in_window(game, args)
     shots = _file_shots(args.shots, game) if args.shots else _asked_shots(game, input, sys.stdin.isatty())
     hole = game.scene.hole.position
     print(f"{game.scene.name}: a cup {2000 * game.scene.hole.radius:.0f} mm across at x = {hole[0]:g} m, "
@@ -71,6 +77,28 @@ def cmd_play(args: argparse.Namespace) -> int:
                 write_csv(game.strokes, args.out)
     except KeyboardInterrupt:
         ended = "interrupted"
+    _finish(game, ended, args)
+    return 130 if ended == "interrupted" and not game.over else 0
+
+
+def _play_in_window(game: GolfGame, args: argparse.Namespace) -> int:
+    """The round in a window (:mod:`.game_gui`), then the same summary and files as in the console."""
+    from .game_gui import GolfWindow, check_display
+
+    check_display()
+    ended = "window closed"
+    try:
+        GolfWindow(game, on_stroke=lambda _: write_csv(game.strokes, args.out) if args.out else None).run()
+    except KeyboardInterrupt:
+        ended = "interrupted"
+    for stroke in game.strokes:
+        print(f"Stroke {stroke.number}: {_result(stroke).strip()}")
+    _finish(game, ended, args)
+    return 0
+
+
+def _finish(game: GolfGame, ended: str, args: argparse.Namespace) -> None:
+    """The round's last line, then the files asked for."""
     print(_summary(game, ended))
     if args.out:
         write_csv(game.strokes, args.out)
@@ -80,7 +108,6 @@ def cmd_play(args: argparse.Namespace) -> int:
 
         plot_round(game, args.plot, title=f"{game.scene.name}: {_summary(game, ended)}")
         print(f"wrote {args.plot}")
-    return 130 if ended == "interrupted" and not game.over else 0
 
 
 def _lie(game: GolfGame) -> str:

@@ -59,9 +59,13 @@ __all__ = [
     "RenderError",
     "View",
     "ball_colors",
+    "build_frame",
     "camera_view",
+    "draw_scene",
     "ggui_available",
+    "ggui_problem",
     "render",
+    "write_png",
 ]
 
 # -- colours (RGB in [0, 1]) ----------------------------------------------------------------------
@@ -588,8 +592,10 @@ def _wind_arrow(wind: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.nd
     return seg, np.tile(WIND_COLOR, (len(seg), 1))
 
 
-def _build_frame(sim: "Simulation", view: View, color_by: Any, trails: Any, min_px: float,
+def build_frame(sim: "Simulation", view: View, color_by: Any, trails: Any, min_px: float,
                  value_range: tuple[float, float] | None, follow: bool = False) -> _Frame:
+    """What :func:`render` draws of ``sim`` seen through ``view`` (arguments as there; ``follow``
+    for the follow camera's reach): balls, planes, terrain, cup and flag, trails, wind arrow, light."""
     x = sim.x
     radius = sim.model.radius_np.astype(float)
     colors = ball_colors(sim, color_by, value_range)
@@ -662,7 +668,7 @@ class _quiet_stderr:
             os.close(self.devnull)
 
 
-def _ggui_problem() -> str | None:
+def ggui_problem() -> str | None:
     """Why GGUI cannot be used in this process, or None when it can (no window is opened)."""
     if _ggui.window is not None:
         return None
@@ -684,7 +690,7 @@ def _ggui_problem() -> str | None:
 
 def ggui_available() -> bool:
     """Whether GGUI can draw in this process (Taichi has GGUI and a Vulkan instance can be created)."""
-    return _ggui_problem() is None
+    return ggui_problem() is None
 
 
 def _ggui_window(size: tuple[int, int]) -> Any:
@@ -694,7 +700,7 @@ def _ggui_window(size: tuple[int, int]) -> Any:
                 f"the GGUI window of this process is {_ggui.size[0]}x{_ggui.size[1]} and cannot be resized "
                 f"to {size[0]}x{size[1]}")
         return _ggui.window
-    problem = _ggui_problem()
+    problem = ggui_problem()
     if problem:
         raise _GGUIUnavailable(problem)
     import taichi as ti
@@ -785,11 +791,22 @@ class _GGUIDraw:
 
 
 def _draw_ggui(frame: _Frame, path: str) -> None:
+    window = _ggui_window(frame.view.size)
+    draw = draw_scene(frame, _ggui.scene, _ggui.camera)
+    _ggui.canvas.set_background_color(BACKGROUND_COLOR)
+    _ggui.canvas.scene(_ggui.scene)
+    rgba = window.get_image_buffer_as_numpy()  # (width, height, 4) float32 in [0, 1], y up
+    draw.keep.clear()
+    write_png(rgba, path)
+
+
+def draw_scene(frame: _Frame, scene: Any, cam: Any) -> _GGUIDraw:
+    """Hand a frame to a GGUI scene through camera ``cam`` (set to the frame's view): lights, tiles,
+    segments and balls. Returns the holder of its buffers: keep it until the canvas has drawn the
+    scene (see :class:`_GGUIDraw`), then clear it. Also used by the game's window (:mod:`.game_gui`)."""
     import taichi as ti
 
     view = frame.view
-    window = _ggui_window(view.size)
-    scene, cam, canvas = _ggui.scene, _ggui.camera, _ggui.canvas
     cam.projection_mode(ti.ui.ProjectionMode.Perspective)
     cam.position(*map(float, view.position))
     cam.lookat(*map(float, view.lookat))
@@ -821,14 +838,10 @@ def _draw_ggui(frame: _Frame, path: str) -> None:
         # belongs): divide by the aspect ratio so a ball is drawn at its true size.
         aspect = view.size[0] / view.size[1]
         draw.particles(_vbo(frame.centers, frame.colors, radius=frame.radius / aspect))
-    canvas.set_background_color(BACKGROUND_COLOR)
-    canvas.scene(scene)
-    rgba = window.get_image_buffer_as_numpy()  # (width, height, 4) float32 in [0, 1], y up
-    draw.keep.clear()
-    _write_png(rgba, path)
+    return draw
 
 
-def _write_png(rgba: np.ndarray, path: str) -> None:
+def write_png(rgba: np.ndarray, path: str) -> None:
     """Write GGUI's (width, height, 4) float buffer as an RGB PNG with Pillow at fast compression
     (Taichi's own ``save_image`` takes about 0.1 s for 1280x720)."""
     from PIL import Image
@@ -955,7 +968,7 @@ def render(sim: "Simulation", path: str | os.PathLike[str], camera: str | View =
     view = camera_view(sim, camera, size, fov, trails)
     if isinstance(camera, View) and tuple(view.size) != size:
         view = View(view.position, view.lookat, view.up, view.fov, size, view.z_near, view.z_far)
-    frame = _build_frame(sim, view, color_by, trails, min_px, value_range, follow=camera == "follow")
+    frame = build_frame(sim, view, color_by, trails, min_px, value_range, follow=camera == "follow")
     target = Path(path)
     if not target.parent.is_dir():
         raise ValueError(f"cannot write {str(target)!r}: folder {str(target.parent)!r} does not exist")
