@@ -100,6 +100,17 @@ class BackgroundRuns:
             raise RuntimeError(f"background run {key!r} did not finish (stopped, or its thread failed: see the log)")
         return run.proc, run.workdir
 
+    def succeeded(self, key: str, unavailable: str) -> tuple[subprocess.CompletedProcess, Path]:
+        """:meth:`result` of a run that exits with 77 when this machine cannot do what it tries (the
+        test is then skipped, saying ``unavailable``) and must otherwise exit with 0."""
+        import pytest
+
+        done, workdir = self.result(key)
+        if done.returncode == 77:
+            pytest.skip(unavailable)
+        assert done.returncode == 0, done.stderr[-2000:]
+        return done, workdir
+
     def stop(self) -> None:
         """Kill the run in progress and start no other (the session ends)."""
         with self._lock:

@@ -303,10 +303,8 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(background
     # both it owns none of its pairs (grid.owns). Both must list the same pairs and take the same
     # step; that pile is kept in id order, since the grid's order follows the cells, and the order
     # of a ball's simultaneous impacts the storage.
-    done, workdir = background_runs.result("gpu-pile")
-    if done.returncode == 77:
-        pytest.skip("Taichi cannot start its Vulkan backend here (apt-get install mesa-vulkan-drivers)")
-    assert done.returncode == 0, done.stderr[-2000:]
+    _, workdir = background_runs.succeeded(
+        "gpu-pile", "Taichi cannot start its Vulkan backend here (apt-get install mesa-vulkan-drivers)")
     gpu = np.load(workdir / "gpu.npz")
     for name, v, reorder in (("", None, None), ("_shot", gpu["v0_shot"], False)):
         sim = tg.Simulation(pile_scene(70_000)[0], x=gpu["x0" + name], v=v)
@@ -319,9 +317,17 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(background
             assert np.sum(pairs == 70_000) > 10  # the shot ball's pairs (h·v = 6 cm: two layers deep)
         np.testing.assert_array_equal(pairs, sim.solver.pairs())
         sim.step(2)
-        # the same step, up to the round-off of f64 square roots and divisions (a GPU need not round
-        # them as the CPU does): 2e-16 m measured; a missed pair would leave overlaps of ~0.1 mm
-        np.testing.assert_allclose(gpu["x" + name], sim.x, rtol=0, atol=1e-12)
+        # the same step, up to round-off: a GPU need not round as the CPU does (SPIR-V, for one,
+        # lets a driver fuse a multiply and an add), and a contact decided on a threshold (impact
+        # or resting, see contact.pair_impulse) can then go the other way and move its neighbours
+        # in the next sweeps. Measured: 2e-16 m on one host; on another (a Xeon with AVX-512,
+        # both sides deterministic) 82 % of the balls identical, none more than 0.24 mm apart,
+        # the same deepest overlap. A missed pair or a race would leave overlaps ~0.1 mm deeper.
+        d = np.linalg.norm(gpu["x" + name] - sim.x, axis=1)
+        assert np.mean(d <= 1e-12) > 0.5 and d.max() < 5e-4, (np.mean(d <= 1e-12), d.max())
+        cpu_deepest = sim.deepest_overlap()
+        gpu_deepest = tg.Simulation(sim.scene, x=gpu["x" + name]).deepest_overlap()
+        assert abs(gpu_deepest.depth - cpu_deepest.depth) < 1e-6, (gpu_deepest, cpu_deepest)
 
 
 # Every array access of the grid's and the step's kernels checked against the array's bounds
