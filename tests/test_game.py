@@ -228,6 +228,18 @@ def test_play_from_a_shots_file_holes_out_and_saves_the_round(green_file, tmp_pa
     assert plot.stat().st_size > 10_000
 
 
+def test_the_readme_round_holes_in_four_strokes(capsys):
+    # the round of README.md and `make demo` (its strokes in scenes/golf_hole_round.txt, its winds
+    # from --seed 3): a regression check of the whole game on the bundled course
+    from ti_golf.scene import scenes_dir
+
+    shots = str(scenes_dir() / "golf_hole_round.txt")
+    assert cli.main(["play", "golf_hole", "--seed", "3", "--shots", shots]) == 0
+    text = capsys.readouterr().out
+    assert "carried 131.1 m (apex 12.9 m), went 156.4 m; the ball is 26.39 m from the hole." in text
+    assert text.rstrip().endswith("Holed in 4 strokes.")
+
+
 def test_play_asks_again_after_bad_answers_and_stops_at_the_end_of_input(green_file, capsys, monkeypatch):
     answers = "north\n\n500\n4\nabc\n0\n\n"  # one answer a line, then the input ends
     monkeypatch.setattr("sys.stdin", io.StringIO(answers))
