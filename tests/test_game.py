@@ -13,6 +13,7 @@ import math
 import background
 import numpy as np
 import pytest
+from conftest import ROOT
 
 import ti_golf as tg
 from ti_golf import cli
@@ -307,6 +308,7 @@ window.hit(Shot(game.to_hole()[1], 10.0, 0.0, 0.0))  # a putt that drops (see th
 window.frame()  # the replay ends in the first frame (1e9 times real time)
 window.frame()
 window.save(str(out / "after.png"))
+window.close()
 print(game.outcome, window.replay is None, repr(window.message))
 """
 
@@ -334,3 +336,4 @@ def test_the_game_window_plays_a_stroke_and_draws_the_course(background_runs):
         assert green_minus_blue[230:290, 250:400].mean() > 0.1  # the green, 12 m ahead, under the camera
     panel = mpimg.imread(workdir / "after.png")[40:200, 20:200, :3]  # (ImGui lays it out in the first frame)
     assert panel.mean() < 0.35  # the panel: dark, with its text and buttons
+    assert not (ROOT / "imgui.ini").exists()  # (the run's folder: Dear ImGui's settings go elsewhere)

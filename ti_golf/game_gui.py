@@ -231,11 +231,22 @@ class GolfWindow:
         write_png(self._image, path)
 
     def run(self) -> None:
-        """Show the window until it is closed or Escape is pressed."""
+        """Show the window until it is closed or Escape is pressed, then close it."""
         import taichi as ti
 
-        while self.window.running:
-            if self.window.get_event(ti.ui.PRESS) and self.window.event.key == ti.ui.ESCAPE:
-                break
-            self.frame()
-            self.window.show()
+        try:
+            while self.window.running:
+                if self.window.get_event(ti.ui.PRESS) and self.window.event.key == ti.ui.ESCAPE:
+                    break
+                self.frame()
+                self.window.show()
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        """Close the window (leaving no ``imgui.ini`` behind, see :func:`.render.destroy_window`)."""
+        from .render import destroy_window
+
+        if self.window is not None:
+            destroy_window(self.window)
+            self.window = None

@@ -721,19 +721,24 @@ def _ggui_window(size: tuple[int, int]) -> Any:
 
 
 def _close_window() -> None:
-    """Destroy the window at exit inside a scratch folder: Dear ImGui writes ``imgui.ini`` into the
-    current folder when its context goes, and the user's folder should not get one."""
+    """Destroy the picture window at exit (see :func:`destroy_window`)."""
     if _ggui.window is None:
         return
+    destroy_window(_ggui.window)
+    _ggui.window = None
+
+
+def destroy_window(window: Any) -> None:
+    """Destroy a GGUI window inside a scratch folder: Dear ImGui writes ``imgui.ini`` into the
+    current folder when its context goes, and the user's folder should not get one."""
     cwd = os.getcwd()
     scratch = tempfile.mkdtemp(prefix="ti_golf_ggui_")
     try:
         os.chdir(scratch)
-        _ggui.window.destroy()
+        window.destroy()
     except Exception:  # pragma: no cover - best effort at exit
         pass
     finally:
-        _ggui.window = None
         os.chdir(cwd)
         shutil.rmtree(scratch, ignore_errors=True)
 
