@@ -13,7 +13,6 @@ import math
 import background
 import numpy as np
 import pytest
-from conftest import ROOT
 
 import ti_golf as tg
 from ti_golf import cli
@@ -290,6 +289,7 @@ def test_play_in_a_window_needs_a_display(green_file, capsys, monkeypatch):
 
 
 WINDOW_SCRIPT = """
+import os
 import sys
 from pathlib import Path
 import ti_golf as tg
@@ -300,6 +300,7 @@ tg.init()
 from ti_golf.game import GolfGame, Shot
 from ti_golf.game_gui import GolfWindow
 out = Path(sys.argv[1])
+os.chdir(out)  # the user's folder, which must get no imgui.ini
 game = GolfGame(tg.load_scene(out / "green.toml"))
 window = GolfWindow(game, (640, 360), show_window=False, replay_speed=1e9)
 window.frame()
@@ -336,4 +337,4 @@ def test_the_game_window_plays_a_stroke_and_draws_the_course(background_runs):
         assert green_minus_blue[230:290, 250:400].mean() > 0.1  # the green, 12 m ahead, under the camera
     panel = mpimg.imread(workdir / "after.png")[40:200, 20:200, :3]  # (ImGui lays it out in the first frame)
     assert panel.mean() < 0.35  # the panel: dark, with its text and buttons
-    assert not (ROOT / "imgui.ini").exists()  # (the run's folder: Dear ImGui's settings go elsewhere)
+    assert not (workdir / "imgui.ini").exists()  # (its folder: Dear ImGui's settings go elsewhere)

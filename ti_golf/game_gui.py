@@ -126,10 +126,13 @@ class GolfWindow:
         """The round's path so far (S, 1, 3): the strokes played, the replayed one up to now."""
         paths = [s.path for s in self.game.strokes[:-1 if self.replay else None]]
         if self.replay is not None:
-            stroke, start = self.replay
-            tau = (time.perf_counter() - start) * self.replay_speed
-            paths.append(stroke.path[: max(int(np.searchsorted(stroke.t, tau)), 1)])
+            stroke = self.replay[0]
+            paths.append(stroke.path[: max(int(np.searchsorted(stroke.t, self._replay_time())), 1)])
         return np.concatenate(paths)[:, None, :] if paths else None
+
+    def _replay_time(self) -> float:
+        """How far [s of the stroke] the replay has come."""
+        return (time.perf_counter() - self.replay[1]) * self.replay_speed
 
     # -- one frame ---------------------------------------------------------------------------
     def hit(self, shot: Shot | None = None) -> Stroke:
@@ -146,8 +149,8 @@ class GolfWindow:
     def _advance_replay(self) -> None:
         if self.replay is None:
             return
-        stroke, start = self.replay
-        tau = (time.perf_counter() - start) * self.replay_speed
+        stroke = self.replay[0]
+        tau = self._replay_time()
         if tau >= stroke.t[-1]:
             self.replay = None
             self.message = self._verdict(stroke)
