@@ -288,6 +288,12 @@ def test_play_in_a_window_needs_a_display(green_file, capsys, monkeypatch):
     assert "--gui: needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set)" in capsys.readouterr().err
 
 
+def test_play_in_a_window_needs_the_cpu_backend(green_file, capsys, monkeypatch):
+    monkeypatch.setattr("ti_golf.render.non_cpu_arch", lambda: "vulkan")  # as with --arch vulkan
+    assert cli.main(["play", str(green_file), "--gui"]) == 2
+    assert "--gui: draws with the CPU backend only (this process runs on vulkan)" in capsys.readouterr().err
+
+
 WINDOW_SCRIPT = """
 import os
 import sys

@@ -42,8 +42,12 @@ REPLAY_SPEED = 2.0
 
 def check_display() -> None:
     """Raise :class:`ConfigError` (exit 2 from the CLI) when no window can be shown here."""
-    from .render import ggui_problem
+    from .render import ggui_problem, non_cpu_arch
 
+    arch = non_cpu_arch()
+    if arch:  # (see render.non_cpu_arch: GGUI garbles the balls there)
+        raise ConfigError("--gui", None, f"draws with the CPU backend only (this process runs on {arch}); "
+                                         "leave out --arch")
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         raise ConfigError("--gui", None, "needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set); "
                                          "play in the console without --gui")

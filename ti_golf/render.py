@@ -64,6 +64,7 @@ __all__ = [
     "draw_scene",
     "ggui_available",
     "ggui_problem",
+    "non_cpu_arch",
     "render",
     "write_png",
 ]
@@ -986,7 +987,7 @@ def render(sim: "Simulation", path: str | os.PathLike[str], camera: str | View =
     os.close(fd)
     try:
         used = "matplotlib"
-        other_arch = _non_cpu_arch() if backend == "auto" else None
+        other_arch = non_cpu_arch() if backend == "auto" else None
         if other_arch:
             _note(f"GGUI pictures are only drawn with the CPU backend (this process runs on {other_arch})")
         elif backend != "matplotlib":
@@ -1006,7 +1007,7 @@ def render(sim: "Simulation", path: str | os.PathLike[str], camera: str | View =
     return used
 
 
-def _non_cpu_arch() -> str | None:
+def non_cpu_arch() -> str | None:
     """The Taichi backend's name when it is not the CPU, else None.
 
     With ``arch=vulkan`` (software driver, Taichi 1.7.4) GGUI draws particles from garbled vertex
