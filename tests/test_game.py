@@ -103,13 +103,14 @@ def test_ball_that_stops_over_the_cup_is_holed():
 # ---------------------------------------------------------------------------------------------
 def speed_at_the_cup(scene: tg.Scene, shot: Shot) -> float | None:
     """The speed [m/s] at which the putt reaches the cup's near rim on the whole green (no cup), from
-    the simulated roll sampled every step; ``None`` when it stops short."""
+    the simulated roll sampled every 5 steps (it slows by under 0.004 m/s in between: 0.2 % of
+    v_c); ``None`` when it stops short."""
     ball = GolfGame(scene).ball
     sim = tg.Simulation(scene, x=ball[None], v=shot.velocity()[None], track=False)
-    rec = sim.run(t=10.0, until="rest", record_every=1)
+    rec = sim.run(t=10.0, until="rest", record_every=5)
     x = np.asarray(rec.x)[:, 0]
     k = np.flatnonzero(x[:, 0] >= 3.0 - R_CUP)
-    return None if k.size == 0 else float((x[k[0], 0] - x[k[0] - 1, 0]) / scene.world.dt)
+    return None if k.size == 0 else float((x[k[0], 0] - x[k[0] - 1, 0]) / (5 * scene.world.dt))
 
 
 def test_a_putt_drops_when_it_reaches_the_cup_slower_than_the_capture_speed():
