@@ -195,6 +195,10 @@ class GolfGame:
         d = (self.cup - self.ball)[[0, 2]]
         return float(np.hypot(*d)), math.degrees(math.atan2(d[1], d[0]))
 
+    def scene_with_wind(self, wind: np.ndarray) -> Scene:
+        """The course's scene with a stroke's ``wind`` [m/s] (3,) in place of its own."""
+        return dataclasses.replace(self.scene, air=dataclasses.replace(self.scene.air, wind=tuple(map(float, wind))))
+
     def play(self, shot: Shot) -> Stroke:
         """Hit the ball: simulate the stroke, move the ball, end the round when it is holed, out of
         bounds, or the last stroke allowed was played."""
@@ -202,7 +206,7 @@ class GolfGame:
 
         if self.over:
             raise RuntimeError(f"the round is over ({self.outcome})")
-        scene = dataclasses.replace(self.scene, air=dataclasses.replace(self.scene.air, wind=tuple(self.wind)))
+        scene = self.scene_with_wind(self.wind)
         sim = Simulation(scene, x=self.ball[None], v=shot.velocity()[None], w=shot.angular_velocity()[None],
                          track=False)
         every = max(1, round(0.005 / sim.dt))  # samples 5 ms apart: a 1.6 m/s putt moves 8 mm
@@ -233,6 +237,38 @@ class GolfGame:
             self.outcome = "no strokes left"
         self.wind = self._draw_wind()
         return stroke
+
+
+def describe_wind(wind: np.ndarray) -> str:
+    """``wind 3.2 m/s toward 58 deg`` (level speed, direction from +x toward +z), or ``no wind``."""
+    speed = math.hypot(wind[0], wind[2])
+    if speed <= 0.05:
+        return "no wind"
+    return f"wind {speed:.1f} m/s toward {math.degrees(math.atan2(wind[2], wind[0])):.0f} deg"
+
+
+def describe_stroke(s: Stroke) -> str:
+    """What a stroke did, one line (indented for the console)."""
+    flew = f"carried {s.carry:.1f} m (apex {s.apex:.1f} m), " if s.carry >= 1.0 else ""  # (not a putt's hop)
+    if s.outcome == HOLED:
+        return f"  {flew}went {s.distance:.1f} m and dropped into the cup!"
+    if s.outcome == OUT:
+        return f"  {flew}went out of bounds at x = {s.end[0]:.1f} m, z = {s.end[2]:.1f} m."
+    moving = " (still moving when the stroke's time ran out)" if s.outcome == MOVING else ""
+    return f"  {flew}went {s.distance:.1f} m; the ball is {s.to_hole:.2f} m from the hole{moving}."
+
+
+def describe_round(game: GolfGame, ended: str) -> str:
+    """The round's last line; ``ended`` says why an unfinished round stopped."""
+    n = len(game.strokes)
+    strokes = f"{n} stroke{'s' if n != 1 else ''}"
+    if game.outcome == HOLED:
+        return f"Holed in {strokes}."
+    if game.outcome == OUT:
+        return f"Out of bounds after {strokes}."
+    if game.outcome is not None:
+        return f"No strokes left: {strokes} played, the ball lies {game.to_hole()[0]:.2f} m from the hole."
+    return f"The round ends unfinished ({ended}) after {strokes}, {game.to_hole()[0]:.2f} m from the hole."
 
 
 def _carry(path: np.ndarray, low: np.ndarray) -> float:

@@ -14,7 +14,6 @@ it until it is closed (or Escape is pressed).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 import time
@@ -24,7 +23,15 @@ from typing import Any
 import numpy as np
 
 from .errors import ConfigError
-from .game import SHOT_FIELDS, GolfGame, Shot, Stroke
+from .game import (
+    SHOT_FIELDS,
+    GolfGame,
+    Shot,
+    Stroke,
+    describe_round,
+    describe_stroke,
+    describe_wind,
+)
 
 CLUBS = {
     "Driver": (275.0, 10.4, 2545.0),
@@ -118,9 +125,8 @@ class GolfWindow:
         """Put the drawn ball at ``x`` [m] (3,); the flag flies with the coming stroke's wind."""
         from .sim import Simulation
 
-        scene = self.game.scene
         wind = self.game.wind if self.replay is None else self.replay[0].wind
-        scene = dataclasses.replace(scene, air=dataclasses.replace(scene.air, wind=tuple(map(float, wind))))
+        scene = self.game.scene_with_wind(wind)
         if self._display is None or self._display.scene.air.wind != scene.air.wind:
             self._display = Simulation(scene, x=np.asarray(x, float)[None], track=False)
         else:
@@ -173,10 +179,8 @@ class GolfWindow:
             self._set_camera(x - 15.0 * ahead + [0.0, 5.0, 0.0], x)
 
     def _verdict(self, s: Stroke) -> str:
-        from .play_cli import _result, _summary
-
-        text = _result(s).strip().replace("; ", ";\n")
-        return text + ("\n" + _summary(self.game, "") if self.game.over else "")
+        text = describe_stroke(s).strip().replace("; ", ";\n")
+        return text + ("\n" + describe_round(self.game, "") if self.game.over else "")
 
     def _panel(self) -> None:
         g = self.game
@@ -189,8 +193,7 @@ class GolfWindow:
                 w.text("The round is over: close the window.")
             else:
                 w.text(f"Stroke {len(g.strokes) + 1}: {dist:.1f} m to the hole (direction {bearing:.1f} deg)")
-            w.text(f"wind {math.hypot(wind[0], wind[2]):.1f} m/s toward "
-                   f"{math.degrees(math.atan2(wind[2], wind[0])):.0f} deg")
+            w.text(describe_wind(wind))
             busy = self.replay is not None or g.over
             for name, (speed, loft, spin) in CLUBS.items():
                 if w.button(name) and not busy:

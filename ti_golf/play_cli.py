@@ -12,13 +12,20 @@ from __future__ import annotations
 
 import argparse
 import csv
-import math
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from .errors import ConfigError
-from .game import SHOT_FIELDS, GolfGame, Shot, Stroke
+from .game import (
+    SHOT_FIELDS,
+    GolfGame,
+    Shot,
+    Stroke,
+    describe_round,
+    describe_stroke,
+    describe_wind,
+)
 
 DEFAULT_SCENE = "golf_hole"
 
@@ -72,7 +79,7 @@ def cmd_play(args: argparse.Namespace) -> int:
             except StopIteration:
                 break
             stroke = game.play(shot)
-            print(_result(stroke))
+            print(describe_stroke(stroke))
             if args.out:
                 write_csv(game.strokes, args.out)
     except KeyboardInterrupt:
@@ -92,57 +99,29 @@ def _play_in_window(game: GolfGame, args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         ended = "interrupted"
     for stroke in game.strokes:
-        print(f"Stroke {stroke.number}: {_result(stroke).strip()}")
+        print(f"Stroke {stroke.number}: {describe_stroke(stroke).strip()}")
     _finish(game, ended, args)
     return 0
 
 
 def _finish(game: GolfGame, ended: str, args: argparse.Namespace) -> None:
     """The round's last line, then the files asked for."""
-    print(_summary(game, ended))
+    print(describe_round(game, ended))
     if args.out:
         write_csv(game.strokes, args.out)
         print(f"wrote {args.out}")
     if args.plot:
         from .plots import plot_round
 
-        plot_round(game, args.plot, title=f"{game.scene.name}: {_summary(game, ended)}")
+        plot_round(game, args.plot, title=f"{game.scene.name}: {describe_round(game, ended)}")
         print(f"wrote {args.plot}")
 
 
 def _lie(game: GolfGame) -> str:
     """Where the ball lies, the hole and the wind, before a stroke."""
     dist, bearing = game.to_hole()
-    w = game.wind
-    speed = math.hypot(w[0], w[2])
-    wind = (f"wind {speed:.1f} m/s toward {math.degrees(math.atan2(w[2], w[0])):.0f} deg" if speed > 0.05
-            else "no wind")
     return (f"Stroke {len(game.strokes) + 1}: the ball lies at x = {game.ball[0]:.2f} m, z = {game.ball[2]:.2f} m, "
-            f"{dist:.2f} m from the hole (direction {bearing:.1f} deg); {wind}.")
-
-
-def _result(s: Stroke) -> str:
-    """What a stroke did."""
-    flew = f"carried {s.carry:.1f} m (apex {s.apex:.1f} m), " if s.carry >= 1.0 else ""  # (not a putt's hop)
-    if s.outcome == "holed":
-        return f"  {flew}went {s.distance:.1f} m and dropped into the cup!"
-    if s.outcome == "out of bounds":
-        return f"  {flew}went out of bounds at x = {s.end[0]:.1f} m, z = {s.end[2]:.1f} m."
-    moving = " (still moving when the stroke's time ran out)" if s.outcome == "still moving" else ""
-    return f"  {flew}went {s.distance:.1f} m; the ball is {s.to_hole:.2f} m from the hole{moving}."
-
-
-def _summary(game: GolfGame, ended: str) -> str:
-    """The round's last line."""
-    n = len(game.strokes)
-    strokes = f"{n} stroke{'s' if n != 1 else ''}"
-    if game.outcome == "holed":
-        return f"Holed in {strokes}."
-    if game.outcome == "out of bounds":
-        return f"Out of bounds after {strokes}."
-    if game.outcome is not None:
-        return f"No strokes left: {strokes} played, the ball lies {game.to_hole()[0]:.2f} m from the hole."
-    return f"The round ends unfinished ({ended}) after {strokes}, {game.to_hole()[0]:.2f} m from the hole."
+            f"{dist:.2f} m from the hole (direction {bearing:.1f} deg); {describe_wind(game.wind)}.")
 
 
 def _asked_shots(game: GolfGame, ask: Callable[[str], str], interactive: bool) -> Iterator[Shot]:
