@@ -225,13 +225,30 @@ def test_no_hole_no_flag(rack, tmp_path):
 def test_status_colours_are_distinct_from_each_other_and_the_scenery():
     colors = list(R.STATUS_COLORS.values())
     assert len(set(colors)) == 4
-    scenery = [R.BACKGROUND_COLOR, *R.GROUND_COLORS, *R.WALL_COLORS, *R.TERRAIN_COLORS, R.FLAG_COLOR, R.FLAGSTICK_COLOR]
+    scenery = [R.BACKGROUND_COLOR, *R.GROUND_COLORS, *R.WALL_COLORS, *R.TERRAIN_COLORS, *R.SURFACE_COLORS.values(),
+               R.FLAG_COLOR, R.FLAGSTICK_COLOR]
     for i, c in enumerate(colors):
         for other in colors[i + 1:] + scenery:
             assert not matches(np.array([[other]], float), c, cos_min=0.98).any(), (c, other)
 
 
 # -- cameras and colours (no picture) -------------------------------------------------------------
+def test_terrain_is_coloured_by_surface_type_and_by_height_where_a_type_has_no_colour():
+    # a 4 x 4-cell slope rising along x; cells of types 0 (green), 1 (a name with no colour), 2 (rough)
+    h = np.repeat(np.linspace(0.0, 1.0, 5)[:, None], 5, axis=1)
+    cells = np.array([[0, 0, 1, 1], [0, 0, 1, 1], [2, 2, 1, 1], [2, 2, 0, 0]])
+    origin, spacing = np.zeros(3), np.ones(2)
+    _, _, by_height = R._terrain_tiles(h, origin, spacing)
+    _, _, colors = R._terrain_tiles(h, origin, spacing, surfaces=(cells, ("green", "heather", "rough")))
+    kind = cells.ravel()  # one quad per cell, in the same (x, z) order
+    for k, name in ((0, "green"), (2, "rough")):
+        assert matches(colors[None, kind == k], R.SURFACE_COLORS[name], cos_min=0.9999).all(), name
+    np.testing.assert_array_equal(colors[kind == 1], by_height[kind == 1])  # no colour for "heather"
+    # within a type, higher cells are lighter: the relief still shows
+    green = np.linalg.norm(colors, axis=1)[kind == 0]
+    assert green[-1] > green[0]  # the green cells at x = 3 lie above those at x = 0
+
+
 def test_camera_presets_frame_the_balls(lab, rack):
     sim, rec = lab
     path = np.vstack([np.asarray(rec.x).reshape(-1, 3), sim.x])

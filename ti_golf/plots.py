@@ -86,16 +86,15 @@ def plot_run(rec: "Recording", path: str | os.PathLike[str], title: str = "", ma
     plt.close(fig)
 
 
-SURFACE_COLORS = {"green": "#5cb85c", "fairway": "#8cc665", "rough": "#6b8e23", "bunker": "#e8d8a0"}
-"""Map colours of the terrain's surface types by name (others: grey)."""
-
-
 def plot_round(game: GolfGame, path: str | os.PathLike[str], title: str = "") -> None:
     """Top view of a golf round: the course (its surface types, else its heights, with height
     contours), the cup and every stroke's path, numbered; beside it the 12 m around the cup."""
     plt = _pyplot()
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
+
+    # the terrain's colours in the window and in pictures
+    from .render import SURFACE_COLORS
 
     ter = game.terrain
     (x0, z0), (sx, sz) = ter.origin[[0, 2]], ter.size
@@ -108,7 +107,7 @@ def plot_round(game: GolfGame, path: str | os.PathLike[str], title: str = "") ->
     handles = []
     for a in (ax, zoom):
         if ter.cells is not None and surfaces:
-            colors = [SURFACE_COLORS.get(f.name, "#b0b0b0") for f in surfaces]
+            colors = [SURFACE_COLORS.get(f.name, (0.69, 0.69, 0.69)) for f in surfaces]
             a.imshow(ter.cells.T, origin="lower", extent=extent, cmap=ListedColormap(colors), vmin=-0.5,
                      vmax=len(surfaces) - 0.5, interpolation="nearest")
             handles = [Patch(color=c, label=f.name or f"surface {k}") for k, (f, c) in enumerate(zip(surfaces, colors))]

@@ -89,6 +89,14 @@ WALL_COLORS = ((0.72, 0.70, 0.66), (0.64, 0.62, 0.58))
 """Checker colours of other planes: two greys."""
 TERRAIN_COLORS = ((0.30, 0.50, 0.24), (0.62, 0.66, 0.40))
 """Terrain colours from its lowest to its highest point: dark green to dry grass."""
+SURFACE_COLORS = {"green": (0.36, 0.72, 0.36), "fairway": (0.55, 0.78, 0.40), "rough": (0.42, 0.56, 0.14),
+                  "bunker": (0.91, 0.85, 0.63)}
+"""Terrain colours of the surface types (``[[surfaces]]``) by name; the cells of a type not named
+here, and a terrain without types, are tinted by height (``TERRAIN_COLORS``). The course map of
+:func:`ti_golf.plots.plot_round` uses the same colours."""
+SURFACE_SHADE = (0.88, 1.05)
+"""A surface type's colour is scaled from the first factor at the terrain's lowest point to the
+second at its highest, so that the relief still reads within one type."""
 HOLE_COLOR = (0.03, 0.03, 0.03)
 """The cup: near black."""
 FLAG_COLOR = (0.90, 0.08, 0.10)
@@ -524,9 +532,23 @@ def _clip_to_open_sides(quads: np.ndarray, planes: list[tuple[np.ndarray, np.nda
     return out, np.asarray(idx, dtype=int)
 
 
-def _terrain_tiles(h: np.ndarray, origin: np.ndarray, spacing: np.ndarray, max_cells: int = 128
+def _surface_types(sim: Simulation) -> tuple[np.ndarray, tuple[str, ...]] | None:
+    """The terrain's surface type of every cell (nx − 1, nz − 1) and the types' names, if the scene
+    names any that has a colour (``SURFACE_COLORS``)."""
+    t = getattr(sim.model, "terrain", None)
+    cells = getattr(t, "cells", None)
+    names = tuple(f.name for f in sim.scene.surfaces)
+    if cells is None or not any(name in SURFACE_COLORS for name in names):
+        return None
+    return np.asarray(cells), names
+
+
+def _terrain_tiles(h: np.ndarray, origin: np.ndarray, spacing: np.ndarray,
+                   surfaces: tuple[np.ndarray, tuple[str, ...]] | None = None, max_cells: int = 128
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The height field as flat-shaded quads (at most ``max_cells`` per axis), tinted by height."""
+    """The height field as flat-shaded quads (at most ``max_cells`` per axis), tinted by height,
+    or with ``surfaces`` (:func:`_surface_types`) coloured by the surface type of the cell at each
+    quad's middle (``SURFACE_COLORS``, shaded by height)."""
     nx, nz = h.shape
     ii = np.unique(np.r_[np.arange(0, nx, max(1, math.ceil((nx - 1) / max_cells))), nx - 1])
     kk = np.unique(np.r_[np.arange(0, nz, max(1, math.ceil((nz - 1) / max_cells))), nz - 1])
@@ -543,6 +565,16 @@ def _terrain_tiles(h: np.ndarray, origin: np.ndarray, spacing: np.ndarray, max_c
     t = (hy - hy.min()) / span if span > 0 else np.zeros_like(hy)
     low, high = np.array(TERRAIN_COLORS[0]), np.array(TERRAIN_COLORS[1])
     colors = low + t[:, None] * (high - low)
+    if surfaces is not None:
+        cells, names = surfaces
+        mid_i = np.minimum((ii[:-1] + ii[1:]) // 2, cells.shape[0] - 1)
+        mid_k = np.minimum((kk[:-1] + kk[1:]) // 2, cells.shape[1] - 1)
+        kind = cells[np.ix_(mid_i, mid_k)].ravel()
+        shade = SURFACE_SHADE[0] + t * (SURFACE_SHADE[1] - SURFACE_SHADE[0])
+        for k, name in enumerate(names):
+            if name in SURFACE_COLORS:
+                here = kind == k
+                colors[here] = np.clip(np.outer(shade[here], SURFACE_COLORS[name]), 0.0, 1.0)
     a, b = np.meshgrid(np.arange(len(ii) - 1), np.arange(len(kk) - 1), indexing="ij")
     colors *= np.where(((a // 4 + b // 4) % 2).ravel() == 1, 0.92, 1.0)[:, None]
     return quads, n, colors
@@ -607,7 +639,7 @@ def build_frame(sim: "Simulation", view: View, color_by: Any, trails: Any, min_p
     tiles, tile_n, tile_c = _plane_tiles(view, sim.model.plane_p, sim.model.plane_n, lo, hi, r_max, reach)
     terr = _terrain(sim)
     if terr is not None:
-        t_tiles, t_n, t_c = _terrain_tiles(*terr)
+        t_tiles, t_n, t_c = _terrain_tiles(*terr, surfaces=_surface_types(sim))
         tiles = tiles + list(t_tiles)
         tile_n, tile_c = np.concatenate([tile_n, t_n]), np.concatenate([tile_c, t_c])
     h_tiles, h_n, h_c, h_seg, h_seg_c = _hole_parts(sim, view, min_px)
