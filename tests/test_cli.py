@@ -348,6 +348,7 @@ def test_bench_collide_json(n, flags, background_runs, request):
     assert result["contacts_per_ball"] == pytest.approx(lattice_contacts, rel=0.02)  # the pile still stands
     assert 0.0 <= result["deepest_overlap"] < 0.05  # and keeps the bound (5 % of a radius)
     assert result["baselines"]["bare_gather_balls_per_s"] > 0
+    assert result["baselines"]["one_pass_contacts_balls_per_s"] > 0 and result["step_cost_in_one_pass_contacts"] > 0
     assert ("asleep_speedup" in result) == bool(flags)  # with its awake baseline timed in the same run
     # few balls are stepped serially, with one parallel launch per step timed in the same run
     assert result["serial"] == (n <= SERIAL_MAX_BALLS) and ("serial_speedup" in result) == result["serial"]

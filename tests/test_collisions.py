@@ -616,6 +616,31 @@ def test_momentum_is_conserved_to_round_off_in_a_gas():
     assert sim.solver.rebuilds > 1  # the gas moved enough to rebuild the lists
 
 
+def test_the_benchs_one_pass_floor_gives_the_two_balls_of_a_pair_opposite_impulses():
+    # the collide bench's floor (physics.baseline.one_pass_contacts) must be a pass of the contact
+    # model itself, not a cheaper stand-in: every listed pair met from both of its balls through
+    # the pair impulse (B.5-B.18), which gives them opposite impulses (sum of m dv = 0 to
+    # round-off), with friction spinning them (B.15). A lattice pressed 2.5 % closer than touching,
+    # mixed radii and masses, random velocities and spins, restitution and friction.
+    from ti_golf.bench import one_pass_contacts
+
+    rng = np.random.default_rng(5)
+    grid = np.stack(np.meshgrid(*[np.arange(7)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    x = 0.039 * grid + rng.uniform(-0.001, 0.001, grid.shape)
+    n = len(x)
+    sim = tg.Simulation(scene("contact.e=0.7", "contact.mu=0.3"), x=x, v=rng.normal(0, 1.0, (n, 3)),
+                        w=rng.normal(0, 50.0, (n, 3)), radius=rng.uniform(0.0195, 0.0205, n),
+                        mass=rng.uniform(0.03, 0.06, n))
+    run, dv, dw = one_pass_contacts(sim)
+    run()
+    dv, dw, m = dv.to_numpy(), dw.to_numpy(), sim.model.mass_np
+    assert not sim.solver.reorder  # (the state's storage order is the id order)
+    momentum = (m[:, None] * dv).sum(axis=0)
+    scale = (m[:, None] * np.abs(dv)).sum()
+    assert scale > 0 and np.abs(momentum).max() < 1e-13 * scale
+    assert np.count_nonzero(np.abs(dw).sum(axis=1)) > n // 2  # friction at most contacts
+
+
 def test_kinetic_energy_is_conserved_with_e1_mu0():
     # e = 1, μ = 0: every binary impact conserves kinetic energy exactly; simultaneous contacts
     # resolved by Jacobi sweeps and the position projection leave a small error we bound at 1 %.

@@ -242,6 +242,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     i, j = sim.solver.pairs().T
     touching = int(np.count_nonzero(np.linalg.norm(xn[i] - xn[j], axis=1) < 2 * 0.02 * 1.001))
     deepest = sim.deepest_overlap()  # speed is only worth quoting while the pile keeps its shape
+    one_pass_rate = one_pass_contact_rate(sim)  # after the peak: its two arrays are not the step's
     del sim
     gc.collect()
     plane_seconds = timed(False, asleep)[1] if terrain else None  # the baselines, timed in the same run
@@ -272,8 +273,9 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         # the OS's high-water mark can lag the current RSS by a few pages: no negative growth
         "bytes_per_ball_above_baseline": max(peak - base_rss, 0) / n,
     }
-    result["baselines"] = {"bare_gather_balls_per_s": gather_rate}
+    result["baselines"] = {"bare_gather_balls_per_s": gather_rate, "one_pass_contacts_balls_per_s": one_pass_rate}
     result["step_cost_in_bare_gathers"] = gather_rate / result["ball_steps_per_s"]
+    result["step_cost_in_one_pass_contacts"] = one_pass_rate / result["ball_steps_per_s"]
     # the baselines timed in the same run: (its seconds, key of its ms per step, key of the ratio, the
     # ratio from (seconds, its seconds), the line that says it)
     for base, key, name, ratio, say in (
@@ -298,6 +300,8 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
         f"({result['bytes_per_ball_above_baseline']:.0f} B/ball above baseline), arch={info.arch}, {info.precision}")
     log(f"baseline: a bare 12-neighbour gather runs at {gather_rate:.3g} balls/s; "
         f"one collision step costs {result['step_cost_in_bare_gathers']:.1f} such passes")
+    log(f"floor: one pass of the pair impulse over every ball's neighbours runs at {one_pass_rate:.3g} balls/s; "
+        f"one collision step costs {result['step_cost_in_one_pass_contacts']:.1f} such passes")
     return result
 
 
@@ -340,6 +344,38 @@ def bare_gather_rate(x: np.ndarray, repeats: int = 5) -> float:
         ti.sync()
 
     return n / _best_time(run, repeats)
+
+
+def one_pass_contacts(sim: Any) -> tuple[Callable[[], None], Any, Any]:
+    """A runner of the one-pass contact yardstick (``physics.baseline.one_pass_contacts``) on the
+    balls and neighbour lists of ``sim`` (built first if need be), and its outputs, Taichi arrays
+    (N, 3) in the state's storage order: the contact impulses' Δv [m/s] and Δω [rad/s]."""
+    import taichi as ti
+
+    from .physics.baseline import one_pass_contacts as kernel
+    from .physics.types import vec3
+
+    m, s, solver = sim.model, sim.state, sim.solver
+    solver.ensure_lists(s)
+    dv, dw = ti.ndarray(vec3, s.n), ti.ndarray(vec3, s.n)
+
+    def run() -> None:
+        kernel(m.contact, m.gravity, m.dt, s.x, s.v, s.w, m.radius, m.mass, solver.upper, solver.n_upper,
+               solver.lower, solver.n_lower, dv, dw)
+        ti.sync()
+
+    return run, dv, dw
+
+
+def one_pass_contact_rate(sim: Any, repeats: int = 5) -> float:
+    """Balls per second of the one-pass contact yardstick on ``sim``'s pile, its own lists: every
+    ball meets each of its neighbours through the report's pair impulse, once, with nothing else
+    of the step (see ``physics.baseline.one_pass_contacts``). A step of the model cannot be
+    cheaper than this pass (it makes it once per sweep, pairs shared, and much else besides), so
+    it bounds the ball-steps per second that the collision model can reach on this machine."""
+    run = one_pass_contacts(sim)[0]
+    run()  # compile
+    return sim.n / _best_time(run, repeats)
 
 
 def _rss_bytes() -> int:
