@@ -8,6 +8,7 @@ Scene files are written into ``tmp_path`` from a copy of ``scenes/lab_turbulent.
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import subprocess
 from pathlib import Path
@@ -121,6 +122,7 @@ BAD_VALUES = {
     "number_for_bool": ("world", "ground", "1", "world.ground", ["true or false"]),
     "number_for_str": ("world", "integrator", "4", "world.integrator", ["string"]),
     "unknown_integrator": ("world", "integrator", '"euler"', "world.integrator", ["'semi_implicit'", "'rk4'", "euler"]),
+    "unknown_air_model": ("air", "model", '"wind_tunnel"', "air.model", ["'lab'", "'spin_ratio'", "wind_tunnel"]),
     # non-finite numbers (nan and inf are valid TOML floats)
     "nan_C_D": ("air", "C_D", "nan", "air.C_D", ["finite", "nan"]),
     "inf_C_D": ("air", "C_D", "inf", "air.C_D", ["finite", "inf"]),
@@ -151,6 +153,21 @@ BAD_VALUES = {
     "hole_radius_zero": ("hole", "radius", "0", "hole.radius", ["> 0"]),
     "hole_flag_negative": ("hole", "flag_height", "-1", "hole.flag_height", [">= 0"]),
 }
+
+
+def test_the_spin_ratio_model_needs_turbulent_flow(tmp_path):
+    # its C_D(S), C_L(S) are quadratic-drag coefficients: with γ = 1 the scene is refused, in the
+    # file and through the API, rather than flown with a law nobody asked for
+    text = edit_scene("air", "gamma", "1", edit_scene("air", "model", '"spin_ratio"'))
+    path = write_scene(tmp_path, text)
+    with pytest.raises(ConfigError) as info:
+        ti_golf.load_scene(path)
+    assert info.value.key == "air.gamma" and info.value.source == str(path)
+    assert "must be 2" in str(info.value) and "spin_ratio" in str(info.value)
+    laminar = ti_golf.load_scene("lab_laminar")
+    scene = dataclasses.replace(laminar, air=dataclasses.replace(laminar.air, model="spin_ratio"))
+    with pytest.raises(ValueError, match="air.gamma must be 2"):
+        ti_golf.Simulation(scene)
 
 
 @pytest.mark.parametrize("case", list(BAD_VALUES), ids=list(BAD_VALUES))

@@ -21,6 +21,8 @@ FLYING, ROLLING, AT_REST, OUT_OF_BOUNDS = 0, 1, 2, 3
 STATUS_NAMES = {FLYING: "flying", ROLLING: "rolling", AT_REST: "at_rest", OUT_OF_BOUNDS: "out_of_bounds"}
 
 INTEGRATORS = ("semi_implicit", "rk4")
+AIR_MODELS = ("lab", "spin_ratio")
+"""Aerodynamic models (``air.model``): the report's laws, or coefficients of the spin ratio."""
 
 
 # ----------------------------------------------------------------------------------------------
@@ -87,6 +89,11 @@ SCHEMA: dict[str, dict[str, Key]] = {
             Key("C_omega", "float", 0.0, "-", "spin-decay coefficient; k_ω = ½ρA·C_ω/m (L.17, L.23)",
                 _non_negative, ">= 0"),
             Key("wind", "vec3", (0.0, 0.0, 0.0), "m/s", "constant wind; forces use v_rel = v − wind (L.21–L.23)"),
+            Key("model", "str", "lab", "-",
+                "drag and lift: lab = the report's constant C_D and Magnus law (L.21, L.22); spin_ratio = "
+                "C_D(S) and C_L(S) of the spin ratio S = R|ω|/|v_rel| fitted to launch-monitor shots "
+                "(Ferguson, McNally & McPhee 2022; C_D, C_M and omega_M unused; needs gamma = 2)",
+                _one_of(*AIR_MODELS), " | ".join(AIR_MODELS)),
         ]
     },
     "ball": {
@@ -335,6 +342,7 @@ class Air:
     omega_M: float = _default("air", "omega_M")
     C_omega: float = _default("air", "C_omega")
     wind: Vec3 = _default("air", "wind")
+    model: str = _default("air", "model")
 
 
 @dataclass(frozen=True)

@@ -6,8 +6,9 @@ import numpy as np
 import taichi as ti
 
 from .config import Scene, Surface
+from .physics.aero import air_params
 from .physics.integrate import INTEGRATOR_CODES
-from .physics.types import AirParams, ContactParams, TerrainParams, vec3
+from .physics.types import ContactParams, TerrainParams, vec3
 from .runtime import np_float
 
 
@@ -59,8 +60,7 @@ class Model:
         self.radius_np = _compact(radius)
         self.mass_np = _compact(mass)
         a, c, w = scene.air, scene.contact, scene.world
-        self.air = AirParams(rho=a.rho, gamma=a.gamma, C_D=a.C_D, C_M=a.C_M, omega_M=a.omega_M,
-                             C_omega=a.C_omega, wind=vec3(*a.wind))
+        self.air = air_params(a)
         self.contact = ContactParams(e=c.e, mu=c.mu, k_p=c.k_p, mu_roll=c.mu_roll, relax=c.relax, v_bounce=c.v_bounce)
         self.gravity = vec3(*w.gravity)
         self.integrator = INTEGRATOR_CODES[w.integrator]

@@ -7,7 +7,9 @@
 
 Model (report L.21–L.23), v_rel = v − wind, A = πR²:
 dv/dt = g − (k_D/m)|v_rel|^(γ−1) v_rel + (k_M/m)|v_rel| (ω × v_rel),
-dω/dt = −k_ω (|v_rel| + R|ω|)^(γ−1) ω.
+dω/dt = −k_ω (|v_rel| + R|ω|)^(γ−1) ω;
+with ``air.model = "spin_ratio"`` drag and lift take C_D(S) and C_L(S) of S = R|ω|/|v_rel|
+(:func:`spin_ratio_coefficients`): dv/dt = g − (½ρA/m)|v_rel|·(C_D v_rel − C_L (ω × v_rel)/|ω|).
 """
 
 from __future__ import annotations
@@ -26,17 +28,32 @@ def coefficients(scene: Scene) -> tuple[float, float, float]:
     return half_rho_A * a.C_D / b.mass, half_rho_A * a.C_M / a.omega_M / b.mass, half_rho_A * a.C_omega / b.mass
 
 
+def spin_ratio_coefficients(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(C_D, C_L) at spin ratios ``s``: Ferguson, McNally & McPhee (2022), C_D = 0.1304 + 0.9287 S
+    − 0.8259 S², C_L = 0.0504 + 1.2031 S − 1.1490 S², fitted over 0.02 ≤ S ≤ 0.75 and held at
+    the ends; below S = 0.02, C_L in proportion to S (golf_data.md; physics/aero.py)."""
+    c = np.clip(s, 0.02, 0.75)
+    return 0.1304 + 0.9287 * c - 0.8259 * c**2, (0.0504 + 1.2031 * c - 1.1490 * c**2) * np.minimum(s / 0.02, 1.0)
+
+
 def derivatives(scene: Scene, v: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(dv/dt, dω/dt) for arrays of shape (N, 3)."""
     kD, kM, kw = coefficients(scene)
     v_rel = v - np.asarray(scene.air.wind)
     speed = np.sqrt(np.einsum("ij,ij->i", v_rel, v_rel))[:, None]
+    spin = np.sqrt(np.einsum("ij,ij->i", w, w))[:, None]
     if scene.air.gamma == 2:
         drag = kD * speed
-        decay = kw * (speed + scene.ball.radius * np.sqrt(np.einsum("ij,ij->i", w, w))[:, None])
+        decay = kw * (speed + scene.ball.radius * spin)
     else:
         drag, decay = kD, kw
-    dv = np.asarray(scene.world.gravity) - drag * v_rel + kM * speed * np.cross(w, v_rel)
+    lift = kM * speed
+    if scene.air.model == "spin_ratio":
+        half_rho_A_over_m = 0.5 * scene.air.rho * math.pi * scene.ball.radius**2 / scene.ball.mass
+        C_D, C_L = spin_ratio_coefficients(scene.ball.radius * spin / np.maximum(speed, 1e-12))
+        drag = half_rho_A_over_m * C_D * speed
+        lift = half_rho_A_over_m * C_L * speed / np.maximum(spin, 1e-12)
+    dv = np.asarray(scene.world.gravity) - drag * v_rel + lift * np.cross(w, v_rel)
     return dv, -decay * w
 
 

@@ -119,8 +119,9 @@ def fly(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, record_eve
     """
     ensure_init()
     from .physics import kernels
+    from .physics.aero import air_params
     from .physics.integrate import INTEGRATOR_CODES
-    from .physics.types import AirParams, vec3
+    from .physics.types import vec3
 
     lanes = default_lanes() if lanes is None else int(lanes)
     f = np_float()
@@ -140,8 +141,7 @@ def fly(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, record_eve
     apex, t_land = np.zeros(n0, f), np.zeros(n0, f)
     land_x, land_v = np.zeros((n0, 3), f), np.zeros((n0, 3), f)
     traj = np.zeros((n0, n_samples, 3) if record_every else (1, 1, 3), f)
-    air = AirParams(rho=a.rho, gamma=a.gamma, C_D=a.C_D, C_M=a.C_M, omega_M=a.omega_M, C_omega=a.C_omega,
-                    wind=vec3(*a.wind))
+    air = air_params(a)
     with plain_compile():  # minutes less of compiling on first use, see runtime.plain_compile
         kernels.fly_to_landing(air, vec3(*wld.gravity), wld.dt, INTEGRATOR_CODES[wld.integrator], lanes,
                                wld.t_max, int(record_every), radius, mass, order.astype(np.int32), arr(x0), arr(v0),

@@ -8,6 +8,19 @@ All laws use the velocity relative to the air, v_rel = v − wind (report L.21�
 
 with A = πR² the cross-section. Forces do not depend on position.
 
+With ``air.model = "spin_ratio"`` (γ = 2) drag and lift take coefficients of the spin ratio
+S = R|ω|/|v_rel| instead (golf_data.md: Ferguson, McNally & McPhee 2022, a fit to 1040
+launch-monitor shots over S = 0.02–0.75):
+
+* drag       f_D = −½ρA·C_D(S) |v_rel| v_rel,          C_D = 0.1304 + 0.9287 S − 0.8259 S²
+* lift       f_L = ½ρA·C_L(S) |v_rel|² (ω̂ × v̂_rel),    C_L = 0.0504 + 1.2031 S − 1.1490 S²
+
+held at their S = 0.75 values beyond the fit, and at their S = 0.02 values below it, where C_L
+also falls in proportion to S so that a ball without spin feels no lift (:func:`spin_ratio_coefficients`).
+Real lift depends on S and saturates; the lab's constant k_M makes it grow with spin alone, so
+that one constant cannot fit both a driver (S ≈ 0.07 at launch) and a wedge (S ≈ 0.45).
+Spin decay keeps the law above.
+
 Balls are integrated in *lanes*: a state matrix ``S`` of shape (10, L) holds L balls side by side,
 rows x, y, z, v_x, v_y, v_z, ω_x, ω_y, ω_z and |ω|. The spin magnitude has a row of its own because
 spin decay only scales ω (dω/dt ∥ ω), so d|ω|/dt = −(decay rate)·|ω| exactly and no square root of
@@ -17,10 +30,18 @@ a single ball). ``coef`` is a (4, L) matrix with rows k_D/m, k_M/m, k_ω and R o
 """
 
 import math
+from typing import Any
 
 import taichi as ti
 
-from .types import vec3
+from .types import AirParams, vec3
+
+LAB, SPIN_RATIO = 0, 1
+AIR_MODEL_CODES = {"lab": LAB, "spin_ratio": SPIN_RATIO}
+"""Kernel codes of ``air.model`` (:data:`ti_golf.config.AIR_MODELS`)."""
+S_MIN, S_MAX = 0.02, 0.75
+"""The range of spin ratios of the C_D(S), C_L(S) fit; the coefficients are held at its ends."""
+_TINY = 1e-12
 
 X, V, W, SPIN = 0, 3, 6, 9
 """Rows of a lane state matrix: first row of position, velocity, angular velocity; spin magnitude |ω|."""
@@ -39,16 +60,41 @@ def column(S, first: ti.template(), lane: ti.template()):
     return vec3(S[first, lane], S[first + 1, lane], S[first + 2, lane])
 
 
+def air_params(air: Any) -> Any:
+    """The kernels' :data:`~.types.AirParams` of a scene's ``Air`` (see ``ti_golf.config.Air``)."""
+    if air.model not in AIR_MODEL_CODES:
+        raise ValueError(f"air.model must be one of {', '.join(AIR_MODEL_CODES)} (got {air.model!r})")
+    if air.model == "spin_ratio" and air.gamma != 2:
+        raise ValueError(f"air.gamma must be 2 with air.model = 'spin_ratio' (got {air.gamma})")
+    return AirParams(rho=air.rho, gamma=air.gamma, C_D=air.C_D, C_M=air.C_M, omega_M=air.omega_M,
+                     C_omega=air.C_omega, wind=vec3(*air.wind), model=AIR_MODEL_CODES[air.model])
+
+
 @ti.func
 def coefficients(air, radius, mass):
-    """(4, L) matrix of k_D/m, k_M/m, k_ω [1/m] and R [m] for lanes of radius [m] and mass [kg]."""
+    """(4, L) matrix of k_D/m, k_M/m, k_ω [1/m] and R [m] for lanes of radius [m] and mass [kg];
+    with the spin-ratio model the first two rows are ½ρA/m, which :func:`rates` multiplies by
+    C_D(S) and C_L(S)/|ω|."""
     half_rho_A = 0.5 * air.rho * math.pi * radius * radius
+    c_D, c_M = air.C_D, air.C_M / air.omega_M
+    if air.model == SPIN_RATIO:
+        c_D, c_M = 1.0, 1.0
     return ti.Matrix.rows([
-        half_rho_A * air.C_D / mass,
-        half_rho_A * air.C_M / air.omega_M / mass,
+        half_rho_A * c_D / mass,
+        half_rho_A * c_M / mass,
         half_rho_A * air.C_omega / mass,
         radius,
     ])
+
+
+@ti.func
+def spin_ratio_coefficients(s):
+    """(C_D, C_L) at spin ratios ``s`` (lanes): the fit of Ferguson, McNally & McPhee (2022) over
+    S_MIN ≤ S ≤ S_MAX, held at its ends, C_L times S/S_MIN below S_MIN (no spin, no lift)."""
+    c = ti.min(ti.max(s, S_MIN), S_MAX)
+    C_D = 0.1304 + c * (0.9287 - 0.8259 * c)
+    C_L = (0.0504 + c * (1.2031 - 1.1490 * c)) * ti.min(s / S_MIN, 1.0)
+    return C_D, C_L
 
 
 @ti.func
@@ -64,6 +110,11 @@ def rates(S, coef, air, gravity):
         drag = drag * speed
         decay = decay * (speed + row(coef, 3) * row(S, SPIN))
     lift = row(coef, 1) * speed
+    if air.model == SPIN_RATIO:  # (γ = 2: the scene is checked when read)
+        spin = row(S, SPIN)
+        C_D, C_L = spin_ratio_coefficients(row(coef, 3) * spin / ti.max(speed, _TINY))
+        drag = row(coef, 0) * C_D * speed
+        lift = row(coef, 1) * C_L * speed / ti.max(spin, _TINY)  # |ω × v_rel|/|ω| = |v_rel| at right angles
     return ti.Matrix.rows([
         vx,
         vy,

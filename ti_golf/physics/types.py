@@ -19,6 +19,7 @@ AirParams = ti.types.struct(
     omega_M=float,  # Magnus reference angular velocity ω_M [1/s] (L.2)
     C_omega=float,  # spin-decay coefficient (L.23)
     wind=vec3,  # constant wind velocity [m/s]
+    model=ti.i32,  # aerodynamic model (aero.AIR_MODEL_CODES): 0 the report's laws, 1 coefficients of the spin ratio
 )
 """Air parameters, passed to kernels by value (tunable without recompiling)."""
 
