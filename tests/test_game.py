@@ -237,7 +237,7 @@ def test_the_readme_round_holes_in_four_strokes(capsys):
     shots = str(scenes_dir() / "golf_hole_round.txt")
     assert cli.main(["play", "golf_hole", "--seed", "3", "--shots", shots]) == 0
     text = capsys.readouterr().out
-    assert "carried 131.1 m (apex 12.9 m), went 156.4 m; the ball is 26.39 m from the hole." in text
+    assert "carried 128.9 m (apex 21.5 m), went 150.7 m; the ball is 20.74 m from the hole." in text
     assert text.rstrip().endswith("Holed in 4 strokes.")
 
 
