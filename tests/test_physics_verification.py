@@ -288,6 +288,69 @@ def test_bounce_heights_follow_restitution():
     assert peaks[1] == pytest.approx(e**4 * H, abs=2e-3)
 
 
+def _penner_bounce(u, v_n, spin, R, mu):
+    """Penner (2002; golf_data.md) for a ball landing at forward speed u and descent speed v_n
+    [m/s] with backspin ``spin`` [rad/s] on level turf: the impact is solved in a frame tilted by
+    θ_c = 15.4°·(v/18.6 m/s)·(φ/44.4°) toward the ball, with e = 0.510 − 0.0375 v_n' + 0.000903 v_n'²
+    (0.120 above 20 m/s); the ball rolls out if μ ≥ μ_c = 2(u' + Rω)/(7(1+e)v_n'), u'' = (5/7)u' −
+    (2/7)Rω and ω'' = −u''/R, else slides, u'' = u' − μ(1+e)v_n', ω'' = ω − 5μ(1+e)v_n'/(2R).
+    Returns the velocity (x forward, y up) and backspin after the bounce, and whether it rolled."""
+    phi = math.degrees(math.atan2(v_n, u))
+    theta = math.radians(min(15.4 * (math.hypot(u, v_n) / 18.6) * (phi / 44.4), 90.0 - phi))
+    n, t = np.array([-math.sin(theta), math.cos(theta)]), np.array([math.cos(theta), math.sin(theta)])
+    v_in = np.array([u, -v_n])
+    vn, ut = -v_in @ n, v_in @ t
+    e = 0.510 - 0.0375 * vn + 0.000903 * vn**2 if vn <= 20.0 else 0.120
+    rolls = mu >= 2 * (ut + R * spin) / (7 * (1 + e) * vn)
+    if rolls:
+        ut2 = 5 / 7 * ut - 2 / 7 * R * spin
+        spin2 = -ut2 / R
+    else:
+        ut2 = ut - mu * (1 + e) * vn
+        spin2 = spin - 5 * mu * (1 + e) * vn / (2 * R)
+    return e * vn * n + ut2 * t, spin2, rolls
+
+
+TURF = ("world.gravity=[0,0,0]", "world.integrator=semi_implicit", "world.dt=0.0001", "contact.turf=true",
+        "contact.mu=0.4", "ball.radius=0.021335", "ball.mass=0.04593")
+
+
+@pytest.mark.parametrize("u, v_n, spin, rolls", [
+    (16.7, 17.7, 600.0, True),  # a tour 7-iron landing (24 m/s at 47°): it rolls out, slowly forward
+    (25.0, 6.0, 0.0, False),  # a low, fast, spinless skid: it slides
+    (9.0, 14.0, 1000.0, True),  # a steep wedge with much backspin: it checks and spins back
+])
+@pytest.mark.parametrize("where", ["plane", "colliding", "terrain"])
+def test_a_turf_bounce_is_penners(u, v_n, spin, rolls, where):
+    # gravity off, so one step holds the whole impact and the closed form applies to round-off;
+    # "plane": one ball (the flight kernel's plane contact), "colliding": two balls far apart (the
+    # collision step's planes), "terrain": a flat height field whose one surface type has turf
+    R = 0.021335
+    want_v, want_spin, want_rolls = _penner_bounce(u, v_n, spin, R, 0.4)
+    assert want_rolls == rolls
+    overrides = list(TURF)
+    if where == "terrain":
+        overrides += ["contact.turf=false", "terrain.kind=\"generated\"", "terrain.amplitude=0.0",
+                      "terrain.origin=[-50,0,-50]", "terrain.size=[100,100]", "terrain.resolution=[5,5]"]
+    scene = lab("lab_vacuum", *overrides)
+    if where == "terrain":
+        import dataclasses
+
+        from ti_golf.config import Surface
+        scene = dataclasses.replace(scene, surfaces=(Surface(name="fairway", turf=True),))
+    x = [[0.0, R + 1e-3, 0.0]] + ([[0.0, R + 1e-3, 30.0]] if where == "colliding" else [])
+    v = [[u, -v_n, 0.0]] * len(x)
+    w = [[0.0, 0.0, spin]] * len(x)
+    sim = tg.Simulation(scene, x=x, v=v, w=w)
+    assert (sim.solver is not None) == (where == "colliding")
+    sim.run(t=0.01)
+    np.testing.assert_allclose(sim.v[:, :2], [want_v] * len(x), rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(sim.w[:, 2], want_spin, rtol=1e-9)
+    assert want_v[1] > 0  # it left the ground
+    if spin == 1000.0:
+        assert want_v[0] < 0 < want_spin  # it checks: back it comes, rolling backward
+
+
 def test_dropped_ball_comes_to_rest_without_sinking_or_jitter():
     scene = lab("lab_vacuum", "world.integrator=semi_implicit", "world.dt=0.001")
     sim = tg.Simulation(scene, x=[[0, 0.5, 0]])

@@ -532,10 +532,10 @@ def test_surface_types_have_their_own_restitution(tmp_path, collide):
 def test_surface_defaults_come_from_contact_and_levels_are_checked(tmp_path):
     from ti_golf.model import Model
 
-    sc = scene(contact={"e": 0.4, "mu": 0.3, "mu_roll": 0.07}, terrain=_two_plateaus(tmp_path),
-               surfaces=[{"name": "fairway", "mu_roll": 0.2}, {"name": "bunker", "e": 0.05}])
+    sc = scene(contact={"e": 0.4, "mu": 0.3, "mu_roll": 0.07, "turf": True}, terrain=_two_plateaus(tmp_path),
+               surfaces=[{"name": "fairway", "mu_roll": 0.2}, {"name": "bunker", "e": 0.05, "turf": False}])
     model = Model(sc, np.full(1, R), np.full(1, 0.045), np.zeros(1))
-    np.testing.assert_allclose(model.surface_table, [[0.4, 0.3, 0.2], [0.05, 0.3, 0.07]])
+    np.testing.assert_allclose(model.surface_table, [[0.4, 0.3, 0.2, 1.0], [0.05, 0.3, 0.07, 0.0]])
     cells = model.terrain.cells
     assert cells.shape == (40, 10) and set(np.unique(cells)) == {0, 1}
     assert np.all(cells[:19] == 0) and np.all(cells[20:] == 1)

@@ -157,6 +157,10 @@ SCHEMA: dict[str, dict[str, Key]] = {
                 "neighbour-list skin as a fraction of the largest radius, bar a few much bigger balls "
                 "(lists are rebuilt when a ball moves skin/2)",
                 lambda v: None if 0 < v <= 2 else "must be in (0, 2]", "(0, 2]"),
+            Key("turf", "bool", False, "-",
+                "ground impacts (planes, terrain) as on turf (Penner 2002, golf_data.md): restitution "
+                "e(v_n) = 0.510 − 0.0375 v_n + 0.000903 v_n² (0.120 above 20 m/s) instead of e, in a frame "
+                "tilted toward the incoming ball by θ_c = 15.4°·(v/18.6 m/s)·(φ/44.4°), φ the impact angle"),
             Key("v_bounce", "float", 0.05, "m/s",
                 "normal approach speeds below v_bounce + 2|g|h are treated as inelastic (no micro-bounces) "
                 "and as resting contacts, whose impulse carries over to the next step",
@@ -310,6 +314,7 @@ ARRAY_SCHEMA: dict[str, dict[str, Key]] = {
             Key("mu", "float", None, "-", "Coulomb friction on this surface (default contact.mu)", _non_negative, ">= 0"),
             Key("mu_roll", "float", None, "-", "rolling resistance on this surface (default contact.mu_roll)",
                 _non_negative, ">= 0"),
+            Key("turf", "bool", None, "-", "impacts on this surface as on turf (default contact.turf)"),
         ]
     },
     "planes": {
@@ -392,6 +397,7 @@ class Contact:
     relax: float = _default("contact", "relax")
     skin: float = _default("contact", "skin")
     v_bounce: float = _default("contact", "v_bounce")
+    turf: bool = _default("contact", "turf")
 
 
 @dataclass(frozen=True)
@@ -441,13 +447,14 @@ class GameConfig:
 
 @dataclass(frozen=True)
 class Surface:
-    """A terrain surface type (``[[surfaces]]``): its own restitution, friction and rolling resistance
-    (``None``: the ``[contact]`` value)."""
+    """A terrain surface type (``[[surfaces]]``): its own restitution, friction, rolling resistance
+    and turf impacts (``None``: the ``[contact]`` value)."""
 
     name: str = ""
     e: float | None = None
     mu: float | None = None
     mu_roll: float | None = None
+    turf: bool | None = None
 
 
 @dataclass(frozen=True)

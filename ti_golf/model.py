@@ -35,7 +35,7 @@ class Model:
         terrain: the scene's height field (:class:`ti_golf.terrain.Terrain`, numpy) or ``None``.
         terrain_params: kernel-argument struct (TerrainParams); ``on`` = 0 without a terrain.
         terrain_cells: surface type of every terrain cell, Taichi ndarray (nx − 1, nz − 1) int.
-        surface_table: e, μ, μ_roll of every surface type, numpy (S, 3) (one row from [contact]
+        surface_table: e, μ, μ_roll and turf (0 or 1) of every surface type, numpy (S, 4) (one row from [contact]
             when the scene has no [[surfaces]]).
         terrain_h: the terrain's heights (nx, nz) [m] as a Taichi ndarray (a 2×2 zero grid
             without a terrain: kernels always take one).
@@ -61,7 +61,8 @@ class Model:
         self.mass_np = _compact(mass)
         a, c, w = scene.air, scene.contact, scene.world
         self.air = air_params(a)
-        self.contact = ContactParams(e=c.e, mu=c.mu, k_p=c.k_p, mu_roll=c.mu_roll, relax=c.relax, v_bounce=c.v_bounce)
+        self.contact = ContactParams(e=c.e, mu=c.mu, k_p=c.k_p, mu_roll=c.mu_roll, relax=c.relax, v_bounce=c.v_bounce,
+                                     turf=int(c.turf))
         self.gravity = vec3(*w.gravity)
         self.integrator = INTEGRATOR_CODES[w.integrator]
         self.dt = w.dt
@@ -89,7 +90,8 @@ class Model:
         self.terrain_cells.from_numpy(np.ascontiguousarray(cells, dtype=np.int32))
         surfaces = scene.surfaces or (Surface(),)
         self.surface_table = np.array([[c.e if sf.e is None else sf.e, c.mu if sf.mu is None else sf.mu,
-                                        c.mu_roll if sf.mu_roll is None else sf.mu_roll] for sf in surfaces], dtype=f)
+                                        c.mu_roll if sf.mu_roll is None else sf.mu_roll,
+                                        float(c.turf if sf.turf is None else sf.turf)] for sf in surfaces], dtype=f)
 
 
 def _shared_or_per_ball(values: np.ndarray) -> ti.Ndarray:

@@ -41,7 +41,7 @@ import taichi as ti
 
 from ..config import AT_REST, FLYING, OUT_OF_BOUNDS
 from .aero import V, W, X, coefficients, column
-from .contact import PRESSED, pair_impulse, plane_jolt, plane_position, rest_update, warm_impulse
+from .contact import PRESSED, pair_impulse, plane_jolt, plane_position, rest_update, surface_impulse, warm_impulse
 from .grid import int_table, owner_slot, real_table, relist_all_pairs, slot_bits
 from .integrate import IN_FLIGHT, step_free, track_flight
 from .kernels import lane_state
@@ -365,10 +365,9 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
         else:
             gap = (x[i] - plane_p[p]).dot(n) - r
             if gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam0 > 0.0:  # else no impulse (pair_impulse)
-                P, lam_p, _, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam0,
-                                              contact.e, contact.mu, v_inelastic, h)
+                P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, contact, v_inelastic, h)
                 if P.dot(n) != 0.0:
-                    vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n, contact.mu_roll)
+                    vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, contact.mu_roll)
                 lam_plane[i, p] = ti.cast(lam_p, ti.f32)
                 if lam_p > 0.0:
                     clear[i] = ti.cast(NEAR, ti.f32)
@@ -383,10 +382,9 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
                 vi, wi = plane_jolt(P, lam0, vi, wi, r, n, ct.mu_roll)
             else:
                 gap = (x[i] - pt).dot(n) - r
-                P, lam_p, _, _ = pair_impulse(n, gap, vi, wi, r, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam0,
-                                              ct.e, ct.mu, v_inelastic, h)
+                P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, ct, v_inelastic, h)
                 if P.dot(n) != 0.0:
-                    vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n, ct.mu_roll)
+                    vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, ct.mu_roll)
                 lam_plane[i, q] = ti.cast(lam_p, ti.f32)
                 if lam_p > 0.0:
                     clear[i] = ti.cast(NEAR, ti.f32)

@@ -20,6 +20,8 @@ along the unit normal n̂ (from b to a):
 6. position projection of what still overlaps, k_p·m_red·Δx·n̂ (B.18).
 """
 
+import math
+
 import taichi as ti
 
 from ..config import AT_REST, FLYING, ROLLING
@@ -125,14 +127,62 @@ def pivot_resistance(w, radius, mu_roll, j_n, n):
     return -ti.math.sign(w_n) * stop * n
 
 
+TURF_TILT, TURF_SPEED, TURF_ANGLE = math.radians(15.4), 18.6, math.radians(44.4)
+"""Penner's turf-compliance tilt [rad] at his reference impact, 18.6 m/s at 44.4° (see :func:`turf_impact`)."""
+
+
+@ti.func
+def turf_restitution(v_n):
+    """Normal restitution of a golf ball on turf at approach speed ``v_n`` [m/s] (Penner 2002,
+    golf_data.md): 0.510 − 0.0375·v_n + 0.000903·v_n² up to 20 m/s, 0.120 above."""
+    e = 0.120
+    if v_n <= 20.0:
+        e = 0.510 - 0.0375 * v_n + 0.000903 * v_n * v_n
+    return e
+
+
+@ti.func
+def turf_impact(n, v, lam, gap, v_inelastic, h):
+    """(n̂', e'): the frame in which an impact of a ball at velocity ``v`` on turf with normal n̂ is
+    solved (Penner 2002, golf_data.md): the turf gives under the ball, so the impact happens on a
+    surface tilted toward the incoming ball by θ_c = 15.4°·(|v|/18.6 m/s)·(φ/44.4°), φ the impact
+    angle below the surface (at most 90° − φ, so the tilted surface never faces away); e' is
+    :func:`turf_restitution` of the approach speed along n̂'. Only an impact is tilted: an approach
+    faster than ``v_inelastic`` that meets the surface within the step, with no resting impulse
+    ``lam``, and not head-on; otherwise n̂' = n̂."""
+    v_n = v.dot(n)
+    v_t = v - v_n * n
+    u = v_t.norm()
+    n_eff = n
+    if -v_n >= v_inelastic and gap + h * v_n < 0.0 and lam == 0.0 and u > _TINY:
+        phi = ti.atan2(-v_n, u)
+        theta = ti.min(TURF_TILT * (v.norm() / TURF_SPEED) * (phi / TURF_ANGLE), 0.5 * math.pi - phi)
+        n_eff = ti.cos(theta) * n - ti.sin(theta) * (v_t / u)
+    return n_eff, turf_restitution(ti.max(-v.dot(n_eff), 0.0))
+
+
+@ti.func
+def surface_impulse(n, gap, v, w, radius, lam, contact, v_inelastic, h):
+    """A ball's impulse per unit mass [m/s] from a static surface (a plane, or the terrain's patch)
+    with normal n̂ and surface gap ``gap`` [m]: :func:`pair_impulse` against a body of infinite
+    mass, with ``contact``'s restitution, or with ``contact.turf`` in the turf frame of
+    :func:`turf_impact`. Returns (P, λ, touching, n̂'), n̂' the normal the impulse was solved along
+    (its contact point is −R·n̂', see :func:`plane_jolt`)."""
+    n_eff, e = n, contact.e
+    if contact.turf != 0:
+        n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
+    P, lam_new, touching, _ = pair_impulse(n_eff, gap, v, w, radius, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam, e,
+                                           contact.mu, v_inelastic, h)
+    return P, lam_new, touching, n_eff
+
+
 @ti.func
 def plane_impulse(x, v, w, radius, p, n, contact, v_inelastic, h):
     """Velocity and spin of a ball after its contact with the plane (p, n̂). Returns (v, ω, touching)."""
     gap = (x - p).dot(n) - radius
-    P, lam, touching, _ = pair_impulse(n, gap, v, w, radius, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0, contact.e,
-                                       contact.mu, v_inelastic, h)
+    P, lam, touching, n_eff = surface_impulse(n, gap, v, w, radius, 0.0, contact, v_inelastic, h)
     if touching != 0 and P.dot(n) > 0.0:
-        v, w = plane_jolt(P, lam, v, w, radius, n, contact.mu_roll)
+        v, w = plane_jolt(P, lam, v, w, radius, n_eff, contact.mu_roll)
     return v, w, touching
 
 

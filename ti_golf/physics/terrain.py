@@ -35,14 +35,15 @@ def cell_under(heights: ti.template(), terrain, x):
 
 @ti.func
 def surface_contact(contact, table: ti.template(), cells: ti.template(), heights: ti.template(), terrain, x):
-    """The contact parameters of the surface type of the cell under x: ``contact`` with e, μ and
-    μ_roll from row ``cells[i, k]`` of ``table`` (S, 3)."""
+    """The contact parameters of the surface type of the cell under x: ``contact`` with e, μ,
+    μ_roll and turf from row ``cells[i, k]`` of ``table`` (S, 4)."""
     i, k, _, _ = cell_under(heights, terrain, x)
     row = cells[ti.min(i, cells.shape[0] - 1), ti.min(k, cells.shape[1] - 1)]
     c = contact
     c.e = table[row, 0]
     c.mu = table[row, 1]
     c.mu_roll = table[row, 2]
+    c.turf = ti.cast(table[row, 3], ti.i32)
     return c
 
 

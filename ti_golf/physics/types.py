@@ -30,6 +30,7 @@ ContactParams = ti.types.struct(
     mu_roll=float,  # rolling resistance: deceleration μ_roll·g_n while rolling
     relax=float,  # Jacobi relaxation of resting ball–ball impulses
     v_bounce=float,  # approach speeds below v_bounce + 2|g|h are inelastic [m/s]
+    turf=ti.i32,  # 1: ground impacts as on turf (contact.turf_impact); 0: restitution e
 )
 """Impulse-contact parameters (report Appendix B)."""
 
