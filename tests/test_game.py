@@ -229,7 +229,7 @@ def test_play_from_a_shots_file_holes_out_and_saves_the_round(green_file, tmp_pa
     assert plot.stat().st_size > 10_000
 
 
-def test_the_readme_round_holes_in_four_strokes(capsys):
+def test_the_readme_round_holes_in_three_strokes(capsys):
     # the round of README.md and `make demo` (its strokes in scenes/golf_hole_round.txt, its winds
     # from --seed 3): a regression check of the whole game on the bundled course
     from ti_golf.scene import scenes_dir
@@ -237,8 +237,8 @@ def test_the_readme_round_holes_in_four_strokes(capsys):
     shots = str(scenes_dir() / "golf_hole_round.txt")
     assert cli.main(["play", "golf_hole", "--seed", "3", "--shots", shots]) == 0
     text = capsys.readouterr().out
-    assert "carried 128.9 m (apex 21.5 m), went 150.7 m; the ball is 20.74 m from the hole." in text
-    assert text.rstrip().endswith("Holed in 4 strokes.")
+    assert "carried 124.7 m (apex 21.5 m), went 133.3 m; the ball is 3.79 m from the hole." in text
+    assert text.rstrip().endswith("Holed in 3 strokes.")
 
 
 def test_play_asks_again_after_bad_answers_and_stops_at_the_end_of_input(green_file, capsys, monkeypatch):
