@@ -25,7 +25,7 @@ import math
 import taichi as ti
 
 from ..config import AT_REST, FLYING, ROLLING
-from .types import vec3
+from .types import real, vec3
 
 _TINY = 1e-12
 
@@ -155,10 +155,29 @@ def turf_impact(n, v, lam, gap, v_inelastic, h):
     u = v_t.norm()
     n_eff = n
     if -v_n >= v_inelastic and gap + h * v_n < 0.0 and lam == 0.0 and u > _TINY:
-        phi = ti.atan2(-v_n, u)
-        theta = ti.min(TURF_TILT * (v.norm() / TURF_SPEED) * (phi / TURF_ANGLE), 0.5 * math.pi - phi)
-        n_eff = ti.cos(theta) * n - ti.sin(theta) * (v_t / u)
+        cos_t, sin_t = turf_tilt(-v_n, u, v.norm())
+        n_eff = cos_t * n - sin_t * (v_t / u)
     return n_eff, turf_restitution(ti.max(-v.dot(n_eff), 0.0))
+
+
+@ti.func
+def turf_tilt(v_n, u, speed):
+    """(cos θ_c, sin θ_c) of the turf tilt (:func:`turf_impact`) of an impact at ``speed`` [m/s]
+    that approaches the surface at ``v_n`` > 0 and moves along it at ``u`` > 0. Taichi's Vulkan
+    backend has no 64-bit atan2, cos or sin (SPIR-V's GLSL.std.450 set stops at 32 bits): there,
+    in f64, the angles are worked out in f32 (θ_c to about 1e-7 of itself), elsewhere in the
+    float type."""
+    cos_t, sin_t = 1.0, 0.0
+    if ti.static(real == ti.f64 and ti.lang.impl.current_cfg().arch == ti.vulkan):
+        phi = ti.atan2(ti.cast(v_n, ti.f32), ti.cast(u, ti.f32))
+        rate = ti.cast(TURF_TILT * (speed / TURF_SPEED) / TURF_ANGLE, ti.f32)
+        theta = ti.min(rate * phi, ti.cast(0.5 * math.pi, ti.f32) - phi)
+        cos_t, sin_t = ti.cast(ti.cos(theta), real), ti.cast(ti.sin(theta), real)
+    else:
+        phi = ti.atan2(v_n, u)
+        theta = ti.min(TURF_TILT * (speed / TURF_SPEED) * (phi / TURF_ANGLE), 0.5 * math.pi - phi)
+        cos_t, sin_t = ti.cos(theta), ti.sin(theta)
+    return cos_t, sin_t
 
 
 @ti.func
