@@ -13,10 +13,10 @@ import pytest
 from conftest import ON_CPU, SERIAL_OR_PARALLEL
 
 import ti_golf as tg
-from ti_golf.bench import pile_scene
-from ti_golf.config import AT_REST, Plane
+from ti_golf.bench.benchmarks import pile_scene
+from ti_golf.scene.schema import AT_REST, Plane
 from ti_golf.physics import grid
-from ti_golf.solver import CollisionSolver
+from ti_golf.sim.solver import CollisionSolver
 
 # no gravity, air, walls or friction unless a test says otherwise
 FREE = ["world.ground=false", "air.rho=0", "world.gravity=[0,0,0]", "world.integrator=semi_implicit",
@@ -258,8 +258,8 @@ _GPU_PILE = textwrap.dedent("""
     import sys
     import numpy as np
     import ti_golf as tg
-    from ti_golf.bench import pile_scene
-    from ti_golf.solver import CollisionSolver
+    from ti_golf.bench.benchmarks import pile_scene
+    from ti_golf.sim.solver import CollisionSolver
 
     info = tg.init()
     if info.arch != "vulkan":
@@ -339,8 +339,8 @@ _BOUNDS_CHECKED = textwrap.dedent("""
     import ti_golf as tg
 
     tg.init(debug=True)  # before importing the kernels' modules, which initialise with the defaults
-    from ti_golf.bench import pile_scene
-    from ti_golf.solver import CollisionSolver
+    from ti_golf.bench.benchmarks import pile_scene
+    from ti_golf.sim.solver import CollisionSolver
 
     scene, x = pile_scene(300)
     x = np.vstack([x[:1], [[0.021, 0.015, 0.021]], x[1:]])  # ball 1 shares ball 0's cell, below it: stored first
@@ -622,7 +622,7 @@ def test_the_benchs_one_pass_floor_gives_the_two_balls_of_a_pair_opposite_impuls
     # the pair impulse (B.5-B.18), which gives them opposite impulses (sum of m dv = 0 to
     # round-off), with friction spinning them (B.15). A lattice pressed 2.5 % closer than touching,
     # mixed radii and masses, random velocities and spins, restitution and friction.
-    from ti_golf.bench import one_pass_contacts
+    from ti_golf.bench.benchmarks import one_pass_contacts
 
     rng = np.random.default_rng(5)
     grid = np.stack(np.meshgrid(*[np.arange(7)] * 3, indexing="ij"), -1).reshape(-1, 3)
@@ -816,7 +816,7 @@ def test_a_step_split_into_launches_equals_the_unrolled_step(monkeypatch):
     # The loops and the arithmetic are those of the unrolled step, in the same order, so the
     # results must be the same bit for bit: here a boulder dropped on a pile (impacts, a ball
     # listed apart, lists rebuilt) with the default 4 sweeps, once in one launch and once in two
-    from ti_golf import solver
+    from ti_golf.sim import solver
     from ti_golf.physics import collide
 
     assert solver.sweep_launches(8) == [(True, 4, False), (False, 3, True)]
@@ -956,7 +956,7 @@ def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypa
     # with a SimulationError that names the ball and its speed before it allocates tables larger
     # than half the memory available; here "available" is made small, and the same run without
     # that limit steps on.
-    import ti_golf.solver as solver_module
+    import ti_golf.sim.solver as solver_module
 
     pile, x = pile_scene(400)
     x = np.vstack([x, [[x[:, 0].mean(), x[:, 1].max() + 0.1, x[:, 2].mean()]]])
@@ -994,7 +994,7 @@ def test_the_memory_guard_counts_the_bytes_the_pair_tables_take():
     # table_bytes is the memory guard's estimate (above) and the README's byte count: it must
     # match the tables the solver allocates, whatever they keep per pair (neighbour, resting
     # impulse, the sweep's impulse, inverse distance and gap, and the links of the other balls).
-    import ti_golf.solver as solver_module
+    import ti_golf.sim.solver as solver_module
 
     pile, x = pile_scene(400)
     sim = tg.Simulation(pile, x=x, track=False)

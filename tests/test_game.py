@@ -1,7 +1,7 @@
 """The golf game: the cup's capture rule (closed form), rounds on a course, and ``ti-golf play``.
 
 References: the capture speed v_c(b) = 2·√(R_c² − b²)·√(g/(2r)) of a ball rolling straight across
-the cup (:mod:`ti_golf.cup`); the simulated roll of the same putt with no cup, for the game's verdicts.
+the cup (:mod:`ti_golf.game.cup`); the simulated roll of the same putt with no cup, for the game's verdicts.
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ import pytest
 
 import ti_golf as tg
 from ti_golf import cli
-from ti_golf.config import GameConfig
-from ti_golf.cup import capture_speed, drop_time, holed_at
-from ti_golf.game import HOLED, OUT, RESTS, GolfGame, Shot
+from ti_golf.scene.schema import GameConfig
+from ti_golf.game.cup import capture_speed, drop_time, holed_at
+from ti_golf.game.rules import HOLED, OUT, RESTS, GolfGame, Shot
 
 G = 9.81
 R = 0.02134  # golf ball
@@ -232,7 +232,7 @@ def test_play_from_a_shots_file_holes_out_and_saves_the_round(green_file, tmp_pa
 def test_the_readme_round_holes_in_three_strokes(capsys):
     # the round of README.md and `make demo` (its strokes in scenes/golf_hole_round.txt, its winds
     # from --seed 3): a regression check of the whole game on the bundled course
-    from ti_golf.scene import scenes_dir
+    from ti_golf.scene.loader import scenes_dir
 
     shots = str(scenes_dir() / "golf_hole_round.txt")
     assert cli.main(["play", "golf_hole", "--seed", "3", "--shots", shots]) == 0
@@ -290,7 +290,7 @@ def test_play_in_a_window_needs_a_display(green_file, capsys, monkeypatch):
 
 
 def test_play_in_a_window_needs_the_cpu_backend(green_file, capsys, monkeypatch):
-    monkeypatch.setattr("ti_golf.render.non_cpu_arch", lambda: "vulkan")  # as with --arch vulkan
+    monkeypatch.setattr("ti_golf.render.offscreen.non_cpu_arch", lambda: "vulkan")  # as with --arch vulkan
     assert cli.main(["play", str(green_file), "--gui"]) == 2
     assert "--gui: draws with the CPU backend only (this process runs on vulkan)" in capsys.readouterr().err
 
@@ -300,12 +300,12 @@ import os
 import sys
 from pathlib import Path
 import ti_golf as tg
-from ti_golf.render import ggui_available
+from ti_golf.render.offscreen import ggui_available
 if not ggui_available():
     sys.exit(77)
 tg.init()
-from ti_golf.game import GolfGame, Shot
-from ti_golf.game_gui import GolfWindow
+from ti_golf.game.rules import GolfGame, Shot
+from ti_golf.game.window import GolfWindow
 out = Path(sys.argv[1])
 os.chdir(out)  # the user's folder, which must get no imgui.ini
 game = GolfGame(tg.load_scene(out / "green.toml"))

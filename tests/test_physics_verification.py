@@ -13,8 +13,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import ti_golf as tg
-from ti_golf.config import backspin_axis, launch_velocity
-from ti_golf.reference import derivatives as reference_derivatives
+from ti_golf.scene.schema import backspin_axis, launch_velocity
+from ti_golf.bench.reference import derivatives as reference_derivatives
 
 G = 9.81
 
@@ -336,7 +336,7 @@ def test_a_turf_bounce_is_penners(u, v_n, spin, rolls, where):
     if where == "terrain":
         import dataclasses
 
-        from ti_golf.config import Surface
+        from ti_golf.scene.schema import Surface
         scene = dataclasses.replace(scene, surfaces=(Surface(name="fairway", turf=True),))
     x = [[0.0, R + 1e-3, 0.0]] + ([[0.0, R + 1e-3, 30.0]] if where == "colliding" else [])
     v = [[u, -v_n, 0.0]] * len(x)

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import ti_golf as tg
-from ti_golf import render as R
+from ti_golf.render import offscreen as R
 
 ROOT = Path(__file__).resolve().parent.parent
 BASELINES = Path(__file__).resolve().parent / "baselines"
@@ -320,7 +320,7 @@ def _python(code: str, cwd: Path, env: dict[str, str] | None = None) -> subproce
 
 RENDER_ONE = """
     import ti_golf as tg
-    from ti_golf.render import render
+    from ti_golf.render.offscreen import render
     sim = tg.Simulation.from_scene("break_shot")
     print(render(sim, "pic.png", camera="iso", size=(160, 120)))
 """

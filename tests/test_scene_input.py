@@ -23,7 +23,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 import ti_golf
 from ti_golf import ConfigError
-from ti_golf.config import parse_range
+from ti_golf.scene.schema import parse_range
 
 BASE_SCENE = SCENES / "lab_turbulent.toml"
 

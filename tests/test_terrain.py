@@ -17,8 +17,8 @@ from conftest import SERIAL_OR_PARALLEL, cli, run_cli
 
 import ti_golf as tg
 from ti_golf import ConfigError
-from ti_golf.solver import CollisionSolver
-from ti_golf.terrain import Terrain, build_terrain, generate_heights
+from ti_golf.sim.solver import CollisionSolver
+from ti_golf.scene.terrain import Terrain, build_terrain, generate_heights
 
 G = 9.81
 R = 0.02
@@ -155,7 +155,7 @@ def test_sinusoidal_surface_converges_at_second_order():
 
 
 def test_taichi_surface_matches_numpy():
-    # the kernels' surface() against ti_golf.terrain.Terrain, on generated hills, inside and outside
+    # the kernels' surface() against ti_golf.scene.terrain.Terrain, on generated hills, inside and outside
     # the grid (clamped to the edge cells); out of bounds: off the grid or below kill_height
     sim = tg.Simulation(scene(terrain={"size": [30.0, 20.0], "resolution": [61, 41], "seed": 3, "amplitude": 2.0,
                                        "origin": [-5.0, 1.0, 2.0], "kill_height": -0.5}), x=[[0.0, 3.0, 5.0]])
@@ -530,7 +530,7 @@ def test_surface_types_have_their_own_restitution(tmp_path, collide):
 
 
 def test_surface_defaults_come_from_contact_and_levels_are_checked(tmp_path):
-    from ti_golf.model import Model
+    from ti_golf.sim.model import Model
 
     sc = scene(contact={"e": 0.4, "mu": 0.3, "mu_roll": 0.07, "turf": True}, terrain=_two_plateaus(tmp_path),
                surfaces=[{"name": "fairway", "mu_roll": 0.2}, {"name": "bunker", "e": 0.05, "turf": False}])

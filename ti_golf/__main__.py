@@ -1,5 +1,5 @@
 """``python -m ti_golf`` runs the command line."""
 
-from .cli import run
+from ti_golf.cli import run
 
 run()

@@ -22,7 +22,7 @@ os.environ.setdefault("TI_LOG_LEVEL", "warn")
 
 import taichi as ti  # noqa: E402
 
-from .errors import ConfigError  # noqa: E402
+from ti_golf.errors import ConfigError  # noqa: E402
 
 ARCHES = ("cpu", "cuda", "vulkan", "gpu")
 PRECISIONS = ("f32", "f64")
@@ -71,7 +71,7 @@ def init(arch: str | None = None, precision: str | None = None, *, debug: bool =
             raise RuntimeError(
                 f"ti_golf is already initialised with arch={_info.requested_arch}, precision={_info.precision}"
                 f"{'' if ti.lang.impl.current_cfg().debug else ', debug off'}; start a new process to change them "
-                "(importing ti_golf.solver or ti_golf.physics initialises with the defaults: call init first)"
+                "(importing ti_golf.sim.solver or ti_golf.physics initialises with the defaults: call init first)"
             )
         return _info
     banner = io.StringIO()

@@ -34,11 +34,11 @@ from typing import Any
 
 import taichi as ti
 
-from .types import AirParams, vec3
+from ti_golf.physics.types import AirParams, vec3
 
 LAB, SPIN_RATIO = 0, 1
 AIR_MODEL_CODES = {"lab": LAB, "spin_ratio": SPIN_RATIO}
-"""Kernel codes of ``air.model`` (:data:`ti_golf.config.AIR_MODELS`)."""
+"""Kernel codes of ``air.model`` (:data:`ti_golf.scene.schema.AIR_MODELS`)."""
 S_MIN, S_MAX = 0.02, 0.75
 """The range of spin ratios of the C_D(S), C_L(S) fit; the coefficients are held at its ends."""
 _TINY = 1e-12
@@ -61,7 +61,7 @@ def column(S, first: ti.template(), lane: ti.template()):
 
 
 def air_params(air: Any) -> Any:
-    """The kernels' :data:`~.types.AirParams` of a scene's ``Air`` (see ``ti_golf.config.Air``)."""
+    """The kernels' :data:`~.types.AirParams` of a scene's ``Air`` (see ``ti_golf.scene.schema.Air``)."""
     if air.model not in AIR_MODEL_CODES:
         raise ValueError(f"air.model must be one of {', '.join(AIR_MODEL_CODES)} (got {air.model!r})")
     if air.model == "spin_ratio" and air.gamma != 2:

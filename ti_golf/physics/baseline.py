@@ -3,10 +3,10 @@ what the memory system allows, and what the report's pair impulse costs at the l
 
 import taichi as ti
 
-from .collide import pair_geometry, pair_normal
-from .contact import pair_impulse
-from .grid import int_table, owner_slot, slot_bits
-from .types import ContactParams, float_array, int_array, of_ball, vec3, vec3_array
+from ti_golf.physics.collide import pair_geometry, pair_normal
+from ti_golf.physics.contact import pair_impulse
+from ti_golf.physics.grid import int_table, owner_slot, slot_bits
+from ti_golf.physics.types import ContactParams, float_array, int_array, of_ball, vec3, vec3_array
 
 
 @ti.kernel

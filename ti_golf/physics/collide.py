@@ -39,14 +39,14 @@ launch overhead that dominates a step of a few balls.
 
 import taichi as ti
 
-from ..config import AT_REST, FLYING, OUT_OF_BOUNDS
-from .aero import V, W, X, coefficients, column
-from .contact import PRESSED, pair_impulse, plane_jolt, plane_position, rest_update, surface_impulse, warm_impulse
-from .grid import int_table, owner_slot, real_table, relist_all_pairs, slot_bits
-from .integrate import IN_FLIGHT, step_free, track_flight
-from .kernels import lane_state
-from .terrain import outside, same_cell, surface, surface_contact, terrain_clearance, terrain_position
-from .types import (AirParams, ContactParams, TerrainParams, f32_array, f32_table, float_array, float_grid, int_array,
+from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS
+from ti_golf.physics.aero import V, W, X, coefficients, column
+from ti_golf.physics.contact import PRESSED, pair_impulse, plane_jolt, plane_position, rest_update, surface_impulse, warm_impulse
+from ti_golf.physics.grid import int_table, owner_slot, real_table, relist_all_pairs, slot_bits
+from ti_golf.physics.integrate import IN_FLIGHT, step_free, track_flight
+from ti_golf.physics.kernels import lane_state
+from ti_golf.physics.terrain import outside, same_cell, surface, surface_contact, terrain_clearance, terrain_position
+from ti_golf.physics.types import (AirParams, ContactParams, TerrainParams, f32_array, f32_table, float_array, float_grid, int_array,
                     int_grid, of_ball, pair_table, real, vec3, vec3_array, vec3f_array)
 
 QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer

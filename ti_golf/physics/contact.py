@@ -24,8 +24,8 @@ import math
 
 import taichi as ti
 
-from ..config import AT_REST, FLYING, ROLLING
-from .types import real, vec3
+from ti_golf.scene.schema import AT_REST, FLYING, ROLLING
+from ti_golf.physics.types import real, vec3
 
 _TINY = 1e-12
 

@@ -28,7 +28,7 @@ import math
 import numpy as np
 import taichi as ti
 
-from .types import (
+from ti_golf.physics.types import (
     float_array,
     int_array,
     of_ball,

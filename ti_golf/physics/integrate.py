@@ -15,7 +15,7 @@ depend on where the step boundaries fall.
 
 import taichi as ti
 
-from .aero import V, X, rates
+from ti_golf.physics.aero import V, X, rates
 
 SEMI_IMPLICIT = 0
 RK4 = 1

@@ -6,12 +6,12 @@ leaving the kernel (a "fused" step loop): per-step launch overhead is paid once 
 
 import taichi as ti
 
-from ..config import AT_REST, OUT_OF_BOUNDS
-from .aero import ROWS, SPIN, V, W, X, coefficients, column, row
-from .contact import plane_impulse, plane_position, rest_update
-from .integrate import IN_FLIGHT, LANDED, NOT_TRACKED, apex_in_step, landing_in_step, step_free, track_flight
-from .terrain import outside, surface, surface_contact, terrain_position
-from .types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, of_ball,
+from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
+from ti_golf.physics.aero import ROWS, SPIN, V, W, X, coefficients, column, row
+from ti_golf.physics.contact import plane_impulse, plane_position, rest_update
+from ti_golf.physics.integrate import IN_FLIGHT, LANDED, NOT_TRACKED, apex_in_step, landing_in_step, step_free, track_flight
+from ti_golf.physics.terrain import outside, surface, surface_contact, terrain_position
+from ti_golf.physics.types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, of_ball,
                     vec3, vec3_array, vec3_table)
 
 

@@ -2,7 +2,7 @@
 
 The terrain is a grid ``heights`` (nx, nz) [m] above ``terrain.origin`` with spacing
 (``terrain.dx``, ``terrain.dz``); between grid points the surface is the bilinear patch of its cell
-(see :mod:`ti_golf.terrain`, the numpy version, which this matches operation for operation).
+(see :mod:`ti_golf.scene.terrain`, the numpy version, which this matches operation for operation).
 A ball touches the terrain through the plane (p, n̂) of the patch under it: p = (x, h(x, z), z)
 and n̂ = (−∂h/∂x, 1, −∂h/∂z)/|…|, handed to the plane routines of :mod:`.contact` each step
 (restitution, friction and spin, rolling resistance, time-of-impact split, position projection).
@@ -11,7 +11,7 @@ For a flat terrain that plane is exactly the ground plane, so the results agree 
 
 import taichi as ti
 
-from .types import TerrainParams, float_grid, int_array, vec3, vec3_array
+from ti_golf.physics.types import TerrainParams, float_grid, int_array, vec3, vec3_array
 
 
 @ti.func

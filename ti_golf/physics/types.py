@@ -3,7 +3,7 @@
 
 import taichi as ti
 
-from . import _ensure_init  # noqa: F401  (Taichi must be initialised before the types below)
+from ti_golf.physics import _ensure_init  # noqa: F401  (Taichi must be initialised before the types below)
 
 real = ti.f64 if ti.lang.impl.get_runtime().default_fp == ti.f64 else ti.f32
 """The float type chosen at ``ti.init`` (f32 or f64), spelled out so numpy arrays can be checked against it."""

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .config import Block, Scene, backspin_axis, launch_velocity, raise_config
+from ti_golf.scene.schema import Block, Scene, backspin_axis, launch_velocity, raise_config
 
 
 @dataclass(frozen=True)

@@ -13,11 +13,11 @@ from typing import Any, Callable, Iterable, Mapping
 
 import numpy as np
 
-from .config import AT_REST, OUT_OF_BOUNDS, STATUS_NAMES, Scene
-from .errors import SimulationError
-from .results import Flight
-from .runtime import ensure_init, np_float
-from .scene import load_scene
+from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS, STATUS_NAMES, Scene
+from ti_golf.errors import SimulationError
+from ti_golf.sim.results import Flight
+from ti_golf.runtime import ensure_init, np_float
+from ti_golf.scene.loader import load_scene
 
 
 @dataclass
@@ -48,7 +48,7 @@ class Simulation:
     """Many balls under the scene's air, gravity and ground, advanced by data-parallel kernels.
 
     Args:
-        scene: a validated :class:`~ti_golf.config.Scene`.
+        scene: a validated :class:`~ti_golf.scene.schema.Scene`.
         x, v, w: initial positions [m], velocities [m/s], spins [rad/s], each (N, 3). Default: one
             ball launched as the scene's ``[launch]`` table says.
         radius, mass: per-ball radius [m] and mass [kg], scalars or (N,). Default: the scene's ball.
@@ -67,12 +67,12 @@ class Simulation:
         track: bool | np.ndarray = True,
     ) -> None:
         ensure_init()
-        from .model import Model
-        from .state import State
+        from ti_golf.sim.model import Model
+        from ti_golf.sim.state import State
 
         self.scene = scene
         if x is None:
-            from .builder import build_balls
+            from ti_golf.scene.balls import build_balls
 
             balls = build_balls(scene)
             x, v, w = balls.x, balls.v, balls.w
@@ -95,7 +95,7 @@ class Simulation:
         self.solver = None
         """The CollisionSolver when balls can collide (several balls and ``world.collisions``)."""
         if n > 1 and scene.world.collisions:
-            from .solver import CollisionSolver
+            from ti_golf.sim.solver import CollisionSolver
 
             self.solver = CollisionSolver(self.model)
 
@@ -142,12 +142,12 @@ class Simulation:
 
     @property
     def status(self) -> np.ndarray:
-        """Per-ball status codes (ti_golf.config: FLYING, ROLLING, AT_REST, OUT_OF_BOUNDS), shape (N,)."""
+        """Per-ball status codes (ti_golf.scene.schema: FLYING, ROLLING, AT_REST, OUT_OF_BOUNDS), shape (N,)."""
         return self.state.read("status")
 
     @property
     def terrain(self):
-        """The scene's height field (:class:`ti_golf.terrain.Terrain`: heights, origin, spacing,
+        """The scene's height field (:class:`ti_golf.scene.terrain.Terrain`: heights, origin, spacing,
         ``height(x, z)``, ``normal(x, z)``), or ``None``."""
         return self.model.terrain
 
@@ -192,7 +192,7 @@ class Simulation:
     # -- stepping ---------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
         """Advance ``n`` time steps; raises SimulationError naming the balls that went non-finite."""
-        from .physics import kernels
+        from ti_golf.physics import kernels
 
         m, s, w = self.model, self.state, self.scene.world
         if self.solver is not None:
@@ -211,7 +211,7 @@ class Simulation:
         """Raise :class:`SimulationError` naming the first ball whose state is NaN or infinite."""
         import taichi as ti
 
-        from .physics import kernels
+        from ti_golf.physics import kernels
 
         if self._check_buf is None:
             self._check_buf = ti.ndarray(ti.i32, 1)

@@ -1,6 +1,6 @@
 """``ti-golf play --gui``: the golf game in a GGUI window (report §2.5, ``playGolf``).
 
-The course is drawn in 3-D as :func:`ti_golf.render.render` draws it (terrain, cup, flag flying
+The course is drawn in 3-D as :func:`ti_golf.render.offscreen.render` draws it (terrain, cup, flag flying
 downwind, the ball at least a few pixels across, its path). A panel holds the stroke: club presets
 (tour averages at launch, golf_data.md), sliders for direction, speed, loft and spin, "Aim at the
 hole" and "Hit". A stroke is simulated first (:meth:`GolfGame.play`), then replayed in the window
@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ConfigError
-from .game import (
+from ti_golf.errors import ConfigError
+from ti_golf.game.rules import (
     SHOT_FIELDS,
     GolfGame,
     Shot,
@@ -49,7 +49,7 @@ REPLAY_SPEED = 2.0
 
 def check_display() -> None:
     """Raise :class:`ConfigError` (exit 2 from the CLI) when no window can be shown here."""
-    from .render import ggui_problem, non_cpu_arch
+    from ti_golf.render.offscreen import ggui_problem, non_cpu_arch
 
     arch = non_cpu_arch()
     if arch:  # (see render.non_cpu_arch: GGUI garbles the balls there)
@@ -114,7 +114,7 @@ class GolfWindow:
         self._set_camera(self.game.cup - 6.0 * ahead + [0.0, 8.0, 0.0], self.game.cup)
 
     def _view(self) -> Any:
-        from .render import View
+        from ti_golf.render.offscreen import View
 
         c = self.camera
         return View(tuple(map(float, c.curr_position)), tuple(map(float, c.curr_lookat)),
@@ -123,7 +123,7 @@ class GolfWindow:
     # -- the ball on show --------------------------------------------------------------------
     def _show_ball(self, x: np.ndarray) -> None:
         """Put the drawn ball at ``x`` [m] (3,); the flag flies with the coming stroke's wind."""
-        from .sim import Simulation
+        from ti_golf.sim.simulation import Simulation
 
         wind = self.game.wind if self.replay is None else self.replay[0].wind
         scene = self.game.scene_with_wind(wind)
@@ -217,7 +217,7 @@ class GolfWindow:
         """Draw one frame: the panel, the camera's moves, the replay, the course."""
         import taichi as ti
 
-        from .render import BACKGROUND_COLOR, build_frame, draw_scene
+        from ti_golf.render.offscreen import BACKGROUND_COLOR, build_frame, draw_scene
 
         if self._pending:
             self._pending = False
@@ -236,7 +236,7 @@ class GolfWindow:
 
     def save(self, path: str) -> None:
         """Write the last frame drawn by a hidden window as a PNG."""
-        from .render import write_png
+        from ti_golf.render.offscreen import write_png
 
         write_png(self._image, path)
 
@@ -255,7 +255,7 @@ class GolfWindow:
 
     def close(self) -> None:
         """Close the window (leaving no ``imgui.ini`` behind, see :func:`.render.destroy_window`)."""
-        from .render import destroy_window
+        from ti_golf.render.offscreen import destroy_window
 
         if self.window is not None:
             destroy_window(self.window)

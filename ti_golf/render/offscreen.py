@@ -38,11 +38,11 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
-from .config import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING
-from .errors import TiGolfError
+from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING
+from ti_golf.errors import TiGolfError
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .sim import Simulation
+    from ti_golf.sim.simulation import Simulation
 
 __all__ = [
     "AT_REST_COLOR",
@@ -93,7 +93,7 @@ SURFACE_COLORS = {"green": (0.36, 0.72, 0.36), "fairway": (0.55, 0.78, 0.40), "r
                   "bunker": (0.91, 0.85, 0.63)}
 """Terrain colours of the surface types (``[[surfaces]]``) by name; the cells of a type not named
 here, and a terrain without types, are tinted by height (``TERRAIN_COLORS``). The course map of
-:func:`ti_golf.plots.plot_round` uses the same colours."""
+:func:`ti_golf.render.plots.plot_round` uses the same colours."""
 SURFACE_SHADE = (0.88, 1.05)
 """A surface type's colour is scaled from the first factor at the terrain's lowest point to the
 second at its highest, so that the relief still reads within one type."""
@@ -1046,7 +1046,7 @@ def non_cpu_arch() -> str | None:
     data (balls missing or huge), so ``backend="auto"`` uses GGUI only on the CPU backend, the one
     the tests check; ``backend="ggui"`` still tries any backend.
     """
-    from .runtime import info
+    from ti_golf.runtime import info
 
     rt = info()
     return rt.arch if rt is not None and rt.arch not in ("x64", "arm64", "cpu") else None

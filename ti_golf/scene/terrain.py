@@ -27,7 +27,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .config import TerrainConfig, raise_config
+from ti_golf.scene.schema import TerrainConfig, raise_config
 
 
 @dataclass(frozen=True)

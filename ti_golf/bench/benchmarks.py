@@ -10,7 +10,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .config import Air, Ball, Launch, Scene, SweepDefaults, World
+from ti_golf.scene.schema import Air, Ball, Launch, Scene, SweepDefaults, World
 
 
 def bench_scene(dt: float = 0.1) -> Scene:
@@ -54,9 +54,9 @@ def bench_sweep(n: int = 100_000, dt: float = 0.1, repeats: int = 3, n_reference
 
     Returns the JSON-able result (``trajectories_per_s``, ``max_rel_carry_error``, ``baselines``, ...).
     """
-    from .reference import carry_numpy, carry_scipy
-    from .runtime import ensure_init
-    from .sweeps import fly
+    from ti_golf.bench.reference import carry_numpy, carry_scipy
+    from ti_golf.runtime import ensure_init
+    from ti_golf.sim.sweep import fly
 
     info = ensure_init()
     scene = bench_scene(dt)
@@ -126,7 +126,7 @@ def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scen
     instead of a plane (same results, the terrain's cost); ``iterations`` Jacobi sweeps per step.
     Returns the scene (planes, full contact model, air, no sleeping) and the positions (n, 3).
     """
-    from .config import Contact, Plane, TerrainConfig
+    from ti_golf.scene.schema import Contact, Plane, TerrainConfig
 
     r = 0.02
     side = int(np.ceil(np.sqrt(n / 16.0)))  # a bin about 16 layers deep
@@ -188,9 +188,9 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     :func:`drop_boulder`; it lands within the untimed first steps and sinks in during the timed
     ones), and the pile alone is timed in the same run as the baseline (``boulder_slowdown``).
     """
-    from .runtime import ensure_init, release_freed_memory
-    from .sim import Simulation
-    from .solver import CollisionSolver, steps_serially
+    from ti_golf.runtime import ensure_init, release_freed_memory
+    from ti_golf.sim.simulation import Simulation
+    from ti_golf.sim.solver import CollisionSolver, steps_serially
 
     info = ensure_init()
     serial = steps_serially(n)
@@ -307,7 +307,7 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
 
 def put_to_sleep(sim: Any) -> None:
     """Put every ball of ``sim`` at rest (zero velocity and spin, rest timer at ``t_rest``)."""
-    from .config import AT_REST
+    from ti_golf.scene.schema import AT_REST
 
     s, n = sim.state, sim.n
     f = s.v.to_numpy().dtype
@@ -324,8 +324,8 @@ def bare_gather_rate(x: np.ndarray, repeats: int = 5) -> float:
     ``bare_gather_rate / ball_steps_per_s`` such passes, a ratio that survives a noisy machine."""
     import taichi as ti
 
-    from .physics.baseline import bare_gather
-    from .physics.types import vec3
+    from ti_golf.physics.baseline import bare_gather
+    from ti_golf.physics.types import vec3
 
     n = len(x)
     side = max(2, int(np.ceil(np.sqrt(n / 16.0))))
@@ -352,8 +352,8 @@ def one_pass_contacts(sim: Any) -> tuple[Callable[[], None], Any, Any]:
     (N, 3) in the state's storage order: the contact impulses' Δv [m/s] and Δω [rad/s]."""
     import taichi as ti
 
-    from .physics.baseline import one_pass_contacts as kernel
-    from .physics.types import vec3
+    from ti_golf.physics.baseline import one_pass_contacts as kernel
+    from ti_golf.physics.types import vec3
 
     m, s, solver = sim.model, sim.state, sim.solver
     solver.ensure_lists(s)
@@ -424,10 +424,10 @@ def bench_render(n: int = 100_000, size: tuple[int, int] = (1280, 720), frames: 
     import os
     import tempfile
 
-    from .config import TerrainConfig
-    from .render import render
-    from .runtime import ensure_init
-    from .sim import Simulation
+    from ti_golf.scene.schema import TerrainConfig
+    from ti_golf.render.offscreen import render
+    from ti_golf.runtime import ensure_init
+    from ti_golf.sim.simulation import Simulation
 
     info = ensure_init()
     side = int(np.ceil(np.sqrt(n / 10.0)))

@@ -1,4 +1,4 @@
-"""TOML scene files -> validated :class:`~ti_golf.config.Scene`, with ``--set KEY=VALUE`` overrides.
+"""TOML scene files -> validated :class:`~ti_golf.scene.schema.Scene`, with ``--set KEY=VALUE`` overrides.
 
 Every problem raises :class:`~ti_golf.errors.ConfigError` naming the file (or ``--set``), the
 dotted key and what is allowed. No Taichi import here.
@@ -17,7 +17,7 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
-from .config import (
+from ti_golf.scene.schema import (
     ARRAY_SCHEMA,
     SCHEMA,
     BallSpec,
@@ -39,7 +39,7 @@ from .config import (
     parse_range,
     raise_config,
 )
-from .errors import ConfigError
+from ti_golf.errors import ConfigError
 
 _SECTION_TYPES = {"air": Air, "ball": Ball, "launch": Launch, "world": World, "contact": Contact, "game": GameConfig}
 
@@ -179,7 +179,7 @@ def scenes_dir() -> Path:
     env = os.environ.get("TI_GOLF_SCENES")
     if env:
         return Path(env)
-    return Path(__file__).resolve().parent.parent / "scenes"
+    return Path(__file__).resolve().parents[2] / "scenes"
 
 
 def load_scene(
@@ -322,7 +322,7 @@ def _block(values: dict[str, Any], source: str, i: int) -> Block:
 def _terrain(values: dict[str, Any], sources: dict[str, str], source: str) -> TerrainConfig:
     """The ``[terrain]`` table: resolve and check the heights file (shape, finite values) now, so a
     bad terrain is reported when the scene loads."""
-    from .terrain import load_heights_file
+    from ti_golf.scene.terrain import load_heights_file
 
     if "resolution" in values:
         values["resolution"] = tuple(int(c) for c in values["resolution"])

@@ -8,12 +8,12 @@ import os
 import numpy as np
 import taichi as ti
 
-from .errors import SimulationError
-from .model import Model
-from .physics import collide, grid
-from .physics.types import pair_entry, vec3, vec3f
-from .runtime import ensure_init, np_float, on_cpu, plain_compile, release_freed_memory
-from .state import State
+from ti_golf.errors import SimulationError
+from ti_golf.sim.model import Model
+from ti_golf.physics import collide, grid
+from ti_golf.physics.types import pair_entry, vec3, vec3f
+from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile, release_freed_memory
+from ti_golf.sim.state import State
 
 SERIAL_MAX_BALLS = 256
 """Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
@@ -121,7 +121,7 @@ class CollisionSolver:
             on, parallel steps only). A pile whose ids are in no spatial order (balls passed in
             any order, balls that have mixed) otherwise fetches every neighbour from a cache line
             of its own. Each per-ball array of the state and the model is gathered into the new order
-            (``State.order`` records it; :class:`~ti_golf.sim.Simulation` reads and writes by
+            (``State.order`` records it; :class:`~ti_golf.sim.simulation.Simulation` reads and writes by
             ball id), and the pairs keep their accumulated impulses. The physics is the same, but
             sums over a ball's neighbours run in another order: results differ from a run
             without reordering by round-off, and two runs of a scene still agree bit for bit.

@@ -329,7 +329,7 @@ ARRAY_SCHEMA: dict[str, dict[str, Key]] = {
 
 
 # ----------------------------------------------------------------------------------------------
-# Dataclasses (static parameters; per-step state lives in ti_golf.state)
+# Dataclasses (static parameters; per-step state lives in ti_golf.sim.state)
 # ----------------------------------------------------------------------------------------------
 def _default(section: str, name: str) -> Any:
     """Dataclass defaults come from :data:`SCHEMA`, so the two can never disagree."""
@@ -402,7 +402,7 @@ class Contact:
 
 @dataclass(frozen=True)
 class TerrainConfig:
-    """The ``[terrain]`` table: a height field (built by :func:`ti_golf.terrain.build_terrain`).
+    """The ``[terrain]`` table: a height field (built by :func:`ti_golf.scene.terrain.build_terrain`).
 
     ``file`` is the resolved path of the .npy heights (kind ``"file"``); ``resolution`` holds ints.
     """
@@ -437,7 +437,7 @@ class HoleConfig:
 
 @dataclass(frozen=True)
 class GameConfig:
-    """The ``[game]`` table of ``ti-golf play`` (see :mod:`ti_golf.game`)."""
+    """The ``[game]`` table of ``ti-golf play`` (see :mod:`ti_golf.game.rules`)."""
 
     start: tuple[float, float] | None = _default("game", "start")
     wind_max: float = _default("game", "wind_max")
@@ -540,7 +540,7 @@ class Scene:
         if self.launch is not None and self.launch.position is not None:
             return self.launch.position
         if self.terrain is not None:
-            from .terrain import build_terrain
+            from ti_golf.scene.terrain import build_terrain
 
             return (0.0, float(build_terrain(self.terrain, self.path).height(0.0, 0.0)) + self.ball.radius, 0.0)
         return (0.0, self.world.ground_height + self.ball.radius, 0.0)
@@ -596,6 +596,6 @@ def parse_range(text: str | Sequence[float], source: str, key: str) -> tuple[flo
 
 def raise_config(source: str, key: str | None, reason: str) -> None:
     """Raise a :class:`~ti_golf.errors.ConfigError` (helper that keeps call sites one line)."""
-    from .errors import ConfigError
+    from ti_golf.errors import ConfigError
 
     raise ConfigError(source, key, reason)

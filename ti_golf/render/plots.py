@@ -8,9 +8,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .game import GolfGame
-    from .sim import Recording
-    from .sweeps import SweepResult
+    from ti_golf.game.rules import GolfGame
+    from ti_golf.sim.simulation import Recording
+    from ti_golf.sim.sweep import SweepResult
 
 
 def _pyplot():
@@ -60,6 +60,32 @@ def plot_sweep(res: "SweepResult", path: str | os.PathLike[str], title: str | No
     plt.close(fig)
 
 
+def plot_table(results: list, path: str | os.PathLike[str]) -> None:
+    """The four lab trajectory families of Table 3.1-1 (report Figures 3.1-1 to 3.1-4), 2x2 panels.
+
+    ``results``: (label, best-angle sweep, figure sweep with trajectories) per row of the table.
+    """
+    plt = _pyplot()
+    fig, axes = plt.subplots(2, 2, figsize=(12, 7))
+    for ax, (label, res, fig_res) in zip(axes.ravel(), results):
+        k = len(fig_res.traj_index)
+        for j, i in enumerate(fig_res.traj_index):
+            p = fig_res.traj[j]
+            ax.plot(p[:, 0], p[:, 1] - p[0, 1], lw=0.8, color=plt.get_cmap("viridis")(j / max(k - 1, 1)),
+                    label=f"{fig_res.angle_deg[i]:g}°" if j in (0, k - 1) else None)
+        b = res.best()
+        ax.legend(fontsize=7, loc="upper right")
+        ax.set_title(f"{label}: best {res.angle_deg[b]:.2f}°, {res.carry[b]:.2f} m", fontsize=9)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.grid(alpha=0.3)
+        ax.set_ylim(bottom=0)
+        ax.set_xlim(0, np.nanmax(fig_res.carry) * 1.05)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def plot_run(rec: "Recording", path: str | os.PathLike[str], title: str = "", max_balls: int = 20) -> None:
     """Trajectory side view and spin magnitude |ω| vs time (as the report's Figure 3.2-3)."""
     plt = _pyplot()
@@ -94,7 +120,7 @@ def plot_round(game: GolfGame, path: str | os.PathLike[str], title: str = "") ->
     from matplotlib.patches import Patch
 
     # the terrain's colours in the window and in pictures
-    from .render import SURFACE_COLORS
+    from ti_golf.render.offscreen import SURFACE_COLORS
 
     ter = game.terrain
     (x0, z0), (sx, sz) = ter.origin[[0, 2]], ter.size

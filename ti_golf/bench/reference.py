@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from .config import Scene
+from ti_golf.scene.schema import Scene
 
 
 def coefficients(scene: Scene) -> tuple[float, float, float]:

@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
-from .physics.integrate import IN_FLIGHT, NOT_TRACKED
-from .physics.types import vec3
-from .runtime import np_float
+from ti_golf.physics.integrate import IN_FLIGHT, NOT_TRACKED
+from ti_golf.physics.types import vec3
+from ti_golf.runtime import np_float
 
 
 class State:
@@ -22,7 +22,7 @@ class State:
         x: ball centres [m], shape (N,), vec3.
         v: velocities [m/s], shape (N,), vec3.
         w: angular velocities ω [rad/s], shape (N,), vec3.
-        status: ``FLYING``, ``ROLLING``, ``AT_REST`` or ``OUT_OF_BOUNDS`` (ti_golf.config), shape (N,), i32.
+        status: ``FLYING``, ``ROLLING``, ``AT_REST`` or ``OUT_OF_BOUNDS`` (ti_golf.scene.schema), shape (N,), i32.
         rest_time: time spent slow while touching [s], shape (N,).
         landed: −1 not tracked, 0 in flight, 1 landed, shape (N,), i32.
         apex: highest centre height so far [m], shape (N,).

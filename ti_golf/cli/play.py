@@ -16,8 +16,9 @@ import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-from .errors import ConfigError
-from .game import (
+from ti_golf.cli._common import check_writable, runtime_options
+from ti_golf.errors import ConfigError
+from ti_golf.game.rules import (
     SHOT_FIELDS,
     GolfGame,
     Shot,
@@ -33,10 +34,8 @@ PROMPT_DEFAULTS = {"spin": 0.0}
 """Fields whose prompt takes Enter for a fixed default (the direction's default is at the hole)."""
 
 
-def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add the ``play`` subcommand to ``ti-golf``'s subparsers; returns its parser."""
-    from . import cli
-
     p = sub.add_parser("play", help="play golf on a course scene, stroke by stroke, until the ball is holed")
     p.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
                    help=f"a course: a scene with [terrain] and [hole] (default {DEFAULT_SCENE})")
@@ -52,17 +51,16 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> argp
                      help="play in a window: the course in 3-D, clubs and sliders, a camera to move")
     p.add_argument("--out", help="write the round as CSV, one row per stroke (rewritten after every stroke)")
     p.add_argument("--plot", help="write a PNG map of the course with every stroke's path at the end")
-    cli._runtime_options(p)
+    runtime_options(p)
     return p
 
 
 def cmd_play(args: argparse.Namespace) -> int:
     """Play a round of ``args.scene``; 0 when it ends (holed, out of bounds, no strokes or input left)."""
-    from . import cli
-    from .scene import load_scene
+    from ti_golf.scene.loader import load_scene
 
-    cli._check_writable(args.out, "--out")
-    cli._check_writable(args.plot, "--plot")
+    check_writable(args.out, "--out")
+    check_writable(args.plot, "--plot")
     game = GolfGame(load_scene(args.scene, args.overrides), seed=args.seed)
     if args.gui:
         return _play_in_window(game, args)
@@ -90,7 +88,7 @@ def cmd_play(args: argparse.Namespace) -> int:
 
 def _play_in_window(game: GolfGame, args: argparse.Namespace) -> int:
     """The round in a window (:mod:`.game_gui`), then the same summary and files as in the console."""
-    from .game_gui import GolfWindow, check_display
+    from ti_golf.game.window import GolfWindow, check_display
 
     check_display()
     ended = "window closed"
@@ -111,7 +109,7 @@ def _finish(game: GolfGame, ended: str, args: argparse.Namespace) -> None:
         write_csv(game.strokes, args.out)
         print(f"wrote {args.out}")
     if args.plot:
-        from .plots import plot_round
+        from ti_golf.render.plots import plot_round
 
         plot_round(game, args.plot, title=f"{game.scene.name}: {describe_round(game, ended)}")
         print(f"wrote {args.plot}")

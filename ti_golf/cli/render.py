@@ -1,36 +1,21 @@
-"""``ti-golf render``: run a scene and write a picture of its balls (GGUI off screen, else matplotlib).
-
-Standalone until ti_golf/cli.py registers it: ``python -m ti_golf.render_cli SCENE --out pic.png``.
-To register it in ``ti-golf``, cli.py calls :func:`add_parser` in ``build_parser`` and maps
-``"render"`` to :func:`cmd_render` in ``_COMMANDS``.
-"""
+"""``ti-golf render``: run a scene and write a picture of its balls (GGUI off screen, else matplotlib)."""
 
 from __future__ import annotations
 
 import argparse
 import math
-import sys
 import time
-from typing import Sequence
 
-from .errors import ConfigError
-
-
-def _size(text: str) -> tuple[int, int]:
-    try:
-        w, h = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, e.g. 1280x720 (got {text!r})") from None
-    return w, h
+from ti_golf.cli._common import check_writable, parse_size, runtime_options, scene_options
+from ti_golf.errors import ConfigError
+from ti_golf.render.offscreen import BACKENDS, CAMERAS, COLOR_BY, render
+from ti_golf.sim.simulation import Simulation
 
 
-def add_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> argparse.ArgumentParser:
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add the ``render`` subcommand to ``ti-golf``'s subparsers; returns its parser."""
-    from . import cli
-    from .render import BACKENDS, CAMERAS, COLOR_BY
-
     p = sub.add_parser("render", help="run a scene and write a PNG of its balls (GGUI off screen, else matplotlib)")
-    cli._scene_options(p)
+    scene_options(p)
     g = p.add_mutually_exclusive_group()
     g.add_argument("--t", type=float,
                    help="simulated time before the picture [s] (default: the initial state; world.t_end with --until)")
@@ -38,23 +23,19 @@ def add_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> ar
     p.add_argument("--until", choices=("rest", "landed"), help="stop early once every ball is at rest / has landed")
     p.add_argument("--out", required=True, help="the PNG to write")
     p.add_argument("--camera", choices=CAMERAS, default="iso", help="camera preset (default iso)")
-    p.add_argument("--size", type=_size, default=(1280, 720), metavar="WxH", help="picture size (default 1280x720)")
+    p.add_argument("--size", type=parse_size, default=(1280, 720), metavar="WxH", help="picture size (default 1280x720)")
     p.add_argument("--color-by", choices=COLOR_BY, default="status", help="ball colours (default status)")
     p.add_argument("--trails", action="store_true", help="draw each ball's path (records about 200 samples)")
     p.add_argument("--fov", type=float, default=45.0, help="vertical field of view [deg] (default 45)")
     p.add_argument("--backend", choices=BACKENDS, default="auto",
                    help="auto: GGUI, else matplotlib with a note (default); ggui: fail without Vulkan")
-    cli._runtime_options(p)
+    runtime_options(p)
     return p
 
 
 def cmd_render(args: argparse.Namespace) -> int:
     """Run ``args.scene`` for ``--t`` / ``--steps`` (default: not at all) and write ``--out``."""
-    from . import cli
-    from .render import render
-    from .sim import Simulation
-
-    cli._check_writable(args.out, "--out")
+    check_writable(args.out, "--out")
     if args.t is not None and not args.t >= 0:
         raise ConfigError("--t", None, f"must be >= 0 seconds (got {args.t})")
     if args.steps is not None and args.steps < 0:
@@ -79,14 +60,3 @@ def cmd_render(args: argparse.Namespace) -> int:
                   backend=args.backend)
     print(f"wrote {args.out} ({used}, {sim.n} ball(s) at t = {sim.t:.4g} s, {time.perf_counter() - t0:.2f} s)")
     return 0
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m ti_golf.render_cli ARGS`` = ``ti-golf render ARGS`` (same parser, same error handling)."""
-    from .cli import main as cli_main
-
-    return cli_main(["render", *(sys.argv[1:] if argv is None else argv)])
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -10,11 +10,11 @@ from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from .config import Scene, backspin_axis
-from .errors import ConfigError, SimulationError
-from .results import CSV_COLUMNS, Flight
-from .runtime import ensure_init, np_float, on_cpu, plain_compile
-from .scene import load_scene
+from ti_golf.scene.schema import Scene, backspin_axis
+from ti_golf.errors import ConfigError, SimulationError
+from ti_golf.sim.results import CSV_COLUMNS, Flight
+from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile
+from ti_golf.scene.loader import load_scene
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,7 @@ class SweepResult:
         return int(np.argmax(c))
 
     def columns(self) -> dict[str, np.ndarray]:
-        """The CSV columns (see :data:`ti_golf.results.CSV_COLUMNS`) as arrays."""
+        """The CSV columns (see :data:`ti_golf.sim.results.CSV_COLUMNS`) as arrays."""
         f = self.flight
         return dict(zip(CSV_COLUMNS, (self.angle_deg, self.speed_mps, self.spin_radps, f.carry, f.landing_x,
                                        f.landing_z, f.apex, f.flight_time, f.landing_angle, f.landing_speed)))
@@ -118,10 +118,10 @@ def fly(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, record_eve
     t_land, land_x, land_v, the final x, v, w and, when recording, traj (N, n_samples, 3).
     """
     ensure_init()
-    from .physics import kernels
-    from .physics.aero import air_params
-    from .physics.integrate import INTEGRATOR_CODES
-    from .physics.types import vec3
+    from ti_golf.physics import kernels
+    from ti_golf.physics.aero import air_params
+    from ti_golf.physics.integrate import INTEGRATOR_CODES
+    from ti_golf.physics.types import vec3
 
     lanes = default_lanes() if lanes is None else int(lanes)
     f = np_float()

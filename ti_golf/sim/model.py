@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
-from .config import Scene, Surface
-from .physics.aero import air_params
-from .physics.integrate import INTEGRATOR_CODES
-from .physics.types import ContactParams, TerrainParams, vec3
-from .runtime import np_float
+from ti_golf.scene.schema import Scene, Surface
+from ti_golf.physics.aero import air_params
+from ti_golf.physics.integrate import INTEGRATOR_CODES
+from ti_golf.physics.types import ContactParams, TerrainParams, vec3
+from ti_golf.runtime import np_float
 
 
 class Model:
@@ -32,7 +32,7 @@ class Model:
         integrator: the integrator code (a compile-time constant of the kernels).
         plane_p, plane_n: points on and unit normals of the impenetrable planes (the ground
             included), numpy (P, 3); passed to kernels directly.
-        terrain: the scene's height field (:class:`ti_golf.terrain.Terrain`, numpy) or ``None``.
+        terrain: the scene's height field (:class:`ti_golf.scene.terrain.Terrain`, numpy) or ``None``.
         terrain_params: kernel-argument struct (TerrainParams); ``on`` = 0 without a terrain.
         terrain_cells: surface type of every terrain cell, Taichi ndarray (nx − 1, nz − 1) int.
         surface_table: e, μ, μ_roll and turf (0 or 1) of every surface type, numpy (S, 4) (one row from [contact]
@@ -76,7 +76,7 @@ class Model:
         heights = np.zeros((2, 2))
         origin, spacing, kill = (0.0, 0.0, 0.0), (1.0, 1.0), 0.0
         if scene.terrain is not None:
-            from .terrain import build_terrain
+            from ti_golf.scene.terrain import build_terrain
 
             self.terrain = build_terrain(scene.terrain, scene.path)
             heights, origin, spacing, kill = (self.terrain.heights, self.terrain.origin, self.terrain.spacing,

@@ -6,7 +6,7 @@ the ball starts (else a random point of the course, as in the report), the wind 
 the most strokes and how long a stroke may take. Each stroke is a :class:`Shot` as the report's
 player enters it (horizontal direction, speed in km/h, club loft, backspin in rpm), simulated with
 the scene's flight and terrain physics until the ball rests, leaves the course or drops into the
-cup (:mod:`ti_golf.cup`). :class:`GolfGame` holds the round; the console (:mod:`ti_golf.play_cli`)
+cup (:mod:`ti_golf.game.cup`). :class:`GolfGame` holds the round; the console (:mod:`ti_golf.cli.play`)
 and any other front end only ask it for shots.
 """
 
@@ -18,9 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .config import AT_REST, OUT_OF_BOUNDS, Scene, backspin_axis, launch_velocity
-from .cup import LOW_GAP, holed_at
-from .errors import ConfigError
+from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS, Scene, backspin_axis, launch_velocity
+from ti_golf.game.cup import LOW_GAP, holed_at
+from ti_golf.errors import ConfigError
 
 KMH = 1.0 / 3.6
 """m/s per km/h."""
@@ -123,7 +123,7 @@ class GolfGame:
     """
 
     def __init__(self, scene: Scene, seed: int | None = None) -> None:
-        from .terrain import build_terrain
+        from ti_golf.scene.terrain import build_terrain
 
         source = scene.path or scene.name
         if scene.terrain is None or scene.hole is None:
@@ -202,7 +202,7 @@ class GolfGame:
     def play(self, shot: Shot) -> Stroke:
         """Hit the ball: simulate the stroke, move the ball, end the round when it is holed, out of
         bounds, or the last stroke allowed was played."""
-        from .sim import Simulation
+        from ti_golf.sim.simulation import Simulation
 
         if self.over:
             raise RuntimeError(f"the round is over ({self.outcome})")

@@ -1,0 +1,87 @@
+"""Options, checks and progress shared by the ``ti-golf`` commands."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+from ti_golf.errors import ConfigError
+from ti_golf.runtime import ARCHES, PRECISIONS
+
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse that reports usage errors as one line with exit code 2 (its default code)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.print_usage(sys.stderr)
+        self.exit(2, f"ti-golf: error: {message}\n")
+
+
+def runtime_options(p: argparse.ArgumentParser) -> None:
+    """``--arch`` and ``--precision``: the Taichi backend and float type of a command that simulates."""
+    p.add_argument("--arch", choices=ARCHES, default=None,
+                   help="Taichi backend (default: $TI_GOLF_ARCH or cpu)")
+    p.add_argument("--precision", choices=PRECISIONS, default=None,
+                   help="float precision (default: $TI_GOLF_PRECISION or f64)")
+
+
+def scene_options(p: argparse.ArgumentParser) -> None:
+    """The positional scene and ``--set KEY=VALUE`` overrides."""
+    p.add_argument("scene", help="scene file, or the name of a bundled scene (see `ti-golf scenes`)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scene key with a TOML value, e.g. --set air.wind=[-5,0,0] (repeatable)")
+
+
+def check_writable(path: str | None, option: str) -> None:
+    """Fail before a long computation rather than lose its result to an unwritable output path."""
+    if not path:
+        return
+    parent = Path(path).resolve().parent
+    if not parent.is_dir():
+        raise ConfigError(option, None, f"cannot write {path!r}: folder {str(parent)!r} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise ConfigError(option, None, f"cannot write {path!r}: folder is not writable")
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """``WIDTHxHEIGHT`` [pixels] -> (width, height); argparse turns the error into a usage line."""
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, e.g. 1280x720 (got {text!r})") from None
+    return w, h
+
+
+class Progress:
+    """Progress for runs longer than a few seconds: a bar on a terminal, plain lines otherwise.
+
+    Called as ``progress(done, total)`` with simulated times [s].
+    """
+
+    def __init__(self, after_s: float = 3.0, every_s: float = 5.0) -> None:
+        self.start = time.perf_counter()
+        self.after_s, self.every_s = after_s, every_s
+        self.last = 0.0
+        self.tty = sys.stderr.isatty()
+        self.shown = False
+
+    def __call__(self, done: float, total: float) -> None:
+        now = time.perf_counter() - self.start
+        if now < self.after_s or (not self.tty and now - self.last < self.every_s) or (self.tty and now - self.last < 0.2):
+            return
+        self.last = now
+        frac = done / total if total else 1.0
+        if self.tty:
+            bar = "#" * int(30 * frac)
+            print(f"\r[{bar:<30}] {100 * frac:5.1f}%  t = {done:.3g}/{total:.3g} s", end="", file=sys.stderr)
+        else:
+            print(f"progress: {100 * frac:5.1f}% (t = {done:.3g} of {total:.3g} s, {now:.0f} s elapsed)", file=sys.stderr)
+        self.shown = True
+
+    def close(self) -> None:
+        if self.shown and self.tty:
+            print(file=sys.stderr)

@@ -1,0 +1,69 @@
+"""``ti-golf bench``: throughput with a baseline timed in the same run, and quality figures (JSON)."""
+
+from __future__ import annotations
+
+import argparse
+
+from ti_golf.cli._common import Parser, runtime_options
+from ti_golf.errors import ConfigError
+from ti_golf.bench.benchmarks import bench_collide, bench_sweep, to_json
+from ti_golf.bench.benchmarks import bench_render
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Add ``bench`` and its benchmarks to ``ti-golf``'s subcommands."""
+    b = sub.add_parser("bench", help="throughput benchmarks (JSON with --json)")
+    bsub = b.add_subparsers(dest="bench", required=True, parser_class=Parser)
+    bs = bsub.add_parser("sweep", help="data-parallel sweep vs numpy and scipy baselines")
+    bs.add_argument("--n", type=int, default=100_000, help="launch conditions (default 100000)")
+    bs.add_argument("--dt", type=float, default=0.1, help="RK4 step [s] (default 0.1)")
+    bs.add_argument("--repeats", type=int, default=3, help="timed repeats; the best is reported")
+    bs.add_argument("--json", action="store_true", help="end with one line of JSON")
+    runtime_options(bs)
+    bc = bsub.add_parser("collide", help="full collision step on a dense pile of N balls")
+    bc.add_argument("--n", type=int, default=131_072, help="balls (default 131072)")
+    bc.add_argument("--steps", type=int, default=50, help="timed steps (default 50)")
+    bc.add_argument("--terrain", action="store_true",
+                    help="a flat height-field floor instead of the plane (the plane is timed too, as baseline)")
+    bc.add_argument("--asleep", action="store_true",
+                    help="every ball of the pile at rest, as a settled pile ends up (the pile awake is timed too, "
+                         "as baseline)")
+    bc.add_argument("--shuffled", action="store_true",
+                    help="the pile's balls numbered in a random order, as balls given in no spatial order are "
+                         "(the same pile left in that order, not stored in the grid's order, is timed too, as "
+                         "baseline)")
+    bc.add_argument("--boulder", type=float, default=0.0, metavar="R",
+                    help="a ball of radius R [m], as dense as the golf balls, dropped at 3 m/s onto the pile (the "
+                         "pile alone is timed too, as baseline)")
+    bc.add_argument("--iterations", type=int, default=4,
+                    help="Jacobi sweeps per step (default 4, the scenes' default; a deep pile at rest needs 8)")
+    bc.add_argument("--json", action="store_true", help="end with one line of JSON")
+    runtime_options(bc)
+    br = bsub.add_parser("render", help="seconds per off-screen frame of N balls over a terrain")
+    br.add_argument("--n", type=int, default=100_000, help="balls (default 100000)")
+    br.add_argument("--frames", type=int, default=3, help="timed frames (default 3)")
+    br.add_argument("--json", action="store_true", help="end with one line of JSON")
+    runtime_options(br)
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    if args.n <= 0:
+        raise ConfigError("--n", None, f"must be > 0 (got {args.n})")
+    if args.bench == "render":
+        result = bench_render(n=args.n, frames=max(1, args.frames))
+    elif args.bench == "collide":
+        if args.n < 2 or args.steps <= 0:
+            raise ConfigError("--n" if args.n < 2 else "--steps", None, "must be >= 2 balls and > 0 steps")
+        if not 1 <= args.iterations <= 100:
+            raise ConfigError("--iterations", None, f"must be in [1, 100] (got {args.iterations})")
+        if not 0.0 <= args.boulder <= 10.0:  # (also false for NaN)
+            raise ConfigError("--boulder", None, f"must be a radius in [0, 10] m (got {args.boulder})")
+        result = bench_collide(n=args.n, steps=args.steps, terrain=args.terrain, asleep=args.asleep,
+                               shuffled=args.shuffled, iterations=args.iterations, boulder=args.boulder)
+    else:
+        if not args.dt > 0:
+            raise ConfigError("--dt", None, f"must be > 0 (got {args.dt})")
+        result = bench_sweep(n=args.n, dt=args.dt, repeats=max(1, args.repeats))
+    if args.json:
+        print(to_json(result))
+    return 0

@@ -1,0 +1,74 @@
+"""``ti-golf``: the parser of every command and the entry point; ``main(argv) -> exit code``.
+
+Bad input exits with code 2 and one line naming the file, the key and what is allowed; a
+simulation that goes non-finite exits with code 3.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Callable, Sequence
+
+from ti_golf import runtime
+from ti_golf.cli import bench, play, render, run, scenes, sweep, table
+from ti_golf.cli._common import Parser
+from ti_golf.errors import ConfigError, SimulationError, TiGolfError
+
+COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
+    "scenes": scenes.cmd_scenes,
+    "keys": scenes.cmd_keys,
+    "sweep": sweep.cmd_sweep,
+    "run": run.cmd_run,
+    "table": table.cmd_table,
+    "bench": bench.cmd_bench,
+    "render": render.cmd_render,
+    "play": play.cmd_play,
+}
+"""Each subcommand's function: parsed arguments -> exit code."""
+
+NO_RUNTIME = ("scenes", "keys")
+"""Commands that simulate nothing and so start no Taichi runtime."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``ti-golf``."""
+    p = Parser(prog="ti-golf", description="Golf-ball physics on Taichi: flights, sweeps, collisions.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
+    for module in (scenes, sweep, run, table, bench, render, play):
+        module.add_parser(sub)
+    return p
+
+
+def run_cli() -> None:
+    """The ``ti-golf`` command and ``python -m ti_golf``: :func:`main`, whose code the process then
+    exits with (see ``runtime.exit_process``: Taichi's runtime can crash the normal exit)."""
+    try:
+        code = main()
+    except BrokenPipeError:  # the reader of stdout left (``ti-golf scenes | head``): no traceback
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        code = 1
+    runtime.exit_process(code)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``ti-golf`` and ``python -m ti_golf``; returns the exit code."""
+    args = build_parser().parse_args(argv)
+    runtime.announce_first_compile = True
+    try:
+        if args.command not in NO_RUNTIME:  # before any output: a first run's notice comes first
+            runtime.init(getattr(args, "arch", None), getattr(args, "precision", None))
+        return COMMANDS[args.command](args)
+    except ConfigError as exc:
+        print(f"ti-golf: error: {exc}", file=sys.stderr)
+        return 2
+    except SimulationError as exc:
+        print(f"ti-golf: simulation stopped: {exc}", file=sys.stderr)
+        return 3
+    except TiGolfError as exc:  # pragma: no cover - future error kinds
+        print(f"ti-golf: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:  # pragma: no cover
+        print("ti-golf: interrupted", file=sys.stderr)
+        return 130

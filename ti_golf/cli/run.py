@@ -1,0 +1,140 @@
+"""``ti-golf run``: simulate a scene, print what happened, save the state, plots and frames."""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+from ti_golf.cli._common import Progress, check_writable, parse_size, runtime_options, scene_options
+from ti_golf.errors import ConfigError
+from PIL import Image
+from ti_golf.render.offscreen import render
+from ti_golf.render.plots import plot_run
+from ti_golf.scene.schema import STATUS_NAMES
+from ti_golf.sim.simulation import Simulation
+import numpy as np
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Add ``run`` to ``ti-golf``'s subcommands."""
+    r = sub.add_parser("run", help="run a scene and save the final state (and trajectories)")
+    scene_options(r)
+    g = r.add_mutually_exclusive_group()
+    g.add_argument("--t", type=float, help="simulated time [s] (default: world.t_end)")
+    g.add_argument("--steps", type=int, help="number of time steps")
+    r.add_argument("--until", choices=("rest", "landed"), help="stop early once every ball is at rest / has landed")
+    r.add_argument("--record-every", type=int, default=0, metavar="K", help="record positions and spins every K steps")
+    r.add_argument("--out", help="write an .npz with x, v, w (N, 3), t, status (and traj_* when recording)")
+    r.add_argument("--plot", help="write a PNG: trajectory and |ω| vs time (records automatically)")
+    r.add_argument("--frames-every", type=int, default=0, metavar="K", help="render a frame every K steps")
+    r.add_argument("--frames", metavar="DIR", help="write the frames as DIR/frame_00000.png, …")
+    r.add_argument("--gif", help="write the frames as an animated GIF (Pillow)")
+    r.add_argument("--camera", choices=("side", "top", "iso", "follow"), default="iso", help="camera of the frames")
+    r.add_argument("--size", default="640x360", metavar="WxH", help="frame size (default 640x360)")
+    runtime_options(r)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    check_writable(args.out, "--out")
+    check_writable(args.plot, "--plot")
+    if args.t is not None and not args.t > 0:
+        raise ConfigError("--t", None, f"must be > 0 seconds (got {args.t})")
+    if args.steps is not None and args.steps <= 0:
+        raise ConfigError("--steps", None, f"must be > 0 (got {args.steps})")
+    if args.record_every < 0:
+        raise ConfigError("--record-every", None, f"must be >= 0 (got {args.record_every})")
+    sim = Simulation.from_scene(args.scene, args.overrides)
+    record_every = args.record_every
+    if args.plot and not record_every:
+        duration = args.t if args.t is not None else (args.steps or 0) * sim.dt or sim.scene.world.t_end
+        record_every = max(1, int(duration / sim.dt / 400))
+    frames = _Frames(args, sim) if (args.frames or args.gif) else None
+    progress = Progress()
+    t0 = time.perf_counter()
+    rec = None
+    try:
+        if frames is not None:
+            frames(sim)
+        rec = sim.run(t=args.t, steps=args.steps, until=args.until, record_every=record_every, progress=progress,
+                      every=frames.every if frames else 0, on_every=frames)
+    finally:
+        progress.close()
+        if frames is not None:
+            frames.close()  # the frames rendered so far are kept, and the GIF is written from them
+        if args.out and (rec is not None or sim.t > 0):
+            sim.save(args.out, rec)  # save what was simulated even if the run stopped early
+    elapsed = time.perf_counter() - t0
+    counts = sim.counts()
+    print(f"{sim.scene.name}: {sim.n} ball(s), t = {sim.t:.4g} s in {elapsed:.2f} s; "
+          + ", ".join(f"{counts[name]} {name.replace('_', ' ')}" for name in STATUS_NAMES.values()))
+    if sim.solver is not None:
+        deepest = sim.deepest_overlap()
+        if deepest is None:
+            print("no two balls overlap")
+        elif deepest.fraction < 1e-6:  # resting contacts left at round-off
+            print("no two balls overlap by more than a millionth of a radius")
+        else:
+            print(f"deepest overlap: {100 * deepest.fraction:.3g} % of a radius ({1e3 * deepest.depth:.3g} mm, "
+                  f"balls {deepest.i} and {deepest.j})")
+    f = sim.flight()
+    x, status = sim.x, sim.status
+
+    def state_of(i: int) -> str:  # "at rest", "out of bounds", ...
+        return STATUS_NAMES[int(status[i])].replace("_", " ")
+
+    for i in np.flatnonzero(f.landed)[:10]:
+        print(f"ball {i}: carry {f.carry[i]:.3f} m, apex {f.apex[i]:.2f} m, flight {f.flight_time[i]:.3f} s, "
+              f"lands at {f.landing_angle[i]:.1f} deg, {f.landing_speed[i]:.2f} m/s; now at "
+              f"x = {x[i, 0]:.2f} m, z = {x[i, 2]:.2f} m ({state_of(i)})")
+    hole = sim.scene.hole
+    if hole is not None:
+        away = np.hypot(x[:, 0] - hole.position[0], x[:, 2] - hole.position[1])
+        for i in range(min(sim.n, 10)):
+            print(f"ball {i}: {away[i]:.2f} m from the hole at x = {hole.position[0]:g} m, z = {hole.position[1]:g} m "
+                  f"({state_of(i)})")
+    if args.out:
+        print(f"wrote {args.out}")
+    if args.plot and rec is not None:
+        plot_run(rec, args.plot, title=sim.scene.description or sim.scene.name)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+class _Frames:
+    """Renders a frame every K steps to numbered PNGs (``--frames DIR``) and/or an animated GIF."""
+
+    def __init__(self, args: argparse.Namespace, sim) -> None:
+        if args.frames_every < 0:
+            raise ConfigError("--frames-every", None, f"must be >= 0 (got {args.frames_every})")
+        check_writable(args.gif, "--gif")
+        duration = args.t if args.t is not None else (args.steps or 0) * sim.dt or sim.scene.world.t_end
+        self.every = args.frames_every or max(1, int(round(duration / sim.dt / 100)))  # ~100 frames
+        self.size = parse_size(args.size)
+        self.camera = args.camera
+        self.gif = args.gif
+        self.fps = max(1.0, min(50.0, 1.0 / (self.every * sim.dt)))
+        self._tmp = None
+        if args.frames:
+            self.folder = Path(args.frames)
+            self.folder.mkdir(parents=True, exist_ok=True)
+        else:
+            self._tmp = tempfile.TemporaryDirectory()
+            self.folder = Path(self._tmp.name)
+        self.paths: list[Path] = []
+
+    def __call__(self, sim) -> None:
+        path = self.folder / f"frame_{len(self.paths):05d}.png"
+        render(sim, path, camera=self.camera, size=self.size)
+        self.paths.append(path)
+
+    def close(self) -> None:
+        if self.gif and self.paths:
+            images = [Image.open(p).convert("P", palette=Image.ADAPTIVE) for p in self.paths]
+            images[0].save(self.gif, save_all=True, append_images=images[1:], duration=int(1000 / self.fps), loop=0)
+            print(f"wrote {self.gif} ({len(images)} frames)")
+        if self._tmp is None and self.paths:
+            print(f"wrote {len(self.paths)} frames to {self.folder}")
+        if self._tmp is not None:
+            self._tmp.cleanup()

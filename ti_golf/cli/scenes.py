@@ -1,0 +1,35 @@
+"""``ti-golf scenes`` and ``ti-golf keys``: the bundled scenes, and every scene key documented."""
+
+from __future__ import annotations
+
+import argparse
+
+from ti_golf.errors import ConfigError
+from ti_golf.scene.loader import describe_keys, load_scene, scenes_dir
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Add ``scenes`` and ``keys`` to ``ti-golf``'s subcommands."""
+    sub.add_parser("scenes", help="list the bundled scenes with a one-line description")
+    sub.add_parser("keys", help="print every scene key with unit, default and allowed values")
+
+
+def cmd_scenes(args: argparse.Namespace) -> int:
+    folder = scenes_dir()
+    files = sorted(folder.glob("*.toml"))
+    if not files:
+        print(f"no scenes in {folder}")
+        return 0
+    width = max(len(f.stem) for f in files)
+    for f in files:
+        try:
+            desc = load_scene(f).description
+        except ConfigError as exc:
+            desc = f"(invalid: {exc.reason})"
+        print(f"{f.stem:<{width}}  {desc}")
+    return 0
+
+
+def cmd_keys(args: argparse.Namespace) -> int:
+    print(describe_keys())
+    return 0
