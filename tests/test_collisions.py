@@ -154,7 +154,7 @@ def test_a_ball_that_moved_past_half_the_skin_is_seen_wherever_it_is():
     import taichi as ti
 
     from ti_golf.physics.collide import moved_past
-    from ti_golf.physics.types import vec3, vec3_array, vec3f, vec3f_array
+    from ti_golf.physics.types import kernel, vec3, vec3_array, vec3f, vec3f_array
 
     def moved(x1, x_build, half_skin, out):
         for i in range(x1.shape[0]):
@@ -163,7 +163,7 @@ def test_a_ball_that_moved_past_half_the_skin_is_seen_wherever_it_is():
     # (this module's annotations are strings: from __future__ import annotations)
     moved.__annotations__ = {"x1": vec3_array, "x_build": vec3f_array, "half_skin": float,
                              "out": ti.types.ndarray(ti.i32, ndim=1)}
-    moved = ti.kernel(moved)
+    moved = kernel(moved)  # ti.kernel, applied once the float type is chosen
 
     rng = np.random.default_rng(3)
     n, half_skin = 20_000, 1e-3
@@ -173,7 +173,7 @@ def test_a_ball_that_moved_past_half_the_skin_is_seen_wherever_it_is():
     u /= np.linalg.norm(u, axis=1)[:, None]
     out = ti.ndarray(ti.i32, n)
     for step, expect in ((1.0001 * half_skin, 1), (0.9 * half_skin, 0)):
-        x1, xb = ti.ndarray(vec3, n), ti.ndarray(vec3f, n)
+        x1, xb = ti.ndarray(vec3.get(), n), ti.ndarray(vec3f, n)
         x1.from_numpy(p + step * u)
         xb.from_numpy(p.astype(np.float32))
         moved(x1, xb, half_skin, out)

@@ -114,7 +114,7 @@ def _taichi_surface(sim_or_model, pts):
 
     m = sim_or_model.model if hasattr(sim_or_model, "model") else sim_or_model
     k = len(pts)
-    x, p, n, out = ti.ndarray(vec3, k), ti.ndarray(vec3, k), ti.ndarray(vec3, k), ti.ndarray(ti.i32, k)
+    x, p, n, out = ti.ndarray(vec3.get(), k), ti.ndarray(vec3.get(), k), ti.ndarray(vec3.get(), k), ti.ndarray(ti.i32, k)
     x.from_numpy(np.asarray(pts, np.float64))
     sample_surface(m.terrain_params, m.terrain_h, x, p, n, out)
     return p.to_numpy(), n.to_numpy(), out.to_numpy()

@@ -331,11 +331,11 @@ def bare_gather_rate(x: np.ndarray, repeats: int = 5) -> float:
     side = max(2, int(np.ceil(np.sqrt(n / 16.0))))
     offsets = np.array([1, side, side * side, side + 1, side * side + 1, side * side + side])
     nbr = (np.arange(n)[:, None] + np.concatenate([offsets, -offsets])[None, :]) % n
-    xs = ti.ndarray(vec3, n)
+    xs = ti.ndarray(vec3.get(), n)
     xs.from_numpy(x.astype(xs.to_numpy().dtype))
     table = ti.ndarray(ti.i32, nbr.shape)
     table.from_numpy(nbr.astype(np.int32))
-    out = ti.ndarray(vec3, n)
+    out = ti.ndarray(vec3.get(), n)
     bare_gather(xs, table, out)  # compile
     ti.sync()
 
@@ -357,7 +357,7 @@ def one_pass_contacts(sim: Any) -> tuple[Callable[[], None], Any, Any]:
 
     m, s, solver = sim.model, sim.state, sim.solver
     solver.ensure_lists(s)
-    dv, dw = ti.ndarray(vec3, s.n), ti.ndarray(vec3, s.n)
+    dv, dw = ti.ndarray(vec3.get(), s.n), ti.ndarray(vec3.get(), s.n)
 
     def run() -> None:
         kernel(m.contact, m.gravity, m.dt, s.x, s.v, s.w, m.radius, m.mass, solver.upper, solver.n_upper,

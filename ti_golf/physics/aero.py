@@ -34,7 +34,7 @@ from typing import Any
 
 import taichi as ti
 
-from ti_golf.physics.types import AirParams, vec3
+from ti_golf.physics.types import AirParams, vec, vec3
 
 LAB, SPIN_RATIO = 0, 1
 AIR_MODEL_CODES = {"lab": LAB, "spin_ratio": SPIN_RATIO}
@@ -57,7 +57,7 @@ def row(S, i: ti.template()):
 @ti.func
 def column(S, first: ti.template(), lane: ti.template()):
     """The 3-vector in rows first..first+2 of column ``lane`` (e.g. the velocity of one ball)."""
-    return vec3(S[first, lane], S[first + 1, lane], S[first + 2, lane])
+    return vec(S[first, lane], S[first + 1, lane], S[first + 2, lane])
 
 
 def air_params(air: Any) -> Any:

@@ -1,25 +1,33 @@
 """Yardstick kernels for the benchmarks, measured in the same run as the step they compare with:
 what the memory system allows, and what the report's pair impulse costs at the least."""
 
-import taichi as ti
 
 from ti_golf.physics.collide import pair_geometry, pair_normal
 from ti_golf.physics.contact import pair_impulse
 from ti_golf.physics.grid import int_table, owner_slot, slot_bits
-from ti_golf.physics.types import ContactParams, float_array, int_array, of_ball, vec3, vec3_array
+from ti_golf.physics.types import (
+    ContactParams,
+    float_array,
+    int_array,
+    kernel,
+    of_ball,
+    vec3,
+    vec3_array,
+    zero3,
+)
 
 
-@ti.kernel
+@kernel
 def bare_gather(x: vec3_array, nbr: int_table, out: vec3_array):
     """out[i] = Σ_k (x[i] − x[nbr[i, k]]): a contact gather with no physics (memory traffic only)."""
     for i in range(x.shape[0]):
-        acc = vec3(0.0)
+        acc = zero3()
         for k in range(nbr.shape[1]):
             acc += x[i] - x[nbr[i, k]]
         out[i] = acc
 
 
-@ti.kernel
+@kernel
 def one_pass_contacts(contact: ContactParams, gravity: vec3, h: float, x: vec3_array, v: vec3_array,
                       w: vec3_array, radius: float_array, mass: float_array, upper: int_table, n_upper: int_array,
                       lower: int_table, n_lower: int_array, dv: vec3_array, dw: vec3_array):
@@ -38,7 +46,7 @@ def one_pass_contacts(contact: ContactParams, gravity: vec3, h: float, x: vec3_a
     for i in range(x.shape[0]):
         r_i, inv_m_i, xi = of_ball(radius, i), 1.0 / of_ball(mass, i), x[i]
         vi = v[i] + h * gravity
-        P, T = vec3(0.0), vec3(0.0)
+        P, T = zero3(), zero3()
         for q in range(n_lower[i] + n_upper[i]):
             j = 0
             if q < n_lower[i]:

@@ -39,15 +39,47 @@ launch overhead that dominates a step of a few balls.
 
 import taichi as ti
 
-from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS
 from ti_golf.physics.aero import V, W, X, coefficients, column
-from ti_golf.physics.contact import PRESSED, pair_impulse, plane_jolt, plane_position, rest_update, surface_impulse, warm_impulse
-from ti_golf.physics.grid import int_table, owner_slot, real_table, relist_all_pairs, slot_bits
+from ti_golf.physics.contact import (
+    PRESSED,
+    pair_impulse,
+    plane_jolt,
+    plane_position,
+    rest_update,
+    surface_impulse,
+    warm_impulse,
+)
+from ti_golf.physics.grid import (
+    owner_slot,
+    relist_all_pairs,
+    slot_bits,
+)
 from ti_golf.physics.integrate import IN_FLIGHT, step_free, track_flight
 from ti_golf.physics.kernels import lane_state
-from ti_golf.physics.terrain import outside, same_cell, surface, surface_contact, terrain_clearance, terrain_position
-from ti_golf.physics.types import (AirParams, ContactParams, TerrainParams, f32_array, f32_table, float_array, float_grid, int_array,
-                    int_grid, of_ball, pair_table, real, vec3, vec3_array, vec3f_array)
+from ti_golf.physics.terrain import (
+    outside,
+    same_cell,
+    surface,
+    surface_contact,
+    terrain_clearance,
+    terrain_position,
+)
+from ti_golf.physics.types import (
+    AirParams,
+    BallState,
+    ContactParams,
+    FlightRecord,
+    ModelArrays,
+    NeighbourLists,
+    StepParams,
+    StepScratch,
+    TerrainParams,
+    is_f64,
+    kernel,
+    of_ball,
+    zero3,
+)
+from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS
 
 QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
 FAR = 1e30  # the surface clearance of a ball when there are no planes and no terrain (see surface_clearance)
@@ -108,7 +140,7 @@ def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic,
         n, gap = pair_normal(xi, x[j], inv), Jk[4]
         ok = n.norm_sqr() > 0.0
         inv_mj = 1.0 / of_ball(mass, j)
-        P = vec3(0.0)
+        P = zero3()
         kick = 0
         if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
             lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
@@ -153,7 +185,7 @@ def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), 
     of the ball and the balls it touches, see :func:`finish`; or ``QUIET`` for a ball at rest
     whose listed neighbours are all at rest or out of bounds: nothing can touch it this step, so
     the step leaves it exactly as it is and the sweeps skip it)."""
-    P = vec3(0.0)
+    P = zero3()
     calm, xi = rest_time[i], x[i]
     quiet = status[i] == AT_REST
     for m in range(n_lower[i]):
@@ -216,7 +248,7 @@ def rounded_down(c):
     it makes the ball visit planes that it cannot reach (no impulse, no change). In f64 the value
     is first lowered by 2^-23·|c|, twice what rounding to f32 can add."""
     low = c
-    if ti.static(real == ti.f64):
+    if ti.static(is_f64()):
         low = c - ti.abs(c) * 2.0**-23
     return ti.cast(low, ti.f32)
 
@@ -234,7 +266,7 @@ def beyond_reach(clear, r, reach_sqr):
 @ti.func
 def resting_impulse(status: ti.template(), i, j, n, lam):
     """λ·n̂ [N·s] on ball i from its pair with j (n̂ from j to i), or zero when the pair gets no impulse."""
-    P = vec3(0.0)
+    P = zero3()
     if lam > 0.0 and not skip_pair(status, i, j):
         P = lam * n
     return P
@@ -303,7 +335,7 @@ def gather(i, final: ti.template(), x: ti.template(), radius: ti.template(), mas
     i) gives Δv = ±P/m and Δω = (−r n̂ᵢ) × (±P)·5/(2 m r²) = −(5/(2 m r))·(n̂ × P) for both balls
     of the pair (n̂ᵢ and the sign of P flip together). Of a ball's impacts, only the one
     :func:`matched` in this sweep acts (``any_impact``: whether the sweep has any, ``flag[1]``)."""
-    P, T, q_n = vec3(0.0), vec3(0.0), vec3(0.0)
+    P, T, q_n = zero3(), zero3(), zero3()
     touching = 0
     r = of_ball(radius, i)
     inv_m, xi = 1.0 / of_ball(mass, i), x[i]
@@ -314,7 +346,7 @@ def gather(i, final: ti.template(), x: ti.template(), radius: ti.template(), mas
         P_k, n_k = Jk.xyz, pair_normal(x[j], xi, ti.abs(Jk[3]))
         if any_impact != 0:  # (the marks are read only in a sweep that has impacts)
             if impact_mark(Jk) and not matched(impact, i, j, slot + 1):
-                P_k = vec3(0.0)
+                P_k = zero3()
         P -= P_k
         T += n_k.cross(P_k)
         if ti.static(final):
@@ -325,7 +357,7 @@ def gather(i, final: ti.template(), x: ti.template(), radius: ti.template(), mas
         P_k, n_k = Jk.xyz, pair_normal(xi, x[upper[i, k]], ti.abs(Jk[3]))
         if any_impact != 0:
             if impact_mark(Jk) and not matched(impact, i, upper[i, k], (i << bits) + k + 1):
-                P_k = vec3(0.0)
+                P_k = zero3()
         P += P_k
         T += n_k.cross(P_k)
         if ti.static(final):
@@ -357,10 +389,10 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
         n_planes = 0
     for p in range(n_planes):
         n = plane_n[p]
-        lam0 = ti.cast(lam_plane[i, p], real)  # f32 in the table (see above)
+        lam0 = ti.cast(lam_plane[i, p], float)  # f32 in the table (see above)
         if ti.static(warm):
             if lam0 > 0.0:
-                P = warm_impulse(n, vi, wi, r, vec3(0.0), vec3(0.0), 0.0, 1.0, lam0, contact.mu)
+                P = warm_impulse(n, vi, wi, r, zero3(), zero3(), 0.0, 1.0, lam0, contact.mu)
                 vi, wi = plane_jolt(P, lam0, vi, wi, r, n, contact.mu_roll)
         else:
             gap = (x[i] - plane_p[p]).dot(n) - r
@@ -373,12 +405,12 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
                     clear[i] = ti.cast(NEAR, ti.f32)
     if terrain.on != 0 and not far:
         q = plane_n.shape[0]
-        lam0 = ti.cast(lam_plane[i, q], real)
+        lam0 = ti.cast(lam_plane[i, q], float)
         if ti.static(not warm) or lam0 > 0.0:
             pt, n = surface(heights, terrain, x_free[i])
             ct = surface_contact(contact, surface_table, terrain_cells, heights, terrain, x_free[i])
             if ti.static(warm):
-                P = warm_impulse(n, vi, wi, r, vec3(0.0), vec3(0.0), 0.0, 1.0, lam0, ct.mu)
+                P = warm_impulse(n, vi, wi, r, zero3(), zero3(), 0.0, 1.0, lam0, ct.mu)
                 vi, wi = plane_jolt(P, lam0, vi, wi, r, n, ct.mu_roll)
             else:
                 gap = (x[i] - pt).dot(n) - r
@@ -391,65 +423,27 @@ def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), conta
     return vi, wi
 
 
-@ti.kernel
+@kernel
 def collision_step(
     # Model:
     air: AirParams,
     contact: ContactParams,
-    gravity: vec3,
-    h: float,
-    integrator: ti.template(),
-    t0: ti.f64,
-    half_skin: float,
-    v_rest: float,
-    t_rest: float,
-    radius: float_array,
-    mass: float_array,
-    launch_height: float_array,
-    plane_p: vec3_array,
-    plane_n: vec3_array,
     terrain: TerrainParams,
-    heights: float_grid,
-    terrain_cells: int_grid,
-    surface_table: float_grid,
-    # Neighbour lists (built by grid.list_neighbours and grid.link_lower), the pairs' accumulated
-    # resting impulses and the planes':
-    upper: int_table,
-    n_upper: int_array,
-    lower: int_table,
-    n_lower: int_array,
-    x_at_build: vec3f_array,
-    lam: real_table,
-    lam_plane: f32_table,
+    params: StepParams,
+    integrator: ti.template(),
+    model: ModelArrays,
+    # Neighbour lists and carried impulses in/out:
+    lists: NeighbourLists,
     # State in/out:
-    x: vec3_array,
-    v: vec3_array,
-    w: vec3_array,
-    status: int_array,
-    rest_time: float_array,
+    state: BallState,
+    flight: FlightRecord,
     # Scratch:
-    x_free: vec3_array,
-    v_free: vec3_array,
-    calm: float_array,
-    clear: f32_array,
-    J: pair_table,
-    impact: int_array,
-    # Flight record in/out (with launch_height: one entry each when no ball is tracked, then not read):
-    landed: int_array,
-    apex: float_array,
-    t_land: float_array,
-    land_x: vec3_array,
-    land_v: vec3_array,
-    flag: int_array,
+    scratch: StepScratch,
+    # The part of a step this launch takes:
     serial: ti.template(),
     warm: ti.template(),
     sweeps: ti.template(),
     last: ti.template(),
-    steps: ti.i32,
-    skin: float,
-    dt: ti.f64,
-    v_cut: float,
-    r_cut: float,
 ) -> ti.i32:
     """Advance all balls by ``steps`` steps of ``h`` [s]: the free flight and warm start (with
     ``warm``), ``sweeps`` Jacobi sweeps, then (with ``last``) the last sweep, which finishes the
@@ -480,189 +474,146 @@ def collision_step(
     distances and gaps or projections, see :func:`owned_pairs`) has the shape of ``upper``;
     ``impact`` holds a key per ball (see :func:`impact_keys`). The kernel takes 32 arrays, as many as Taichi's Vulkan
     backend passes to a kernel (with more its launch crashes); merge arrays before adding one."""
+    h = params.h
     result = 0
     if ti.static(not serial):
         if ti.static(warm):
-            flag[0] = 0
-        step_balls(
-            serial, warm, sweeps, last, air, contact, gravity, h, integrator, ti.cast(t0, real), half_skin, v_rest,
-            t_rest, radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
-            upper, n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free,
-            calm, clear, J, impact, landed, apex, t_land, land_x, land_v, flag,
-        )
-        result = flag[0]
+            scratch.flag[0] = 0
+        step_balls(serial, warm, sweeps, last, air, contact, terrain, params, h, ti.cast(params.t0, float),
+                   integrator, model, lists, state, flight, scratch)
+        result = scratch.flag[0]
     else:
-        t = t0
+        t = params.t0
         ti.loop_config(serialize=True)
-        for _ in range(steps):
-            if flag[0] != 0:
-                relist_all_pairs(x, radius, skin, v, h, v_cut, r_cut, upper, n_upper, lower, n_lower, x_at_build, lam,
-                                 J)
+        for _ in range(params.steps):
+            if scratch.flag[0] != 0:
+                relist_all_pairs(state.x, model.radius, params.skin, state.v, h, params.v_cut, params.r_cut, lists.upper, lists.n_upper, lists.lower, lists.n_lower, lists.x_at_build, lists.lam,
+                                 scratch.J)
                 result += 1
-                flag[0] = 0
-            step_balls(
-                serial, warm, sweeps, last, air, contact, gravity, h, integrator, ti.cast(t, real), half_skin, v_rest,
-                t_rest, radius, mass, launch_height, plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
-                upper, n_upper, lower, n_lower, x_at_build, lam, lam_plane, x, v, w, status, rest_time, x_free, v_free,
-                calm, clear, J, impact, landed, apex, t_land, land_x, land_v, flag,
-            )
-            for i in range(x.shape[0]):
-                x[i] = x_free[i]
-            t += dt
+                scratch.flag[0] = 0
+            step_balls(serial, warm, sweeps, last, air, contact, terrain, params, h, ti.cast(t, float),
+                   integrator, model, lists, state, flight, scratch)
+            for i in range(state.x.shape[0]):
+                state.x[i] = scratch.x_free[i]
+            t += params.dt
     return result
 
 
 @ti.func
 def step_balls(serial: ti.template(), warm: ti.template(), sweeps: ti.template(), last: ti.template(),
-               air: ti.template(), contact: ti.template(), gravity: ti.template(), h, integrator: ti.template(), t0,
-               half_skin, v_rest, t_rest,
-               radius: ti.template(), mass: ti.template(), launch_height: ti.template(), plane_p: ti.template(),
-               plane_n: ti.template(), terrain: ti.template(), heights: ti.template(), terrain_cells: ti.template(),
-               surface_table: ti.template(), upper: ti.template(), n_upper: ti.template(), lower: ti.template(),
-               n_lower: ti.template(), x_at_build: ti.template(), lam: ti.template(), lam_plane: ti.template(),
-               x: ti.template(), v: ti.template(), w: ti.template(), status: ti.template(), rest_time: ti.template(),
-               x_free: ti.template(), v_free: ti.template(), calm: ti.template(), clear: ti.template(),
-               J: ti.template(), impact: ti.template(),
-               landed: ti.template(), apex: ti.template(), t_land: ti.template(), land_x: ti.template(),
-               land_v: ti.template(), flag: ti.template()):
+               air: ti.template(), contact: ti.template(), terrain: ti.template(), params: ti.template(), h, t0,
+               integrator: ti.template(), model: ti.template(), lists: ti.template(), state: ti.template(),
+               flight: ti.template(), scratch: ti.template()):
     """One step of all balls, the body of :func:`collision_step` (see there) in parallel and serially,
     or the part of it that ``warm``, ``sweeps`` and ``last`` name."""
-    v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
-    bits = slot_bits(upper.shape[1])  # lower-list slots: owner · 2^bits + column (once, not per ball)
+    v_inelastic = contact.v_bounce + 2.0 * params.gravity.norm() * h
+    bits = slot_bits(lists.upper.shape[1])  # lower-list slots: owner · 2^bits + column (once, not per ball)
     if ti.static(warm):
-        start_step(air, contact, gravity, h, integrator, t0, v_inelastic, bits, radius, mass, launch_height, plane_p,
-                   plane_n, terrain, heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, lam,
-                   lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, landed, apex, t_land,
-                   land_x, land_v)
+        start_step(air, contact, terrain, params, h, t0, integrator, v_inelastic, bits, model, lists,
+                   state, flight, scratch)
     # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
     if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
         for _ in range(sweeps):
-            sweep(False,
-                  contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
-                  heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
-                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, impact, flag)
+            sweep(False, contact, terrain, params, h, v_inelastic, bits, model, lists, state, scratch)
     else:  # unrolled, so that each sweep's loops stay top-level loops (parallel)
         for _ in ti.static(range(sweeps)):
-            sweep(False,
-                  contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain,
-                  heights, terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam,
-                  lam_plane, x, v, w, status, rest_time, x_free, v_free, calm, clear, J, impact, flag)
+            sweep(False, contact, terrain, params, h, v_inelastic, bits, model, lists, state, scratch)
     if ti.static(last):
-        sweep(True,
-              contact, h, v_inelastic, half_skin, v_rest, t_rest, radius, mass, plane_p, plane_n, terrain, heights,
-              terrain_cells, surface_table, upper, n_upper, lower, n_lower, bits, x_at_build, lam, lam_plane, x, v,
-              w, status, rest_time, x_free, v_free, calm, clear, J, impact, flag)
+        sweep(True, contact, terrain, params, h, v_inelastic, bits, model, lists, state, scratch)
 
 
 @ti.func
-def start_step(air: ti.template(), contact: ti.template(), gravity: ti.template(), h, integrator: ti.template(), t0,
-               v_inelastic, bits, radius: ti.template(), mass: ti.template(), launch_height: ti.template(),
-               plane_p: ti.template(), plane_n: ti.template(), terrain: ti.template(), heights: ti.template(),
-               terrain_cells: ti.template(), surface_table: ti.template(), upper: ti.template(),
-               n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), lam: ti.template(),
-               lam_plane: ti.template(), x: ti.template(), v: ti.template(), w: ti.template(), status: ti.template(),
-               rest_time: ti.template(), x_free: ti.template(), v_free: ti.template(), calm: ti.template(),
-               clear: ti.template(), J: ti.template(), landed: ti.template(), apex: ti.template(),
-               t_land: ti.template(), land_x: ti.template(), land_v: ti.template()):
+def start_step(air: ti.template(), contact: ti.template(), terrain: ti.template(), params: ti.template(), h, t0,
+               integrator: ti.template(), v_inelastic, bits, model: ti.template(), lists: ti.template(),
+               state: ti.template(), flight: ti.template(), scratch: ti.template()):
     """1. Free flight of every ball to ``x_free``, ``v_free``, then the warm start: last step's
     resting impulses (ball pairs, planes and terrain) applied again, so a stack starts the step
     supported (see the module's docstring)."""
-    tracking = landed.shape[0] == x.shape[0]
-    for i in range(x.shape[0]):
-        xi = x[i]
-        x1, v1, w1 = xi, vec3(0.0), vec3(0.0)
-        if status[i] != AT_REST and status[i] != OUT_OF_BOUNDS:
-            coef = coefficients(air, ti.Vector([of_ball(radius, i)]), ti.Vector([of_ball(mass, i)]))
-            S1 = step_free(lane_state(xi, v[i], w[i]), h, integrator, coef, air, gravity)
+    tracking = flight.landed.shape[0] == state.x.shape[0]
+    for i in range(state.x.shape[0]):
+        xi = state.x[i]
+        x1, v1, w1 = xi, zero3(), zero3()
+        if state.status[i] != AT_REST and state.status[i] != OUT_OF_BOUNDS:
+            coef = coefficients(air, ti.Vector([of_ball(model.radius, i)]), ti.Vector([of_ball(model.mass, i)]))
+            S1 = step_free(lane_state(xi, state.v[i], state.w[i]), h, integrator, coef, air, params.gravity)
             x1, v1, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
             if tracking:  # else the flight records hold one entry each, not read (see State.tracking)
-                if landed[i] == IN_FLIGHT:  # a landed ball's record is final: neither read nor written
-                    landed[i], apex[i], t_land[i], land_x[i], land_v[i] = track_flight(
-                        xi, v[i], x1, v1, h, t0, launch_height[i], landed[i], apex[i], t_land[i], land_x[i],
-                        land_v[i])
-        x_free[i], v_free[i] = x1, v1
-        clear[i] = rounded_down(surface_clearance(i, x, x1, radius, plane_p, plane_n, terrain, heights, lam_plane))
-        dv, calm[i] = warm_start(i, x, radius, mass, status, rest_time, upper, n_upper, lower, n_lower, bits,
-                                 lam, J)
-        if status[i] != OUT_OF_BOUNDS and calm[i] != QUIET:
+                if flight.landed[i] == IN_FLIGHT:  # a landed ball's record is final: neither read nor written
+                    flight.landed[i], flight.apex[i], flight.t_land[i], flight.land_x[i], flight.land_v[i] = track_flight(
+                        xi, state.v[i], x1, v1, h, t0, model.launch_height[i], flight.landed[i], flight.apex[i], flight.t_land[i], flight.land_x[i],
+                        flight.land_v[i])
+        scratch.x_free[i], scratch.v_free[i] = x1, v1
+        scratch.clear[i] = rounded_down(surface_clearance(i, state.x, x1, model.radius, model.plane_p, model.plane_n, terrain, model.heights, lists.lam_plane))
+        dv, scratch.calm[i] = warm_start(i, state.x, model.radius, model.mass, state.status, state.rest_time, lists.upper, lists.n_upper, lists.lower, lists.n_lower, bits,
+                                 lists.lam, scratch.J)
+        if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
             v1 += dv
-            v1, w1 = surface_impulses(i, True, v1, w1, clear, contact, h, v_inelastic, radius, plane_p, plane_n,
-                                      terrain, heights, terrain_cells, surface_table, x, x_free, lam_plane)
-        v[i], w[i] = v1, w1
+            v1, w1 = surface_impulses(i, True, v1, w1, scratch.clear, contact, h, v_inelastic, model.radius, model.plane_p, model.plane_n,
+                                      terrain, model.heights, model.terrain_cells, model.surface_table, state.x, scratch.x_free, lists.lam_plane)
+        state.v[i], state.w[i] = v1, w1
 
 
 @ti.func
-def sweep(last: ti.template(), contact: ti.template(), h, v_inelastic, half_skin, v_rest, t_rest,
-          radius: ti.template(), mass: ti.template(), plane_p: ti.template(), plane_n: ti.template(),
-          terrain: ti.template(), heights: ti.template(), terrain_cells: ti.template(), surface_table: ti.template(),
-          upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits,
-          x_at_build: ti.template(), lam: ti.template(), lam_plane: ti.template(), x: ti.template(),
-          v: ti.template(), w: ti.template(), status: ti.template(), rest_time: ti.template(), x_free: ti.template(),
-          v_free: ti.template(), calm: ti.template(), clear: ti.template(), J: ti.template(),
-          impact: ti.template(), flag: ti.template()):
+def sweep(last: ti.template(), contact: ti.template(), terrain: ti.template(), params: ti.template(), h, v_inelastic,
+          bits, model: ti.template(), lists: ti.template(), state: ti.template(), scratch: ti.template()):
     """One Jacobi sweep: the pairs' impulses from the velocities of the previous sweep, then each
     ball gathers them and meets its planes; the ``last`` sweep's ball loop also finishes the step.
     Between the two, when the pairs marked impacts (``flag[1]``), every ball finds its first
     impact (:func:`impact_keys`, :func:`matched`).
     A quiet ball gets no impulse (its pairs are skipped) and stays where it is; the last pair pass
     still visits its pairs, for the projections its awake neighbours gather."""
-    flag[1] = 0
-    for i in range(x.shape[0]):
-        if ti.static(last) or calm[i] != QUIET:
-            owned_pairs(i, last, contact, h, v_inelastic, x, radius, mass, status, upper, n_upper, lam, J, v, w,
-                        flag)
-    for i in range(x.shape[0]):
-        if flag[1] != 0:  # (a loop inside the test would not run in parallel)
-            impact_keys(i, n_upper, lower, n_lower, bits, J, impact)
-    for i in range(x.shape[0]):
-        if calm[i] == QUIET:
+    scratch.flag[1] = 0
+    for i in range(state.x.shape[0]):
+        if ti.static(last) or scratch.calm[i] != QUIET:
+            owned_pairs(i, last, contact, h, v_inelastic, state.x, model.radius, model.mass, state.status, lists.upper, lists.n_upper, lists.lam, scratch.J, state.v, state.w,
+                        scratch.flag)
+    for i in range(state.x.shape[0]):
+        if scratch.flag[1] != 0:  # (a loop inside the test would not run in parallel)
+            impact_keys(i, lists.n_upper, lists.lower, lists.n_lower, bits, scratch.J, scratch.impact)
+    for i in range(state.x.shape[0]):
+        if scratch.calm[i] == QUIET:
             if ti.static(last):
-                x_free[i] = x[i]
-        elif status[i] != OUT_OF_BOUNDS:
-            dv, dw, dx, touching = gather(i, last, x, radius, mass, upper, n_upper, lower, n_lower, bits, J,
-                                          impact, flag[1], contact.k_p)
-            v_new, w_new = surface_impulses(i, False, v[i] + dv, w[i] + dw, clear, contact, h, v_inelastic, radius,
-                                            plane_p, plane_n, terrain, heights, terrain_cells, surface_table,
-                                            x, x_free, lam_plane)
+                scratch.x_free[i] = state.x[i]
+        elif state.status[i] != OUT_OF_BOUNDS:
+            dv, dw, dx, touching = gather(i, last, state.x, model.radius, model.mass, lists.upper, lists.n_upper, lists.lower, lists.n_lower, bits, scratch.J,
+                                          scratch.impact, scratch.flag[1], contact.k_p)
+            v_new, w_new = surface_impulses(i, False, state.v[i] + dv, state.w[i] + dw, scratch.clear, contact, h, v_inelastic, model.radius,
+                                            model.plane_p, model.plane_n, terrain, model.heights, model.terrain_cells, model.surface_table,
+                                            state.x, scratch.x_free, lists.lam_plane)
             if ti.static(not last):
-                v[i], w[i] = v_new, w_new
+                state.v[i], state.w[i] = v_new, w_new
             else:
-                finish(i, v_new, w_new, dx, touching, contact, h, half_skin, v_rest, t_rest, radius, plane_p,
-                       plane_n, terrain, heights, x_at_build, x, v, w, status, rest_time, calm, clear, x_free,
-                       v_free, flag)
+                finish(i, v_new, w_new, dx, touching, contact, terrain, params, h, model, lists, state, scratch)
 
 
 @ti.func
-def finish(i, v_final, w_final, dx, touching, contact: ti.template(), h, half_skin, v_rest, t_rest,
-           radius: ti.template(), plane_p: ti.template(), plane_n: ti.template(), terrain: ti.template(),
-           heights: ti.template(), x_at_build: ti.template(), x: ti.template(), v: ti.template(), w: ti.template(),
-           status: ti.template(), rest_time: ti.template(), calm: ti.template(), clear: ti.template(),
-           x_free: ti.template(), v_free: ti.template(), flag: ti.template()):
+def finish(i, v_final, w_final, dx, touching, contact: ti.template(), terrain: ti.template(), params: ti.template(), h,
+           model: ti.template(), lists: ti.template(), state: ti.template(), scratch: ti.template()):
     """End of the step for ball i (not out of bounds) with its final velocities, the position
     projection ``dx`` of its ball overlaps and whether it ``touching`` a ball: new position in
     ``x_free`` (split at a plane's time of impact, overlaps projected out), status, rest timer,
     out-of-bounds; sets ``flag[0]`` when the neighbour lists must be rebuilt before the next step."""
-    st = status[i]
-    xi, ri = x[i], of_ball(radius, i)
-    x1 = x_free[i] + h * (v_final - v_free[i])
+    st = state.status[i]
+    xi, ri = state.x[i], of_ball(model.radius, i)
+    x1 = scratch.x_free[i] + h * (v_final - scratch.v_free[i])
     # no plane or terrain patch within reach of the flight or the end point (see surface_clearance)
-    moved = ti.max((x_free[i] - xi).norm_sqr(), (x1 - xi).norm_sqr())
+    moved = ti.max((scratch.x_free[i] - xi).norm_sqr(), (x1 - xi).norm_sqr())
     far = False
     if terrain.on == 0:
-        far = beyond_reach(clear[i], ri, moved)
+        far = beyond_reach(scratch.clear[i], ri, moved)
     else:
-        far = beyond_reach(clear[i], ri, 4.0 * moved) and same_cell(heights, terrain, xi, x1)
-    n_planes = plane_p.shape[0]
+        far = beyond_reach(scratch.clear[i], ri, 4.0 * moved) and same_cell(model.heights, terrain, xi, x1)
+    n_planes = model.plane_p.shape[0]
     if far:
         n_planes = 0
     for p in range(n_planes):
-        x1 = plane_position(xi, x_free[i], x1, v_free[i], v_final, ri, plane_p[p], plane_n[p], contact.k_p, h)
-        if (x1 - plane_p[p]).dot(plane_n[p]) - ri < 0.01 * ri:
+        x1 = plane_position(xi, scratch.x_free[i], x1, scratch.v_free[i], v_final, ri, model.plane_p[p], model.plane_n[p], contact.k_p, h)
+        if (x1 - model.plane_p[p]).dot(model.plane_n[p]) - ri < 0.01 * ri:
             touching = ti.max(touching, 1)
     if terrain.on != 0 and not far:
-        pt, nt = surface(heights, terrain, x_free[i])
-        x1 = plane_position(xi, x_free[i], x1, v_free[i], v_final, ri, pt, nt, contact.k_p, h)
-        x1 = terrain_position(xi, x1, pt, nt, ri, heights, terrain)
+        pt, nt = surface(model.heights, terrain, scratch.x_free[i])
+        x1 = plane_position(xi, scratch.x_free[i], x1, scratch.v_free[i], v_final, ri, pt, nt, contact.k_p, h)
+        x1 = terrain_position(xi, x1, pt, nt, ri, model.heights, terrain)
         if (x1 - pt).dot(nt) - ri < 0.01 * ri:
             touching = ti.max(touching, 1)
     x1 += dx  # position projection k_p·m_red·Δx·n̂ of the ball overlaps (B.18)
@@ -673,18 +624,18 @@ def finish(i, v_final, w_final, dx, touching, contact: ti.template(), h, half_sk
         # this one at the start of the step (``calm``), so the balls of a calm group reach t_rest
         # together and fall asleep in the same step, and a ball pressed by a moving one stays
         # awake (asleep, it would feel no gravity and the balls above it would keep rocking)
-        st, rest_time[i] = rest_update(touching, v_final, w_final, ri, calm[i], h, v_rest, t_rest)
+        st, state.rest_time[i] = rest_update(touching, v_final, w_final, ri, scratch.calm[i], h, params.v_rest, params.t_rest)
         if st == AT_REST:
-            v_final, w_final = vec3(0.0), vec3(0.0)
+            v_final, w_final = zero3(), zero3()
             x1 = xi
-    if terrain.on != 0 and outside(heights, terrain, x1):
+    if terrain.on != 0 and outside(model.heights, terrain, x1):
         st = OUT_OF_BOUNDS
-        v_final, w_final = vec3(0.0), vec3(0.0)
-    status[i] = st
-    x_free[i] = x1
-    v[i], w[i] = v_final, w_final
-    if moved_past(x1, x_at_build[i], 2.0 * h * v_final.norm(), half_skin):
-        flag[0] = 1
+        v_final, w_final = zero3(), zero3()
+    state.status[i] = st
+    scratch.x_free[i] = x1
+    state.v[i], state.w[i] = v_final, w_final
+    if moved_past(x1, lists.x_at_build[i], 2.0 * h * v_final.norm(), params.half_skin):
+        scratch.flag[0] = 1
 
 
 @ti.func
@@ -697,8 +648,8 @@ def moved_past(x1, x_build, reach, half_skin):
     adds twice that, |x_build|·2^-23 (in f64; nothing in f32, where nothing was rounded): a ball
     never moves past half the skin unseen, and the lists are rebuilt a little early, by 2 % of
     half the skin of a golf ball (1.07 mm) for a ball 170 m from the origin, by 11 % at 1 km."""
-    xb = ti.cast(x_build, real)
+    xb = ti.cast(x_build, float)
     margin = 0.0
-    if ti.static(real == ti.f64):
+    if ti.static(is_f64()):
         margin = xb.norm() * 2.0**-23
     return (x1 - xb).norm() + margin + reach > half_skin

@@ -24,8 +24,8 @@ import math
 
 import taichi as ti
 
+from ti_golf.physics.types import is_f64, zero3
 from ti_golf.scene.schema import AT_REST, FLYING, ROLLING
-from ti_golf.physics.types import real, vec3
 
 _TINY = 1e-12
 
@@ -48,7 +48,7 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
     Returns (P, lam, touching, impact): ``impact`` is 1 when P is an impact's jolt (a Jacobi sweep
     takes one of a ball's simultaneous impacts at a time, see :func:`.collide.matched`).
     """
-    P = vec3(0.0)
+    P = zero3()
     touching = 0
     impact = 0
     inv_m = inv_m_a + inv_m_b
@@ -87,7 +87,7 @@ def friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff, bound):
     slip = v_a + w_a.cross(-r_a * n) - v_b - w_b.cross(r_b * n)
     slip_t = slip - slip.dot(n) * n
     s = slip_t.norm()
-    P = vec3(0.0)
+    P = zero3()
     if s > _TINY:
         P = -ti.min(bound, s * m_eff * (2.0 / 7.0)) * (slip_t * (1.0 / s))
     return P
@@ -111,7 +111,7 @@ def rolling_resistance(v, radius, mu_roll, j_n, n):
     """(Δv, Δω) that slow a rolling ball by at most μ_roll·j_n [m/s], keeping the slip unchanged."""
     v_t = v - v.dot(n) * n
     speed = v_t.norm()
-    dv = vec3(0.0)
+    dv = zero3()
     if speed > _TINY:
         dv = -ti.min(speed, mu_roll * j_n) * v_t / speed
     return dv, n.cross(dv) / radius
@@ -168,11 +168,11 @@ def turf_tilt(v_n, u, speed):
     in f64, the angles are worked out in f32 (θ_c to about 1e-7 of itself), elsewhere in the
     float type."""
     cos_t, sin_t = 1.0, 0.0
-    if ti.static(real == ti.f64 and ti.lang.impl.current_cfg().arch == ti.vulkan):
+    if ti.static(is_f64() and ti.lang.impl.current_cfg().arch == ti.vulkan):
         phi = ti.atan2(ti.cast(v_n, ti.f32), ti.cast(u, ti.f32))
         rate = ti.cast(TURF_TILT * (speed / TURF_SPEED) / TURF_ANGLE, ti.f32)
         theta = ti.min(rate * phi, ti.cast(0.5 * math.pi, ti.f32) - phi)
-        cos_t, sin_t = ti.cast(ti.cos(theta), real), ti.cast(ti.sin(theta), real)
+        cos_t, sin_t = ti.cast(ti.cos(theta), float), ti.cast(ti.sin(theta), float)
     else:
         phi = ti.atan2(v_n, u)
         theta = ti.min(TURF_TILT * (speed / TURF_SPEED) * (phi / TURF_ANGLE), 0.5 * math.pi - phi)
@@ -190,7 +190,7 @@ def surface_impulse(n, gap, v, w, radius, lam, contact, v_inelastic, h):
     n_eff, e = n, contact.e
     if contact.turf != 0:
         n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
-    P, lam_new, touching, _ = pair_impulse(n_eff, gap, v, w, radius, 1.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lam, e,
+    P, lam_new, touching, _ = pair_impulse(n_eff, gap, v, w, radius, 1.0, zero3(), zero3(), 0.0, 0.0, lam, e,
                                            contact.mu, v_inelastic, h)
     return P, lam_new, touching, n_eff
 

@@ -29,18 +29,22 @@ import numpy as np
 import taichi as ti
 
 from ti_golf.physics.types import (
+    GridParams,
+    GridScratch,
+    NeighbourLists,
     float_array,
+    float_grid,
     int_array,
+    int_table,
+    ivec3,
+    kernel,
     of_ball,
     pair_table,
-    real,
+    vec3,
     vec3_array,
-    vec3f_array,
 )
 
-int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
-real_table = ti.types.ndarray(dtype=real, ndim=2)
-ivec3 = ti.types.vector(3, ti.i32)
+real_table = float_grid
 
 SCATTERED_HASH = (1, 19349663, 83492791)
 """Strides of the cell coordinates (x, y, z) in the hash of a grid whose balls are too spread out
@@ -133,9 +137,9 @@ def fast_speed(r_ref: float, skin: float, h: float) -> float:
     return max(skin, 2.0 * r_ref) / (2.0 * h)
 
 
-@ti.kernel
-def apart_balls(v: vec3_array, radius: float_array, v_cut: real, r_cut: real,
-                apart_ids: int_array) -> ti.types.vector(3, real):
+@kernel
+def apart_balls(v: vec3_array, radius: float_array, v_cut: float, r_cut: float,
+                apart_ids: int_array) -> vec3:
     """(the greatest speed [m/s], the greatest speed of the balls not set apart, how many are set
     apart): the balls faster than ``v_cut`` or bigger than ``r_cut`` (see
     :func:`is_apart`). The indices of the first ``apart_ids.shape[0] − 1`` of them go to
@@ -153,7 +157,7 @@ def apart_balls(v: vec3_array, radius: float_array, v_cut: real, r_cut: real,
                 apart_ids[k] = i
         else:
             ti.atomic_max(rest2, q)
-    return ti.Vector([ti.sqrt(s2), ti.sqrt(rest2), ti.cast(apart_ids[last], real)])
+    return ti.Vector([ti.sqrt(s2), ti.sqrt(rest2), ti.cast(apart_ids[last], float)])
 
 
 @ti.func
@@ -167,7 +171,7 @@ def is_apart(v: ti.template(), radius: ti.template(), i, v_cut, r_cut, n_apart):
     return apart
 
 
-@ti.kernel
+@kernel
 def cell_bounds(x: vec3_array, inv_cell: float) -> ti.types.vector(6, ti.i32):
     """The least (first three) and greatest (last three) cell coordinates of the balls (integer
     atomics: the same on every thread order)."""
@@ -195,51 +199,35 @@ def hash_strides(bounds, buckets: int) -> tuple[tuple[int, int, int], tuple[int,
     return (0, 0, 0), SCATTERED_HASH
 
 
-@ti.kernel
+@kernel
 def clear(a: int_array):
     """Set every entry of an int array to zero."""
     for i in range(a.shape[0]):
         a[i] = 0
 
 
-@ti.kernel
+@kernel
 def clear2(a: real_table):
     """Set every entry of a float table to zero."""
     for i, k in a:
         a[i, k] = 0.0
 
 
-@ti.kernel
+@kernel
 def list_neighbours(
+    # In:
+    g: GridParams,
     x: vec3_array,
-    radius: float_array,
-    inv_cell: float,
-    mask: ti.i32,
-    origin: ivec3,
-    stride: ivec3,
-    skin: float,
     v: vec3_array,
-    h: float,
-    fast: ti.i32,
-    v_cut: float,
-    r_cut: float,
+    radius: float_array,
     apart_ids: int_array,
-    n_apart: ti.i32,
-    scan_apart: ti.i32,
-    # scratch:
-    rank: int_array,
-    start: int_array,
-    chunk_start: int_array,
-    sorted_ids: int_array,
-    # out:
-    upper: int_table,
-    n_upper: int_array,
-    lower: int_table,
-    n_lower: int_array,
-    x_at_build: vec3f_array,
+    # Scratch:
+    scratch: GridScratch,
+    # Out:
+    lists: NeighbourLists,
     longest: int_array,
     stored_sorted: ti.template(),
-) -> ti.types.vector(3, ti.i32):
+) -> ivec3:
     """Sort the balls into the hash grid, then list every ball's neighbours closer than
     r_a + r_b + :func:`pair_reach` (with ``fast`` 0, the skin: see :func:`cell_size`; ``h`` is
     the time step [s], ``v`` the velocities), each list sorted by id (the ``n_apart`` balls faster
@@ -266,16 +254,18 @@ def list_neighbours(
     longest[0], longest[1] = 0, 0
     most_loops = 0
     if ti.static(not stored_sorted):
-        counting_sort(x, inv_cell, mask, origin, stride, rank, start, chunk_start, sorted_ids)
+        counting_sort(x, g.inv_cell, g.mask, g.origin, g.stride, scratch.rank, scratch.start, scratch.chunk_start,
+                      scratch.sorted_ids)
     for idx in range(x.shape[0]):
         i = idx  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         if ti.static(not stored_sorted):
-            i = sorted_ids[idx]
-        n_up, n_low, loops = list_ball(i, x, radius, inv_cell, mask, origin, stride, skin, v, h, fast, v_cut, r_cut,
-                                       apart_ids, n_apart, scan_apart, start, sorted_ids, upper, lower, stored_sorted)
-        n_upper[i] = ti.min(n_up, upper.shape[1])
-        n_lower[i] = ti.min(n_low, lower.shape[0])
-        x_at_build[i] = ti.cast(x[i], ti.f32)
+            i = scratch.sorted_ids[idx]
+        n_up, n_low, loops = list_ball(i, x, radius, g.inv_cell, g.mask, g.origin, g.stride, g.skin, v, g.h, g.fast,
+                                       g.v_cut, g.r_cut, apart_ids, g.n_apart, g.scan_apart, scratch.start,
+                                       scratch.sorted_ids, lists.upper, lists.lower, stored_sorted)
+        lists.n_upper[i] = ti.min(n_up, lists.upper.shape[1])
+        lists.n_lower[i] = ti.min(n_low, lists.lower.shape[0])
+        lists.x_at_build[i] = ti.cast(x[i], ti.f32)
         ti.atomic_max(longest[0], n_up)
         ti.atomic_max(longest[1], n_low)
         ti.atomic_max(most_loops, loops)
@@ -297,7 +287,7 @@ def counting_sort(x: ti.template(), inv_cell, mask, origin, stride, rank: ti.tem
         sorted_ids[start[bucket_of(cell_of(x[i], inv_cell), mask, origin, stride)] + rank[i]] = i
 
 
-@ti.kernel
+@kernel
 def storage_order(x: vec3_array, inv_cell: float, mask: ti.i32, origin: ivec3, stride: ivec3, rank: int_array,
                   start: int_array, chunk_start: int_array, sorted_ids: int_array):
     """The order in which to store the balls so that neighbours lie close in memory: ``sorted_ids``
@@ -328,14 +318,14 @@ def stored_after(x: ti.template(), a, b):
     return after
 
 
-@ti.kernel
+@kernel
 def gather(src: ti.types.ndarray(), order: int_array, dst: ti.types.ndarray()):
     """dst[p] = src[order[p]]: per-ball data into a new storage order (any element type)."""
     for p in range(dst.shape[0]):
         dst[p] = src[order[p]]
 
 
-@ti.kernel
+@kernel
 def gather_column(table: ti.types.ndarray(), column: ti.i32, order: int_array, dst: ti.types.ndarray()):
     """Column ``column`` of a per-ball table into the storage order ``order``, in place, through the
     per-ball scratch ``dst`` (two loops: every entry is read before any is written)."""
@@ -542,7 +532,7 @@ def owner_slot(slot, bits):
     return slot >> bits, slot & ((1 << bits) - 1)
 
 
-@ti.kernel
+@kernel
 def link_lower(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array):
     """Replace each lower neighbour j of every ball by the slot of the pair in j's upper list
     (see :func:`link_ball`)."""
@@ -565,7 +555,7 @@ def link_ball(i, bits, upper: ti.template(), n_upper: ti.template(), lower: ti.t
         lower[m, i] = slot
 
 
-@ti.kernel
+@kernel
 def stash(upper: int_table, n_upper: int_array, lam: real_table, scratch: pair_table):
     """Keep every pair's (neighbour id, accumulated impulse) in ``scratch`` (see :func:`stash_ball`)."""
     for i in range(scratch.shape[0]):
@@ -582,10 +572,10 @@ def stash_ball(i, upper: ti.template(), n_upper: ti.template(), lam: ti.template
         j = -1
         if k < n_upper[i]:
             j = upper[i, k]
-        scratch[i, k] = ti.Vector([lam[i, k], j // 4096, j % 4096, 0.0, 0.0], dt=real)
+        scratch[i, k] = ti.Vector([lam[i, k], j // 4096, j % 4096, 0.0, 0.0], dt=float)
 
 
-@ti.kernel
+@kernel
 def link_and_carry(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array, stashed: pair_table,
                    lam: real_table, moved: ti.template(), old_id: int_array):
     """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see

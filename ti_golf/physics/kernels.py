@@ -6,13 +6,37 @@ leaving the kernel (a "fused" step loop): per-step launch overhead is paid once 
 
 import taichi as ti
 
-from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
 from ti_golf.physics.aero import ROWS, SPIN, V, W, X, coefficients, column, row
 from ti_golf.physics.contact import plane_impulse, plane_position, rest_update
-from ti_golf.physics.integrate import IN_FLIGHT, LANDED, NOT_TRACKED, apex_in_step, landing_in_step, step_free, track_flight
+from ti_golf.physics.integrate import (
+    IN_FLIGHT,
+    LANDED,
+    NOT_TRACKED,
+    apex_in_step,
+    landing_in_step,
+    step_free,
+    track_flight,
+)
 from ti_golf.physics.terrain import outside, surface, surface_contact, terrain_position
-from ti_golf.physics.types import (AirParams, ContactParams, TerrainParams, float_array, float_grid, int_array, int_grid, of_ball,
-                    vec3, vec3_array, vec3_table)
+from ti_golf.physics.types import (
+    AirParams,
+    BallState,
+    ContactParams,
+    FlightRecord,
+    ModelArrays,
+    StepParams,
+    TerrainParams,
+    float_array,
+    int_array,
+    kernel,
+    of_ball,
+    vec,
+    vec3,
+    vec3_array,
+    vec3_table,
+    zero3,
+)
+from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
 
 
 @ti.func
@@ -21,7 +45,7 @@ def lane_state(x, v, w):
     return ti.Matrix([[x[0]], [x[1]], [x[2]], [v[0]], [v[1]], [v[2]], [w[0]], [w[1]], [w[2]], [w.norm()]])
 
 
-@ti.kernel
+@kernel
 def fly_to_landing(
     # Model:
     air: AirParams,
@@ -120,41 +144,20 @@ def fly_to_landing(
                 land_x[i], land_v[i] = column(LX, 0, l), column(LV, 0, l)
 
 
-@ti.kernel
+@kernel
 def advance(
     # Model:
     air: AirParams,
     contact: ContactParams,
-    gravity: vec3,
-    h: float,
-    integrator: ti.template(),
-    n_steps: ti.i32,
-    t0: float,
-    v_rest: float,
-    t_rest: float,
-    radius: float_array,
-    mass: float_array,
-    launch_height: float_array,
-    plane_p: vec3_array,
-    plane_n: vec3_array,
     terrain: TerrainParams,
-    heights: float_grid,
-    terrain_cells: int_grid,
-    surface_table: float_grid,
+    params: StepParams,
+    integrator: ti.template(),
+    model: ModelArrays,
     # State in/out:
-    x: vec3_array,
-    v: vec3_array,
-    w: vec3_array,
-    status: int_array,
-    rest_time: float_array,
-    # Flight record in/out (with launch_height: one entry each when no ball is tracked, then not read):
-    landed: int_array,
-    apex: float_array,
-    t_land: float_array,
-    land_x: vec3_array,
-    land_v: vec3_array,
+    state: BallState,
+    flight: FlightRecord,
 ):
-    """Advance every active ball by ``n_steps`` steps of ``h`` [s] from ``t0``; balls do not meet
+    """Advance every active ball by ``params.steps`` steps of ``params.h`` [s] from ``params.t0``; balls do not meet
     each other, only the planes and the terrain (one thread per ball runs all the steps).
 
     A ball that stays touching with speed and R|ω| below ``v_rest`` for ``t_rest`` is put at rest
@@ -163,57 +166,58 @@ def advance(
     ``terrain.kill`` is put out of bounds (velocities zeroed). Balls at rest or out of bounds are
     not touched.
     """
-    v_inelastic = contact.v_bounce + 2.0 * gravity.norm() * h
-    tracking = landed.shape[0] == x.shape[0]  # else no ball is tracked: one-entry flight records, not read
-    for i in range(x.shape[0]):
-        st = status[i]
+    h, t0 = params.h, ti.cast(params.t0, float)
+    v_inelastic = contact.v_bounce + 2.0 * params.gravity.norm() * h
+    tracking = flight.landed.shape[0] == state.x.shape[0]  # else no ball is tracked: one-entry flight records, not read
+    for i in range(state.x.shape[0]):
+        st = state.status[i]
         if st != AT_REST and st != OUT_OF_BOUNDS:
-            r = of_ball(radius, i)
-            coef = coefficients(air, ti.Vector([r]), ti.Vector([of_ball(mass, i)]))
-            xi, vi, wi = x[i], v[i], w[i]
-            rt = rest_time[i]
-            fl, top, tl, lx, lv, level = NOT_TRACKED, 0.0, 0.0, vec3(0.0), vec3(0.0), 0.0
+            r = of_ball(model.radius, i)
+            coef = coefficients(air, ti.Vector([r]), ti.Vector([of_ball(model.mass, i)]))
+            xi, vi, wi = state.x[i], state.v[i], state.w[i]
+            rt = state.rest_time[i]
+            fl, top, tl, lx, lv, level = NOT_TRACKED, 0.0, 0.0, zero3(), zero3(), 0.0
             if tracking:
-                fl, top, tl, lx, lv, level = landed[i], apex[i], t_land[i], land_x[i], land_v[i], launch_height[i]
-            for k in range(n_steps):
-                S1 = step_free(lane_state(xi, vi, wi), h, integrator, coef, air, gravity)
+                fl, top, tl, lx, lv, level = flight.landed[i], flight.apex[i], flight.t_land[i], flight.land_x[i], flight.land_v[i], model.launch_height[i]
+            for k in range(params.steps):
+                S1 = step_free(lane_state(xi, vi, wi), h, integrator, coef, air, params.gravity)
                 x_free, v_free, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
                 fl, top, tl, lx, lv = track_flight(xi, vi, x_free, v_free, h, t0 + k * h, level, fl, top, tl, lx, lv)
                 v1 = v_free
                 touching = 0
-                for p in range(plane_p.shape[0]):
-                    v1, w1, t = plane_impulse(xi, v1, w1, r, plane_p[p], plane_n[p], contact, v_inelastic, h)
+                for p in range(model.plane_p.shape[0]):
+                    v1, w1, t = plane_impulse(xi, v1, w1, r, model.plane_p[p], model.plane_n[p], contact, v_inelastic, h)
                     touching |= t
-                pt, nt = vec3(0.0), vec3(0.0, 1.0, 0.0)
+                pt, nt = zero3(), vec(0.0, 1.0, 0.0)
                 if terrain.on != 0:  # the terrain: the plane of the patch under the free-flight end point
-                    pt, nt = surface(heights, terrain, x_free)
-                    ct = surface_contact(contact, surface_table, terrain_cells, heights, terrain, x_free)
+                    pt, nt = surface(model.heights, terrain, x_free)
+                    ct = surface_contact(contact, model.surface_table, model.terrain_cells, model.heights, terrain, x_free)
                     v1, w1, t = plane_impulse(xi, v1, w1, r, pt, nt, ct, v_inelastic, h)
                     touching |= t
                 x1 = x_free + h * (v1 - v_free)
-                for p in range(plane_p.shape[0]):
-                    x1 = plane_position(xi, x_free, x1, v_free, v1, r, plane_p[p], plane_n[p], contact.k_p, h)
+                for p in range(model.plane_p.shape[0]):
+                    x1 = plane_position(xi, x_free, x1, v_free, v1, r, model.plane_p[p], model.plane_n[p], contact.k_p, h)
                 if terrain.on != 0:
                     x1 = plane_position(xi, x_free, x1, v_free, v1, r, pt, nt, contact.k_p, h)
-                    x1 = terrain_position(xi, x1, pt, nt, r, heights, terrain)
+                    x1 = terrain_position(xi, x1, pt, nt, r, model.heights, terrain)
                 xi, vi, wi = x1, v1, w1
-                st, rt = rest_update(touching, vi, wi, r, rt, h, v_rest, t_rest)
-                if terrain.on != 0 and outside(heights, terrain, xi):
+                st, rt = rest_update(touching, vi, wi, r, rt, h, params.v_rest, params.t_rest)
+                if terrain.on != 0 and outside(model.heights, terrain, xi):
                     st = OUT_OF_BOUNDS
-                    vi = vec3(0.0)
-                    wi = vec3(0.0)
+                    vi = zero3()
+                    wi = zero3()
                     break
                 if st == AT_REST:
-                    vi = vec3(0.0)
-                    wi = vec3(0.0)
+                    vi = zero3()
+                    wi = zero3()
                     break
-            x[i], v[i], w[i] = xi, vi, wi
-            status[i], rest_time[i] = st, rt
+            state.x[i], state.v[i], state.w[i] = xi, vi, wi
+            state.status[i], state.rest_time[i] = st, rt
             if tracking:
-                landed[i], apex[i], t_land[i], land_x[i], land_v[i] = fl, top, tl, lx, lv
+                flight.landed[i], flight.apex[i], flight.t_land[i], flight.land_x[i], flight.land_v[i] = fl, top, tl, lx, lv
 
 
-@ti.kernel
+@kernel
 def first_nonfinite(x: vec3_array, v: vec3_array, w: vec3_array, out: int_array):
     """``out[0]`` = smallest id of a ball whose x, v or ω holds NaN or ±inf, or N when all are finite.
 

@@ -11,7 +11,14 @@ For a flat terrain that plane is exactly the ground plane, so the results agree 
 
 import taichi as ti
 
-from ti_golf.physics.types import TerrainParams, float_grid, int_array, vec3, vec3_array
+from ti_golf.physics.types import (
+    TerrainParams,
+    float_grid,
+    int_array,
+    kernel,
+    vec,
+    vec3_array,
+)
 
 
 @ti.func
@@ -59,8 +66,8 @@ def surface(heights: ti.template(), terrain, x):
     h = terrain.origin[1] + ((h00 * (1.0 - s) + h10 * s) * (1.0 - t) + (h01 * (1.0 - s) + h11 * s) * t)
     hx = ((h10 - h00) * (1.0 - t) + (h11 - h01) * t) / terrain.dx
     hz = ((h01 - h00) * (1.0 - s) + (h11 - h10) * s) / terrain.dz
-    n = vec3(-hx, 1.0, -hz)
-    return vec3(x[0], h, x[2]), n / n.norm()
+    n = vec(-hx, 1.0, -hz)
+    return vec(x[0], h, x[2]), n / n.norm()
 
 
 @ti.func
@@ -132,7 +139,7 @@ def terrain_position(x, x1, p, n, radius, heights: ti.template(), terrain):
     return x1
 
 
-@ti.kernel
+@kernel
 def sample_surface(terrain: TerrainParams, heights: float_grid, x: vec3_array, p: vec3_array, n: vec3_array,
                    out: int_array):
     """For points x (N,) [m]: the terrain point p under each and its unit normal n, and ``out`` = 1

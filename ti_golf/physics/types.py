@@ -1,29 +1,110 @@
-"""Taichi types of the physics kernels (created after ``ti.init``, see the package docstring)."""
+"""Taichi types of the physics kernels, made when the Taichi runtime starts.
 
+Taichi fixes the meaning of ``float`` in a type when the type is made: a type made before
+``ti.init(default_fp=ti.f64)`` would silently hold f32. So the float-dependent types below are
+:class:`Deferred`: each is made on first use, after :func:`ti_golf.runtime.init` has chosen the
+precision (first use initialises the runtime with its defaults if nothing chose it yet), and
+kernels whose signatures name them are declared with :func:`kernel`, which applies ``ti.kernel``
+on the first call. Importing the physics therefore starts no runtime.
+
+Inside kernel and ``ti.func`` bodies, ``float`` is the chosen float type (Taichi resolves it when
+it compiles), so bodies write ``ti.cast(x, float)`` and build vectors with :func:`vec` and
+:func:`zero3` rather than calling the deferred types.
+"""
+
+import functools
+from collections.abc import Callable
+from typing import Any
 
 import taichi as ti
 
-from ti_golf.physics import _ensure_init  # noqa: F401  (Taichi must be initialised before the types below)
+from ti_golf import runtime
 
-real = ti.f64 if ti.lang.impl.get_runtime().default_fp == ti.f64 else ti.f32
-"""The float type chosen at ``ti.init`` (f32 or f64), spelled out so numpy arrays can be checked against it."""
 
-vec3 = ti.types.vector(3, real)
-"""3-vector of the default float [SI units]."""
+class Deferred:
+    """A Taichi type made on first use, after the runtime has chosen the float type.
 
-AirParams = ti.types.struct(
+    Calling it (outside kernels) or reading an attribute makes the type and forwards to it, so
+    ``vec3(0.0, -9.81, 0.0)`` and ``AirParams(rho=1.2, ...)`` work as with the type itself.
+    """
+
+    def __init__(self, make: Callable[[], Any], name: str) -> None:
+        self._make = make
+        self._type: Any = None
+        self.__name__ = name
+
+    def get(self) -> Any:
+        """The Taichi type (made now if this is its first use)."""
+        if self._type is None:
+            runtime.ensure_init()
+            self._type = self._make()
+        return self._type
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        return self.get()(*args, **kwargs)
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(self.get(), name)
+
+    def __repr__(self) -> str:
+        return f"Deferred({self.__name__})"
+
+
+def kernel(fn: Callable[..., Any]) -> Callable[..., Any]:
+    """``ti.kernel``, applied at the first call, when the :class:`Deferred` types in ``fn``'s
+    annotations (arguments and return) can be made with the chosen float type."""
+    compiled: Callable[..., Any] | None = None
+
+    @functools.wraps(fn)
+    def launch(*args: Any) -> Any:
+        nonlocal compiled
+        if compiled is None:
+            fn.__annotations__ = {k: a.get() if isinstance(a, Deferred) else a for k, a in fn.__annotations__.items()}
+            compiled = ti.kernel(fn)
+        return compiled(*args)
+
+    return launch
+
+
+def is_f64() -> bool:
+    """Whether the chosen float type is f64 (for ``ti.static`` branches in kernels)."""
+    return runtime.ensure_init().precision == "f64"
+
+
+@ti.func
+def vec(a, b, c):
+    """The 3-vector (a, b, c) in the chosen float type, inside kernels."""
+    return ti.Vector([a, b, c], dt=float)
+
+
+@ti.func
+def zero3():
+    """The zero 3-vector in the chosen float type, inside kernels."""
+    return ti.Vector([0.0, 0.0, 0.0], dt=float)
+
+
+real = Deferred(lambda: ti.f64 if is_f64() else ti.f32, "real")
+"""The float type chosen at ``ti.init`` (f32 or f64): Taichi's own ``ti.f32``/``ti.f64`` objects,
+which its argument checks compare by identity."""
+
+vec3 = Deferred(lambda: ti.types.vector(3, float), "vec3")
+"""3-vector of the chosen float [SI units]."""
+
+AirParams = Deferred(lambda: ti.types.struct(
     rho=float,  # air density ρ [kg/m³]
     gamma=ti.i32,  # flow type γ: 1 laminar, 2 turbulent
     C_D=float,  # drag coefficient (L.22)
     C_M=float,  # Magnus coefficient (L.21)
     omega_M=float,  # Magnus reference angular velocity ω_M [1/s] (L.2)
     C_omega=float,  # spin-decay coefficient (L.23)
-    wind=vec3,  # constant wind velocity [m/s]
+    wind=vec3.get(),  # constant wind velocity [m/s]
     model=ti.i32,  # aerodynamic model (aero.AIR_MODEL_CODES): 0 the report's laws, 1 coefficients of the spin ratio
-)
+), "AirParams")
 """Air parameters, passed to kernels by value (tunable without recompiling)."""
 
-ContactParams = ti.types.struct(
+ContactParams = Deferred(lambda: ti.types.struct(
     e=float,  # restitution (B.9)
     mu=float,  # Coulomb friction (B.15)
     k_p=float,  # position projection factor (B.18)
@@ -31,35 +112,112 @@ ContactParams = ti.types.struct(
     relax=float,  # Jacobi relaxation of resting ball–ball impulses
     v_bounce=float,  # approach speeds below v_bounce + 2|g|h are inelastic [m/s]
     turf=ti.i32,  # 1: ground impacts as on turf (contact.turf_impact); 0: restitution e
-)
+), "ContactParams")
 """Impulse-contact parameters (report Appendix B)."""
 
+TerrainParams = Deferred(lambda: ti.types.struct(
+    on=ti.i32,  # 1: the scene has a terrain (its heights are the kernel's height-grid argument); 0: none
+    origin=vec3.get(),  # the grid's first corner [m]; heights are added to its y
+    dx=float,  # grid spacing along x [m]
+    dz=float,  # grid spacing along z [m]
+    kill=float,  # balls below this height are out of bounds [m]
+), "TerrainParams")
+"""Height-field terrain parameters (see :mod:`ti_golf.physics.terrain`)."""
+
 # ndarray annotations (any length; element types follow the precision chosen at init)
-vec3_array = ti.types.ndarray(dtype=vec3, ndim=1)
-float_array = ti.types.ndarray(dtype=real, ndim=1)
+vec3_array = Deferred(lambda: ti.types.ndarray(dtype=vec3.get(), ndim=1), "vec3_array")
+float_array = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=1), "float_array")
+vec3_table = Deferred(lambda: ti.types.ndarray(dtype=vec3.get(), ndim=2), "vec3_table")
+float_grid = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=2), "float_grid")
+"""2-D float array (terrain heights, tables)."""
+pair_entry = Deferred(lambda: ti.types.vector(5, float), "pair_entry")
+"""A pair's entry in a sweep: its impulse [N·s], inverse distance [1/m] and gap [m] (see collide.owned_pairs)."""
+pair_table = Deferred(lambda: ti.types.ndarray(dtype=pair_entry.get(), ndim=2), "pair_table")
+
+# Types that do not depend on the precision.
 int_array = ti.types.ndarray(dtype=ti.i32, ndim=1)
-vec3_table = ti.types.ndarray(dtype=vec3, ndim=2)
+int_grid = ti.types.ndarray(dtype=ti.i32, ndim=2)
+"""2-D int array (terrain cell surface types)."""
 vec3f = ti.types.vector(3, ti.f32)
 """3-vector of f32 whatever the precision (positions kept only to test how far balls moved, see
 ``collide.moved_past``)."""
 vec3f_array = ti.types.ndarray(dtype=vec3f, ndim=1)
 f32_array = ti.types.ndarray(dtype=ti.f32, ndim=1)
 f32_table = ti.types.ndarray(dtype=ti.f32, ndim=2)
-pair_entry = ti.types.vector(5, real)
-"""A pair's entry in a sweep: its impulse [N·s], inverse distance [1/m] and gap [m] (see collide.owned_pairs)."""
-pair_table = ti.types.ndarray(dtype=pair_entry, ndim=2)
-float_grid = ti.types.ndarray(dtype=real, ndim=2)
+int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
+"""2-D int array (neighbour lists: a row per ball)."""
 
-TerrainParams = ti.types.struct(
-    on=ti.i32,  # 1: the scene has a terrain (its heights are the kernel's height-grid argument); 0: none
-    origin=vec3,  # the grid's first corner [m]; heights are added to its y
-    dx=float,  # grid spacing along x [m]
-    dz=float,  # grid spacing along z [m]
-    kill=float,  # balls below this height are out of bounds [m]
-)
-"""Height-field terrain parameters (see :mod:`ti_golf.physics.terrain`)."""
-int_grid = ti.types.ndarray(dtype=ti.i32, ndim=2)
-"""2-D int array (terrain cell surface types)."""
+ivec3 = ti.types.vector(3, ti.i32)
+"""3-vector of i32 (grid cells)."""
+
+# Kernel data grouped by what it is (argument packs of arrays, structs of scalars), as the
+# kernels take it: model before state, inputs before outputs.
+StepParams = Deferred(lambda: ti.types.struct(
+    gravity=vec3.get(),  # g [m/s²]
+    h=float,  # time step [s]
+    t0=ti.f64,  # time at the start of the launch [s]
+    dt=ti.f64,  # the time step h in f64 [s], by which t advances
+    steps=ti.i32,  # steps to take in one launch (serial stepping)
+    half_skin=float,  # half the neighbour lists' skin [m]
+    skin=float,  # the neighbour lists' skin [m]
+    v_rest=float,  # speed and R|ω| below which a touching ball counts as still [m/s]
+    t_rest=float,  # time still before a ball is put at rest [s]
+    v_cut=float,  # balls faster than this own no pair in the lists [m/s]
+    r_cut=float,  # balls bigger than this own no pair in the lists [m]
+), "StepParams")
+"""Scalars of a step of the collision solver, passed by value."""
+
+ModelArrays = Deferred(lambda: ti.types.argpack(
+    radius=float_array.get(),  # ball radii [m], (N,) or (1,) (see of_ball)
+    mass=float_array.get(),  # ball masses [kg], (N,) or (1,)
+    launch_height=float_array.get(),  # heights whose downward crossing is a landing [m], (N,) or (1,)
+    plane_p=vec3_array.get(),  # a point on each plane [m], (P,)
+    plane_n=vec3_array.get(),  # each plane's unit normal, (P,)
+    heights=float_grid.get(),  # terrain heights [m], (nx, nz) (2×2 zeros without a terrain)
+    terrain_cells=int_grid,  # surface type of each terrain cell, (nx − 1, nz − 1)
+    surface_table=float_grid.get(),  # e, μ, μ_roll, turf of each surface type, (S, 4)
+), "ModelArrays")
+"""The model's arrays (see :class:`ti_golf.sim.model.Model`)."""
+
+BallState = Deferred(lambda: ti.types.argpack(
+    x=vec3_array.get(),  # positions [m], (N,)
+    v=vec3_array.get(),  # velocities [m/s], (N,)
+    w=vec3_array.get(),  # angular velocities [rad/s], (N,)
+    status=int_array,  # FLYING, ROLLING, AT_REST or OUT_OF_BOUNDS, (N,)
+    rest_time=float_array.get(),  # time spent still [s], (N,)
+), "BallState")
+"""The balls' state (see :class:`ti_golf.sim.state.State`)."""
+
+FlightRecord = Deferred(lambda: ti.types.argpack(
+    landed=int_array,  # IN_FLIGHT, LANDED or NOT_TRACKED, (N,) or (1,) when no ball is tracked
+    apex=float_array.get(),  # highest centre height so far [m]
+    t_land=float_array.get(),  # time of landing [s]
+    land_x=vec3_array.get(),  # position at landing [m]
+    land_v=vec3_array.get(),  # velocity at landing [m/s]
+), "FlightRecord")
+"""Each tracked ball's flight: landing and apex (see :class:`ti_golf.sim.state.State`)."""
+
+NeighbourLists = Deferred(lambda: ti.types.argpack(
+    upper=int_table,  # each ball's neighbours of higher storage index, (N, K)
+    n_upper=int_array,  # how many, (N,)
+    lower=int_table,  # each ball's lower neighbours, as slots of the pairs in their upper lists, (N, K')
+    n_lower=int_array,  # how many, (N,)
+    x_at_build=vec3f_array,  # positions when the lists were built [m], f32, (N,)
+    lam=float_grid.get(),  # each pair's accumulated resting impulse [N·s], the shape of upper
+    lam_plane=f32_table,  # each ball's accumulated impulse on each plane and the terrain [N·s], (N, P + 1)
+), "NeighbourLists")
+"""The collision solver's neighbour lists and the impulses it carries from step to step."""
+
+StepScratch = Deferred(lambda: ti.types.argpack(
+    x_free=vec3_array.get(),  # free-flight positions, then the step's new positions [m], (N,)
+    v_free=vec3_array.get(),  # free-flight velocities [m/s], (N,)
+    calm=float_array.get(),  # least rest timer of the balls touching each ball [s], (N,)
+    clear=f32_array,  # clearance to the nearest plane or terrain [m], (N,)
+    J=pair_table.get(),  # each pair's impulse, inverse distance and gap in a sweep, the shape of upper
+    impact=int_array,  # each ball's first impact key, (N,)
+    flag=int_array,  # [0]: rebuild the lists; [1]: the sweep marked impacts, (2,)
+), "StepScratch")
+"""Per-step work arrays of the collision solver."""
 
 
 @ti.func
@@ -67,3 +225,26 @@ def of_ball(a: ti.template(), i):
     """Entry ``i`` of a per-ball array of shape (N,), or its only entry when every ball shares the
     value (shape (1,): the radius and mass of balls all alike, see ``Model``)."""
     return a[ti.min(i, a.shape[0] - 1)]
+
+GridParams = Deferred(lambda: ti.types.struct(
+    inv_cell=float,  # 1 / the grid's cell size [1/m]
+    mask=ti.i32,  # the hash table's size − 1 (a power of two − 1)
+    origin=ivec3,  # the least cell of the balls
+    stride=ivec3,  # the hash's strides per cell axis
+    skin=float,  # the lists' skin [m]: pairs closer than the sum of their radii plus this are listed
+    h=float,  # time step [s]
+    fast=ti.i32,  # 1: some balls are set apart as fast or big (apart_ids)
+    v_cut=float,  # balls faster than this own no pair [m/s]
+    r_cut=float,  # balls bigger than this own no pair [m]
+    n_apart=ti.i32,  # how many balls are set apart
+    scan_apart=ti.i32,  # 1: every ball tests the balls set apart
+), "GridParams")
+"""Scalars of a neighbour-list build (see :func:`ti_golf.physics.grid.list_neighbours`)."""
+
+GridScratch = ti.types.argpack(
+    rank=int_array,  # each ball's rank within its bucket, (N,)
+    start=int_array,  # each bucket's first entry in sorted_ids, (buckets + 1,)
+    chunk_start=int_array,  # the counting sort's per-chunk starts
+    sorted_ids=int_array,  # ball ids sorted by bucket, (N,)
+)
+"""Work arrays of the grid's counting sort."""

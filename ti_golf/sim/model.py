@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
-from ti_golf.scene.schema import Scene, Surface
 from ti_golf.physics.aero import air_params
 from ti_golf.physics.integrate import INTEGRATOR_CODES
 from ti_golf.physics.types import ContactParams, TerrainParams, vec3
 from ti_golf.runtime import np_float
+from ti_golf.scene.schema import Scene, Surface
+from ti_golf.scene.terrain import build_terrain
 
 
 class Model:
@@ -76,8 +77,6 @@ class Model:
         heights = np.zeros((2, 2))
         origin, spacing, kill = (0.0, 0.0, 0.0), (1.0, 1.0), 0.0
         if scene.terrain is not None:
-            from ti_golf.scene.terrain import build_terrain
-
             self.terrain = build_terrain(scene.terrain, scene.path)
             heights, origin, spacing, kill = (self.terrain.heights, self.terrain.origin, self.terrain.spacing,
                                               scene.terrain.kill)

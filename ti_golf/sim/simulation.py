@@ -12,12 +12,20 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Mapping
 
 import numpy as np
+import taichi as ti
 
-from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS, STATUS_NAMES, Scene
 from ti_golf.errors import SimulationError
-from ti_golf.sim.results import Flight
+from ti_golf.physics import kernels
+from ti_golf.physics.types import StepParams
 from ti_golf.runtime import ensure_init, np_float
+from ti_golf.scene.balls import build_balls
 from ti_golf.scene.loader import load_scene
+from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS, STATUS_NAMES, Scene
+from ti_golf.sim.model import Model
+from ti_golf.sim.packs import Packs
+from ti_golf.sim.results import Flight
+from ti_golf.sim.solver import CollisionSolver
+from ti_golf.sim.state import State
 
 
 @dataclass
@@ -67,13 +75,8 @@ class Simulation:
         track: bool | np.ndarray = True,
     ) -> None:
         ensure_init()
-        from ti_golf.sim.model import Model
-        from ti_golf.sim.state import State
-
         self.scene = scene
         if x is None:
-            from ti_golf.scene.balls import build_balls
-
             balls = build_balls(scene)
             x, v, w = balls.x, balls.v, balls.w
             radius = balls.radius if radius is None else radius
@@ -92,11 +95,10 @@ class Simulation:
         self.launch_x = x.copy() if tracking else None
         """Launch points [m], shape (N, 3): carry is measured from here; ``None`` when no ball is tracked."""
         self._check_buf = None
+        self._packs = Packs()
         self.solver = None
         """The CollisionSolver when balls can collide (several balls and ``world.collisions``)."""
         if n > 1 and scene.world.collisions:
-            from ti_golf.sim.solver import CollisionSolver
-
             self.solver = CollisionSolver(self.model)
 
     @classmethod
@@ -192,27 +194,19 @@ class Simulation:
     # -- stepping ---------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
         """Advance ``n`` time steps; raises SimulationError naming the balls that went non-finite."""
-        from ti_golf.physics import kernels
-
         m, s, w = self.model, self.state, self.scene.world
         if self.solver is not None:
             self.solver.advance(m, s, int(n))
         else:
-            kernels.advance(
-                m.air, m.contact, m.gravity, m.dt, m.integrator, int(n), s.t, w.v_rest, w.t_rest, m.radius, m.mass,
-                m.launch_height, m.plane_p, m.plane_n, m.terrain_params, m.terrain_h, m.terrain_cells, m.surface_table,
-                s.x, s.v, s.w, s.status,
-                s.rest_time, s.landed, s.apex, s.t_land, s.land_x, s.land_v,
-            )
+            params = StepParams(gravity=m.gravity, h=m.dt, t0=s.t, dt=m.dt, steps=int(n), half_skin=0.0, skin=0.0,
+                                v_rest=w.v_rest, t_rest=w.t_rest, v_cut=0.0, r_cut=0.0)
+            kernels.advance(m.air, m.contact, m.terrain_params, params, m.integrator, self._packs.model(m),
+                            self._packs.state(s), self._packs.flight(s))
             s.t += n * m.dt
         self.check_finite()
 
     def check_finite(self) -> None:
         """Raise :class:`SimulationError` naming the first ball whose state is NaN or infinite."""
-        import taichi as ti
-
-        from ti_golf.physics import kernels
-
         if self._check_buf is None:
             self._check_buf = ti.ndarray(ti.i32, 1)
         kernels.first_nonfinite(self.state.x, self.state.v, self.state.w, self._check_buf)

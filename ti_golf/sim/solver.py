@@ -9,10 +9,24 @@ import numpy as np
 import taichi as ti
 
 from ti_golf.errors import SimulationError
-from ti_golf.sim.model import Model
 from ti_golf.physics import collide, grid
-from ti_golf.physics.types import pair_entry, vec3, vec3f
-from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile, release_freed_memory
+from ti_golf.physics.types import (
+    GridParams,
+    GridScratch,
+    StepParams,
+    pair_entry,
+    vec3,
+    vec3f,
+)
+from ti_golf.runtime import (
+    ensure_init,
+    np_float,
+    on_cpu,
+    plain_compile,
+    release_freed_memory,
+)
+from ti_golf.sim.model import Model
+from ti_golf.sim.packs import Packs
 from ti_golf.sim.state import State
 
 SERIAL_MAX_BALLS = 256
@@ -130,6 +144,7 @@ class CollisionSolver:
     def __init__(self, model: Model, capacity: int = 1, serial: bool | None = None,
                  reorder: bool | None = None) -> None:
         self._model = model
+        self._packs = Packs()
         n = model.n
         self._r_max = float(model.radius_np.max())
         self.r_cut, self.r_ref = grid.size_cut(model.radius_np)
@@ -152,8 +167,8 @@ class CollisionSolver:
         self.start = ti.ndarray(ti.i32, self.mask + 2)
         self.chunk_start = ti.ndarray(ti.i32, grid.scan_chunks(self.mask + 1))
         self.x_at_build = ti.ndarray(vec3f, n)  # f32: only tested against half the skin (collide.moved_past)
-        self.x_free = ti.ndarray(vec3, n)
-        self.v_free = ti.ndarray(vec3, n)
+        self.x_free = ti.ndarray(vec3.get(), n)
+        self.v_free = ti.ndarray(vec3.get(), n)
         self.calm = ti.ndarray(float, n)  # least rest timer of each ball and the balls it touches [s]
         self.clear = ti.ndarray(ti.f32, n)  # least gap of each ball to the planes [m] (collide.surface_clearance)
         self.n_upper, self.n_lower = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
@@ -205,11 +220,13 @@ class CollisionSolver:
                 self.lam = ti.ndarray(float, (n, self.capacity[0]))
             if self.lower is None or self.lower.shape[0] != self.capacity[1]:
                 self.lower = ti.ndarray(ti.i32, (self.capacity[1], n))  # column i: ball i's list (see grid)
-            longest = grid.list_neighbours(state.x, self._model.radius, 1.0 / self.cell, self.mask, *self._hash,
-                                           self.skin, state.v, h, int(fast), self.v_cut, self.r_cut, self.apart_ids,
-                                           self.n_apart, int(scan_apart), self.rank, self.start,
-                                           self.chunk_start, self.sorted_ids, self.upper, self.n_upper, self.lower,
-                                           self.n_lower, self.x_at_build, self.flag, self.reorder)
+            params = GridParams(inv_cell=1.0 / self.cell, mask=self.mask, origin=self._hash[0], stride=self._hash[1],
+                                skin=self.skin, h=h, fast=int(fast), v_cut=self.v_cut, r_cut=self.r_cut,
+                                n_apart=self.n_apart, scan_apart=int(scan_apart))
+            scratch = self._packs.get(GridScratch, rank=self.rank, start=self.start, chunk_start=self.chunk_start,
+                                      sorted_ids=self.sorted_ids)
+            longest = grid.list_neighbours(params, state.x, state.v, self._model.radius, self.apart_ids, scratch,
+                                           self._packs.lists(self), self.flag, self.reorder)
             if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
                 break
             # widen to the longest list found (no power-of-two padding: memory follows the pile), but
@@ -236,7 +253,7 @@ class CollisionSolver:
         if self.impulse is None or self.impulse.shape != self.upper.shape:
             self.impulse = None  # free the old table before allocating
             # each pair's impulse, inverse distance, and gap or projection in a sweep (collide.owned_pairs)
-            self.impulse = ti.ndarray(pair_entry, self.upper.shape)
+            self.impulse = ti.ndarray(pair_entry.get(), self.upper.shape)
         self.rebuilds += 1
         self._valid = True
 
@@ -366,32 +383,28 @@ class CollisionSolver:
             self.capacity = (width, width)
             self.build(state)
             grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
-        with plain_compile():  # 5 s against 50 s of compiling on first use, and as fast (see runtime.plain_compile)
-            self.rebuilds += collide.collision_step(*self._arguments(model, state), True, True,
-                                                     model.scene.contact.iterations - 1, True, steps, self.skin,
-                                                     model.dt, self.v_cut, self.r_cut)
+        with plain_compile():  # see runtime.plain_compile
+            self.rebuilds += collide.collision_step(*self._arguments(model, state, steps), True, True,
+                                                     model.scene.contact.iterations - 1, True)
         for _ in range(steps):
             state.t += model.dt  # as one step at a time adds it, to the same round-off
 
     def _step_in_parallel(self, model: Model, state: State) -> None:
         if not self._valid or self._rebuild:
             self.build(state)
-        arguments = self._arguments(model, state)
+        arguments = self._arguments(model, state, 1)
         for warm, sweeps, last in sweep_launches(model.scene.contact.iterations):
-            rebuild = collide.collision_step(*arguments, False, warm, sweeps, last, 1, self.skin, model.dt,
-                                             self.v_cut, self.r_cut)
+            rebuild = collide.collision_step(*arguments, False, warm, sweeps, last)
         state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
         state.t += model.dt
         self._rebuild = bool(rebuild)
 
-    def _arguments(self, m: Model, s: State) -> tuple:
-        """The arguments of ``collide.collision_step`` before ``serial``."""
+    def _arguments(self, m: Model, s: State, steps: int) -> tuple:
+        """The arguments of ``collide.collision_step`` before ``serial``: the model, the lists, the
+        state, the flight record and the scratch."""
         w = m.scene.world
-        return (
-            m.air, m.contact, m.gravity, m.dt, m.integrator, s.t, 0.5 * self.skin,
-            w.v_rest, w.t_rest, m.radius, m.mass, m.launch_height, m.plane_p, m.plane_n, m.terrain_params, m.terrain_h,
-            m.terrain_cells, m.surface_table,
-            self.upper, self.n_upper, self.lower, self.n_lower, self.x_at_build, self.lam, self.lam_plane,
-            s.x, s.v, s.w, s.status, s.rest_time, self.x_free, self.v_free, self.calm, self.clear, self.impulse,
-            self.impact, s.landed, s.apex, s.t_land, s.land_x, s.land_v, self.flag,
-        )
+        p = StepParams(gravity=m.gravity, h=m.dt, t0=s.t, dt=m.dt, steps=steps, half_skin=0.5 * self.skin,
+                       skin=self.skin, v_rest=w.v_rest, t_rest=w.t_rest, v_cut=self.v_cut, r_cut=self.r_cut)
+        packs = self._packs
+        return (m.air, m.contact, m.terrain_params, p, m.integrator, packs.model(m), packs.lists(self),
+                packs.state(s), packs.flight(s), packs.scratch(self))

@@ -47,17 +47,17 @@ class State:
     def __init__(self, n: int, tracking: bool = True) -> None:
         self.n = int(n)
         self.tracking = bool(tracking)
-        self.x = ti.ndarray(vec3, self.n)
-        self.v = ti.ndarray(vec3, self.n)
-        self.w = ti.ndarray(vec3, self.n)
+        self.x = ti.ndarray(vec3.get(), self.n)
+        self.v = ti.ndarray(vec3.get(), self.n)
+        self.w = ti.ndarray(vec3.get(), self.n)
         self.status = ti.ndarray(ti.i32, self.n)
         self.rest_time = ti.ndarray(float, self.n)
         m = self.n if self.tracking else 1
         self.landed = ti.ndarray(ti.i32, m)
         self.apex = ti.ndarray(float, m)
         self.t_land = ti.ndarray(float, m)
-        self.land_x = ti.ndarray(vec3, m)
-        self.land_v = ti.ndarray(vec3, m)
+        self.land_x = ti.ndarray(vec3.get(), m)
+        self.land_v = ti.ndarray(vec3.get(), m)
         self.t = 0.0
         self.ids: ti.Ndarray | None = None
 

@@ -10,11 +10,15 @@ from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from ti_golf.scene.schema import Scene, backspin_axis
 from ti_golf.errors import ConfigError, SimulationError
-from ti_golf.sim.results import CSV_COLUMNS, Flight
+from ti_golf.physics import kernels
+from ti_golf.physics.aero import air_params
+from ti_golf.physics.integrate import INTEGRATOR_CODES
+from ti_golf.physics.types import vec3
 from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile
 from ti_golf.scene.loader import load_scene
+from ti_golf.scene.schema import Scene, backspin_axis
+from ti_golf.sim.results import CSV_COLUMNS, Flight
 
 
 @dataclass(frozen=True)
@@ -118,11 +122,6 @@ def fly(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, record_eve
     t_land, land_x, land_v, the final x, v, w and, when recording, traj (N, n_samples, 3).
     """
     ensure_init()
-    from ti_golf.physics import kernels
-    from ti_golf.physics.aero import air_params
-    from ti_golf.physics.integrate import INTEGRATOR_CODES
-    from ti_golf.physics.types import vec3
-
     lanes = default_lanes() if lanes is None else int(lanes)
     f = np_float()
     a, wld = scene.air, scene.world

@@ -1,0 +1,64 @@
+"""The kernels' argument packs of a model, a state and a solver, made once and reused.
+
+A Taichi argument pack holds references to arrays; making one costs tens of microseconds, so
+:class:`Packs` keeps each pack until one of its arrays is replaced (the solver swaps the state's
+positions with its scratch every step, and reorders per-ball arrays when it sorts the balls).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ti_golf.physics.types import (
+    BallState,
+    FlightRecord,
+    ModelArrays,
+    NeighbourLists,
+    StepScratch,
+)
+
+
+class Packs:
+    """Argument packs by their members' identity: ``packs.get(BallState, x=..., v=..., ...)``."""
+
+    MAX_KEPT = 16
+    """Packs kept before the oldest are dropped (a solver alternates between two per kind)."""
+
+    def __init__(self) -> None:
+        self._kept: dict[tuple[Any, ...], Any] = {}
+
+    def get(self, kind: Any, **members: Any) -> Any:
+        """The pack of type ``kind`` holding ``members`` (made now if these arrays have none yet)."""
+        key = (id(kind), *(id(a) for a in members.values()))
+        pack = self._kept.get(key)
+        if pack is None:
+            if len(self._kept) >= self.MAX_KEPT:
+                self._kept.pop(next(iter(self._kept)))
+            pack = kind(**members)
+            self._kept[key] = pack
+        return pack
+
+    def model(self, m: Any) -> Any:
+        """:data:`~ti_golf.physics.types.ModelArrays` of a :class:`~ti_golf.sim.model.Model`."""
+        return self.get(ModelArrays, radius=m.radius, mass=m.mass, launch_height=m.launch_height,
+                        plane_p=m.plane_p, plane_n=m.plane_n, heights=m.terrain_h,
+                        terrain_cells=m.terrain_cells, surface_table=m.surface_table)
+
+    def state(self, s: Any) -> Any:
+        """:data:`~ti_golf.physics.types.BallState` of a :class:`~ti_golf.sim.state.State`."""
+        return self.get(BallState, x=s.x, v=s.v, w=s.w, status=s.status, rest_time=s.rest_time)
+
+    def flight(self, s: Any) -> Any:
+        """:data:`~ti_golf.physics.types.FlightRecord` of a :class:`~ti_golf.sim.state.State`."""
+        return self.get(FlightRecord, landed=s.landed, apex=s.apex, t_land=s.t_land, land_x=s.land_x,
+                        land_v=s.land_v)
+
+    def lists(self, c: Any) -> Any:
+        """:data:`~ti_golf.physics.types.NeighbourLists` of a collision solver."""
+        return self.get(NeighbourLists, upper=c.upper, n_upper=c.n_upper, lower=c.lower, n_lower=c.n_lower,
+                        x_at_build=c.x_at_build, lam=c.lam, lam_plane=c.lam_plane)
+
+    def scratch(self, c: Any) -> Any:
+        """:data:`~ti_golf.physics.types.StepScratch` of a collision solver."""
+        return self.get(StepScratch, x_free=c.x_free, v_free=c.v_free, calm=c.calm, clear=c.clear, J=c.impulse,
+                        impact=c.impact, flag=c.flag)
