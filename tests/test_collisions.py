@@ -441,7 +441,7 @@ def test_balls_stored_in_grid_order_step_as_in_id_order():
     # for 55 steps; then a last-bit difference flips a branch, an inelastic threshold, and it
     # drifts by microns: a mere renumbering of its balls does the same at the same step.) A sweep
     # takes a ball's simultaneous impacts one at a time, in the order of their slots in the pair
-    # tables (collide.matched), which the storage order sets: the gas's balls meet as resting
+    # tables (pairs.matched), which the storage order sets: the gas's balls meet as resting
     # contacts here (v_bounce above every approach), whose impulses accumulate and must be carried.
     sc, x = pile_scene(2048)
     gas = tg.load_scene("lab_vacuum", [*FREE, "contact.mu=0.3", "contact.v_bounce=100"])
@@ -904,7 +904,7 @@ def test_simultaneous_impacts_are_taken_one_at_a_time(serial):
     # (e = 1, μ = 0). A Jacobi sweep that gave ball 0 both jolts of B.9 at once, each as if the
     # other ball were not there, stopped it at v − 2·v·cos² 30° = −v/2 and sent the others off at
     # v·cos 30°: 75 % more kinetic energy than it brought. A sweep takes one impact per ball
-    # (collide.matched), so the balls meet as if a moment apart: ball 0 and one of the two first,
+    # (pairs.matched), so the balls meet as if a moment apart: ball 0 and one of the two first,
     # B.9 along their line of centres, then, in the next sweep, ball 0 and the other (still
     # approaching). Which goes first is fixed by the lists' order; either way kinetic energy is
     # kept to round-off, as in every binary impact with e = 1, and so is momentum.

@@ -2,13 +2,14 @@
 what the memory system allows, and what the report's pair impulse costs at the least."""
 
 
-from ti_golf.physics.collide import pair_geometry, pair_normal
 from ti_golf.physics.contact import pair_impulse
-from ti_golf.physics.grid import int_table, owner_slot, slot_bits
+from ti_golf.physics.links import owner_slot, slot_bits
+from ti_golf.physics.pairs import pair_geometry, pair_normal
 from ti_golf.physics.types import (
     ContactParams,
     float_array,
     int_array,
+    int_table,
     kernel,
     of_ball,
     vec3,
@@ -32,7 +33,7 @@ def one_pass_contacts(contact: ContactParams, gravity: vec3, h: float, x: vec3_a
                       w: vec3_array, radius: float_array, mass: float_array, upper: int_table, n_upper: int_array,
                       lower: int_table, n_lower: int_array, dv: vec3_array, dw: vec3_array):
     """The least one step of the collision model can cost: a single pass over the balls in which
-    every ball meets each of its listed neighbours (both its lists, as ``collide.gather`` reads
+    every ball meets each of its listed neighbours (both its lists, as ``pairs.gather`` reads
     them) through the report's pair impulse (:func:`.contact.pair_impulse`, B.5–B.18: normal
     jolt, resting impulse, Coulomb friction with both spins) from the start-of-step velocities
     after gravity, and keeps the sum: dv[i] [m/s] and dw[i] [rad/s]. A pair is evaluated twice,

@@ -41,21 +41,16 @@ import taichi as ti
 
 from ti_golf.physics.aero import V, W, X, coefficients, column
 from ti_golf.physics.contact import (
-    PRESSED,
-    pair_impulse,
     plane_jolt,
     plane_position,
     rest_update,
     surface_impulse,
     warm_impulse,
 )
-from ti_golf.physics.grid import (
-    owner_slot,
-    relist_all_pairs,
-    slot_bits,
-)
 from ti_golf.physics.integrate import IN_FLIGHT, step_free, track_flight
 from ti_golf.physics.kernels import lane_state
+from ti_golf.physics.links import relist_all_pairs, slot_bits
+from ti_golf.physics.pairs import QUIET, gather, impact_keys, owned_pairs, warm_start
 from ti_golf.physics.terrain import (
     outside,
     same_cell,
@@ -81,139 +76,8 @@ from ti_golf.physics.types import (
 )
 from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS
 
-QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
 FAR = 1e30  # the surface clearance of a ball when there are no planes and no terrain (see surface_clearance)
 NEAR = -1.0  # the surface clearance of a ball resting on a plane or the terrain: it always visits them
-
-
-@ti.func
-def pair_geometry(x: ti.template(), radius: ti.template(), a, b):
-    """(1/|x_a − x_b| [1/m], zero when the centres of balls a and b coincide, and their surface
-    gap [m]); :func:`pair_normal` turns the first into the unit normal."""
-    dist = (x[a] - x[b]).norm()
-    inv = 0.0
-    if dist > 0.0:
-        inv = 1.0 / dist
-    return inv, dist - of_ball(radius, a) - of_ball(radius, b)
-
-
-@ti.func
-def pair_normal(x_a, x_b, inv):
-    """Unit normal from ball b at ``x_b`` to ball a at ``x_a`` [m] (zero when their centres
-    coincide), from their inverse distance ``inv`` (:func:`pair_geometry`). The sweeps keep
-    ``inv`` rather than the normal (one float a pair rather than three) and recompute the normal
-    from the start-of-step positions, which do not change during them: bit for bit the normal
-    that the warm start used."""
-    return (x_a - x_b) * inv
-
-
-@ti.func
-def skip_pair(status: ti.template(), i, j):
-    """Whether the pair (i, j) gets no impulse: a ball is out of bounds, or both are at rest."""
-    return (status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS
-            or (status[i] == AT_REST and status[j] == AT_REST))
-
-
-@ti.func
-def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic, x: ti.template(),
-                radius: ti.template(), mass: ti.template(), status: ti.template(), upper: ti.template(),
-                n_upper: ti.template(), lam: ti.template(), J: ti.template(), v: ti.template(), w: ti.template(),
-                flag: ti.template()):
-    """One Jacobi sweep over the pairs that ball i owns, with its neighbours j = upper[i, k]: the
-    impulse P on i (−P acts on j) from the current velocities (which updates the resting impulse
-    ``lam``), stored as J[i, k] = (P, 1/|x_i − x_j|, gap). The inverse distance [1/m], which gives
-    the unit normal n̂ from j to i (:func:`pair_normal`), and the surface gap [m] were stored there
-    by :func:`warm_start` (positions do not change during the sweeps).
-    An impact (see :func:`.contact.pair_impulse`) is marked by the inverse distance's sign, negative
-    (:func:`impact_mark`; and ``flag[1]`` is set, so that :func:`impact_keys` looks for the balls'
-    first impacts; :func:`gather` takes one impact per ball, see :func:`matched`).
-
-    With ``final`` (the last sweep) the gap's place, J[i, k][4], takes, for an overlapping pair,
-    q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position projection (B.18: ball i moves by
-    q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the other way); for a pair apart,
-    −gap ≤ 0 (the surface gap [m]: the balls touch while it is below 1 % of a radius)."""
-    inv_mi, xi = 1.0 / of_ball(mass, i), x[i]
-    for k in range(n_upper[i]):
-        j = upper[i, k]
-        Jk = J[i, k]
-        inv = ti.abs(Jk[3])  # (the mark of an impact in the last sweep, see impact_mark)
-        n, gap = pair_normal(xi, x[j], inv), Jk[4]
-        ok = n.norm_sqr() > 0.0
-        inv_mj = 1.0 / of_ball(mass, j)
-        P = zero3()
-        kick = 0
-        if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
-            lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
-        elif ok and not skip_pair(status, i, j):
-            P, lam[i, k], _, kick = pair_impulse(n, gap, v[i], w[i], of_ball(radius, i), inv_mi, v[j], w[j],
-                                                 of_ball(radius, j), inv_mj, lam[i, k], contact.e, contact.mu,
-                                                 v_inelastic, h, contact.relax)
-            if kick != 0:
-                flag[1] = 1  # every thread that writes, writes 1
-        g = gap
-        if ti.static(final):
-            g = -gap
-            if gap < 0.0:
-                g = 0.0
-                if ok:
-                    g = -contact.k_p * gap / (inv_mi + inv_mj)
-        if kick != 0:
-            inv = -inv
-        J[i, k] = ti.Vector([P[0], P[1], P[2], inv, g])
-
-
-@ti.func
-def impact_mark(Jk):
-    """Whether the pair whose sweep entry (:func:`owned_pairs`) is ``Jk`` met as an impact in the
-    sweep: its stored inverse distance is then negative. The sign is the mark, so that no table
-    of marks is kept (the inverse distance is positive for every pair that gets an impact: the
-    centres of the pair's balls are apart)."""
-    return Jk[3] < 0.0
-
-
-@ti.func
-def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), status: ti.template(),
-               rest_time: ti.template(), upper: ti.template(), n_upper: ti.template(), lower: ti.template(),
-               n_lower: ti.template(), bits, lam: ti.template(), J: ti.template()):
-    """Δv [m/s] of ball i from last step's resting impulses λ of its ball pairs, each along the
-    pair's normal at the start of the step, summed in id order (lower then upper). A normal
-    impulse gives no spin; friction is left to the sweeps. Also stores the geometry of the pairs
-    ball i owns for the sweeps: J[i, k] = (0, 1/|x_i − x_j|, the surface gap [m]), which marks
-    no impact (:func:`impact_mark`). Reads only
-    what the free-flight loop does not write (start-of-step positions, status, λ, rest timers),
-    so it runs inside that loop. Returns (Δv, the calm time [s] of ball i: the least rest timer
-    of the ball and the balls it touches, see :func:`finish`; or ``QUIET`` for a ball at rest
-    whose listed neighbours are all at rest or out of bounds: nothing can touch it this step, so
-    the step leaves it exactly as it is and the sweeps skip it)."""
-    P = zero3()
-    calm, xi = rest_time[i], x[i]
-    quiet = status[i] == AT_REST
-    for m in range(n_lower[i]):
-        slot = lower[m, i]
-        j, k = owner_slot(slot, bits)  # the pair's owner j keeps its λ
-        inv, gap = pair_geometry(x, radius, i, j)
-        P += resting_impulse(status, i, j, pair_normal(xi, x[j], inv), lam[j, k])
-        calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j])
-        quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
-    for k in range(n_upper[i]):
-        j = upper[i, k]
-        inv, gap = pair_geometry(x, radius, i, j)
-        J[i, k] = ti.Vector([0.0, 0.0, 0.0, inv, gap])
-        P += resting_impulse(status, i, j, pair_normal(xi, x[j], inv), lam[i, k])
-        calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j])
-        quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
-    if quiet:
-        calm = QUIET
-    return P / of_ball(mass, i), calm
-
-
-@ti.func
-def island_calm(calm, gap, r, status_j, rest_time_j):
-    """The calm time [s] so far, lowered to the rest timer of a neighbour that touches the ball
-    (surface gap below 1 % of its radius ``r``) and is not out of bounds."""
-    if gap < 0.01 * r and status_j != OUT_OF_BOUNDS:
-        calm = ti.min(calm, rest_time_j)
-    return calm
 
 
 @ti.func
@@ -261,109 +125,6 @@ def beyond_reach(clear, r, reach_sqr):
     with room for round-off."""
     c = clear - 0.02 * r
     return c > 0.0 and c * c > reach_sqr
-
-
-@ti.func
-def resting_impulse(status: ti.template(), i, j, n, lam):
-    """λ·n̂ [N·s] on ball i from its pair with j (n̂ from j to i), or zero when the pair gets no impulse."""
-    P = zero3()
-    if lam > 0.0 and not skip_pair(status, i, j):
-        P = lam * n
-    return P
-
-
-@ti.func
-def impact_keys(i, n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits, J: ti.template(),
-                impact: ti.template()):
-    """Keep in ``impact[i]`` the greatest key of ball i's impacts in this sweep (0 when it has
-    none): the key of a pair is its slot in the pair tables, owner·2^bits + column (as in the
-    lower lists, see :func:`.grid.owner_slot`), plus one. Gathered from the pairs' marks
-    (:func:`impact_mark`), as the impulses are: no atomics."""
-    key = 0
-    for m in range(n_lower[i]):
-        slot = lower[m, i]
-        j, k = owner_slot(slot, bits)
-        if impact_mark(J[j, k]):
-            key = ti.max(key, slot + 1)
-    for k in range(n_upper[i]):
-        if impact_mark(J[i, k]):
-            key = ti.max(key, (i << bits) + k + 1)
-    impact[i] = key
-
-
-@ti.func
-def matched(impact: ti.template(), a, b, key):
-    """Whether the impact of balls a and b with ``key`` (see :func:`impact_keys`) is taken in this
-    sweep: it is the first of both balls' impacts in the sweep's order, the greatest key.
-
-    A Jacobi sweep evaluates every pair from the same velocities, so a ball that meets several
-    balls at once would take each impact's whole jolt, as if the others were not there: a ball at
-    v into two touching balls at ±30° with e = 1 would leave at −v/2 and send both off at
-    0.87 v, 75 % more kinetic energy than it brought. So each sweep takes, for every ball, at most
-    one of its impacts, a binary collision by B.9 that keeps kinetic energy with e = 1 and loses
-    some with e < 1; the others are evaluated again in the next sweep, from the velocities that
-    collision left (the next step's sweeps when this was the last). The impacts are taken one
-    after another in a fixed order, as if the balls had met a moment apart."""
-    return impact[a] == key and impact[b] == key
-
-
-@ti.func
-def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p):
-    """0, 1 or ``PRESSED`` (see :func:`gather`) for the pair of ball i (radius ``r``, 1/m_i
-    ``inv_m_i``) with ball j whose last-sweep J[·, ·][4] is ``g`` (the projection q ≥ 0 of an
-    overlap, or minus the gap: see :func:`owned_pairs`). Ball j's mass is read only for an
-    overlap (this runs for every pair of the step's last sweep)."""
-    state = 0
-    if g > -0.01 * r:
-        state = 1
-        if g > 0.0:
-            if g * (inv_m_i + 1.0 / of_ball(mass, j)) > 0.01 * r * k_p:
-                state = PRESSED
-    return state
-
-
-@ti.func
-def gather(i, final: ti.template(), x: ti.template(), radius: ti.template(), mass: ti.template(), upper: ti.template(),
-           n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits, J: ti.template(),
-           impact: ti.template(), any_impact, k_p):
-    """What ball i gets from all its pairs, summed in id order (lower then upper): (Δv [m/s],
-    Δω [rad/s], and with ``final`` the position projection Δx [m] and whether it touches a ball:
-    0 when no gap is below 1 % of its radius, ``PRESSED`` when some ball overlaps it by more than
-    that (the overlap is q·(1/m_i + 1/m_j)/k_p, q the pair's projection in J), else 1).
-
-    An impulse ±P at the contact point −r·n̂ᵢ of a solid sphere (n̂ᵢ = ±n̂ from the other ball to
-    i) gives Δv = ±P/m and Δω = (−r n̂ᵢ) × (±P)·5/(2 m r²) = −(5/(2 m r))·(n̂ × P) for both balls
-    of the pair (n̂ᵢ and the sign of P flip together). Of a ball's impacts, only the one
-    :func:`matched` in this sweep acts (``any_impact``: whether the sweep has any, ``flag[1]``)."""
-    P, T, q_n = zero3(), zero3(), zero3()
-    touching = 0
-    r = of_ball(radius, i)
-    inv_m, xi = 1.0 / of_ball(mass, i), x[i]
-    for m in range(n_lower[i]):
-        slot = lower[m, i]
-        j, k = owner_slot(slot, bits)  # the pair's owner j stores it
-        Jk = J[j, k]
-        P_k, n_k = Jk.xyz, pair_normal(x[j], xi, ti.abs(Jk[3]))
-        if any_impact != 0:  # (the marks are read only in a sweep that has impacts)
-            if impact_mark(Jk) and not matched(impact, i, j, slot + 1):
-                P_k = zero3()
-        P -= P_k
-        T += n_k.cross(P_k)
-        if ti.static(final):
-            q_n -= ti.max(Jk[4], 0.0) * n_k
-            touching = ti.max(touching, contact_state(Jk[4], r, inv_m, mass, j, k_p))
-    for k in range(n_upper[i]):
-        Jk = J[i, k]
-        P_k, n_k = Jk.xyz, pair_normal(xi, x[upper[i, k]], ti.abs(Jk[3]))
-        if any_impact != 0:
-            if impact_mark(Jk) and not matched(impact, i, upper[i, k], (i << bits) + k + 1):
-                P_k = zero3()
-        P += P_k
-        T += n_k.cross(P_k)
-        if ti.static(final):
-            q_n += ti.max(Jk[4], 0.0) * n_k
-            touching = ti.max(touching, contact_state(Jk[4], r, inv_m, mass, upper[i, k], k_p))
-    return P * inv_m, T * (-2.5 * inv_m / r), q_n * inv_m, touching
 
 
 @ti.func

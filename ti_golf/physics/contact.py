@@ -46,7 +46,7 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
     ``relax`` ∈ (0, 1] scales the impulses of lasting contacts in a Jacobi sweep: a ball pressed by
     many neighbours at once would otherwise receive all their corrections together and overshoot.
     Returns (P, lam, touching, impact): ``impact`` is 1 when P is an impact's jolt (a Jacobi sweep
-    takes one of a ball's simultaneous impacts at a time, see :func:`.collide.matched`).
+    takes one of a ball's simultaneous impacts at a time, see :func:`.pairs.matched`).
     """
     P = zero3()
     touching = 0

@@ -131,7 +131,7 @@ vec3_table = Deferred(lambda: ti.types.ndarray(dtype=vec3.get(), ndim=2), "vec3_
 float_grid = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=2), "float_grid")
 """2-D float array (terrain heights, tables)."""
 pair_entry = Deferred(lambda: ti.types.vector(5, float), "pair_entry")
-"""A pair's entry in a sweep: its impulse [N·s], inverse distance [1/m] and gap [m] (see collide.owned_pairs)."""
+"""A pair's entry in a sweep: its impulse [N·s], inverse distance [1/m] and gap [m] (see pairs.owned_pairs)."""
 pair_table = Deferred(lambda: ti.types.ndarray(dtype=pair_entry.get(), ndim=2), "pair_table")
 
 # Types that do not depend on the precision.

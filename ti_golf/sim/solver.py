@@ -9,7 +9,7 @@ import numpy as np
 import taichi as ti
 
 from ti_golf.errors import SimulationError
-from ti_golf.physics import collide, grid
+from ti_golf.physics import collide, grid, links
 from ti_golf.physics.types import (
     GridParams,
     GridScratch,
@@ -173,7 +173,7 @@ class CollisionSolver:
         self.clear = ti.ndarray(ti.f32, n)  # least gap of each ball to the planes [m] (collide.surface_clearance)
         self.n_upper, self.n_lower = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
         self.upper = self.lower = self.lam = self.impulse = None
-        self.impact = ti.ndarray(ti.i32, n)  # each ball's first impact in a sweep (collide.impact_keys)
+        self.impact = ti.ndarray(ti.i32, n)  # each ball's first impact in a sweep (pairs.impact_keys)
         # resting impulses per unit mass [m/s] of the planes and (one column more) the terrain, in f32 (see
         # collide.surface_impulses): 20 bytes per ball less for a bin of five planes in f64
         self.lam_plane = ti.ndarray(ti.f32, (n, max(1, len(model.plane_p) + (model.terrain is not None))))
@@ -196,7 +196,7 @@ class CollisionSolver:
         stashed = None
         if self._valid:  # the pair impulses are scratch between steps: they keep the old lists' λ
             stashed = self.impulse
-            grid.stash(self.upper, self.n_upper, self.lam, stashed)
+            links.stash(self.upper, self.n_upper, self.lam, stashed)
         h = self._model.dt
         v_max, v_rest, n_apart = (float(s) for s in grid.apart_balls(state.v, self._model.radius, self.v_cut,
                                                                       self.r_cut, self.apart_ids))
@@ -244,15 +244,15 @@ class CollisionSolver:
                                   f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)")
         if stashed is not None:
             # after a reorder, sorted_ids still maps each ball to its index in the stashed lists
-            grid.link_and_carry(self.upper, self.n_upper, self.lower, self.n_lower, stashed, self.lam, self.reorder,
+            links.link_and_carry(self.upper, self.n_upper, self.lower, self.n_lower, stashed, self.lam, self.reorder,
                                 self.sorted_ids)
             stashed = None
         else:
-            grid.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
+            links.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
             grid.clear2(self.lam)
         if self.impulse is None or self.impulse.shape != self.upper.shape:
             self.impulse = None  # free the old table before allocating
-            # each pair's impulse, inverse distance, and gap or projection in a sweep (collide.owned_pairs)
+            # each pair's impulse, inverse distance, and gap or projection in a sweep (pairs.owned_pairs)
             self.impulse = ti.ndarray(pair_entry.get(), self.upper.shape)
         self.rebuilds += 1
         self._valid = True
