@@ -12,7 +12,6 @@ from ti_golf.errors import ConfigError
 from ti_golf.runtime import ARCHES, PRECISIONS
 
 
-
 class Parser(argparse.ArgumentParser):
     """argparse that reports usage errors as one line with exit code 2 (its default code)."""
 

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import argparse
 
+from ti_golf.bench.benchmarks import bench_collide, bench_render, bench_sweep, to_json
 from ti_golf.cli._common import Parser, runtime_options
 from ti_golf.errors import ConfigError
-from ti_golf.bench.benchmarks import bench_collide, bench_sweep, to_json
-from ti_golf.bench.benchmarks import bench_render
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

@@ -27,6 +27,9 @@ from ti_golf.game.rules import (
     describe_stroke,
     describe_wind,
 )
+from ti_golf.game.window import GolfWindow, check_display
+from ti_golf.render.plots import plot_round
+from ti_golf.scene.loader import load_scene
 
 DEFAULT_SCENE = "golf_hole"
 
@@ -57,8 +60,6 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def cmd_play(args: argparse.Namespace) -> int:
     """Play a round of ``args.scene``; 0 when it ends (holed, out of bounds, no strokes or input left)."""
-    from ti_golf.scene.loader import load_scene
-
     check_writable(args.out, "--out")
     check_writable(args.plot, "--plot")
     game = GolfGame(load_scene(args.scene, args.overrides), seed=args.seed)
@@ -88,8 +89,6 @@ def cmd_play(args: argparse.Namespace) -> int:
 
 def _play_in_window(game: GolfGame, args: argparse.Namespace) -> int:
     """The round in a window (:mod:`.game_gui`), then the same summary and files as in the console."""
-    from ti_golf.game.window import GolfWindow, check_display
-
     check_display()
     ended = "window closed"
     try:
@@ -109,8 +108,6 @@ def _finish(game: GolfGame, ended: str, args: argparse.Namespace) -> None:
         write_csv(game.strokes, args.out)
         print(f"wrote {args.out}")
     if args.plot:
-        from ti_golf.render.plots import plot_round
-
         plot_round(game, args.plot, title=f"{game.scene.name}: {describe_round(game, ended)}")
         print(f"wrote {args.plot}")
 

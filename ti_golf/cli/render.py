@@ -6,7 +6,12 @@ import argparse
 import math
 import time
 
-from ti_golf.cli._common import check_writable, parse_size, runtime_options, scene_options
+from ti_golf.cli._common import (
+    check_writable,
+    parse_size,
+    runtime_options,
+    scene_options,
+)
 from ti_golf.errors import ConfigError
 from ti_golf.render.offscreen import BACKENDS, CAMERAS, COLOR_BY, render
 from ti_golf.sim.simulation import Simulation

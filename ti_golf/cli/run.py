@@ -7,14 +7,21 @@ import tempfile
 import time
 from pathlib import Path
 
-from ti_golf.cli._common import Progress, check_writable, parse_size, runtime_options, scene_options
-from ti_golf.errors import ConfigError
+import numpy as np
 from PIL import Image
+
+from ti_golf.cli._common import (
+    Progress,
+    check_writable,
+    parse_size,
+    runtime_options,
+    scene_options,
+)
+from ti_golf.errors import ConfigError
 from ti_golf.render.offscreen import render
 from ti_golf.render.plots import plot_run
 from ti_golf.scene.schema import STATUS_NAMES
 from ti_golf.sim.simulation import Simulation
-import numpy as np
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

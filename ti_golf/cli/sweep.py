@@ -6,9 +6,9 @@ import argparse
 import time
 
 from ti_golf.cli._common import check_writable, runtime_options, scene_options
-from ti_golf.scene.schema import parse_range
 from ti_golf.render.plots import plot_sweep
 from ti_golf.scene.loader import load_scene
+from ti_golf.scene.schema import parse_range
 from ti_golf.sim.sweep import sweep
 
 

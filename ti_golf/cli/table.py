@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 
 from ti_golf.cli._common import check_writable, runtime_options
-from ti_golf.scene.schema import parse_range
 from ti_golf.render.plots import plot_table
 from ti_golf.scene.loader import load_scene
+from ti_golf.scene.schema import parse_range
 from ti_golf.sim.sweep import sweep
 
 LAB_TABLE = (
