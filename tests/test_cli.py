@@ -26,8 +26,9 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 import ti_golf
 from ti_golf.bench.benchmarks import pile_scene
-from ti_golf.sim.solver import SERIAL_MAX_BALLS
+from ti_golf.scene.balls import launch_position
 from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
+from ti_golf.sim.solver import SERIAL_MAX_BALLS
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -229,7 +230,7 @@ def test_run_spin_decay_npz_and_plot(tmp_path):
     assert data["traj_w"].shape == (n_samples, 1, 3)
     assert np.allclose(np.diff(data["traj_t"]), 100 * dt)
     # the recording starts at the launch and ends at the saved state
-    assert np.allclose(data["traj_x"][0, 0], scene.launch_position())
+    assert np.allclose(data["traj_x"][0, 0], launch_position(scene))
     assert np.allclose(data["traj_w"][0, 0], scene.launch.spin)
     assert np.allclose(data["traj_x"][-1], data["x"]) and np.allclose(data["traj_w"][-1], data["w"])
     # still in the air after 2 s (40 m/s at 40°), moving downrange

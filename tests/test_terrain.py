@@ -13,12 +13,12 @@ import math
 import background
 import numpy as np
 import pytest
-from conftest import SERIAL_OR_PARALLEL, cli, run_cli
-
 import ti_golf as tg
+from conftest import SERIAL_OR_PARALLEL, cli, run_cli
 from ti_golf import ConfigError
-from ti_golf.sim.solver import CollisionSolver
+from ti_golf.scene.balls import launch_position
 from ti_golf.scene.terrain import Terrain, build_terrain, generate_heights
+from ti_golf.sim.solver import CollisionSolver
 
 G = 9.81
 R = 0.02
@@ -108,7 +108,6 @@ def _analytic_normal(hx, hz):
 def _taichi_surface(sim_or_model, pts):
     """p, n and the out-of-bounds flag from the kernels' own ti.func (sample_surface)."""
     import taichi as ti
-
     from ti_golf.physics.terrain import sample_surface
     from ti_golf.physics.types import vec3
 
@@ -417,7 +416,7 @@ def test_bundled_terrain_scenes():
     # the default launch point sits on the terrain at x = z = 0
     sc = tg.load_scene("terrain_2d")
     ter = build_terrain(sc.terrain)
-    assert sc.launch_position()[1] == pytest.approx(float(ter.height(0.0, 0.0)) + sc.ball.radius)
+    assert launch_position(sc)[1] == pytest.approx(float(ter.height(0.0, 0.0)) + sc.ball.radius)
     np.testing.assert_array_equal(ter.heights[:, 0], ter.heights[:, 1])  # a profile
     assert sc.world.ground is False
     # the incline ball starts touching the slope

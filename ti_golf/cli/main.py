@@ -12,13 +12,14 @@ import sys
 from collections.abc import Callable, Sequence
 
 from ti_golf import runtime
-from ti_golf.cli import bench, play, render, run, scenes, sweep, table
+from ti_golf.cli import bench, play, render, run, scenes, schema, sweep, table
 from ti_golf.cli._common import Parser
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
 
 COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "scenes": scenes.cmd_scenes,
     "keys": scenes.cmd_keys,
+    "schema": schema.cmd_schema,
     "sweep": sweep.cmd_sweep,
     "run": run.cmd_run,
     "table": table.cmd_table,
@@ -28,7 +29,7 @@ COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
 }
 """Each subcommand's function: parsed arguments -> exit code."""
 
-NO_RUNTIME = ("scenes", "keys")
+NO_RUNTIME = ("scenes", "keys", "schema")
 """Commands that simulate nothing and so start no Taichi runtime."""
 
 
@@ -36,7 +37,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``ti-golf``."""
     p = Parser(prog="ti-golf", description="Golf-ball physics on Taichi: flights, sweeps, collisions.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (scenes, sweep, run, table, bench, render, play):
+    for module in (scenes, schema, sweep, run, table, bench, render, play):
         module.add_parser(sub)
     return p
 

@@ -7,6 +7,7 @@ import time
 
 from ti_golf.cli._common import check_writable, runtime_options, scene_options
 from ti_golf.render.plots import plot_sweep
+from ti_golf.scene.balls import launch_position
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import parse_range
 from ti_golf.sim.sweep import sweep
@@ -48,7 +49,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         b = res.best()
         f = res.flight
         print(f"best: angle {res.angle_deg[b]:.4f} deg, speed {res.speed_mps[b]:g} m/s, spin {res.spin_radps[b]:g} rad/s"
-              f" -> carry {f.carry[b]:.4f} m (apex {f.apex[b] - scene.launch_position()[1]:.2f} m, "
+              f" -> carry {f.carry[b]:.4f} m (apex {f.apex[b] - launch_position(scene)[1]:.2f} m, "
               f"flight {f.flight_time[b]:.3f} s, lands at {f.landing_angle[b]:.1f} deg, {f.landing_speed[b]:.2f} m/s)")
     if args.out:
         res.to_csv(args.out)

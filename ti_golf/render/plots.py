@@ -7,6 +7,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ti_golf.scene.balls import launch_position
+
 if TYPE_CHECKING:  # pragma: no cover
     from ti_golf.game.rules import GolfGame
     from ti_golf.sim.simulation import Recording
@@ -27,7 +29,7 @@ def plot_sweep(res: "SweepResult", path: str | os.PathLike[str], title: str | No
     plt = _pyplot()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5), gridspec_kw={"width_ratios": [1.6, 1]})
     best = res.best()
-    x0 = np.asarray(res.scene.launch_position())
+    x0 = np.asarray(launch_position(res.scene))
     if res.traj is not None and res.traj_index is not None:
         cmap = plt.get_cmap("viridis")
         k = len(res.traj_index)

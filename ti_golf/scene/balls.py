@@ -10,7 +10,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ti_golf.scene.schema import Block, Scene, backspin_axis, launch_velocity, raise_config
+from ti_golf.scene.schema import (
+    Block,
+    Scene,
+    Vec3,
+    backspin_axis,
+    launch_velocity,
+    raise_config,
+)
+from ti_golf.scene.terrain import build_terrain
 
 
 @dataclass(frozen=True)
@@ -30,6 +38,17 @@ class Balls:
         return len(self.x)
 
 
+def launch_position(scene: Scene) -> Vec3:
+    """Launch point [m] of the scene's launched ball: ``launch.position``, or the ball resting on the
+    ground (the terrain, if any) at x = z = 0."""
+    if scene.launch is not None and scene.launch.position is not None:
+        return scene.launch.position
+    if scene.terrain is not None:
+        height = float(build_terrain(scene.terrain, scene.path).height(0.0, 0.0))
+        return (0.0, height + scene.ball.radius, 0.0)
+    return (0.0, scene.world.ground_height + scene.ball.radius, 0.0)
+
+
 def _one(x, v, w, r, m, track) -> Balls:
     return Balls(np.array([x], float), np.array([v], float), np.array([w], float), np.array([r], float),
                  np.array([m], float), np.array([track]))
@@ -42,7 +61,7 @@ def build_balls(scene: Scene) -> Balls:
     if scene.launch is not None:
         L = scene.launch
         # a shot that leaves the ground is a flight (carry, apex, landing); a putt (angle 0) is not
-        parts.append(_one(scene.launch_position(), launch_velocity(L.speed, L.angle_deg, L.direction_deg), L.spin,
+        parts.append(_one(launch_position(scene), launch_velocity(L.speed, L.angle_deg, L.direction_deg), L.spin,
                           R, M, L.angle_deg > 0.0))
     for spec in scene.balls:
         parts.append(_one(spec.position, spec.velocity, spec.spin, spec.radius or R, spec.mass or M, False))

@@ -17,29 +17,30 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
+from ti_golf.errors import ConfigError
 from ti_golf.scene.schema import (
     ARRAY_SCHEMA,
     SCHEMA,
-    BallSpec,
-    Block,
-    HoleConfig,
-    Plane,
-    Surface,
-    TerrainConfig,
     TOP_LEVEL,
     Air,
     Ball,
+    BallSpec,
+    Block,
     Contact,
     GameConfig,
+    HoleConfig,
     Key,
     Launch,
+    Plane,
     Scene,
+    Surface,
     SweepDefaults,
+    TerrainConfig,
     World,
     parse_range,
     raise_config,
 )
-from ti_golf.errors import ConfigError
+from ti_golf.scene.terrain import load_heights_file
 
 _SECTION_TYPES = {"air": Air, "ball": Ball, "launch": Launch, "world": World, "contact": Contact, "game": GameConfig}
 
@@ -322,8 +323,6 @@ def _block(values: dict[str, Any], source: str, i: int) -> Block:
 def _terrain(values: dict[str, Any], sources: dict[str, str], source: str) -> TerrainConfig:
     """The ``[terrain]`` table: resolve and check the heights file (shape, finite values) now, so a
     bad terrain is reported when the scene loads."""
-    from ti_golf.scene.terrain import load_heights_file
-
     if "resolution" in values:
         values["resolution"] = tuple(int(c) for c in values["resolution"])
     cfg = TerrainConfig(**values)

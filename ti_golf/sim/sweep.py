@@ -16,6 +16,7 @@ from ti_golf.physics.aero import air_params
 from ti_golf.physics.integrate import INTEGRATOR_CODES
 from ti_golf.physics.types import vec3
 from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile
+from ti_golf.scene.balls import launch_position
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene, backspin_axis
 from ti_golf.sim.results import CSV_COLUMNS, Flight
@@ -94,7 +95,7 @@ def launch_grid(
     sp, sn, an = np.meshgrid(speeds_, spins_, angles, indexing="ij")
     an, sp, sn = an.ravel(), sp.ravel(), sn.ravel()
     n = an.size
-    x0 = np.tile(np.asarray(scene.launch_position(), float), (n, 1))
+    x0 = np.tile(np.asarray(launch_position(scene), float), (n, 1))
     th, ph = np.radians(an), math.radians(L.direction_deg)
     v0 = np.stack([sp * np.cos(th) * math.cos(ph), sp * np.sin(th), sp * np.cos(th) * math.sin(ph)], axis=1)
     w0 = sn[:, None] * axis[None, :]
