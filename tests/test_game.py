@@ -16,9 +16,9 @@ import pytest
 
 import ti_golf as tg
 from ti_golf import cli
-from ti_golf.scene.schema import GameConfig
 from ti_golf.game.cup import capture_speed, drop_time, holed_at
 from ti_golf.game.rules import HOLED, OUT, RESTS, GolfGame, Shot
+from ti_golf.scene.schema import GameConfig
 
 G = 9.81
 R = 0.02134  # golf ball
@@ -290,7 +290,7 @@ def test_play_in_a_window_needs_a_display(green_file, capsys, monkeypatch):
 
 
 def test_play_in_a_window_needs_the_cpu_backend(green_file, capsys, monkeypatch):
-    monkeypatch.setattr("ti_golf.render.offscreen.non_cpu_arch", lambda: "vulkan")  # as with --arch vulkan
+    monkeypatch.setattr("ti_golf.game.window.non_cpu_arch", lambda: "vulkan")  # as with --arch vulkan
     assert cli.main(["play", str(green_file), "--gui"]) == 2
     assert "--gui: draws with the CPU backend only (this process runs on vulkan)" in capsys.readouterr().err
 
@@ -300,7 +300,7 @@ import os
 import sys
 from pathlib import Path
 import ti_golf as tg
-from ti_golf.render.offscreen import ggui_available
+from ti_golf.render import ggui_available
 if not ggui_available():
     sys.exit(77)
 tg.init()

@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 
 import ti_golf as tg
-from ti_golf.render import offscreen as R
+import ti_golf.render as R
+from ti_golf.render import camera, frame
 
 ROOT = Path(__file__).resolve().parent.parent
 BASELINES = Path(__file__).resolve().parent / "baselines"
@@ -193,7 +194,7 @@ def test_a_wall_seen_from_its_solid_side_is_cut_away(tmp_path, backend):
 def test_hole_and_flag_appear_where_the_hole_is(tmp_path, backend):
     # putting_green: the cup at (6, 0) on the terrain, a 2.13 m flagstick; seen from above and the side
     green = tg.Simulation.from_scene("putting_green")
-    cup, _, _, flag_h = R._hole(green)
+    cup, _, _, flag_h = camera._hole(green)
     assert cup[1] == pytest.approx(float(green.model.terrain.height(6.0, 0.0)))  # on the surface
     view = R.View(position=(6.0, 6.0, 0.0), lookat=(6.0, 0.0, 0.0), up=(1.0, 0.0, 0.0), size=SIZE)
     out = tmp_path / f"hole_top_{backend}.png"
@@ -219,7 +220,7 @@ def test_no_hole_no_flag(rack, tmp_path):
     out = tmp_path / "rack.png"
     R.render(rack, out, camera="iso", size=SIZE, backend="matplotlib")
     assert not matches(read_png(out), R.FLAG_COLOR).any()
-    assert R._hole(rack) is None
+    assert camera._hole(rack) is None
 
 
 def test_status_colours_are_distinct_from_each_other_and_the_scenery():
@@ -238,8 +239,8 @@ def test_terrain_is_coloured_by_surface_type_and_by_height_where_a_type_has_no_c
     h = np.repeat(np.linspace(0.0, 1.0, 5)[:, None], 5, axis=1)
     cells = np.array([[0, 0, 1, 1], [0, 0, 1, 1], [2, 2, 1, 1], [2, 2, 0, 0]])
     origin, spacing = np.zeros(3), np.ones(2)
-    _, _, by_height = R._terrain_tiles(h, origin, spacing)
-    _, _, colors = R._terrain_tiles(h, origin, spacing, surfaces=(cells, ("green", "heather", "rough")))
+    _, _, by_height = frame._terrain_tiles(h, origin, spacing)
+    _, _, colors = frame._terrain_tiles(h, origin, spacing, surfaces=(cells, ("green", "heather", "rough")))
     kind = cells.ravel()  # one quad per cell, in the same (x, z) order
     for k, name in ((0, "green"), (2, "rough")):
         assert matches(colors[None, kind == k], R.SURFACE_COLORS[name], cos_min=0.9999).all(), name
@@ -320,7 +321,7 @@ def _python(code: str, cwd: Path, env: dict[str, str] | None = None) -> subproce
 
 RENDER_ONE = """
     import ti_golf as tg
-    from ti_golf.render.offscreen import render
+    from ti_golf.render import render
     sim = tg.Simulation.from_scene("break_shot")
     print(render(sim, "pic.png", camera="iso", size=(160, 120)))
 """
@@ -377,7 +378,7 @@ def test_wind_indicator_shows_only_in_wind(tmp_path, backend):
         assert R.render(sim, out, camera="side", size=SIZE, backend=backend) == backend
         img = read_png(out).astype(float)
         img = img / 255.0 if img.max() > 1.0 else img
-        return int(np.count_nonzero(np.linalg.norm(img - np.asarray(R.WIND_COLOR), axis=-1) < 0.12))
+        return int(np.count_nonzero(np.linalg.norm(img - np.asarray(frame.WIND_COLOR), axis=-1) < 0.12))
 
     assert wind_pixels("lab_headwind") >= 10
     assert wind_pixels("lab_turbulent") == 0

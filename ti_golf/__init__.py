@@ -15,10 +15,12 @@ Quick start::
 Taichi is initialised on first use (CPU, f64) or explicitly with :func:`init`.
 """
 
-from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING, Scene
+from importlib.metadata import PackageNotFoundError, version
+
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
 from ti_golf.runtime import init
 from ti_golf.scene.loader import load_scene
+from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING, Scene
 from ti_golf.sim.simulation import Overlap, Recording, Simulation
 from ti_golf.sim.sweep import SweepResult, sweep
 
@@ -39,4 +41,9 @@ __all__ = [
     "load_scene",
     "sweep",
 ]
-__version__ = "0.1.0"
+
+try:
+    __version__ = version("ti-golf")
+    """The installed distribution's version (``version`` in pyproject.toml, the one place it is set)."""
+except PackageNotFoundError:  # a source tree on sys.path, not installed
+    __version__ = "0+unknown"

@@ -15,11 +15,13 @@ import os
 import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
+from pathlib import Path
 from typing import NoReturn
 
 os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")  # keep stdout clean (JSON output)
 os.environ.setdefault("TI_LOG_LEVEL", "warn")
 
+import numpy as np  # noqa: E402
 import taichi as ti  # noqa: E402
 
 from ti_golf.errors import ConfigError  # noqa: E402
@@ -134,8 +136,6 @@ def release_freed_memory() -> None:
 
 def kernels_cached() -> bool:
     """Whether Taichi's offline kernel cache holds any compiled kernel (after :func:`init`)."""
-    from pathlib import Path
-
     return any(Path(ti.lang.impl.current_cfg().offline_cache_file_path).glob("*.tic"))
 
 
@@ -156,8 +156,6 @@ def info() -> RuntimeInfo | None:
 
 def np_float():
     """The numpy float type matching the Taichi default float."""
-    import numpy as np
-
     return np.float64 if ensure_init().precision == "f64" else np.float32
 
 

@@ -4,13 +4,35 @@ from __future__ import annotations
 
 import gc
 import json
+import os
+import tempfile
 import time
 from dataclasses import replace
 from typing import Any, Callable
 
 import numpy as np
+import taichi as ti
 
-from ti_golf.scene.schema import Air, Ball, Launch, Scene, SweepDefaults, World
+from ti_golf.bench.reference import carry_numpy, carry_scipy
+from ti_golf.physics import baseline
+from ti_golf.physics.types import vec3
+from ti_golf.render import render
+from ti_golf.runtime import ensure_init, release_freed_memory
+from ti_golf.scene.schema import (
+    AT_REST,
+    Air,
+    Ball,
+    Contact,
+    Launch,
+    Plane,
+    Scene,
+    SweepDefaults,
+    TerrainConfig,
+    World,
+)
+from ti_golf.sim.simulation import Simulation
+from ti_golf.sim.solver import CollisionSolver, steps_serially
+from ti_golf.sim.sweep import fly
 
 
 def bench_scene(dt: float = 0.1) -> Scene:
@@ -54,10 +76,6 @@ def bench_sweep(n: int = 100_000, dt: float = 0.1, repeats: int = 3, n_reference
 
     Returns the JSON-able result (``trajectories_per_s``, ``max_rel_carry_error``, ``baselines``, ...).
     """
-    from ti_golf.bench.reference import carry_numpy, carry_scipy
-    from ti_golf.runtime import ensure_init
-    from ti_golf.sim.sweep import fly
-
     info = ensure_init()
     scene = bench_scene(dt)
     x0, v0, w0 = bench_conditions(n)
@@ -126,8 +144,6 @@ def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scen
     instead of a plane (same results, the terrain's cost); ``iterations`` Jacobi sweeps per step.
     Returns the scene (planes, full contact model, air, no sleeping) and the positions (n, 3).
     """
-    from ti_golf.scene.schema import Contact, Plane, TerrainConfig
-
     r = 0.02
     side = int(np.ceil(np.sqrt(n / 16.0)))  # a bin about 16 layers deep
     layers = int(np.ceil(n / side**2))
@@ -188,10 +204,6 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     :func:`drop_boulder`; it lands within the untimed first steps and sinks in during the timed
     ones), and the pile alone is timed in the same run as the baseline (``boulder_slowdown``).
     """
-    from ti_golf.runtime import ensure_init, release_freed_memory
-    from ti_golf.sim.simulation import Simulation
-    from ti_golf.sim.solver import CollisionSolver, steps_serially
-
     info = ensure_init()
     serial = steps_serially(n)
 
@@ -307,8 +319,6 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
 
 def put_to_sleep(sim: Any) -> None:
     """Put every ball of ``sim`` at rest (zero velocity and spin, rest timer at ``t_rest``)."""
-    from ti_golf.scene.schema import AT_REST
-
     s, n = sim.state, sim.n
     f = s.v.to_numpy().dtype
     s.v.from_numpy(np.zeros((n, 3), f))
@@ -322,11 +332,6 @@ def bare_gather_rate(x: np.ndarray, repeats: int = 5) -> float:
     x_i − x_j over a fixed 12-entry list of lattice neighbours (memory traffic, no physics). It is
     the yardstick of the collision benchmark, measured in the same run: one collision step costs
     ``bare_gather_rate / ball_steps_per_s`` such passes, a ratio that survives a noisy machine."""
-    import taichi as ti
-
-    from ti_golf.physics.baseline import bare_gather
-    from ti_golf.physics.types import vec3
-
     n = len(x)
     side = max(2, int(np.ceil(np.sqrt(n / 16.0))))
     offsets = np.array([1, side, side * side, side + 1, side * side + 1, side * side + side])
@@ -336,11 +341,11 @@ def bare_gather_rate(x: np.ndarray, repeats: int = 5) -> float:
     table = ti.ndarray(ti.i32, nbr.shape)
     table.from_numpy(nbr.astype(np.int32))
     out = ti.ndarray(vec3.get(), n)
-    bare_gather(xs, table, out)  # compile
+    baseline.bare_gather(xs, table, out)  # compile
     ti.sync()
 
     def run() -> None:
-        bare_gather(xs, table, out)
+        baseline.bare_gather(xs, table, out)
         ti.sync()
 
     return n / _best_time(run, repeats)
@@ -350,17 +355,12 @@ def one_pass_contacts(sim: Any) -> tuple[Callable[[], None], Any, Any]:
     """A runner of the one-pass contact yardstick (``physics.baseline.one_pass_contacts``) on the
     balls and neighbour lists of ``sim`` (built first if need be), and its outputs, Taichi arrays
     (N, 3) in the state's storage order: the contact impulses' Δv [m/s] and Δω [rad/s]."""
-    import taichi as ti
-
-    from ti_golf.physics.baseline import one_pass_contacts as kernel
-    from ti_golf.physics.types import vec3
-
     m, s, solver = sim.model, sim.state, sim.solver
     solver.ensure_lists(s)
     dv, dw = ti.ndarray(vec3.get(), s.n), ti.ndarray(vec3.get(), s.n)
 
     def run() -> None:
-        kernel(m.contact, m.gravity, m.dt, s.x, s.v, s.w, m.radius, m.mass, solver.upper, solver.n_upper,
+        baseline.one_pass_contacts(m.contact, m.gravity, m.dt, s.x, s.v, s.w, m.radius, m.mass, solver.upper, solver.n_upper,
                solver.lower, solver.n_lower, dv, dw)
         ti.sync()
 
@@ -382,8 +382,6 @@ def _rss_bytes() -> int:
     """Current resident set size [bytes] (Linux /proc; peak RSS elsewhere)."""
     try:
         with open("/proc/self/statm") as fh:
-            import os
-
             return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
     except OSError:  # pragma: no cover
         return _peak_rss_bytes()
@@ -412,7 +410,7 @@ def _peak_rss_bytes() -> int:
                     return int(line.split()[1]) * 1024  # kB
     except OSError:  # pragma: no cover
         pass
-    import resource  # pragma: no cover
+    import resource  # pragma: no cover  (POSIX only; reached where /proc is missing)
 
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # pragma: no cover
 
@@ -421,14 +419,6 @@ def bench_render(n: int = 100_000, size: tuple[int, int] = (1280, 720), frames: 
                  log: Callable[[str], None] = print) -> dict[str, Any]:
     """Seconds per off-screen frame of n balls over a generated terrain (GGUI), with the matplotlib
     fallback timed in the same run as the baseline."""
-    import os
-    import tempfile
-
-    from ti_golf.scene.schema import TerrainConfig
-    from ti_golf.render.offscreen import render
-    from ti_golf.runtime import ensure_init
-    from ti_golf.sim.simulation import Simulation
-
     info = ensure_init()
     side = int(np.ceil(np.sqrt(n / 10.0)))
     scene = Scene(

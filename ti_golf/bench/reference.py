@@ -109,7 +109,7 @@ def _hermite_root(y0, y1, m0, m1, level):
 def carry_scipy(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, method: str = "DOP853",
                 rtol: float = 1e-12, atol: float = 1e-12, t_max: float | None = None) -> np.ndarray:
     """Carry [m] of each ball by ``solve_ivp`` (one call per trajectory) with an exact landing event."""
-    from scipy.integrate import solve_ivp
+    from scipy.integrate import solve_ivp  # scipy is optional (the bench and test extras): imported on use
 
     t_max = scene.world.t_max if t_max is None else t_max
     out = np.full(len(x0), np.nan)

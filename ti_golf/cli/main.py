@@ -11,6 +11,7 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 
+import ti_golf
 from ti_golf import runtime
 from ti_golf.cli import bench, play, render, run, scenes, schema, sweep, table
 from ti_golf.cli._common import Parser
@@ -36,6 +37,7 @@ NO_RUNTIME = ("scenes", "keys", "schema")
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``ti-golf``."""
     p = Parser(prog="ti-golf", description="Golf-ball physics on Taichi: flights, sweeps, collisions.")
+    p.add_argument("--version", action="version", version=f"ti-golf {ti_golf.__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
     for module in (scenes, schema, sweep, run, table, bench, render, play):
         module.add_parser(sub)

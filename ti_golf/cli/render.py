@@ -13,7 +13,7 @@ from ti_golf.cli._common import (
     scene_options,
 )
 from ti_golf.errors import ConfigError
-from ti_golf.render.offscreen import BACKENDS, CAMERAS, COLOR_BY, render
+from ti_golf.render import BACKENDS, CAMERAS, COLOR_BY, render
 from ti_golf.sim.simulation import Simulation
 
 

@@ -18,7 +18,7 @@ from ti_golf.cli._common import (
     scene_options,
 )
 from ti_golf.errors import ConfigError
-from ti_golf.render.offscreen import render
+from ti_golf.render import render
 from ti_golf.render.plots import plot_run
 from ti_golf.scene.schema import STATUS_NAMES
 from ti_golf.sim.simulation import Simulation

@@ -18,9 +18,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS, Scene, backspin_axis, launch_velocity
-from ti_golf.game.cup import LOW_GAP, holed_at
 from ti_golf.errors import ConfigError
+from ti_golf.game.cup import LOW_GAP, holed_at
+from ti_golf.scene.schema import (
+    AT_REST,
+    OUT_OF_BOUNDS,
+    Scene,
+    backspin_axis,
+    launch_velocity,
+)
+from ti_golf.scene.terrain import build_terrain
+from ti_golf.sim.simulation import Simulation
 
 KMH = 1.0 / 3.6
 """m/s per km/h."""
@@ -123,8 +131,6 @@ class GolfGame:
     """
 
     def __init__(self, scene: Scene, seed: int | None = None) -> None:
-        from ti_golf.scene.terrain import build_terrain
-
         source = scene.path or scene.name
         if scene.terrain is None or scene.hole is None:
             missing = "[terrain]" if scene.terrain is None else "[hole]"
@@ -202,8 +208,6 @@ class GolfGame:
     def play(self, shot: Shot) -> Stroke:
         """Hit the ball: simulate the stroke, move the ball, end the round when it is holed, out of
         bounds, or the last stroke allowed was played."""
-        from ti_golf.sim.simulation import Simulation
-
         if self.over:
             raise RuntimeError(f"the round is over ({self.outcome})")
         scene = self.scene_with_wind(self.wind)

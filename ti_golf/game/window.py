@@ -1,6 +1,6 @@
 """``ti-golf play --gui``: the golf game in a GGUI window (report §2.5, ``playGolf``).
 
-The course is drawn in 3-D as :func:`ti_golf.render.offscreen.render` draws it (terrain, cup, flag flying
+The course is drawn in 3-D as :func:`ti_golf.render.render` draws it (terrain, cup, flag flying
 downwind, the ball at least a few pixels across, its path). A panel holds the stroke: club presets
 (tour averages at launch, golf_data.md), sliders for direction, speed, loft and spin, "Aim at the
 hole" and "Hit". A stroke is simulated first (:meth:`GolfGame.play`), then replayed in the window
@@ -21,6 +21,7 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+import taichi as ti
 
 from ti_golf.errors import ConfigError
 from ti_golf.game.rules import (
@@ -32,6 +33,17 @@ from ti_golf.game.rules import (
     describe_stroke,
     describe_wind,
 )
+from ti_golf.render import (
+    BACKGROUND_COLOR,
+    View,
+    build_frame,
+    destroy_window,
+    draw_scene,
+    ggui_problem,
+    non_cpu_arch,
+    write_png,
+)
+from ti_golf.sim.simulation import Simulation
 
 CLUBS = {
     "Driver": (275.0, 10.4, 2545.0),
@@ -49,8 +61,6 @@ REPLAY_SPEED = 2.0
 
 def check_display() -> None:
     """Raise :class:`ConfigError` (exit 2 from the CLI) when no window can be shown here."""
-    from ti_golf.render.offscreen import ggui_problem, non_cpu_arch
-
     arch = non_cpu_arch()
     if arch:  # (see render.non_cpu_arch: GGUI garbles the balls there)
         raise ConfigError("--gui", None, f"draws with the CPU backend only (this process runs on {arch}); "
@@ -70,8 +80,6 @@ class GolfWindow:
 
     def __init__(self, game: GolfGame, size: tuple[int, int] = (1280, 720), show_window: bool = True,
                  replay_speed: float = REPLAY_SPEED, on_stroke: Callable[[Stroke], None] | None = None) -> None:
-        import taichi as ti
-
         self.game = game
         self.replay_speed = replay_speed
         self.on_stroke = on_stroke
@@ -114,8 +122,6 @@ class GolfWindow:
         self._set_camera(self.game.cup - 6.0 * ahead + [0.0, 8.0, 0.0], self.game.cup)
 
     def _view(self) -> Any:
-        from ti_golf.render.offscreen import View
-
         c = self.camera
         return View(tuple(map(float, c.curr_position)), tuple(map(float, c.curr_lookat)),
                     tuple(map(float, c.curr_up)), 45.0, self.size, z_near=0.05, z_far=2000.0)
@@ -123,8 +129,6 @@ class GolfWindow:
     # -- the ball on show --------------------------------------------------------------------
     def _show_ball(self, x: np.ndarray) -> None:
         """Put the drawn ball at ``x`` [m] (3,); the flag flies with the coming stroke's wind."""
-        from ti_golf.sim.simulation import Simulation
-
         wind = self.game.wind if self.replay is None else self.replay[0].wind
         scene = self.game.scene_with_wind(wind)
         if self._display is None or self._display.scene.air.wind != scene.air.wind:
@@ -215,10 +219,6 @@ class GolfWindow:
 
     def frame(self) -> None:
         """Draw one frame: the panel, the camera's moves, the replay, the course."""
-        import taichi as ti
-
-        from ti_golf.render.offscreen import BACKGROUND_COLOR, build_frame, draw_scene
-
         if self._pending:
             self._pending = False
             self.hit()
@@ -236,14 +236,10 @@ class GolfWindow:
 
     def save(self, path: str) -> None:
         """Write the last frame drawn by a hidden window as a PNG."""
-        from ti_golf.render.offscreen import write_png
-
         write_png(self._image, path)
 
     def run(self) -> None:
         """Show the window until it is closed or Escape is pressed, then close it."""
-        import taichi as ti
-
         try:
             while self.window.running:
                 if self.window.get_event(ti.ui.PRESS) and self.window.event.key == ti.ui.ESCAPE:
@@ -255,8 +251,6 @@ class GolfWindow:
 
     def close(self) -> None:
         """Close the window (leaving no ``imgui.ini`` behind, see :func:`.render.destroy_window`)."""
-        from ti_golf.render.offscreen import destroy_window
-
         if self.window is not None:
             destroy_window(self.window)
             self.window = None

@@ -1,0 +1,42 @@
+"""Pictures of a simulation: off-screen 3-D renders (GGUI, else matplotlib) and plots.
+
+:func:`render` writes a PNG of a :class:`~ti_golf.Simulation` through a :class:`View`;
+:mod:`ti_golf.render.plots` draws sweeps, runs and golf rounds with matplotlib. Importing this
+package starts no Taichi runtime.
+"""
+
+from ti_golf.render.camera import View, ball_colors, camera_view
+from ti_golf.render.frame import build_frame
+from ti_golf.render.ggui import (
+    destroy_window,
+    draw_scene,
+    ggui_available,
+    ggui_problem,
+    write_png,
+)
+from ti_golf.render.offscreen import non_cpu_arch, render
+from ti_golf.render.style import (
+    AT_REST_COLOR,
+    BACKENDS,
+    BACKGROUND_COLOR,
+    CAMERAS,
+    COLOR_BY,
+    FLAG_COLOR,
+    FLAGSTICK_COLOR,
+    FLYING_COLOR,
+    GROUND_COLORS,
+    OUT_OF_BOUNDS_COLOR,
+    ROLLING_COLOR,
+    STATUS_COLORS,
+    SURFACE_COLORS,
+    TERRAIN_COLORS,
+    WALL_COLORS,
+    RenderError,
+)
+
+__all__ = [
+    "AT_REST_COLOR", "BACKENDS", "BACKGROUND_COLOR", "CAMERAS", "COLOR_BY", "FLAGSTICK_COLOR", "FLAG_COLOR",
+    "FLYING_COLOR", "GROUND_COLORS", "OUT_OF_BOUNDS_COLOR", "ROLLING_COLOR", "STATUS_COLORS", "SURFACE_COLORS",
+    "TERRAIN_COLORS", "WALL_COLORS", "RenderError", "View", "ball_colors", "build_frame", "camera_view",
+    "destroy_window", "draw_scene", "ggui_available", "ggui_problem", "non_cpu_arch", "render", "write_png",
+]

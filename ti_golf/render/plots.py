@@ -1,12 +1,19 @@
-"""Matplotlib (Agg) figures: sweep trajectories and carry, run trajectories and spin decay."""
+"""Matplotlib figures written to files (no pyplot, no global backend): sweep trajectories and carry,
+the report's Table 3.1-1 families, run trajectories and spin decay, and a golf round on its course."""
 
 from __future__ import annotations
 
 import os
 from typing import TYPE_CHECKING
 
+import matplotlib
 import numpy as np
+from matplotlib.colors import ListedColormap
+from matplotlib.figure import Figure
+from matplotlib.patches import Patch
 
+from ti_golf.files import atomic_path
+from ti_golf.render.style import SURFACE_COLORS
 from ti_golf.scene.balls import launch_position
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -15,23 +22,20 @@ if TYPE_CHECKING:  # pragma: no cover
     from ti_golf.sim.sweep import SweepResult
 
 
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int) -> None:
+    """Write ``fig`` to ``path`` (format from its suffix) whole or not at all."""
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi)
 
 
 def plot_sweep(res: "SweepResult", path: str | os.PathLike[str], title: str | None = None) -> None:
     """Side view of the recorded trajectories (as the report's Figures 3.1-1 to 3.1-4) and carry vs angle."""
-    plt = _pyplot()
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5), gridspec_kw={"width_ratios": [1.6, 1]})
+    fig = Figure(figsize=(12, 4.5))
+    ax1, ax2 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.6, 1]})
     best = res.best()
     x0 = np.asarray(launch_position(res.scene))
     if res.traj is not None and res.traj_index is not None:
-        cmap = plt.get_cmap("viridis")
+        cmap = matplotlib.colormaps.get_cmap("viridis")
         k = len(res.traj_index)
         for j, i in enumerate(res.traj_index):
             p = res.traj[j]
@@ -58,8 +62,7 @@ def plot_sweep(res: "SweepResult", path: str | os.PathLike[str], title: str | No
     ax2.grid(alpha=0.3)
     ax2.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
 
 
 def plot_table(results: list, path: str | os.PathLike[str]) -> None:
@@ -67,13 +70,13 @@ def plot_table(results: list, path: str | os.PathLike[str]) -> None:
 
     ``results``: (label, best-angle sweep, figure sweep with trajectories) per row of the table.
     """
-    plt = _pyplot()
-    fig, axes = plt.subplots(2, 2, figsize=(12, 7))
+    fig = Figure(figsize=(12, 7))
+    axes = fig.subplots(2, 2)
     for ax, (label, res, fig_res) in zip(axes.ravel(), results):
         k = len(fig_res.traj_index)
         for j, i in enumerate(fig_res.traj_index):
             p = fig_res.traj[j]
-            ax.plot(p[:, 0], p[:, 1] - p[0, 1], lw=0.8, color=plt.get_cmap("viridis")(j / max(k - 1, 1)),
+            ax.plot(p[:, 0], p[:, 1] - p[0, 1], lw=0.8, color=matplotlib.colormaps.get_cmap("viridis")(j / max(k - 1, 1)),
                     label=f"{fig_res.angle_deg[i]:g}°" if j in (0, k - 1) else None)
         b = res.best()
         ax.legend(fontsize=7, loc="upper right")
@@ -84,16 +87,15 @@ def plot_table(results: list, path: str | os.PathLike[str]) -> None:
         ax.set_ylim(bottom=0)
         ax.set_xlim(0, np.nanmax(fig_res.carry) * 1.05)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 
 
 def plot_run(rec: "Recording", path: str | os.PathLike[str], title: str = "", max_balls: int = 20) -> None:
     """Trajectory side view and spin magnitude |ω| vs time (as the report's Figure 3.2-3)."""
-    plt = _pyplot()
     a = rec.arrays()
     t, x, w = a["traj_t"], a["traj_x"], a["traj_w"]
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), gridspec_kw={"height_ratios": [1.3, 1]})
+    fig = Figure(figsize=(9, 7))
+    ax1, ax2 = fig.subplots(2, 1, gridspec_kw={"height_ratios": [1.3, 1]})
     n = x.shape[1] if x.ndim == 3 else 0
     shown = x[:, :max_balls] if n else x
     spread = np.ptp(shown.reshape(-1, 3), axis=0) if n else np.zeros(3)
@@ -110,25 +112,17 @@ def plot_run(rec: "Recording", path: str | os.PathLike[str], title: str = "", ma
     ax2.set_ylabel("|ω| [rad/s]")
     ax2.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
 
 
 def plot_round(game: GolfGame, path: str | os.PathLike[str], title: str = "") -> None:
     """Top view of a golf round: the course (its surface types, else its heights, with height
     contours), the cup and every stroke's path, numbered; beside it the 12 m around the cup."""
-    plt = _pyplot()
-    from matplotlib.colors import ListedColormap
-    from matplotlib.patches import Patch
-
-    # the terrain's colours in the window and in pictures
-    from ti_golf.render.offscreen import SURFACE_COLORS
-
     ter = game.terrain
     (x0, z0), (sx, sz) = ter.origin[[0, 2]], ter.size
     extent = (x0, x0 + sx, z0, z0 + sz)
-    fig, (ax, zoom) = plt.subplots(1, 2, figsize=(13, 13 / (sx / sz + 1.0) + 1.2),
-                                   gridspec_kw={"width_ratios": [sx / sz, 1.0]})
+    fig = Figure(figsize=(13, 13 / (sx / sz + 1.0) + 1.2))
+    ax, zoom = fig.subplots(1, 2, gridspec_kw={"width_ratios": [sx / sz, 1.0]})
     xs, zs = np.linspace(x0, x0 + sx, ter.shape[0]), np.linspace(z0, z0 + sz, ter.shape[1])
     heights = ter.heights.T + ter.origin[1]
     surfaces = game.scene.surfaces
@@ -144,7 +138,7 @@ def plot_round(game: GolfGame, path: str | os.PathLike[str], title: str = "") ->
         cs = a.contour(xs, zs, heights, levels=12 if a is ax else 40, colors="k", linewidths=0.3, alpha=0.5)
         a.clabel(cs, fontsize=6, fmt="%.2f m")
         for s in game.strokes:
-            color = plt.get_cmap("autumn")((s.number - 1) / max(len(game.strokes) - 1, 1))
+            color = matplotlib.colormaps.get_cmap("autumn")((s.number - 1) / max(len(game.strokes) - 1, 1))
             a.plot(s.path[:, 0], s.path[:, 2], color=color, lw=1.5)
             a.annotate(str(s.number), s.start[[0, 2]], color="k", fontsize=8, ha="center", va="center",
                        bbox={"boxstyle": "circle,pad=0.2", "fc": "white", "ec": color}, annotation_clip=True)
@@ -159,5 +153,4 @@ def plot_round(game: GolfGame, path: str | os.PathLike[str], title: str = "") ->
     ax.legend(handles=ax.get_legend_handles_labels()[0] + handles, loc="upper left", fontsize=7)
     ax.set_title(title or game.scene.name, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)

@@ -7,6 +7,8 @@ dotted key and what is allowed. No Taichi import here.
 from __future__ import annotations
 
 import difflib
+import importlib.resources
+import importlib.util
 import math
 import os
 from pathlib import Path
@@ -176,10 +178,14 @@ def resolve_scene_path(name: str | os.PathLike[str]) -> Path:
 
 
 def scenes_dir() -> Path:
-    """The ``scenes/`` folder of the source tree (environment variable ``TI_GOLF_SCENES`` overrides)."""
+    """The folder of the bundled scenes: the package data ``ti_golf.scene.data`` of an installed
+    ti_golf, else the source tree's ``scenes/`` (the environment variable ``TI_GOLF_SCENES``
+    overrides both)."""
     env = os.environ.get("TI_GOLF_SCENES")
     if env:
         return Path(env)
+    if importlib.util.find_spec("ti_golf.scene.data") is not None:
+        return Path(str(importlib.resources.files("ti_golf.scene.data")))
     return Path(__file__).resolve().parents[2] / "scenes"
 
 
