@@ -6,7 +6,7 @@ TIGOLF := $(VENV)/bin/ti-golf
 STAMP  := $(VENV)/.installed
 OUT    ?= out
 
-.PHONY: setup demo test bench system-deps clean
+.PHONY: setup demo test bench lint docs wheel-check system-deps clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -15,6 +15,12 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 setup: $(STAMP)
+
+# Linters, type checker and docs tools, installed on first use of lint or docs.
+DEVSTAMP := $(VENV)/.installed-dev
+$(DEVSTAMP): $(STAMP)
+	$(PY) -m pip install --quiet -e ".[test,bench,dev,docs]"
+	touch $(DEVSTAMP)
 
 # The software Vulkan driver for off-screen GGUI rendering (needs root and apt-get; skipped otherwise).
 system-deps:
@@ -36,8 +42,23 @@ demo: setup system-deps
 test: setup system-deps
 	$(PY) -m pytest -q --durations=15
 
+# ruff (lint and format), mypy on the non-kernel code, and the import layers (pyproject.toml).
+lint: $(DEVSTAMP)
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
+	$(VENV)/bin/mypy
+	$(VENV)/bin/lint-imports
+
+# The documentation site, warnings as errors, into site/.
+docs: $(DEVSTAMP)
+	$(VENV)/bin/mkdocs build --strict --site-dir site
+
+# The wheel, installed into a fresh venv outside the checkout, runs its commands and bundled scenes.
+wheel-check: setup
+	PYTHON=$(PY) bash .ci/wheel_check.sh
+
 bench: setup
 	$(TIGOLF) bench sweep --json
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache
+	rm -rf $(VENV) $(OUT) .pytest_cache site

@@ -141,8 +141,14 @@ class BackgroundRuns:
             make, timeout = _DECLARED[key]
             run.workdir.mkdir(parents=True, exist_ok=True)
             argv, env = make(run.workdir)
-            child = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                     env={**self._env, **env}, cwd=Path(__file__).resolve().parent.parent)
+            child = subprocess.Popen(
+                argv,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+                env={**self._env, **env},
+                cwd=Path(__file__).resolve().parent.parent,
+            )
             with self._lock:
                 self._children.add(child)
                 if self._stopped:  # the session ended while it started

@@ -21,8 +21,10 @@ os.environ["TI_GOLF_ARCH"] = TEST_ARCH
 
 ON_CPU = TEST_ARCH == "cpu"
 SERIAL_OR_PARALLEL = pytest.mark.parametrize(
-    "serial", [pytest.param(True, marks=pytest.mark.skipif(not ON_CPU, reason="serial stepping runs on the CPU only")),
-               False], ids=["serial", "parallel"])
+    "serial",
+    [pytest.param(True, marks=pytest.mark.skipif(not ON_CPU, reason="serial stepping runs on the CPU only")), False],
+    ids=["serial", "parallel"],
+)
 """Run a test with the collision step forced serial (``CollisionSolver(serial=True)``) and parallel."""
 
 
@@ -30,8 +32,11 @@ _exit_status: list[int] = []
 
 
 def pytest_configure(config):
-    config.addinivalue_line("markers", "background(key): the test uses the run `key` of tests/background.py, which "
-                                       "starts in the background when the session does")
+    config.addinivalue_line(
+        "markers",
+        "background(key): the test uses the run `key` of tests/background.py, which "
+        "starts in the background when the session does",
+    )
 
 
 def pytest_collection_modifyitems(session, config, items):

@@ -58,7 +58,9 @@ def test_scenes_lists_every_scene_with_its_description():
         description = tomllib.loads(f.read_text(encoding="utf-8"))["description"]
         assert description.strip()
         assert any(re.fullmatch(rf"{re.escape(f.stem)}\s+{re.escape(description)}", ln.rstrip()) for ln in lines), (
-            f.stem, proc.stdout)
+            f.stem,
+            proc.stdout,
+        )
 
 
 def _keys_rows(stdout: str) -> dict[str, list[str]]:
@@ -119,16 +121,26 @@ def test_help_and_unknown_subcommand():
 # ----------------------------------------------------------------------------------------------
 # sweep
 # ----------------------------------------------------------------------------------------------
-SWEEP_COLUMNS = ["angle_deg", "speed_mps", "carry_m", "landing_x_m", "landing_z_m", "apex_m", "flight_time_s",
-                 "landing_angle_deg", "landing_speed_mps"]
+SWEEP_COLUMNS = [
+    "angle_deg",
+    "speed_mps",
+    "carry_m",
+    "landing_x_m",
+    "landing_z_m",
+    "apex_m",
+    "flight_time_s",
+    "landing_angle_deg",
+    "landing_speed_mps",
+]
 
 
 @pytest.fixture(scope="module")
 def turbulent_sweep(tmp_path_factory):
     out = tmp_path_factory.mktemp("sweep")
     csv_path, png_path = out / "turbulent.csv", out / "turbulent.png"
-    proc = ok(run_cli("sweep", "lab_turbulent", "--angles", "36:37.4:0.02", "--out", str(csv_path),
-                      "--plot", str(png_path)))
+    proc = ok(
+        run_cli("sweep", "lab_turbulent", "--angles", "36:37.4:0.02", "--out", str(csv_path), "--plot", str(png_path))
+    )
     header, rows = read_csv(csv_path)
     return proc, header, rows, png_path
 
@@ -213,8 +225,20 @@ def test_sweep_speeds_and_spins_grid(tmp_path):
 # ----------------------------------------------------------------------------------------------
 def test_run_spin_decay_npz_and_plot(tmp_path):
     npz_path, png_path = tmp_path / "spin.npz", tmp_path / "spin.png"
-    proc = ok(run_cli("run", "lab_spin_decay", "--t", "2", "--record-every", "100", "--out", str(npz_path),
-                      "--plot", str(png_path)))
+    proc = ok(
+        run_cli(
+            "run",
+            "lab_spin_decay",
+            "--t",
+            "2",
+            "--record-every",
+            "100",
+            "--out",
+            str(npz_path),
+            "--plot",
+            str(png_path),
+        )
+    )
     scene = ti_golf.load_scene("lab_spin_decay")
     dt = scene.world.dt
     assert dt == 0.001
@@ -247,7 +271,8 @@ def test_run_reports_the_deepest_overlap(tmp_path):
     # two balls at rest overlapping by Δx = 4 mm (20 % of a radius), no gravity: one step moves each
     # by k_p·m_red·Δx (B.18, m_red = 1/2) apart and leaves (1 − k_p)·Δx = 3.2 mm (16 %) with k_p = 0.2
     scene = tmp_path / "overlap.toml"
-    scene.write_text(textwrap.dedent("""\
+    scene.write_text(
+        textwrap.dedent("""\
         [ball]
         radius = 0.02
         mass = 0.045
@@ -263,7 +288,8 @@ def test_run_reports_the_deepest_overlap(tmp_path):
         position = [0.0, 1.0, 0.0]
         [[balls]]
         position = [0.036, 1.0, 0.0]
-        """))
+        """)
+    )
     proc = ok(run_cli("run", str(scene), "--steps", "1"))
     m = re.search(r"deepest overlap: ([0-9.]+) % of a radius \(([0-9.]+) mm, balls 0 and 1\)", proc.stdout)
     assert m, proc.stdout
@@ -330,12 +356,19 @@ def test_bench_sweep_json():
 
 _BENCH_COLLIDE = {"awake": (512, ()), "asleep-8-sweeps": (512, ("--asleep", "--iterations", "8")), "serial": (64, ())}
 for _name, (_n, _flags) in _BENCH_COLLIDE.items():
-    background.declare(f"bench-collide-{_name}", lambda _, n=_n, flags=_flags: (
-        cli("bench", "collide", "--n", str(n), "--steps", "3", "--json", *flags), {}))
+    background.declare(
+        f"bench-collide-{_name}",
+        lambda _, n=_n, flags=_flags: (cli("bench", "collide", "--n", str(n), "--steps", "3", "--json", *flags), {}),
+    )
 
 
-@pytest.mark.parametrize("n, flags", [pytest.param(*args, id=name, marks=pytest.mark.background(f"bench-collide-{name}"))
-                                      for name, args in _BENCH_COLLIDE.items()])
+@pytest.mark.parametrize(
+    "n, flags",
+    [
+        pytest.param(*args, id=name, marks=pytest.mark.background(f"bench-collide-{name}"))
+        for name, args in _BENCH_COLLIDE.items()
+    ],
+)
 def test_bench_collide_json(n, flags, background_runs, request):
     proc = ok(background_runs.result(f"bench-collide-{request.node.callspec.id}")[0])
     result = json.loads(proc.stdout.strip().splitlines()[-1])
@@ -383,8 +416,10 @@ def test_the_bench_restarts_the_peak_memory_after_its_warm_up():
     assert after >= bench._rss_bytes() - 2**20  # the peak restarts from the current size (a page's lag aside)
 
 
-background.declare("bench-collide-boulder", lambda _: (
-    cli("bench", "collide", "--n", "512", "--steps", "3", "--boulder", "0.1", "--json"), {}))
+background.declare(
+    "bench-collide-boulder",
+    lambda _: (cli("bench", "collide", "--n", "512", "--steps", "3", "--boulder", "0.1", "--json"), {}),
+)
 
 
 @pytest.mark.background("bench-collide-boulder")
@@ -394,12 +429,20 @@ def test_bench_collide_with_a_boulder_times_the_pile_alone_too(background_runs):
     assert result["boulder_radius"] == 0.1 and result["n"] == 512  # the pile's balls (the boulder comes on top)
     assert result["baselines"]["pile_alone_ms_per_step"] > 0
     assert result["boulder_slowdown"] == pytest.approx(
-        result["ms_per_step"] / result["baselines"]["pile_alone_ms_per_step"], rel=1e-3)
+        result["ms_per_step"] / result["baselines"]["pile_alone_ms_per_step"], rel=1e-3
+    )
 
 
-@pytest.mark.parametrize("option, value, fragment", [("--iterations", "0", "[1, 100]"), ("--steps", "0", "> 0 steps"),
-                                                     ("--n", "1", ">= 2 balls"), ("--boulder", "-0.1", "[0, 10] m"),
-                                                     ("--boulder", "nan", "[0, 10] m")])
+@pytest.mark.parametrize(
+    "option, value, fragment",
+    [
+        ("--iterations", "0", "[1, 100]"),
+        ("--steps", "0", "> 0 steps"),
+        ("--n", "1", ">= 2 balls"),
+        ("--boulder", "-0.1", "[0, 10] m"),
+        ("--boulder", "nan", "[0, 10] m"),
+    ],
+)
 def test_bench_collide_bad_option_exits_2(option, value, fragment):
     proc = run_cli("bench", "collide", option, value)
     assert proc.returncode == 2, (proc.stdout, proc.stderr)

@@ -14,13 +14,20 @@ from conftest import ON_CPU, SERIAL_OR_PARALLEL
 
 import ti_golf as tg
 from ti_golf.bench.benchmarks import pile_scene
-from ti_golf.scene.schema import AT_REST, Plane
 from ti_golf.physics import grid
+from ti_golf.scene.schema import AT_REST, Plane
 from ti_golf.sim.solver import CollisionSolver
 
 # no gravity, air, walls or friction unless a test says otherwise
-FREE = ["world.ground=false", "air.rho=0", "world.gravity=[0,0,0]", "world.integrator=semi_implicit",
-        "world.dt=0.0005", "contact.mu=0", "world.v_rest=0"]
+FREE = [
+    "world.ground=false",
+    "air.rho=0",
+    "world.gravity=[0,0,0]",
+    "world.integrator=semi_implicit",
+    "world.dt=0.0005",
+    "contact.mu=0",
+    "world.v_rest=0",
+]
 
 
 def scene(*overrides: str) -> tg.Scene:
@@ -50,8 +57,12 @@ def _random_sets():
     sparse = rng.uniform(-3, 3, (n, 3))
     far = np.concatenate([rng.uniform(-0.5, 0.5, (n // 2, 3)), rng.uniform(-0.5, 0.5, (n // 2, 3)) + 1e4])
     negative = rng.uniform(-0.6, 0.6, (n, 3)) - 1234.5  # cells with negative coordinates
-    return {"clustered": (clustered, mixed[: len(clustered)]), "sparse": (sparse, mixed),
-            "far_apart": (far, np.full(len(far), 0.03)), "negative": (negative, mixed)}
+    return {
+        "clustered": (clustered, mixed[: len(clustered)]),
+        "sparse": (sparse, mixed),
+        "far_apart": (far, np.full(len(far), 0.03)),
+        "negative": (negative, mixed),
+    }
 
 
 def _velocities(n, fast):
@@ -161,8 +172,12 @@ def test_a_ball_that_moved_past_half_the_skin_is_seen_wherever_it_is():
             out[i] = ti.cast(moved_past(x1[i], x_build[i], 0.0, half_skin), ti.i32)
 
     # (this module's annotations are strings: from __future__ import annotations)
-    moved.__annotations__ = {"x1": vec3_array, "x_build": vec3f_array, "half_skin": float,
-                             "out": ti.types.ndarray(ti.i32, ndim=1)}
+    moved.__annotations__ = {
+        "x1": vec3_array,
+        "x_build": vec3f_array,
+        "half_skin": float,
+        "out": ti.types.ndarray(ti.i32, ndim=1),
+    }
     moved = kernel(moved)  # ti.kernel, applied once the float type is chosen
 
     rng = np.random.default_rng(3)
@@ -285,7 +300,9 @@ _GPU_PILE = textwrap.dedent("""
 def _gpu_pile(workdir: Path) -> background.Command:
     (workdir / "gpu_pile.py").write_text(_GPU_PILE)
     return background.python(str(workdir / "gpu_pile.py"), str(workdir / "gpu.npz")), {
-        "TI_GOLF_ARCH": "vulkan", "TI_GOLF_PRECISION": "f64"}
+        "TI_GOLF_ARCH": "vulkan",
+        "TI_GOLF_PRECISION": "f64",
+    }
 
 
 background.declare("gpu-pile", _gpu_pile, timeout=600)
@@ -304,7 +321,8 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(background
     # step; that pile is kept in id order, since the grid's order follows the cells, and the order
     # of a ball's simultaneous impacts the storage.
     _, workdir = background_runs.succeeded(
-        "gpu-pile", "Taichi cannot start its Vulkan backend here (apt-get install mesa-vulkan-drivers)")
+        "gpu-pile", "Taichi cannot start its Vulkan backend here (apt-get install mesa-vulkan-drivers)"
+    )
     gpu = np.load(workdir / "gpu.npz")
     for name, v, reorder in (("", None, None), ("_shot", gpu["v0_shot"], False)):
         sim = tg.Simulation(pile_scene(70_000)[0], x=gpu["x0" + name], v=v)
@@ -447,9 +465,18 @@ def test_balls_stored_in_grid_order_step_as_in_id_order():
     gas = tg.load_scene("lab_vacuum", [*FREE, "contact.mu=0.3", "contact.v_bounce=100"])
     rng = np.random.default_rng(4)
     r = rng.uniform(0.01, 0.03, 3000)
-    cases = [(sc, {"x": x[rng.permutation(len(x))]}),
-             (gas, {"x": rng.uniform(-0.6, 0.6, (3000, 3)), "v": rng.normal(0.0, 1.0, (3000, 3)), "radius": r,
-                    "mass": 0.045 * (r / 0.02) ** 3})]
+    cases = [
+        (sc, {"x": x[rng.permutation(len(x))]}),
+        (
+            gas,
+            {
+                "x": rng.uniform(-0.6, 0.6, (3000, 3)),
+                "v": rng.normal(0.0, 1.0, (3000, 3)),
+                "radius": r,
+                "mass": 0.045 * (r / 0.02) ** 3,
+            },
+        ),
+    ]
     for (sc, balls), rounds in zip(cases, (8, 20)):
         runs = []
         for reorder in (True, False):
@@ -470,9 +497,15 @@ def test_balls_stored_in_grid_order_step_as_in_id_order():
         np.testing.assert_array_equal(grid_order.solver.pairs(), id_order.solver.pairs())
 
 
-@pytest.mark.parametrize("serial, reorder", [pytest.param(True, False, marks=pytest.mark.skipif(
-    not ON_CPU, reason="serial stepping runs on the CPU only")), (False, False), (False, True)],
-    ids=["serial", "parallel", "grid_order"])
+@pytest.mark.parametrize(
+    "serial, reorder",
+    [
+        pytest.param(True, False, marks=pytest.mark.skipif(not ON_CPU, reason="serial stepping runs on the CPU only")),
+        (False, False),
+        (False, True),
+    ],
+    ids=["serial", "parallel", "grid_order"],
+)
 def test_a_pile_that_tracks_no_flight_keeps_no_flight_record_and_steps_the_same(serial, reorder):
     # the flight record (apex, landing, the launch heights it is measured from) is bookkeeping that
     # never feeds back into the step: a pile of balls that are not tracked, as a scene's
@@ -560,8 +593,9 @@ def test_overlap_is_projected_out_in_proportion_to_the_other_mass():
     x = np.array([[0.0, 1.0, 0.0], [0.04 - overlap, 1.0, 0.0]])
     sim = tg.Simulation(sc, x=x, mass=[m1, m2])
     sim.step(1)
-    np.testing.assert_allclose(sim.x[:, 0], [-k_p * m2 / (m1 + m2) * overlap, x[1, 0] + k_p * m1 / (m1 + m2) * overlap],
-                               rtol=0, atol=1e-15)
+    np.testing.assert_allclose(
+        sim.x[:, 0], [-k_p * m2 / (m1 + m2) * overlap, x[1, 0] + k_p * m1 / (m1 + m2) * overlap], rtol=0, atol=1e-15
+    )
     np.testing.assert_allclose(sim.v, 0.0, atol=0)  # no impulse between balls that do not approach
     assert m1 * sim.x[0, 0] + m2 * sim.x[1, 0] == pytest.approx(m2 * x[1, 0], abs=1e-15)  # centre of mass kept
 
@@ -588,7 +622,10 @@ def test_friction_spins_colliding_balls():
     np.testing.assert_allclose(sim.w[0], sim.w[1], rtol=1e-12)
     assert abs(sim.w[0, 1]) > 1.0
     m, r = 0.045, 0.02
-    ke = lambda v, w: 0.5 * m * (v**2).sum() + 0.5 * 0.4 * m * r**2 * (w**2).sum()
+
+    def ke(v, w):
+        return 0.5 * m * (v**2).sum() + 0.5 * 0.4 * m * r**2 * (w**2).sum()
+
     assert ke(sim.v, sim.w) < ke(v0, np.zeros((2, 3)))
 
 
@@ -628,9 +665,14 @@ def test_the_benchs_one_pass_floor_gives_the_two_balls_of_a_pair_opposite_impuls
     grid = np.stack(np.meshgrid(*[np.arange(7)] * 3, indexing="ij"), -1).reshape(-1, 3)
     x = 0.039 * grid + rng.uniform(-0.001, 0.001, grid.shape)
     n = len(x)
-    sim = tg.Simulation(scene("contact.e=0.7", "contact.mu=0.3"), x=x, v=rng.normal(0, 1.0, (n, 3)),
-                        w=rng.normal(0, 50.0, (n, 3)), radius=rng.uniform(0.0195, 0.0205, n),
-                        mass=rng.uniform(0.03, 0.06, n))
+    sim = tg.Simulation(
+        scene("contact.e=0.7", "contact.mu=0.3"),
+        x=x,
+        v=rng.normal(0, 1.0, (n, 3)),
+        w=rng.normal(0, 50.0, (n, 3)),
+        radius=rng.uniform(0.0195, 0.0205, n),
+        mass=rng.uniform(0.03, 0.06, n),
+    )
     run, dv, dw = one_pass_contacts(sim)
     run()
     dv, dw, m = dv.to_numpy(), dw.to_numpy(), sim.model.mass_np
@@ -681,8 +723,10 @@ def test_a_calm_column_falls_asleep_in_one_step(iterations):
     # touches, so a column falls asleep as a whole, with either sweep count; a lowest ball put to
     # sleep alone would feel no gravity while the balls above it still move, and the column would
     # keep rocking (and sink) instead of resting
-    sc = tg.load_scene("lab_vacuum", ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3",
-                                      f"contact.iterations={iterations}"])
+    sc = tg.load_scene(
+        "lab_vacuum",
+        ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3", f"contact.iterations={iterations}"],
+    )
     x = np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)])
     sim = tg.Simulation(sc, x=x)
     asleep_at = np.full(10, -1)
@@ -735,15 +779,28 @@ def test_deep_pile_settles_without_deep_overlaps(e):
     pit = tg.load_scene("ball_pit")
     width = 0.3
     data = {
-        "description": "a narrow ball pit", "air": {"rho": pit.air.rho, "gamma": pit.air.gamma, "C_D": pit.air.C_D},
+        "description": "a narrow ball pit",
+        "air": {"rho": pit.air.rho, "gamma": pit.air.gamma, "C_D": pit.air.C_D},
         "world": {"dt": pit.world.dt, "integrator": pit.world.integrator},
         "contact": dataclasses.asdict(pit.contact) | ({} if e is None else {"e": e}),
-        "planes": [{"point": [0, 0, 0], "normal": [0, 1, 0]}, {"point": [0, 0, 0], "normal": [1, 0, 0]},
-                   {"point": [width, 0, 0], "normal": [-1, 0, 0]}, {"point": [0, 0, 0], "normal": [0, 0, 1]},
-                   {"point": [0, 0, width], "normal": [0, 0, -1]}],
-        "blocks": [{"kind": "random", "number": 2250, "box_min": [0.025, 0.3, 0.025],
-                    "box_max": [width - 0.025, 4.3, width - 0.025], "velocity": [0.0, -1.0, 0.0],
-                    "velocity_jitter": 0.3, "seed": 7}],
+        "planes": [
+            {"point": [0, 0, 0], "normal": [0, 1, 0]},
+            {"point": [0, 0, 0], "normal": [1, 0, 0]},
+            {"point": [width, 0, 0], "normal": [-1, 0, 0]},
+            {"point": [0, 0, 0], "normal": [0, 0, 1]},
+            {"point": [0, 0, width], "normal": [0, 0, -1]},
+        ],
+        "blocks": [
+            {
+                "kind": "random",
+                "number": 2250,
+                "box_min": [0.025, 0.3, 0.025],
+                "box_max": [width - 0.025, 4.3, width - 0.025],
+                "velocity": [0.0, -1.0, 0.0],
+                "velocity_jitter": 0.3,
+                "seed": 7,
+            }
+        ],
     }
     sim = tg.Simulation(tg.load_scene(None, data=data))
     sim.run(t=pit.world.t_end)
@@ -756,8 +813,17 @@ def test_deep_pile_settles_without_deep_overlaps(e):
     assert x[:, 1].min() > r - 0.05 * r and 1.2 < x[:, 1].max() < 1.6  # all in the bin, about 34 layers deep
 
 
-@pytest.mark.parametrize("name, steps", [("break_shot", 600), ("newtons_cradle", 600), ("terrain_3d", 400),
-                                         ("sleeping_column", 900), ("fast_into_pile", 40), ("boulder_into_pile", 40)])
+@pytest.mark.parametrize(
+    "name, steps",
+    [
+        ("break_shot", 600),
+        ("newtons_cradle", 600),
+        ("terrain_3d", 400),
+        ("sleeping_column", 900),
+        ("fast_into_pile", 40),
+        ("boulder_into_pile", 40),
+    ],
+)
 @pytest.mark.skipif(not ON_CPU, reason="serial stepping runs on the CPU only")
 def test_serial_steps_equal_parallel_steps(name, steps):
     # few balls step serially, many steps per launch, with their lists rebuilt in the kernel by
@@ -800,8 +866,20 @@ def test_serial_steps_equal_parallel_steps(name, steps):
             done += k
             asleep = max(asleep, int(np.sum(sim.status == AT_REST)))
         st = sim.state
-        runs.append((asleep, sim.x, sim.v, sim.w, st.status.to_numpy(), st.rest_time.to_numpy(), st.apex.to_numpy(),
-                     st.t_land.to_numpy(), np.float64(sim.t), np.float64(sim.solver.rebuilds)))
+        runs.append(
+            (
+                asleep,
+                sim.x,
+                sim.v,
+                sim.w,
+                st.status.to_numpy(),
+                st.rest_time.to_numpy(),
+                st.apex.to_numpy(),
+                st.t_land.to_numpy(),
+                np.float64(sim.t),
+                np.float64(sim.solver.rebuilds),
+            )
+        )
     serial, parallel = runs
     for a, b in zip(serial, parallel):
         np.testing.assert_array_equal(a, b)
@@ -816,8 +894,8 @@ def test_a_step_split_into_launches_equals_the_unrolled_step(monkeypatch):
     # The loops and the arithmetic are those of the unrolled step, in the same order, so the
     # results must be the same bit for bit: here a boulder dropped on a pile (impacts, a ball
     # listed apart, lists rebuilt) with the default 4 sweeps, once in one launch and once in two
-    from ti_golf.sim import solver
     from ti_golf.physics import collide
+    from ti_golf.sim import solver
 
     assert solver.sweep_launches(8) == [(True, 4, False), (False, 3, True)]
     assert solver.sweep_launches(9) == [(True, 4, False), (False, 4, False), (False, 0, True)]
@@ -1021,8 +1099,9 @@ def test_a_build_past_the_vulkan_loop_cap_stops_the_run_and_names_the_ball():
     sim.solver = CollisionSolver(sim.model, serial=False)
     assert sim.solver.loop_cap == (grid.LOOP_CAP if tg.init().arch == "vulkan" else None)
     sim.solver.loop_cap = 300
-    with pytest.raises(tg.SimulationError, match=r"Vulkan backend stops .* Ball 400 reaches farthest \(radius 0.2 m"
-                       ) as err:
+    with pytest.raises(
+        tg.SimulationError, match=r"Vulkan backend stops .* Ball 400 reaches farthest \(radius 0.2 m"
+    ) as err:
         sim.step(1)
     assert err.value.balls == [400]
     alone = tg.Simulation(pile, x=x[:-1], track=False)
@@ -1058,9 +1137,10 @@ def test_a_fast_ball_meets_a_wall_it_reaches_within_the_step(serial):
     # at 30 m/s: it gets there within the 0.5 ms step (15 mm of flight). The wall jolts it by
     # −(1 + e)·v_n (B.11, m_red = 1) and the step is split at the time of impact, 2/3 of the way:
     # it ends 10 − (1/3)·0.5 ms·15 m/s = 2.5 mm from the wall. Ball 1, 20 mm away, flies on.
-    sc = dataclasses.replace(scene("contact.e=0.5", "contact.v_bounce=0"),
-                             planes=(Plane((0.5, 0, 0), (-1, 0, 0)), Plane((0, -5, 0), (0, 1, 0)),
-                                     Plane((0, 0, -5), (0, 0, 1))))
+    sc = dataclasses.replace(
+        scene("contact.e=0.5", "contact.v_bounce=0"),
+        planes=(Plane((0.5, 0, 0), (-1, 0, 0)), Plane((0, -5, 0), (0, 1, 0)), Plane((0, 0, -5), (0, 0, 1))),
+    )
     wall = 0.5 - sc.ball.radius  # where a centre touches the wall
     sim = tg.Simulation(sc, x=[[wall - 0.010, 1.0, 0.0], [wall - 0.020, 2.0, 0.0]], v=[[30.0, 0, 0], [30.0, 0, 0]])
     sim.solver = CollisionSolver(sim.model, serial=serial)

@@ -27,17 +27,24 @@ R_CUP = 0.054  # regulation cup
 
 def green(**game) -> tg.Scene:
     """A flat green 10 m × 6 m (y = 0) with the cup 3 m down +x from the ball, in vacuum."""
-    return tg.load_scene(data={
-        "description": "test green",
-        "air": {"rho": 0.0},
-        "ball": {"radius": R, "mass": 0.04593},
-        "world": {"integrator": "semi_implicit", "dt": 0.001},
-        "contact": {"e": 0.3, "mu": 0.4, "mu_roll": 0.05},
-        "terrain": {"kind": "generated", "amplitude": 0.0, "origin": [-2.0, 0.0, -3.0], "size": [10.0, 6.0],
-                    "resolution": [11, 7]},
-        "hole": {"position": [3.0, 0.0]},
-        "game": {"start": [0.0, 0.0], "max_strokes": 5, **game},
-    })
+    return tg.load_scene(
+        data={
+            "description": "test green",
+            "air": {"rho": 0.0},
+            "ball": {"radius": R, "mass": 0.04593},
+            "world": {"integrator": "semi_implicit", "dt": 0.001},
+            "contact": {"e": 0.3, "mu": 0.4, "mu_roll": 0.05},
+            "terrain": {
+                "kind": "generated",
+                "amplitude": 0.0,
+                "origin": [-2.0, 0.0, -3.0],
+                "size": [10.0, 6.0],
+                "resolution": [11, 7],
+            },
+            "hole": {"position": [3.0, 0.0]},
+            "game": {"start": [0.0, 0.0], "max_strokes": 5, **game},
+        }
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -254,11 +261,14 @@ def test_play_asks_again_after_bad_answers_and_stops_at_the_end_of_input(green_f
     assert "The round ends unfinished (no more input) after 1 stroke" in text
 
 
-@pytest.mark.parametrize("content, needle", [
-    ("0 5 95 0\n", "shots.txt:1: key 'loft' must be a number in [-10, 90] deg (got 95.0)"),
-    ("0 5\n", "shots.txt:1: a stroke is 'direction speed loft [spin]'"),
-    ("\n0 fast 0\n", "shots.txt:2: key 'speed' must be a number (got 'fast')"),
-])
+@pytest.mark.parametrize(
+    "content, needle",
+    [
+        ("0 5 95 0\n", "shots.txt:1: key 'loft' must be a number in [-10, 90] deg (got 95.0)"),
+        ("0 5\n", "shots.txt:1: a stroke is 'direction speed loft [spin]'"),
+        ("\n0 fast 0\n", "shots.txt:2: key 'speed' must be a number (got 'fast')"),
+    ],
+)
 def test_play_rejects_a_bad_shots_file_naming_the_line_and_field(green_file, tmp_path, capsys, content, needle):
     shots = tmp_path / "shots.txt"
     shots.write_text(content)
@@ -267,11 +277,14 @@ def test_play_rejects_a_bad_shots_file_naming_the_line_and_field(green_file, tmp
     assert needle in err and "Traceback" not in err
 
 
-@pytest.mark.parametrize("overrides, needle", [
-    (["--set", "hole.position=[30, 0]"], "key 'hole.position' must lie on the terrain (x in [-2, 8] m"),
-    (["--set", "game.start=[0, 9]"], "key 'game.start' must lie on the terrain"),
-    (["--set", "game.max_strokes=0"], "key 'game.max_strokes' must be in [1, 1000]"),
-])
+@pytest.mark.parametrize(
+    "overrides, needle",
+    [
+        (["--set", "hole.position=[30, 0]"], "key 'hole.position' must lie on the terrain (x in [-2, 8] m"),
+        (["--set", "game.start=[0, 9]"], "key 'game.start' must lie on the terrain"),
+        (["--set", "game.max_strokes=0"], "key 'game.max_strokes' must be in [1, 1000]"),
+    ],
+)
 def test_play_rejects_a_bad_course(green_file, capsys, overrides, needle):
     assert cli.main(["play", str(green_file), *overrides]) == 2
     assert needle in capsys.readouterr().err

@@ -13,8 +13,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import ti_golf as tg
-from ti_golf.scene.schema import backspin_axis, launch_velocity
 from ti_golf.bench.reference import derivatives as reference_derivatives
+from ti_golf.scene.schema import backspin_axis, launch_velocity
 
 G = 9.81
 
@@ -128,8 +128,9 @@ def _scipy_trajectory(scene: tg.Scene, x0, v0, w0, times):
         dv, dw = reference_derivatives(scene, y[3:6][None], y[6:9][None])
         return np.concatenate([y[3:6], dv[0], dw[0]])
 
-    sol = solve_ivp(rhs, (0, times[-1]), np.concatenate([x0, v0, w0]), method="DOP853", rtol=1e-12,
-                    atol=1e-12, t_eval=times)
+    sol = solve_ivp(
+        rhs, (0, times[-1]), np.concatenate([x0, v0, w0]), method="DOP853", rtol=1e-12, atol=1e-12, t_eval=times
+    )
     return sol.y[0:3].T, sol.y[6:9].T
 
 
@@ -152,8 +153,12 @@ def test_magnus_and_spin_decay_match_scipy(overrides, spin):
         sim = tg.Simulation(scene, x=[x0], v=[v0], w=[w0])
         rec = sim.run(t=4.0, record_every=int(round(0.2 / dt)))
         ref_x, ref_w = _scipy_trajectory(scene, x0, v0, w0, np.asarray(rec.t))
-        errors.append((np.max(np.abs(np.asarray(rec.x)[:, 0] - ref_x)),
-                       np.max(np.abs(np.asarray(rec.w)[:, 0] - ref_w)) / np.linalg.norm(w0)))
+        errors.append(
+            (
+                np.max(np.abs(np.asarray(rec.x)[:, 0] - ref_x)),
+                np.max(np.abs(np.asarray(rec.w)[:, 0] - ref_w)) / np.linalg.norm(w0),
+            )
+        )
     (ex1, _), (ex2, _), (ex3, ew3) = errors
     # RK4 converges to the independent solution at 4th order: halving h divides the error by ~16
     assert 10.0 < ex1 / ex2 < 22.0, errors
@@ -224,15 +229,28 @@ def test_spin_ratio_aerodynamics_match_scipy(speed, angle, spin, wind):
         sim = tg.Simulation(scene, x=[x0], v=[v0], w=[w0])
         rec = sim.run(t=3.0, record_every=round(0.2 / dt))
         ref_x, ref_w = _scipy_trajectory(scene, x0, v0, w0, np.asarray(rec.t))
-        errors.append((np.max(np.abs(np.asarray(rec.x)[:, 0] - ref_x)),
-                       np.max(np.abs(np.asarray(rec.w)[:, 0] - ref_w)) / spin))
+        errors.append(
+            (np.max(np.abs(np.asarray(rec.x)[:, 0] - ref_x)), np.max(np.abs(np.asarray(rec.w)[:, 0] - ref_w)) / spin)
+        )
     (ex1, _), (ex2, _), (ex3, ew3) = errors
     assert 10.0 < ex1 / ex2 < 22.0, errors
     assert ex3 < 1e-6 and ew3 < 1e-8, errors
     # and the model is not the lab's law: the same ball with the report's C_D = 0.3 and Magnus
     # coefficient ends metres away
-    lab_law = tg.Simulation(lab("tour_shot", "world.ground=false", 'air.model="lab"', "air.C_D=0.3",
-                                "air.C_M=0.025", "air.omega_M=100", f"air.wind={wind}"), x=[x0], v=[v0], w=[w0])
+    lab_law = tg.Simulation(
+        lab(
+            "tour_shot",
+            "world.ground=false",
+            'air.model="lab"',
+            "air.C_D=0.3",
+            "air.C_M=0.025",
+            "air.omega_M=100",
+            f"air.wind={wind}",
+        ),
+        x=[x0],
+        v=[v0],
+        w=[w0],
+    )
     lab_law.run(t=3.0)
     assert np.linalg.norm(lab_law.x[0] - ref_x[-1]) > 1.0
 
@@ -240,12 +258,18 @@ def test_spin_ratio_aerodynamics_match_scipy(speed, angle, spin, wind):
 # TrackMan 2023 PGA Tour averages (golf_data.md): ball mph, launch deg, spin rpm; max height yd,
 # land angle deg, carry yd
 PGA_TOUR = {
-    "driver": (171, 10.4, 2545, 35, 39, 282), "3-wood": (162, 9.3, 3663, 32, 44, 249),
-    "5-wood": (156, 9.7, 4322, 33, 48, 236), "hybrid": (149, 10.2, 4587, 31, 49, 231),
-    "3-iron": (145, 10.3, 4404, 30, 48, 218), "4-iron": (140, 10.8, 4782, 31, 49, 209),
-    "5-iron": (135, 11.9, 5280, 33, 50, 199), "6-iron": (130, 14.0, 6204, 32, 50, 188),
-    "7-iron": (123, 16.1, 7124, 34, 51, 176), "8-iron": (118, 17.8, 8078, 33, 51, 164),
-    "9-iron": (112, 20.0, 8793, 32, 52, 152), "PW": (104, 23.7, 9316, 32, 52, 142),
+    "driver": (171, 10.4, 2545, 35, 39, 282),
+    "3-wood": (162, 9.3, 3663, 32, 44, 249),
+    "5-wood": (156, 9.7, 4322, 33, 48, 236),
+    "hybrid": (149, 10.2, 4587, 31, 49, 231),
+    "3-iron": (145, 10.3, 4404, 30, 48, 218),
+    "4-iron": (140, 10.8, 4782, 31, 49, 209),
+    "5-iron": (135, 11.9, 5280, 33, 50, 199),
+    "6-iron": (130, 14.0, 6204, 32, 50, 188),
+    "7-iron": (123, 16.1, 7124, 34, 51, 176),
+    "8-iron": (118, 17.8, 8078, 33, 51, 164),
+    "9-iron": (112, 20.0, 8793, 32, 52, 152),
+    "PW": (104, 23.7, 9316, 32, 52, 142),
 }
 
 
@@ -266,8 +290,15 @@ def test_spin_ratio_aerodynamics_carry_the_tour_averages():
         assert 0.0 < land - res.flight.landing_angle[0] <= 8.0, club
     # the lab's law with one Magnus constant (golf_hole's before this model) cannot fit both ends
     # of the bag: a driver launched as on tour carries 40 % short
-    old = lab("tour_shot", 'air.model="lab"', "air.rho=1.2", "air.C_D=0.25", "air.C_M=0.025", "air.omega_M=100",
-              "air.C_omega=1")
+    old = lab(
+        "tour_shot",
+        'air.model="lab"',
+        "air.rho=1.2",
+        "air.C_D=0.25",
+        "air.C_M=0.025",
+        "air.omega_M=100",
+        "air.C_omega=1",
+    )
     speed, launch, spin, _, _, carry = PGA_TOUR["driver"]
     assert tg.sweep(old, angles_deg=[launch], speeds=[speed * mph], spins=[spin * rpm]).carry[0] / yd < 0.7 * carry
 
@@ -311,15 +342,25 @@ def _penner_bounce(u, v_n, spin, R, mu):
     return e * vn * n + ut2 * t, spin2, rolls
 
 
-TURF = ("world.gravity=[0,0,0]", "world.integrator=semi_implicit", "world.dt=0.0001", "contact.turf=true",
-        "contact.mu=0.4", "ball.radius=0.021335", "ball.mass=0.04593")
+TURF = (
+    "world.gravity=[0,0,0]",
+    "world.integrator=semi_implicit",
+    "world.dt=0.0001",
+    "contact.turf=true",
+    "contact.mu=0.4",
+    "ball.radius=0.021335",
+    "ball.mass=0.04593",
+)
 
 
-@pytest.mark.parametrize("u, v_n, spin, rolls", [
-    (16.7, 17.7, 600.0, True),  # a tour 7-iron landing (24 m/s at 47°): it rolls out, slowly forward
-    (25.0, 6.0, 0.0, False),  # a low, fast, spinless skid: it slides
-    (9.0, 14.0, 1000.0, True),  # a steep wedge with much backspin: it checks and spins back
-])
+@pytest.mark.parametrize(
+    "u, v_n, spin, rolls",
+    [
+        (16.7, 17.7, 600.0, True),  # a tour 7-iron landing (24 m/s at 47°): it rolls out, slowly forward
+        (25.0, 6.0, 0.0, False),  # a low, fast, spinless skid: it slides
+        (9.0, 14.0, 1000.0, True),  # a steep wedge with much backspin: it checks and spins back
+    ],
+)
 @pytest.mark.parametrize("where", ["plane", "colliding", "terrain"])
 def test_a_turf_bounce_is_penners(u, v_n, spin, rolls, where):
     # gravity off, so one step holds the whole impact and the closed form applies to round-off;
@@ -330,13 +371,20 @@ def test_a_turf_bounce_is_penners(u, v_n, spin, rolls, where):
     assert want_rolls == rolls
     overrides = list(TURF)
     if where == "terrain":
-        overrides += ["contact.turf=false", "terrain.kind=\"generated\"", "terrain.amplitude=0.0",
-                      "terrain.origin=[-50,0,-50]", "terrain.size=[100,100]", "terrain.resolution=[5,5]"]
+        overrides += [
+            "contact.turf=false",
+            'terrain.kind="generated"',
+            "terrain.amplitude=0.0",
+            "terrain.origin=[-50,0,-50]",
+            "terrain.size=[100,100]",
+            "terrain.resolution=[5,5]",
+        ]
     scene = lab("lab_vacuum", *overrides)
     if where == "terrain":
         import dataclasses
 
         from ti_golf.scene.schema import Surface
+
         scene = dataclasses.replace(scene, surfaces=(Surface(name="fairway", turf=True),))
     x = [[0.0, R + 1e-3, 0.0]] + ([[0.0, R + 1e-3, 30.0]] if where == "colliding" else [])
     v = [[u, -v_n, 0.0]] * len(x)
@@ -373,8 +421,9 @@ def test_rolling_ball_stops_where_closed_form_says():
     # slip, so the slip decays at (7/2)μg (solid sphere) and the centre at (μ+μ_r)g while sliding;
     # then the ball rolls at du/dt = −μ_r g.
     u0, mu, mu_r = 3.0, 0.3, 0.05
-    scene = lab("lab_vacuum", "world.integrator=semi_implicit", "world.dt=0.0005", f"contact.mu={mu}",
-                f"contact.mu_roll={mu_r}")
+    scene = lab(
+        "lab_vacuum", "world.integrator=semi_implicit", "world.dt=0.0005", f"contact.mu={mu}", f"contact.mu_roll={mu_r}"
+    )
     sim = tg.Simulation(scene, x=[[0, 0.02, 0]], v=[[u0, 0, 0]])
     sim.run(t=15.0, until="rest")
     t1 = u0 / (3.5 * mu * G)
@@ -403,8 +452,13 @@ def test_spin_about_the_normal_decays_at_five_halves_mu_roll_g_over_r(n_balls):
     # dω_y/dt = −(5/2)·μ_roll·g/R until it stops. The resting impulse is g·h every step, so the
     # semi-implicit steps follow the line exactly (round-off only); the ball does not move.
     mu_r, w0, h = 0.05, 30.0, 0.001
-    sc = tg.load_scene(data={"air": {"rho": 0.0}, "world": {"integrator": "semi_implicit", "dt": h},
-                             "contact": {"mu": 0.4, "mu_roll": mu_r}})
+    sc = tg.load_scene(
+        data={
+            "air": {"rho": 0.0},
+            "world": {"integrator": "semi_implicit", "dt": h},
+            "contact": {"mu": 0.4, "mu_roll": mu_r},
+        }
+    )
     x0 = np.array([[0.0, 0.02, 0.0], [5.0, 0.02, 0.0]][:n_balls])
     sim = tg.Simulation(sc, x=x0, w=[[0.0, w0, 0.0]] * n_balls, radius=0.02)
     assert (sim.solver is not None) == (n_balls == 2)

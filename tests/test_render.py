@@ -35,8 +35,10 @@ MAX_CHANGED_FRACTION = 0.01  # ... and at most 1 % of the pixels may do so
 
 GGUI = R.ggui_available()
 needs_ggui = pytest.mark.skipif(
-    not GGUI, reason="GGUI needs Vulkan, which this machine lacks (apt-get install mesa-vulkan-drivers libvulkan1, "
-                     "or `make system-deps`); the matplotlib fallback is still tested")
+    not GGUI,
+    reason="GGUI needs Vulkan, which this machine lacks (apt-get install mesa-vulkan-drivers libvulkan1, "
+    "or `make system-deps`); the matplotlib fallback is still tested",
+)
 BACKENDS = [pytest.param("ggui", marks=needs_ggui), "matplotlib"]
 
 
@@ -48,8 +50,9 @@ def read_png(path: Path) -> np.ndarray:
     return np.asarray(mpimg.imread(path), dtype=float)[..., :3]
 
 
-def matches(img: np.ndarray, color: tuple[float, float, float], cos_min: float = 0.995,
-            min_norm: float = 0.15) -> np.ndarray:
+def matches(
+    img: np.ndarray, color: tuple[float, float, float], cos_min: float = 0.995, min_norm: float = 0.15
+) -> np.ndarray:
     """Pixels whose colour is a shade of ``color`` (lit or in shadow: the same direction in RGB)."""
     c = np.asarray(color, float)
     norm = np.linalg.norm(img, axis=2)
@@ -63,8 +66,9 @@ def compare_with_baseline(obtained: Path, name: str, tmp_path: Path) -> None:
         BASELINES.mkdir(exist_ok=True)
         shutil.copyfile(obtained, baseline)
         return
-    assert baseline.exists(), (f"no baseline {baseline}; obtained picture: {obtained}. "
-                               "Run with TI_GOLF_UPDATE_BASELINES=1 to create it.")
+    assert baseline.exists(), (
+        f"no baseline {baseline}; obtained picture: {obtained}. Run with TI_GOLF_UPDATE_BASELINES=1 to create it."
+    )
     a, b = read_png(obtained), read_png(baseline)
     assert a.shape == b.shape, f"size {a.shape[1]}x{a.shape[0]} differs from the baseline's {b.shape[1]}x{b.shape[0]}"
     diff = np.abs(a - b)
@@ -77,11 +81,13 @@ def compare_with_baseline(obtained: Path, name: str, tmp_path: Path) -> None:
         amplified = tmp_path / f"diff_x8_{name}"
         shutil.copyfile(obtained, kept)
         mpimg.imsave(amplified, np.clip(8.0 * diff, 0.0, 1.0))
-        pytest.fail(f"{name} differs from {baseline}: mean difference {mean_pct:.3f} % (allowed "
-                    f"{MAX_MEAN_DIFF_PCT} %), {100 * changed:.3f} % of pixels changed by more than "
-                    f"{100 * CHANGED_LEVEL:.0f} % (allowed {100 * MAX_CHANGED_FRACTION:g} %). Obtained: {kept}; "
-                    f"difference x8: {amplified}. If the change is intended: TI_GOLF_UPDATE_BASELINES=1 pytest "
-                    "tests/test_render.py")
+        pytest.fail(
+            f"{name} differs from {baseline}: mean difference {mean_pct:.3f} % (allowed "
+            f"{MAX_MEAN_DIFF_PCT} %), {100 * changed:.3f} % of pixels changed by more than "
+            f"{100 * CHANGED_LEVEL:.0f} % (allowed {100 * MAX_CHANGED_FRACTION:g} %). Obtained: {kept}; "
+            f"difference x8: {amplified}. If the change is intended: TI_GOLF_UPDATE_BASELINES=1 pytest "
+            "tests/test_render.py"
+        )
 
 
 @pytest.fixture(scope="module")
@@ -171,11 +177,16 @@ def test_no_ball_in_view_shows_no_ball_colour(rack, tmp_path, backend):
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_a_wall_seen_from_its_solid_side_is_cut_away(tmp_path, backend):
     # a floor and a wall at x = 1 whose solid side is x > 1, one ball in front of the wall
-    scene = tg.load_scene(None, data={
-        "planes": [{"point": [0.0, 0.0, 0.0], "normal": [0.0, 1.0, 0.0]},
-                   {"point": [1.0, 0.0, 0.0], "normal": [-1.0, 0.0, 0.0]}],
-        "balls": [{"position": [0.5, 0.1, 0.0], "radius": 0.1}],
-    })
+    scene = tg.load_scene(
+        None,
+        data={
+            "planes": [
+                {"point": [0.0, 0.0, 0.0], "normal": [0.0, 1.0, 0.0]},
+                {"point": [1.0, 0.0, 0.0], "normal": [-1.0, 0.0, 0.0]},
+            ],
+            "balls": [{"position": [0.5, 0.1, 0.0], "radius": 0.1}],
+        },
+    )
     sim = tg.Simulation(scene)
     out = tmp_path / "wall.png"
     inside = R.View(position=(-1.5, 0.6, 0.0), lookat=(0.5, 0.1, 0.0), size=SIZE)  # from the open side
@@ -200,7 +211,7 @@ def test_hole_and_flag_appear_where_the_hole_is(tmp_path, backend):
     out = tmp_path / f"hole_top_{backend}.png"
     R.render(green, out, camera=view, size=SIZE, backend=backend)
     img = read_png(out)
-    (px, py), = view.project(cup[None])[0]
+    ((px, py),) = view.project(cup[None])[0]
     dark = np.nonzero(img.max(axis=2) < 0.12)
     assert len(dark[0]) >= 4, f"no cup in {out}"
     assert np.hypot(dark[1].mean() + 0.5 - px, dark[0].mean() + 0.5 - py) < 3.0  # centred on the hole
@@ -226,10 +237,17 @@ def test_no_hole_no_flag(rack, tmp_path):
 def test_status_colours_are_distinct_from_each_other_and_the_scenery():
     colors = list(R.STATUS_COLORS.values())
     assert len(set(colors)) == 4
-    scenery = [R.BACKGROUND_COLOR, *R.GROUND_COLORS, *R.WALL_COLORS, *R.TERRAIN_COLORS, *R.SURFACE_COLORS.values(),
-               R.FLAG_COLOR, R.FLAGSTICK_COLOR]
+    scenery = [
+        R.BACKGROUND_COLOR,
+        *R.GROUND_COLORS,
+        *R.WALL_COLORS,
+        *R.TERRAIN_COLORS,
+        *R.SURFACE_COLORS.values(),
+        R.FLAG_COLOR,
+        R.FLAGSTICK_COLOR,
+    ]
     for i, c in enumerate(colors):
-        for other in colors[i + 1:] + scenery:
+        for other in colors[i + 1 :] + scenery:
             assert not matches(np.array([[other]], float), c, cos_min=0.98).any(), (c, other)
 
 
@@ -253,11 +271,13 @@ def test_terrain_is_coloured_by_surface_type_and_by_height_where_a_type_has_no_c
 def test_camera_presets_frame_the_balls(lab, rack):
     sim, rec = lab
     path = np.vstack([np.asarray(rec.x).reshape(-1, 3), sim.x])
-    cases = [("side", R.camera_view(sim, "side", SIZE, trails=rec), path),
-             ("iso", R.camera_view(sim, "iso", SIZE, trails=rec), path),
-             ("top", R.camera_view(rack, "top", SIZE), rack.x),
-             ("iso", R.camera_view(rack, "iso", SIZE), rack.x),
-             ("follow", R.camera_view(sim, "follow", SIZE), sim.x)]
+    cases = [
+        ("side", R.camera_view(sim, "side", SIZE, trails=rec), path),
+        ("iso", R.camera_view(sim, "iso", SIZE, trails=rec), path),
+        ("top", R.camera_view(rack, "top", SIZE), rack.x),
+        ("iso", R.camera_view(rack, "iso", SIZE), rack.x),
+        ("follow", R.camera_view(sim, "follow", SIZE), sim.x),
+    ]
     for name, view, pts in cases:
         p, d = view.project(pts)
         assert np.all(d > view.z_near) and np.all(d < view.z_far), name
@@ -315,8 +335,14 @@ def test_other_size_than_the_window_falls_back_or_raises(rack, tmp_path, capfd):
 
 
 def _python(code: str, cwd: Path, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, cwd=cwd,
-                          env={**os.environ, **(env or {})}, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        env={**os.environ, **(env or {})},
+        timeout=300,
+    )
 
 
 RENDER_ONE = """
@@ -329,8 +355,11 @@ RENDER_ONE = """
 
 def test_without_vulkan_one_line_and_a_matplotlib_picture(tmp_path):
     # no Vulkan driver to be found: the loader gets an ICD list that does not exist
-    proc = _python(RENDER_ONE, tmp_path, {"VK_ICD_FILENAMES": str(tmp_path / "none.json"),
-                                          "VK_DRIVER_FILES": str(tmp_path / "none.json")})
+    proc = _python(
+        RENDER_ONE,
+        tmp_path,
+        {"VK_ICD_FILENAMES": str(tmp_path / "none.json"), "VK_DRIVER_FILES": str(tmp_path / "none.json")},
+    )
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert proc.stdout.strip().splitlines()[-1] == "matplotlib"
     assert proc.stderr.strip().splitlines() == ["ti_golf: Vulkan is not available, rendering with matplotlib"]
@@ -353,8 +382,22 @@ def test_run_writes_numbered_frames_and_a_gif(tmp_path):
 
     from tests.conftest import run_cli
 
-    out = run_cli("run", "break_shot", "--steps", "200", "--frames-every", "100", "--frames", str(tmp_path / "f"),
-                  "--gif", str(tmp_path / "a.gif"), "--size", "160x120", "--camera", "top")
+    out = run_cli(
+        "run",
+        "break_shot",
+        "--steps",
+        "200",
+        "--frames-every",
+        "100",
+        "--frames",
+        str(tmp_path / "f"),
+        "--gif",
+        str(tmp_path / "a.gif"),
+        "--size",
+        "160x120",
+        "--camera",
+        "top",
+    )
     assert out.returncode == 0, out.stderr
     frames = sorted((tmp_path / "f").glob("frame_*.png"))
     assert [p.name for p in frames] == ["frame_00000.png", "frame_00001.png", "frame_00002.png"]

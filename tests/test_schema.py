@@ -18,8 +18,17 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-TABLE_CLASSES = {"air": S.Air, "ball": S.Ball, "launch": S.Launch, "world": S.World, "contact": S.Contact,
-                 "sweep": S.SweepDefaults, "terrain": S.TerrainConfig, "hole": S.HoleConfig, "game": S.GameConfig}
+TABLE_CLASSES = {
+    "air": S.Air,
+    "ball": S.Ball,
+    "launch": S.Launch,
+    "world": S.World,
+    "contact": S.Contact,
+    "sweep": S.SweepDefaults,
+    "terrain": S.TerrainConfig,
+    "hole": S.HoleConfig,
+    "game": S.GameConfig,
+}
 ARRAY_CLASSES = {"balls": S.BallSpec, "blocks": S.Block, "surfaces": S.Surface, "planes": S.Plane}
 
 
@@ -31,10 +40,14 @@ def validate(value, schema, where="scene"):
             problems.append(f"{where}: matches none of anyOf")
         return problems
     kind = schema.get("type")
-    checks = {"object": lambda v: isinstance(v, dict), "array": lambda v: isinstance(v, list),
-              "string": lambda v: isinstance(v, str), "boolean": lambda v: isinstance(v, bool),
-              "integer": lambda v: isinstance(v, int) and not isinstance(v, bool),
-              "number": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool)}
+    checks = {
+        "object": lambda v: isinstance(v, dict),
+        "array": lambda v: isinstance(v, list),
+        "string": lambda v: isinstance(v, str),
+        "boolean": lambda v: isinstance(v, bool),
+        "integer": lambda v: isinstance(v, int) and not isinstance(v, bool),
+        "number": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool),
+    }
     if kind and not checks[kind](value):
         return [f"{where}: not of type {kind}"]
     if kind == "object":

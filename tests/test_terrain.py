@@ -13,8 +13,9 @@ import math
 import background
 import numpy as np
 import pytest
-import ti_golf as tg
 from conftest import SERIAL_OR_PARALLEL, cli, run_cli
+
+import ti_golf as tg
 from ti_golf import ConfigError
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.terrain import Terrain, build_terrain, generate_heights
@@ -27,9 +28,13 @@ VACUUM = {"air": {"rho": 0.0}}
 
 def scene(world=None, contact=None, terrain=None, **tables) -> tg.Scene:
     """A scene in vacuum with the semi-implicit integrator; ``terrain=None`` keeps the ground plane."""
-    doc = {"description": "test", **VACUUM,
-           "world": {"integrator": "semi_implicit", "dt": 0.001, **(world or {})},
-           "contact": dict(contact or {}), **tables}
+    doc = {
+        "description": "test",
+        **VACUUM,
+        "world": {"integrator": "semi_implicit", "dt": 0.001, **(world or {})},
+        "contact": dict(contact or {}),
+        **tables,
+    }
     if terrain is not None:
         doc["terrain"] = terrain
     return tg.load_scene(data=doc)
@@ -74,8 +79,9 @@ def test_flat_terrain_equals_ground_plane_colliding_balls():
     # reference: the ground plane (the `collision_step` kernel): a break shot, and a small pile that
     # exercises the warm-started resting impulses (the terrain's own column of lam_plane)
     break_shot = tg.load_scene("break_shot")
-    on_terrain = tg.load_scene("break_shot", ["terrain.amplitude=0", "terrain.origin=[-50,0,-50]",
-                                              "terrain.resolution=[11,11]"])
+    on_terrain = tg.load_scene(
+        "break_shot", ["terrain.amplitude=0", "terrain.origin=[-50,0,-50]", "terrain.resolution=[11,11]"]
+    )
     a, b = tg.Simulation(break_shot), tg.Simulation(on_terrain)
     a.run(t=0.4)
     b.run(t=0.4)
@@ -96,8 +102,9 @@ def _grid_terrain(f, d: float, extent: float = 4.0, origin=(0.0, 0.0, 0.0)) -> T
     n = int(round(extent / d)) + 1
     xs = origin[0] + d * np.arange(n)
     zs = origin[2] + d * np.arange(n)
-    return Terrain(heights=f(*np.meshgrid(xs, zs, indexing="ij")), origin=np.array(origin, float),
-                   spacing=np.array([d, d]))
+    return Terrain(
+        heights=f(*np.meshgrid(xs, zs, indexing="ij")), origin=np.array(origin, float), spacing=np.array([d, d])
+    )
 
 
 def _analytic_normal(hx, hz):
@@ -108,12 +115,18 @@ def _analytic_normal(hx, hz):
 def _taichi_surface(sim_or_model, pts):
     """p, n and the out-of-bounds flag from the kernels' own ti.func (sample_surface)."""
     import taichi as ti
+
     from ti_golf.physics.terrain import sample_surface
     from ti_golf.physics.types import vec3
 
     m = sim_or_model.model if hasattr(sim_or_model, "model") else sim_or_model
     k = len(pts)
-    x, p, n, out = ti.ndarray(vec3.get(), k), ti.ndarray(vec3.get(), k), ti.ndarray(vec3.get(), k), ti.ndarray(ti.i32, k)
+    x, p, n, out = (
+        ti.ndarray(vec3.get(), k),
+        ti.ndarray(vec3.get(), k),
+        ti.ndarray(vec3.get(), k),
+        ti.ndarray(ti.i32, k),
+    )
     x.from_numpy(np.asarray(pts, np.float64))
     sample_surface(m.terrain_params, m.terrain_h, x, p, n, out)
     return p.to_numpy(), n.to_numpy(), out.to_numpy()
@@ -122,7 +135,9 @@ def _taichi_surface(sim_or_model, pts):
 def test_linear_surface_normal_is_exact():
     # h = a x + b z: every bilinear patch is the plane itself, so n̂ = (−a, 1, −b)/|…| to round-off
     a, b = -0.36, 0.21
-    ter = _grid_terrain(lambda x, z: a * x + b * z, d=0.5, origin=(-1.0, 2.0, -1.0))  # heights: h(x, z) at the grid points
+    ter = _grid_terrain(
+        lambda x, z: a * x + b * z, d=0.5, origin=(-1.0, 2.0, -1.0)
+    )  # heights: h(x, z) at the grid points
     rng = np.random.default_rng(0)
     x, z = rng.uniform(-1.0, 3.0, 500), rng.uniform(-1.0, 3.0, 500)
     np.testing.assert_allclose(ter.height(x, z), 2.0 + a * x + b * z, atol=1e-13)
@@ -156,8 +171,19 @@ def test_sinusoidal_surface_converges_at_second_order():
 def test_taichi_surface_matches_numpy():
     # the kernels' surface() against ti_golf.scene.terrain.Terrain, on generated hills, inside and outside
     # the grid (clamped to the edge cells); out of bounds: off the grid or below kill_height
-    sim = tg.Simulation(scene(terrain={"size": [30.0, 20.0], "resolution": [61, 41], "seed": 3, "amplitude": 2.0,
-                                       "origin": [-5.0, 1.0, 2.0], "kill_height": -0.5}), x=[[0.0, 3.0, 5.0]])
+    sim = tg.Simulation(
+        scene(
+            terrain={
+                "size": [30.0, 20.0],
+                "resolution": [61, 41],
+                "seed": 3,
+                "amplitude": 2.0,
+                "origin": [-5.0, 1.0, 2.0],
+                "kill_height": -0.5,
+            }
+        ),
+        x=[[0.0, 3.0, 5.0]],
+    )
     ter = sim.terrain
     rng = np.random.default_rng(2)
     pts = np.column_stack([rng.uniform(-10, 30, 3000), rng.uniform(-1.0, 4.0, 3000), rng.uniform(-3, 27, 3000)])
@@ -201,8 +227,9 @@ def test_bounce_on_terrain_follows_restitution():
     # like test_bounce_heights_follow_restitution: a ball dropped from H above a (raised) flat
     # terrain rebounds to e²H, then e⁴H; the time-of-impact split leaves a few g·h² per bounce
     H, e, h, y0 = 1.0, 0.6, 1e-4, 0.7
-    sim = tg.Simulation(scene(world={"dt": h}, contact={"e": e, "mu": 0.0}, terrain=flat_at(y0)),
-                        x=[[0.3, y0 + R + H, -0.2]])
+    sim = tg.Simulation(
+        scene(world={"dt": h}, contact={"e": e, "mu": 0.0}, terrain=flat_at(y0)), x=[[0.3, y0 + R + H, -0.2]]
+    )
     rec = sim.run(t=2.0, record_every=10)
     y = np.asarray(rec.x)[:, 0, 1] - y0 - R
     peaks = [y[i] for i in range(1, len(y) - 1) if y[i - 1] < y[i] >= y[i + 1] and y[i] > 0.01]
@@ -243,15 +270,18 @@ def test_ball_on_incline_slides_or_rolls(mu, collide):
             assert w[2] == pytest.approx(-np.linalg.norm(v) / R, rel=1e-9)  # rolling: ω = v/R about −z
             np.testing.assert_allclose(w[:2], 0.0, atol=1e-9)
         # it stays on the incline: centre R above the plane (distance = (y − h)·cosθ)
-        assert sim.terrain.gap(sim.x[i:i + 1], R)[0] == pytest.approx(0.0, abs=1e-9)
+        assert sim.terrain.gap(sim.x[i : i + 1], R)[0] == pytest.approx(0.0, abs=1e-9)
 
 
 def test_ball_on_level_terrain_comes_to_rest():
     # a ball pushed along a raised flat terrain stops where the ground-plane closed form says
     # (test_rolling_ball_stops_where_closed_form_says): slide until rolling, then μ_r·g to rest
     u0, mu, mu_r, y0 = 3.0, 0.3, 0.05, 1.5
-    sim = tg.Simulation(scene(world={"dt": 0.0005}, contact={"mu": mu, "mu_roll": mu_r}, terrain=flat_at(y0)),
-                        x=[[0.0, y0 + R, 0.0]], v=[[u0, 0.0, 0.0]])
+    sim = tg.Simulation(
+        scene(world={"dt": 0.0005}, contact={"mu": mu, "mu_roll": mu_r}, terrain=flat_at(y0)),
+        x=[[0.0, y0 + R, 0.0]],
+        v=[[u0, 0.0, 0.0]],
+    )
     sim.run(t=15.0, until="rest")
     t1 = u0 / (3.5 * mu * G)
     u1 = u0 - (mu + mu_r) * G * t1
@@ -276,11 +306,23 @@ def test_no_ball_ends_below_hills_at_100_mps(collisions):
     # into the surface, as it may into the ground plane, and the surface's k_p projection pushes
     # it back out over a few steps: (1 − k_p)^20 ≈ 1 %.)
     h, speed = 0.001, 100.0
-    sc = scene(world={"dt": h, "collisions": collisions}, contact={"e": 0.0, "mu": 0.4},
-               terrain={"size": [60.0, 60.0], "resolution": [121, 121], "seed": 7, "amplitude": 4.0},
-               blocks=[{"kind": "lattice", "count": [20, 1, 10], "origin": [10.0, 5.0, 10.0], "spacing": 2.0,
-                        "speed": [speed, speed], "angle_deg": [-45.0, -8.0], "direction_deg": [-180.0, 180.0],
-                        "seed": 3}])
+    sc = scene(
+        world={"dt": h, "collisions": collisions},
+        contact={"e": 0.0, "mu": 0.4},
+        terrain={"size": [60.0, 60.0], "resolution": [121, 121], "seed": 7, "amplitude": 4.0},
+        blocks=[
+            {
+                "kind": "lattice",
+                "count": [20, 1, 10],
+                "origin": [10.0, 5.0, 10.0],
+                "spacing": 2.0,
+                "speed": [speed, speed],
+                "angle_deg": [-45.0, -8.0],
+                "direction_deg": [-180.0, 180.0],
+                "seed": 3,
+            }
+        ],
+    )
     sim = tg.Simulation(sc)
     assert sim.n == 200 and (sim.solver is not None) == collisions
     ter = sim.terrain
@@ -292,7 +334,9 @@ def test_no_ball_ends_below_hills_at_100_mps(collisions):
     for k in range(300):
         sim.step(1)
         x0, x = x, sim.x
-        dist = np.minimum(np.linalg.norm(x0[:, None] - x0[None], axis=-1), np.linalg.norm(x[:, None] - x[None], axis=-1))
+        dist = np.minimum(
+            np.linalg.norm(x0[:, None] - x0[None], axis=-1), np.linalg.norm(x[:, None] - x[None], axis=-1)
+        )
         np.fill_diagonal(dist, np.inf)
         last_met[dist.min(axis=1) < 2.2 * R] = k
         check = (sim.status != tg.OUT_OF_BOUNDS) & (k - last_met > 20)
@@ -317,10 +361,12 @@ def test_a_ball_over_a_steep_slope_meets_it_within_the_step(tmp_path, serial):
     # n̂ = (−√3, 1, 0)/2, v·n̂ = −5 m/s.
     slope = math.sqrt(3.0)
     np.save(tmp_path / "ramp.npy", np.repeat([[0.0], [slope], [slope]], 3, axis=1))  # h(x) = √3·min(x, 1)
-    sc = scene(world={"gravity": [0.0, 0.0, 0.0]}, contact={"e": 0.0, "mu": 0.0},
-               terrain={"kind": "file", "file": str(tmp_path / "ramp.npy"), "size": [2.0, 2.0]},
-               balls=[{"position": [0.999, slope + 0.045, 1.0], "velocity": [0.0, -10.0, 0.0]},
-                      {"position": [1.5, 3.0, 1.0]}])
+    sc = scene(
+        world={"gravity": [0.0, 0.0, 0.0]},
+        contact={"e": 0.0, "mu": 0.0},
+        terrain={"kind": "file", "file": str(tmp_path / "ramp.npy"), "size": [2.0, 2.0]},
+        balls=[{"position": [0.999, slope + 0.045, 1.0], "velocity": [0.0, -10.0, 0.0]}, {"position": [1.5, 3.0, 1.0]}],
+    )
     sim = tg.Simulation(sc)
     sim.solver = CollisionSolver(sim.model, serial=serial)
     sim.step(1)
@@ -339,10 +385,16 @@ def test_ball_leaving_the_terrain_is_out_of_bounds_and_frozen(tmp_path, collisio
     heights[4:7, 4:7] = -5.0
     np.save(tmp_path / "pit.npy", heights)
     path = tmp_path / "pit.toml"
-    _write_scene(path, 'kind = "file"\nfile = "pit.npy"\nsize = [10.0, 10.0]\nkill_height = -2.0',
-                 f"[world]\ncollisions = {str(collisions).lower()}\nintegrator = \"semi_implicit\"")
-    sim = tg.Simulation(tg.load_scene(path), x=[[9.8, R, 2.0], [5.0, 1.0, 5.0], [2.0, R, 2.0]],
-                        v=[[2.0, 0.0, 0.0], [0, 0, 0], [0, 0, 0]])
+    _write_scene(
+        path,
+        'kind = "file"\nfile = "pit.npy"\nsize = [10.0, 10.0]\nkill_height = -2.0',
+        f'[world]\ncollisions = {str(collisions).lower()}\nintegrator = "semi_implicit"',
+    )
+    sim = tg.Simulation(
+        tg.load_scene(path),
+        x=[[9.8, R, 2.0], [5.0, 1.0, 5.0], [2.0, R, 2.0]],
+        v=[[2.0, 0.0, 0.0], [0, 0, 0], [0, 0, 0]],
+    )
     assert (sim.solver is not None) == collisions
     sim.run(t=1.0)
     st = sim.status
@@ -361,8 +413,11 @@ def test_ball_leaving_the_terrain_is_out_of_bounds_and_frozen(tmp_path, collisio
 # Files, saving, bundled scenes
 # ---------------------------------------------------------------------------------------------
 def _write_scene(path, terrain_toml: str, extra: str = "") -> None:
-    path.write_text('description = "t"\n[air]\nrho = 0.0\n[[balls]]\nposition = [1.0, 3.0, 1.0]\n'
-                    f"{extra}\n[terrain]\n{terrain_toml}\n", encoding="utf-8")
+    path.write_text(
+        'description = "t"\n[air]\nrho = 0.0\n[[balls]]\nposition = [1.0, 3.0, 1.0]\n'
+        f"{extra}\n[terrain]\n{terrain_toml}\n",
+        encoding="utf-8",
+    )
 
 
 def test_terrain_from_npy_file(tmp_path, monkeypatch):
@@ -399,8 +454,9 @@ def test_save_writes_the_terrain(tmp_path):
         assert not any(k.startswith("terrain") for k in d.files)
 
 
-background.declare("run-terrain-3d", lambda workdir: (
-    cli("run", "terrain_3d", "--steps", "5", "--out", str(workdir / "run.npz")), {}))
+background.declare(
+    "run-terrain-3d", lambda workdir: (cli("run", "terrain_3d", "--steps", "5", "--out", str(workdir / "run.npz")), {})
+)
 
 
 @pytest.mark.background("run-terrain-3d")
@@ -498,8 +554,13 @@ def _two_plateaus(tmp_path):
     heights = np.zeros((41, 11))
     heights[20:, :] = 0.5
     np.save(tmp_path / "steps.npy", heights)
-    return {"kind": "file", "file": str(tmp_path / "steps.npy"), "origin": [-20.0, 0.0, -5.0],
-            "size": [40.0, 10.0], "surface_levels": [0.25]}
+    return {
+        "kind": "file",
+        "file": str(tmp_path / "steps.npy"),
+        "origin": [-20.0, 0.0, -5.0],
+        "size": [40.0, 10.0],
+        "surface_levels": [0.25],
+    }
 
 
 @pytest.mark.parametrize("collide", [False, True], ids=["advance", "collision_step"])
@@ -507,8 +568,12 @@ def test_surface_types_have_their_own_restitution(tmp_path, collide):
     # report B.9 per surface: a ball dropped from H on each plateau rebounds to e²H with that
     # surface's e (the time-of-impact split leaves a few g·h² per bounce)
     H, h = 1.0, 1e-4
-    sc = scene(world={"dt": h}, contact={"e": 0.5, "mu": 0.0}, terrain=_two_plateaus(tmp_path),
-               surfaces=[{"name": "green", "e": 0.8}, {"name": "rough", "e": 0.3}])
+    sc = scene(
+        world={"dt": h},
+        contact={"e": 0.5, "mu": 0.0},
+        terrain=_two_plateaus(tmp_path),
+        surfaces=[{"name": "green", "e": 0.8}, {"name": "rough", "e": 0.3}],
+    )
     x = [[-10.0, R + H, 0.0], [10.0, 0.5 + R + H, 0.0]]
     if collide:  # both balls in one simulation: the collision step
         sim = tg.Simulation(sc, x=x)
@@ -531,8 +596,11 @@ def test_surface_types_have_their_own_restitution(tmp_path, collide):
 def test_surface_defaults_come_from_contact_and_levels_are_checked(tmp_path):
     from ti_golf.sim.model import Model
 
-    sc = scene(contact={"e": 0.4, "mu": 0.3, "mu_roll": 0.07, "turf": True}, terrain=_two_plateaus(tmp_path),
-               surfaces=[{"name": "fairway", "mu_roll": 0.2}, {"name": "bunker", "e": 0.05, "turf": False}])
+    sc = scene(
+        contact={"e": 0.4, "mu": 0.3, "mu_roll": 0.07, "turf": True},
+        terrain=_two_plateaus(tmp_path),
+        surfaces=[{"name": "fairway", "mu_roll": 0.2}, {"name": "bunker", "e": 0.05, "turf": False}],
+    )
     model = Model(sc, np.full(1, R), np.full(1, 0.045), np.zeros(1))
     np.testing.assert_allclose(model.surface_table, [[0.4, 0.3, 0.2, 1.0], [0.05, 0.3, 0.07, 0.0]])
     cells = model.terrain.cells

@@ -68,8 +68,11 @@ def init(arch: str | None = None, precision: str | None = None, *, debug: bool =
     global _info
     want_arch, want_prec = _resolve(arch, precision)
     if _info is not None:
-        if ((arch and want_arch != _info.requested_arch) or (precision and want_prec != _info.precision)
-                or (debug and not ti.lang.impl.current_cfg().debug)):
+        if (
+            (arch and want_arch != _info.requested_arch)
+            or (precision and want_prec != _info.precision)
+            or (debug and not ti.lang.impl.current_cfg().debug)
+        ):
             raise RuntimeError(
                 f"ti_golf is already initialised with arch={_info.requested_arch}, precision={_info.precision}"
                 f"{'' if ti.lang.impl.current_cfg().debug else ', debug off'}; start a new process to change them "
@@ -92,9 +95,11 @@ def init(arch: str | None = None, precision: str | None = None, *, debug: bool =
     actual = ti.lang.impl.current_cfg().arch
     _info = RuntimeInfo(requested_arch=want_arch, arch=str(actual).split(".")[-1], precision=want_prec)
     if announce_first_compile and not kernels_cached():
-        print("ti-golf: first run on this machine: Taichi compiles the kernels as they are first used "
-              f"(up to a minute in all) and keeps them in {ti.lang.impl.current_cfg().offline_cache_file_path}",
-              file=sys.stderr)
+        print(
+            "ti-golf: first run on this machine: Taichi compiles the kernels as they are first used "
+            f"(up to a minute in all) and keeps them in {ti.lang.impl.current_cfg().offline_cache_file_path}",
+            file=sys.stderr,
+        )
     return _info
 
 

@@ -7,8 +7,9 @@ import json
 import os
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import replace
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 import taichi as ti
@@ -70,8 +71,15 @@ def _best_time(fn: Callable[[], Any], repeats: int) -> float:
     return best
 
 
-def bench_sweep(n: int = 100_000, dt: float = 0.1, repeats: int = 3, n_reference: int = 64,
-                n_numpy: int | None = None, n_scipy: int = 100, log: Callable[[str], None] = print) -> dict[str, Any]:
+def bench_sweep(
+    n: int = 100_000,
+    dt: float = 0.1,
+    repeats: int = 3,
+    n_reference: int = 64,
+    n_numpy: int | None = None,
+    n_scipy: int = 100,
+    log: Callable[[str], None] = print,
+) -> dict[str, Any]:
     """Time a data-parallel sweep of ``n`` launches and compare with numpy and scipy baselines.
 
     Returns the JSON-able result (``trajectories_per_s``, ``max_rel_carry_error``, ``baselines``, ...).
@@ -89,8 +97,10 @@ def bench_sweep(n: int = 100_000, dt: float = 0.1, repeats: int = 3, n_reference
     landed = raw["landed"] == 1
     d = raw["land_x"] - x0
     carry = np.where(landed, np.hypot(d[:, 0], d[:, 2]), np.nan)
-    log(f"ti_golf sweep: {n} trajectories in {seconds:.3f} s ({n / seconds:,.0f}/s, best of {repeats}), "
-        f"arch={info.arch}, {info.precision}, RK4 h={dt} s")
+    log(
+        f"ti_golf sweep: {n} trajectories in {seconds:.3f} s ({n / seconds:,.0f}/s, best of {repeats}), "
+        f"arch={info.arch}, {info.precision}, RK4 h={dt} s"
+    )
 
     rng = np.random.default_rng(1)
     pick = rng.choice(n, size=min(n_reference, n), replace=False)
@@ -151,13 +161,23 @@ def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scen
     grid = np.stack([idx % side, idx // (side * side), (idx // side) % side], axis=1)
     x = r + 2.0 * r * grid.astype(float)
     width = 2.0 * r * side
-    planes = (Plane((0, 0, 0), (0, 1, 0)), Plane((0, 0, 0), (1, 0, 0)), Plane((width, 0, 0), (-1, 0, 0)),
-              Plane((0, 0, 0), (0, 0, 1)), Plane((0, 0, width), (0, 0, -1)))
+    planes = (
+        Plane((0, 0, 0), (0, 1, 0)),
+        Plane((0, 0, 0), (1, 0, 0)),
+        Plane((width, 0, 0), (-1, 0, 0)),
+        Plane((0, 0, 0), (0, 0, 1)),
+        Plane((0, 0, width), (0, 0, -1)),
+    )
     floor = None
     if terrain:
         planes = planes[1:]
-        floor = TerrainConfig(kind="generated", origin=(-0.1, 0.0, -0.1), size=(width + 0.2, width + 0.2),
-                              resolution=(65, 65), amplitude=0.0)
+        floor = TerrainConfig(
+            kind="generated",
+            origin=(-0.1, 0.0, -0.1),
+            size=(width + 0.2, width + 0.2),
+            resolution=(65, 65),
+            amplitude=0.0,
+        )
     scene = Scene(
         name="bench_collide",
         description=f"benchmark: {n} balls in a {width:.2f} m bin, {layers} layers",
@@ -171,8 +191,9 @@ def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scen
     return scene, x
 
 
-def drop_boulder(scene: Scene, x: np.ndarray, radius: float,
-                 speed: float = 3.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def drop_boulder(
+    scene: Scene, x: np.ndarray, radius: float, speed: float = 3.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """A ball of ``radius`` [m], as dense as the scene's balls, 5 mm above the middle of the top
     of the pile at ``x`` (n, 3) [m], falling at ``speed`` [m/s]: a boulder thrown into a ball pit.
     Returns the positions, velocities, radii and masses of the n + 1 balls (the boulder last)."""
@@ -186,9 +207,16 @@ def drop_boulder(scene: Scene, x: np.ndarray, radius: float,
     return x, v, radii, m * (radii / r) ** 3
 
 
-def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asleep: bool = False,
-                  shuffled: bool = False, iterations: int = 4, boulder: float = 0.0,
-                  log: Callable[[str], None] = print) -> dict[str, Any]:
+def bench_collide(
+    n: int = 131_072,
+    steps: int = 50,
+    terrain: bool = False,
+    asleep: bool = False,
+    shuffled: bool = False,
+    iterations: int = 4,
+    boulder: float = 0.0,
+    log: Callable[[str], None] = print,
+) -> dict[str, Any]:
     """Time the full collision step (flight forces, grid, ball–ball and plane contacts) on a dense pile.
 
     With ``terrain`` the floor is a flat height field, and the same pile on the plane floor is
@@ -207,8 +235,9 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     info = ensure_init()
     serial = steps_serially(n)
 
-    def pile(m: int, floor: bool, parallel: bool = False, reorder: bool | None = None,
-             with_boulder: bool = boulder > 0) -> Simulation:
+    def pile(
+        m: int, floor: bool, parallel: bool = False, reorder: bool | None = None, with_boulder: bool = boulder > 0
+    ) -> Simulation:
         scene, x = pile_scene(m, floor, iterations)
         if shuffled:
             x = x[np.random.default_rng(0).permutation(m)]
@@ -236,8 +265,13 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     _restart_peak_rss()
     base_rss = _rss_bytes()
 
-    def timed(floor: bool, sleeping: bool, parallel: bool = False, reorder: bool | None = None,
-              with_boulder: bool = boulder > 0) -> tuple[Any, float]:
+    def timed(
+        floor: bool,
+        sleeping: bool,
+        parallel: bool = False,
+        reorder: bool | None = None,
+        with_boulder: bool = boulder > 0,
+    ) -> tuple[Any, float]:
         sim = pile(n, floor, parallel, reorder, with_boulder)
         sim.step(10)  # settle the first contacts, build the lists
         if sleeping:
@@ -291,29 +325,60 @@ def bench_collide(n: int = 131_072, steps: int = 50, terrain: bool = False, asle
     # the baselines timed in the same run: (its seconds, key of its ms per step, key of the ratio, the
     # ratio from (seconds, its seconds), the line that says it)
     for base, key, name, ratio, say in (
-        (plane_seconds, "plane_floor_ms_per_step", "terrain_overhead", lambda s, b: s / b - 1.0,
-         lambda q: f"terrain floor vs plane floor: {100 * q:+.1f} % time per step"),
-        (awake_seconds, "awake_ms_per_step", "asleep_speedup", lambda s, b: b / s,
-         lambda q: f"the pile asleep vs awake: {q:.2f}x faster per step"),
-        (in_id_order_seconds, "not_reordered_ms_per_step", "reorder_speedup", lambda s, b: b / s,
-         lambda q: f"stored in the grid's order vs left in random id order: {q:.2f}x faster per step"),
-        (alone_seconds, "pile_alone_ms_per_step", "boulder_slowdown", lambda s, b: s / b,
-         lambda q: f"with a {boulder:g} m boulder vs the pile alone: {q:.2f}x the time per step"),
-        (parallel_seconds, "parallel_ms_per_step", "serial_speedup", lambda s, b: b / s,
-         lambda q: f"stepped serially vs one parallel launch per step: {q:.1f}x faster per step"),
+        (
+            plane_seconds,
+            "plane_floor_ms_per_step",
+            "terrain_overhead",
+            lambda s, b: s / b - 1.0,
+            lambda q: f"terrain floor vs plane floor: {100 * q:+.1f} % time per step",
+        ),
+        (
+            awake_seconds,
+            "awake_ms_per_step",
+            "asleep_speedup",
+            lambda s, b: b / s,
+            lambda q: f"the pile asleep vs awake: {q:.2f}x faster per step",
+        ),
+        (
+            in_id_order_seconds,
+            "not_reordered_ms_per_step",
+            "reorder_speedup",
+            lambda s, b: b / s,
+            lambda q: f"stored in the grid's order vs left in random id order: {q:.2f}x faster per step",
+        ),
+        (
+            alone_seconds,
+            "pile_alone_ms_per_step",
+            "boulder_slowdown",
+            lambda s, b: s / b,
+            lambda q: f"with a {boulder:g} m boulder vs the pile alone: {q:.2f}x the time per step",
+        ),
+        (
+            parallel_seconds,
+            "parallel_ms_per_step",
+            "serial_speedup",
+            lambda s, b: b / s,
+            lambda q: f"stepped serially vs one parallel launch per step: {q:.1f}x faster per step",
+        ),
     ):
         if base is not None:
             result["baselines"][key] = 1e3 * base / steps
             result[name] = ratio(seconds, base)
             log(say(result[name]))
-    log(f"ti_golf collide: {n} balls, {result['ms_per_step']:.2f} ms/step, {result['ball_steps_per_s']:.3g} ball-steps/s, "
+    log(
+        f"ti_golf collide: {n} balls, {result['ms_per_step']:.2f} ms/step, {result['ball_steps_per_s']:.3g} ball-steps/s, "
         f"{result['contacts_per_ball']:.2f} contacts/ball, deepest overlap {100 * result['deepest_overlap']:.2g} % "
         f"of a radius, peak RSS {peak / 2**20:.0f} MiB "
-        f"({result['bytes_per_ball_above_baseline']:.0f} B/ball above baseline), arch={info.arch}, {info.precision}")
-    log(f"baseline: a bare 12-neighbour gather runs at {gather_rate:.3g} balls/s; "
-        f"one collision step costs {result['step_cost_in_bare_gathers']:.1f} such passes")
-    log(f"floor: one pass of the pair impulse over every ball's neighbours runs at {one_pass_rate:.3g} balls/s; "
-        f"one collision step costs {result['step_cost_in_one_pass_contacts']:.1f} such passes")
+        f"({result['bytes_per_ball_above_baseline']:.0f} B/ball above baseline), arch={info.arch}, {info.precision}"
+    )
+    log(
+        f"baseline: a bare 12-neighbour gather runs at {gather_rate:.3g} balls/s; "
+        f"one collision step costs {result['step_cost_in_bare_gathers']:.1f} such passes"
+    )
+    log(
+        f"floor: one pass of the pair impulse over every ball's neighbours runs at {one_pass_rate:.3g} balls/s; "
+        f"one collision step costs {result['step_cost_in_one_pass_contacts']:.1f} such passes"
+    )
     return result
 
 
@@ -360,8 +425,22 @@ def one_pass_contacts(sim: Any) -> tuple[Callable[[], None], Any, Any]:
     dv, dw = ti.ndarray(vec3.get(), s.n), ti.ndarray(vec3.get(), s.n)
 
     def run() -> None:
-        baseline.one_pass_contacts(m.contact, m.gravity, m.dt, s.x, s.v, s.w, m.radius, m.mass, solver.upper, solver.n_upper,
-               solver.lower, solver.n_lower, dv, dw)
+        baseline.one_pass_contacts(
+            m.contact,
+            m.gravity,
+            m.dt,
+            s.x,
+            s.v,
+            s.w,
+            m.radius,
+            m.mass,
+            solver.upper,
+            solver.n_upper,
+            solver.lower,
+            solver.n_lower,
+            dv,
+            dw,
+        )
         ti.sync()
 
     return run, dv, dw
@@ -415,8 +494,9 @@ def _peak_rss_bytes() -> int:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # pragma: no cover
 
 
-def bench_render(n: int = 100_000, size: tuple[int, int] = (1280, 720), frames: int = 3,
-                 log: Callable[[str], None] = print) -> dict[str, Any]:
+def bench_render(
+    n: int = 100_000, size: tuple[int, int] = (1280, 720), frames: int = 3, log: Callable[[str], None] = print
+) -> dict[str, Any]:
     """Seconds per off-screen frame of n balls over a generated terrain (GGUI), with the matplotlib
     fallback timed in the same run as the baseline."""
     info = ensure_init()
@@ -426,8 +506,14 @@ def bench_render(n: int = 100_000, size: tuple[int, int] = (1280, 720), frames: 
         description=f"benchmark: {n} balls over a terrain",
         launch=None,
         world=World(dt=0.001, integrator="semi_implicit", ground=False),
-        terrain=TerrainConfig(kind="generated", origin=(-1.0, 0.0, -1.0), size=(2.0 + 0.05 * side, 2.0 + 0.05 * side),
-                              resolution=(129, 129), amplitude=0.3, seed=3),
+        terrain=TerrainConfig(
+            kind="generated",
+            origin=(-1.0, 0.0, -1.0),
+            size=(2.0 + 0.05 * side, 2.0 + 0.05 * side),
+            resolution=(129, 129),
+            amplitude=0.3,
+            seed=3,
+        ),
     )
     idx = np.arange(n)
     x = np.stack([0.05 * (idx % side), 0.6 + 0.05 * (idx // (side * side)), 0.05 * ((idx // side) % side)], axis=1)
@@ -445,6 +531,8 @@ def bench_render(n: int = 100_000, size: tuple[int, int] = (1280, 720), frames: 
                 out["seconds_per_frame"], out["renderer"] = per_frame, used
             else:
                 out["baselines"] = {"matplotlib_seconds_per_frame": per_frame}
-    log(f"ti_golf render: {n} balls + terrain at {size[0]}x{size[1]}: {out['seconds_per_frame']:.3f} s/frame "
-        f"({out['renderer']}); matplotlib {out['baselines']['matplotlib_seconds_per_frame']:.3f} s/frame")
+    log(
+        f"ti_golf render: {n} balls + terrain at {size[0]}x{size[1]}: {out['seconds_per_frame']:.3f} s/frame "
+        f"({out['renderer']}); matplotlib {out['baselines']['matplotlib_seconds_per_frame']:.3f} s/frame"
+    )
     return out

@@ -57,8 +57,9 @@ def derivatives(scene: Scene, v: np.ndarray, w: np.ndarray) -> tuple[np.ndarray,
     return dv, -decay * w
 
 
-def carry_numpy(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, h: float,
-                t_max: float | None = None) -> np.ndarray:
+def carry_numpy(
+    scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, h: float, t_max: float | None = None
+) -> np.ndarray:
     """Carry [m] of each ball by vectorised RK4 with step ``h`` and cubic-Hermite landing; NaN if not landed."""
     t_max = scene.world.t_max if t_max is None else t_max
     x, v, w = (np.array(a, dtype=float) for a in (x0, v0, w0))
@@ -106,8 +107,16 @@ def _hermite_root(y0, y1, m0, m1, level):
     return s
 
 
-def carry_scipy(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, method: str = "DOP853",
-                rtol: float = 1e-12, atol: float = 1e-12, t_max: float | None = None) -> np.ndarray:
+def carry_scipy(
+    scene: Scene,
+    x0: np.ndarray,
+    v0: np.ndarray,
+    w0: np.ndarray,
+    method: str = "DOP853",
+    rtol: float = 1e-12,
+    atol: float = 1e-12,
+    t_max: float | None = None,
+) -> np.ndarray:
     """Carry [m] of each ball by ``solve_ivp`` (one call per trajectory) with an exact landing event."""
     from scipy.integrate import solve_ivp  # scipy is optional (the bench and test extras): imported on use
 
@@ -120,7 +129,7 @@ def carry_scipy(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, me
             dv, dw = derivatives(scene, y[3:6][None, :], y[6:9][None, :])
             return np.concatenate([y[3:6], dv[0], dw[0]])
 
-        def landing(_t: float, y: np.ndarray) -> float:
+        def landing(_t: float, y: np.ndarray, level: float = level) -> float:
             return y[1] - level
 
         landing.terminal, landing.direction = True, -1  # type: ignore[attr-defined]

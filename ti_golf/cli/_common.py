@@ -8,6 +8,9 @@ import sys
 import time
 from pathlib import Path
 
+import rich.console
+import rich.progress
+
 from ti_golf.errors import ConfigError
 from ti_golf.runtime import ARCHES, PRECISIONS
 
@@ -22,17 +25,23 @@ class Parser(argparse.ArgumentParser):
 
 def runtime_options(p: argparse.ArgumentParser) -> None:
     """``--arch`` and ``--precision``: the Taichi backend and float type of a command that simulates."""
-    p.add_argument("--arch", choices=ARCHES, default=None,
-                   help="Taichi backend (default: $TI_GOLF_ARCH or cpu)")
-    p.add_argument("--precision", choices=PRECISIONS, default=None,
-                   help="float precision (default: $TI_GOLF_PRECISION or f64)")
+    p.add_argument("--arch", choices=ARCHES, default=None, help="Taichi backend (default: $TI_GOLF_ARCH or cpu)")
+    p.add_argument(
+        "--precision", choices=PRECISIONS, default=None, help="float precision (default: $TI_GOLF_PRECISION or f64)"
+    )
 
 
 def scene_options(p: argparse.ArgumentParser) -> None:
     """The positional scene and ``--set KEY=VALUE`` overrides."""
     p.add_argument("scene", help="scene file, or the name of a bundled scene (see `ti-golf scenes`)")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a scene key with a TOML value, e.g. --set air.wind=[-5,0,0] (repeatable)")
+    p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene key with a TOML value, e.g. --set air.wind=[-5,0,0] (repeatable)",
+    )
 
 
 def check_writable(path: str | None, option: str) -> None:
@@ -56,9 +65,10 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 class Progress:
-    """Progress for runs longer than a few seconds: a bar on a terminal, plain lines otherwise.
+    """Progress of a run longer than a few seconds: a rich progress bar on a terminal, a plain line
+    every few seconds otherwise (logs and CI read standard error).
 
-    Called as ``progress(done, total)`` with simulated times [s].
+    Called as ``progress(done, total)`` with simulated times [s]; :meth:`close` ends the bar.
     """
 
     def __init__(self, after_s: float = 3.0, every_s: float = 5.0) -> None:
@@ -66,21 +76,35 @@ class Progress:
         self.after_s, self.every_s = after_s, every_s
         self.last = 0.0
         self.tty = sys.stderr.isatty()
-        self.shown = False
+        self._bar: rich.progress.Progress | None = None
+        self._task: rich.progress.TaskID | None = None
 
     def __call__(self, done: float, total: float) -> None:
         now = time.perf_counter() - self.start
-        if now < self.after_s or (not self.tty and now - self.last < self.every_s) or (self.tty and now - self.last < 0.2):
+        if now < self.after_s:
             return
-        self.last = now
-        frac = done / total if total else 1.0
         if self.tty:
-            bar = "#" * int(30 * frac)
-            print(f"\r[{bar:<30}] {100 * frac:5.1f}%  t = {done:.3g}/{total:.3g} s", end="", file=sys.stderr)
-        else:
-            print(f"progress: {100 * frac:5.1f}% (t = {done:.3g} of {total:.3g} s, {now:.0f} s elapsed)", file=sys.stderr)
-        self.shown = True
+            if self._bar is None:
+                self._bar = rich.progress.Progress(
+                    rich.progress.BarColumn(),
+                    rich.progress.TaskProgressColumn(),
+                    rich.progress.TextColumn("t = {task.completed:.3g} of {task.total:.3g} s"),
+                    rich.progress.TimeElapsedColumn(),
+                    console=rich.console.Console(stderr=True),
+                    transient=True,
+                )
+                self._task = self._bar.add_task("run", total=total)
+                self._bar.start()
+            assert self._task is not None
+            self._bar.update(self._task, completed=done, total=total)
+        elif now - self.last >= self.every_s:
+            self.last = now
+            frac = done / total if total else 1.0
+            print(
+                f"progress: {100 * frac:5.1f}% (t = {done:.3g} of {total:.3g} s, {now:.0f} s elapsed)", file=sys.stderr
+            )
 
     def close(self) -> None:
-        if self.shown and self.tty:
-            print(file=sys.stderr)
+        if self._bar is not None:
+            self._bar.stop()
+            self._bar = None

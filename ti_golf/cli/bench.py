@@ -22,20 +22,37 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     bc = bsub.add_parser("collide", help="full collision step on a dense pile of N balls")
     bc.add_argument("--n", type=int, default=131_072, help="balls (default 131072)")
     bc.add_argument("--steps", type=int, default=50, help="timed steps (default 50)")
-    bc.add_argument("--terrain", action="store_true",
-                    help="a flat height-field floor instead of the plane (the plane is timed too, as baseline)")
-    bc.add_argument("--asleep", action="store_true",
-                    help="every ball of the pile at rest, as a settled pile ends up (the pile awake is timed too, "
-                         "as baseline)")
-    bc.add_argument("--shuffled", action="store_true",
-                    help="the pile's balls numbered in a random order, as balls given in no spatial order are "
-                         "(the same pile left in that order, not stored in the grid's order, is timed too, as "
-                         "baseline)")
-    bc.add_argument("--boulder", type=float, default=0.0, metavar="R",
-                    help="a ball of radius R [m], as dense as the golf balls, dropped at 3 m/s onto the pile (the "
-                         "pile alone is timed too, as baseline)")
-    bc.add_argument("--iterations", type=int, default=4,
-                    help="Jacobi sweeps per step (default 4, the scenes' default; a deep pile at rest needs 8)")
+    bc.add_argument(
+        "--terrain",
+        action="store_true",
+        help="a flat height-field floor instead of the plane (the plane is timed too, as baseline)",
+    )
+    bc.add_argument(
+        "--asleep",
+        action="store_true",
+        help="every ball of the pile at rest, as a settled pile ends up (the pile awake is timed too, as baseline)",
+    )
+    bc.add_argument(
+        "--shuffled",
+        action="store_true",
+        help="the pile's balls numbered in a random order, as balls given in no spatial order are "
+        "(the same pile left in that order, not stored in the grid's order, is timed too, as "
+        "baseline)",
+    )
+    bc.add_argument(
+        "--boulder",
+        type=float,
+        default=0.0,
+        metavar="R",
+        help="a ball of radius R [m], as dense as the golf balls, dropped at 3 m/s onto the pile (the "
+        "pile alone is timed too, as baseline)",
+    )
+    bc.add_argument(
+        "--iterations",
+        type=int,
+        default=4,
+        help="Jacobi sweeps per step (default 4, the scenes' default; a deep pile at rest needs 8)",
+    )
     bc.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(bc)
     br = bsub.add_parser("render", help="seconds per off-screen frame of N balls over a terrain")
@@ -57,8 +74,15 @@ def cmd_bench(args: argparse.Namespace) -> int:
             raise ConfigError("--iterations", None, f"must be in [1, 100] (got {args.iterations})")
         if not 0.0 <= args.boulder <= 10.0:  # (also false for NaN)
             raise ConfigError("--boulder", None, f"must be a radius in [0, 10] m (got {args.boulder})")
-        result = bench_collide(n=args.n, steps=args.steps, terrain=args.terrain, asleep=args.asleep,
-                               shuffled=args.shuffled, iterations=args.iterations, boulder=args.boulder)
+        result = bench_collide(
+            n=args.n,
+            steps=args.steps,
+            terrain=args.terrain,
+            asleep=args.asleep,
+            shuffled=args.shuffled,
+            iterations=args.iterations,
+            boulder=args.boulder,
+        )
     else:
         if not args.dt > 0:
             raise ConfigError("--dt", None, f"must be > 0 (got {args.dt})")

@@ -40,18 +40,33 @@ PROMPT_DEFAULTS = {"spin": 0.0}
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add the ``play`` subcommand to ``ti-golf``'s subparsers; returns its parser."""
     p = sub.add_parser("play", help="play golf on a course scene, stroke by stroke, until the ball is holed")
-    p.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
-                   help=f"a course: a scene with [terrain] and [hole] (default {DEFAULT_SCENE})")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a scene key with a TOML value, e.g. --set game.wind_max=0 (repeatable)")
-    p.add_argument("--seed", type=int, default=None,
-                   help="seed of the random start and winds (default: a new round every time)")
+    p.add_argument(
+        "scene",
+        nargs="?",
+        default=DEFAULT_SCENE,
+        help=f"a course: a scene with [terrain] and [hole] (default {DEFAULT_SCENE})",
+    )
+    p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene key with a TOML value, e.g. --set game.wind_max=0 (repeatable)",
+    )
+    p.add_argument(
+        "--seed", type=int, default=None, help="seed of the random start and winds (default: a new round every time)"
+    )
     how = p.add_mutually_exclusive_group()
-    how.add_argument("--shots", metavar="FILE",
-                     help="play the strokes in FILE, one per line: direction speed loft spin "
-                          "(deg, km/h, deg, rpm; 'hole' aims at the hole)")
-    how.add_argument("--gui", action="store_true",
-                     help="play in a window: the course in 3-D, clubs and sliders, a camera to move")
+    how.add_argument(
+        "--shots",
+        metavar="FILE",
+        help="play the strokes in FILE, one per line: direction speed loft spin "
+        "(deg, km/h, deg, rpm; 'hole' aims at the hole)",
+    )
+    how.add_argument(
+        "--gui", action="store_true", help="play in a window: the course in 3-D, clubs and sliders, a camera to move"
+    )
     p.add_argument("--out", help="write the round as CSV, one row per stroke (rewritten after every stroke)")
     p.add_argument("--plot", help="write a PNG map of the course with every stroke's path at the end")
     runtime_options(p)
@@ -66,9 +81,11 @@ def cmd_play(args: argparse.Namespace) -> int:
     if args.gui:
         return _play_in_window(game, args)
     shots = _file_shots(args.shots, game) if args.shots else _asked_shots(game, input, sys.stdin.isatty())
-    hole = game.scene.hole.position
-    print(f"{game.scene.name}: a cup {2000 * game.scene.hole.radius:.0f} mm across at x = {hole[0]:g} m, "
-          f"z = {hole[1]:g} m; directions are degrees from +x toward +z")
+    hole = game.hole.position
+    print(
+        f"{game.scene.name}: a cup {2000 * game.hole.radius:.0f} mm across at x = {hole[0]:g} m, "
+        f"z = {hole[1]:g} m; directions are degrees from +x toward +z"
+    )
     ended = "no more input"
     try:
         while not game.over:
@@ -115,8 +132,10 @@ def _finish(game: GolfGame, ended: str, args: argparse.Namespace) -> None:
 def _lie(game: GolfGame) -> str:
     """Where the ball lies, the hole and the wind, before a stroke."""
     dist, bearing = game.to_hole()
-    return (f"Stroke {len(game.strokes) + 1}: the ball lies at x = {game.ball[0]:.2f} m, z = {game.ball[2]:.2f} m, "
-            f"{dist:.2f} m from the hole (direction {bearing:.1f} deg); {describe_wind(game.wind)}.")
+    return (
+        f"Stroke {len(game.strokes) + 1}: the ball lies at x = {game.ball[0]:.2f} m, z = {game.ball[2]:.2f} m, "
+        f"{dist:.2f} m from the hole (direction {bearing:.1f} deg); {describe_wind(game.wind)}."
+    )
 
 
 def _asked_shots(game: GolfGame, ask: Callable[[str], str], interactive: bool) -> Iterator[Shot]:
@@ -193,9 +212,24 @@ def _file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
     return shots()
 
 
-CSV_COLUMNS = ("stroke", "direction_deg", "speed_kmh", "loft_deg", "spin_rpm", "wind_x_mps", "wind_z_mps",
-               "start_x_m", "start_z_m", "end_x_m", "end_y_m", "end_z_m", "carry_m", "distance_m", "outcome",
-               "to_hole_m")
+CSV_COLUMNS = (
+    "stroke",
+    "direction_deg",
+    "speed_kmh",
+    "loft_deg",
+    "spin_rpm",
+    "wind_x_mps",
+    "wind_z_mps",
+    "start_x_m",
+    "start_z_m",
+    "end_x_m",
+    "end_y_m",
+    "end_z_m",
+    "carry_m",
+    "distance_m",
+    "outcome",
+    "to_hole_m",
+)
 
 
 def write_csv(strokes: list[Stroke], path: str) -> None:
@@ -204,7 +238,23 @@ def write_csv(strokes: list[Stroke], path: str) -> None:
         out = csv.writer(f)
         out.writerow(CSV_COLUMNS)
         for s in strokes:
-            out.writerow([s.number, f"{s.shot.direction:g}", f"{s.shot.speed:g}", f"{s.shot.loft:g}",
-                          f"{s.shot.spin:g}", f"{s.wind[0]:.3f}", f"{s.wind[2]:.3f}", f"{s.start[0]:.3f}",
-                          f"{s.start[2]:.3f}", f"{s.end[0]:.3f}", f"{s.end[1]:.3f}", f"{s.end[2]:.3f}",
-                          f"{s.carry:.3f}", f"{s.distance:.3f}", s.outcome, f"{s.to_hole:.3f}"])
+            out.writerow(
+                [
+                    s.number,
+                    f"{s.shot.direction:g}",
+                    f"{s.shot.speed:g}",
+                    f"{s.shot.loft:g}",
+                    f"{s.shot.spin:g}",
+                    f"{s.wind[0]:.3f}",
+                    f"{s.wind[2]:.3f}",
+                    f"{s.start[0]:.3f}",
+                    f"{s.start[2]:.3f}",
+                    f"{s.end[0]:.3f}",
+                    f"{s.end[1]:.3f}",
+                    f"{s.end[2]:.3f}",
+                    f"{s.carry:.3f}",
+                    f"{s.distance:.3f}",
+                    s.outcome,
+                    f"{s.to_hole:.3f}",
+                ]
+            )

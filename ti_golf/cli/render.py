@@ -22,18 +22,27 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser("render", help="run a scene and write a PNG of its balls (GGUI off screen, else matplotlib)")
     scene_options(p)
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--t", type=float,
-                   help="simulated time before the picture [s] (default: the initial state; world.t_end with --until)")
+    g.add_argument(
+        "--t",
+        type=float,
+        help="simulated time before the picture [s] (default: the initial state; world.t_end with --until)",
+    )
     g.add_argument("--steps", type=int, help="time steps before the picture")
     p.add_argument("--until", choices=("rest", "landed"), help="stop early once every ball is at rest / has landed")
     p.add_argument("--out", required=True, help="the PNG to write")
     p.add_argument("--camera", choices=CAMERAS, default="iso", help="camera preset (default iso)")
-    p.add_argument("--size", type=parse_size, default=(1280, 720), metavar="WxH", help="picture size (default 1280x720)")
+    p.add_argument(
+        "--size", type=parse_size, default=(1280, 720), metavar="WxH", help="picture size (default 1280x720)"
+    )
     p.add_argument("--color-by", choices=COLOR_BY, default="status", help="ball colours (default status)")
     p.add_argument("--trails", action="store_true", help="draw each ball's path (records about 200 samples)")
     p.add_argument("--fov", type=float, default=45.0, help="vertical field of view [deg] (default 45)")
-    p.add_argument("--backend", choices=BACKENDS, default="auto",
-                   help="auto: GGUI, else matplotlib with a note (default); ggui: fail without Vulkan")
+    p.add_argument(
+        "--backend",
+        choices=BACKENDS,
+        default="auto",
+        help="auto: GGUI, else matplotlib with a note (default); ggui: fail without Vulkan",
+    )
     runtime_options(p)
     return p
 
@@ -60,8 +69,15 @@ def cmd_render(args: argparse.Namespace) -> int:
     if steps > 0:
         rec = sim.run(steps=steps, until=args.until, record_every=max(1, steps // 200) if args.trails else 0)
     t0 = time.perf_counter()
-    used = render(sim, args.out, camera=args.camera, size=(w, h), color_by=args.color_by,
-                  trails=rec if args.trails and rec is not None else None, fov=args.fov,
-                  backend=args.backend)
+    used = render(
+        sim,
+        args.out,
+        camera=args.camera,
+        size=(w, h),
+        color_by=args.color_by,
+        trails=rec if args.trails and rec is not None else None,
+        fov=args.fov,
+        backend=args.backend,
+    )
     print(f"wrote {args.out} ({used}, {sim.n} ball(s) at t = {sim.t:.4g} s, {time.perf_counter() - t0:.2f} s)")
     return 0

@@ -64,8 +64,15 @@ def cmd_run(args: argparse.Namespace) -> int:
     try:
         if frames is not None:
             frames(sim)
-        rec = sim.run(t=args.t, steps=args.steps, until=args.until, record_every=record_every, progress=progress,
-                      every=frames.every if frames else 0, on_every=frames)
+        rec = sim.run(
+            t=args.t,
+            steps=args.steps,
+            until=args.until,
+            record_every=record_every,
+            progress=progress,
+            every=frames.every if frames else 0,
+            on_every=frames,
+        )
     finally:
         progress.close()
         if frames is not None:
@@ -74,8 +81,10 @@ def cmd_run(args: argparse.Namespace) -> int:
             sim.save(args.out, rec)  # save what was simulated even if the run stopped early
     elapsed = time.perf_counter() - t0
     counts = sim.counts()
-    print(f"{sim.scene.name}: {sim.n} ball(s), t = {sim.t:.4g} s in {elapsed:.2f} s; "
-          + ", ".join(f"{counts[name]} {name.replace('_', ' ')}" for name in STATUS_NAMES.values()))
+    print(
+        f"{sim.scene.name}: {sim.n} ball(s), t = {sim.t:.4g} s in {elapsed:.2f} s; "
+        + ", ".join(f"{counts[name]} {name.replace('_', ' ')}" for name in STATUS_NAMES.values())
+    )
     if sim.solver is not None:
         deepest = sim.deepest_overlap()
         if deepest is None:
@@ -83,8 +92,10 @@ def cmd_run(args: argparse.Namespace) -> int:
         elif deepest.fraction < 1e-6:  # resting contacts left at round-off
             print("no two balls overlap by more than a millionth of a radius")
         else:
-            print(f"deepest overlap: {100 * deepest.fraction:.3g} % of a radius ({1e3 * deepest.depth:.3g} mm, "
-                  f"balls {deepest.i} and {deepest.j})")
+            print(
+                f"deepest overlap: {100 * deepest.fraction:.3g} % of a radius ({1e3 * deepest.depth:.3g} mm, "
+                f"balls {deepest.i} and {deepest.j})"
+            )
     f = sim.flight()
     x, status = sim.x, sim.status
 
@@ -92,15 +103,19 @@ def cmd_run(args: argparse.Namespace) -> int:
         return STATUS_NAMES[int(status[i])].replace("_", " ")
 
     for i in np.flatnonzero(f.landed)[:10]:
-        print(f"ball {i}: carry {f.carry[i]:.3f} m, apex {f.apex[i]:.2f} m, flight {f.flight_time[i]:.3f} s, "
-              f"lands at {f.landing_angle[i]:.1f} deg, {f.landing_speed[i]:.2f} m/s; now at "
-              f"x = {x[i, 0]:.2f} m, z = {x[i, 2]:.2f} m ({state_of(i)})")
+        print(
+            f"ball {i}: carry {f.carry[i]:.3f} m, apex {f.apex[i]:.2f} m, flight {f.flight_time[i]:.3f} s, "
+            f"lands at {f.landing_angle[i]:.1f} deg, {f.landing_speed[i]:.2f} m/s; now at "
+            f"x = {x[i, 0]:.2f} m, z = {x[i, 2]:.2f} m ({state_of(i)})"
+        )
     hole = sim.scene.hole
     if hole is not None:
         away = np.hypot(x[:, 0] - hole.position[0], x[:, 2] - hole.position[1])
         for i in range(min(sim.n, 10)):
-            print(f"ball {i}: {away[i]:.2f} m from the hole at x = {hole.position[0]:g} m, z = {hole.position[1]:g} m "
-                  f"({state_of(i)})")
+            print(
+                f"ball {i}: {away[i]:.2f} m from the hole at x = {hole.position[0]:g} m, z = {hole.position[1]:g} m "
+                f"({state_of(i)})"
+            )
     if args.out:
         print(f"wrote {args.out}")
     if args.plot and rec is not None:
@@ -138,7 +153,7 @@ class _Frames:
 
     def close(self) -> None:
         if self.gif and self.paths:
-            images = [Image.open(p).convert("P", palette=Image.ADAPTIVE) for p in self.paths]
+            images = [Image.open(p).convert("P", palette=Image.Palette.ADAPTIVE) for p in self.paths]
             images[0].save(self.gif, save_all=True, append_images=images[1:], duration=int(1000 / self.fps), loop=0)
             print(f"wrote {self.gif} ({len(images)} frames)")
         if self._tmp is None and self.paths:

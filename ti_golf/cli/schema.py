@@ -12,10 +12,13 @@ from ti_golf.scene.jsonschema import json_schema
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``schema`` to ``ti-golf``'s subcommands."""
-    p = sub.add_parser("schema", help="write the JSON Schema of scene files (for Taplo / Even Better TOML)",
-                       description="Write the JSON Schema of scene files. An editor with Taplo (Even Better TOML) "
-                                   "checks and completes a scene file against it when the file's first line is "
-                                   "'#:schema ./scene.schema.json'.")
+    p = sub.add_parser(
+        "schema",
+        help="write the JSON Schema of scene files (for Taplo / Even Better TOML)",
+        description="Write the JSON Schema of scene files. An editor with Taplo (Even Better TOML) "
+        "checks and completes a scene file against it when the file's first line is "
+        "'#:schema ./scene.schema.json'.",
+    )
     p.add_argument("--out", help="write the schema to this file (default: standard output)")
 
 

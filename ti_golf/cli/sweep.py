@@ -29,6 +29,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def _parse_opt_range(text: str | None, option: str) -> tuple[float, ...] | None:
     return None if text is None else parse_range(text, option, None)  # type: ignore[arg-type]
 
+
 def cmd_sweep(args: argparse.Namespace) -> int:
     check_writable(args.out, "--out")
     check_writable(args.plot, "--plot")
@@ -41,16 +42,20 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     elapsed = time.perf_counter() - t0
     n = res.angle_deg.size
     landed = int(res.flight.landed.sum())
-    print(f"{scene.name}: {n} launch conditions, {landed} landed, {elapsed:.2f} s "
-          f"({scene.world.integrator}, dt = {scene.world.dt:g} s)")
+    print(
+        f"{scene.name}: {n} launch conditions, {landed} landed, {elapsed:.2f} s "
+        f"({scene.world.integrator}, dt = {scene.world.dt:g} s)"
+    )
     if landed == 0:
         print(f"no ball landed within world.t_max = {scene.world.t_max:g} s")
     else:
         b = res.best()
         f = res.flight
-        print(f"best: angle {res.angle_deg[b]:.4f} deg, speed {res.speed_mps[b]:g} m/s, spin {res.spin_radps[b]:g} rad/s"
-              f" -> carry {f.carry[b]:.4f} m (apex {f.apex[b] - launch_position(scene)[1]:.2f} m, "
-              f"flight {f.flight_time[b]:.3f} s, lands at {f.landing_angle[b]:.1f} deg, {f.landing_speed[b]:.2f} m/s)")
+        print(
+            f"best: angle {res.angle_deg[b]:.4f} deg, speed {res.speed_mps[b]:g} m/s, spin {res.spin_radps[b]:g} rad/s"
+            f" -> carry {f.carry[b]:.4f} m (apex {f.apex[b] - launch_position(scene)[1]:.2f} m, "
+            f"flight {f.flight_time[b]:.3f} s, lands at {f.landing_angle[b]:.1f} deg, {f.landing_speed[b]:.2f} m/s)"
+        )
     if args.out:
         res.to_csv(args.out)
         print(f"wrote {args.out}")

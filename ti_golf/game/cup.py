@@ -71,8 +71,15 @@ def inside_fractions(xz: np.ndarray, centre: np.ndarray, cup_radius: float) -> t
     return s0, s1
 
 
-def holed_at(t: np.ndarray, x: np.ndarray, gap: np.ndarray, centre: tuple[float, float], cup_radius: float,
-             radius: float, g: float) -> float | None:
+def holed_at(
+    t: np.ndarray,
+    x: np.ndarray,
+    gap: np.ndarray,
+    centre: tuple[float, float],
+    cup_radius: float,
+    radius: float,
+    g: float,
+) -> float | None:
     """The time [s] at which a ball that followed the sampled path drops into the cup, or ``None``.
 
     Args:

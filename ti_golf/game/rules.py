@@ -23,6 +23,7 @@ from ti_golf.game.cup import LOW_GAP, holed_at
 from ti_golf.scene.schema import (
     AT_REST,
     OUT_OF_BOUNDS,
+    HoleConfig,
     Scene,
     backspin_axis,
     launch_velocity,
@@ -53,8 +54,9 @@ class Field:
         """``value`` when it is a finite number in range, else a :class:`ConfigError` naming
         ``source`` (the file and line, or the option), the field and the range."""
         if not (math.isfinite(value) and self.low <= value <= self.high):
-            raise ConfigError(source, self.name, f"must be a number in [{self.low:g}, {self.high:g}] {self.unit} "
-                                                 f"(got {value!r})")
+            raise ConfigError(
+                source, self.name, f"must be a number in [{self.low:g}, {self.high:g}] {self.unit} (got {value!r})"
+            )
         return float(value)
 
 
@@ -134,23 +136,35 @@ class GolfGame:
         source = scene.path or scene.name
         if scene.terrain is None or scene.hole is None:
             missing = "[terrain]" if scene.terrain is None else "[hole]"
-            raise ConfigError(source, None, f"is not a course: the golf game needs a [terrain] and a [hole] "
-                                            f"(it has no {missing}; try the bundled scene golf_hole)")
+            raise ConfigError(
+                source,
+                None,
+                f"is not a course: the golf game needs a [terrain] and a [hole] "
+                f"(it has no {missing}; try the bundled scene golf_hole)",
+            )
         self.scene = scene
+        self.hole: HoleConfig = scene.hole
+        """The course's cup: its position [x, z] [m] and radius [m]."""
         self.terrain = build_terrain(scene.terrain, scene.path)
         self.rng = np.random.default_rng(seed)
         self.radius = scene.ball.radius
         self.g = float(np.linalg.norm(scene.world.gravity))
         hole = np.asarray(scene.hole.position, dtype=float)
         if not self.terrain.contains(*hole):
-            raise ConfigError(source, "hole.position", f"must lie on the terrain (x in {self._span(0)}, "
-                                                       f"z in {self._span(2)}; got {list(hole)})")
+            raise ConfigError(
+                source,
+                "hole.position",
+                f"must lie on the terrain (x in {self._span(0)}, z in {self._span(2)}; got {list(hole)})",
+            )
         self.cup = self._on_ground(hole)
         if scene.game.start is not None:
             start = np.asarray(scene.game.start, dtype=float)
             if not self.terrain.contains(*start):
-                raise ConfigError(source, "game.start", f"must lie on the terrain (x in {self._span(0)}, "
-                                                        f"z in {self._span(2)}; got {list(start)})")
+                raise ConfigError(
+                    source,
+                    "game.start",
+                    f"must lie on the terrain (x in {self._span(0)}, z in {self._span(2)}; got {list(start)})",
+                )
         else:
             start = self._random_start(hole)
         self.ball = self._on_ground(start)
@@ -203,7 +217,9 @@ class GolfGame:
 
     def scene_with_wind(self, wind: np.ndarray) -> Scene:
         """The course's scene with a stroke's ``wind`` [m/s] (3,) in place of its own."""
-        return dataclasses.replace(self.scene, air=dataclasses.replace(self.scene.air, wind=tuple(map(float, wind))))
+        return dataclasses.replace(
+            self.scene, air=dataclasses.replace(self.scene.air, wind=(float(wind[0]), float(wind[1]), float(wind[2])))
+        )
 
     def play(self, shot: Shot) -> Stroke:
         """Hit the ball: simulate the stroke, move the ball, end the round when it is holed, out of
@@ -211,16 +227,16 @@ class GolfGame:
         if self.over:
             raise RuntimeError(f"the round is over ({self.outcome})")
         scene = self.scene_with_wind(self.wind)
-        sim = Simulation(scene, x=self.ball[None], v=shot.velocity()[None], w=shot.angular_velocity()[None],
-                         track=False)
+        sim = Simulation(
+            scene, x=self.ball[None], v=shot.velocity()[None], w=shot.angular_velocity()[None], track=False
+        )
         every = max(1, round(0.005 / sim.dt))  # samples 5 ms apart: a 1.6 m/s putt moves 8 mm
         rec = sim.run(t=scene.game.shot_time, until="rest", record_every=every)
         t = np.asarray(rec.t)
         path = np.asarray(rec.x)[:, 0, :]
         out = int(sim.status[0]) == OUT_OF_BOUNDS
         gap = self.terrain.gap(path, self.radius)
-        t_in = None if out else holed_at(t, path, gap, self.scene.hole.position, self.scene.hole.radius,
-                                         self.radius, self.g)
+        t_in = None if out else holed_at(t, path, gap, self.hole.position, self.hole.radius, self.radius, self.g)
         carry = _carry(path, gap < LOW_GAP * self.radius)
         if t_in is not None:
             keep = t < t_in
@@ -231,8 +247,18 @@ class GolfGame:
         else:
             outcome = RESTS if int(sim.status[0]) == AT_REST else MOVING
             end = self._on_ground(path[-1][[0, 2]])
-        stroke = Stroke(len(self.strokes) + 1, shot, self.wind.copy(), self.ball.copy(), end, t - t[0], path,
-                        outcome, float(np.hypot(*(self.cup - end)[[0, 2]])), carry)
+        stroke = Stroke(
+            len(self.strokes) + 1,
+            shot,
+            self.wind.copy(),
+            self.ball.copy(),
+            end,
+            t - t[0],
+            path,
+            outcome,
+            float(np.hypot(*(self.cup - end)[[0, 2]])),
+            carry,
+        )
         self.strokes.append(stroke)
         self.ball = end
         if outcome in (HOLED, OUT):
@@ -281,6 +307,6 @@ def _carry(path: np.ndarray, low: np.ndarray) -> float:
     up = np.flatnonzero(~low)
     if up.size == 0:
         return 0.0
-    down = np.flatnonzero(low[up[0]:])
+    down = np.flatnonzero(low[up[0] :])
     k = up[0] + down[0] if down.size else len(path) - 1
     return float(np.hypot(*(path[k] - path[0])[[0, 2]]))

@@ -63,23 +63,37 @@ def check_display() -> None:
     """Raise :class:`ConfigError` (exit 2 from the CLI) when no window can be shown here."""
     arch = non_cpu_arch()
     if arch:  # (see render.non_cpu_arch: GGUI garbles the balls there)
-        raise ConfigError("--gui", None, f"draws with the CPU backend only (this process runs on {arch}); "
-                                         "leave out --arch")
+        raise ConfigError(
+            "--gui", None, f"draws with the CPU backend only (this process runs on {arch}); leave out --arch"
+        )
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        raise ConfigError("--gui", None, "needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set); "
-                                         "play in the console without --gui")
+        raise ConfigError(
+            "--gui",
+            None,
+            "needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set); play in the console without --gui",
+        )
     problem = ggui_problem()
     if problem:
-        raise ConfigError("--gui", None, f"cannot open a window: {problem} (Debian: apt-get install "
-                                         "mesa-vulkan-drivers); play in the console without --gui")
+        raise ConfigError(
+            "--gui",
+            None,
+            f"cannot open a window: {problem} (Debian: apt-get install "
+            "mesa-vulkan-drivers); play in the console without --gui",
+        )
 
 
 class GolfWindow:
     """A round of :class:`GolfGame` in a GGUI window of ``size`` pixels (hidden with
     ``show_window=False``: then :meth:`hit`, :meth:`frame` and :meth:`save` drive it, for tests)."""
 
-    def __init__(self, game: GolfGame, size: tuple[int, int] = (1280, 720), show_window: bool = True,
-                 replay_speed: float = REPLAY_SPEED, on_stroke: Callable[[Stroke], None] | None = None) -> None:
+    def __init__(
+        self,
+        game: GolfGame,
+        size: tuple[int, int] = (1280, 720),
+        show_window: bool = True,
+        replay_speed: float = REPLAY_SPEED,
+        on_stroke: Callable[[Stroke], None] | None = None,
+    ) -> None:
         self.game = game
         self.replay_speed = replay_speed
         self.on_stroke = on_stroke
@@ -94,8 +108,12 @@ class GolfWindow:
         self.canvas = self.window.get_canvas()
         self.camera = ti.ui.Camera()
         self.gui = self.window.get_gui()
-        self.shot = {"direction": round(game.to_hole()[1], 1), "speed": CLUBS["7-iron"][0],
-                     "loft": CLUBS["7-iron"][1], "spin": CLUBS["7-iron"][2]}
+        self.shot = {
+            "direction": round(game.to_hole()[1], 1),
+            "speed": CLUBS["7-iron"][0],
+            "loft": CLUBS["7-iron"][1],
+            "spin": CLUBS["7-iron"][2],
+        }
         self.message = "Choose a club, aim and hit."
         self.replay: tuple[Stroke, float] | None = None
         self._display = None
@@ -123,8 +141,15 @@ class GolfWindow:
 
     def _view(self) -> Any:
         c = self.camera
-        return View(tuple(map(float, c.curr_position)), tuple(map(float, c.curr_lookat)),
-                    tuple(map(float, c.curr_up)), 45.0, self.size, z_near=0.05, z_far=2000.0)
+        return View(
+            tuple(map(float, c.curr_position)),
+            tuple(map(float, c.curr_lookat)),
+            tuple(map(float, c.curr_up)),
+            45.0,
+            self.size,
+            z_near=0.05,
+            z_far=2000.0,
+        )
 
     # -- the ball on show --------------------------------------------------------------------
     def _show_ball(self, x: np.ndarray) -> None:
@@ -138,7 +163,7 @@ class GolfWindow:
 
     def _trail(self) -> np.ndarray | None:
         """The round's path so far (S, 1, 3): the strokes played, the replayed one up to now."""
-        paths = [s.path for s in self.game.strokes[:-1 if self.replay else None]]
+        paths = [s.path for s in self.game.strokes[: -1 if self.replay else None]]
         if self.replay is not None:
             stroke = self.replay[0]
             paths.append(stroke.path[: max(int(np.searchsorted(stroke.t, self._replay_time())), 1)])

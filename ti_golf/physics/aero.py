@@ -66,8 +66,16 @@ def air_params(air: Any) -> Any:
         raise ValueError(f"air.model must be one of {', '.join(AIR_MODEL_CODES)} (got {air.model!r})")
     if air.model == "spin_ratio" and air.gamma != 2:
         raise ValueError(f"air.gamma must be 2 with air.model = 'spin_ratio' (got {air.gamma})")
-    return AirParams(rho=air.rho, gamma=air.gamma, C_D=air.C_D, C_M=air.C_M, omega_M=air.omega_M,
-                     C_omega=air.C_omega, wind=vec3(*air.wind), model=AIR_MODEL_CODES[air.model])
+    return AirParams(
+        rho=air.rho,
+        gamma=air.gamma,
+        C_D=air.C_D,
+        C_M=air.C_M,
+        omega_M=air.omega_M,
+        C_omega=air.C_omega,
+        wind=vec3(*air.wind),
+        model=AIR_MODEL_CODES[air.model],
+    )
 
 
 @ti.func
@@ -79,12 +87,14 @@ def coefficients(air, radius, mass):
     c_D, c_M = air.C_D, air.C_M / air.omega_M
     if air.model == SPIN_RATIO:
         c_D, c_M = 1.0, 1.0
-    return ti.Matrix.rows([
-        half_rho_A * c_D / mass,
-        half_rho_A * c_M / mass,
-        half_rho_A * air.C_omega / mass,
-        radius,
-    ])
+    return ti.Matrix.rows(
+        [
+            half_rho_A * c_D / mass,
+            half_rho_A * c_M / mass,
+            half_rho_A * air.C_omega / mass,
+            radius,
+        ]
+    )
 
 
 @ti.func
@@ -115,15 +125,17 @@ def rates(S, coef, air, gravity):
         C_D, C_L = spin_ratio_coefficients(row(coef, 3) * spin / ti.max(speed, _TINY))
         drag = row(coef, 0) * C_D * speed
         lift = row(coef, 1) * C_L * speed / ti.max(spin, _TINY)  # |ω × v_rel|/|ω| = |v_rel| at right angles
-    return ti.Matrix.rows([
-        vx,
-        vy,
-        vz,
-        gravity[0] - drag * rx + lift * (wy * rz - wz * ry),
-        gravity[1] - drag * ry + lift * (wz * rx - wx * rz),
-        gravity[2] - drag * rz + lift * (wx * ry - wy * rx),
-        -decay * wx,
-        -decay * wy,
-        -decay * wz,
-        -decay * row(S, SPIN),
-    ])
+    return ti.Matrix.rows(
+        [
+            vx,
+            vy,
+            vz,
+            gravity[0] - drag * rx + lift * (wy * rz - wz * ry),
+            gravity[1] - drag * ry + lift * (wz * rx - wx * rz),
+            gravity[2] - drag * rz + lift * (wx * ry - wy * rx),
+            -decay * wx,
+            -decay * wy,
+            -decay * wz,
+            -decay * row(S, SPIN),
+        ]
+    )

@@ -1,7 +1,6 @@
 """Yardstick kernels for the benchmarks, measured in the same run as the step they compare with:
 what the memory system allows, and what the report's pair impulse costs at the least."""
 
-
 from ti_golf.physics.contact import pair_impulse
 from ti_golf.physics.links import owner_slot, slot_bits
 from ti_golf.physics.pairs import pair_geometry, pair_normal
@@ -29,9 +28,22 @@ def bare_gather(x: vec3_array, nbr: int_table, out: vec3_array):
 
 
 @kernel
-def one_pass_contacts(contact: ContactParams, gravity: vec3, h: float, x: vec3_array, v: vec3_array,
-                      w: vec3_array, radius: float_array, mass: float_array, upper: int_table, n_upper: int_array,
-                      lower: int_table, n_lower: int_array, dv: vec3_array, dw: vec3_array):
+def one_pass_contacts(
+    contact: ContactParams,
+    gravity: vec3,
+    h: float,
+    x: vec3_array,
+    v: vec3_array,
+    w: vec3_array,
+    radius: float_array,
+    mass: float_array,
+    upper: int_table,
+    n_upper: int_array,
+    lower: int_table,
+    n_lower: int_array,
+    dv: vec3_array,
+    dw: vec3_array,
+):
     """The least one step of the collision model can cost: a single pass over the balls in which
     every ball meets each of its listed neighbours (both its lists, as ``pairs.gather`` reads
     them) through the report's pair impulse (:func:`.contact.pair_impulse`, B.5–B.18: normal
@@ -56,9 +68,24 @@ def one_pass_contacts(contact: ContactParams, gravity: vec3, h: float, x: vec3_a
                 j = upper[i, q - n_lower[i]]
             inv, gap = pair_geometry(x, radius, i, j)
             n = pair_normal(xi, x[j], inv)
-            P_q, _, _, _ = pair_impulse(n, gap, vi, w[i], r_i, inv_m_i, v[j] + h * gravity, w[j], of_ball(radius, j),
-                                        1.0 / of_ball(mass, j), 0.0, contact.e, contact.mu, v_inelastic, h,
-                                        contact.relax)
+            P_q, _, _, _ = pair_impulse(
+                n,
+                gap,
+                vi,
+                w[i],
+                r_i,
+                inv_m_i,
+                v[j] + h * gravity,
+                w[j],
+                of_ball(radius, j),
+                1.0 / of_ball(mass, j),
+                0.0,
+                contact.e,
+                contact.mu,
+                v_inelastic,
+                h,
+                contact.relax,
+            )
             P += P_q
             T += n.cross(P_q)
         dv[i] = P * inv_m_i

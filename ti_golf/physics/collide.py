@@ -81,9 +81,17 @@ NEAR = -1.0  # the surface clearance of a ball resting on a plane or the terrain
 
 
 @ti.func
-def surface_clearance(i, x: ti.template(), x_free_i, radius: ti.template(), plane_p: ti.template(),
-                      plane_n: ti.template(), terrain: ti.template(), heights: ti.template(),
-                      lam_plane: ti.template()):
+def surface_clearance(
+    i,
+    x: ti.template(),
+    x_free_i,
+    radius: ti.template(),
+    plane_p: ti.template(),
+    plane_n: ti.template(),
+    terrain: ti.template(),
+    heights: ti.template(),
+    lam_plane: ti.template(),
+):
     """The least surface gap [m] of ball i to the planes at the start of the step and, with a
     terrain, a lower bound on its gap to the terrain less its free-flight displacement (see
     :func:`terrain.terrain_clearance`; the free-flight end point ``x_free_i``); ``FAR`` with
@@ -128,10 +136,26 @@ def beyond_reach(clear, r, reach_sqr):
 
 
 @ti.func
-def surface_impulses(i, warm: ti.template(), vi, wi, clear: ti.template(), contact: ti.template(), h, v_inelastic,
-                     radius: ti.template(), plane_p: ti.template(), plane_n: ti.template(), terrain: ti.template(),
-                     heights: ti.template(), terrain_cells: ti.template(), surface_table: ti.template(),
-                     x: ti.template(), x_free: ti.template(), lam_plane: ti.template()):
+def surface_impulses(
+    i,
+    warm: ti.template(),
+    vi,
+    wi,
+    clear: ti.template(),
+    contact: ti.template(),
+    h,
+    v_inelastic,
+    radius: ti.template(),
+    plane_p: ti.template(),
+    plane_n: ti.template(),
+    terrain: ti.template(),
+    heights: ti.template(),
+    terrain_cells: ti.template(),
+    surface_table: ti.template(),
+    x: ti.template(),
+    x_free: ti.template(),
+    lam_plane: ti.template(),
+):
     """Ball i's contacts with the planes, then the terrain (the plane of the patch under its
     free-flight end point; its resting impulse is kept in the column after the planes' in
     ``lam_plane``, in f32: 4 bytes instead of 8 for every ball and plane, though most balls touch
@@ -240,20 +264,66 @@ def collision_step(
     if ti.static(not serial):
         if ti.static(warm):
             scratch.flag[0] = 0
-        step_balls(serial, warm, sweeps, last, air, contact, terrain, params, h, ti.cast(params.t0, float),
-                   integrator, model, lists, state, flight, scratch)
+        step_balls(
+            serial,
+            warm,
+            sweeps,
+            last,
+            air,
+            contact,
+            terrain,
+            params,
+            h,
+            ti.cast(params.t0, float),
+            integrator,
+            model,
+            lists,
+            state,
+            flight,
+            scratch,
+        )
         result = scratch.flag[0]
     else:
         t = params.t0
         ti.loop_config(serialize=True)
         for _ in range(params.steps):
             if scratch.flag[0] != 0:
-                relist_all_pairs(state.x, model.radius, params.skin, state.v, h, params.v_cut, params.r_cut, lists.upper, lists.n_upper, lists.lower, lists.n_lower, lists.x_at_build, lists.lam,
-                                 scratch.J)
+                relist_all_pairs(
+                    state.x,
+                    model.radius,
+                    params.skin,
+                    state.v,
+                    h,
+                    params.v_cut,
+                    params.r_cut,
+                    lists.upper,
+                    lists.n_upper,
+                    lists.lower,
+                    lists.n_lower,
+                    lists.x_at_build,
+                    lists.lam,
+                    scratch.J,
+                )
                 result += 1
                 scratch.flag[0] = 0
-            step_balls(serial, warm, sweeps, last, air, contact, terrain, params, h, ti.cast(t, float),
-                   integrator, model, lists, state, flight, scratch)
+            step_balls(
+                serial,
+                warm,
+                sweeps,
+                last,
+                air,
+                contact,
+                terrain,
+                params,
+                h,
+                ti.cast(t, float),
+                integrator,
+                model,
+                lists,
+                state,
+                flight,
+                scratch,
+            )
             for i in range(state.x.shape[0]):
                 state.x[i] = scratch.x_free[i]
             t += params.dt
@@ -261,17 +331,32 @@ def collision_step(
 
 
 @ti.func
-def step_balls(serial: ti.template(), warm: ti.template(), sweeps: ti.template(), last: ti.template(),
-               air: ti.template(), contact: ti.template(), terrain: ti.template(), params: ti.template(), h, t0,
-               integrator: ti.template(), model: ti.template(), lists: ti.template(), state: ti.template(),
-               flight: ti.template(), scratch: ti.template()):
+def step_balls(
+    serial: ti.template(),
+    warm: ti.template(),
+    sweeps: ti.template(),
+    last: ti.template(),
+    air: ti.template(),
+    contact: ti.template(),
+    terrain: ti.template(),
+    params: ti.template(),
+    h,
+    t0,
+    integrator: ti.template(),
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    flight: ti.template(),
+    scratch: ti.template(),
+):
     """One step of all balls, the body of :func:`collision_step` (see there) in parallel and serially,
     or the part of it that ``warm``, ``sweeps`` and ``last`` name."""
     v_inelastic = contact.v_bounce + 2.0 * params.gravity.norm() * h
     bits = slot_bits(lists.upper.shape[1])  # lower-list slots: owner · 2^bits + column (once, not per ball)
     if ti.static(warm):
-        start_step(air, contact, terrain, params, h, t0, integrator, v_inelastic, bits, model, lists,
-                   state, flight, scratch)
+        start_step(
+            air, contact, terrain, params, h, t0, integrator, v_inelastic, bits, model, lists, state, flight, scratch
+        )
     # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
     if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
         for _ in range(sweeps):
@@ -284,9 +369,22 @@ def step_balls(serial: ti.template(), warm: ti.template(), sweeps: ti.template()
 
 
 @ti.func
-def start_step(air: ti.template(), contact: ti.template(), terrain: ti.template(), params: ti.template(), h, t0,
-               integrator: ti.template(), v_inelastic, bits, model: ti.template(), lists: ti.template(),
-               state: ti.template(), flight: ti.template(), scratch: ti.template()):
+def start_step(
+    air: ti.template(),
+    contact: ti.template(),
+    terrain: ti.template(),
+    params: ti.template(),
+    h,
+    t0,
+    integrator: ti.template(),
+    v_inelastic,
+    bits,
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    flight: ti.template(),
+    scratch: ti.template(),
+):
     """1. Free flight of every ball to ``x_free``, ``v_free``, then the warm start: last step's
     resting impulses (ball pairs, planes and terrain) applied again, so a stack starts the step
     supported (see the module's docstring)."""
@@ -300,23 +398,82 @@ def start_step(air: ti.template(), contact: ti.template(), terrain: ti.template(
             x1, v1, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
             if tracking:  # else the flight records hold one entry each, not read (see State.tracking)
                 if flight.landed[i] == IN_FLIGHT:  # a landed ball's record is final: neither read nor written
-                    flight.landed[i], flight.apex[i], flight.t_land[i], flight.land_x[i], flight.land_v[i] = track_flight(
-                        xi, state.v[i], x1, v1, h, t0, model.launch_height[i], flight.landed[i], flight.apex[i], flight.t_land[i], flight.land_x[i],
-                        flight.land_v[i])
+                    flight.landed[i], flight.apex[i], flight.t_land[i], flight.land_x[i], flight.land_v[i] = (
+                        track_flight(
+                            xi,
+                            state.v[i],
+                            x1,
+                            v1,
+                            h,
+                            t0,
+                            model.launch_height[i],
+                            flight.landed[i],
+                            flight.apex[i],
+                            flight.t_land[i],
+                            flight.land_x[i],
+                            flight.land_v[i],
+                        )
+                    )
         scratch.x_free[i], scratch.v_free[i] = x1, v1
-        scratch.clear[i] = rounded_down(surface_clearance(i, state.x, x1, model.radius, model.plane_p, model.plane_n, terrain, model.heights, lists.lam_plane))
-        dv, scratch.calm[i] = warm_start(i, state.x, model.radius, model.mass, state.status, state.rest_time, lists.upper, lists.n_upper, lists.lower, lists.n_lower, bits,
-                                 lists.lam, scratch.J)
+        scratch.clear[i] = rounded_down(
+            surface_clearance(
+                i, state.x, x1, model.radius, model.plane_p, model.plane_n, terrain, model.heights, lists.lam_plane
+            )
+        )
+        dv, scratch.calm[i] = warm_start(
+            i,
+            state.x,
+            model.radius,
+            model.mass,
+            state.status,
+            state.rest_time,
+            lists.upper,
+            lists.n_upper,
+            lists.lower,
+            lists.n_lower,
+            bits,
+            lists.lam,
+            scratch.J,
+        )
         if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
             v1 += dv
-            v1, w1 = surface_impulses(i, True, v1, w1, scratch.clear, contact, h, v_inelastic, model.radius, model.plane_p, model.plane_n,
-                                      terrain, model.heights, model.terrain_cells, model.surface_table, state.x, scratch.x_free, lists.lam_plane)
+            v1, w1 = surface_impulses(
+                i,
+                True,
+                v1,
+                w1,
+                scratch.clear,
+                contact,
+                h,
+                v_inelastic,
+                model.radius,
+                model.plane_p,
+                model.plane_n,
+                terrain,
+                model.heights,
+                model.terrain_cells,
+                model.surface_table,
+                state.x,
+                scratch.x_free,
+                lists.lam_plane,
+            )
         state.v[i], state.w[i] = v1, w1
 
 
 @ti.func
-def sweep(last: ti.template(), contact: ti.template(), terrain: ti.template(), params: ti.template(), h, v_inelastic,
-          bits, model: ti.template(), lists: ti.template(), state: ti.template(), scratch: ti.template()):
+def sweep(
+    last: ti.template(),
+    contact: ti.template(),
+    terrain: ti.template(),
+    params: ti.template(),
+    h,
+    v_inelastic,
+    bits,
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    scratch: ti.template(),
+):
     """One Jacobi sweep: the pairs' impulses from the velocities of the previous sweep, then each
     ball gathers them and meets its planes; the ``last`` sweep's ball loop also finishes the step.
     Between the two, when the pairs marked impacts (``flag[1]``), every ball finds its first
@@ -326,8 +483,24 @@ def sweep(last: ti.template(), contact: ti.template(), terrain: ti.template(), p
     scratch.flag[1] = 0
     for i in range(state.x.shape[0]):
         if ti.static(last) or scratch.calm[i] != QUIET:
-            owned_pairs(i, last, contact, h, v_inelastic, state.x, model.radius, model.mass, state.status, lists.upper, lists.n_upper, lists.lam, scratch.J, state.v, state.w,
-                        scratch.flag)
+            owned_pairs(
+                i,
+                last,
+                contact,
+                h,
+                v_inelastic,
+                state.x,
+                model.radius,
+                model.mass,
+                state.status,
+                lists.upper,
+                lists.n_upper,
+                lists.lam,
+                scratch.J,
+                state.v,
+                state.w,
+                scratch.flag,
+            )
     for i in range(state.x.shape[0]):
         if scratch.flag[1] != 0:  # (a loop inside the test would not run in parallel)
             impact_keys(i, lists.n_upper, lists.lower, lists.n_lower, bits, scratch.J, scratch.impact)
@@ -336,11 +509,42 @@ def sweep(last: ti.template(), contact: ti.template(), terrain: ti.template(), p
             if ti.static(last):
                 scratch.x_free[i] = state.x[i]
         elif state.status[i] != OUT_OF_BOUNDS:
-            dv, dw, dx, touching = gather(i, last, state.x, model.radius, model.mass, lists.upper, lists.n_upper, lists.lower, lists.n_lower, bits, scratch.J,
-                                          scratch.impact, scratch.flag[1], contact.k_p)
-            v_new, w_new = surface_impulses(i, False, state.v[i] + dv, state.w[i] + dw, scratch.clear, contact, h, v_inelastic, model.radius,
-                                            model.plane_p, model.plane_n, terrain, model.heights, model.terrain_cells, model.surface_table,
-                                            state.x, scratch.x_free, lists.lam_plane)
+            dv, dw, dx, touching = gather(
+                i,
+                last,
+                state.x,
+                model.radius,
+                model.mass,
+                lists.upper,
+                lists.n_upper,
+                lists.lower,
+                lists.n_lower,
+                bits,
+                scratch.J,
+                scratch.impact,
+                scratch.flag[1],
+                contact.k_p,
+            )
+            v_new, w_new = surface_impulses(
+                i,
+                False,
+                state.v[i] + dv,
+                state.w[i] + dw,
+                scratch.clear,
+                contact,
+                h,
+                v_inelastic,
+                model.radius,
+                model.plane_p,
+                model.plane_n,
+                terrain,
+                model.heights,
+                model.terrain_cells,
+                model.surface_table,
+                state.x,
+                scratch.x_free,
+                lists.lam_plane,
+            )
             if ti.static(not last):
                 state.v[i], state.w[i] = v_new, w_new
             else:
@@ -348,8 +552,21 @@ def sweep(last: ti.template(), contact: ti.template(), terrain: ti.template(), p
 
 
 @ti.func
-def finish(i, v_final, w_final, dx, touching, contact: ti.template(), terrain: ti.template(), params: ti.template(), h,
-           model: ti.template(), lists: ti.template(), state: ti.template(), scratch: ti.template()):
+def finish(
+    i,
+    v_final,
+    w_final,
+    dx,
+    touching,
+    contact: ti.template(),
+    terrain: ti.template(),
+    params: ti.template(),
+    h,
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    scratch: ti.template(),
+):
     """End of the step for ball i (not out of bounds) with its final velocities, the position
     projection ``dx`` of its ball overlaps and whether it ``touching`` a ball: new position in
     ``x_free`` (split at a plane's time of impact, overlaps projected out), status, rest timer,
@@ -368,7 +585,18 @@ def finish(i, v_final, w_final, dx, touching, contact: ti.template(), terrain: t
     if far:
         n_planes = 0
     for p in range(n_planes):
-        x1 = plane_position(xi, scratch.x_free[i], x1, scratch.v_free[i], v_final, ri, model.plane_p[p], model.plane_n[p], contact.k_p, h)
+        x1 = plane_position(
+            xi,
+            scratch.x_free[i],
+            x1,
+            scratch.v_free[i],
+            v_final,
+            ri,
+            model.plane_p[p],
+            model.plane_n[p],
+            contact.k_p,
+            h,
+        )
         if (x1 - model.plane_p[p]).dot(model.plane_n[p]) - ri < 0.01 * ri:
             touching = ti.max(touching, 1)
     if terrain.on != 0 and not far:
@@ -385,7 +613,9 @@ def finish(i, v_final, w_final, dx, touching, contact: ti.template(), terrain: t
         # this one at the start of the step (``calm``), so the balls of a calm group reach t_rest
         # together and fall asleep in the same step, and a ball pressed by a moving one stays
         # awake (asleep, it would feel no gravity and the balls above it would keep rocking)
-        st, state.rest_time[i] = rest_update(touching, v_final, w_final, ri, scratch.calm[i], h, params.v_rest, params.t_rest)
+        st, state.rest_time[i] = rest_update(
+            touching, v_final, w_final, ri, scratch.calm[i], h, params.v_rest, params.t_rest
+        )
         if st == AT_REST:
             v_final, w_final = zero3(), zero3()
             x1 = xi

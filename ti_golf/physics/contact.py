@@ -190,8 +190,9 @@ def surface_impulse(n, gap, v, w, radius, lam, contact, v_inelastic, h):
     n_eff, e = n, contact.e
     if contact.turf != 0:
         n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
-    P, lam_new, touching, _ = pair_impulse(n_eff, gap, v, w, radius, 1.0, zero3(), zero3(), 0.0, 0.0, lam, e,
-                                           contact.mu, v_inelastic, h)
+    P, lam_new, touching, _ = pair_impulse(
+        n_eff, gap, v, w, radius, 1.0, zero3(), zero3(), 0.0, 0.0, lam, e, contact.mu, v_inelastic, h
+    )
     return P, lam_new, touching, n_eff
 
 

@@ -61,8 +61,11 @@ def bucket_of(c, mask, origin, stride):
     stride 1 along x, so a row of cells along x fills consecutive buckets (their starts share a
     cache line; see ``list_ball``). See :func:`hash_strides` for ``origin`` and ``stride``."""
     d = c - origin
-    h = (ti.cast(d[0], ti.u32) * ti.cast(stride[0], ti.u32) + ti.cast(d[1], ti.u32) * ti.cast(stride[1], ti.u32)
-         + ti.cast(d[2], ti.u32) * ti.cast(stride[2], ti.u32))
+    h = (
+        ti.cast(d[0], ti.u32) * ti.cast(stride[0], ti.u32)
+        + ti.cast(d[1], ti.u32) * ti.cast(stride[1], ti.u32)
+        + ti.cast(d[2], ti.u32) * ti.cast(stride[2], ti.u32)
+    )
     return ti.cast(h & ti.cast(mask, ti.u32), ti.i32)
 
 
@@ -136,8 +139,7 @@ def fast_speed(r_ref: float, skin: float, h: float) -> float:
 
 
 @kernel
-def apart_balls(v: vec3_array, radius: float_array, v_cut: float, r_cut: float,
-                apart_ids: int_array) -> vec3:
+def apart_balls(v: vec3_array, radius: float_array, v_cut: float, r_cut: float, apart_ids: int_array) -> vec3:
     """(the greatest speed [m/s], the greatest speed of the balls not set apart, how many are set
     apart): the balls faster than ``v_cut`` or bigger than ``r_cut`` (see
     :func:`is_apart`). The indices of the first ``apart_ids.shape[0] − 1`` of them go to
@@ -252,15 +254,44 @@ def list_neighbours(
     longest[0], longest[1] = 0, 0
     most_loops = 0
     if ti.static(not stored_sorted):
-        counting_sort(x, g.inv_cell, g.mask, g.origin, g.stride, scratch.rank, scratch.start, scratch.chunk_start,
-                      scratch.sorted_ids)
+        counting_sort(
+            x,
+            g.inv_cell,
+            g.mask,
+            g.origin,
+            g.stride,
+            scratch.rank,
+            scratch.start,
+            scratch.chunk_start,
+            scratch.sorted_ids,
+        )
     for idx in range(x.shape[0]):
         i = idx  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         if ti.static(not stored_sorted):
             i = scratch.sorted_ids[idx]
-        n_up, n_low, loops = list_ball(i, x, radius, g.inv_cell, g.mask, g.origin, g.stride, g.skin, v, g.h, g.fast,
-                                       g.v_cut, g.r_cut, apart_ids, g.n_apart, g.scan_apart, scratch.start,
-                                       scratch.sorted_ids, lists.upper, lists.lower, stored_sorted)
+        n_up, n_low, loops = list_ball(
+            i,
+            x,
+            radius,
+            g.inv_cell,
+            g.mask,
+            g.origin,
+            g.stride,
+            g.skin,
+            v,
+            g.h,
+            g.fast,
+            g.v_cut,
+            g.r_cut,
+            apart_ids,
+            g.n_apart,
+            g.scan_apart,
+            scratch.start,
+            scratch.sorted_ids,
+            lists.upper,
+            lists.lower,
+            stored_sorted,
+        )
         lists.n_upper[i] = ti.min(n_up, lists.upper.shape[1])
         lists.n_lower[i] = ti.min(n_low, lists.lower.shape[0])
         lists.x_at_build[i] = ti.cast(x[i], ti.f32)
@@ -271,8 +302,17 @@ def list_neighbours(
 
 
 @ti.func
-def counting_sort(x: ti.template(), inv_cell, mask, origin, stride, rank: ti.template(), start: ti.template(),
-                  chunk_start: ti.template(), sorted_ids: ti.template()):
+def counting_sort(
+    x: ti.template(),
+    inv_cell,
+    mask,
+    origin,
+    stride,
+    rank: ti.template(),
+    start: ti.template(),
+    chunk_start: ti.template(),
+    sorted_ids: ti.template(),
+):
     """The grid's counting sort (see :func:`list_neighbours`): ``sorted_ids[start[b] : start[b + 1]]``
     are the balls of bucket b, in the order their threads took ranks (an integer atomic add)."""
     for b in range(start.shape[0]):
@@ -286,8 +326,17 @@ def counting_sort(x: ti.template(), inv_cell, mask, origin, stride, rank: ti.tem
 
 
 @kernel
-def storage_order(x: vec3_array, inv_cell: float, mask: ti.i32, origin: ivec3, stride: ivec3, rank: int_array,
-                  start: int_array, chunk_start: int_array, sorted_ids: int_array):
+def storage_order(
+    x: vec3_array,
+    inv_cell: float,
+    mask: ti.i32,
+    origin: ivec3,
+    stride: ivec3,
+    rank: int_array,
+    start: int_array,
+    chunk_start: int_array,
+    sorted_ids: int_array,
+):
     """The order in which to store the balls so that neighbours lie close in memory: ``sorted_ids``
     lists the ball ids bucket by bucket (the grid's counting sort), and within a bucket by
     position, y then z then x (then id), as the buckets of a dense hash run (:func:`hash_strides`),
@@ -378,9 +427,29 @@ def bucket_starts(start: ti.template(), chunk_start: ti.template()):
 
 
 @ti.func
-def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin, stride, skin, v: ti.template(),
-              h, fast, v_cut, r_cut, apart_ids: ti.template(), n_apart, scan_apart, start: ti.template(),
-              sorted_ids: ti.template(), upper: ti.template(), lower: ti.template(), stored_sorted: ti.template()):
+def list_ball(
+    i,
+    x: ti.template(),
+    radius: ti.template(),
+    inv_cell,
+    mask,
+    origin,
+    stride,
+    skin,
+    v: ti.template(),
+    h,
+    fast,
+    v_cut,
+    r_cut,
+    apart_ids: ti.template(),
+    n_apart,
+    scan_apart,
+    start: ti.template(),
+    sorted_ids: ti.template(),
+    upper: ti.template(),
+    lower: ti.template(),
+    stored_sorted: ti.template(),
+):
     """Ball i's neighbours into its row of ``upper`` and its column of ``lower`` in id order (as
     many as fit; ``stored_sorted``: see :func:`list_neighbours`). Returns how many there are
     (n_upper, n_lower) and a bound on the iterations of the thread's loops (see ``LOOP_CAP``).
@@ -401,8 +470,23 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin
         tested = x.shape[0]
         for j in range(x.shape[0]):
             if j != i:
-                n_up, n_low = list_pair(i, j, xi, x[j], ri + of_ball(radius, j), skin, v, h, 1, True,
-                                        is_apart(v, radius, j, v_cut, r_cut, n_apart), upper, lower, n_up, n_low)
+                n_up, n_low = list_pair(
+                    i,
+                    j,
+                    xi,
+                    x[j],
+                    ri + of_ball(radius, j),
+                    skin,
+                    v,
+                    h,
+                    1,
+                    True,
+                    is_apart(v, radius, j, v_cut, r_cut, n_apart),
+                    upper,
+                    lower,
+                    n_up,
+                    n_low,
+                )
     else:
         c = cell_of(xi, inv_cell)  # recomputed, not stored: 12 bytes per ball less
         # no pair the cells list is farther apart than a cell's side (see cell_size): the square of
@@ -428,22 +512,58 @@ def list_ball(i, x: ti.template(), radius: ti.template(), inv_cell, mask, origin
                         cj = cell_of(xj, inv_cell)
                         apart_j = is_apart(v, radius, j, v_cut, r_cut, n_apart)
                         # a ball of the row (not of another cell sharing its buckets), not one listed apart
-                        if (j != i and cj[1] == row[1] and cj[2] == row[2] and ti.abs(cj[0] - c[0]) <= 1
-                                and not (apart_j and scan_apart != 0)):
-                            n_up, n_low = list_pair(i, j, xi, xj, ri + of_ball(radius, j), skin, v, h, fast,
-                                                    apart_i, apart_j, upper, lower, n_up, n_low)
+                        if (
+                            j != i
+                            and cj[1] == row[1]
+                            and cj[2] == row[2]
+                            and ti.abs(cj[0] - c[0]) <= 1
+                            and not (apart_j and scan_apart != 0)
+                        ):
+                            n_up, n_low = list_pair(
+                                i,
+                                j,
+                                xi,
+                                xj,
+                                ri + of_ball(radius, j),
+                                skin,
+                                v,
+                                h,
+                                fast,
+                                apart_i,
+                                apart_j,
+                                upper,
+                                lower,
+                                n_up,
+                                n_low,
+                            )
         for f in range(n_apart * scan_apart):
             j = apart_ids[f]
-            n_up, n_low = list_pair(i, j, xi, x[j], ri + of_ball(radius, j), skin, v, h, 1, False, True, upper, lower,
-                                    n_up, n_low)
+            n_up, n_low = list_pair(
+                i, j, xi, x[j], ri + of_ball(radius, j), skin, v, h, 1, False, True, upper, lower, n_up, n_low
+            )
         tested += 18 + n_apart * scan_apart
     # the insertions' shifts: at most n(n − 1)/2 for a list of n
     return n_up, n_low, tested + (n_up * n_up + n_low * n_low) // 2
 
 
 @ti.func
-def list_pair(i, j, xi, xj, r_sum, skin, v: ti.template(), h, fast, apart_i, apart_j, upper: ti.template(),
-              lower: ti.template(), n_up, n_low):
+def list_pair(
+    i,
+    j,
+    xi,
+    xj,
+    r_sum,
+    skin,
+    v: ti.template(),
+    h,
+    fast,
+    apart_i,
+    apart_j,
+    upper: ti.template(),
+    lower: ti.template(),
+    n_up,
+    n_low,
+):
     """Ball j into ball i's ``upper`` or ``lower`` row (by :func:`owns`; ``apart_i``, ``apart_j``:
     whether they are listed apart) when their surface gap is below :func:`pair_reach` (the skin
     when ``fast`` is 0; ``r_sum``: r_i + r_j [m]). Returns the rows' new lengths (n_up, n_low); an

@@ -12,7 +12,6 @@ Hermite interpolation of (x, v) at both ends (error O(h⁴), matching RK4), so c
 depend on where the step boundaries fall.
 """
 
-
 import taichi as ti
 
 from ti_golf.physics.aero import V, X, rates
@@ -54,7 +53,12 @@ def hermite(p0, p1, m0, m1, s):
 def hermite_ds(p0, p1, m0, m1, s):
     """d/ds of :func:`hermite`."""
     s2 = s * s
-    return (6.0 * s2 - 6.0 * s) * p0 + (3.0 * s2 - 4.0 * s + 1.0) * m0 + (6.0 * s - 6.0 * s2) * p1 + (3.0 * s2 - 2.0 * s) * m1
+    return (
+        (6.0 * s2 - 6.0 * s) * p0
+        + (3.0 * s2 - 4.0 * s + 1.0) * m0
+        + (6.0 * s - 6.0 * s2) * p1
+        + (3.0 * s2 - 2.0 * s) * m1
+    )
 
 
 @ti.func

@@ -118,8 +118,9 @@ def fly_to_landing(
                     if peak[l]:
                         top[l] = ti.max(top[l], apex_in_step(y[l], y1[l], vy[l], vy1[l], h))
                     if cross[l]:
-                        t1, p, u = landing_in_step(column(S, X, l), column(S, V, l), column(S1, X, l),
-                                                   column(S1, V, l), h, k * h, level[l])
+                        t1, p, u = landing_in_step(
+                            column(S, X, l), column(S, V, l), column(S1, X, l), column(S1, V, l), h, k * h, level[l]
+                        )
                         state[l], tl[l] = LANDED, t1
                         for c in ti.static(range(3)):
                             LX[c, l], LV[c, l] = p[c], u[c]
@@ -178,7 +179,14 @@ def advance(
             rt = state.rest_time[i]
             fl, top, tl, lx, lv, level = NOT_TRACKED, 0.0, 0.0, zero3(), zero3(), 0.0
             if tracking:
-                fl, top, tl, lx, lv, level = flight.landed[i], flight.apex[i], flight.t_land[i], flight.land_x[i], flight.land_v[i], model.launch_height[i]
+                fl, top, tl, lx, lv, level = (
+                    flight.landed[i],
+                    flight.apex[i],
+                    flight.t_land[i],
+                    flight.land_x[i],
+                    flight.land_v[i],
+                    model.launch_height[i],
+                )
             for k in range(params.steps):
                 S1 = step_free(lane_state(xi, vi, wi), h, integrator, coef, air, params.gravity)
                 x_free, v_free, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
@@ -186,17 +194,23 @@ def advance(
                 v1 = v_free
                 touching = 0
                 for p in range(model.plane_p.shape[0]):
-                    v1, w1, t = plane_impulse(xi, v1, w1, r, model.plane_p[p], model.plane_n[p], contact, v_inelastic, h)
+                    v1, w1, t = plane_impulse(
+                        xi, v1, w1, r, model.plane_p[p], model.plane_n[p], contact, v_inelastic, h
+                    )
                     touching |= t
                 pt, nt = zero3(), vec(0.0, 1.0, 0.0)
                 if terrain.on != 0:  # the terrain: the plane of the patch under the free-flight end point
                     pt, nt = surface(model.heights, terrain, x_free)
-                    ct = surface_contact(contact, model.surface_table, model.terrain_cells, model.heights, terrain, x_free)
+                    ct = surface_contact(
+                        contact, model.surface_table, model.terrain_cells, model.heights, terrain, x_free
+                    )
                     v1, w1, t = plane_impulse(xi, v1, w1, r, pt, nt, ct, v_inelastic, h)
                     touching |= t
                 x1 = x_free + h * (v1 - v_free)
                 for p in range(model.plane_p.shape[0]):
-                    x1 = plane_position(xi, x_free, x1, v_free, v1, r, model.plane_p[p], model.plane_n[p], contact.k_p, h)
+                    x1 = plane_position(
+                        xi, x_free, x1, v_free, v1, r, model.plane_p[p], model.plane_n[p], contact.k_p, h
+                    )
                 if terrain.on != 0:
                     x1 = plane_position(xi, x_free, x1, v_free, v1, r, pt, nt, contact.k_p, h)
                     x1 = terrain_position(xi, x1, pt, nt, r, model.heights, terrain)
@@ -214,7 +228,13 @@ def advance(
             state.x[i], state.v[i], state.w[i] = xi, vi, wi
             state.status[i], state.rest_time[i] = st, rt
             if tracking:
-                flight.landed[i], flight.apex[i], flight.t_land[i], flight.land_x[i], flight.land_v[i] = fl, top, tl, lx, lv
+                flight.landed[i], flight.apex[i], flight.t_land[i], flight.land_x[i], flight.land_v[i] = (
+                    fl,
+                    top,
+                    tl,
+                    lx,
+                    lv,
+                )
 
 
 @kernel

@@ -8,7 +8,6 @@ resting impulse is stashed by (owner, neighbour) and carried into the new lists
 scene inside a serial kernel by testing every pair.
 """
 
-
 import taichi as ti
 
 from ti_golf.physics.grid import APART_MAX, is_apart, owns, pair_reach
@@ -83,8 +82,16 @@ def stash_ball(i, upper: ti.template(), n_upper: ti.template(), lam: ti.template
 
 
 @kernel
-def link_and_carry(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array, stashed: pair_table,
-                   lam: float_grid, moved: ti.template(), old_id: int_array):
+def link_and_carry(
+    upper: int_table,
+    n_upper: int_array,
+    lower: int_table,
+    n_lower: int_array,
+    stashed: pair_table,
+    lam: float_grid,
+    moved: ti.template(),
+    old_id: int_array,
+):
     """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
     :func:`stash` and :func:`carry_ball`) to the new ones, in one launch (neither writes what the
     other reads). With ``moved`` the balls were stored in a new order since the stash: ball i was
@@ -96,8 +103,15 @@ def link_and_carry(upper: int_table, n_upper: int_array, lower: int_table, n_low
 
 
 @ti.func
-def carry_ball(i, stashed: ti.template(), upper: ti.template(), n_upper: ti.template(), lam: ti.template(),
-               old_id: ti.template(), moved: ti.template()):
+def carry_ball(
+    i,
+    stashed: ti.template(),
+    upper: ti.template(),
+    n_upper: ti.template(),
+    lam: ti.template(),
+    old_id: ti.template(),
+    moved: ti.template(),
+):
     """Carry the accumulated impulse of each pair ball i owns in the new lists from the stashed old
     ones (see :func:`stash_ball`); new pairs start at zero. The pair of balls a and b (their old
     ids: ``old_id`` of i and j when ``moved``) is looked up in the row of its old owner, which is
@@ -134,9 +148,22 @@ def stashed_id(stashed: ti.template(), i, k):
 
 
 @ti.func
-def relist_all_pairs(x: ti.template(), radius: ti.template(), skin, v: ti.template(), h, v_cut, r_cut,
-                     upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(),
-                     x_at_build: ti.template(), lam: ti.template(), scratch: ti.template()):
+def relist_all_pairs(
+    x: ti.template(),
+    radius: ti.template(),
+    skin,
+    v: ti.template(),
+    h,
+    v_cut,
+    r_cut,
+    upper: ti.template(),
+    n_upper: ti.template(),
+    lower: ti.template(),
+    n_lower: ti.template(),
+    x_at_build: ti.template(),
+    lam: ti.template(),
+    scratch: ti.template(),
+):
     """Rebuild the neighbour lists of a few balls in place without a grid, by testing every pair:
     the lists, slots and carried-over impulses that ``list_neighbours`` and ``link_and_carry``
     give on a CPU backend (with the same owners: the balls faster than ``v_cut`` or bigger than

@@ -47,15 +47,28 @@ def pair_normal(x_a, x_b, inv):
 @ti.func
 def skip_pair(status: ti.template(), i, j):
     """Whether the pair (i, j) gets no impulse: a ball is out of bounds, or both are at rest."""
-    return (status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS
-            or (status[i] == AT_REST and status[j] == AT_REST))
+    return status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS or (status[i] == AT_REST and status[j] == AT_REST)
 
 
 @ti.func
-def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic, x: ti.template(),
-                radius: ti.template(), mass: ti.template(), status: ti.template(), upper: ti.template(),
-                n_upper: ti.template(), lam: ti.template(), J: ti.template(), v: ti.template(), w: ti.template(),
-                flag: ti.template()):
+def owned_pairs(
+    i,
+    final: ti.template(),
+    contact: ti.template(),
+    h,
+    v_inelastic,
+    x: ti.template(),
+    radius: ti.template(),
+    mass: ti.template(),
+    status: ti.template(),
+    upper: ti.template(),
+    n_upper: ti.template(),
+    lam: ti.template(),
+    J: ti.template(),
+    v: ti.template(),
+    w: ti.template(),
+    flag: ti.template(),
+):
     """One Jacobi sweep over the pairs that ball i owns, with its neighbours j = upper[i, k]: the
     impulse P on i (−P acts on j) from the current velocities (which updates the resting impulse
     ``lam``), stored as J[i, k] = (P, 1/|x_i − x_j|, gap). The inverse distance [1/m], which gives
@@ -82,9 +95,24 @@ def owned_pairs(i, final: ti.template(), contact: ti.template(), h, v_inelastic,
         if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
             lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
         elif ok and not skip_pair(status, i, j):
-            P, lam[i, k], _, kick = pair_impulse(n, gap, v[i], w[i], of_ball(radius, i), inv_mi, v[j], w[j],
-                                                 of_ball(radius, j), inv_mj, lam[i, k], contact.e, contact.mu,
-                                                 v_inelastic, h, contact.relax)
+            P, lam[i, k], _, kick = pair_impulse(
+                n,
+                gap,
+                v[i],
+                w[i],
+                of_ball(radius, i),
+                inv_mi,
+                v[j],
+                w[j],
+                of_ball(radius, j),
+                inv_mj,
+                lam[i, k],
+                contact.e,
+                contact.mu,
+                v_inelastic,
+                h,
+                contact.relax,
+            )
             if kick != 0:
                 flag[1] = 1  # every thread that writes, writes 1
         g = gap
@@ -109,9 +137,21 @@ def impact_mark(Jk):
 
 
 @ti.func
-def warm_start(i, x: ti.template(), radius: ti.template(), mass: ti.template(), status: ti.template(),
-               rest_time: ti.template(), upper: ti.template(), n_upper: ti.template(), lower: ti.template(),
-               n_lower: ti.template(), bits, lam: ti.template(), J: ti.template()):
+def warm_start(
+    i,
+    x: ti.template(),
+    radius: ti.template(),
+    mass: ti.template(),
+    status: ti.template(),
+    rest_time: ti.template(),
+    upper: ti.template(),
+    n_upper: ti.template(),
+    lower: ti.template(),
+    n_lower: ti.template(),
+    bits,
+    lam: ti.template(),
+    J: ti.template(),
+):
     """Δv [m/s] of ball i from last step's resting impulses λ of its ball pairs, each along the
     pair's normal at the start of the step, summed in id order (lower then upper). A normal
     impulse gives no spin; friction is left to the sweeps. Also stores the geometry of the pairs
@@ -163,8 +203,15 @@ def resting_impulse(status: ti.template(), i, j, n, lam):
 
 
 @ti.func
-def impact_keys(i, n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits, J: ti.template(),
-                impact: ti.template()):
+def impact_keys(
+    i,
+    n_upper: ti.template(),
+    lower: ti.template(),
+    n_lower: ti.template(),
+    bits,
+    J: ti.template(),
+    impact: ti.template(),
+):
     """Keep in ``impact[i]`` the greatest key of ball i's impacts in this sweep (0 when it has
     none): the key of a pair is its slot in the pair tables, owner·2^bits + column (as in the
     lower lists, see :func:`.grid.owner_slot`), plus one. Gathered from the pairs' marks
@@ -213,9 +260,22 @@ def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p):
 
 
 @ti.func
-def gather(i, final: ti.template(), x: ti.template(), radius: ti.template(), mass: ti.template(), upper: ti.template(),
-           n_upper: ti.template(), lower: ti.template(), n_lower: ti.template(), bits, J: ti.template(),
-           impact: ti.template(), any_impact, k_p):
+def gather(
+    i,
+    final: ti.template(),
+    x: ti.template(),
+    radius: ti.template(),
+    mass: ti.template(),
+    upper: ti.template(),
+    n_upper: ti.template(),
+    lower: ti.template(),
+    n_lower: ti.template(),
+    bits,
+    J: ti.template(),
+    impact: ti.template(),
+    any_impact,
+    k_p,
+):
     """What ball i gets from all its pairs, summed in id order (lower then upper): (Δv [m/s],
     Δω [rad/s], and with ``final`` the position projection Δx [m] and whether it touches a ball:
     0 when no gap is below 1 % of its radius, ``PRESSED`` when some ball overlaps it by more than

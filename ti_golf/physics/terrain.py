@@ -109,8 +109,13 @@ def outside(heights: ti.template(), terrain, x):
     ex = terrain.dx * (heights.shape[0] - 1)
     ez = terrain.dz * (heights.shape[1] - 1)
     out = False
-    if not (x[0] >= terrain.origin[0] and x[0] <= terrain.origin[0] + ex and x[2] >= terrain.origin[2]
-            and x[2] <= terrain.origin[2] + ez and x[1] >= terrain.kill):
+    if not (
+        x[0] >= terrain.origin[0]
+        and x[0] <= terrain.origin[0] + ex
+        and x[2] >= terrain.origin[2]
+        and x[2] <= terrain.origin[2] + ez
+        and x[1] >= terrain.kill
+    ):
         out = True  # (NaN positions are out too)
     return out
 
@@ -140,8 +145,9 @@ def terrain_position(x, x1, p, n, radius, heights: ti.template(), terrain):
 
 
 @kernel
-def sample_surface(terrain: TerrainParams, heights: float_grid, x: vec3_array, p: vec3_array, n: vec3_array,
-                   out: int_array):
+def sample_surface(
+    terrain: TerrainParams, heights: float_grid, x: vec3_array, p: vec3_array, n: vec3_array, out: int_array
+):
     """For points x (N,) [m]: the terrain point p under each and its unit normal n, and ``out`` = 1
     where a ball centred there would be out of bounds (the contact's own functions, for checks)."""
     for i in range(x.shape[0]):

@@ -92,36 +92,45 @@ which its argument checks compare by identity."""
 vec3 = Deferred(lambda: ti.types.vector(3, float), "vec3")
 """3-vector of the chosen float [SI units]."""
 
-AirParams = Deferred(lambda: ti.types.struct(
-    rho=float,  # air density ρ [kg/m³]
-    gamma=ti.i32,  # flow type γ: 1 laminar, 2 turbulent
-    C_D=float,  # drag coefficient (L.22)
-    C_M=float,  # Magnus coefficient (L.21)
-    omega_M=float,  # Magnus reference angular velocity ω_M [1/s] (L.2)
-    C_omega=float,  # spin-decay coefficient (L.23)
-    wind=vec3.get(),  # constant wind velocity [m/s]
-    model=ti.i32,  # aerodynamic model (aero.AIR_MODEL_CODES): 0 the report's laws, 1 coefficients of the spin ratio
-), "AirParams")
+AirParams = Deferred(
+    lambda: ti.types.struct(
+        rho=float,  # air density ρ [kg/m³]
+        gamma=ti.i32,  # flow type γ: 1 laminar, 2 turbulent
+        C_D=float,  # drag coefficient (L.22)
+        C_M=float,  # Magnus coefficient (L.21)
+        omega_M=float,  # Magnus reference angular velocity ω_M [1/s] (L.2)
+        C_omega=float,  # spin-decay coefficient (L.23)
+        wind=vec3.get(),  # constant wind velocity [m/s]
+        model=ti.i32,  # aerodynamic model (aero.AIR_MODEL_CODES): 0 the report's laws, 1 coefficients of the spin ratio
+    ),
+    "AirParams",
+)
 """Air parameters, passed to kernels by value (tunable without recompiling)."""
 
-ContactParams = Deferred(lambda: ti.types.struct(
-    e=float,  # restitution (B.9)
-    mu=float,  # Coulomb friction (B.15)
-    k_p=float,  # position projection factor (B.18)
-    mu_roll=float,  # rolling resistance: deceleration μ_roll·g_n while rolling
-    relax=float,  # Jacobi relaxation of resting ball–ball impulses
-    v_bounce=float,  # approach speeds below v_bounce + 2|g|h are inelastic [m/s]
-    turf=ti.i32,  # 1: ground impacts as on turf (contact.turf_impact); 0: restitution e
-), "ContactParams")
+ContactParams = Deferred(
+    lambda: ti.types.struct(
+        e=float,  # restitution (B.9)
+        mu=float,  # Coulomb friction (B.15)
+        k_p=float,  # position projection factor (B.18)
+        mu_roll=float,  # rolling resistance: deceleration μ_roll·g_n while rolling
+        relax=float,  # Jacobi relaxation of resting ball–ball impulses
+        v_bounce=float,  # approach speeds below v_bounce + 2|g|h are inelastic [m/s]
+        turf=ti.i32,  # 1: ground impacts as on turf (contact.turf_impact); 0: restitution e
+    ),
+    "ContactParams",
+)
 """Impulse-contact parameters (report Appendix B)."""
 
-TerrainParams = Deferred(lambda: ti.types.struct(
-    on=ti.i32,  # 1: the scene has a terrain (its heights are the kernel's height-grid argument); 0: none
-    origin=vec3.get(),  # the grid's first corner [m]; heights are added to its y
-    dx=float,  # grid spacing along x [m]
-    dz=float,  # grid spacing along z [m]
-    kill=float,  # balls below this height are out of bounds [m]
-), "TerrainParams")
+TerrainParams = Deferred(
+    lambda: ti.types.struct(
+        on=ti.i32,  # 1: the scene has a terrain (its heights are the kernel's height-grid argument); 0: none
+        origin=vec3.get(),  # the grid's first corner [m]; heights are added to its y
+        dx=float,  # grid spacing along x [m]
+        dz=float,  # grid spacing along z [m]
+        kill=float,  # balls below this height are out of bounds [m]
+    ),
+    "TerrainParams",
+)
 """Height-field terrain parameters (see :mod:`ti_golf.physics.terrain`)."""
 
 # ndarray annotations (any length; element types follow the precision chosen at init)
@@ -152,71 +161,89 @@ ivec3 = ti.types.vector(3, ti.i32)
 
 # Kernel data grouped by what it is (argument packs of arrays, structs of scalars), as the
 # kernels take it: model before state, inputs before outputs.
-StepParams = Deferred(lambda: ti.types.struct(
-    gravity=vec3.get(),  # g [m/s²]
-    h=float,  # time step [s]
-    t0=ti.f64,  # time at the start of the launch [s]
-    dt=ti.f64,  # the time step h in f64 [s], by which t advances
-    steps=ti.i32,  # steps to take in one launch (serial stepping)
-    half_skin=float,  # half the neighbour lists' skin [m]
-    skin=float,  # the neighbour lists' skin [m]
-    v_rest=float,  # speed and R|ω| below which a touching ball counts as still [m/s]
-    t_rest=float,  # time still before a ball is put at rest [s]
-    v_cut=float,  # balls faster than this own no pair in the lists [m/s]
-    r_cut=float,  # balls bigger than this own no pair in the lists [m]
-), "StepParams")
+StepParams = Deferred(
+    lambda: ti.types.struct(
+        gravity=vec3.get(),  # g [m/s²]
+        h=float,  # time step [s]
+        t0=ti.f64,  # time at the start of the launch [s]
+        dt=ti.f64,  # the time step h in f64 [s], by which t advances
+        steps=ti.i32,  # steps to take in one launch (serial stepping)
+        half_skin=float,  # half the neighbour lists' skin [m]
+        skin=float,  # the neighbour lists' skin [m]
+        v_rest=float,  # speed and R|ω| below which a touching ball counts as still [m/s]
+        t_rest=float,  # time still before a ball is put at rest [s]
+        v_cut=float,  # balls faster than this own no pair in the lists [m/s]
+        r_cut=float,  # balls bigger than this own no pair in the lists [m]
+    ),
+    "StepParams",
+)
 """Scalars of a step of the collision solver, passed by value."""
 
-ModelArrays = Deferred(lambda: ti.types.argpack(
-    radius=float_array.get(),  # ball radii [m], (N,) or (1,) (see of_ball)
-    mass=float_array.get(),  # ball masses [kg], (N,) or (1,)
-    launch_height=float_array.get(),  # heights whose downward crossing is a landing [m], (N,) or (1,)
-    plane_p=vec3_array.get(),  # a point on each plane [m], (P,)
-    plane_n=vec3_array.get(),  # each plane's unit normal, (P,)
-    heights=float_grid.get(),  # terrain heights [m], (nx, nz) (2×2 zeros without a terrain)
-    terrain_cells=int_grid,  # surface type of each terrain cell, (nx − 1, nz − 1)
-    surface_table=float_grid.get(),  # e, μ, μ_roll, turf of each surface type, (S, 4)
-), "ModelArrays")
+ModelArrays = Deferred(
+    lambda: ti.types.argpack(
+        radius=float_array.get(),  # ball radii [m], (N,) or (1,) (see of_ball)
+        mass=float_array.get(),  # ball masses [kg], (N,) or (1,)
+        launch_height=float_array.get(),  # heights whose downward crossing is a landing [m], (N,) or (1,)
+        plane_p=vec3_array.get(),  # a point on each plane [m], (P,)
+        plane_n=vec3_array.get(),  # each plane's unit normal, (P,)
+        heights=float_grid.get(),  # terrain heights [m], (nx, nz) (2×2 zeros without a terrain)
+        terrain_cells=int_grid,  # surface type of each terrain cell, (nx − 1, nz − 1)
+        surface_table=float_grid.get(),  # e, μ, μ_roll, turf of each surface type, (S, 4)
+    ),
+    "ModelArrays",
+)
 """The model's arrays (see :class:`ti_golf.sim.model.Model`)."""
 
-BallState = Deferred(lambda: ti.types.argpack(
-    x=vec3_array.get(),  # positions [m], (N,)
-    v=vec3_array.get(),  # velocities [m/s], (N,)
-    w=vec3_array.get(),  # angular velocities [rad/s], (N,)
-    status=int_array,  # FLYING, ROLLING, AT_REST or OUT_OF_BOUNDS, (N,)
-    rest_time=float_array.get(),  # time spent still [s], (N,)
-), "BallState")
+BallState = Deferred(
+    lambda: ti.types.argpack(
+        x=vec3_array.get(),  # positions [m], (N,)
+        v=vec3_array.get(),  # velocities [m/s], (N,)
+        w=vec3_array.get(),  # angular velocities [rad/s], (N,)
+        status=int_array,  # FLYING, ROLLING, AT_REST or OUT_OF_BOUNDS, (N,)
+        rest_time=float_array.get(),  # time spent still [s], (N,)
+    ),
+    "BallState",
+)
 """The balls' state (see :class:`ti_golf.sim.state.State`)."""
 
-FlightRecord = Deferred(lambda: ti.types.argpack(
-    landed=int_array,  # IN_FLIGHT, LANDED or NOT_TRACKED, (N,) or (1,) when no ball is tracked
-    apex=float_array.get(),  # highest centre height so far [m]
-    t_land=float_array.get(),  # time of landing [s]
-    land_x=vec3_array.get(),  # position at landing [m]
-    land_v=vec3_array.get(),  # velocity at landing [m/s]
-), "FlightRecord")
+FlightRecord = Deferred(
+    lambda: ti.types.argpack(
+        landed=int_array,  # IN_FLIGHT, LANDED or NOT_TRACKED, (N,) or (1,) when no ball is tracked
+        apex=float_array.get(),  # highest centre height so far [m]
+        t_land=float_array.get(),  # time of landing [s]
+        land_x=vec3_array.get(),  # position at landing [m]
+        land_v=vec3_array.get(),  # velocity at landing [m/s]
+    ),
+    "FlightRecord",
+)
 """Each tracked ball's flight: landing and apex (see :class:`ti_golf.sim.state.State`)."""
 
-NeighbourLists = Deferred(lambda: ti.types.argpack(
-    upper=int_table,  # each ball's neighbours of higher storage index, (N, K)
-    n_upper=int_array,  # how many, (N,)
-    lower=int_table,  # each ball's lower neighbours, as slots of the pairs in their upper lists, (N, K')
-    n_lower=int_array,  # how many, (N,)
-    x_at_build=vec3f_array,  # positions when the lists were built [m], f32, (N,)
-    lam=float_grid.get(),  # each pair's accumulated resting impulse [N·s], the shape of upper
-    lam_plane=f32_table,  # each ball's accumulated impulse on each plane and the terrain [N·s], (N, P + 1)
-), "NeighbourLists")
+NeighbourLists = Deferred(
+    lambda: ti.types.argpack(
+        upper=int_table,  # each ball's neighbours of higher storage index, (N, K)
+        n_upper=int_array,  # how many, (N,)
+        lower=int_table,  # each ball's lower neighbours, as slots of the pairs in their upper lists, (N, K')
+        n_lower=int_array,  # how many, (N,)
+        x_at_build=vec3f_array,  # positions when the lists were built [m], f32, (N,)
+        lam=float_grid.get(),  # each pair's accumulated resting impulse [N·s], the shape of upper
+        lam_plane=f32_table,  # each ball's accumulated impulse on each plane and the terrain [N·s], (N, P + 1)
+    ),
+    "NeighbourLists",
+)
 """The collision solver's neighbour lists and the impulses it carries from step to step."""
 
-StepScratch = Deferred(lambda: ti.types.argpack(
-    x_free=vec3_array.get(),  # free-flight positions, then the step's new positions [m], (N,)
-    v_free=vec3_array.get(),  # free-flight velocities [m/s], (N,)
-    calm=float_array.get(),  # least rest timer of the balls touching each ball [s], (N,)
-    clear=f32_array,  # clearance to the nearest plane or terrain [m], (N,)
-    J=pair_table.get(),  # each pair's impulse, inverse distance and gap in a sweep, the shape of upper
-    impact=int_array,  # each ball's first impact key, (N,)
-    flag=int_array,  # [0]: rebuild the lists; [1]: the sweep marked impacts, (2,)
-), "StepScratch")
+StepScratch = Deferred(
+    lambda: ti.types.argpack(
+        x_free=vec3_array.get(),  # free-flight positions, then the step's new positions [m], (N,)
+        v_free=vec3_array.get(),  # free-flight velocities [m/s], (N,)
+        calm=float_array.get(),  # least rest timer of the balls touching each ball [s], (N,)
+        clear=f32_array,  # clearance to the nearest plane or terrain [m], (N,)
+        J=pair_table.get(),  # each pair's impulse, inverse distance and gap in a sweep, the shape of upper
+        impact=int_array,  # each ball's first impact key, (N,)
+        flag=int_array,  # [0]: rebuild the lists; [1]: the sweep marked impacts, (2,)
+    ),
+    "StepScratch",
+)
 """Per-step work arrays of the collision solver."""
 
 
@@ -226,19 +253,23 @@ def of_ball(a: ti.template(), i):
     value (shape (1,): the radius and mass of balls all alike, see ``Model``)."""
     return a[ti.min(i, a.shape[0] - 1)]
 
-GridParams = Deferred(lambda: ti.types.struct(
-    inv_cell=float,  # 1 / the grid's cell size [1/m]
-    mask=ti.i32,  # the hash table's size − 1 (a power of two − 1)
-    origin=ivec3,  # the least cell of the balls
-    stride=ivec3,  # the hash's strides per cell axis
-    skin=float,  # the lists' skin [m]: pairs closer than the sum of their radii plus this are listed
-    h=float,  # time step [s]
-    fast=ti.i32,  # 1: some balls are set apart as fast or big (apart_ids)
-    v_cut=float,  # balls faster than this own no pair [m/s]
-    r_cut=float,  # balls bigger than this own no pair [m]
-    n_apart=ti.i32,  # how many balls are set apart
-    scan_apart=ti.i32,  # 1: every ball tests the balls set apart
-), "GridParams")
+
+GridParams = Deferred(
+    lambda: ti.types.struct(
+        inv_cell=float,  # 1 / the grid's cell size [1/m]
+        mask=ti.i32,  # the hash table's size − 1 (a power of two − 1)
+        origin=ivec3,  # the least cell of the balls
+        stride=ivec3,  # the hash's strides per cell axis
+        skin=float,  # the lists' skin [m]: pairs closer than the sum of their radii plus this are listed
+        h=float,  # time step [s]
+        fast=ti.i32,  # 1: some balls are set apart as fast or big (apart_ids)
+        v_cut=float,  # balls faster than this own no pair [m/s]
+        r_cut=float,  # balls bigger than this own no pair [m]
+        n_apart=ti.i32,  # how many balls are set apart
+        scan_apart=ti.i32,  # 1: every ball tests the balls set apart
+    ),
+    "GridParams",
+)
 """Scalars of a neighbour-list build (see :func:`ti_golf.physics.grid.list_neighbours`)."""
 
 GridScratch = ti.types.argpack(

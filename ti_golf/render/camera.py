@@ -1,11 +1,11 @@
 """The camera of a picture: a pinhole :class:`View` fitted to the balls, and the balls' colours."""
 
-
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any
 
 import matplotlib
 import numpy as np
@@ -89,8 +89,15 @@ def _preset_direction(camera: str) -> tuple[np.ndarray, np.ndarray]:
     return f / np.linalg.norm(f), np.array([0.0, 1.0, 0.0])
 
 
-def _fit(lo: np.ndarray, hi: np.ndarray, forward: np.ndarray, up: np.ndarray, size: tuple[int, int],
-         fov: float, margin: float = 1.1) -> View:
+def _fit(
+    lo: np.ndarray,
+    hi: np.ndarray,
+    forward: np.ndarray,
+    up: np.ndarray,
+    size: tuple[int, int],
+    fov: float,
+    margin: float = 1.1,
+) -> View:
     """The camera looking along ``forward`` at the box's centre from just far enough to see all of it."""
     center = 0.5 * (lo + hi)
     corners = np.array([[a, b, c] for a in (lo[0], hi[0]) for b in (lo[1], hi[1]) for c in (lo[2], hi[2])]) - center
@@ -99,8 +106,11 @@ def _fit(lo: np.ndarray, hi: np.ndarray, forward: np.ndarray, up: np.ndarray, si
     a, b, w = corners @ r, corners @ u, corners @ f
     tan_y = math.tan(math.radians(fov) / 2.0)
     tan_x = tan_y * size[0] / size[1]
-    d = max(float(np.max(margin * np.abs(a) / tan_x - w)), float(np.max(margin * np.abs(b) / tan_y - w)),
-            float(np.max(-w)) * 1.05)
+    d = max(
+        float(np.max(margin * np.abs(a) / tan_x - w)),
+        float(np.max(margin * np.abs(b) / tan_y - w)),
+        float(np.max(-w)) * 1.05,
+    )
     half_diag = float(np.linalg.norm(hi - lo)) / 2.0
     d = max(d, 1e-6)
     z_near = max(1e-4 * d, 0.5 * (d - half_diag))
@@ -108,8 +118,9 @@ def _fit(lo: np.ndarray, hi: np.ndarray, forward: np.ndarray, up: np.ndarray, si
     return View(tuple(center - d * f), tuple(center), tuple(u), float(fov), size, z_near, z_far)
 
 
-def _scene_bounds(points: np.ndarray, radius: np.ndarray, plane_p: np.ndarray, plane_n: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray]:
+def _scene_bounds(
+    points: np.ndarray, radius: np.ndarray, plane_p: np.ndarray, plane_n: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Bounding box of the balls (with their radii) and trail points, reaching down to a horizontal
     ground below them, at least 10 ball radii wide along each axis."""
     r_max = float(np.max(radius)) if radius.size else 0.02
@@ -149,8 +160,12 @@ def _hole(sim: "Simulation") -> tuple[np.ndarray, np.ndarray, float, float] | No
     x, z = map(float, hole.position)
     t = getattr(sim.model, "terrain", None)
     if t is not None:
-        return (np.array([x, float(t.height(x, z)), z]), np.asarray(t.normal(x, z), float).reshape(3),
-                float(hole.radius), float(hole.flag_height))
+        return (
+            np.array([x, float(t.height(x, z)), z]),
+            np.asarray(t.normal(x, z), float).reshape(3),
+            float(hole.radius),
+            float(hole.flag_height),
+        )
     y, n = 0.0, np.array([0.0, 1.0, 0.0])
     for p, m in zip(np.asarray(sim.model.plane_p, float), np.asarray(sim.model.plane_n, float)):
         if m[1] > 0.7:  # the ground: y where the plane meets the vertical through (x, z)
@@ -159,8 +174,9 @@ def _hole(sim: "Simulation") -> tuple[np.ndarray, np.ndarray, float, float] | No
     return np.array([x, y, z]), n, float(hole.radius), float(hole.flag_height)
 
 
-def _hole_parts(sim: "Simulation", view: View, min_px: float) -> tuple[list[np.ndarray], np.ndarray, np.ndarray,
-                                                                       np.ndarray, np.ndarray]:
+def _hole_parts(
+    sim: "Simulation", view: View, min_px: float
+) -> tuple[list[np.ndarray], np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The cup (a dark disc just above the surface, at least ``min_px`` pixels across), the
     flagstick (a segment) and the flag (a triangle flying downwind, else along +x): tiles, tile
     normals, tile colours, segments (k, 2, 3) and segment colours."""
@@ -201,14 +217,19 @@ def _bounds(sim: "Simulation", trail: np.ndarray | None) -> tuple[np.ndarray, np
         h, origin, spacing = terr
         i = np.clip(np.round((np.array([lo[0], hi[0]]) - origin[0]) / spacing[0]).astype(int), 0, h.shape[0] - 1)
         k = np.clip(np.round((np.array([lo[2], hi[2]]) - origin[2]) / spacing[1]).astype(int), 0, h.shape[1] - 1)
-        under = h[i[0]:i[1] + 1, k[0]:k[1] + 1]
+        under = h[i[0] : i[1] + 1, k[0] : k[1] + 1]
         if under.size:
             lo[1] = min(lo[1], origin[1] + float(under.min()))
     return lo, hi
 
 
-def camera_view(sim: "Simulation", camera: str | View = "iso", size: tuple[int, int] = (1280, 720),
-                fov: float = 45.0, trails: Any = None) -> View:
+def camera_view(
+    sim: "Simulation",
+    camera: str | View = "iso",
+    size: tuple[int, int] = (1280, 720),
+    fov: float = 45.0,
+    trails: Any = None,
+) -> View:
     """The :class:`View` :func:`render` uses for ``camera`` (a preset name, or a View returned as is)."""
     if isinstance(camera, View):
         return camera
@@ -234,13 +255,21 @@ def camera_view(sim: "Simulation", camera: str | View = "iso", size: tuple[int, 
     d = 60.0 * float(radius[0])  # a chase camera: ball 0 stays large, whatever the scene's extent
     position = p0 - d * heading + np.array([0.0, 0.4 * d, 0.0])
     lookat = p0 + d * heading
-    return View(tuple(position), tuple(lookat), (0.0, 1.0, 0.0), float(fov), size, z_near=0.05 * d,
-                z_far=_FOLLOW_REACH * d + 4.0 * float(np.linalg.norm(hi - lo)))
+    return View(
+        tuple(position),
+        tuple(lookat),
+        (0.0, 1.0, 0.0),
+        float(fov),
+        size,
+        z_near=0.05 * d,
+        z_far=_FOLLOW_REACH * d + 4.0 * float(np.linalg.norm(hi - lo)),
+    )
 
 
 # -- colours --------------------------------------------------------------------------------------
-def ball_colors(sim: "Simulation", color_by: str | np.ndarray = "status",
-                value_range: tuple[float, float] | None = None) -> np.ndarray:
+def ball_colors(
+    sim: "Simulation", color_by: str | np.ndarray = "status", value_range: tuple[float, float] | None = None
+) -> np.ndarray:
     """Per-ball RGB (N, 3) in [0, 1]: by status (:data:`STATUS_COLORS`), by ``speed`` |v| or ``spin``
     |ω| through a colormap over ``value_range`` (default 0 to the largest value), by ``id`` (a cycle
     of 20 colours), or given directly as an (N, 3) array."""

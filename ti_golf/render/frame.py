@@ -1,6 +1,5 @@
 """What a picture shows, as geometry both renderers draw: balls, planes, terrain, hole, trails, wind."""
 
-
 from __future__ import annotations
 
 import math
@@ -75,8 +74,15 @@ def _footprint(view: View, p: np.ndarray, n: np.ndarray, reach: float) -> np.nda
     return np.array(out)
 
 
-def _plane_tiles(view: View, plane_p: np.ndarray, plane_n: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                 r_max: float, reach: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _plane_tiles(
+    view: View,
+    plane_p: np.ndarray,
+    plane_n: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    r_max: float,
+    reach: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Checkered quads of every plane seen from its open side, sized to the box ``lo``–``hi`` (and,
     with ``reach`` > 0, to what the camera sees of the plane up to that distance)."""
     cam = np.asarray(view.position)
@@ -133,8 +139,9 @@ def _clip_poly(poly: np.ndarray, d: np.ndarray) -> np.ndarray:
     return np.array(out).reshape(-1, 3)
 
 
-def _clip_to_open_sides(quads: np.ndarray, planes: list[tuple[np.ndarray, np.ndarray]]
-                        ) -> tuple[list[np.ndarray], np.ndarray]:
+def _clip_to_open_sides(
+    quads: np.ndarray, planes: list[tuple[np.ndarray, np.ndarray]]
+) -> tuple[list[np.ndarray], np.ndarray]:
     """Cut a plane's tiles (T, 4, 3) to the open side of every other plane (the space balls can
     reach): a bin's floor stops at its walls and the walls at the floor. Returns the polygons and
     the indices of the tiles they come from."""
@@ -174,9 +181,13 @@ def _surface_types(sim: Simulation) -> tuple[np.ndarray, tuple[str, ...]] | None
     return np.asarray(cells), names
 
 
-def _terrain_tiles(h: np.ndarray, origin: np.ndarray, spacing: np.ndarray,
-                   surfaces: tuple[np.ndarray, tuple[str, ...]] | None = None, max_cells: int = 128
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _terrain_tiles(
+    h: np.ndarray,
+    origin: np.ndarray,
+    spacing: np.ndarray,
+    surfaces: tuple[np.ndarray, tuple[str, ...]] | None = None,
+    max_cells: int = 128,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The height field as flat-shaded quads (at most ``max_cells`` per axis), tinted by height,
     or with ``surfaces`` (:func:`_surface_types`) coloured by the surface type of the cell at each
     quad's middle (``SURFACE_COLORS``, shaded by height)."""
@@ -256,8 +267,15 @@ def _wind_arrow(wind: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.nd
     return seg, np.tile(WIND_COLOR, (len(seg), 1))
 
 
-def build_frame(sim: "Simulation", view: View, color_by: Any, trails: Any, min_px: float,
-                 value_range: tuple[float, float] | None, follow: bool = False) -> _Frame:
+def build_frame(
+    sim: "Simulation",
+    view: View,
+    color_by: Any,
+    trails: Any,
+    min_px: float,
+    value_range: tuple[float, float] | None,
+    follow: bool = False,
+) -> _Frame:
     """What :func:`render` draws of ``sim`` seen through ``view`` (arguments as there; ``follow``
     for the follow camera's reach): balls, planes, terrain, cup and flag, trails, wind arrow, light."""
     x = sim.x

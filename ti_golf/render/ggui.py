@@ -1,6 +1,5 @@
 """GGUI (Vulkan) off screen: the one window a process may have, drawing a frame, writing the PNG."""
 
-
 from __future__ import annotations
 
 import atexit
@@ -95,7 +94,8 @@ def _ggui_window(size: tuple[int, int]) -> Any:
         if _ggui.size != size:
             raise _GGUIUnavailable(
                 f"the GGUI window of this process is {_ggui.size[0]}x{_ggui.size[1]} and cannot be resized "
-                f"to {size[0]}x{size[1]}")
+                f"to {size[0]}x{size[1]}"
+            )
         return _ggui.window
     problem = ggui_problem()
     if problem:
@@ -143,8 +143,9 @@ def destroy_window(window: Any) -> None:
 _VBO_STRIDE = 12
 
 
-def _vbo(points: np.ndarray, colors: np.ndarray, normals: np.ndarray | None = None,
-         radius: np.ndarray | None = None) -> np.ndarray:
+def _vbo(
+    points: np.ndarray, colors: np.ndarray, normals: np.ndarray | None = None, radius: np.ndarray | None = None
+) -> np.ndarray:
     """One GGUI vertex buffer, shape (n, 12) float32, built in numpy (no Taichi kernel runs)."""
     vbo = np.zeros((len(points), _VBO_STRIDE), np.float32)
     vbo[:, 0:3] = points
@@ -176,8 +177,18 @@ class _GGUIDraw:
 
     def mesh(self, vbo: np.ndarray, indices: np.ndarray) -> None:
         vbo_info, idx_info = self._hold(vbo, indices)
-        self.scene.mesh(vbo_info, True, idx_info, (0.5, 0.5, 0.5), True,  # per-vertex colour, two-sided
-                        len(indices), 0, len(vbo), 0, False)  # index count/offset, vertex count/offset, wireframe
+        self.scene.mesh(
+            vbo_info,
+            True,
+            idx_info,
+            (0.5, 0.5, 0.5),
+            True,  # per-vertex colour, two-sided
+            len(indices),
+            0,
+            len(vbo),
+            0,
+            False,
+        )  # index count/offset, vertex count/offset, wireframe
 
     def lines(self, vbo: np.ndarray, width: float) -> None:
         vbo_info, idx_info = self._hold(vbo, None)
@@ -228,12 +239,18 @@ def draw_scene(frame: _Frame, scene: Any, cam: Any) -> _GGUIDraw:
             first = starts[counts == k][:, None]
             j = np.arange(1, k - 1)[None, :]
             fans.append(np.stack(np.broadcast_arrays(first, first + j, first + j + 1), axis=-1).reshape(-1))
-        draw.mesh(_vbo(np.concatenate(frame.tiles), np.repeat(frame.tile_colors, counts, axis=0),
-                       normals=np.repeat(frame.tile_normals, counts, axis=0)),
-                  np.ascontiguousarray(np.concatenate(fans), np.int32))
+        draw.mesh(
+            _vbo(
+                np.concatenate(frame.tiles),
+                np.repeat(frame.tile_colors, counts, axis=0),
+                normals=np.repeat(frame.tile_normals, counts, axis=0),
+            ),
+            np.ascontiguousarray(np.concatenate(fans), np.int32),
+        )
     if len(frame.segments):
-        draw.lines(_vbo(frame.segments.reshape(-1, 3), np.repeat(frame.segment_colors, 2, axis=0)),
-                   float(frame.line_px))
+        draw.lines(
+            _vbo(frame.segments.reshape(-1, 3), np.repeat(frame.segment_colors, 2, axis=0)), float(frame.line_px)
+        )
     if len(frame.centers):
         # GGUI 1.7 scales sprite radii by width/height (it uses the window width where the height
         # belongs): divide by the aspect ratio so a ball is drawn at its true size.

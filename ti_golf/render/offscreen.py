@@ -24,7 +24,6 @@ trails (and the horizontal ground below them):
 * ``follow``: behind and above ball 0, looking along its horizontal direction of travel.
 """
 
-
 from __future__ import annotations
 
 import os
@@ -91,8 +90,13 @@ def _tile_collection(frame: _Frame, PolyCollection: Any) -> Any:
             if len(c) >= 3:
                 add(c, i)
     order = np.argsort(depth, kind="stable")[::-1]
-    return PolyCollection([polys[i] for i in order], facecolors=colors[np.asarray(source, int)[order]],
-                          edgecolors="none", antialiased=False, zorder=1)
+    return PolyCollection(
+        [polys[i] for i in order],
+        facecolors=colors[np.asarray(source, int)[order]],
+        edgecolors="none",
+        antialiased=False,
+        zorder=1,
+    )
 
 
 def _render_matplotlib(frame: _Frame, path: str) -> None:
@@ -122,8 +126,11 @@ def _render_matplotlib(frame: _Frame, path: str) -> None:
         seg[cut_a, 0] = point[cut_a]
         seg[cut_b, 1] = point[cut_b]
         px = np.stack([0.5 * w + f * seg[..., 0] / seg[..., 2], 0.5 * h - f * seg[..., 1] / seg[..., 2]], axis=-1)
-        ax.add_collection(LineCollection(px, colors=np.clip(frame.segment_colors[ok], 0, 1),
-                                         linewidths=frame.line_px * pt_per_px, zorder=2))
+        ax.add_collection(
+            LineCollection(
+                px, colors=np.clip(frame.segment_colors[ok], 0, 1), linewidths=frame.line_px * pt_per_px, zorder=2
+            )
+        )
     if len(frame.centers):
         px, depth = view.project(frame.centers)
         dist = np.linalg.norm(frame.centers - np.asarray(view.position), axis=1)
@@ -132,17 +139,34 @@ def _render_matplotlib(frame: _Frame, path: str) -> None:
         order = np.flatnonzero(ok)[np.argsort(-depth[ok], kind="stable")]
         c = np.clip(frame.colors[order] * (AMBIENT + 0.75 * LIGHT), 0, 1)
         edge = np.clip(frame.colors[order] * AMBIENT, 0, 1)
-        ax.scatter(px[order, 0], px[order, 1], s=(2.0 * r_px[order] * pt_per_px) ** 2, c=c, edgecolors=edge,
-                   linewidths=np.where(r_px[order] > 3.0, 0.6, 0.0), marker="o", zorder=3)
+        ax.scatter(
+            px[order, 0],
+            px[order, 1],
+            s=(2.0 * r_px[order] * pt_per_px) ** 2,
+            c=c,
+            edgecolors=edge,
+            linewidths=np.where(r_px[order] > 3.0, 0.6, 0.0),
+            marker="o",
+            zorder=3,
+        )
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=dpi, facecolor=BACKGROUND_COLOR, format="png")
 
 
 # -- entry point ----------------------------------------------------------------------------------
-def render(sim: "Simulation", path: str | os.PathLike[str], camera: str | View = "iso",
-           size: tuple[int, int] = (1280, 720), color_by: str | np.ndarray = "status", trails: Any = None,
-           fov: float = 45.0, *, backend: str = "auto", min_px: float | None = None,
-           value_range: tuple[float, float] | None = None) -> str:
+def render(
+    sim: "Simulation",
+    path: str | os.PathLike[str],
+    camera: str | View = "iso",
+    size: tuple[int, int] = (1280, 720),
+    color_by: str | np.ndarray = "status",
+    trails: Any = None,
+    fov: float = 45.0,
+    *,
+    backend: str = "auto",
+    min_px: float | None = None,
+    value_range: tuple[float, float] | None = None,
+) -> str:
     """Draw the simulation's balls to a PNG at ``path``; returns the renderer used, ``"ggui"`` or ``"matplotlib"``.
 
     Args:

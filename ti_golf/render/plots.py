@@ -40,8 +40,13 @@ def plot_sweep(res: "SweepResult", path: str | os.PathLike[str], title: str | No
         for j, i in enumerate(res.traj_index):
             p = res.traj[j]
             d = np.hypot(p[:, 0] - x0[0], p[:, 2] - x0[2])
-            ax1.plot(d, p[:, 1] - x0[1], color=cmap(j / max(k - 1, 1)), lw=1.0,
-                     label=f"{res.angle_deg[i]:.4g}°" if k <= 12 else None)
+            ax1.plot(
+                d,
+                p[:, 1] - x0[1],
+                color=cmap(j / max(k - 1, 1)),
+                lw=1.0,
+                label=f"{res.angle_deg[i]:.4g}°" if k <= 12 else None,
+            )
         if k <= 12:
             ax1.legend(fontsize=7, ncol=2, title="launch angle")
     ax1.set_xlabel("downrange distance [m]")
@@ -53,10 +58,20 @@ def plot_sweep(res: "SweepResult", path: str | os.PathLike[str], title: str | No
     groups = {(s, w) for s, w in zip(res.speed_mps, res.spin_radps)}
     for s, w in sorted(groups):
         m = (res.speed_mps[order] == s) & (res.spin_radps[order] == w)
-        ax2.plot(res.angle_deg[order][m], res.carry[order][m], ".-", ms=3,
-                 label=f"{s:g} m/s, {w:g} rad/s" if len(groups) > 1 else None)
-    ax2.plot([res.angle_deg[best]], [res.carry[best]], "r*", ms=12,
-             label=f"best {res.angle_deg[best]:.4g}°: {res.carry[best]:.3f} m")
+        ax2.plot(
+            res.angle_deg[order][m],
+            res.carry[order][m],
+            ".-",
+            ms=3,
+            label=f"{s:g} m/s, {w:g} rad/s" if len(groups) > 1 else None,
+        )
+    ax2.plot(
+        [res.angle_deg[best]],
+        [res.carry[best]],
+        "r*",
+        ms=12,
+        label=f"best {res.angle_deg[best]:.4g}°: {res.carry[best]:.3f} m",
+    )
     ax2.set_xlabel("launch angle [deg]")
     ax2.set_ylabel("carry [m]")
     ax2.grid(alpha=0.3)
@@ -76,8 +91,13 @@ def plot_table(results: list, path: str | os.PathLike[str]) -> None:
         k = len(fig_res.traj_index)
         for j, i in enumerate(fig_res.traj_index):
             p = fig_res.traj[j]
-            ax.plot(p[:, 0], p[:, 1] - p[0, 1], lw=0.8, color=matplotlib.colormaps.get_cmap("viridis")(j / max(k - 1, 1)),
-                    label=f"{fig_res.angle_deg[i]:g}°" if j in (0, k - 1) else None)
+            ax.plot(
+                p[:, 0],
+                p[:, 1] - p[0, 1],
+                lw=0.8,
+                color=matplotlib.colormaps.get_cmap("viridis")(j / max(k - 1, 1)),
+                label=f"{fig_res.angle_deg[i]:g}°" if j in (0, k - 1) else None,
+            )
         b = res.best()
         ax.legend(fontsize=7, loc="upper right")
         ax.set_title(f"{label}: best {res.angle_deg[b]:.2f}°, {res.carry[b]:.2f} m", fontsize=9)
@@ -130,8 +150,15 @@ def plot_round(game: GolfGame, path: str | os.PathLike[str], title: str = "") ->
     for a in (ax, zoom):
         if ter.cells is not None and surfaces:
             colors = [SURFACE_COLORS.get(f.name, (0.69, 0.69, 0.69)) for f in surfaces]
-            a.imshow(ter.cells.T, origin="lower", extent=extent, cmap=ListedColormap(colors), vmin=-0.5,
-                     vmax=len(surfaces) - 0.5, interpolation="nearest")
+            a.imshow(
+                ter.cells.T,
+                origin="lower",
+                extent=extent,
+                cmap=ListedColormap(colors),
+                vmin=-0.5,
+                vmax=len(surfaces) - 0.5,
+                interpolation="nearest",
+            )
             handles = [Patch(color=c, label=f.name or f"surface {k}") for k, (f, c) in enumerate(zip(surfaces, colors))]
         else:
             a.imshow(heights, origin="lower", extent=extent, cmap="summer")
@@ -140,8 +167,16 @@ def plot_round(game: GolfGame, path: str | os.PathLike[str], title: str = "") ->
         for s in game.strokes:
             color = matplotlib.colormaps.get_cmap("autumn")((s.number - 1) / max(len(game.strokes) - 1, 1))
             a.plot(s.path[:, 0], s.path[:, 2], color=color, lw=1.5)
-            a.annotate(str(s.number), s.start[[0, 2]], color="k", fontsize=8, ha="center", va="center",
-                       bbox={"boxstyle": "circle,pad=0.2", "fc": "white", "ec": color}, annotation_clip=True)
+            a.annotate(
+                str(s.number),
+                s.start[[0, 2]],
+                color="k",
+                fontsize=8,
+                ha="center",
+                va="center",
+                bbox={"boxstyle": "circle,pad=0.2", "fc": "white", "ec": color},
+                annotation_clip=True,
+            )
         a.plot(*game.cup[[0, 2]], "k^", ms=8, zorder=5, label="the hole")
         a.plot(*game.ball[[0, 2]], "o", color="white", mec="k", ms=5, zorder=6, label="the ball")
         a.set_xlabel("x [m]")

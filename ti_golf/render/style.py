@@ -1,6 +1,5 @@
 """Colours and constants of the pictures (RGB in [0, 1]), shared by both renderers."""
 
-
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
@@ -12,7 +11,6 @@ if TYPE_CHECKING:  # pragma: no cover
     pass
 
 
-
 # -- colours (RGB in [0, 1]) ----------------------------------------------------------------------
 FLYING_COLOR = (0.95, 0.36, 0.08)
 """Balls in the air: orange."""
@@ -22,8 +20,12 @@ AT_REST_COLOR = (0.15, 0.36, 0.92)
 """Balls put at rest: blue."""
 OUT_OF_BOUNDS_COLOR = (0.66, 0.18, 0.80)
 """Balls out of bounds: purple."""
-STATUS_COLORS = {FLYING: FLYING_COLOR, ROLLING: ROLLING_COLOR, AT_REST: AT_REST_COLOR,
-                 OUT_OF_BOUNDS: OUT_OF_BOUNDS_COLOR}
+STATUS_COLORS = {
+    FLYING: FLYING_COLOR,
+    ROLLING: ROLLING_COLOR,
+    AT_REST: AT_REST_COLOR,
+    OUT_OF_BOUNDS: OUT_OF_BOUNDS_COLOR,
+}
 """Ball colour per status code (``color_by="status"``)."""
 BACKGROUND_COLOR = (0.80, 0.86, 0.92)
 """The sky: a pale grey-blue."""
@@ -33,8 +35,12 @@ WALL_COLORS = ((0.72, 0.70, 0.66), (0.64, 0.62, 0.58))
 """Checker colours of other planes: two greys."""
 TERRAIN_COLORS = ((0.30, 0.50, 0.24), (0.62, 0.66, 0.40))
 """Terrain colours from its lowest to its highest point: dark green to dry grass."""
-SURFACE_COLORS = {"green": (0.36, 0.72, 0.36), "fairway": (0.55, 0.78, 0.40), "rough": (0.42, 0.56, 0.14),
-                  "bunker": (0.91, 0.85, 0.63)}
+SURFACE_COLORS = {
+    "green": (0.36, 0.72, 0.36),
+    "fairway": (0.55, 0.78, 0.40),
+    "rough": (0.42, 0.56, 0.14),
+    "bunker": (0.91, 0.85, 0.63),
+}
 """Terrain colours of the surface types (``[[surfaces]]``) by name; the cells of a type not named
 here, and a terrain without types, are tinted by height (``TERRAIN_COLORS``). The course map of
 :func:`ti_golf.render.plots.plot_round` uses the same colours."""

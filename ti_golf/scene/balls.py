@@ -50,8 +50,14 @@ def launch_position(scene: Scene) -> Vec3:
 
 
 def _one(x, v, w, r, m, track) -> Balls:
-    return Balls(np.array([x], float), np.array([v], float), np.array([w], float), np.array([r], float),
-                 np.array([m], float), np.array([track]))
+    return Balls(
+        np.array([x], float),
+        np.array([v], float),
+        np.array([w], float),
+        np.array([r], float),
+        np.array([m], float),
+        np.array([track]),
+    )
 
 
 def build_balls(scene: Scene) -> Balls:
@@ -61,8 +67,16 @@ def build_balls(scene: Scene) -> Balls:
     if scene.launch is not None:
         L = scene.launch
         # a shot that leaves the ground is a flight (carry, apex, landing); a putt (angle 0) is not
-        parts.append(_one(launch_position(scene), launch_velocity(L.speed, L.angle_deg, L.direction_deg), L.spin,
-                          R, M, L.angle_deg > 0.0))
+        parts.append(
+            _one(
+                launch_position(scene),
+                launch_velocity(L.speed, L.angle_deg, L.direction_deg),
+                L.spin,
+                R,
+                M,
+                L.angle_deg > 0.0,
+            )
+        )
     for spec in scene.balls:
         parts.append(_one(spec.position, spec.velocity, spec.spin, spec.radius or R, spec.mass or M, False))
     for i, block in enumerate(scene.blocks):
@@ -82,7 +96,9 @@ def _block_balls(scene: Scene, block: Block, index: int) -> Balls:
         counts = [int(c) for c in block.count]
         spacing = block.spacing or 2.02 * r_max
         if spacing < 2.0 * r_max:
-            raise_config(scene.path, f"{key}.spacing", f"must be at least one diameter ({2 * r_max:g} m) so balls do not overlap")
+            raise_config(
+                scene.path, f"{key}.spacing", f"must be at least one diameter ({2 * r_max:g} m) so balls do not overlap"
+            )
         grid = np.stack(np.meshgrid(*[np.arange(c) for c in counts], indexing="ij"), axis=-1).reshape(-1, 3)
         x = np.asarray(block.origin) + spacing * grid
         free = 0.5 * (spacing - 2.0 * r_max)
@@ -100,8 +116,11 @@ def _block_balls(scene: Scene, block: Block, index: int) -> Balls:
                 break
             spacing = max(2.02 * r_max, spacing * 0.98)
         if np.prod(per_axis) < n:
-            raise_config(scene.path, f"{key}.number", f"{n} balls of radius up to {r_max:g} m do not fit in the box "
-                         f"(at most {int(np.prod(per_axis))})")
+            raise_config(
+                scene.path,
+                f"{key}.number",
+                f"{n} balls of radius up to {r_max:g} m do not fit in the box (at most {int(np.prod(per_axis))})",
+            )
         sites = rng.choice(int(np.prod(per_axis)), size=n, replace=False)
         grid = np.stack(np.unravel_index(np.sort(sites), per_axis), axis=-1)
         x = lo + r_max + spacing * grid
@@ -125,4 +144,3 @@ def _block_balls(scene: Scene, block: Block, index: int) -> Balls:
         w = w + spin[:, None] * np.array([backspin_axis(d) for d in direction])
         track[:] = angle > 0.0
     return Balls(x, v, w, radius, mass, track)
-

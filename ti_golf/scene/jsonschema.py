@@ -45,8 +45,11 @@ def key_schema(k: Key) -> dict[str, Any]:
 
 def _table(keys: dict[str, Key]) -> dict[str, Any]:
     required = [name for name, k in keys.items() if k.required]
-    out: dict[str, Any] = {"type": "object", "additionalProperties": False,
-                           "properties": {name: key_schema(k) for name, k in keys.items()}}
+    out: dict[str, Any] = {
+        "type": "object",
+        "additionalProperties": False,
+        "properties": {name: key_schema(k) for name, k in keys.items()},
+    }
     if required:
         out["required"] = required
     return out

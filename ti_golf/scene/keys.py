@@ -46,8 +46,9 @@ class Key:
     required: bool = False
 
 
-def key(kind: str, default: Any, unit: str, doc: str, check: Callable[[Any], str | None] | None = None,
-        allowed: str = "") -> Any:
+def key(
+    kind: str, default: Any, unit: str, doc: str, check: Callable[[Any], str | None] | None = None, allowed: str = ""
+) -> Any:
     """A dataclass field declaring a scene key of ``kind`` with its ``default`` [``unit``], help
     ``doc`` and allowed values (``check``, ``allowed``); ``default`` :data:`REQUIRED` makes the key
     required and the field default-less."""
@@ -62,8 +63,11 @@ def key(kind: str, default: Any, unit: str, doc: str, check: Callable[[Any], str
 
 def keys_of(cls: type) -> dict[str, Key]:
     """The keys a dataclass declares with :func:`key`, by field name, in declaration order."""
-    return {f.name: dataclasses.replace(f.metadata["key"], name=f.name)
-            for f in dataclasses.fields(cls) if "key" in f.metadata}
+    return {
+        f.name: dataclasses.replace(f.metadata["key"], name=f.name)
+        for f in dataclasses.fields(cls)
+        if "key" in f.metadata
+    }
 
 
 def _number(x: float) -> str:
@@ -92,8 +96,7 @@ class Interval:
         """``> 0``, ``>= 0`` or ``in [0, 1]``, ``in (0, 1]``, …"""
         if self.hi is None:
             return f"{'>' if self.lo_open else '>='} {_number(self.lo)}"
-        return (f"in {'(' if self.lo_open else '['}{_number(self.lo)}, {_number(self.hi)}"
-                f"{')' if self.hi_open else ']'}")
+        return f"in {'(' if self.lo_open else '['}{_number(self.lo)}, {_number(self.hi)}{')' if self.hi_open else ']'}"
 
     def json_schema(self) -> dict[str, float]:
         """The interval as JSON Schema keywords."""

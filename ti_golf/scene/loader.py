@@ -11,13 +11,14 @@ import importlib.resources
 import importlib.util
 import math
 import os
+from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any
 
 try:  # Python >= 3.11
     import tomllib
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
+    import tomli as tomllib  # type: ignore[no-redef,unused-ignore]
 
 from ti_golf.errors import ConfigError
 from ti_golf.scene.schema import (
@@ -121,7 +122,9 @@ def parse_override(text: str) -> tuple[str, Any]:
         if raw and all(c.isalnum() or c in "_-./~" for c in raw):
             value = raw  # a bare word such as rk4, or a path such as data/hills.npy
         else:
-            raise ConfigError("--set", dotted, f"value {raw!r} is not valid TOML (numbers, [x, y, z], true/false, \"text\")")
+            raise ConfigError(
+                "--set", dotted, f'value {raw!r} is not valid TOML (numbers, [x, y, z], true/false, "text")'
+            ) from None
     return dotted, value
 
 
@@ -236,8 +239,12 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
             continue
         if top not in SCHEMA:
             names = list(TOP_LEVEL) + list(SCHEMA) + [f"[[{a}]]" for a in ARRAY_SCHEMA]
-            raise_config(source, top, f"is not a scene table or key{_suggest(top, list(SCHEMA) + list(TOP_LEVEL) + list(ARRAY_SCHEMA))}; "
-                         f"allowed: {', '.join(names)}")
+            raise_config(
+                source,
+                top,
+                f"is not a scene table or key{_suggest(top, list(SCHEMA) + list(TOP_LEVEL) + list(ARRAY_SCHEMA))}; "
+                f"allowed: {', '.join(names)}",
+            )
         if not isinstance(value, dict):
             raise_config(source, top, f"must be a table [{top}] (got {value!r})")
     for section, keys in SCHEMA.items():
@@ -252,8 +259,9 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
             if isinstance(value, tuple) and len(value) == 2 and value[0] == "--set":
                 src, value = value
             if name_ not in keys:
-                raise_config(src, dotted, f"is unknown{_suggest(name_, keys)}; allowed in [{section}]: "
-                             + ", ".join(keys))
+                raise_config(
+                    src, dotted, f"is unknown{_suggest(name_, keys)}; allowed in [{section}]: " + ", ".join(keys)
+                )
             values[name_] = _coerce(value, keys[name_], src, dotted)
             sources[name_] = src
         if section == "sweep":
@@ -267,8 +275,11 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
         else:
             kwargs[section] = _SECTION_TYPES[section](**values)
         if section == "air" and kwargs["air"].model == "spin_ratio" and kwargs["air"].gamma != 2:
-            raise_config(sources.get("gamma", sources.get("model", source)), "air.gamma",
-                         "must be 2 with air.model = \"spin_ratio\" (its drag and lift are for turbulent flow)")
+            raise_config(
+                sources.get("gamma", sources.get("model", source)),
+                "air.gamma",
+                'must be 2 with air.model = "spin_ratio" (its drag and lift are for turbulent flow)',
+            )
     if "launch" not in doc:
         kwargs["launch"] = None
     arrays = {name: _array_tables(doc.get(name), name, source) for name in ARRAY_SCHEMA}
@@ -279,8 +290,12 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
     levels = kwargs["terrain"].surface_levels if kwargs.get("terrain") is not None else None
     if levels is not None:
         if len(levels) != len(kwargs["surfaces"]) - 1:
-            raise_config(source, "terrain.surface_levels", f"needs one level fewer than there are [[surfaces]] "
-                         f"({len(kwargs['surfaces'])} surfaces, {len(levels)} levels)")
+            raise_config(
+                source,
+                "terrain.surface_levels",
+                f"needs one level fewer than there are [[surfaces]] "
+                f"({len(kwargs['surfaces'])} surfaces, {len(levels)} levels)",
+            )
         if any(b <= a for a, b in zip(levels, levels[1:])):
             raise_config(source, "terrain.surface_levels", "must increase")
     elif kwargs["surfaces"] and kwargs.get("terrain") is None:
@@ -304,7 +319,9 @@ def _array_tables(value: Any, name: str, source: str) -> list[dict[str, Any]]:
         for k, v in table.items():
             dotted = f"{name}[{i}].{k}"
             if k not in keys:
-                raise_config(source, dotted, f"is unknown{_suggest(k, keys)}; allowed in [[{name}]]: " + ", ".join(keys))
+                raise_config(
+                    source, dotted, f"is unknown{_suggest(k, keys)}; allowed in [[{name}]]: " + ", ".join(keys)
+                )
             values[k] = _coerce(v, keys[k], source, dotted)
         out.append(values)
     return out
@@ -335,8 +352,11 @@ def _terrain(values: dict[str, Any], sources: dict[str, str], source: str) -> Te
     if cfg.kind == "file":
         src = sources.get("file", source)
         if not cfg.file:
-            raise_config(src, "terrain.file", "is required when terrain.kind = \"file\" (a .npy array of heights [m], "
-                         "shape (nx, nz))")
+            raise_config(
+                src,
+                "terrain.file",
+                'is required when terrain.kind = "file" (a .npy array of heights [m], shape (nx, nz))',
+            )
         path = Path(cfg.file).expanduser()
         if not path.is_absolute() and src != "--set":
             path = Path(source).parent / path
@@ -349,7 +369,7 @@ def _plane(values: dict[str, Any]) -> Plane:
     plane = Plane(**values)
     n = plane.normal
     length = math.sqrt(sum(c * c for c in n))
-    return Plane(point=plane.point, normal=tuple(c / length for c in n))
+    return Plane(point=plane.point, normal=(n[0] / length, n[1] / length, n[2] / length))
 
 
 def describe_keys() -> str:
@@ -359,8 +379,10 @@ def describe_keys() -> str:
     tables += [(f"[[{name}]].", keys) for name, keys in ARRAY_SCHEMA.items()]
     for prefix, keys in tables:
         for k in keys.values():
-            rows.append(f"| `{prefix}{k.name}` | {k.unit} | `{_default_text(k)}` | {_cell(k.allowed or k.kind)} | "
-                        f"{_cell(k.doc)} |")
+            rows.append(
+                f"| `{prefix}{k.name}` | {k.unit} | `{_default_text(k)}` | {_cell(k.allowed or k.kind)} | "
+                f"{_cell(k.doc)} |"
+            )
     return "\n".join(rows)
 
 

@@ -60,8 +60,11 @@ def _pair(lo: float, hi: float = math.inf) -> Callable[[Any], str | None]:
 
 
 def _count3(v: tuple[float, ...]) -> str | None:
-    return None if all(c >= 1 and float(c).is_integer() for c in v) and math.prod(v) <= 50_000_000 else \
-        "must be 3 whole numbers >= 1 (at most 50 million balls)"
+    return (
+        None
+        if all(c >= 1 and float(c).is_integer() for c in v) and math.prod(v) <= 50_000_000
+        else "must be 3 whole numbers >= 1 (at most 50 million balls)"
+    )
 
 
 # -- the scene's tables -------------------------------------------------------------------------
@@ -70,15 +73,28 @@ class Air:
     """Air properties (report L.1–L.23)."""
 
     rho: float = key("float", 1.3, "kg/m^3", "air density ρ", _non_negative, ">= 0")
-    gamma: int = key("int", 2, "-", "flow type γ: 1 laminar (drag ∝ v), 2 turbulent (drag ∝ v²)", _one_of(1, 2), "1 or 2")
+    gamma: int = key(
+        "int", 2, "-", "flow type γ: 1 laminar (drag ∝ v), 2 turbulent (drag ∝ v²)", _one_of(1, 2), "1 or 2"
+    )
     C_D: float = key("float", 0.3, "-", "drag coefficient; k_D = ½ρA·C_D (L.22)", _non_negative, ">= 0")
     C_M: float = key("float", 0.0, "-", "Magnus coefficient; k_M = ½ρA·C_M/ω_M (L.2, L.21)", _non_negative, ">= 0")
-    omega_M: float = key("float", 1.0, "1/s", "reference angular velocity ω_M of the Magnus law (L.2)", _positive, "> 0")
-    C_omega: float = key("float", 0.0, "-", "spin-decay coefficient; k_ω = ½ρA·C_ω/m (L.17, L.23)", _non_negative, ">= 0")
+    omega_M: float = key(
+        "float", 1.0, "1/s", "reference angular velocity ω_M of the Magnus law (L.2)", _positive, "> 0"
+    )
+    C_omega: float = key(
+        "float", 0.0, "-", "spin-decay coefficient; k_ω = ½ρA·C_ω/m (L.17, L.23)", _non_negative, ">= 0"
+    )
     wind: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "constant wind; forces use v_rel = v − wind (L.21–L.23)")
-    model: str = key("str", "lab", "-", "drag and lift: lab = the report's constant C_D and Magnus law (L.21, L.22); spin_ratio = "
-                "C_D(S) and C_L(S) of the spin ratio S = R|ω|/|v_rel| fitted to launch-monitor shots "
-                "(Ferguson, McNally & McPhee 2022; C_D, C_M and omega_M unused; needs gamma = 2)", _one_of(*AIR_MODELS), " | ".join(AIR_MODELS))
+    model: str = key(
+        "str",
+        "lab",
+        "-",
+        "drag and lift: lab = the report's constant C_D and Magnus law (L.21, L.22); spin_ratio = "
+        "C_D(S) and C_L(S) of the spin ratio S = R|ω|/|v_rel| fitted to launch-monitor shots "
+        "(Ferguson, McNally & McPhee 2022; C_D, C_M and omega_M unused; needs gamma = 2)",
+        _one_of(*AIR_MODELS),
+        " | ".join(AIR_MODELS),
+    )
 
 
 @dataclass(frozen=True)
@@ -96,9 +112,16 @@ class Launch:
     speed: float = key("float", 80.0, "m/s", "launch speed |v0|", _non_negative, ">= 0")
     angle_deg: float = key("float", 45.0, "deg", "elevation above the horizontal", _angle(90), "[-90, 90]")
     direction_deg: float = key("float", 0.0, "deg", "azimuth, from +x toward +z", _angle(360), "[-360, 360]")
-    spin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity ω0 (+z is backspin for a shot toward +x)")
-    position: Vec3 | None = key("vec3", None, "m", "launch point of the ball's centre (default: resting on the ground, [0, ground_height + radius, 0], "
-                "or on the terrain at x = z = 0)")
+    spin: Vec3 = key(
+        "vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity ω0 (+z is backspin for a shot toward +x)"
+    )
+    position: Vec3 | None = key(
+        "vec3",
+        None,
+        "m",
+        "launch point of the ball's centre (default: resting on the ground, [0, ground_height + radius, 0], "
+        "or on the terrain at x = z = 0)",
+    )
 
 
 @dataclass(frozen=True)
@@ -107,15 +130,44 @@ class World:
 
     dt: float = key("float", 0.001, "s", "time step h", _positive, "> 0")
     gravity: Vec3 = key("vec3", (0.0, -9.81, 0.0), "m/s^2", "gravitational acceleration g")
-    integrator: str = key("str", "semi_implicit", "-", "semi_implicit (the report's leapfrog-style Euler) or rk4 (4th order, for flights)", _one_of(*INTEGRATORS), " | ".join(INTEGRATORS))
+    integrator: str = key(
+        "str",
+        "semi_implicit",
+        "-",
+        "semi_implicit (the report's leapfrog-style Euler) or rk4 (4th order, for flights)",
+        _one_of(*INTEGRATORS),
+        " | ".join(INTEGRATORS),
+    )
     t_end: float = key("float", 20.0, "s", "default duration of `ti-golf run`", _positive, "> 0")
-    t_max: float = key("float", 60.0, "s", "longest flight a sweep integrates before giving up on a ball", _positive, "> 0")
-    ground: bool = key("bool", True, "-", "an impenetrable ground plane y = ground_height "
-                "(off by default when the scene has [[planes]] or a [terrain])")
-    collisions: bool = key("bool", True, "-", "ball–ball collisions (hash grid + impulses) when there are several balls")
+    t_max: float = key(
+        "float", 60.0, "s", "longest flight a sweep integrates before giving up on a ball", _positive, "> 0"
+    )
+    ground: bool = key(
+        "bool",
+        True,
+        "-",
+        "an impenetrable ground plane y = ground_height (off by default when the scene has [[planes]] or a [terrain])",
+    )
+    collisions: bool = key(
+        "bool", True, "-", "ball–ball collisions (hash grid + impulses) when there are several balls"
+    )
     ground_height: float = key("float", 0.0, "m", "height of the ground plane")
-    v_rest: float = key("float", 0.01, "m/s", "a touching ball slower than this (and R|ω| below it) may come to rest", _non_negative, ">= 0")
-    t_rest: float = key("float", 0.2, "s", "how long a ball and the balls it touches must stay below v_rest before they are put at rest", _non_negative, ">= 0")
+    v_rest: float = key(
+        "float",
+        0.01,
+        "m/s",
+        "a touching ball slower than this (and R|ω| below it) may come to rest",
+        _non_negative,
+        ">= 0",
+    )
+    t_rest: float = key(
+        "float",
+        0.2,
+        "s",
+        "how long a ball and the balls it touches must stay below v_rest before they are put at rest",
+        _non_negative,
+        ">= 0",
+    )
 
 
 @dataclass(frozen=True)
@@ -124,17 +176,59 @@ class Contact:
 
     e: float = key("float", 0.5, "-", "coefficient of restitution e (B.9)", _unit_interval, "[0, 1]")
     mu: float = key("float", 0.4, "-", "Coulomb friction coefficient μ (B.15)", _non_negative, ">= 0")
-    k_p: float = key("float", 0.2, "-", "position-projection factor k_p (B.18; stable below 0.5)", _unit_interval, "[0, 1]")
-    mu_roll: float = key("float", 0.05, "-", "rolling-resistance coefficient: a rolling ball decelerates at μ_roll·g", _non_negative, ">= 0")
-    iterations: int = key("int", 4, "-", "Jacobi sweeps over all touching pairs per step (more: stiffer stacks)", Interval(1, 100), "[1, 100]")
-    relax: float = key("float", 0.5, "-", "Jacobi relaxation of resting ball–ball impulses (1: full; lower is steadier in dense piles)", Interval(0.0, 1.0, lo_open=True), "(0, 1]")
-    skin: float = key("float", 0.1, "-", "neighbour-list skin as a fraction of the largest radius, bar a few much bigger balls "
-                "(lists are rebuilt when a ball moves skin/2)", Interval(0.0, 2.0, lo_open=True), "(0, 2]")
-    turf: bool = key("bool", False, "-", "ground impacts (planes, terrain) as on turf (Penner 2002, golf_data.md): restitution "
-                "e(v_n) = 0.510 − 0.0375 v_n + 0.000903 v_n² (0.120 above 20 m/s) instead of e, in a frame "
-                "tilted toward the incoming ball by θ_c = 15.4°·(v/18.6 m/s)·(φ/44.4°), φ the impact angle")
-    v_bounce: float = key("float", 0.05, "m/s", "normal approach speeds below v_bounce + 2|g|h are treated as inelastic (no micro-bounces) "
-                "and as resting contacts, whose impulse carries over to the next step", _non_negative, ">= 0")
+    k_p: float = key(
+        "float", 0.2, "-", "position-projection factor k_p (B.18; stable below 0.5)", _unit_interval, "[0, 1]"
+    )
+    mu_roll: float = key(
+        "float",
+        0.05,
+        "-",
+        "rolling-resistance coefficient: a rolling ball decelerates at μ_roll·g",
+        _non_negative,
+        ">= 0",
+    )
+    iterations: int = key(
+        "int",
+        4,
+        "-",
+        "Jacobi sweeps over all touching pairs per step (more: stiffer stacks)",
+        Interval(1, 100),
+        "[1, 100]",
+    )
+    relax: float = key(
+        "float",
+        0.5,
+        "-",
+        "Jacobi relaxation of resting ball–ball impulses (1: full; lower is steadier in dense piles)",
+        Interval(0.0, 1.0, lo_open=True),
+        "(0, 1]",
+    )
+    skin: float = key(
+        "float",
+        0.1,
+        "-",
+        "neighbour-list skin as a fraction of the largest radius, bar a few much bigger balls "
+        "(lists are rebuilt when a ball moves skin/2)",
+        Interval(0.0, 2.0, lo_open=True),
+        "(0, 2]",
+    )
+    turf: bool = key(
+        "bool",
+        False,
+        "-",
+        "ground impacts (planes, terrain) as on turf (Penner 2002, golf_data.md): restitution "
+        "e(v_n) = 0.510 − 0.0375 v_n + 0.000903 v_n² (0.120 above 20 m/s) instead of e, in a frame "
+        "tilted toward the incoming ball by θ_c = 15.4°·(v/18.6 m/s)·(φ/44.4°), φ the impact angle",
+    )
+    v_bounce: float = key(
+        "float",
+        0.05,
+        "m/s",
+        "normal approach speeds below v_bounce + 2|g|h are treated as inelastic (no micro-bounces) "
+        "and as resting contacts, whose impulse carries over to the next step",
+        _non_negative,
+        ">= 0",
+    )
 
 
 @dataclass(frozen=True)
@@ -144,24 +238,80 @@ class TerrainConfig:
     ``file`` is the resolved path of the .npy heights (kind ``"file"``); ``resolution`` holds ints.
     """
 
-    kind: str = key("str", "generated", "-", "generated: seeded fractal noise on a resolution[0]×resolution[1] grid; file: heights from a .npy "
-                "array (first axis along x)", _one_of("generated", "file"), "generated | file")
-    file: str = key("str", "", "-", "the .npy file of heights [m], shape (nx, nz), nx, nz >= 2 (relative paths: from the scene file's "
-                "folder; from the current folder for --set)")
+    kind: str = key(
+        "str",
+        "generated",
+        "-",
+        "generated: seeded fractal noise on a resolution[0]×resolution[1] grid; file: heights from a .npy "
+        "array (first axis along x)",
+        _one_of("generated", "file"),
+        "generated | file",
+    )
+    file: str = key(
+        "str",
+        "",
+        "-",
+        "the .npy file of heights [m], shape (nx, nz), nx, nz >= 2 (relative paths: from the scene file's "
+        "folder; from the current folder for --set)",
+    )
     origin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m", "the grid's first corner [x, y, z]; heights are added to its y")
-    size: tuple[float, float] = key("vec2", (100.0, 100.0), "m", "extent [size_x, size_z] of the grid (the heights span it)", lambda v: None if v[0] > 0 and v[1] > 0 else "must be > 0 on both axes", "[> 0, > 0]")
-    resolution: tuple[int, int] = key("vec2", (129, 129), "-", "grid points [nx, nz] of generated terrain", lambda v: None if all(c >= 2 and float(c).is_integer() for c in v) and v[0] * v[1] <= 50_000_000
-                else "must be 2 whole numbers >= 2 (at most 50 million points)", "2 whole numbers >= 2")
+    size: tuple[float, float] = key(
+        "vec2",
+        (100.0, 100.0),
+        "m",
+        "extent [size_x, size_z] of the grid (the heights span it)",
+        lambda v: None if v[0] > 0 and v[1] > 0 else "must be > 0 on both axes",
+        "[> 0, > 0]",
+    )
+    resolution: tuple[int, int] = key(
+        "vec2",
+        (129, 129),
+        "-",
+        "grid points [nx, nz] of generated terrain",
+        lambda v: (
+            None
+            if all(c >= 2 and float(c).is_integer() for c in v) and v[0] * v[1] <= 50_000_000
+            else "must be 2 whole numbers >= 2 (at most 50 million points)"
+        ),
+        "2 whole numbers >= 2",
+    )
     seed: int = key("int", 0, "-", "random seed of generated terrain (the same seed gives the same heights everywhere)")
     amplitude: float = key("float", 1.0, "m", "generated heights lie within ±amplitude", _non_negative, ">= 0")
-    roughness: float = key("float", 0.5, "-", "amplitude ratio of successive noise octaves (each half the wavelength): small is smooth, near 1 rugged", Interval(0.0, 1.0, lo_open=True, hi_open=True), "(0, 1)")
-    profile: bool = key("bool", False, "-", "generated heights vary along x only (a 2-D profile, constant along z; resolution [nx, 2] suffices)")
-    slope: tuple[float, float] = key("vec2", (0.0, 0.0), "-", "tilt [dh/dx, dh/dz] added to the heights of either kind (an incline: amplitude 0 and a slope)")
-    kill_height: float | None = key("float", None, "m", "balls below this height are out of bounds, as are balls whose x or z leaves the grid "
-                "(default: origin y − 10 m)")
-    surface_levels: tuple[float, ...] | None = key("range", None, "m", "per-cell surface types by height: a cell whose mean height (above origin y) is below "
-                "levels[k] (and not below levels[k−1]) uses [[surfaces]] k, the highest cells the last; "
-                "needs one level fewer than there are surfaces")
+    roughness: float = key(
+        "float",
+        0.5,
+        "-",
+        "amplitude ratio of successive noise octaves (each half the wavelength): small is smooth, near 1 rugged",
+        Interval(0.0, 1.0, lo_open=True, hi_open=True),
+        "(0, 1)",
+    )
+    profile: bool = key(
+        "bool",
+        False,
+        "-",
+        "generated heights vary along x only (a 2-D profile, constant along z; resolution [nx, 2] suffices)",
+    )
+    slope: tuple[float, float] = key(
+        "vec2",
+        (0.0, 0.0),
+        "-",
+        "tilt [dh/dx, dh/dz] added to the heights of either kind (an incline: amplitude 0 and a slope)",
+    )
+    kill_height: float | None = key(
+        "float",
+        None,
+        "m",
+        "balls below this height are out of bounds, as are balls whose x or z leaves the grid "
+        "(default: origin y − 10 m)",
+    )
+    surface_levels: tuple[float, ...] | None = key(
+        "range",
+        None,
+        "m",
+        "per-cell surface types by height: a cell whose mean height (above origin y) is below "
+        "levels[k] (and not below levels[k−1]) uses [[surfaces]] k, the highest cells the last; "
+        "needs one level fewer than there are surfaces",
+    )
 
     @property
     def kill(self) -> float:
@@ -173,22 +323,50 @@ class TerrainConfig:
 class HoleConfig:
     """The ``[hole]`` table: a cup at ``position`` [x, z] [m] on the course, and its flagstick."""
 
-    position: tuple[float, float] = key("vec2", REQUIRED, "m", "the cup's centre [x, z] (required); it sits on the terrain, else on the ground or the first "
-                "upward-facing plane")
+    position: tuple[float, float] = key(
+        "vec2",
+        REQUIRED,
+        "m",
+        "the cup's centre [x, z] (required); it sits on the terrain, else on the ground or the first "
+        "upward-facing plane",
+    )
     radius: float = key("float", 0.054, "m", "cup radius (regulation: 108 mm across)", _positive, "> 0")
-    flag_height: float = key("float", 2.13, "m", "flagstick height above the cup (2.13 m = 7 ft is usual; 0: none)", _non_negative, ">= 0")
+    flag_height: float = key(
+        "float", 2.13, "m", "flagstick height above the cup (2.13 m = 7 ft is usual; 0: none)", _non_negative, ">= 0"
+    )
 
 
 @dataclass(frozen=True)
 class GameConfig:
     """The ``[game]`` table of ``ti-golf play`` (see :mod:`ti_golf.game.rules`)."""
 
-    start: tuple[float, float] | None = key("vec2", None, "m", "where the ball lies for the first stroke of `ti-golf play`, [x, z] on the terrain (default: a "
-                "random point of the course, from --seed)")
-    wind_max: float = key("float", 0.0, "m/s", "each stroke's wind blows level from a random direction at a random speed up to this (0: the "
-                "scene's air.wind throughout)", _non_negative, ">= 0")
-    max_strokes: int = key("int", 20, "-", "the round ends unfinished after this many strokes", Interval(1, 1000), "[1, 1000]")
-    shot_time: float = key("float", 60.0, "s", "longest a stroke is simulated; a ball still moving then is played from where it is", _positive, "> 0")
+    start: tuple[float, float] | None = key(
+        "vec2",
+        None,
+        "m",
+        "where the ball lies for the first stroke of `ti-golf play`, [x, z] on the terrain (default: a "
+        "random point of the course, from --seed)",
+    )
+    wind_max: float = key(
+        "float",
+        0.0,
+        "m/s",
+        "each stroke's wind blows level from a random direction at a random speed up to this (0: the "
+        "scene's air.wind throughout)",
+        _non_negative,
+        ">= 0",
+    )
+    max_strokes: int = key(
+        "int", 20, "-", "the round ends unfinished after this many strokes", Interval(1, 1000), "[1, 1000]"
+    )
+    shot_time: float = key(
+        "float",
+        60.0,
+        "s",
+        "longest a stroke is simulated; a ball still moving then is played from where it is",
+        _positive,
+        "> 0",
+    )
 
 
 @dataclass(frozen=True)
@@ -197,9 +375,15 @@ class Surface:
     and turf impacts (``None``: the ``[contact]`` value)."""
 
     name: str = key("str", "", "-", "what the surface is (fairway, rough, green, bunker, water …)")
-    e: float | None = key("float", None, "-", "restitution on this surface (default contact.e)", _unit_interval, "[0, 1]")
-    mu: float | None = key("float", None, "-", "Coulomb friction on this surface (default contact.mu)", _non_negative, ">= 0")
-    mu_roll: float | None = key("float", None, "-", "rolling resistance on this surface (default contact.mu_roll)", _non_negative, ">= 0")
+    e: float | None = key(
+        "float", None, "-", "restitution on this surface (default contact.e)", _unit_interval, "[0, 1]"
+    )
+    mu: float | None = key(
+        "float", None, "-", "Coulomb friction on this surface (default contact.mu)", _non_negative, ">= 0"
+    )
+    mu_roll: float | None = key(
+        "float", None, "-", "rolling resistance on this surface (default contact.mu_roll)", _non_negative, ">= 0"
+    )
     turf: bool | None = key("bool", None, "-", "impacts on this surface as on turf (default contact.turf)")
 
 
@@ -208,7 +392,14 @@ class Plane:
     """An impenetrable plane: ``point`` [m] on it, unit ``normal`` out of the solid side."""
 
     point: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m", "a point on the plane")
-    normal: Vec3 = key("vec3", (0.0, 1.0, 0.0), "-", "normal pointing out of the solid side (normalised on load)", _nonzero, "non-zero vec3")
+    normal: Vec3 = key(
+        "vec3",
+        (0.0, 1.0, 0.0),
+        "-",
+        "normal pointing out of the solid side (normalised on load)",
+        _nonzero,
+        "non-zero vec3",
+    )
 
 
 @dataclass(frozen=True)
@@ -226,25 +417,60 @@ class BallSpec:
 class Block:
     """Many balls at once (``[[blocks]]``): a lattice or a seeded random fill; optionally shots."""
 
-    kind: str = key("str", "lattice", "-", "lattice: count[0]×count[1]×count[2] balls from origin, spacing apart; "
-                "random: `number` balls at seeded random non-overlapping places inside [box_min, box_max]", _one_of("lattice", "random"), "lattice | random")
+    kind: str = key(
+        "str",
+        "lattice",
+        "-",
+        "lattice: count[0]×count[1]×count[2] balls from origin, spacing apart; "
+        "random: `number` balls at seeded random non-overlapping places inside [box_min, box_max]",
+        _one_of("lattice", "random"),
+        "lattice | random",
+    )
     count: Vec3 = key("vec3", (1.0, 1.0, 1.0), "-", "lattice size along x, y, z", _count3, "3 whole numbers >= 1")
     number: int = key("int", 0, "-", "number of balls of a random block", Interval(0, 50_000_000), "[0, 50000000]")
     origin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m", "centre of the lattice's first ball")
-    spacing: float | None = key("float", None, "m", "lattice spacing (default: one diameter plus 1 %)", _positive, "> 0")
-    jitter: float = key("float", 0.0, "m", "uniform random offset of each lattice ball (at most half the free gap)", _non_negative, ">= 0")
+    spacing: float | None = key(
+        "float", None, "m", "lattice spacing (default: one diameter plus 1 %)", _positive, "> 0"
+    )
+    jitter: float = key(
+        "float",
+        0.0,
+        "m",
+        "uniform random offset of each lattice ball (at most half the free gap)",
+        _non_negative,
+        ">= 0",
+    )
     box_min: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m", "lower corner of a random block's box")
     box_max: Vec3 = key("vec3", (1.0, 1.0, 1.0), "m", "upper corner of a random block's box")
     velocity: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "initial velocity of every ball")
-    velocity_jitter: float = key("float", 0.0, "m/s", "uniform random velocity added per component", _non_negative, ">= 0")
-    speed: tuple[float, float] | None = key("list2", None, "m/s", "launch speeds [min, max]: the block's balls are shots", _pair(0.0), "[min, max] >= 0")
-    angle_deg: tuple[float, float] | None = key("list2", None, "deg", "launch elevations [min, max] of shots", _pair(-90.0, 90.0), "[min, max] in [-90, 90]")
-    direction_deg: tuple[float, float] = key("list2", (0.0, 0.0), "deg", "launch azimuths [min, max] of shots", _pair(-360.0, 360.0), "[min, max] in [-360, 360]")
-    backspin: tuple[float, float] = key("list2", (0.0, 0.0), "rad/s", "backspin [min, max] of shots", _pair(-1e5, 1e5), "[min, max]")
+    velocity_jitter: float = key(
+        "float", 0.0, "m/s", "uniform random velocity added per component", _non_negative, ">= 0"
+    )
+    speed: tuple[float, float] | None = key(
+        "list2", None, "m/s", "launch speeds [min, max]: the block's balls are shots", _pair(0.0), "[min, max] >= 0"
+    )
+    angle_deg: tuple[float, float] | None = key(
+        "list2", None, "deg", "launch elevations [min, max] of shots", _pair(-90.0, 90.0), "[min, max] in [-90, 90]"
+    )
+    direction_deg: tuple[float, float] = key(
+        "list2",
+        (0.0, 0.0),
+        "deg",
+        "launch azimuths [min, max] of shots",
+        _pair(-360.0, 360.0),
+        "[min, max] in [-360, 360]",
+    )
+    backspin: tuple[float, float] = key(
+        "list2", (0.0, 0.0), "rad/s", "backspin [min, max] of shots", _pair(-1e5, 1e5), "[min, max]"
+    )
     spin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity of every ball")
     radius: float | None = key("float", None, "m", "radius (default ball.radius)", _positive, "> 0")
-    radius_jitter: float = key("float", 0.0, "-", "relative spread of radii: R·(1 ± jitter)", Interval(0.0, 0.5, hi_open=True), "[0, 0.5)")
-    mass: float | None = key("float", None, "kg", "mass (default ball.mass; scaled with R³ when radii vary)", _positive, "> 0")
+    radius_jitter: float = key(
+        "float", 0.0, "-", "relative spread of radii: R·(1 ± jitter)", Interval(0.0, 0.5, hi_open=True), "[0, 0.5)"
+    )
+    mass: float | None = key(
+        "float", None, "kg", "mass (default ball.mass; scaled with R³ when radii vary)", _positive, "> 0"
+    )
     seed: int = key("int", 0, "-", "random seed (the same seed gives the same balls everywhere)")
 
 
@@ -252,9 +478,13 @@ class Block:
 class SweepDefaults:
     """Default launch-condition lists for ``ti-golf sweep`` (``None``: use the launch table)."""
 
-    angles: tuple[float, ...] | None = key("range", None, "deg", "default elevation angles of `ti-golf sweep` (START:STOP:STEP or list)")
+    angles: tuple[float, ...] | None = key(
+        "range", None, "deg", "default elevation angles of `ti-golf sweep` (START:STOP:STEP or list)"
+    )
     speeds: tuple[float, ...] | None = key("range", None, "m/s", "default launch speeds of `ti-golf sweep`")
-    spins: tuple[float, ...] | None = key("range", None, "rad/s", "default spin magnitudes of `ti-golf sweep` (along the scene's spin axis)")
+    spins: tuple[float, ...] | None = key(
+        "range", None, "rad/s", "default spin magnitudes of `ti-golf sweep` (along the scene's spin axis)"
+    )
 
 
 @dataclass(frozen=True)

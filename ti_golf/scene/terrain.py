@@ -42,7 +42,7 @@ class Terrain:
 
     @property
     def shape(self) -> tuple[int, int]:
-        return self.heights.shape  # type: ignore[return-value]
+        return self.heights.shape
 
     @property
     def size(self) -> np.ndarray:
@@ -113,11 +113,17 @@ def load_heights_file(path: str | os.PathLike[str], source: str = "") -> np.ndar
     except (OSError, ValueError) as exc:
         raise_config(source, key, f"cannot be read as a .npy array ({exc}): {p}")
     if not isinstance(a, np.ndarray) or a.dtype.kind not in "iuf":
-        raise_config(source, key, f"must hold a numeric array of heights in m (got {getattr(a, 'dtype', type(a))}): {p}")
+        raise_config(
+            source, key, f"must hold a numeric array of heights in m (got {getattr(a, 'dtype', type(a))}): {p}"
+        )
     if a.ndim != 2 or min(a.shape) < 2:
-        raise_config(source, key, f"must hold a 2-D array (nx, nz) of heights with nx, nz >= 2 (got shape {a.shape}): {p}")
+        raise_config(
+            source, key, f"must hold a 2-D array (nx, nz) of heights with nx, nz >= 2 (got shape {a.shape}): {p}"
+        )
     if not np.all(np.isfinite(a)):
-        raise_config(source, key, f"holds NaN or infinite heights ({int(np.count_nonzero(~np.isfinite(a)))} of them): {p}")
+        raise_config(
+            source, key, f"holds NaN or infinite heights ({int(np.count_nonzero(~np.isfinite(a)))} of them): {p}"
+        )
     return np.asarray(a, dtype=np.float64)
 
 
@@ -137,8 +143,14 @@ def _interp_axis(values: np.ndarray, pos: np.ndarray, axis: int) -> np.ndarray:
     return a * (1.0 - f) + b * f
 
 
-def generate_heights(resolution: tuple[int, int], size: tuple[float, float], seed: int = 0, amplitude: float = 1.0,
-                     roughness: float = 0.5, profile: bool = False) -> np.ndarray:
+def generate_heights(
+    resolution: tuple[int, int],
+    size: tuple[float, float],
+    seed: int = 0,
+    amplitude: float = 1.0,
+    roughness: float = 0.5,
+    profile: bool = False,
+) -> np.ndarray:
     """Seeded fractal value noise (nx, nz) [m] within ±amplitude (see the module docstring).
 
     With ``profile`` the heights vary along x only (every column along z is equal).
@@ -189,8 +201,11 @@ def build_terrain(cfg: TerrainConfig, source: str = "") -> Terrain:
     nx, nz = heights.shape
     spacing = np.array([cfg.size[0] / (nx - 1), cfg.size[1] / (nz - 1)])
     if cfg.slope[0] or cfg.slope[1]:
-        heights = heights + cfg.slope[0] * (spacing[0] * np.arange(nx))[:, None] \
+        heights = (
+            heights
+            + cfg.slope[0] * (spacing[0] * np.arange(nx))[:, None]
             + cfg.slope[1] * (spacing[1] * np.arange(nz))[None, :]
+        )
     cells = np.zeros((nx - 1, nz - 1), dtype=np.int32)
     if cfg.surface_levels:
         mean = 0.25 * (heights[:-1, :-1] + heights[1:, :-1] + heights[:-1, 1:] + heights[1:, 1:])

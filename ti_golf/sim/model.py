@@ -62,8 +62,9 @@ class Model:
         self.mass_np = _compact(mass)
         a, c, w = scene.air, scene.contact, scene.world
         self.air = air_params(a)
-        self.contact = ContactParams(e=c.e, mu=c.mu, k_p=c.k_p, mu_roll=c.mu_roll, relax=c.relax, v_bounce=c.v_bounce,
-                                     turf=int(c.turf))
+        self.contact = ContactParams(
+            e=c.e, mu=c.mu, k_p=c.k_p, mu_roll=c.mu_roll, relax=c.relax, v_bounce=c.v_bounce, turf=int(c.turf)
+        )
         self.gravity = vec3(*w.gravity)
         self.integrator = INTEGRATOR_CODES[w.integrator]
         self.dt = w.dt
@@ -78,19 +79,37 @@ class Model:
         origin, spacing, kill = (0.0, 0.0, 0.0), (1.0, 1.0), 0.0
         if scene.terrain is not None:
             self.terrain = build_terrain(scene.terrain, scene.path)
-            heights, origin, spacing, kill = (self.terrain.heights, self.terrain.origin, self.terrain.spacing,
-                                              scene.terrain.kill)
-        self.terrain_params = TerrainParams(on=int(self.terrain is not None), origin=vec3(*origin),
-                                            dx=float(spacing[0]), dz=float(spacing[1]), kill=float(kill))
+            heights, origin, spacing, kill = (
+                self.terrain.heights,
+                self.terrain.origin,
+                self.terrain.spacing,
+                scene.terrain.kill,
+            )
+        self.terrain_params = TerrainParams(
+            on=int(self.terrain is not None),
+            origin=vec3(*origin),
+            dx=float(spacing[0]),
+            dz=float(spacing[1]),
+            kill=float(kill),
+        )
         self.terrain_h = ti.ndarray(float, heights.shape)
         self.terrain_h.from_numpy(np.ascontiguousarray(heights, dtype=f))
         cells = self.terrain.cells if self.terrain is not None else np.zeros((1, 1), np.int32)
         self.terrain_cells = ti.ndarray(ti.i32, cells.shape)
         self.terrain_cells.from_numpy(np.ascontiguousarray(cells, dtype=np.int32))
         surfaces = scene.surfaces or (Surface(),)
-        self.surface_table = np.array([[c.e if sf.e is None else sf.e, c.mu if sf.mu is None else sf.mu,
-                                        c.mu_roll if sf.mu_roll is None else sf.mu_roll,
-                                        float(c.turf if sf.turf is None else sf.turf)] for sf in surfaces], dtype=f)
+        self.surface_table = np.array(
+            [
+                [
+                    c.e if sf.e is None else sf.e,
+                    c.mu if sf.mu is None else sf.mu,
+                    c.mu_roll if sf.mu_roll is None else sf.mu_roll,
+                    float(c.turf if sf.turf is None else sf.turf),
+                ]
+                for sf in surfaces
+            ],
+            dtype=f,
+        )
 
 
 def _shared_or_per_ball(values: np.ndarray) -> ti.Ndarray:

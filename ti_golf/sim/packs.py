@@ -40,9 +40,17 @@ class Packs:
 
     def model(self, m: Any) -> Any:
         """:data:`~ti_golf.physics.types.ModelArrays` of a :class:`~ti_golf.sim.model.Model`."""
-        return self.get(ModelArrays, radius=m.radius, mass=m.mass, launch_height=m.launch_height,
-                        plane_p=m.plane_p, plane_n=m.plane_n, heights=m.terrain_h,
-                        terrain_cells=m.terrain_cells, surface_table=m.surface_table)
+        return self.get(
+            ModelArrays,
+            radius=m.radius,
+            mass=m.mass,
+            launch_height=m.launch_height,
+            plane_p=m.plane_p,
+            plane_n=m.plane_n,
+            heights=m.terrain_h,
+            terrain_cells=m.terrain_cells,
+            surface_table=m.surface_table,
+        )
 
     def state(self, s: Any) -> Any:
         """:data:`~ti_golf.physics.types.BallState` of a :class:`~ti_golf.sim.state.State`."""
@@ -50,15 +58,30 @@ class Packs:
 
     def flight(self, s: Any) -> Any:
         """:data:`~ti_golf.physics.types.FlightRecord` of a :class:`~ti_golf.sim.state.State`."""
-        return self.get(FlightRecord, landed=s.landed, apex=s.apex, t_land=s.t_land, land_x=s.land_x,
-                        land_v=s.land_v)
+        return self.get(FlightRecord, landed=s.landed, apex=s.apex, t_land=s.t_land, land_x=s.land_x, land_v=s.land_v)
 
     def lists(self, c: Any) -> Any:
         """:data:`~ti_golf.physics.types.NeighbourLists` of a collision solver."""
-        return self.get(NeighbourLists, upper=c.upper, n_upper=c.n_upper, lower=c.lower, n_lower=c.n_lower,
-                        x_at_build=c.x_at_build, lam=c.lam, lam_plane=c.lam_plane)
+        return self.get(
+            NeighbourLists,
+            upper=c.upper,
+            n_upper=c.n_upper,
+            lower=c.lower,
+            n_lower=c.n_lower,
+            x_at_build=c.x_at_build,
+            lam=c.lam,
+            lam_plane=c.lam_plane,
+        )
 
     def scratch(self, c: Any) -> Any:
         """:data:`~ti_golf.physics.types.StepScratch` of a collision solver."""
-        return self.get(StepScratch, x_free=c.x_free, v_free=c.v_free, calm=c.calm, clear=c.clear, J=c.impulse,
-                        impact=c.impact, flag=c.flag)
+        return self.get(
+            StepScratch,
+            x_free=c.x_free,
+            v_free=c.v_free,
+            calm=c.calm,
+            clear=c.clear,
+            J=c.impulse,
+            impact=c.impact,
+            flag=c.flag,
+        )

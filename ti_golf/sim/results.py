@@ -47,8 +47,13 @@ class Flight:
 
     @classmethod
     def from_arrays(
-        cls, launch_x: np.ndarray, landed: np.ndarray, apex: np.ndarray, t_land: np.ndarray,
-        land_x: np.ndarray, land_v: np.ndarray,
+        cls,
+        launch_x: np.ndarray,
+        landed: np.ndarray,
+        apex: np.ndarray,
+        t_land: np.ndarray,
+        land_x: np.ndarray,
+        land_v: np.ndarray,
     ) -> "Flight":
         """Build from the kernels' raw record: launch points (N, 3), flags (−1 not tracked, 0 in
         flight, 1 landed), apex, landing time, point, velocity."""

@@ -8,8 +8,9 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Mapping
+from typing import Any
 
 import numpy as np
 import taichi as ti
@@ -102,8 +103,9 @@ class Simulation:
             self.solver = CollisionSolver(self.model)
 
     @classmethod
-    def from_scene(cls, path: str | os.PathLike[str], overrides: Mapping[str, Any] | Iterable[str] | None = None,
-                   **kwargs: Any) -> "Simulation":
+    def from_scene(
+        cls, path: str | os.PathLike[str], overrides: Mapping[str, Any] | Iterable[str] | None = None, **kwargs: Any
+    ) -> "Simulation":
         """Load a TOML scene (path or bundled name) with optional overrides and build a simulation."""
         return cls(load_scene(path, overrides), **kwargs)
 
@@ -135,12 +137,21 @@ class Simulation:
         if name == "x" and self.solver is not None:
             self.solver.invalidate()  # moved balls may now touch balls missing from their lists
 
-    x = property(lambda self: self._vectors("x"), lambda self, a: self._assign("x", a),
-                 doc="Ball centres [m], a copy, shape (N, 3); assign to move balls.")
-    v = property(lambda self: self._vectors("v"), lambda self, a: self._assign("v", a),
-                 doc="Velocities [m/s], a copy, shape (N, 3); assign to change them (wakes resting balls).")
-    w = property(lambda self: self._vectors("w"), lambda self, a: self._assign("w", a),
-                 doc="Angular velocities ω [rad/s], a copy, shape (N, 3); assign to change them.")
+    x = property(
+        lambda self: self._vectors("x"),
+        lambda self, a: self._assign("x", a),
+        doc="Ball centres [m], a copy, shape (N, 3); assign to move balls.",
+    )
+    v = property(
+        lambda self: self._vectors("v"),
+        lambda self, a: self._assign("v", a),
+        doc="Velocities [m/s], a copy, shape (N, 3); assign to change them (wakes resting balls).",
+    )
+    w = property(
+        lambda self: self._vectors("w"),
+        lambda self, a: self._assign("w", a),
+        doc="Angular velocities ω [rad/s], a copy, shape (N, 3); assign to change them.",
+    )
 
     @property
     def status(self) -> np.ndarray:
@@ -198,10 +209,29 @@ class Simulation:
         if self.solver is not None:
             self.solver.advance(m, s, int(n))
         else:
-            params = StepParams(gravity=m.gravity, h=m.dt, t0=s.t, dt=m.dt, steps=int(n), half_skin=0.0, skin=0.0,
-                                v_rest=w.v_rest, t_rest=w.t_rest, v_cut=0.0, r_cut=0.0)
-            kernels.advance(m.air, m.contact, m.terrain_params, params, m.integrator, self._packs.model(m),
-                            self._packs.state(s), self._packs.flight(s))
+            params = StepParams(
+                gravity=m.gravity,
+                h=m.dt,
+                t0=s.t,
+                dt=m.dt,
+                steps=int(n),
+                half_skin=0.0,
+                skin=0.0,
+                v_rest=w.v_rest,
+                t_rest=w.t_rest,
+                v_cut=0.0,
+                r_cut=0.0,
+            )
+            kernels.advance(
+                m.air,
+                m.contact,
+                m.terrain_params,
+                params,
+                m.integrator,
+                self._packs.model(m),
+                self._packs.state(s),
+                self._packs.flight(s),
+            )
             s.t += n * m.dt
         self.check_finite()
 
@@ -278,11 +308,21 @@ class Simulation:
         """Write an ``.npz`` with ``x``, ``v``, ``w`` (N, 3), ``t``, ``status``, ``radius``, ``mass``,
         with a terrain ``terrain_heights`` (nx, nz), ``terrain_origin`` (3,) and ``terrain_spacing``
         (dx, dz), and, if given, the recording."""
-        data: dict[str, Any] = {"x": self.x, "v": self.v, "w": self.w, "t": np.float64(self.t),
-                                "status": self.status, "radius": self.model.radius_np, "mass": self.model.mass_np}
+        data: dict[str, Any] = {
+            "x": self.x,
+            "v": self.v,
+            "w": self.w,
+            "t": np.float64(self.t),
+            "status": self.status,
+            "radius": self.model.radius_np,
+            "mass": self.model.mass_np,
+        }
         if self.terrain is not None:
-            data.update(terrain_heights=self.terrain.heights, terrain_origin=self.terrain.origin,
-                        terrain_spacing=self.terrain.spacing)
+            data.update(
+                terrain_heights=self.terrain.heights,
+                terrain_origin=self.terrain.origin,
+                terrain_spacing=self.terrain.spacing,
+            )
         if recording is not None and recording.t:
             data.update(recording.arrays())
         np.savez(path, **data)

@@ -141,8 +141,9 @@ class CollisionSolver:
             without reordering by round-off, and two runs of a scene still agree bit for bit.
     """
 
-    def __init__(self, model: Model, capacity: int = 1, serial: bool | None = None,
-                 reorder: bool | None = None) -> None:
+    def __init__(
+        self, model: Model, capacity: int = 1, serial: bool | None = None, reorder: bool | None = None
+    ) -> None:
         self._model = model
         self._packs = Packs()
         n = model.n
@@ -198,8 +199,9 @@ class CollisionSolver:
             stashed = self.impulse
             links.stash(self.upper, self.n_upper, self.lam, stashed)
         h = self._model.dt
-        v_max, v_rest, n_apart = (float(s) for s in grid.apart_balls(state.v, self._model.radius, self.v_cut,
-                                                                      self.r_cut, self.apart_ids))
+        v_max, v_rest, n_apart = (
+            float(s) for s in grid.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
+        )
         self.n_apart = int(n_apart) if n_apart <= grid.APART_MAX else 0  # a few own no pair with the others
         scan_apart = self.n_apart > 0 and on_cpu()  # and are listed apart (see grid.APART_MAX)
         # the cells hold every pair of the other balls; fast: their pairs are listed by closing speed too
@@ -220,13 +222,33 @@ class CollisionSolver:
                 self.lam = ti.ndarray(float, (n, self.capacity[0]))
             if self.lower is None or self.lower.shape[0] != self.capacity[1]:
                 self.lower = ti.ndarray(ti.i32, (self.capacity[1], n))  # column i: ball i's list (see grid)
-            params = GridParams(inv_cell=1.0 / self.cell, mask=self.mask, origin=self._hash[0], stride=self._hash[1],
-                                skin=self.skin, h=h, fast=int(fast), v_cut=self.v_cut, r_cut=self.r_cut,
-                                n_apart=self.n_apart, scan_apart=int(scan_apart))
-            scratch = self._packs.get(GridScratch, rank=self.rank, start=self.start, chunk_start=self.chunk_start,
-                                      sorted_ids=self.sorted_ids)
-            longest = grid.list_neighbours(params, state.x, state.v, self._model.radius, self.apart_ids, scratch,
-                                           self._packs.lists(self), self.flag, self.reorder)
+            params = GridParams(
+                inv_cell=1.0 / self.cell,
+                mask=self.mask,
+                origin=self._hash[0],
+                stride=self._hash[1],
+                skin=self.skin,
+                h=h,
+                fast=int(fast),
+                v_cut=self.v_cut,
+                r_cut=self.r_cut,
+                n_apart=self.n_apart,
+                scan_apart=int(scan_apart),
+            )
+            scratch = self._packs.get(
+                GridScratch, rank=self.rank, start=self.start, chunk_start=self.chunk_start, sorted_ids=self.sorted_ids
+            )
+            longest = grid.list_neighbours(
+                params,
+                state.x,
+                state.v,
+                self._model.radius,
+                self.apart_ids,
+                scratch,
+                self._packs.lists(self),
+                self.flag,
+                self.reorder,
+            )
             if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
                 break
             # widen to the longest list found (no power-of-two padding: memory follows the pile), but
@@ -240,12 +262,15 @@ class CollisionSolver:
             self.capacity = wider
         self._check_loop_cap(state, int(longest[2]))
         if n << self.slot_bits > 2**31:  # the largest slot, (n − 1)·2^bits + 2^bits − 1, must fit an i32
-            raise SimulationError(f"{n} balls with up to {self.capacity[0]} neighbours each are more than the "
-                                  f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)")
+            raise SimulationError(
+                f"{n} balls with up to {self.capacity[0]} neighbours each are more than the "
+                f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)"
+            )
         if stashed is not None:
             # after a reorder, sorted_ids still maps each ball to its index in the stashed lists
-            links.link_and_carry(self.upper, self.n_upper, self.lower, self.n_lower, stashed, self.lam, self.reorder,
-                                self.sorted_ids)
+            links.link_and_carry(
+                self.upper, self.n_upper, self.lower, self.n_lower, stashed, self.lam, self.reorder, self.sorted_ids
+            )
             stashed = None
         else:
             links.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
@@ -299,8 +324,10 @@ class CollisionSolver:
         k = int(np.argmax(radius + h * speed))
         order = state.order
         ball = int(order[k]) if order is not None else k
-        return ball, (f"Ball {ball} reaches farthest (radius {radius[k]:.4g} m, speed {speed[k]:.4g} m/s: "
-                      f"{h * speed[k]:.4g} m per step of {h:g} s)")
+        return ball, (
+            f"Ball {ball} reaches farthest (radius {radius[k]:.4g} m, speed {speed[k]:.4g} m/s: "
+            f"{h * speed[k]:.4g} m per step of {h:g} s)"
+        )
 
     def _store_in_grid_order(self, state: State) -> None:
         """Gather every per-ball array of ``state`` and the model into the grid's order (see
@@ -311,15 +338,18 @@ class CollisionSolver:
         stays in Taichi's memory, where each reorder gathers it as it gathers the balls, rather than
         being composed in numpy (at 8,192 balls that left 16 bytes per ball of freed heap in the
         process)."""
-        grid.storage_order(state.x, 1.0 / self.cell, self.mask, *self._hash, self.rank,
-                           self.start, self.chunk_start, self.sorted_ids)
+        grid.storage_order(
+            state.x, 1.0 / self.cell, self.mask, *self._hash, self.rank, self.start, self.chunk_start, self.sorted_ids
+        )
         order = self.sorted_ids
         spares = [self.v_free, self.calm, self.rank]  # scratch between steps: a vec3, a float and an int array
         model = self._model
         per_ball = [(state, name) for name in state.per_ball()] + [(model, name) for name in model.per_ball()]
         for owner, name in per_ball:
             values = getattr(owner, name)
-            k = next(k for k, a in enumerate(spares) if (a.dtype, a.element_shape) == (values.dtype, values.element_shape))
+            k = next(
+                k for k, a in enumerate(spares) if (a.dtype, a.element_shape) == (values.dtype, values.element_shape)
+            )
             grid.gather(values, order, spares[k])
             setattr(owner, name, spares[k])
             spares[k] = values
@@ -384,8 +414,9 @@ class CollisionSolver:
             self.build(state)
             grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
         with plain_compile():  # see runtime.plain_compile
-            self.rebuilds += collide.collision_step(*self._arguments(model, state, steps), True, True,
-                                                     model.scene.contact.iterations - 1, True)
+            self.rebuilds += collide.collision_step(
+                *self._arguments(model, state, steps), True, True, model.scene.contact.iterations - 1, True
+            )
         for _ in range(steps):
             state.t += model.dt  # as one step at a time adds it, to the same round-off
 
@@ -403,8 +434,29 @@ class CollisionSolver:
         """The arguments of ``collide.collision_step`` before ``serial``: the model, the lists, the
         state, the flight record and the scratch."""
         w = m.scene.world
-        p = StepParams(gravity=m.gravity, h=m.dt, t0=s.t, dt=m.dt, steps=steps, half_skin=0.5 * self.skin,
-                       skin=self.skin, v_rest=w.v_rest, t_rest=w.t_rest, v_cut=self.v_cut, r_cut=self.r_cut)
+        p = StepParams(
+            gravity=m.gravity,
+            h=m.dt,
+            t0=s.t,
+            dt=m.dt,
+            steps=steps,
+            half_skin=0.5 * self.skin,
+            skin=self.skin,
+            v_rest=w.v_rest,
+            t_rest=w.t_rest,
+            v_cut=self.v_cut,
+            r_cut=self.r_cut,
+        )
         packs = self._packs
-        return (m.air, m.contact, m.terrain_params, p, m.integrator, packs.model(m), packs.lists(self),
-                packs.state(s), packs.flight(s), packs.scratch(self))
+        return (
+            m.air,
+            m.contact,
+            m.terrain_params,
+            p,
+            m.integrator,
+            packs.model(m),
+            packs.lists(self),
+            packs.state(s),
+            packs.flight(s),
+            packs.scratch(self),
+        )

@@ -98,8 +98,7 @@ class State:
         """Set the per-ball array ``name`` from numpy values given by ball id."""
         getattr(self, name).from_numpy(np.ascontiguousarray(self.from_ids(a)))
 
-    def reset(self, x: np.ndarray, v: np.ndarray | None, w: np.ndarray | None,
-              track: np.ndarray | bool = True) -> None:
+    def reset(self, x: np.ndarray, v: np.ndarray | None, w: np.ndarray | None, track: np.ndarray | bool = True) -> None:
         """Set positions, velocities and spins (each (N, 3); ``None``: zero); start flight tracking
         where ``track`` (ignored while not ``tracking``). One array at a time, so that few numpy
         copies of a large pile live at once."""

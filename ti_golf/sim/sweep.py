@@ -5,8 +5,9 @@ from __future__ import annotations
 import csv
 import math
 import os
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -58,8 +59,23 @@ class SweepResult:
     def columns(self) -> dict[str, np.ndarray]:
         """The CSV columns (see :data:`ti_golf.sim.results.CSV_COLUMNS`) as arrays."""
         f = self.flight
-        return dict(zip(CSV_COLUMNS, (self.angle_deg, self.speed_mps, self.spin_radps, f.carry, f.landing_x,
-                                       f.landing_z, f.apex, f.flight_time, f.landing_angle, f.landing_speed)))
+        return dict(
+            zip(
+                CSV_COLUMNS,
+                (
+                    self.angle_deg,
+                    self.speed_mps,
+                    self.spin_radps,
+                    f.carry,
+                    f.landing_x,
+                    f.landing_z,
+                    f.apex,
+                    f.flight_time,
+                    f.landing_angle,
+                    f.landing_speed,
+                ),
+            )
+        )
 
     def to_csv(self, path: str | os.PathLike[str]) -> None:
         """Write one row per launch condition with the :data:`CSV_COLUMNS` header."""
@@ -72,7 +88,9 @@ class SweepResult:
 
 
 def launch_grid(
-    scene: Scene, angles_deg: Sequence[float] | None = None, speeds: Sequence[float] | None = None,
+    scene: Scene,
+    angles_deg: Sequence[float] | None = None,
+    speeds: Sequence[float] | None = None,
     spins: Sequence[float] | None = None,
 ) -> tuple[np.ndarray, ...]:
     """All combinations (angle fastest, then spin, then speed) as arrays.
@@ -89,7 +107,11 @@ def launch_grid(
     spin_mag = float(np.linalg.norm(spin_vec))
     axis = spin_vec / spin_mag if spin_mag > 0 else np.asarray(backspin_axis(L.direction_deg))
     spins_ = np.asarray(spins if spins is not None else (scene.sweep.spins or (spin_mag,)), float)
-    for name, arr, lo, hi in (("angles", angles, -90, 90), ("speeds", speeds_, 0, math.inf), ("spins", spins_, -math.inf, math.inf)):
+    for name, arr, lo, hi in (
+        ("angles", angles, -90, 90),
+        ("speeds", speeds_, 0, math.inf),
+        ("spins", spins_, -math.inf, math.inf),
+    ):
         if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr < lo) or np.any(arr > hi):
             raise ConfigError(f"--{name}", None, f"values must be finite and in [{lo}, {hi}]")
     sp, sn, an = np.meshgrid(speeds_, spins_, angles, indexing="ij")
@@ -113,8 +135,15 @@ def default_lanes() -> int:
     return 8 if ensure_init().precision == "f64" else 16
 
 
-def fly(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, record_every: int = 0,
-        n_samples: int = 0, lanes: int | None = None) -> dict[str, np.ndarray]:
+def fly(
+    scene: Scene,
+    x0: np.ndarray,
+    v0: np.ndarray,
+    w0: np.ndarray,
+    record_every: int = 0,
+    n_samples: int = 0,
+    lanes: int | None = None,
+) -> dict[str, np.ndarray]:
     """Integrate balls from (x0, v0, w0) (each (N, 3)) to landing at their launch height.
 
     Uses the scene's integrator and ``world.dt``; gives up on a ball after ``world.t_max``.
@@ -143,18 +172,38 @@ def fly(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray, record_eve
     traj = np.zeros((n0, n_samples, 3) if record_every else (1, 1, 3), f)
     air = air_params(a)
     with plain_compile():  # minutes less of compiling on first use, see runtime.plain_compile
-        kernels.fly_to_landing(air, vec3(*wld.gravity), wld.dt, INTEGRATOR_CODES[wld.integrator], lanes,
-                               wld.t_max, int(record_every), radius, mass, order.astype(np.int32), arr(x0), arr(v0),
-                               arr(w0), landed, apex, t_land, land_x, land_v, traj)
+        kernels.fly_to_landing(
+            air,
+            vec3(*wld.gravity),
+            wld.dt,
+            INTEGRATOR_CODES[wld.integrator],
+            lanes,
+            wld.t_max,
+            int(record_every),
+            radius,
+            mass,
+            order.astype(np.int32),
+            arr(x0),
+            arr(v0),
+            arr(w0),
+            landed,
+            apex,
+            t_land,
+            land_x,
+            land_v,
+            traj,
+        )
     out = dict(landed=landed, apex=apex, t_land=t_land, land_x=land_x, land_v=land_v)
     if record_every:
         out["traj"] = traj
     bad = ~np.all(np.isfinite(np.concatenate([out["land_x"], out["land_v"], out["apex"][:, None]], axis=1)), axis=1)
     if np.any(bad):
         ids = np.flatnonzero(bad)
-        raise SimulationError(f"{ids.size} ball(s) went non-finite, first ball {ids[0]} "
-                              f"(launch v = {np.round(v0[ids[0]], 6).tolist()} m/s); try a smaller world.dt",
-                              ids[:20].tolist())
+        raise SimulationError(
+            f"{ids.size} ball(s) went non-finite, first ball {ids[0]} "
+            f"(launch v = {np.round(v0[ids[0]], 6).tolist()} m/s); try a smaller world.dt",
+            ids[:20].tolist(),
+        )
     return out
 
 
