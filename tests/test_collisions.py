@@ -742,7 +742,7 @@ def test_a_calm_column_falls_asleep_in_one_step(iterations):
 
 def test_a_sleeping_column_stays_put_until_a_ball_lands_on_it():
     # balls asleep whose neighbours are all asleep are skipped by the sweeps and stay exactly where
-    # they are (README: "put at rest and stays exactly where it is"); a ball falling onto the top of
+    # they are (docs, physics: "put at rest and stays exactly where it is"); a ball falling onto the top of
     # the column enters its neighbour list, wakes it, and comes to rest on it (no tunnelling)
     sc = tg.load_scene("lab_vacuum", ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3"])
     x = np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)] + [[0.0, 2.0, 0.0]])
@@ -1054,7 +1054,7 @@ def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypa
 
 def test_balls_all_alike_share_one_radius_and_one_mass():
     # the model keeps one radius and one mass when every ball has the same (8 bytes per ball each
-    # in f64; README, "Where the f64 bytes go"), and one per ball when they vary; the kernels read
+    # in f64; docs, performance: "Where the f64 bytes go"), and one per ball when they vary; the kernels read
     # both through types.of_ball, and a storage reorder gathers only the per-ball ones
     pile, x = pile_scene(50)
     alike = tg.Simulation(pile, x=x, track=False)
@@ -1069,7 +1069,7 @@ def test_balls_all_alike_share_one_radius_and_one_mass():
 
 
 def test_the_memory_guard_counts_the_bytes_the_pair_tables_take():
-    # table_bytes is the memory guard's estimate (above) and the README's byte count: it must
+    # table_bytes is the memory guard's estimate (above) and the performance page's byte count: it must
     # match the tables the solver allocates, whatever they keep per pair (neighbour, resting
     # impulse, the sweep's impulse, inverse distance and gap, and the links of the other balls).
     import ti_golf.sim.solver as solver_module

@@ -237,7 +237,7 @@ def test_play_from_a_shots_file_holes_out_and_saves_the_round(green_file, tmp_pa
 
 
 def test_the_readme_round_holes_in_three_strokes(capsys):
-    # the round of README.md and `make demo` (its strokes in scenes/golf_hole_round.txt, its winds
+    # the round of the docs' game page and `make demo` (its strokes in scenes/golf_hole_round.txt, its winds
     # from --seed 3): a regression check of the whole game on the bundled course
     from ti_golf.scene.loader import scenes_dir
 

@@ -107,13 +107,9 @@ def exit_process(code: int) -> NoReturn:
     """End the process with exit status ``code`` after Python's own exit work (the ``atexit``
     handlers, such as the one that closes the GGUI window while the runtime still stands; then
     Taichi's runtime reset, which writes the kernels compiled in this process to the offline
-    cache; the streams flushed), but without the C++ static destructors that follow it.
-
-    With Taichi 1.7.4 on the CPU those destructors crash now and then, after the last line of
-    output (SIGSEGV, SIGBUS or SIGABRT, no Python frame left to blame): on the 2-core benchmark
-    machine, while another process kept it busy, ``ti-golf bench collide --n 1`` exited with −11
-    (or −7, −6) instead of 2 in 10 of 30 runs, and a bare ``ti.init`` then ``sys.exit`` in 1 of 30;
-    ending this way, 0 of 40 (2026-11-23)."""
+    cache; the streams flushed), but without the C++ static destructors that follow it, which
+    with Taichi 1.7.4 on the CPU crash now and then after the last line of output (see the docs'
+    performance page, "Design measurements")."""
     try:
         atexit._run_exitfuncs()
         if _info is not None:
@@ -128,9 +124,8 @@ def release_freed_memory() -> None:
     """Give the C heap's freed pages back to the OS (glibc's ``malloc_trim``; nothing elsewhere).
 
     Setting up a large simulation makes numpy copies of its balls (positions, velocities, radii
-    given by id, converted to the float type), freed once Taichi holds them; glibc keeps much of
-    such memory in the process. For the 131,072-ball bench pile that was 50–60 bytes per ball
-    of the process's resident memory for the rest of the run (2026-11-23); the call took 0.2 ms."""
+    given by id, converted to the float type), freed once Taichi holds them; glibc would keep
+    much of that memory in the process for the rest of the run."""
     if not sys.platform.startswith("linux"):
         return
     try:
@@ -168,20 +163,12 @@ def np_float():
 def plain_compile() -> Iterator[None]:
     """Kernels first launched inside are compiled without Taichi's advanced IR optimisation.
 
-    For the lane-unrolled sweep kernel (``physics.kernels.fly_to_landing``): its body is long
-    straight-line code (every lane of every RK4 stage spelled out), and Taichi's own IR passes
-    grow much faster than linearly with it. Measured cold on the 2-core CPU of the benchmarks
-    (Taichi 1.7.4): the 8-lane f64 kernel took about 80 s to compile and the 16-lane f32 one over
-    6 minutes and 7 GB, against 8 s and 18 s with these passes off; LLVM still optimises the
-    code, and the kernels ran no slower (1.25e5 against 8.5e4 trajectories/s in one pair of f64
-    runs; 2.1e5 in f32 with 16 lanes). Likewise for the collision step of small scenes (the
-    ``serial`` variant of ``physics.collide.collision_step``): 50 s against 5–6 s, and 3.6 against
-    4.5 µs per step of a six-ball cradle. The parallel collision step keeps the passes: there
-    they buy about 10 % speed for 5x the compile time (27 s against 5 s). With 8 sweeps in one
-    kernel (the ``ball_pit`` scene, before a step was split into launches of at most 4 sweeps:
-    ``solver.UNROLL_MAX_SWEEPS``) they cost more and buy more: 146 s against 12 s of compiling,
-    and the step's kernels took 46.4–51.0 ms per step of a 65,536-ball pile with them, 64.5–71.1
-    without (sums of kernel-profiler minima, two alternating runs each, 2026-11-22 on a slow day).
+    For kernels whose bodies are long straight-line code: the lane-unrolled sweep kernel
+    (``physics.kernels.fly_to_landing``, every lane of every RK4 stage spelled out) and the
+    ``serial`` collision step of small scenes. Taichi's own IR passes grow much faster than
+    linearly with such a body, while LLVM still optimises the code, so the kernels compile many
+    times faster and run no slower (figures on the docs' performance page, "Design
+    measurements").
 
     On the CPU only: elsewhere kernels have one lane (short bodies, quick to compile with the
     passes), and Taichi's SPIR-V code generator (Vulkan) cannot compile the sweep kernel without

@@ -144,7 +144,7 @@ class GolfGame:
             )
         self.scene = scene
         self.hole: HoleConfig = scene.hole
-        """The course's cup: its position [x, z] [m] and radius [m]."""
+        """The course's cup: its position (x, z) and radius, in metres."""
         self.terrain = build_terrain(scene.terrain, scene.path)
         self.rng = np.random.default_rng(seed)
         self.radius = scene.ball.radius

@@ -58,9 +58,12 @@ class Simulation:
 
     Args:
         scene: a validated :class:`~ti_golf.scene.schema.Scene`.
-        x, v, w: initial positions [m], velocities [m/s], spins [rad/s], each (N, 3). Default: one
-            ball launched as the scene's ``[launch]`` table says.
-        radius, mass: per-ball radius [m] and mass [kg], scalars or (N,). Default: the scene's ball.
+        x: initial positions [m], (N, 3). Default, with ``v`` and ``w``: one ball launched as the
+            scene's ``[launch]`` table says.
+        v: initial velocities [m/s], (N, 3).
+        w: initial spins (angular velocities) [rad/s], (N, 3).
+        radius: per-ball radius [m], a scalar or (N,). Default: the scene's ball.
+        mass: per-ball mass [kg], a scalar or (N,). Default: the scene's ball.
         track: which balls get landing detection (carry, apex ...); default all. When no ball is
             tracked (a pile), no flight record is kept at all (``State.tracking``).
     """

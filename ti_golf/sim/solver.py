@@ -32,10 +32,7 @@ from ti_golf.sim.state import State
 SERIAL_MAX_BALLS = 256
 """Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
 (``serial`` in ``collide.collision_step``): for so few balls a parallel step is mostly launch
-overhead. Measured with ``ti-golf bench collide`` on the 2-core benchmark machine: 0.005 against
-0.77 ms per step for 16 balls in a pile, 0.11 against 0.93 ms for 256. With the lists rebuilt
-every step (balls flying apart: n² distance tests each time, serially) the two are even at 400
-balls, and for 512 the parallel step wins."""
+overhead (see the docs' performance page, "Design measurements")."""
 
 
 REORDER_MIN_BALLS = 8192
@@ -46,12 +43,9 @@ REORDER_MIN_BALLS = 8192
 UNROLL_MAX_SWEEPS = 4
 """Most Jacobi sweeps in one kernel launch of a parallel step: a step of more
 (``contact.iterations``) is split into launches of at most this many sweeps each
-(:func:`sweep_launches`). Compiling a kernel grows faster than the sweeps unrolled in it:
-measured on first use, from an empty kernel cache, for a 512-ball pile on the 2-core benchmark
-machine (the whole run, the grid's kernels included): 32 s with 2 sweeps in one launch, 51 s with
-4 and 156 s (and 1.7 GB of memory) with 8, and 58 s (645 MB) in two launches of 4. Each launch
-costs up to 0.8 ms (the kernel's 32 arrays and parameter structs, set from Python): with a sweep
-per launch, the second step of that pile took 11.0 ms, against 4.2 unrolled and 4.3 in two."""
+(:func:`sweep_launches`): compiling a kernel grows faster than the sweeps unrolled in it, while
+each launch costs a fraction of a millisecond (see the docs' performance page, "Design
+measurements")."""
 
 
 def sweep_launches(iterations: int) -> list[tuple[bool, int, bool]]:

@@ -125,11 +125,8 @@ def launch_grid(
 
 
 def default_lanes() -> int:
-    """Balls per CPU thread stepped side by side: 8 in f64, 16 in f32 (one AVX-512 register), 1 on GPUs.
-
-    Measured with ``ti-golf bench sweep`` on a 2-core AVX-512 machine: 2, 4 and 8 lanes gave about
-    0.49, 0.49 and 0.80 million trajectories/s in f64; GPUs already run one ball per SIMT lane.
-    """
+    """Balls per CPU thread stepped side by side: 8 in f64, 16 in f32 (one AVX-512 register), 1 on
+    GPUs, which already run one ball per SIMT lane."""
     if not on_cpu():
         return 1
     return 8 if ensure_init().precision == "f64" else 16
@@ -219,8 +216,10 @@ def sweep(
 
     Args:
         scene: a Scene, a TOML path or a bundled scene name.
-        angles_deg, speeds, spins: launch conditions (default: the scene's ``[sweep]`` lists, else
-            its ``[launch]`` values). Every combination is flown.
+        angles_deg: launch elevations [deg] (default: the scene's ``[sweep]`` list, else its
+            ``[launch]`` value). Every combination of angle, speed and spin is flown.
+        speeds: launch speeds [m/s], likewise.
+        spins: spin magnitudes [rad/s] along the scene's spin axis, likewise.
         overrides: scene overrides (``{"air.wind": [-5, 0, 0]}`` or ``["air.wind=[-5,0,0]"]``).
         trajectories: also record the trajectories of up to this many evenly spaced conditions.
 
