@@ -230,35 +230,38 @@ def collision_step(
     sweeps: ti.template(),
     last: ti.template(),
 ) -> ti.i32:
-    """Advance all balls by ``steps`` steps of ``h`` [s]: the free flight and warm start (with
-    ``warm``), ``sweeps`` Jacobi sweeps, then (with ``last``) the last sweep, which finishes the
-    step. A whole step of ``iterations`` sweeps is ``(True, iterations − 1, True)``.
+    """Advance all balls by ``params.steps`` steps of ``params.h`` [s]: the free flight and warm
+    start (with ``warm``), ``sweeps`` Jacobi sweeps, then (with ``last``) the last sweep, which
+    finishes the step. A whole step of ``iterations`` sweeps is ``(True, iterations − 1, True)``.
+
+    Arguments: the air, contact and terrain parameters; the step's scalars ``params``
+    (:data:`~ti_golf.physics.types.StepParams`); the integrator code; the model's arrays
+    ``model``; the neighbour lists with the impulses they carry, ``lists``; the balls' ``state``
+    and ``flight`` records; the step's ``scratch`` (:mod:`ti_golf.physics.types` documents each
+    array's shape and units); and which part of a step this launch takes.
 
     In parallel (``serial`` False) the kernel takes exactly one step, or the part of one that
     ``warm``, ``sweeps`` and ``last`` name, so that a step of many sweeps can be split into
-    launches (see ``solver.sweep_launches``; ``steps``, ``skin``, ``dt``, ``v_cut`` and ``r_cut``
-    are not read). It returns 1 (also left in ``flag[0]``) when some ball may come within reach of
-    a ball missing from its neighbour lists next step: rebuild the lists (read it after the
-    ``last`` part; the ``warm`` part clears it). The new positions are left in ``x_free`` (swap it with
-    ``x``).
+    launches (see ``solver.sweep_launches``; ``params.steps``, ``skin``, ``dt``, ``v_cut`` and
+    ``r_cut`` are not read). It returns 1 (also left in ``scratch.flag[0]``) when some ball may
+    come within reach of a ball missing from its neighbour lists next step: rebuild the lists
+    (read it after the ``last`` part; the ``warm`` part clears it). The new positions are left in
+    ``scratch.x_free`` (swap it with ``state.x``).
 
-    With ``serial`` the balls are stepped one after another, ``steps`` steps in one launch: for
-    scenes so small that a launch (tens of arguments, about 0.5 ms from Python) and rebuilding the
-    lists through the grid's kernels cost far more than the step itself. Each step is the parallel
-    one on the same data, the time [s] advanced by ``dt`` (``h`` before rounding to the float
-    type) from ``t0`` in f64, as the caller advances it between parallel steps; the
-    neighbour lists are rebuilt in the kernel by testing every pair (:func:`grid.relist_all_pairs`,
-    ``skin`` [m]; the balls faster than ``v_cut`` [m/s] or bigger than ``r_cut`` [m] own no pair
-    with the others, as in the grid's lists: see :func:`grid.owns`) whenever ``flag[0]`` asks for
-    it at the start of a step, so the tables must be n − 1 wide; new positions are copied to ``x``
+    With ``serial`` the balls are stepped one after another, ``params.steps`` steps in one launch:
+    for scenes so small that launches and rebuilding the lists through the grid's kernels cost far
+    more than the step itself. Each step is the parallel one on the same data, the time [s]
+    advanced by ``params.dt`` from ``params.t0`` in f64, as the caller advances it between
+    parallel steps; the neighbour lists are rebuilt in the kernel by testing every pair
+    (:func:`~ti_golf.physics.links.relist_all_pairs`, with the skin [m]; the balls faster than
+    ``v_cut`` [m/s] or bigger than ``r_cut`` [m] own no pair with the others, as in the grid's
+    lists: see :func:`~ti_golf.physics.grid.owns`) whenever ``scratch.flag[0]`` asks for it at the
+    start of a step, so the tables must be n − 1 wide; new positions are copied to ``state.x``
     after every step. Returns how many times the lists were rebuilt.
 
-    With a terrain (``terrain.on``; ``heights`` its grid, else any 2×2 array; ``lam_plane`` then
-    has a column more than there are planes) a ball that leaves the grid's extent or falls below
-    ``terrain.kill`` is put out of bounds (velocities zeroed). ``J`` (the pairs' impulses, inverse
-    distances and gaps or projections, see :func:`owned_pairs`) has the shape of ``upper``;
-    ``impact`` holds a key per ball (see :func:`impact_keys`). The kernel takes 32 arrays, as many as Taichi's Vulkan
-    backend passes to a kernel (with more its launch crashes); merge arrays before adding one."""
+    With a terrain (``terrain.on``; ``model.heights`` its grid, else any 2×2 array;
+    ``lists.lam_plane`` then has a column more than there are planes) a ball that leaves the grid's
+    extent or falls below ``terrain.kill`` is put out of bounds (velocities zeroed)."""
     h = params.h
     result = 0
     if ti.static(not serial):

@@ -237,9 +237,8 @@ def list_neighbours(
     ball i owns (:func:`owns`), column i of ``lower`` the others (to be turned into slots by
     :func:`link_lower` or :func:`link_and_carry`). ``lower`` is stored transposed, (width, n), so
     that the few first entries of consecutive balls lie side by side however wide one ball's list
-    makes it (a boulder's hundreds: with rows, every ball's list fell on cache lines and pages of
-    its own, and the sweeps' gathers took four times as long). One launch (a launch from Python costs
-    about 0.1 ms; the grid took five). The counting sort: each ball's rank among the balls of its
+    makes it (a boulder's hundreds), and the sweeps' gathers read few cache lines. The sort and
+    the lists are built in one launch. The counting sort: each ball's rank among the balls of its
     bucket (an integer atomic add, counting in ``start``), the buckets' starts
     (:func:`bucket_starts`; ``start`` has one entry more than there are buckets, ``chunk_start`` is
     its scratch), then the ball ids grouped by bucket (each ball's bucket hashed again, rather

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import difflib
 import importlib.resources
-import importlib.util
 import math
 import os
 from collections.abc import Iterable, Mapping
@@ -181,15 +180,16 @@ def resolve_scene_path(name: str | os.PathLike[str]) -> Path:
 
 
 def scenes_dir() -> Path:
-    """The folder of the bundled scenes: the package data ``ti_golf.scene.data`` of an installed
-    ti_golf, else the source tree's ``scenes/`` (the environment variable ``TI_GOLF_SCENES``
-    overrides both)."""
+    """The folder of the bundled scenes: the source tree's ``scenes/`` when ti_golf runs from a
+    checkout, else the package data ``ti_golf.scene.data`` of the installed wheel (the environment
+    variable ``TI_GOLF_SCENES`` overrides both)."""
     env = os.environ.get("TI_GOLF_SCENES")
     if env:
         return Path(env)
-    if importlib.util.find_spec("ti_golf.scene.data") is not None:
-        return Path(str(importlib.resources.files("ti_golf.scene.data")))
-    return Path(__file__).resolve().parents[2] / "scenes"
+    checkout = Path(__file__).resolve().parents[2]
+    if (checkout / "pyproject.toml").is_file() and (checkout / "scenes").is_dir():
+        return checkout / "scenes"
+    return Path(str(importlib.resources.files("ti_golf.scene.data")))
 
 
 def load_scene(
