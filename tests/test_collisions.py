@@ -14,7 +14,7 @@ from conftest import ON_CPU, SERIAL_OR_PARALLEL
 
 import ti_golf as tg
 from ti_golf.bench.benchmarks import pile_scene
-from ti_golf.physics import grid
+from ti_golf.physics import apart, grid
 from ti_golf.scene.schema import AT_REST, Plane
 from ti_golf.sim.solver import CollisionSolver
 
@@ -69,7 +69,7 @@ def _velocities(n, fast):
     """Resting balls, or (``fast``) balls at up to 1 m/s with one in twenty at up to 40 m/s: 20 mm
     per 0.5 ms step, ten times the skin of 2-cm balls; or (``few_fast``) balls at up to 1 m/s with
     six at 150 to 3,000 m/s, moving 1.5 to 30 of the largest diameters in two steps
-    (grid.APART_MAX); or (``few_big``) balls at up to 1 m/s."""
+    (apart.APART_MAX); or (``few_big``) balls at up to 1 m/s."""
     if not fast:
         return np.zeros((n, 3))
     rng = np.random.default_rng(5)
@@ -96,7 +96,7 @@ def test_grid_neighbours_equal_brute_force(name, fast):
     sim = tg.Simulation(scene(), x=x, v=v, radius=r, mass=0.045 * (r / 0.02) ** 3)
     solver: CollisionSolver = sim.solver
     solver.build(sim.state)
-    # a few balls more than twice the size of all but the 32 biggest (grid.APART_MAX), or faster
+    # a few balls more than twice the size of all but the 32 biggest (apart.APART_MAX), or faster
     # than a diameter of the rest (or the skin) in two steps, are set apart: they own none of their
     # pairs with the others (see _owns), and on CPU backends they are listed apart (each tests
     # every ball), so that the cells and the skin are as small as the others need: the rest's
@@ -104,14 +104,14 @@ def test_grid_neighbours_equal_brute_force(name, fast):
     # With many fast balls (one in twenty), or none, or on a GPU, the cells are sized for the
     # fastest pair and the largest ball
     r_desc = np.sort(r)[::-1]
-    r_cut = 2 * r_desc[grid.APART_MAX] if r_desc[0] > 2 * r_desc[grid.APART_MAX] else np.inf
+    r_cut = 2 * r_desc[apart.APART_MAX] if r_desc[0] > 2 * r_desc[apart.APART_MAX] else np.inf
     r_ref = r[r <= r_cut].max()
     assert solver.skin == pytest.approx(sim.scene.contact.skin * r_ref, rel=1e-12)
     fast_balls = 2 * sim.dt * np.linalg.norm(v, axis=1) > max(solver.skin, 2 * r_ref)
-    apart = fast_balls | (r > r_cut)  # they own no pair with the others, on every backend
-    if np.sum(apart) > grid.APART_MAX:
-        apart[:] = False
-    assert solver.n_apart == np.sum(apart)
+    set_apart = fast_balls | (r > r_cut)  # they own no pair with the others, on every backend
+    if np.sum(set_apart) > apart.APART_MAX:
+        set_apart[:] = False
+    assert solver.n_apart == np.sum(set_apart)
     if fast in ("few_fast", "few_big") and ON_CPU:
         assert solver.n_apart == {"few_fast": 6, "few_big": 5}[fast]
         assert solver.cell <= 2 * r_ref + max(solver.skin, 2 * r_ref)
@@ -136,11 +136,11 @@ def test_grid_neighbours_equal_brute_force(name, fast):
         within[a].add(j)
     for i in range(len(x)):  # lists are sorted by id: sums over them do not depend on threads
         assert np.all(np.diff(upper[i, : n_upper[i]]) > 0)
-        assert set(upper[i, : n_upper[i]].tolist()) == {j for j in within[i] if _owns(xs, i, j, apart)}
+        assert set(upper[i, : n_upper[i]].tolist()) == {j for j in within[i] if _owns(xs, i, j, set_apart)}
         slots = lower[: n_lower[i], i]  # where each lower pair is stored: owner · 2^bits + column
         owners, entries = slots >> solver.slot_bits, slots & ((1 << solver.slot_bits) - 1)
         assert np.all(np.diff(owners) > 0)
-        assert set(owners.tolist()) == {j for j in within[i] if _owns(xs, j, i, apart)}
+        assert set(owners.tolist()) == {j for j in within[i] if _owns(xs, j, i, set_apart)}
         assert np.all(upper[owners, entries] == i)
 
 
@@ -202,7 +202,7 @@ def test_a_ball_that_moved_past_half_the_skin_is_seen_wherever_it_is():
 
 def test_a_boulder_owns_none_of_its_pairs_so_the_impulse_table_stays_narrow():
     # the upper table keeps each pair's impulse and geometry (52 bytes a pair in f64) and is as
-    # wide as the longest upper list, for every ball; a ball set apart (grid.APART_MAX: here a
+    # wide as the longest upper list, for every ball; a ball set apart (apart.APART_MAX: here a
     # boulder five times the radius of the rest) owns none of its pairs with the others
     # (grid.owns), so the ~100 balls within its reach each own one pair more, and its long list
     # goes to the lower table (4 bytes a link). By the axis rule alone it would own about half of
@@ -314,7 +314,7 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(background
     # kernels as a GPU does, every loop in parallel. The grid once scanned its bucket counts in a
     # serial loop, and there Taichi's Vulkan backend stops after 65,535 iterations without a
     # word: most balls of this pile then had no neighbours, and it fell through itself. Then a ball
-    # is shot into the pile's top: on the CPU the grid lists it apart (grid.APART_MAX), testing it
+    # is shot into the pile's top: on the CPU the grid lists it apart (apart.APART_MAX), testing it
     # against all 70,001 balls in one thread, which on Vulkan would stop at 65,535 (its
     # neighbours, in the top layers, come last); there the cells are widened for it instead. On
     # both it owns none of its pairs (grid.owns). Both must list the same pairs and take the same
@@ -370,7 +370,7 @@ _BOUNDS_CHECKED = textwrap.dedent("""
             sim.x = sim.x[::-1]  # every ball moved: the lists are rebuilt, impulses carried
             sim.step(2)
     v = np.zeros_like(x)
-    v[-1] = [0.0, -60.0, 0.0]  # a fast ball, listed apart by the grid (grid.APART_MAX)
+    v[-1] = [0.0, -60.0, 0.0]  # a fast ball, listed apart by the grid (apart.APART_MAX)
     r = np.full(len(x), 0.02)
     r[-1] = 0.2  # or a boulder, listed apart too
     for big, reorder in ((False, False), (False, True), (True, False), (True, True)):
@@ -833,7 +833,7 @@ def test_serial_steps_equal_parallel_steps(name, steps):
     # the chunks of steps per launch. The scenes cover a break (fast balls: lists rebuilt nearly
     # every step), the cradle, a terrain with surface types and out-of-bounds balls, and balls
     # that fall asleep and are woken, and a ball shot at 60 m/s into a pile or a boulder five times
-    # the size of the others dropped on it (the grid lists them apart: grid.APART_MAX)
+    # the size of the others dropped on it (the grid lists them apart: apart.APART_MAX)
     v, r, m = None, None, None
     if name == "sleeping_column":
         sc = tg.load_scene("lab_vacuum", ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3"])

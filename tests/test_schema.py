@@ -3,15 +3,19 @@
 import dataclasses
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
 import pytest
 
 from ti_golf.cli import main
+from ti_golf.errors import ConfigError
 from ti_golf.scene import schema as S
+from ti_golf.scene.checks import Interval
 from ti_golf.scene.jsonschema import json_schema
 from ti_golf.scene.loader import load_scene, scenes_dir
+from ti_golf.scene.reference import keys_markdown
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -119,3 +123,68 @@ def test_ti_golf_schema_writes_the_schema(tmp_path, capsys):
     capsys.readouterr()
     assert main(["schema"]) == 0
     assert json.loads(capsys.readouterr().out) == json.loads(out.read_text())
+
+
+def test_the_json_schema_bounds_the_numbers_of_lists():
+    props = json_schema()["properties"]
+    assert props["terrain"]["properties"]["size"]["items"] == {"type": "number", "exclusiveMinimum": 0.0}
+    assert props["terrain"]["properties"]["resolution"]["items"] == {"type": "integer", "minimum": 2}
+    assert props["blocks"]["items"]["properties"]["angle_deg"]["items"] == {
+        "type": "number",
+        "minimum": -90.0,
+        "maximum": 90.0,
+    }
+    assert validate({"terrain": {"size": [10, 0]}}, json_schema()) == ["scene.terrain.size[1]: 0 out of range"]
+
+
+def _bounded_keys():
+    """(table, key name, Interval) of every table key whose allowed values are an interval."""
+    for table, keys in S.SCHEMA.items():
+        for name, k in keys.items():
+            if isinstance(k.check, Interval) and k.kind in ("float", "int"):
+                yield table, name, k.check
+
+
+@pytest.mark.parametrize("table,name,interval", [pytest.param(*b, id=f"{b[0]}.{b[1]}") for b in _bounded_keys()])
+def test_the_loader_and_the_json_schema_reject_the_same_numbers(table, name, interval):
+    # the loader's check and the schema's minimum/maximum both come from the key's one declaration
+    schema = json_schema()
+    outside = [interval.lo if interval.lo_open else interval.lo - 1]
+    if interval.hi is not None:
+        outside.append(interval.hi if interval.hi_open else interval.hi + 1)
+    for value in outside:
+        doc = {table: {name: value}}
+        if table == "hole":
+            doc["hole"]["position"] = [0.0, 0.0]
+        assert validate(doc, schema), (table, name, value)
+        with pytest.raises(ConfigError) as err:
+            load_scene(data=doc)
+        assert err.value.key == f"{table}.{name}" and interval.text in err.value.reason
+
+
+def test_allowed_values_are_stated_once_by_the_check():
+    # a key's 'allowed' text is its check's, unless the declaration words it itself (air.gamma)
+    assert S.SCHEMA["contact"]["relax"].allowed == "(0, 1]"
+    assert S.SCHEMA["world"]["integrator"].allowed == "semi_implicit | rk4"
+    assert S.SCHEMA["air"]["gamma"].allowed == "1 or 2"
+    assert S.ARRAY_SCHEMA["blocks"]["count"].allowed == "3 whole numbers >= 1"
+    for keys in (*S.SCHEMA.values(), *S.ARRAY_SCHEMA.values()):
+        for name, k in keys.items():
+            assert (k.check is None) == (k.allowed == ""), name
+
+
+def test_keys_markdown_lists_every_key_with_section_type_unit_default_allowed_and_help():
+    lines = keys_markdown().splitlines()
+    assert lines[0] == "| section | key | type | unit | default | allowed | help |"
+    rows = {}
+    for line in lines[2:]:
+        cells = [c.strip() for c in re.split(r"(?<!\\)\|", line.strip().strip("|"))]
+        assert len(cells) == 7, line
+        rows[(cells[0].strip("`"), cells[1].strip("`"))] = cells
+    expected = {("(top level)", name) for name in S.TOP_LEVEL}
+    expected |= {(f"[{t}]", name) for t, keys in S.SCHEMA.items() for name in keys}
+    expected |= {(f"[[{t}]]", name) for t, keys in S.ARRAY_SCHEMA.items() for name in keys}
+    assert set(rows) == expected
+    assert rows[("[contact]", "relax")][2:6] == ["number", "-", "`0.5`", "(0, 1]"]
+    assert rows[("[air]", "wind")][2:5] == ["[x, y, z]", "m/s", "`[0, 0, 0]`"]
+    assert rows[("[hole]", "position")][5] == "required"

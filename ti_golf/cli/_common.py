@@ -31,16 +31,24 @@ def runtime_options(p: argparse.ArgumentParser) -> None:
     )
 
 
-def scene_options(p: argparse.ArgumentParser) -> None:
-    """The positional scene and ``--set KEY=VALUE`` overrides."""
-    p.add_argument("scene", help="scene file, or the name of a bundled scene (see `ti-golf scenes`)")
+def scene_options(
+    p: argparse.ArgumentParser,
+    default: str | None = None,
+    scene_help: str = "scene file, or the name of a bundled scene (see `ti-golf scenes`)",
+    example: str = "air.wind=[-5,0,0]",
+) -> None:
+    """The positional scene (optional when it has a ``default``) and ``--set KEY=VALUE`` overrides."""
+    if default is None:
+        p.add_argument("scene", help=scene_help)
+    else:
+        p.add_argument("scene", nargs="?", default=default, help=scene_help)
     p.add_argument(
         "--set",
         dest="overrides",
         action="append",
         default=[],
         metavar="KEY=VALUE",
-        help="override a scene key with a TOML value, e.g. --set air.wind=[-5,0,0] (repeatable)",
+        help=f"override a scene key with a TOML value, e.g. --set {example} (repeatable)",
     )
 
 

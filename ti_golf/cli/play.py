@@ -16,7 +16,7 @@ import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-from ti_golf.cli._common import check_writable, runtime_options
+from ti_golf.cli._common import check_writable, runtime_options, scene_options
 from ti_golf.errors import ConfigError
 from ti_golf.game.rules import (
     SHOT_FIELDS,
@@ -40,19 +40,11 @@ PROMPT_DEFAULTS = {"spin": 0.0}
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add the ``play`` subcommand to ``ti-golf``'s subparsers; returns its parser."""
     p = sub.add_parser("play", help="play golf on a course scene, stroke by stroke, until the ball is holed")
-    p.add_argument(
-        "scene",
-        nargs="?",
+    scene_options(
+        p,
         default=DEFAULT_SCENE,
-        help=f"a course: a scene with [terrain] and [hole] (default {DEFAULT_SCENE})",
-    )
-    p.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a scene key with a TOML value, e.g. --set game.wind_max=0 (repeatable)",
+        scene_help=f"a course: a scene with [terrain] and [hole] (default {DEFAULT_SCENE})",
+        example="game.wind_max=0",
     )
     p.add_argument(
         "--seed", type=int, default=None, help="seed of the random start and winds (default: a new round every time)"

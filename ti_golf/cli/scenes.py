@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 
 from ti_golf.errors import ConfigError
-from ti_golf.scene.loader import describe_keys, load_scene, scenes_dir
+from ti_golf.scene.loader import load_scene, scenes_dir
+from ti_golf.scene.reference import describe_keys
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

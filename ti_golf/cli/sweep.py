@@ -27,7 +27,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def _parse_opt_range(text: str | None, option: str) -> tuple[float, ...] | None:
-    return None if text is None else parse_range(text, option, None)  # type: ignore[arg-type]
+    return None if text is None else parse_range(text, option, None)
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:

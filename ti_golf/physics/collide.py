@@ -41,22 +41,18 @@ import taichi as ti
 
 from ti_golf.physics.aero import V, W, X, coefficients, column
 from ti_golf.physics.contact import (
-    plane_jolt,
     plane_position,
     rest_update,
-    surface_impulse,
-    warm_impulse,
 )
 from ti_golf.physics.integrate import IN_FLIGHT, step_free, track_flight
 from ti_golf.physics.kernels import lane_state
 from ti_golf.physics.links import relist_all_pairs, slot_bits
 from ti_golf.physics.pairs import QUIET, gather, impact_keys, owned_pairs, warm_start
+from ti_golf.physics.surfaces import beyond_reach, rounded_down, surface_clearance, surface_impulses
 from ti_golf.physics.terrain import (
     outside,
     same_cell,
     surface,
-    surface_contact,
-    terrain_clearance,
     terrain_position,
 )
 from ti_golf.physics.types import (
@@ -75,137 +71,6 @@ from ti_golf.physics.types import (
     zero3,
 )
 from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS
-
-FAR = 1e30  # the surface clearance of a ball when there are no planes and no terrain (see surface_clearance)
-NEAR = -1.0  # the surface clearance of a ball resting on a plane or the terrain: it always visits them
-
-
-@ti.func
-def surface_clearance(
-    i,
-    x: ti.template(),
-    x_free_i,
-    radius: ti.template(),
-    plane_p: ti.template(),
-    plane_n: ti.template(),
-    terrain: ti.template(),
-    heights: ti.template(),
-    lam_plane: ti.template(),
-):
-    """The least surface gap [m] of ball i to the planes at the start of the step and, with a
-    terrain, a lower bound on its gap to the terrain less its free-flight displacement (see
-    :func:`terrain.terrain_clearance`; the free-flight end point ``x_free_i``); ``FAR`` with
-    neither, ``NEAR`` when the ball keeps a resting impulse on one of them. A plane's gap at any
-    point y is at least the plane clearance less |y − x_i| (the normals are unit vectors), a
-    terrain patch's at least the terrain clearance less twice that (the patch is taken under a
-    moved point too). This lets the sweeps and :func:`finish` skip the planes and the terrain of a
-    ball that cannot reach any of them (most balls of a pile) without changing any result."""
-    c = FAR
-    for p in range(plane_n.shape[0]):
-        c = ti.min(c, (x[i] - plane_p[p]).dot(plane_n[p]) - of_ball(radius, i))
-        if lam_plane[i, p] > 0.0:
-            c = NEAR
-    if terrain.on != 0:
-        if lam_plane[i, plane_n.shape[0]] > 0.0:
-            c = NEAR
-        elif c != NEAR:
-            c = ti.min(c, terrain_clearance(heights, terrain, x[i], x_free_i, of_ball(radius, i)))
-    return c
-
-
-@ti.func
-def rounded_down(c):
-    """``c`` [m] as an f32 no larger than ``c``, for the ``clear`` array (f32 whatever the
-    precision: 4 bytes per ball less in f64): a clearance may only err on the near side, where
-    it makes the ball visit planes that it cannot reach (no impulse, no change). In f64 the value
-    is first lowered by 2^-23·|c|, twice what rounding to f32 can add."""
-    low = c
-    if ti.static(is_f64()):
-        low = c - ti.abs(c) * 2.0**-23
-    return ti.cast(low, ti.f32)
-
-
-@ti.func
-def beyond_reach(clear, r, reach_sqr):
-    """Whether a ball of radius ``r`` with surface clearance ``clear`` (:func:`surface_clearance`)
-    stays more than 2 % of a radius from every plane and the terrain while its gaps shrink by at
-    most sqrt(``reach_sqr``) [m]: it can neither touch one nor count as touching one (below 1 %),
-    with room for round-off."""
-    c = clear - 0.02 * r
-    return c > 0.0 and c * c > reach_sqr
-
-
-@ti.func
-def surface_impulses(
-    i,
-    warm: ti.template(),
-    vi,
-    wi,
-    clear: ti.template(),
-    contact: ti.template(),
-    h,
-    v_inelastic,
-    radius: ti.template(),
-    plane_p: ti.template(),
-    plane_n: ti.template(),
-    terrain: ti.template(),
-    heights: ti.template(),
-    terrain_cells: ti.template(),
-    surface_table: ti.template(),
-    x: ti.template(),
-    x_free: ti.template(),
-    lam_plane: ti.template(),
-):
-    """Ball i's contacts with the planes, then the terrain (the plane of the patch under its
-    free-flight end point; its resting impulse is kept in the column after the planes' in
-    ``lam_plane``, in f32: 4 bytes instead of 8 for every ball and plane, though most balls touch
-    none; only the ball reads and writes its own λ, so nothing can disagree about it, and the next
-    sweep or step corrects what the rounding left, 2^-24 of the impulse), applied in turn to
-    (vi, wi): the warm start (``warm``) or a sweep. A sweep skips
-    them when the ball is too far from all of them (``clear[i]``, see :func:`surface_clearance`)
-    to touch one within the step at its speed, and marks the ball ``NEAR`` once it rests on one
-    (that resting impulse must be visited in later sweeps, to be given back). Returns (v, ω)."""
-    r = of_ball(radius, i)
-    far = False
-    if ti.static(not warm):
-        far = beyond_reach(clear[i], r, h * h * vi.norm_sqr())
-    n_planes = plane_n.shape[0]
-    if far:
-        n_planes = 0
-    for p in range(n_planes):
-        n = plane_n[p]
-        lam0 = ti.cast(lam_plane[i, p], float)  # f32 in the table (see above)
-        if ti.static(warm):
-            if lam0 > 0.0:
-                P = warm_impulse(n, vi, wi, r, zero3(), zero3(), 0.0, 1.0, lam0, contact.mu)
-                vi, wi = plane_jolt(P, lam0, vi, wi, r, n, contact.mu_roll)
-        else:
-            gap = (x[i] - plane_p[p]).dot(n) - r
-            if gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam0 > 0.0:  # else no impulse (pair_impulse)
-                P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, contact, v_inelastic, h)
-                if P.dot(n) != 0.0:
-                    vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, contact.mu_roll)
-                lam_plane[i, p] = ti.cast(lam_p, ti.f32)
-                if lam_p > 0.0:
-                    clear[i] = ti.cast(NEAR, ti.f32)
-    if terrain.on != 0 and not far:
-        q = plane_n.shape[0]
-        lam0 = ti.cast(lam_plane[i, q], float)
-        if ti.static(not warm) or lam0 > 0.0:
-            pt, n = surface(heights, terrain, x_free[i])
-            ct = surface_contact(contact, surface_table, terrain_cells, heights, terrain, x_free[i])
-            if ti.static(warm):
-                P = warm_impulse(n, vi, wi, r, zero3(), zero3(), 0.0, 1.0, lam0, ct.mu)
-                vi, wi = plane_jolt(P, lam0, vi, wi, r, n, ct.mu_roll)
-            else:
-                gap = (x[i] - pt).dot(n) - r
-                P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, ct, v_inelastic, h)
-                if P.dot(n) != 0.0:
-                    vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, ct.mu_roll)
-                lam_plane[i, q] = ti.cast(lam_p, ti.f32)
-                if lam_p > 0.0:
-                    clear[i] = ti.cast(NEAR, ti.f32)
-    return vi, wi
 
 
 @kernel
@@ -418,11 +283,7 @@ def start_step(
                         )
                     )
         scratch.x_free[i], scratch.v_free[i] = x1, v1
-        scratch.clear[i] = rounded_down(
-            surface_clearance(
-                i, state.x, x1, model.radius, model.plane_p, model.plane_n, terrain, model.heights, lists.lam_plane
-            )
-        )
+        scratch.clear[i] = rounded_down(surface_clearance(i, x1, terrain, model, lists, state))
         dv, scratch.calm[i] = warm_start(
             i,
             state.x,
@@ -440,26 +301,7 @@ def start_step(
         )
         if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
             v1 += dv
-            v1, w1 = surface_impulses(
-                i,
-                True,
-                v1,
-                w1,
-                scratch.clear,
-                contact,
-                h,
-                v_inelastic,
-                model.radius,
-                model.plane_p,
-                model.plane_n,
-                terrain,
-                model.heights,
-                model.terrain_cells,
-                model.surface_table,
-                state.x,
-                scratch.x_free,
-                lists.lam_plane,
-            )
+            v1, w1 = surface_impulses(i, True, v1, w1, contact, terrain, h, v_inelastic, model, lists, state, scratch)
         state.v[i], state.w[i] = v1, w1
 
 
@@ -533,20 +375,14 @@ def sweep(
                 False,
                 state.v[i] + dv,
                 state.w[i] + dw,
-                scratch.clear,
                 contact,
+                terrain,
                 h,
                 v_inelastic,
-                model.radius,
-                model.plane_p,
-                model.plane_n,
-                terrain,
-                model.heights,
-                model.terrain_cells,
-                model.surface_table,
-                state.x,
-                scratch.x_free,
-                lists.lam_plane,
+                model,
+                lists,
+                state,
+                scratch,
             )
             if ti.static(not last):
                 state.v[i], state.w[i] = v_new, w_new

@@ -23,11 +23,10 @@ listed apart, each tested against every ball (:func:`list_ball`), so that the ce
 for the rest.
 """
 
-import math
-
-import numpy as np
 import taichi as ti
 
+from ti_golf.physics.apart import is_apart
+from ti_golf.physics.sort import bucket_of, cell_of, counting_sort
 from ti_golf.physics.types import (
     GridParams,
     GridScratch,
@@ -38,35 +37,15 @@ from ti_golf.physics.types import (
     ivec3,
     kernel,
     of_ball,
-    vec3,
     vec3_array,
 )
 
 real_table = float_grid
 
 SCATTERED_HASH = (1, 19349663, 83492791)
+
 """Strides of the cell coordinates (x, y, z) in the hash of a grid whose balls are too spread out
 for a dense one (see :func:`hash_strides`)."""
-
-
-@ti.func
-def cell_of(x, inv_cell):
-    """Integer cell coordinates of a point [m]."""
-    return ti.cast(ti.floor(x * inv_cell), ti.i32)
-
-
-@ti.func
-def bucket_of(c, mask, origin, stride):
-    """Hash of integer cell coordinates into [0, mask]: (c − origin)·stride, wrapping around, with
-    stride 1 along x, so a row of cells along x fills consecutive buckets (their starts share a
-    cache line; see ``list_ball``). See :func:`hash_strides` for ``origin`` and ``stride``."""
-    d = c - origin
-    h = (
-        ti.cast(d[0], ti.u32) * ti.cast(stride[0], ti.u32)
-        + ti.cast(d[1], ti.u32) * ti.cast(stride[1], ti.u32)
-        + ti.cast(d[2], ti.u32) * ti.cast(stride[2], ti.u32)
-    )
-    return ti.cast(h & ti.cast(mask, ti.u32), ti.i32)
 
 
 def cell_size(r_max: float, skin: float, h: float, v_max: float) -> tuple[float, bool]:
@@ -94,81 +73,13 @@ def pair_reach(skin, h, v_a, v_b):
     return ti.max(skin, h * (v_a - v_b).norm())
 
 
-APART_MAX = 32
-"""Most balls set *apart* (see :func:`apart_balls`: much faster or bigger than the rest), which
-own none of their pairs with the others (see :func:`owns`) and whose pairs are listed ball by
-ball; with more, the cells are sized for the fastest pair and the largest ball instead
-(:func:`cell_size`): a thousand balls hit at once are spread out, and big cells cost them
-little. Their pairs are listed ball by ball on CPU backends only (``CollisionSolver.build``): a
-ball listed apart tests every ball in one thread, and Taichi's Vulkan backend stops the loops of
-a thread after 65,535 iterations in all, nested or not, without a word (measured with Taichi 1.7.4 and
-lavapipe: the ball shot into the 70,001-ball pile of the GPU test lost 7 of its pairs); on a GPU,
-many threads make wide cells cheap anyway."""
-
-
 LOOP_CAP = 65_535
+
 """Loop iterations after which a thread of Taichi's Vulkan backend stops all its loops, nested or
 not, without a word (measured with Taichi 1.7.4 and lavapipe: 70,001 iterations ran 65,535 flat
 and 65,505 nested in blocks). Listing a ball's neighbours loops over every ball of its 27 cells,
 so a build whose largest bound (:func:`list_neighbours`) exceeds it on that backend has lost
 pairs, and ``CollisionSolver.build`` stops the run instead."""
-
-
-def size_cut(radius: np.ndarray) -> tuple[float, float]:
-    """(r_cut, r_ref) [m] for balls of ``radius`` (n,) [m]: a ball bigger than r_cut, twice the
-    radius of the (``APART_MAX`` + 1)-th biggest ball, is set apart (at most ``APART_MAX`` of
-    them), and r_ref, the largest radius of the other balls, sizes the cells and the skin. So a
-    boulder dropped into a pit of golf balls does not make every cell as wide as the boulder (a
-    0.5 m ball on a pile of 131,072 2-cm balls made a rebuild of the lists take 20 s, against
-    0.1 s). Without such outliers, r_cut is infinite and r_ref the largest radius."""
-    r = np.sort(np.asarray(radius, dtype=float))[::-1]
-    if len(r) <= APART_MAX:
-        return math.inf, float(r[0])
-    r_cut = 2.0 * float(r[APART_MAX])
-    if r[0] <= r_cut:
-        return math.inf, float(r[0])
-    return r_cut, float(r[r <= r_cut][0])
-
-
-def fast_speed(r_ref: float, skin: float, h: float) -> float:
-    """The speed [m/s] above which a ball is *fast*: 2h·|v| exceeds the larger of the skin and the
-    largest diameter ``2·r_ref`` [m] of the balls not set apart for their size (see
-    :func:`size_cut`), so a pair with it could close by more than that within a step (``h`` [s]).
-    Below it, cells are at most 2·r_ref + max(skin, 2·r_ref) wide."""
-    return max(skin, 2.0 * r_ref) / (2.0 * h)
-
-
-@kernel
-def apart_balls(v: vec3_array, radius: float_array, v_cut: float, r_cut: float, apart_ids: int_array) -> vec3:
-    """(the greatest speed [m/s], the greatest speed of the balls not set apart, how many are set
-    apart): the balls faster than ``v_cut`` or bigger than ``r_cut`` (see
-    :func:`is_apart`). The indices of the first ``apart_ids.shape[0] − 1`` of them go to
-    ``apart_ids`` in no particular order, their count to its last entry (integer atomics; float
-    atomic maxima, the same on every thread order)."""
-    s2, rest2 = 0.0, 0.0
-    last = apart_ids.shape[0] - 1
-    apart_ids[last] = 0
-    for i in range(v.shape[0]):
-        q = v[i].norm_sqr()
-        ti.atomic_max(s2, q)
-        if q > v_cut * v_cut or of_ball(radius, i) > r_cut:  # as :func:`is_apart` tests it
-            k = ti.atomic_add(apart_ids[last], 1)
-            if k < last:
-                apart_ids[k] = i
-        else:
-            ti.atomic_max(rest2, q)
-    return ti.Vector([ti.sqrt(s2), ti.sqrt(rest2), ti.cast(apart_ids[last], float)])
-
-
-@ti.func
-def is_apart(v: ti.template(), radius: ti.template(), i, v_cut, r_cut, n_apart):
-    """Whether ball i is one of the ``n_apart`` balls set apart (faster than ``v_cut`` or bigger
-    than ``r_cut``, see :func:`apart_balls`); its velocity and radius are read only when there
-    are any."""
-    apart = False
-    if n_apart > 0:
-        apart = v[i].norm_sqr() > v_cut * v_cut or of_ball(radius, i) > r_cut
-    return apart
 
 
 @kernel
@@ -298,131 +209,6 @@ def list_neighbours(
         ti.atomic_max(longest[1], n_low)
         ti.atomic_max(most_loops, loops)
     return ti.Vector([longest[0], longest[1], most_loops])
-
-
-@ti.func
-def counting_sort(
-    x: ti.template(),
-    inv_cell,
-    mask,
-    origin,
-    stride,
-    rank: ti.template(),
-    start: ti.template(),
-    chunk_start: ti.template(),
-    sorted_ids: ti.template(),
-):
-    """The grid's counting sort (see :func:`list_neighbours`): ``sorted_ids[start[b] : start[b + 1]]``
-    are the balls of bucket b, in the order their threads took ranks (an integer atomic add)."""
-    for b in range(start.shape[0]):
-        start[b] = 0
-    for i in range(x.shape[0]):
-        b = bucket_of(cell_of(x[i], inv_cell), mask, origin, stride)
-        rank[i] = ti.atomic_add(start[b + 1], 1)  # bucket b's count, until the scan turns it into a start
-    bucket_starts(start, chunk_start)
-    for i in range(x.shape[0]):
-        sorted_ids[start[bucket_of(cell_of(x[i], inv_cell), mask, origin, stride)] + rank[i]] = i
-
-
-@kernel
-def storage_order(
-    x: vec3_array,
-    inv_cell: float,
-    mask: ti.i32,
-    origin: ivec3,
-    stride: ivec3,
-    rank: int_array,
-    start: int_array,
-    chunk_start: int_array,
-    sorted_ids: int_array,
-):
-    """The order in which to store the balls so that neighbours lie close in memory: ``sorted_ids``
-    lists the ball ids bucket by bucket (the grid's counting sort), and within a bucket by
-    position, y then z then x (then id), as the buckets of a dense hash run (:func:`hash_strides`),
-    so the order does not depend on thread scheduling. The balls of each row of cells, and of
-    the rows a ball's neighbours lie in, end up in runs of consecutive indices."""
-    counting_sort(x, inv_cell, mask, origin, stride, rank, start, chunk_start, sorted_ids)
-    for b in range(start.shape[0] - 1):  # a bucket holds a few balls: an insertion sort
-        for k in range(start[b] + 1, start[b + 1]):
-            j = sorted_ids[k]
-            m = k
-            while m > start[b]:  # not `m > start[b] and ...`: Taichi evaluates both sides of an `and`
-                if not stored_after(x, sorted_ids[m - 1], j):  # (sorted_ids[-1] would be read)
-                    break
-                sorted_ids[m] = sorted_ids[m - 1]
-                m -= 1
-            sorted_ids[m] = j
-
-
-@ti.func
-def stored_after(x: ti.template(), a, b):
-    """Whether ball a goes after ball b in a bucket of :func:`storage_order`: by y, z, x, then id."""
-    after = a > b
-    for axis in ti.static((0, 2, 1)):  # the least significant first: each later axis overrides
-        if x[a][axis] != x[b][axis]:
-            after = x[a][axis] > x[b][axis]
-    return after
-
-
-@kernel
-def gather(src: ti.types.ndarray(), order: int_array, dst: ti.types.ndarray()):
-    """dst[p] = src[order[p]]: per-ball data into a new storage order (any element type)."""
-    for p in range(dst.shape[0]):
-        dst[p] = src[order[p]]
-
-
-@kernel
-def gather_column(table: ti.types.ndarray(), column: ti.i32, order: int_array, dst: ti.types.ndarray()):
-    """Column ``column`` of a per-ball table into the storage order ``order``, in place, through the
-    per-ball scratch ``dst`` (two loops: every entry is read before any is written)."""
-    for p in range(dst.shape[0]):
-        dst[p] = table[order[p], column]
-    for p in range(dst.shape[0]):
-        table[p, column] = dst[p]
-
-
-SCAN_CHUNKS = 4096
-"""Most chunks the buckets' scan (:func:`bucket_starts`) splits the buckets into: the length of its
-one serial loop, far below the 65,535 iterations after which Taichi's Vulkan backend silently
-stops a serial loop."""
-
-
-def scan_chunks(buckets: int) -> int:
-    """Length of the ``chunk_start`` scratch of :func:`list_neighbours` for ``buckets`` buckets:
-    chunks of at least 64 buckets, at most ``SCAN_CHUNKS`` of them, plus one entry."""
-    return max(1, min(SCAN_CHUNKS, buckets // 64)) + 1
-
-
-@ti.func
-def bucket_starts(start: ti.template(), chunk_start: ti.template()):
-    """The buckets' starts from their counts, in place: given start[0] = 0 and bucket b's count
-    c_b in start[b + 1], start[b + 1] becomes c_0 + … + c_b (an exclusive scan of the counts; one
-    array instead of two, 8 bytes per ball less), in three loops: the sums of chunks of buckets,
-    in parallel; a serial scan of those sums into ``chunk_start`` (as many entries as there are
-    chunks, plus one); each chunk's running sum from its start, in parallel. No loop runs long on
-    one thread: a single-thread scan of all buckets (2^21 of them for a million balls) would crawl
-    on a GPU, and Taichi's Vulkan backend stops a serial loop after 65,535 iterations without a
-    word, which left most balls of a large pile without neighbours (``PrefixSumExecutor`` does not
-    run on CPU). Integer sums: the same result on every backend and thread count."""
-    n_chunks = chunk_start.shape[0] - 1
-    buckets = start.shape[0] - 1
-    size = (buckets + n_chunks - 1) // n_chunks
-    for c in range(n_chunks):
-        total = 0
-        for b in range(c * size, ti.min((c + 1) * size, buckets)):
-            total += start[b + 1]
-        chunk_start[c + 1] = total
-        if c == 0:
-            chunk_start[0] = 0
-            start[0] = 0
-    ti.loop_config(serialize=True)
-    for c in range(n_chunks):
-        chunk_start[c + 1] += chunk_start[c]
-    for c in range(n_chunks):
-        running = chunk_start[c]
-        for b in range(c * size, ti.min((c + 1) * size, buckets)):
-            running += start[b + 1]
-            start[b + 1] = running
 
 
 @ti.func

@@ -10,7 +10,8 @@ scene inside a serial kernel by testing every pair.
 
 import taichi as ti
 
-from ti_golf.physics.grid import APART_MAX, is_apart, owns, pair_reach
+from ti_golf.physics.apart import APART_MAX, is_apart
+from ti_golf.physics.grid import owns, pair_reach
 from ti_golf.physics.types import (
     float_grid,
     int_array,

@@ -10,14 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ti_golf.scene.schema import (
-    Block,
-    Scene,
-    Vec3,
-    backspin_axis,
-    launch_velocity,
-    raise_config,
-)
+from ti_golf.scene.checks import raise_config
+from ti_golf.scene.schema import Block, Scene, Vec3, backspin_axis, launch_velocity
 from ti_golf.scene.terrain import build_terrain
 
 

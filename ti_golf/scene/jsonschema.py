@@ -34,7 +34,10 @@ def key_schema(k: Key) -> dict[str, Any]:
     out: dict[str, Any] = dict(_TYPES[k.kind])
     bounds = getattr(k.check, "json_schema", None)
     if bounds is not None:
-        out.update(bounds())
+        extra = bounds()
+        if "items" in extra:  # bounds on each number of a list
+            out["items"] = {**out["items"], **extra.pop("items")}
+        out.update(extra)
     if k.default is not None:
         out["default"] = list(k.default) if isinstance(k.default, tuple) else k.default
     unit = "" if k.unit in ("", "-") else f" [{k.unit}]"

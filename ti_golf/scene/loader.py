@@ -20,6 +20,8 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef,unused-ignore]
 
 from ti_golf.errors import ConfigError
+from ti_golf.scene.checks import parse_range, raise_config
+from ti_golf.scene.keys import Key
 from ti_golf.scene.schema import (
     ARRAY_SCHEMA,
     SCHEMA,
@@ -31,7 +33,6 @@ from ti_golf.scene.schema import (
     Contact,
     GameConfig,
     HoleConfig,
-    Key,
     Launch,
     Plane,
     Scene,
@@ -39,8 +40,6 @@ from ti_golf.scene.schema import (
     SweepDefaults,
     TerrainConfig,
     World,
-    parse_range,
-    raise_config,
 )
 from ti_golf.scene.terrain import load_heights_file
 
@@ -370,35 +369,3 @@ def _plane(values: dict[str, Any]) -> Plane:
     n = plane.normal
     length = math.sqrt(sum(c * c for c in n))
     return Plane(point=plane.point, normal=(n[0] / length, n[1] / length, n[2] / length))
-
-
-def describe_keys() -> str:
-    """Every scene key with unit, default, allowed values and meaning, as a Markdown table."""
-    rows = ["| key | unit | default | allowed | meaning |", "|---|---|---|---|---|"]
-    tables = [("", TOP_LEVEL)] + [(f"{name}.", keys) for name, keys in SCHEMA.items()]
-    tables += [(f"[[{name}]].", keys) for name, keys in ARRAY_SCHEMA.items()]
-    for prefix, keys in tables:
-        for k in keys.values():
-            rows.append(
-                f"| `{prefix}{k.name}` | {k.unit} | `{_default_text(k)}` | {_cell(k.allowed or k.kind)} | "
-                f"{_cell(k.doc)} |"
-            )
-    return "\n".join(rows)
-
-
-def _default_text(k: Key) -> str:
-    d = k.default
-    if k.kind == "text" or d == "":
-        return '""'
-    if isinstance(d, tuple):
-        return "[" + ", ".join(f"{c:g}" for c in d) + "]"
-    if isinstance(d, bool):
-        return str(d).lower()
-    if d is None:
-        return "(see meaning)"
-    return str(d)
-
-
-def _cell(text: str) -> str:
-    """Escape '|' so a Markdown table cell stays one cell."""
-    return text.replace("|", "\\|")

@@ -1,10 +1,11 @@
 """Scene configuration: one frozen dataclass per scene table, each key declared once.
 
 Every scene key is a dataclass field declared with :func:`~ti_golf.scene.keys.key`: its kind,
-default, unit, help and allowed values live in that one declaration, from which the loader's
-checks, ``ti-golf keys``, ``ti-golf schema`` (a JSON Schema) and the docs' key reference are made
-(:data:`SCHEMA`, :data:`ARRAY_SCHEMA`, :data:`TOP_LEVEL`). Plain Python, no Taichi import, so
-scenes can be parsed and validated before ``ti.init``.
+default, unit, help and allowed values (a check from :mod:`ti_golf.scene.checks`) live in that one
+declaration. :data:`SCHEMA`, :data:`ARRAY_SCHEMA` and :data:`TOP_LEVEL` collect them; from those
+come the loader's checks and errors (:mod:`ti_golf.scene.loader`), ``ti-golf keys`` and the docs'
+key reference (:mod:`ti_golf.scene.reference`) and ``ti-golf schema`` (:mod:`ti_golf.scene.jsonschema`).
+Plain Python, no Taichi import, so scenes can be parsed and validated before ``ti.init``.
 
 Conventions: SI units, x downrange, y up, z lateral. Symbols follow the lab report
 (``C_D``, ``C_M``, ``omega_M``, ``C_omega``, ``k_p``).
@@ -13,12 +14,22 @@ Conventions: SI units, x downrange, y up, z lateral. Symbols follow the lab repo
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
-from ti_golf.errors import ConfigError
-from ti_golf.scene.keys import REQUIRED, Interval, Key, OneOf, key, keys_of
+from ti_golf.scene.checks import (
+    NON_NEGATIVE,
+    POSITIVE,
+    UNIT_INTERVAL,
+    Each,
+    Interval,
+    MinMax,
+    NonZero,
+    OneOf,
+    WholeCounts,
+    angle,
+)
+from ti_golf.scene.checks import parse_range as parse_range  # re-exported: the CLI parses --angles with it
+from ti_golf.scene.keys import REQUIRED, Key, key, keys_of
 
 Vec3 = tuple[float, float, float]
 
@@ -31,59 +42,19 @@ AIR_MODELS = ("lab", "spin_ratio")
 """Aerodynamic models (``air.model``): the report's laws, or coefficients of the spin ratio."""
 
 
-# -- checks of allowed values: each returns None when a (type-correct) value is allowed, else a phrase
-
-_positive = Interval(0.0, lo_open=True)
-_non_negative = Interval(0.0)
-_unit_interval = Interval(0.0, 1.0)
-
-
-def _one_of(*choices: Any) -> OneOf:
-    return OneOf(choices)
-
-
-def _angle(limit: float) -> Interval:
-    return Interval(-limit, limit, unit_word="degrees")
-
-
-def _nonzero(v: tuple[float, ...]) -> str | None:
-    return None if any(c != 0 for c in v) else "must not be the zero vector"
-
-
-def _pair(lo: float, hi: float = math.inf) -> Callable[[Any], str | None]:
-    def check(v: tuple[float, ...]) -> str | None:
-        if len(v) != 2 or v[0] > v[1]:
-            return "must be [min, max] with min <= max"
-        return None if lo <= v[0] and v[1] <= hi else f"must lie in [{lo:g}, {hi:g}]"
-
-    return check
-
-
-def _count3(v: tuple[float, ...]) -> str | None:
-    return (
-        None
-        if all(c >= 1 and float(c).is_integer() for c in v) and math.prod(v) <= 50_000_000
-        else "must be 3 whole numbers >= 1 (at most 50 million balls)"
-    )
-
-
 # -- the scene's tables -------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Air:
     """Air properties (report L.1–L.23)."""
 
-    rho: float = key("float", 1.3, "kg/m^3", "air density ρ", _non_negative, ">= 0")
+    rho: float = key("float", 1.3, "kg/m^3", "air density ρ", NON_NEGATIVE)
     gamma: int = key(
-        "int", 2, "-", "flow type γ: 1 laminar (drag ∝ v), 2 turbulent (drag ∝ v²)", _one_of(1, 2), "1 or 2"
+        "int", 2, "-", "flow type γ: 1 laminar (drag ∝ v), 2 turbulent (drag ∝ v²)", OneOf((1, 2)), "1 or 2"
     )
-    C_D: float = key("float", 0.3, "-", "drag coefficient; k_D = ½ρA·C_D (L.22)", _non_negative, ">= 0")
-    C_M: float = key("float", 0.0, "-", "Magnus coefficient; k_M = ½ρA·C_M/ω_M (L.2, L.21)", _non_negative, ">= 0")
-    omega_M: float = key(
-        "float", 1.0, "1/s", "reference angular velocity ω_M of the Magnus law (L.2)", _positive, "> 0"
-    )
-    C_omega: float = key(
-        "float", 0.0, "-", "spin-decay coefficient; k_ω = ½ρA·C_ω/m (L.17, L.23)", _non_negative, ">= 0"
-    )
+    C_D: float = key("float", 0.3, "-", "drag coefficient; k_D = ½ρA·C_D (L.22)", NON_NEGATIVE)
+    C_M: float = key("float", 0.0, "-", "Magnus coefficient; k_M = ½ρA·C_M/ω_M (L.2, L.21)", NON_NEGATIVE)
+    omega_M: float = key("float", 1.0, "1/s", "reference angular velocity ω_M of the Magnus law (L.2)", POSITIVE)
+    C_omega: float = key("float", 0.0, "-", "spin-decay coefficient; k_ω = ½ρA·C_ω/m (L.17, L.23)", NON_NEGATIVE)
     wind: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "constant wind; forces use v_rel = v − wind (L.21–L.23)")
     model: str = key(
         "str",
@@ -92,8 +63,7 @@ class Air:
         "drag and lift: lab = the report's constant C_D and Magnus law (L.21, L.22); spin_ratio = "
         "C_D(S) and C_L(S) of the spin ratio S = R|ω|/|v_rel| fitted to launch-monitor shots "
         "(Ferguson, McNally & McPhee 2022; C_D, C_M and omega_M unused; needs gamma = 2)",
-        _one_of(*AIR_MODELS),
-        " | ".join(AIR_MODELS),
+        OneOf(AIR_MODELS),
     )
 
 
@@ -101,17 +71,17 @@ class Air:
 class Ball:
     """Properties of the default ball [kg, m]."""
 
-    mass: float = key("float", 0.045, "kg", "ball mass m", _positive, "> 0")
-    radius: float = key("float", 0.02, "m", "ball radius R (cross-section A = πR²)", _positive, "> 0")
+    mass: float = key("float", 0.045, "kg", "ball mass m", POSITIVE)
+    radius: float = key("float", 0.02, "m", "ball radius R (cross-section A = πR²)", POSITIVE)
 
 
 @dataclass(frozen=True)
 class Launch:
     """One launched ball: speed [m/s], elevation and azimuth [deg], spin [rad/s], position [m]."""
 
-    speed: float = key("float", 80.0, "m/s", "launch speed |v0|", _non_negative, ">= 0")
-    angle_deg: float = key("float", 45.0, "deg", "elevation above the horizontal", _angle(90), "[-90, 90]")
-    direction_deg: float = key("float", 0.0, "deg", "azimuth, from +x toward +z", _angle(360), "[-360, 360]")
+    speed: float = key("float", 80.0, "m/s", "launch speed |v0|", NON_NEGATIVE)
+    angle_deg: float = key("float", 45.0, "deg", "elevation above the horizontal", angle(90))
+    direction_deg: float = key("float", 0.0, "deg", "azimuth, from +x toward +z", angle(360))
     spin: Vec3 = key(
         "vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity ω0 (+z is backspin for a shot toward +x)"
     )
@@ -128,20 +98,17 @@ class Launch:
 class World:
     """Time stepping, gravity and the ground plane."""
 
-    dt: float = key("float", 0.001, "s", "time step h", _positive, "> 0")
+    dt: float = key("float", 0.001, "s", "time step h", POSITIVE)
     gravity: Vec3 = key("vec3", (0.0, -9.81, 0.0), "m/s^2", "gravitational acceleration g")
     integrator: str = key(
         "str",
         "semi_implicit",
         "-",
         "semi_implicit (the report's leapfrog-style Euler) or rk4 (4th order, for flights)",
-        _one_of(*INTEGRATORS),
-        " | ".join(INTEGRATORS),
+        OneOf(INTEGRATORS),
     )
-    t_end: float = key("float", 20.0, "s", "default duration of `ti-golf run`", _positive, "> 0")
-    t_max: float = key(
-        "float", 60.0, "s", "longest flight a sweep integrates before giving up on a ball", _positive, "> 0"
-    )
+    t_end: float = key("float", 20.0, "s", "default duration of `ti-golf run`", POSITIVE)
+    t_max: float = key("float", 60.0, "s", "longest flight a sweep integrates before giving up on a ball", POSITIVE)
     ground: bool = key(
         "bool",
         True,
@@ -157,16 +124,14 @@ class World:
         0.01,
         "m/s",
         "a touching ball slower than this (and R|ω| below it) may come to rest",
-        _non_negative,
-        ">= 0",
+        NON_NEGATIVE,
     )
     t_rest: float = key(
         "float",
         0.2,
         "s",
         "how long a ball and the balls it touches must stay below v_rest before they are put at rest",
-        _non_negative,
-        ">= 0",
+        NON_NEGATIVE,
     )
 
 
@@ -174,18 +139,15 @@ class World:
 class Contact:
     """Impulse-contact parameters (report Appendix B)."""
 
-    e: float = key("float", 0.5, "-", "coefficient of restitution e (B.9)", _unit_interval, "[0, 1]")
-    mu: float = key("float", 0.4, "-", "Coulomb friction coefficient μ (B.15)", _non_negative, ">= 0")
-    k_p: float = key(
-        "float", 0.2, "-", "position-projection factor k_p (B.18; stable below 0.5)", _unit_interval, "[0, 1]"
-    )
+    e: float = key("float", 0.5, "-", "coefficient of restitution e (B.9)", UNIT_INTERVAL)
+    mu: float = key("float", 0.4, "-", "Coulomb friction coefficient μ (B.15)", NON_NEGATIVE)
+    k_p: float = key("float", 0.2, "-", "position-projection factor k_p (B.18; stable below 0.5)", UNIT_INTERVAL)
     mu_roll: float = key(
         "float",
         0.05,
         "-",
         "rolling-resistance coefficient: a rolling ball decelerates at μ_roll·g",
-        _non_negative,
-        ">= 0",
+        NON_NEGATIVE,
     )
     iterations: int = key(
         "int",
@@ -193,7 +155,6 @@ class Contact:
         "-",
         "Jacobi sweeps over all touching pairs per step (more: stiffer stacks)",
         Interval(1, 100),
-        "[1, 100]",
     )
     relax: float = key(
         "float",
@@ -201,7 +162,6 @@ class Contact:
         "-",
         "Jacobi relaxation of resting ball–ball impulses (1: full; lower is steadier in dense piles)",
         Interval(0.0, 1.0, lo_open=True),
-        "(0, 1]",
     )
     skin: float = key(
         "float",
@@ -210,7 +170,6 @@ class Contact:
         "neighbour-list skin as a fraction of the largest radius, bar a few much bigger balls "
         "(lists are rebuilt when a ball moves skin/2)",
         Interval(0.0, 2.0, lo_open=True),
-        "(0, 2]",
     )
     turf: bool = key(
         "bool",
@@ -226,8 +185,7 @@ class Contact:
         "m/s",
         "normal approach speeds below v_bounce + 2|g|h are treated as inelastic (no micro-bounces) "
         "and as resting contacts, whose impulse carries over to the next step",
-        _non_negative,
-        ">= 0",
+        NON_NEGATIVE,
     )
 
 
@@ -244,8 +202,7 @@ class TerrainConfig:
         "-",
         "generated: seeded fractal noise on a resolution[0]×resolution[1] grid; file: heights from a .npy "
         "array (first axis along x)",
-        _one_of("generated", "file"),
-        "generated | file",
+        OneOf(("generated", "file")),
     )
     file: str = key(
         "str",
@@ -260,30 +217,23 @@ class TerrainConfig:
         (100.0, 100.0),
         "m",
         "extent [size_x, size_z] of the grid (the heights span it)",
-        lambda v: None if v[0] > 0 and v[1] > 0 else "must be > 0 on both axes",
-        "[> 0, > 0]",
+        Each(POSITIVE),
     )
     resolution: tuple[int, int] = key(
         "vec2",
         (129, 129),
         "-",
         "grid points [nx, nz] of generated terrain",
-        lambda v: (
-            None
-            if all(c >= 2 and float(c).is_integer() for c in v) and v[0] * v[1] <= 50_000_000
-            else "must be 2 whole numbers >= 2 (at most 50 million points)"
-        ),
-        "2 whole numbers >= 2",
+        WholeCounts(2, 2, 50_000_000, "points"),
     )
     seed: int = key("int", 0, "-", "random seed of generated terrain (the same seed gives the same heights everywhere)")
-    amplitude: float = key("float", 1.0, "m", "generated heights lie within ±amplitude", _non_negative, ">= 0")
+    amplitude: float = key("float", 1.0, "m", "generated heights lie within ±amplitude", NON_NEGATIVE)
     roughness: float = key(
         "float",
         0.5,
         "-",
         "amplitude ratio of successive noise octaves (each half the wavelength): small is smooth, near 1 rugged",
         Interval(0.0, 1.0, lo_open=True, hi_open=True),
-        "(0, 1)",
     )
     profile: bool = key(
         "bool",
@@ -330,9 +280,9 @@ class HoleConfig:
         "the cup's centre [x, z] (required); it sits on the terrain, else on the ground or the first "
         "upward-facing plane",
     )
-    radius: float = key("float", 0.054, "m", "cup radius (regulation: 108 mm across)", _positive, "> 0")
+    radius: float = key("float", 0.054, "m", "cup radius (regulation: 108 mm across)", POSITIVE)
     flag_height: float = key(
-        "float", 2.13, "m", "flagstick height above the cup (2.13 m = 7 ft is usual; 0: none)", _non_negative, ">= 0"
+        "float", 2.13, "m", "flagstick height above the cup (2.13 m = 7 ft is usual; 0: none)", NON_NEGATIVE
     )
 
 
@@ -353,19 +303,15 @@ class GameConfig:
         "m/s",
         "each stroke's wind blows level from a random direction at a random speed up to this (0: the "
         "scene's air.wind throughout)",
-        _non_negative,
-        ">= 0",
+        NON_NEGATIVE,
     )
-    max_strokes: int = key(
-        "int", 20, "-", "the round ends unfinished after this many strokes", Interval(1, 1000), "[1, 1000]"
-    )
+    max_strokes: int = key("int", 20, "-", "the round ends unfinished after this many strokes", Interval(1, 1000))
     shot_time: float = key(
         "float",
         60.0,
         "s",
         "longest a stroke is simulated; a ball still moving then is played from where it is",
-        _positive,
-        "> 0",
+        POSITIVE,
     )
 
 
@@ -375,14 +321,10 @@ class Surface:
     and turf impacts (``None``: the ``[contact]`` value)."""
 
     name: str = key("str", "", "-", "what the surface is (fairway, rough, green, bunker, water …)")
-    e: float | None = key(
-        "float", None, "-", "restitution on this surface (default contact.e)", _unit_interval, "[0, 1]"
-    )
-    mu: float | None = key(
-        "float", None, "-", "Coulomb friction on this surface (default contact.mu)", _non_negative, ">= 0"
-    )
+    e: float | None = key("float", None, "-", "restitution on this surface (default contact.e)", UNIT_INTERVAL)
+    mu: float | None = key("float", None, "-", "Coulomb friction on this surface (default contact.mu)", NON_NEGATIVE)
     mu_roll: float | None = key(
-        "float", None, "-", "rolling resistance on this surface (default contact.mu_roll)", _non_negative, ">= 0"
+        "float", None, "-", "rolling resistance on this surface (default contact.mu_roll)", NON_NEGATIVE
     )
     turf: bool | None = key("bool", None, "-", "impacts on this surface as on turf (default contact.turf)")
 
@@ -397,8 +339,7 @@ class Plane:
         (0.0, 1.0, 0.0),
         "-",
         "normal pointing out of the solid side (normalised on load)",
-        _nonzero,
-        "non-zero vec3",
+        NonZero(),
     )
 
 
@@ -409,8 +350,8 @@ class BallSpec:
     position: Vec3 = key("vec3", REQUIRED, "m", "centre of the ball (required)")
     velocity: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "initial velocity")
     spin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity")
-    radius: float | None = key("float", None, "m", "radius (default ball.radius)", _positive, "> 0")
-    mass: float | None = key("float", None, "kg", "mass (default ball.mass)", _positive, "> 0")
+    radius: float | None = key("float", None, "m", "radius (default ball.radius)", POSITIVE)
+    mass: float | None = key("float", None, "kg", "mass (default ball.mass)", POSITIVE)
 
 
 @dataclass(frozen=True)
@@ -423,54 +364,45 @@ class Block:
         "-",
         "lattice: count[0]×count[1]×count[2] balls from origin, spacing apart; "
         "random: `number` balls at seeded random non-overlapping places inside [box_min, box_max]",
-        _one_of("lattice", "random"),
-        "lattice | random",
+        OneOf(("lattice", "random")),
     )
-    count: Vec3 = key("vec3", (1.0, 1.0, 1.0), "-", "lattice size along x, y, z", _count3, "3 whole numbers >= 1")
-    number: int = key("int", 0, "-", "number of balls of a random block", Interval(0, 50_000_000), "[0, 50000000]")
+    count: Vec3 = key(
+        "vec3", (1.0, 1.0, 1.0), "-", "lattice size along x, y, z", WholeCounts(3, 1, 50_000_000, "balls")
+    )
+    number: int = key("int", 0, "-", "number of balls of a random block", Interval(0, 50_000_000))
     origin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m", "centre of the lattice's first ball")
-    spacing: float | None = key(
-        "float", None, "m", "lattice spacing (default: one diameter plus 1 %)", _positive, "> 0"
-    )
+    spacing: float | None = key("float", None, "m", "lattice spacing (default: one diameter plus 1 %)", POSITIVE)
     jitter: float = key(
         "float",
         0.0,
         "m",
         "uniform random offset of each lattice ball (at most half the free gap)",
-        _non_negative,
-        ">= 0",
+        NON_NEGATIVE,
     )
     box_min: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m", "lower corner of a random block's box")
     box_max: Vec3 = key("vec3", (1.0, 1.0, 1.0), "m", "upper corner of a random block's box")
     velocity: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "initial velocity of every ball")
-    velocity_jitter: float = key(
-        "float", 0.0, "m/s", "uniform random velocity added per component", _non_negative, ">= 0"
-    )
+    velocity_jitter: float = key("float", 0.0, "m/s", "uniform random velocity added per component", NON_NEGATIVE)
     speed: tuple[float, float] | None = key(
-        "list2", None, "m/s", "launch speeds [min, max]: the block's balls are shots", _pair(0.0), "[min, max] >= 0"
+        "list2", None, "m/s", "launch speeds [min, max]: the block's balls are shots", MinMax(0.0)
     )
     angle_deg: tuple[float, float] | None = key(
-        "list2", None, "deg", "launch elevations [min, max] of shots", _pair(-90.0, 90.0), "[min, max] in [-90, 90]"
+        "list2", None, "deg", "launch elevations [min, max] of shots", MinMax(-90.0, 90.0)
     )
     direction_deg: tuple[float, float] = key(
         "list2",
         (0.0, 0.0),
         "deg",
         "launch azimuths [min, max] of shots",
-        _pair(-360.0, 360.0),
-        "[min, max] in [-360, 360]",
+        MinMax(-360.0, 360.0),
     )
-    backspin: tuple[float, float] = key(
-        "list2", (0.0, 0.0), "rad/s", "backspin [min, max] of shots", _pair(-1e5, 1e5), "[min, max]"
-    )
+    backspin: tuple[float, float] = key("list2", (0.0, 0.0), "rad/s", "backspin [min, max] of shots", MinMax(-1e5, 1e5))
     spin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity of every ball")
-    radius: float | None = key("float", None, "m", "radius (default ball.radius)", _positive, "> 0")
+    radius: float | None = key("float", None, "m", "radius (default ball.radius)", POSITIVE)
     radius_jitter: float = key(
-        "float", 0.0, "-", "relative spread of radii: R·(1 ± jitter)", Interval(0.0, 0.5, hi_open=True), "[0, 0.5)"
+        "float", 0.0, "-", "relative spread of radii: R·(1 ± jitter)", Interval(0.0, 0.5, hi_open=True)
     )
-    mass: float | None = key(
-        "float", None, "kg", "mass (default ball.mass; scaled with R³ when radii vary)", _positive, "> 0"
-    )
+    mass: float | None = key("float", None, "kg", "mass (default ball.mass; scaled with R³ when radii vary)", POSITIVE)
     seed: int = key("int", 0, "-", "random seed (the same seed gives the same balls everywhere)")
 
 
@@ -549,44 +481,3 @@ def backspin_axis(direction_deg: float) -> Vec3:
     """Unit backspin axis d × ŷ for a shot along azimuth ``direction_deg`` (+z for a shot toward +x)."""
     ph = math.radians(direction_deg)
     return (-math.sin(ph), 0.0, math.cos(ph))
-
-
-def parse_range(text: str | Sequence[float], source: str, key: str) -> tuple[float, ...]:
-    """Parse ``START:STOP:STEP`` (STOP included) or ``a,b,c`` (or a list) into a tuple of floats."""
-    if isinstance(text, (list, tuple)):
-        values = []
-        for v in text:
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise_config(source, key, f"must be a list of numbers (got {v!r})")
-            values.append(float(v))
-        out = tuple(values)
-    else:
-        s = str(text).strip()
-        try:
-            if ":" in s:
-                parts = [float(p) for p in s.split(":")]
-                if len(parts) != 3:
-                    raise ValueError
-                start, stop, step = parts
-                if not step > 0:
-                    raise_config(source, key, f"STEP must be > 0 in START:STOP:STEP (got {s!r})")
-                if stop < start:
-                    raise_config(source, key, f"STOP must be >= START in START:STOP:STEP (got {s!r})")
-                n = int(math.floor((stop - start) / step + 1e-9)) + 1
-                if n > 10_000_000:
-                    raise_config(source, key, f"gives {n} values; at most 10,000,000 are allowed")
-                out = tuple(round(start + i * step, 12) for i in range(n))
-            else:
-                out = tuple(float(p) for p in s.split(",") if p.strip() != "")
-        except ValueError:
-            raise_config(source, key, f"must be START:STOP:STEP (STOP included) or a comma list of numbers (got {s!r})")
-    if not out:
-        raise_config(source, key, "must list at least one value")
-    if not all(math.isfinite(v) for v in out):
-        raise_config(source, key, "values must be finite numbers")
-    return out
-
-
-def raise_config(source: str, key: str | None, reason: str) -> None:
-    """Raise a :class:`~ti_golf.errors.ConfigError` (helper that keeps call sites one line)."""
-    raise ConfigError(source, key, reason)

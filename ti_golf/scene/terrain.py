@@ -27,7 +27,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from ti_golf.scene.schema import TerrainConfig, raise_config
+from ti_golf.scene.checks import raise_config
+from ti_golf.scene.schema import TerrainConfig
 
 
 @dataclass(frozen=True)

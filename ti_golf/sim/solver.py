@@ -9,7 +9,7 @@ import numpy as np
 import taichi as ti
 
 from ti_golf.errors import SimulationError
-from ti_golf.physics import collide, grid, links
+from ti_golf.physics import apart, collide, grid, links, sort
 from ti_golf.physics.types import (
     GridParams,
     GridScratch,
@@ -92,7 +92,7 @@ def _size(nbytes: float) -> str:
 
 LONG_LOWER = 16
 """Longest lower list (see ``CollisionSolver.build``) that widens the lower table exactly; a
-longer one, a ball set apart (``grid.APART_MAX``) touching many, widens it with room to grow."""
+longer one, a ball set apart (``apart.APART_MAX``) touching many, widens it with room to grow."""
 
 
 def steps_serially(n: int) -> bool:
@@ -111,10 +111,10 @@ class CollisionSolver:
             not listed apart when some are (``n_apart``).
         skin: neighbour-list skin [m] (``contact.skin`` × ``r_ref``).
         r_cut, r_ref: balls bigger than ``r_cut`` [m] are listed apart, and ``r_ref`` [m] is the
-            largest radius of the others (``grid.size_cut``: infinite, and the largest radius,
+            largest radius of the others (``apart.size_cut``: infinite, and the largest radius,
             unless a few balls are more than twice the size of the rest).
         n_apart: how many balls, much faster or bigger than the rest, the last build set apart
-            (``grid.APART_MAX``): they own none of their pairs with the others, and on CPU
+            (``apart.APART_MAX``): they own none of their pairs with the others, and on CPU
             backends they are listed apart.
         loop_cap: on Taichi's Vulkan backend, the loop iterations after which a thread stops (see
             ``grid.LOOP_CAP``): a build that needs more stops the run; ``None`` elsewhere.
@@ -142,9 +142,9 @@ class CollisionSolver:
         self._packs = Packs()
         n = model.n
         self._r_max = float(model.radius_np.max())
-        self.r_cut, self.r_ref = grid.size_cut(model.radius_np)
+        self.r_cut, self.r_ref = apart.size_cut(model.radius_np)
         self.skin = model.scene.contact.skin * self.r_ref
-        self.v_cut = grid.fast_speed(self.r_ref, self.skin, model.dt)  # faster balls are listed apart
+        self.v_cut = apart.fast_speed(self.r_ref, self.skin, model.dt)  # faster balls are listed apart
         self.cell = grid.cell_size(self._r_max, self.skin, model.dt, 0.0)[0]
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
         self.serial = steps_serially(n) if serial is None else bool(serial)
@@ -160,7 +160,7 @@ class CollisionSolver:
         self.rank = ti.ndarray(ti.i32, n)
         self.sorted_ids = ti.ndarray(ti.i32, n)
         self.start = ti.ndarray(ti.i32, self.mask + 2)
-        self.chunk_start = ti.ndarray(ti.i32, grid.scan_chunks(self.mask + 1))
+        self.chunk_start = ti.ndarray(ti.i32, sort.scan_chunks(self.mask + 1))
         self.x_at_build = ti.ndarray(vec3f, n)  # f32: only tested against half the skin (collide.moved_past)
         self.x_free = ti.ndarray(vec3.get(), n)
         self.v_free = ti.ndarray(vec3.get(), n)
@@ -173,7 +173,7 @@ class CollisionSolver:
         # collide.surface_impulses): 20 bytes per ball less for a bin of five planes in f64
         self.lam_plane = ti.ndarray(ti.f32, (n, max(1, len(model.plane_p) + (model.terrain is not None))))
         self.flag = ti.ndarray(ti.i32, 2)
-        self.apart_ids = ti.ndarray(ti.i32, grid.APART_MAX + 1)  # the balls listed apart (grid.apart_balls), count
+        self.apart_ids = ti.ndarray(ti.i32, apart.APART_MAX + 1)  # the balls listed apart (apart.apart_balls), count
         self.n_apart = 0
         # the loop iterations after which a thread stops its loops without a word (grid.LOOP_CAP)
         self.loop_cap = grid.LOOP_CAP if ensure_init().arch == "vulkan" else None
@@ -194,10 +194,10 @@ class CollisionSolver:
             links.stash(self.upper, self.n_upper, self.lam, stashed)
         h = self._model.dt
         v_max, v_rest, n_apart = (
-            float(s) for s in grid.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
+            float(s) for s in apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
         )
-        self.n_apart = int(n_apart) if n_apart <= grid.APART_MAX else 0  # a few own no pair with the others
-        scan_apart = self.n_apart > 0 and on_cpu()  # and are listed apart (see grid.APART_MAX)
+        self.n_apart = int(n_apart) if n_apart <= apart.APART_MAX else 0  # a few own no pair with the others
+        scan_apart = self.n_apart > 0 and on_cpu()  # and are listed apart (see apart.APART_MAX)
         # the cells hold every pair of the other balls; fast: their pairs are listed by closing speed too
         if scan_apart:
             self.cell, fast = grid.cell_size(self.r_ref, self.skin, h, v_rest)
@@ -208,7 +208,7 @@ class CollisionSolver:
         if self.reorder:
             self._store_in_grid_order(state)
             if scan_apart:  # their new indices
-                grid.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
+                apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
         self._ids = state.ids
         while True:
             if self.upper is None or self.upper.shape[1] != self.capacity[0]:
@@ -332,7 +332,7 @@ class CollisionSolver:
         stays in Taichi's memory, where each reorder gathers it as it gathers the balls, rather than
         being composed in numpy (at 8,192 balls that left 16 bytes per ball of freed heap in the
         process)."""
-        grid.storage_order(
+        sort.storage_order(
             state.x, 1.0 / self.cell, self.mask, *self._hash, self.rank, self.start, self.chunk_start, self.sorted_ids
         )
         order = self.sorted_ids
@@ -344,12 +344,12 @@ class CollisionSolver:
             k = next(
                 k for k, a in enumerate(spares) if (a.dtype, a.element_shape) == (values.dtype, values.element_shape)
             )
-            grid.gather(values, order, spares[k])
+            sort.gather(values, order, spares[k])
             setattr(owner, name, spares[k])
             spares[k] = values
         self.v_free, self.calm, self.rank = spares
         for column in range(self.lam_plane.shape[1]):
-            grid.gather_column(self.lam_plane, column, order, self.clear)  # (f32 scratch between steps)
+            sort.gather_column(self.lam_plane, column, order, self.clear)  # (f32 scratch between steps)
         if state.ids is None:  # the first reorder: the ids are this build's order (gathered above from then on)
             state.ids = ti.ndarray(ti.i32, state.n)
             state.ids.copy_from(order)

@@ -1,0 +1,156 @@
+"""The hash grid's counting sort (ball ids grouped by bucket), and storing the balls in that order
+so that neighbours lie close in memory."""
+
+import taichi as ti
+
+from ti_golf.physics.types import (
+    int_array,
+    ivec3,
+    kernel,
+    vec3_array,
+)
+
+
+@ti.func
+def cell_of(x, inv_cell):
+    """Integer cell coordinates of a point [m]."""
+    return ti.cast(ti.floor(x * inv_cell), ti.i32)
+
+
+@ti.func
+def bucket_of(c, mask, origin, stride):
+    """Hash of integer cell coordinates into [0, mask]: (c − origin)·stride, wrapping around, with
+    stride 1 along x, so a row of cells along x fills consecutive buckets (their starts share a
+    cache line; see ``list_ball``). See :func:`hash_strides` for ``origin`` and ``stride``."""
+    d = c - origin
+    h = (
+        ti.cast(d[0], ti.u32) * ti.cast(stride[0], ti.u32)
+        + ti.cast(d[1], ti.u32) * ti.cast(stride[1], ti.u32)
+        + ti.cast(d[2], ti.u32) * ti.cast(stride[2], ti.u32)
+    )
+    return ti.cast(h & ti.cast(mask, ti.u32), ti.i32)
+
+
+@ti.func
+def counting_sort(
+    x: ti.template(),
+    inv_cell,
+    mask,
+    origin,
+    stride,
+    rank: ti.template(),
+    start: ti.template(),
+    chunk_start: ti.template(),
+    sorted_ids: ti.template(),
+):
+    """The grid's counting sort (see :func:`list_neighbours`): ``sorted_ids[start[b] : start[b + 1]]``
+    are the balls of bucket b, in the order their threads took ranks (an integer atomic add)."""
+    for b in range(start.shape[0]):
+        start[b] = 0
+    for i in range(x.shape[0]):
+        b = bucket_of(cell_of(x[i], inv_cell), mask, origin, stride)
+        rank[i] = ti.atomic_add(start[b + 1], 1)  # bucket b's count, until the scan turns it into a start
+    bucket_starts(start, chunk_start)
+    for i in range(x.shape[0]):
+        sorted_ids[start[bucket_of(cell_of(x[i], inv_cell), mask, origin, stride)] + rank[i]] = i
+
+
+@kernel
+def storage_order(
+    x: vec3_array,
+    inv_cell: float,
+    mask: ti.i32,
+    origin: ivec3,
+    stride: ivec3,
+    rank: int_array,
+    start: int_array,
+    chunk_start: int_array,
+    sorted_ids: int_array,
+):
+    """The order in which to store the balls so that neighbours lie close in memory: ``sorted_ids``
+    lists the ball ids bucket by bucket (the grid's counting sort), and within a bucket by
+    position, y then z then x (then id), as the buckets of a dense hash run (:func:`hash_strides`),
+    so the order does not depend on thread scheduling. The balls of each row of cells, and of
+    the rows a ball's neighbours lie in, end up in runs of consecutive indices."""
+    counting_sort(x, inv_cell, mask, origin, stride, rank, start, chunk_start, sorted_ids)
+    for b in range(start.shape[0] - 1):  # a bucket holds a few balls: an insertion sort
+        for k in range(start[b] + 1, start[b + 1]):
+            j = sorted_ids[k]
+            m = k
+            while m > start[b]:  # not `m > start[b] and ...`: Taichi evaluates both sides of an `and`
+                if not stored_after(x, sorted_ids[m - 1], j):  # (sorted_ids[-1] would be read)
+                    break
+                sorted_ids[m] = sorted_ids[m - 1]
+                m -= 1
+            sorted_ids[m] = j
+
+
+@ti.func
+def stored_after(x: ti.template(), a, b):
+    """Whether ball a goes after ball b in a bucket of :func:`storage_order`: by y, z, x, then id."""
+    after = a > b
+    for axis in ti.static((0, 2, 1)):  # the least significant first: each later axis overrides
+        if x[a][axis] != x[b][axis]:
+            after = x[a][axis] > x[b][axis]
+    return after
+
+
+@kernel
+def gather(src: ti.types.ndarray(), order: int_array, dst: ti.types.ndarray()):
+    """dst[p] = src[order[p]]: per-ball data into a new storage order (any element type)."""
+    for p in range(dst.shape[0]):
+        dst[p] = src[order[p]]
+
+
+@kernel
+def gather_column(table: ti.types.ndarray(), column: ti.i32, order: int_array, dst: ti.types.ndarray()):
+    """Column ``column`` of a per-ball table into the storage order ``order``, in place, through the
+    per-ball scratch ``dst`` (two loops: every entry is read before any is written)."""
+    for p in range(dst.shape[0]):
+        dst[p] = table[order[p], column]
+    for p in range(dst.shape[0]):
+        table[p, column] = dst[p]
+
+
+SCAN_CHUNKS = 4096
+"""Most chunks the buckets' scan (:func:`bucket_starts`) splits the buckets into: the length of its
+one serial loop, far below the 65,535 iterations after which Taichi's Vulkan backend silently
+stops a serial loop."""
+
+
+def scan_chunks(buckets: int) -> int:
+    """Length of the ``chunk_start`` scratch of :func:`list_neighbours` for ``buckets`` buckets:
+    chunks of at least 64 buckets, at most ``SCAN_CHUNKS`` of them, plus one entry."""
+    return max(1, min(SCAN_CHUNKS, buckets // 64)) + 1
+
+
+@ti.func
+def bucket_starts(start: ti.template(), chunk_start: ti.template()):
+    """The buckets' starts from their counts, in place: given start[0] = 0 and bucket b's count
+    c_b in start[b + 1], start[b + 1] becomes c_0 + … + c_b (an exclusive scan of the counts; one
+    array instead of two, 8 bytes per ball less), in three loops: the sums of chunks of buckets,
+    in parallel; a serial scan of those sums into ``chunk_start`` (as many entries as there are
+    chunks, plus one); each chunk's running sum from its start, in parallel. No loop runs long on
+    one thread: a single-thread scan of all buckets (2^21 of them for a million balls) would crawl
+    on a GPU, and Taichi's Vulkan backend stops a serial loop after 65,535 iterations without a
+    word, which left most balls of a large pile without neighbours (``PrefixSumExecutor`` does not
+    run on CPU). Integer sums: the same result on every backend and thread count."""
+    n_chunks = chunk_start.shape[0] - 1
+    buckets = start.shape[0] - 1
+    size = (buckets + n_chunks - 1) // n_chunks
+    for c in range(n_chunks):
+        total = 0
+        for b in range(c * size, ti.min((c + 1) * size, buckets)):
+            total += start[b + 1]
+        chunk_start[c + 1] = total
+        if c == 0:
+            chunk_start[0] = 0
+            start[0] = 0
+    ti.loop_config(serialize=True)
+    for c in range(n_chunks):
+        chunk_start[c + 1] += chunk_start[c]
+    for c in range(n_chunks):
+        running = chunk_start[c]
+        for b in range(c * size, ti.min((c + 1) * size, buckets)):
+            running += start[b + 1]
+            start[b + 1] = running
