@@ -15,9 +15,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "schema",
         help="write the JSON Schema of scene files (for Taplo / Even Better TOML)",
-        description="Write the JSON Schema of scene files. An editor with Taplo (Even Better TOML) "
-        "checks and completes a scene file against it when the file's first line is "
-        "'#:schema ./scene.schema.json'.",
+        description="Write the JSON Schema (draft 2020-12) of scene files. An editor with Taplo (Even Better "
+        "TOML) checks and completes a scene file against it when the file's first line is "
+        "'#:schema ./scene.schema.json', or for every scene when a .taplo.toml [[rule]] with include = "
+        '["scenes/*.toml"] sets schema.path = "scene.schema.json".',
     )
     p.add_argument("--out", help="write the schema to this file (default: standard output)")
 
