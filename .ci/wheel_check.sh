@@ -5,6 +5,7 @@ repo="$(cd "$(dirname "$0")/.." && pwd)"
 python="${PYTHON:-python3}"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
+rm -rf "$repo/build"  # setuptools would put stale files of an earlier build into the wheel
 "$python" -m pip wheel --quiet --no-deps --wheel-dir "$work/dist" "$repo"
 wheel="$(ls "$work"/dist/ti_golf-*.whl)"
 "$python" -m zipfile -l "$wheel" | grep -q "ti_golf/scene/data/ball_pit.toml" || { echo "wheel-check: no scenes in $wheel"; exit 1; }

@@ -25,7 +25,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 import ti_golf
-from ti_golf.bench.benchmarks import pile_scene
+from ti_golf.bench.collide import pile_scene
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
 from ti_golf.sim.solver import SERIAL_MAX_BALLS
@@ -398,7 +398,7 @@ def test_the_bench_restarts_the_peak_memory_after_its_warm_up():
     # with the kernels cached), so the peak must restart after it
     import mmap
 
-    from ti_golf.bench import benchmarks as bench
+    from ti_golf.bench import common as bench
 
     # 96 MiB of memory of its own, touched page by page, then given back to the OS (munmap). Not a
     # numpy array: in a process whose heap holds freed memory (this one, after compiling kernels)

@@ -13,7 +13,7 @@ import pytest
 from conftest import ON_CPU, SERIAL_OR_PARALLEL
 
 import ti_golf as tg
-from ti_golf.bench.benchmarks import pile_scene
+from ti_golf.bench.collide import pile_scene
 from ti_golf.physics import apart, grid
 from ti_golf.scene.schema import AT_REST, Plane
 from ti_golf.sim.solver import CollisionSolver
@@ -273,7 +273,7 @@ _GPU_PILE = textwrap.dedent("""
     import sys
     import numpy as np
     import ti_golf as tg
-    from ti_golf.bench.benchmarks import pile_scene
+    from ti_golf.bench.collide import pile_scene
     from ti_golf.sim.solver import CollisionSolver
 
     info = tg.init()
@@ -357,7 +357,7 @@ _BOUNDS_CHECKED = textwrap.dedent("""
     import ti_golf as tg
 
     tg.init(debug=True)  # before importing the kernels' modules, which initialise with the defaults
-    from ti_golf.bench.benchmarks import pile_scene
+    from ti_golf.bench.collide import pile_scene
     from ti_golf.sim.solver import CollisionSolver
 
     scene, x = pile_scene(300)
@@ -659,7 +659,7 @@ def test_the_benchs_one_pass_floor_gives_the_two_balls_of_a_pair_opposite_impuls
     # the pair impulse (B.5-B.18), which gives them opposite impulses (sum of m dv = 0 to
     # round-off), with friction spinning them (B.15). A lattice pressed 2.5 % closer than touching,
     # mixed radii and masses, random velocities and spins, restitution and friction.
-    from ti_golf.bench.benchmarks import one_pass_contacts
+    from ti_golf.bench.collide import one_pass_contacts
 
     rng = np.random.default_rng(5)
     grid = np.stack(np.meshgrid(*[np.arange(7)] * 3, indexing="ij"), -1).reshape(-1, 3)

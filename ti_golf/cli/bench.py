@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 
-from ti_golf.bench.benchmarks import bench_collide, bench_render, bench_sweep, to_json
+from ti_golf.bench.collide import bench_collide
+from ti_golf.bench.common import to_json
+from ti_golf.bench.render import bench_render
+from ti_golf.bench.sweep import bench_sweep
 from ti_golf.cli._common import Parser, runtime_options
 from ti_golf.errors import ConfigError
 

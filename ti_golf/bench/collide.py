@@ -1,150 +1,30 @@
-"""Throughput benchmarks with baselines measured in the same run (a ratio survives a noisy machine)."""
+"""``ti-golf bench collide``: the collision step on a pile of N balls, with same-run yardsticks."""
 
 from __future__ import annotations
 
 import gc
-import json
-import os
-import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
 import taichi as ti
 
-from ti_golf.bench.reference import carry_numpy, carry_scipy
+from ti_golf.bench.common import _best_time, _peak_rss_bytes, _restart_peak_rss, _rss_bytes
 from ti_golf.physics import baseline
 from ti_golf.physics.types import vec3
-from ti_golf.render import render
 from ti_golf.runtime import ensure_init, release_freed_memory
 from ti_golf.scene.schema import (
     AT_REST,
     Air,
-    Ball,
     Contact,
-    Launch,
     Plane,
     Scene,
-    SweepDefaults,
     TerrainConfig,
     World,
 )
 from ti_golf.sim.simulation import Simulation
 from ti_golf.sim.solver import CollisionSolver, steps_serially
-from ti_golf.sim.sweep import fly
-
-
-def bench_scene(dt: float = 0.1) -> Scene:
-    """The full model: turbulent drag, Magnus (lab coefficients), spin decay and a quartering wind."""
-    return Scene(
-        name="bench_sweep",
-        description="benchmark: turbulent drag + Magnus + spin decay + wind",
-        air=Air(rho=1.3, gamma=2, C_D=0.3, C_M=0.025, omega_M=1.0, C_omega=1.0, wind=(-3.0, 0.0, 1.5)),
-        ball=Ball(mass=0.045, radius=0.02),
-        launch=Launch(speed=70.0, angle_deg=15.0, spin=(0.0, 0.0, 10.0)),
-        world=World(dt=dt, integrator="rk4", t_max=60.0),
-        sweep=SweepDefaults(),
-    )
-
-
-def bench_conditions(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``n`` seeded random launches: angle 5–45°, speed 40–80 m/s, backspin 0–15 rad/s, azimuth ±10°."""
-    rng = np.random.default_rng(seed)
-    th = np.radians(rng.uniform(5.0, 45.0, n))
-    ph = np.radians(rng.uniform(-10.0, 10.0, n))
-    speed = rng.uniform(40.0, 80.0, n)
-    spin = rng.uniform(0.0, 15.0, n)
-    x0 = np.tile([0.0, 0.02, 0.0], (n, 1))
-    v0 = np.stack([speed * np.cos(th) * np.cos(ph), speed * np.sin(th), speed * np.cos(th) * np.sin(ph)], axis=1)
-    w0 = spin[:, None] * np.stack([-np.sin(ph), np.zeros(n), np.cos(ph)], axis=1)
-    return x0, v0, w0
-
-
-def _best_time(fn: Callable[[], Any], repeats: int) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
-
-
-def bench_sweep(
-    n: int = 100_000,
-    dt: float = 0.1,
-    repeats: int = 3,
-    n_reference: int = 64,
-    n_numpy: int | None = None,
-    n_scipy: int = 100,
-    log: Callable[[str], None] = print,
-) -> dict[str, Any]:
-    """Time a data-parallel sweep of ``n`` launches and compare with numpy and scipy baselines.
-
-    Returns the JSON-able result (``trajectories_per_s``, ``max_rel_carry_error``, ``baselines``, ...).
-    """
-    info = ensure_init()
-    scene = bench_scene(dt)
-    x0, v0, w0 = bench_conditions(n)
-    fly(scene, x0[:16], v0[:16], w0[:16])  # compile outside the timing
-    raw: dict[str, np.ndarray] = {}
-
-    def run() -> None:
-        raw.update(fly(scene, x0, v0, w0))
-
-    seconds = _best_time(run, repeats)
-    landed = raw["landed"] == 1
-    d = raw["land_x"] - x0
-    carry = np.where(landed, np.hypot(d[:, 0], d[:, 2]), np.nan)
-    log(
-        f"ti_golf sweep: {n} trajectories in {seconds:.3f} s ({n / seconds:,.0f}/s, best of {repeats}), "
-        f"arch={info.arch}, {info.precision}, RK4 h={dt} s"
-    )
-
-    rng = np.random.default_rng(1)
-    pick = rng.choice(n, size=min(n_reference, n), replace=False)
-    ref = carry_scipy(replace(scene, world=replace(scene.world, t_max=60.0)), x0[pick], v0[pick], w0[pick])
-    rel = np.abs(carry[pick] - ref) / np.abs(ref)
-    max_rel = float(np.nanmax(rel)) if np.all(np.isfinite(rel)) else float("inf")
-    log(f"max relative carry error vs scipy DOP853 (rtol 1e-12) on {pick.size} trajectories: {max_rel:.2e}")
-
-    k_np = n if n_numpy is None else min(n_numpy, n)
-    t_np = _best_time(lambda: carry_numpy(scene, x0[:k_np], v0[:k_np], w0[:k_np], dt), 1)
-    k_sp = min(n_scipy, n)
-    t_sp = _best_time(lambda: carry_scipy(scene, x0[:k_sp], v0[:k_sp], w0[:k_sp], rtol=1e-9, atol=1e-9), 1)
-    baselines = {"numpy_rk4_vectorised": k_np / t_np, "scipy_solve_ivp_dop853": k_sp / t_sp}
-    tps = n / seconds
-    for name, rate in baselines.items():
-        log(f"baseline {name}: {rate:,.0f} trajectories/s -> ti_golf is {tps / rate:,.1f}x faster")
-    return {
-        "benchmark": "sweep",
-        "n": n,
-        "dt_s": dt,
-        "integrator": "rk4",
-        "arch": info.arch,
-        "precision": info.precision,
-        "seconds": seconds,
-        "trajectories_per_s": tps,
-        "max_rel_carry_error": max_rel,
-        "landed_fraction": float(np.mean(landed)),
-        "baselines": baselines,
-        "speedup": {name: tps / rate for name, rate in baselines.items()},
-        "baseline_sizes": {"numpy_rk4_vectorised": k_np, "scipy_solve_ivp_dop853": k_sp},
-    }
-
-
-def to_json(result: dict[str, Any]) -> str:
-    """One line of JSON (floats rounded to 6 significant digits)."""
-
-    def clean(o: Any) -> Any:
-        if isinstance(o, float):
-            return float(f"{o:.6g}")
-        if isinstance(o, dict):
-            return {k: clean(v) for k, v in o.items()}
-        return o
-
-    return json.dumps(clean(result))
 
 
 def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scene, np.ndarray]:
@@ -455,84 +335,3 @@ def one_pass_contact_rate(sim: Any, repeats: int = 5) -> float:
     run = one_pass_contacts(sim)[0]
     run()  # compile
     return sim.n / _best_time(run, repeats)
-
-
-def _rss_bytes() -> int:
-    """Current resident set size [bytes] (Linux /proc; peak RSS elsewhere)."""
-    try:
-        with open("/proc/self/statm") as fh:
-            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
-    except OSError:  # pragma: no cover
-        return _peak_rss_bytes()
-
-
-def _restart_peak_rss() -> bool:
-    """Restart the OS's count of this process's peak resident set size from the current one
-    (Linux ≥ 4.0: ``/proc/self/clear_refs``); whether it could. Elsewhere the peak stays the
-    process's lifetime peak."""
-    try:
-        with open("/proc/self/clear_refs", "w") as fh:
-            fh.write("5")
-        return True
-    except OSError:  # pragma: no cover
-        return False
-
-
-def _peak_rss_bytes() -> int:
-    """Peak resident set size [bytes] of this process since its start or the last
-    :func:`_restart_peak_rss` (Linux: ``VmHWM``; ``ru_maxrss`` elsewhere, which also keeps the
-    peaks of threads that have exited)."""
-    try:
-        with open("/proc/self/status") as fh:
-            for line in fh:
-                if line.startswith("VmHWM:"):
-                    return int(line.split()[1]) * 1024  # kB
-    except OSError:  # pragma: no cover
-        pass
-    import resource  # pragma: no cover  (POSIX only; reached where /proc is missing)
-
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # pragma: no cover
-
-
-def bench_render(
-    n: int = 100_000, size: tuple[int, int] = (1280, 720), frames: int = 3, log: Callable[[str], None] = print
-) -> dict[str, Any]:
-    """Seconds per off-screen frame of n balls over a generated terrain (GGUI), with the matplotlib
-    fallback timed in the same run as the baseline."""
-    info = ensure_init()
-    side = int(np.ceil(np.sqrt(n / 10.0)))
-    scene = Scene(
-        name="bench_render",
-        description=f"benchmark: {n} balls over a terrain",
-        launch=None,
-        world=World(dt=0.001, integrator="semi_implicit", ground=False),
-        terrain=TerrainConfig(
-            kind="generated",
-            origin=(-1.0, 0.0, -1.0),
-            size=(2.0 + 0.05 * side, 2.0 + 0.05 * side),
-            resolution=(129, 129),
-            amplitude=0.3,
-            seed=3,
-        ),
-    )
-    idx = np.arange(n)
-    x = np.stack([0.05 * (idx % side), 0.6 + 0.05 * (idx // (side * side)), 0.05 * ((idx // side) % side)], axis=1)
-    sim = Simulation(scene, x=x)
-    out: dict[str, Any] = {"benchmark": "render", "n": n, "size": list(size), "arch": info.arch}
-    with tempfile.TemporaryDirectory() as tmp:
-        path = os.path.join(tmp, "frame.png")
-        for backend, key in (("auto", "seconds_per_frame"), ("matplotlib", "matplotlib")):
-            used = render(sim, path, camera="iso", size=size, backend=backend)  # first frame: window, compile
-            t0 = time.perf_counter()
-            for _ in range(frames if key == "seconds_per_frame" else 1):
-                render(sim, path, camera="iso", size=size, backend=backend)
-            per_frame = (time.perf_counter() - t0) / (frames if key == "seconds_per_frame" else 1)
-            if key == "seconds_per_frame":
-                out["seconds_per_frame"], out["renderer"] = per_frame, used
-            else:
-                out["baselines"] = {"matplotlib_seconds_per_frame": per_frame}
-    log(
-        f"ti_golf render: {n} balls + terrain at {size[0]}x{size[1]}: {out['seconds_per_frame']:.3f} s/frame "
-        f"({out['renderer']}); matplotlib {out['baselines']['matplotlib_seconds_per_frame']:.3f} s/frame"
-    )
-    return out
