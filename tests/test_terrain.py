@@ -440,6 +440,31 @@ def test_terrain_from_npy_file(tmp_path, monkeypatch):
     np.testing.assert_array_equal(build_terrain(sc2.terrain).heights, heights)
 
 
+def test_a_terrain_key_is_read_or_refused(tmp_path):
+    # a key never silently does nothing: a heights file with no kind makes a file terrain (it
+    # used to be ignored for a generated one), and keys the kind does not read are refused,
+    # naming the file and the key
+    heights = np.add.outer(np.arange(4) * 0.5, np.arange(3) * 0.1)
+    np.save(tmp_path / "h.npy", heights)
+    path = tmp_path / "s.toml"
+    _write_scene(path, 'file = "h.npy"\nsize = [6.0, 4.0]')
+    sc = tg.load_scene(path)
+    assert sc.terrain.kind == "file"
+    np.testing.assert_array_equal(build_terrain(sc.terrain).heights, heights)
+    for terrain, key, kind in (
+        ('kind = "generated"\nfile = "h.npy"', "terrain.file", '"file"'),
+        ('kind = "file"\nfile = "h.npy"\nseed = 3', "terrain.seed", '"generated"'),
+        ('file = "h.npy"\nresolution = [9, 9]', "terrain.resolution", '"generated"'),
+    ):
+        _write_scene(path, terrain)
+        with pytest.raises(tg.ConfigError) as err:
+            tg.load_scene(path)
+        assert str(path) in str(err.value) and key in str(err.value), err.value
+        assert f"only read when terrain.kind = {kind}" in str(err.value)
+    with pytest.raises(tg.ConfigError, match="terrain.file"):  # --set too
+        tg.load_scene("terrain_3d", ["terrain.file=h.npy"])
+
+
 def test_save_writes_the_terrain(tmp_path):
     sim = tg.Simulation.from_scene("friction_incline")
     sim.run(steps=10)

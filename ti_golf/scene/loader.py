@@ -342,9 +342,30 @@ def _block(values: dict[str, Any], source: str, i: int) -> Block:
     return block
 
 
+GENERATED_ONLY = ("resolution", "seed", "amplitude", "roughness", "profile")
+"""Keys of ``[terrain]`` that only a generated terrain reads."""
+
+
 def _terrain(values: dict[str, Any], sources: dict[str, str], source: str) -> TerrainConfig:
     """The ``[terrain]`` table: resolve and check the heights file (shape, finite values) now, so a
     bad terrain is reported when the scene loads."""
+    if "file" in values and "kind" not in values:
+        values["kind"] = "file"  # a heights file names the kind of terrain it is
+    kind = values.get("kind", TerrainConfig.kind)
+    if kind == "generated" and "file" in values:
+        raise_config(
+            sources.get("file", source),
+            "terrain.file",
+            'is only read when terrain.kind = "file" (leave kind out, or set it to "file")',
+        )
+    if kind == "file":
+        for name in GENERATED_ONLY:
+            if name in values:
+                raise_config(
+                    sources.get(name, source),
+                    f"terrain.{name}",
+                    'is only read when terrain.kind = "generated" (a heights file has its own grid)',
+                )
     if "resolution" in values:
         values["resolution"] = tuple(int(c) for c in values["resolution"])
     cfg = TerrainConfig(**values)
