@@ -6,7 +6,9 @@ once in a module-scoped fixture and several tests read its output.
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import io
 import json
 import math
 import re
@@ -26,6 +28,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 import ti_golf
 from ti_golf.bench.collide import pile_scene
+from ti_golf.cli import main
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
 from ti_golf.sim.solver import SERIAL_MAX_BALLS
@@ -116,6 +119,30 @@ def test_help_and_unknown_subcommand():
     assert proc.returncode == 2
     assert "frobnicate" in proc.stderr and "invalid choice" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("size", ["0x0", "16x9000", "wide"])
+def test_a_bad_picture_size_is_a_usage_error(size, tmp_path):
+    # before any simulation, in argparse (no process starts Taichi): one usage line, exit code 2
+    for command in (
+        ["run", "break_shot", "--steps", "2", "--frames-every", "1", "--frames", str(tmp_path), "--size", size],
+        ["render", "break_shot", "--out", str(tmp_path / "p.png"), "--size", size],
+    ):
+        proc = cli_main_process(command)
+        assert proc.returncode == 2, proc.stderr
+        assert "--size" in proc.stderr and "Traceback" not in proc.stderr
+        assert proc.stderr.strip().splitlines()[-1].startswith("ti-golf: error: argument --size:")
+
+
+def cli_main_process(args):
+    """``ti_golf.cli.main(args)`` as a process would see it: exit code and standard error."""
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        try:
+            code = main(args)
+        except SystemExit as exc:
+            code = exc.code
+    return subprocess.CompletedProcess(args, code, "", err.getvalue())
 
 
 # ----------------------------------------------------------------------------------------------

@@ -63,12 +63,20 @@ def check_writable(path: str | None, option: str) -> None:
         raise ConfigError(option, None, f"cannot write {path!r}: folder is not writable")
 
 
+SIZE_RANGE = (16, 8192)
+"""Least and greatest width and height of a picture [pixels]."""
+
+
 def parse_size(text: str) -> tuple[int, int]:
-    """``WIDTHxHEIGHT`` [pixels] -> (width, height); argparse turns the error into a usage line."""
+    """``WIDTHxHEIGHT`` [pixels] -> (width, height), each in :data:`SIZE_RANGE`; argparse turns the
+    error into a usage line (exit code 2)."""
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, e.g. 1280x720 (got {text!r})") from None
+    lo, hi = SIZE_RANGE
+    if not (lo <= w <= hi and lo <= h <= hi):
+        raise argparse.ArgumentTypeError(f"must be between {lo}x{lo} and {hi}x{hi} (got {w}x{h})")
     return w, h
 
 

@@ -55,8 +55,6 @@ def cmd_render(args: argparse.Namespace) -> int:
     if args.steps is not None and args.steps < 0:
         raise ConfigError("--steps", None, f"must be >= 0 (got {args.steps})")
     w, h = args.size
-    if not (16 <= w <= 8192 and 16 <= h <= 8192):
-        raise ConfigError("--size", None, f"must be between 16x16 and 8192x8192 (got {w}x{h})")
     if not 1.0 <= args.fov <= 170.0:
         raise ConfigError("--fov", None, f"must be in [1, 170] degrees (got {args.fov})")
     sim = Simulation.from_scene(args.scene, args.overrides)

@@ -39,7 +39,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--frames", metavar="DIR", help="write the frames as DIR/frame_00000.png, …")
     r.add_argument("--gif", help="write the frames as an animated GIF (Pillow)")
     r.add_argument("--camera", choices=("side", "top", "iso", "follow"), default="iso", help="camera of the frames")
-    r.add_argument("--size", default="640x360", metavar="WxH", help="frame size (default 640x360)")
+    r.add_argument("--size", type=parse_size, default=(640, 360), metavar="WxH", help="frame size (default 640x360)")
     runtime_options(r)
 
 
@@ -133,7 +133,7 @@ class _Frames:
         check_writable(args.gif, "--gif")
         duration = args.t if args.t is not None else (args.steps or 0) * sim.dt or sim.scene.world.t_end
         self.every = args.frames_every or max(1, int(round(duration / sim.dt / 100)))  # ~100 frames
-        self.size = parse_size(args.size)
+        self.size = args.size
         self.camera = args.camera
         self.gif = args.gif
         self.fps = max(1.0, min(50.0, 1.0 / (self.every * sim.dt)))
