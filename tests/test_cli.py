@@ -381,6 +381,30 @@ def test_bench_sweep_json():
         assert isinstance(rate, (int, float)) and not isinstance(rate, bool) and rate > 0, name
 
 
+def test_bench_pit_pours_the_scene_and_reports_the_piles_quality():
+    # the bundled pour scaled down (the bin narrowed so the pile is as deep), in this process
+    from ti_golf.bench.pit import PIT_BALLS, bench_pit, pit_scene
+
+    full, side = pit_scene()
+    assert full.blocks[0].number == PIT_BALLS and side == pytest.approx(2.0)
+    small, small_side = pit_scene(1000)
+    assert small_side == pytest.approx(2.0 * (1000 / PIT_BALLS) ** 0.5)
+    lo, hi = small.blocks[0].box_min, small.blocks[0].box_max
+    assert 0 < lo[0] < hi[0] < small_side and lo[1] == full.blocks[0].box_min[1]  # as high, narrower
+    lines = []
+    result = bench_pit(n=1000, t=0.05, log=lines.append)
+    assert result["n"] == 1000 and result["steps"] == 50 and result["t_s"] == pytest.approx(0.05)
+    for key in ("wall_s", "compile_s", "sim_s_per_wall_s", "ball_steps_per_s", "peak_rss_bytes"):
+        assert result[key] > 0, key
+    assert result["outside_bin"] == 0
+    # still falling at 0.05 s: dropped at 1 ± 0.3 m/s per component, plus g·t
+    assert 1.0 < result["p99_speed_mps"] < 1.0 + 0.3 * 3**0.5 + 9.81 * 0.05 + 1e-9
+    assert 0.0 <= result["asleep_fraction"] <= 1.0 and 0.0 <= result["deepest_overlap"] < 1.0
+    assert result["baselines"]["bare_gather_balls_per_s"] > 0
+    assert any("deepest overlap" in line for line in lines)
+    json.loads(json.dumps(result))
+
+
 _BENCH_COLLIDE = {"awake": (512, ()), "asleep-8-sweeps": (512, ("--asleep", "--iterations", "8")), "serial": (64, ())}
 for _name, (_n, _flags) in _BENCH_COLLIDE.items():
     background.declare(

@@ -6,6 +6,7 @@ import argparse
 
 from ti_golf.bench.collide import bench_collide
 from ti_golf.bench.common import to_json
+from ti_golf.bench.pit import PIT_BALLS, bench_pit
 from ti_golf.bench.render import bench_render
 from ti_golf.bench.sweep import bench_sweep
 from ti_golf.cli._common import Parser, runtime_options
@@ -58,6 +59,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     bc.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(bc)
+    bp = bsub.add_parser("pit", help="the ball pit poured to rest: wall time, compile time and the pile's quality")
+    bp.add_argument(
+        "--n", type=int, default=PIT_BALLS, help=f"balls (default {PIT_BALLS}, the scene's; the bin scales)"
+    )
+    bp.add_argument("--t", type=float, default=4.0, help="simulated time [s] (default 4)")
+    bp.add_argument("--json", action="store_true", help="end with one line of JSON")
+    runtime_options(bp)
     br = bsub.add_parser("render", help="seconds per off-screen frame of N balls over a terrain")
     br.add_argument("--n", type=int, default=100_000, help="balls (default 100000)")
     br.add_argument("--frames", type=int, default=3, help="timed frames (default 3)")
@@ -70,6 +78,12 @@ def cmd_bench(args: argparse.Namespace) -> int:
         raise ConfigError("--n", None, f"must be > 0 (got {args.n})")
     if args.bench == "render":
         result = bench_render(n=args.n, frames=max(1, args.frames))
+    elif args.bench == "pit":
+        if not 0.0 < args.t <= 60.0:  # (also false for NaN)
+            raise ConfigError("--t", None, f"must be in (0, 60] s (got {args.t})")
+        if args.n < 16:
+            raise ConfigError("--n", None, f"must be >= 16 balls (got {args.n})")
+        result = bench_pit(n=args.n, t=args.t)
     elif args.bench == "collide":
         if args.n < 2 or args.steps <= 0:
             raise ConfigError("--n" if args.n < 2 else "--steps", None, "must be >= 2 balls and > 0 steps")

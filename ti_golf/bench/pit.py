@@ -1,0 +1,136 @@
+"""``ti-golf bench pit``: the bundled ball pit poured to rest, timed, with the pile's quality figures.
+
+The pour of ``scenes/ball_pit.toml`` (N balls dropped into a square bin), scaled to ``n`` balls by
+widening the bin so the pile stays as deep, is run to ``t`` simulated seconds. The benchmark
+reports the wall time after compilation and the compile time on its own (a warm-up pour of a few
+balls compiles the same kernels first), simulated seconds per wall second, ball-steps per second,
+the peak memory above the runtime's baseline, and the quality of the pile at the end: its deepest
+overlap, its 99th-percentile speed, the balls outside the bin and the share asleep. A bare gather
+over the final pile is timed in the same run as the yardstick (``step_cost_in_bare_gathers``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from ti_golf.bench.collide import bare_gather_rate
+from ti_golf.bench.common import _peak_rss_bytes, _restart_peak_rss, _rss_bytes
+from ti_golf.runtime import ensure_init, release_freed_memory
+from ti_golf.scene.loader import load_scene
+from ti_golf.scene.schema import AT_REST, Plane, Scene
+from ti_golf.sim.simulation import Simulation
+
+PIT_SCENE = "ball_pit"
+"""The bundled scene the benchmark pours."""
+
+PIT_BALLS = 100_000
+"""Balls of the bundled pour (``[[blocks]].number`` of the scene)."""
+
+WARM_UP_BALLS = 8192
+"""Balls of the warm-up pour that compiles the kernels: enough for the parallel step stored in
+the grid's order, as the full pour is."""
+
+
+def pit_scene(n: int | None = None) -> tuple[Scene, float]:
+    """The bundled ball pit with ``n`` balls (default: the scene's), its bin widened or narrowed
+    so that the pile is as deep; returns the scene and the bin's side [m]."""
+    scene = load_scene(PIT_SCENE)
+    block = scene.blocks[0]
+    side = max(p.point[0] for p in scene.planes)  # the wall at x = side
+    if n is None or n == block.number:
+        return scene, side
+    scale = math.sqrt(n / block.number)
+    new_side = side * scale
+
+    def widen(v: tuple[float, float, float]) -> tuple[float, float, float]:
+        return (v[0] * scale, v[1], v[2] * scale)
+
+    planes = tuple(Plane(point=widen(p.point), normal=p.normal) for p in scene.planes)
+    block = dataclasses.replace(block, number=n, box_min=widen(block.box_min), box_max=widen(block.box_max))
+    desc = f"{scene.description} (scaled to {n:,} balls in a {new_side:.2f} m bin)"
+    return dataclasses.replace(scene, planes=planes, blocks=(block,), description=desc), new_side
+
+
+def pile_quality(sim: Simulation, side: float) -> dict[str, Any]:
+    """The pile's figures at the end of a pour into a bin of ``side`` [m]: the deepest overlap (a
+    share of a radius), the 99th-percentile and greatest speed [m/s], the balls outside the bin,
+    the share of balls asleep, and the kinetic energy [J]."""
+    x, v = sim.x, sim.v
+    speed = np.linalg.norm(v, axis=1)
+    r = np.asarray(sim.model.radius_np)
+    outside = (x[:, 0] < -r) | (x[:, 0] > side + r) | (x[:, 2] < -r) | (x[:, 2] > side + r) | (x[:, 1] < -r)
+    deepest = sim.deepest_overlap()
+    mass = np.asarray(sim.model.mass_np)
+    return {
+        "deepest_overlap": 0.0 if deepest is None else float(deepest.fraction),
+        "p99_speed_mps": float(np.percentile(speed, 99)),
+        "max_speed_mps": float(speed.max()),
+        "outside_bin": int(outside.sum()),
+        "asleep_fraction": float(np.mean(sim.status == AT_REST)),
+        "kinetic_energy_J": float(0.5 * np.sum(mass * speed**2)),
+    }
+
+
+def bench_pit(n: int | None = None, t: float = 4.0, log: Callable[[str], None] = print) -> dict[str, Any]:
+    """Pour the ball pit (``n`` balls, default the scene's 100,000) for ``t`` simulated seconds
+    and measure it (see the module's docstring); returns the figures as a dict."""
+    info = ensure_init()
+    scene, side = pit_scene(n)
+    n_balls = scene.blocks[0].number
+    t0 = time.perf_counter()
+    warm_scene, _ = pit_scene(WARM_UP_BALLS)
+    warm = Simulation(warm_scene)
+    warm.run(steps=3)
+    compile_s = time.perf_counter() - t0
+    del warm
+    release_freed_memory()
+    _restart_peak_rss()
+    base_rss = _rss_bytes()
+    log(f"{scene.name}: {n_balls:,} balls into a {side:.2f} m bin, {t:g} s at dt = {scene.world.dt:g} s ...")
+    t1 = time.perf_counter()
+    sim = Simulation(scene)
+    setup_s = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    sim.run(t=t)
+    wall_s = time.perf_counter() - t2
+    peak = _peak_rss_bytes()
+    steps = round(sim.t / sim.dt)
+    quality = pile_quality(sim, side)
+    gather_rate = bare_gather_rate(sim.x)
+    ball_steps_per_s = n_balls * steps / wall_s
+    result: dict[str, Any] = {
+        "benchmark": "pit",
+        "n": n_balls,
+        "t_s": sim.t,
+        "dt_s": sim.dt,
+        "steps": steps,
+        "arch": info.arch,
+        "precision": info.precision,
+        "wall_s": wall_s,
+        "setup_s": setup_s,
+        "compile_s": compile_s,
+        "sim_s_per_wall_s": sim.t / wall_s,
+        "ball_steps_per_s": ball_steps_per_s,
+        "peak_rss_bytes": peak,
+        "bytes_per_ball_above_baseline": max(peak - base_rss, 0) / n_balls,
+        **quality,
+        "baselines": {"bare_gather_balls_per_s": gather_rate},
+        "step_cost_in_bare_gathers": gather_rate / ball_steps_per_s,
+    }
+    log(
+        f"{wall_s:.1f} s after {compile_s:.1f} s of compiling ({result['sim_s_per_wall_s']:.3g} simulated s per "
+        f"wall s, {ball_steps_per_s:.3g} ball-steps/s, {result['bytes_per_ball_above_baseline']:.0f} bytes/ball)"
+    )
+    log(
+        f"pile at t = {sim.t:.3g} s: deepest overlap {100 * quality['deepest_overlap']:.3g} % of a radius, "
+        f"p99 speed {1e3 * quality['p99_speed_mps']:.3g} mm/s, {quality['outside_bin']} outside the bin, "
+        f"{100 * quality['asleep_fraction']:.3g} % asleep"
+    )
+    log(f"baseline bare_gather: {gather_rate:.3g} balls/s -> a step costs {result['step_cost_in_bare_gathers']:.1f}")
+    return result
