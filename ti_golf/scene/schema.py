@@ -271,7 +271,7 @@ class TerrainConfig:
 
 @dataclass(frozen=True)
 class HoleConfig:
-    """The ``[hole]`` table: a cup at ``position`` [x, z] [m] on the course, and its flagstick."""
+    """The ``[hole]`` table: a cup at ``position`` (x, z, in metres) on the course, and its flagstick."""
 
     position: tuple[float, float] = key(
         "vec2",
