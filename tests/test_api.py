@@ -159,3 +159,32 @@ def test_init_refuses_to_change_a_started_runtime():
         tg.init(debug=True)
     with pytest.raises(RuntimeError, match="start a new process"):
         tg.init(precision="f32" if info.precision == "f64" else "f64")
+
+
+def test_outputs_are_written_whole_or_not_at_all(tmp_path, monkeypatch):
+    # a run's NPZ and a sweep's CSV go to a temporary file renamed into place: a failure while
+    # writing leaves the previous file as it was and no partial or temporary file behind
+    sim = tg.Simulation.from_scene("lab_vacuum")
+    sim.run(steps=10)
+    sim.save(tmp_path / "run")  # .npz is added, as np.savez names its files
+    with np.load(tmp_path / "run.npz") as d:
+        np.testing.assert_array_equal(d["x"], sim.x)
+    sim.run(steps=10)
+
+    def broken(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(np, "savez", broken)
+    with pytest.raises(OSError, match="disk full"):
+        sim.save(tmp_path / "run.npz")
+    monkeypatch.undo()
+    with np.load(tmp_path / "run.npz") as d:
+        assert d["t"] == pytest.approx(10 * sim.dt)  # the first save, intact
+    res = tg.sweep("lab_vacuum", angles_deg=[30.0, 45.0])
+    res.to_csv(tmp_path / "s.csv")
+    text = (tmp_path / "s.csv").read_text()
+    monkeypatch.setattr("ti_golf.sim.sweep.csv.writer", broken)
+    with pytest.raises(OSError):
+        res.to_csv(tmp_path / "s.csv")
+    assert (tmp_path / "s.csv").read_text() == text
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.npz", "s.csv"]

@@ -18,6 +18,7 @@ from pathlib import Path
 
 from ti_golf.cli._common import check_writable, runtime_options, scene_options
 from ti_golf.errors import ConfigError
+from ti_golf.files import atomic_path
 from ti_golf.game.rules import (
     SHOT_FIELDS,
     GolfGame,
@@ -225,8 +226,8 @@ CSV_COLUMNS = (
 
 
 def write_csv(strokes: list[Stroke], path: str) -> None:
-    """The round as CSV, one row per stroke (:data:`CSV_COLUMNS`)."""
-    with open(path, "w", newline="") as f:
+    """The round as CSV, one row per stroke (:data:`CSV_COLUMNS`), written whole or not at all."""
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         out = csv.writer(f)
         out.writerow(CSV_COLUMNS)
         for s in strokes:

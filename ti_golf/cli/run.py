@@ -18,6 +18,7 @@ from ti_golf.cli._common import (
     scene_options,
 )
 from ti_golf.errors import ConfigError
+from ti_golf.files import atomic_path
 from ti_golf.render import render
 from ti_golf.render.plots import plot_run
 from ti_golf.scene.schema import STATUS_NAMES
@@ -154,7 +155,10 @@ class _Frames:
     def close(self) -> None:
         if self.gif and self.paths:
             images = [Image.open(p).convert("P", palette=Image.Palette.ADAPTIVE) for p in self.paths]
-            images[0].save(self.gif, save_all=True, append_images=images[1:], duration=int(1000 / self.fps), loop=0)
+            with atomic_path(self.gif) as tmp:
+                images[0].save(
+                    tmp, format="GIF", save_all=True, append_images=images[1:], duration=int(1000 / self.fps), loop=0
+                )
             print(f"wrote {self.gif} ({len(images)} frames)")
         if self._tmp is None and self.paths:
             print(f"wrote {len(self.paths)} frames to {self.folder}")

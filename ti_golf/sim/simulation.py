@@ -10,12 +10,14 @@ import math
 import os
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import taichi as ti
 
 from ti_golf.errors import SimulationError
+from ti_golf.files import atomic_path
 from ti_golf.physics import kernels
 from ti_golf.physics.types import StepParams
 from ti_golf.runtime import ensure_init, np_float
@@ -310,7 +312,8 @@ class Simulation:
     def save(self, path: str | os.PathLike[str], recording: Recording | None = None) -> None:
         """Write an ``.npz`` with ``x``, ``v``, ``w`` (N, 3), ``t``, ``status``, ``radius``, ``mass``,
         with a terrain ``terrain_heights`` (nx, nz), ``terrain_origin`` (3,) and ``terrain_spacing``
-        (dx, dz), and, if given, the recording."""
+        (dx, dz), and, if given, the recording; ``.npz`` is added to a path without it. The file is
+        written whole or not at all (a temporary file renamed into place)."""
         data: dict[str, Any] = {
             "x": self.x,
             "v": self.v,
@@ -328,7 +331,11 @@ class Simulation:
             )
         if recording is not None and recording.t:
             data.update(recording.arrays())
-        np.savez(path, **data)
+        target = Path(path)
+        if target.suffix != ".npz":
+            target = target.with_name(target.name + ".npz")  # as np.savez names it
+        with atomic_path(target) as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, **data)
 
 
 def _as_vectors(a: Any, name: str, n: int | None = None) -> np.ndarray:

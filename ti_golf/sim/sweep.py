@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from ti_golf.errors import ConfigError, SimulationError
+from ti_golf.files import atomic_path
 from ti_golf.physics import kernels
 from ti_golf.physics.aero import air_params
 from ti_golf.physics.integrate import INTEGRATOR_CODES
@@ -78,9 +79,10 @@ class SweepResult:
         )
 
     def to_csv(self, path: str | os.PathLike[str]) -> None:
-        """Write one row per launch condition with the :data:`CSV_COLUMNS` header."""
+        """Write one row per launch condition with the :data:`CSV_COLUMNS` header (whole or not at
+        all)."""
         cols = self.columns()
-        with open(path, "w", newline="") as fh:
+        with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
             out = csv.writer(fh)
             out.writerow(CSV_COLUMNS)
             for row in zip(*cols.values()):
