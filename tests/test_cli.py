@@ -12,6 +12,7 @@ import io
 import json
 import math
 import re
+import signal
 import subprocess
 import textwrap
 from pathlib import Path
@@ -19,7 +20,7 @@ from pathlib import Path
 import background
 import numpy as np
 import pytest
-from conftest import SCENES, cli, run_cli
+from conftest import ROOT, SCENES, cli, run_cli
 
 try:  # Python >= 3.11
     import tomllib
@@ -537,3 +538,29 @@ def test_the_first_run_on_a_machine_is_announced(tmp_path):
     warm = run_cli("run", "no_such_scene", env=env)
     assert warm.returncode == 2 and "no_such_scene" in warm.stderr
     assert "first run" not in warm.stderr
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_an_interrupted_run_keeps_what_it_computed(sig, tmp_path):
+    # a real process, stopped mid-run: it saves the state it reached, marked partial, says so in
+    # one line and exits with code 130
+    out = tmp_path / "run.npz"
+    proc = subprocess.Popen(
+        cli("run", "terrain_3d", "--t", "100", "--out", str(out)), stderr=subprocess.PIPE, text=True, cwd=ROOT
+    )
+    try:
+        for line in proc.stderr:  # the first progress line comes a few seconds into the run
+            if line.startswith("progress:"):
+                break
+        proc.send_signal(sig)
+        rest = proc.stderr.read()
+        code = proc.wait(timeout=120)
+    finally:
+        proc.kill()
+    assert code == 130, rest
+    last = rest.strip().splitlines()[-1]
+    assert last.startswith("ti-golf: interrupted at t = ") and "marked partial" in last, rest
+    assert "Traceback" not in rest
+    with np.load(out) as d:
+        assert bool(d["partial"]) and 0.0 < float(d["t"]) < 100.0
+        assert d["x"].shape == (400, 3) and np.isfinite(d["x"]).all()

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
+import threading
 from collections.abc import Callable, Sequence
 
 import ti_golf
@@ -55,9 +57,17 @@ def run_cli() -> None:
     runtime.exit_process(code)
 
 
+def _interrupt(signum: int, frame: object) -> None:
+    """SIGTERM handler: stop as Ctrl-C does (``KeyboardInterrupt``), so outputs are kept."""
+    raise KeyboardInterrupt
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``ti-golf`` and ``python -m ti_golf``; returns the exit code."""
     args = build_parser().parse_args(argv)
+    on_main_thread = threading.current_thread() is threading.main_thread()
+    if on_main_thread:  # a kill stops as Ctrl-C does, keeping what was done (signals reach the main thread only)
+        previous = signal.signal(signal.SIGTERM, _interrupt)
     runtime.announce_first_compile = True
     try:
         if args.command not in NO_RUNTIME:  # before any output: a first run's notice comes first
@@ -72,6 +82,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except TiGolfError as exc:  # pragma: no cover - future error kinds
         print(f"ti-golf: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:  # pragma: no cover
-        print("ti-golf: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:
+        print(f"ti-golf: interrupted{f' {exc}' if exc.args else ''}", file=sys.stderr)
         return 130
+    finally:
+        if on_main_thread:
+            signal.signal(signal.SIGTERM, previous)

@@ -62,6 +62,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     progress = Progress()
     t0 = time.perf_counter()
     rec = None
+    partial = False
     try:
         if frames is not None:
             frames(sim)
@@ -74,12 +75,16 @@ def cmd_run(args: argparse.Namespace) -> int:
             every=frames.every if frames else 0,
             on_every=frames,
         )
+    except KeyboardInterrupt:  # Ctrl-C, or SIGTERM (see cli.main)
+        partial = True
+        saved = f"; what was simulated is saved in {args.out} (marked partial)" if args.out and sim.t > 0 else ""
+        raise KeyboardInterrupt(f"at t = {sim.t:.4g} s{saved}") from None
     finally:
         progress.close()
         if frames is not None:
             frames.close()  # the frames rendered so far are kept, and the GIF is written from them
         if args.out and (rec is not None or sim.t > 0):
-            sim.save(args.out, rec)  # save what was simulated even if the run stopped early
+            sim.save(args.out, rec, partial=partial)  # save what was simulated even if the run stopped early
     elapsed = time.perf_counter() - t0
     counts = sim.counts()
     print(

@@ -309,10 +309,11 @@ class Simulation:
         landed = self.state.landed.to_numpy()  # storage order: only all() is asked
         return bool(np.all(landed != 0))
 
-    def save(self, path: str | os.PathLike[str], recording: Recording | None = None) -> None:
+    def save(self, path: str | os.PathLike[str], recording: Recording | None = None, partial: bool = False) -> None:
         """Write an ``.npz`` with ``x``, ``v``, ``w`` (N, 3), ``t``, ``status``, ``radius``, ``mass``,
         with a terrain ``terrain_heights`` (nx, nz), ``terrain_origin`` (3,) and ``terrain_spacing``
-        (dx, dz), and, if given, the recording; ``.npz`` is added to a path without it. The file is
+        (dx, dz), and, if given, the recording; ``partial`` (a bool) says whether the run was stopped
+        before the time it was asked to reach. ``.npz`` is added to a path without it. The file is
         written whole or not at all (a temporary file renamed into place)."""
         data: dict[str, Any] = {
             "x": self.x,
@@ -322,6 +323,7 @@ class Simulation:
             "status": self.status,
             "radius": self.model.radius_np,
             "mass": self.model.mass_np,
+            "partial": np.bool_(partial),
         }
         if self.terrain is not None:
             data.update(
