@@ -3,6 +3,12 @@
 from __future__ import annotations
 
 
+def one_line(text: str) -> str:
+    """``text`` on one line: line breaks and other control characters (from the user's input,
+    quoted back) written as escapes (``\\n``)."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in text)
+
+
 class TiGolfError(Exception):
     """Base class of every error ti_golf reports to a user without a traceback."""
 
@@ -22,7 +28,7 @@ class ConfigError(TiGolfError):
         self.reason = reason
         where = f"{self.source}: " if self.source else ""
         what = f"key '{key}' " if key else ""
-        super().__init__(f"{where}{what}{reason}")
+        super().__init__(one_line(f"{where}{what}{reason}"))
 
 
 class SimulationError(TiGolfError):
