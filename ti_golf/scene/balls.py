@@ -6,6 +6,7 @@ on every machine.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,6 +53,18 @@ def _one(x, v, w, r, m, track) -> Balls:
         np.array([m], float),
         np.array([track]),
     )
+
+
+def block_size(block: Block) -> int:
+    """How many balls a ``[[blocks]]`` table creates."""
+    if block.kind == "random":
+        return int(block.number)
+    return int(math.prod(int(c) for c in block.count))
+
+
+def ball_count(scene: Scene) -> int:
+    """How many balls the scene creates (launch, ``[[balls]]``, blocks), without creating them."""
+    return int(scene.launch is not None) + len(scene.balls) + sum(block_size(b) for b in scene.blocks)
 
 
 def build_balls(scene: Scene) -> Balls:

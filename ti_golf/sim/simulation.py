@@ -16,18 +16,18 @@ from typing import Any
 import numpy as np
 import taichi as ti
 
-from ti_golf.errors import SimulationError
+from ti_golf.errors import ConfigError, SimulationError
 from ti_golf.files import atomic_path
 from ti_golf.physics import kernels
 from ti_golf.physics.types import StepParams
 from ti_golf.runtime import ensure_init, np_float
-from ti_golf.scene.balls import build_balls
+from ti_golf.scene.balls import ball_count, block_size, build_balls
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS, STATUS_NAMES, Scene
 from ti_golf.sim.model import Model
 from ti_golf.sim.packs import Packs
 from ti_golf.sim.results import Flight
-from ti_golf.sim.solver import CollisionSolver
+from ti_golf.sim.solver import CollisionSolver, available_memory
 from ti_golf.sim.state import State
 
 
@@ -83,6 +83,7 @@ class Simulation:
         ensure_init()
         self.scene = scene
         if x is None:
+            check_memory(scene)
             balls = build_balls(scene)
             x, v, w = balls.x, balls.v, balls.w
             radius = balls.radius if radius is None else radius
@@ -338,6 +339,30 @@ class Simulation:
             target = target.with_name(target.name + ".npz")  # as np.savez names it
         with atomic_path(target) as tmp, open(tmp, "wb") as fh:
             np.savez(fh, **data)
+
+
+BYTES_PER_BALL = 2048
+"""Peak memory [bytes] a ball of a scene's blocks takes while the simulation is set up and run
+(the balls made in numpy, then the solver's arrays), bounded from the ball pit's (see the docs'
+performance page)."""
+
+
+def check_memory(scene: Scene) -> None:
+    """Refuse a scene whose balls would not fit in the memory available, before making any,
+    naming the scene's file, the balls and the bytes they would need against what there is."""
+    n = ball_count(scene)
+    need = n * BYTES_PER_BALL
+    avail = available_memory()
+    if avail is None or need <= avail:
+        return
+    sizes = [block_size(b) for b in scene.blocks]
+    key = f"blocks[{sizes.index(max(sizes))}]" if sizes else None  # the biggest block
+    raise ConfigError(
+        scene.path or scene.name,
+        key,
+        f"the scene's {n:,} balls would need about {need / 2**30:.1f} GiB of memory "
+        f"({BYTES_PER_BALL} bytes per ball); this machine has {avail / 2**30:.1f} GiB available",
+    )
 
 
 def _as_vectors(a: Any, name: str, n: int | None = None) -> np.ndarray:
