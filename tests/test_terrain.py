@@ -633,3 +633,71 @@ def test_surface_defaults_come_from_contact_and_levels_are_checked(tmp_path):
     assert np.all(cells[:19] == 0) and np.all(cells[20:] == 1)
     with pytest.raises(tg.ConfigError, match="terrain.surface_levels"):
         scene(terrain=_two_plateaus(tmp_path), surfaces=[{"name": "only one"}])
+
+
+def test_a_thousand_balls_hit_at_80_mps_onto_rough_terrain_end_at_rest_above_it():
+    # stress (issue 33): 1,000 balls shot downward at 80 m/s in random directions, with spin, onto
+    # a rough generated terrain, run to rest. Every ball stays finite and ends at rest on or above
+    # the surface, or out of bounds beyond the grid's edge: none ends below the surface or falls
+    # through it (that would put it out of bounds inside the grid, below the kill height)
+    half = 400.0
+    scene = tg.load_scene(
+        None,
+        data={
+            "description": "stress",
+            "air": {"rho": 1.2, "gamma": 2, "C_D": 0.3},
+            "world": {"dt": 0.001, "collisions": False},
+            "contact": {"e": 0.5, "mu": 0.4},
+            "terrain": {
+                "kind": "generated",
+                "size": [2 * half, 2 * half],
+                "origin": [-half, 0.0, -half],
+                "resolution": [65, 65],
+                "seed": 5,
+                "amplitude": 4.0,
+                "roughness": 0.7,
+            },
+        },
+    )
+    rng = np.random.default_rng(1)
+    n = 1000
+    x = np.column_stack([rng.uniform(-20, 20, n), np.full(n, 12.0), rng.uniform(-20, 20, n)])
+    d = rng.normal(size=(n, 3))
+    d[:, 1] = -np.abs(d[:, 1])
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    sim = tg.Simulation(scene, x=x, v=80.0 * d, w=rng.normal(scale=50.0, size=(n, 3)), track=False)
+    sim.run(t=120.0, until="rest")
+    assert np.isfinite(sim.x).all() and np.isfinite(sim.v).all() and np.isfinite(sim.w).all()
+    assert set(np.unique(sim.status)) <= {tg.AT_REST, tg.OUT_OF_BOUNDS}
+    out = sim.status == tg.OUT_OF_BOUNDS
+    beyond = (np.abs(sim.x[:, 0]) > half) | (np.abs(sim.x[:, 2]) > half)
+    assert np.array_equal(out, beyond)  # out of bounds only past the grid's edge
+    assert (~out).sum() > n // 2
+    ter = build_terrain(scene.terrain)
+    rest = sim.x[~out]
+    # a ball resting on a slope has its centre R/cos(θ) ≥ R above the surface, vertically
+    gap = rest[:, 1] - ter.height(rest[:, 0], rest[:, 2]) - scene.ball.radius
+    assert gap.min() > -1e-6, gap.min()
+    assert np.all(sim.v[~out] == 0.0)
+
+
+@pytest.mark.parametrize("slope", [0.0, 0.03], ids=["flat", "gentler than rolling resistance"])
+def test_a_resting_ball_does_not_creep_in_a_million_steps(slope):
+    # tan θ = 0.03 < μ_roll = 0.05: gravity's pull along the slope, g sin θ, is less than the
+    # rolling resistance μ_roll g cos θ, so the ball must not move; on flat ground it must not drift
+    scene = tg.load_scene(
+        "friction_incline",
+        [
+            "air.rho=0.0",
+            "contact.mu_roll=0.05",
+            f"terrain.slope=[{-slope}, 0.0]",
+            "world.dt=0.001",
+        ],
+    )
+    r = scene.ball.radius
+    x = np.array([[5.0, -slope * 5.0 + r / np.cos(np.arctan(slope)), 0.0]])  # resting on the slope
+    sim = tg.Simulation(scene, x=x, v=np.zeros((1, 3)), w=np.zeros((1, 3)))
+    x0 = sim.x.copy()
+    sim.run(steps=1_000_000)
+    assert np.linalg.norm(sim.x - x0) < 1e-3
+    assert sim.status[0] == tg.AT_REST
