@@ -159,6 +159,7 @@ def test_the_spin_ratio_model_needs_turbulent_flow(tmp_path):
     # its C_D(S), C_L(S) are quadratic-drag coefficients: with γ = 1 the scene is refused, in the
     # file and through the API, rather than flown with a law nobody asked for
     text = edit_scene("air", "gamma", "1", edit_scene("air", "model", '"spin_ratio"'))
+    text = "\n".join(ln for ln in text.splitlines() if not re.match(r"\s*(C_D|C_M|omega_M)\s*=", ln))  # unread
     path = write_scene(tmp_path, text)
     with pytest.raises(ConfigError) as info:
         ti_golf.load_scene(path)
@@ -168,6 +169,43 @@ def test_the_spin_ratio_model_needs_turbulent_flow(tmp_path):
     scene = dataclasses.replace(laminar, air=dataclasses.replace(laminar.air, model="spin_ratio"))
     with pytest.raises(ValueError, match="air.gamma must be 2"):
         ti_golf.Simulation(scene)
+
+
+def test_every_key_that_its_setting_leaves_unread_is_refused(tmp_path):
+    # walks the key table: each key declared with read_when (it takes effect only under another
+    # key's setting) is given with that setting violated, and refused naming the file, the key
+    # and the setting it needs
+    from ti_golf.scene.schema import ARRAY_SCHEMA, SCHEMA
+
+    sample = {"float": 0.5, "int": 2, "bool": True, "str": "x", "vec3": [1.0, 1.0, 1.0], "vec2": [2.0, 2.0]}
+    base = {"description": "t", "launch": {"speed": 10.0}, "world": {"dt": 0.01}}
+    cases = [(s, k, key) for s, keys in SCHEMA.items() for k, key in keys.items() if key.read_when]
+    cases += [(a, k, key) for a, keys in ARRAY_SCHEMA.items() for k, key in keys.items() if key.read_when]
+    assert {(s, k) for s, k, _ in cases} >= {
+        ("air", "C_D"),
+        ("terrain", "seed"),
+        ("blocks", "number"),
+        ("contact", "iterations"),
+    }
+    for section, name, key in cases:
+        other, allowed = key.read_when
+        table_of_other, other_key = other.split(".") if "." in other else (section, other)
+        other_decl = (SCHEMA | ARRAY_SCHEMA)[table_of_other][other_key]
+        choices = (True, False) if other_decl.kind == "bool" else other_decl.check.choices
+        bad = next(c for c in choices if c not in allowed)  # a valid setting that leaves the key unread
+        doc = {k: dict(v) for k, v in base.items() if isinstance(v, dict)} | {"description": "t"}
+        value = sample.get(key.kind, 1.0)
+        if section in ARRAY_SCHEMA:
+            doc[section] = [{name: value, other_key: bad}]
+            where = f"{section}[0].{name}"
+        else:
+            doc.setdefault(section, {})[name] = value
+            doc.setdefault(table_of_other, {})[other_key] = bad
+            where = f"{section}.{name}"
+        with pytest.raises(ConfigError) as err:
+            ti_golf.load_scene("s.toml", data=doc)
+        text = str(err.value)
+        assert err.value.key == where and "is only read when" in text and other.split(".")[-1] in text, text
 
 
 @pytest.mark.parametrize("case", list(BAD_VALUES), ids=list(BAD_VALUES))

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ti_golf.scene.keys import Key
+from ti_golf.scene.keys import Key, help_text
 from ti_golf.scene.schema import ARRAY_SCHEMA, SCHEMA, TOP_LEVEL
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
@@ -42,7 +42,7 @@ def key_schema(k: Key) -> dict[str, Any]:
         out["default"] = list(k.default) if isinstance(k.default, tuple) else k.default
     unit = "" if k.unit in ("", "-") else f" [{k.unit}]"
     allowed = f" Allowed: {k.allowed}." if k.allowed else ""
-    out["description"] = f"{k.doc}{unit}.{allowed}"
+    out["description"] = f"{help_text(k)}{unit}.{allowed}"
     return out
 
 

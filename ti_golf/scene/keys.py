@@ -45,22 +45,44 @@ class Key:
     check: Callable[[Any], str | None] | None = None
     allowed: str = ""
     required: bool = False
+    read_when: tuple[str, tuple[Any, ...]] | None = None
+    """``(other, values)``: the key is read only while the key ``other`` (of the same table, or
+    dotted, ``"world.collisions"``) has one of ``values``; given otherwise, it is refused."""
 
 
 def key(
-    kind: str, default: Any, unit: str, doc: str, check: Callable[[Any], str | None] | None = None, allowed: str = ""
+    kind: str,
+    default: Any,
+    unit: str,
+    doc: str,
+    check: Callable[[Any], str | None] | None = None,
+    allowed: str = "",
+    read_when: tuple[str, tuple[Any, ...]] | None = None,
 ) -> Any:
     """A dataclass field declaring a scene key of ``kind`` with its ``default`` [``unit``], help
     ``doc`` and allowed values: ``check``, and ``allowed`` (by default the check's own ``allowed``
-    text). ``default`` :data:`REQUIRED` makes the key required and the field default-less."""
+    text); ``read_when`` names the setting under which the key takes effect (see :class:`Key`).
+    ``default`` :data:`REQUIRED` makes the key required and the field default-less."""
     if kind not in KINDS:
         raise ValueError(f"unknown key kind {kind!r}")
     required = default is REQUIRED
     allowed = allowed or getattr(check, "allowed", "")
-    info = Key("", kind, None if required else default, unit, doc, check, allowed, required)
+    info = Key("", kind, None if required else default, unit, doc, check, allowed, required, read_when)
     if required:
         return dataclasses.field(metadata={"key": info})
     return dataclasses.field(default=default, metadata={"key": info})
+
+
+def help_text(k: Key) -> str:
+    """A key's help, with the setting under which it is read (``read_when``) when it has one."""
+    if k.read_when is None:
+        return k.doc
+    other, values = k.read_when
+    shown = " or ".join(
+        ("true" if v else "false") if isinstance(v, bool) else f'"{v}"' if isinstance(v, str) else str(v)
+        for v in values
+    )
+    return f"{k.doc} (read only when {other} = {shown})"
 
 
 def keys_of(cls: type) -> dict[str, Key]:

@@ -263,6 +263,9 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
                 )
             values[name_] = _coerce(value, keys[name_], src, dotted)
             sources[name_] = src
+        if section == "terrain" and "file" in values and "kind" not in values:
+            values["kind"] = "file"  # a heights file names the kind of terrain it is
+        _refuse_unread(values, keys, section, sources, source, doc)
         if section == "sweep":
             kwargs["sweep"] = SweepDefaults(**values)
         elif section == "terrain":
@@ -281,7 +284,7 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
             )
     if "launch" not in doc:
         kwargs["launch"] = None
-    arrays = {name: _array_tables(doc.get(name), name, source) for name in ARRAY_SCHEMA}
+    arrays = {name: _array_tables(doc.get(name), name, source, doc) for name in ARRAY_SCHEMA}
     kwargs["balls"] = tuple(_ball_spec(t, source, i) for i, t in enumerate(arrays["balls"]))
     kwargs["blocks"] = tuple(_block(t, source, i) for i, t in enumerate(arrays["blocks"]))
     kwargs["planes"] = tuple(_plane(t) for t in arrays["planes"])
@@ -305,7 +308,7 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
     return Scene(**kwargs)
 
 
-def _array_tables(value: Any, name: str, source: str) -> list[dict[str, Any]]:
+def _array_tables(value: Any, name: str, source: str, doc: Mapping[str, Any]) -> list[dict[str, Any]]:
     """Validate the tables of one ``[[name]]`` array against :data:`ARRAY_SCHEMA`."""
     if value is None:
         return []
@@ -322,8 +325,46 @@ def _array_tables(value: Any, name: str, source: str) -> list[dict[str, Any]]:
                     source, dotted, f"is unknown{_suggest(k, keys)}; allowed in [[{name}]]: " + ", ".join(keys)
                 )
             values[k] = _coerce(v, keys[k], source, dotted)
+        _refuse_unread(values, keys, f"{name}[{i}]", {}, source, doc)
         out.append(values)
     return out
+
+
+def _refuse_unread(
+    values: dict[str, Any],
+    keys: dict[str, Key],
+    prefix: str,
+    sources: dict[str, str],
+    source: str,
+    doc: Mapping[str, Any],
+) -> None:
+    """Refuse each key of one table that its setting would leave unread (``Key.read_when``): a key
+    never silently does nothing."""
+    for name in values:
+        condition = keys[name].read_when
+        if condition is None:
+            continue
+        other, allowed = condition
+        if "." in other:  # a key of another table, as given (its value is checked there) or its default
+            table, other_key = other.split(".")
+            given = doc.get(table, {})
+            current = given.get(other_key, SCHEMA[table][other_key].default) if isinstance(given, dict) else None
+            if isinstance(current, tuple) and len(current) == 2 and current[0] == "--set":
+                current = current[1]
+            shown = other
+        else:
+            current = values.get(other, keys[other].default)
+            shown = f"{prefix}.{other}"
+        if current not in allowed:
+            wanted = " or ".join(_toml(v) for v in allowed)
+            raise_config(sources.get(name, source), f"{prefix}.{name}", f"is only read when {shown} = {wanted}")
+
+
+def _toml(value: Any) -> str:
+    """A value as a TOML file writes it: ``"file"``, ``true``, ``2``."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return f'"{value}"' if isinstance(value, str) else str(value)
 
 
 def _ball_spec(values: dict[str, Any], source: str, i: int) -> BallSpec:
@@ -342,30 +383,9 @@ def _block(values: dict[str, Any], source: str, i: int) -> Block:
     return block
 
 
-GENERATED_ONLY = ("resolution", "seed", "amplitude", "roughness", "profile")
-"""Keys of ``[terrain]`` that only a generated terrain reads."""
-
-
 def _terrain(values: dict[str, Any], sources: dict[str, str], source: str) -> TerrainConfig:
     """The ``[terrain]`` table: resolve and check the heights file (shape, finite values) now, so a
     bad terrain is reported when the scene loads."""
-    if "file" in values and "kind" not in values:
-        values["kind"] = "file"  # a heights file names the kind of terrain it is
-    kind = values.get("kind", TerrainConfig.kind)
-    if kind == "generated" and "file" in values:
-        raise_config(
-            sources.get("file", source),
-            "terrain.file",
-            'is only read when terrain.kind = "file" (leave kind out, or set it to "file")',
-        )
-    if kind == "file":
-        for name in GENERATED_ONLY:
-            if name in values:
-                raise_config(
-                    sources.get(name, source),
-                    f"terrain.{name}",
-                    'is only read when terrain.kind = "generated" (a heights file has its own grid)',
-                )
     if "resolution" in values:
         values["resolution"] = tuple(int(c) for c in values["resolution"])
     cfg = TerrainConfig(**values)

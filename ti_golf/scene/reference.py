@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from ti_golf.scene.keys import Key
+from ti_golf.scene.keys import Key, help_text
 from ti_golf.scene.schema import ARRAY_SCHEMA, SCHEMA, TOP_LEVEL
 
 TYPE_NAMES = {
@@ -40,7 +40,7 @@ def keys_markdown() -> str:
             allowed = k.allowed or ("required" if k.required else "")
             rows.append(
                 f"| `{section}` | `{k.name}` | {_cell(TYPE_NAMES[k.kind])} | {k.unit} | `{_default_text(k, 'help')}` | "
-                f"{_cell(allowed)} | {_cell(k.doc)} |"
+                f"{_cell(allowed)} | {_cell(help_text(k))} |"
             )
     return "\n".join(rows)
 
@@ -53,7 +53,7 @@ def describe_keys() -> str:
         for k in keys.values():
             rows.append(
                 f"| `{prefix}{k.name}` | {k.unit} | `{_default_text(k)}` | {_cell(k.allowed or k.kind)} | "
-                f"{_cell(k.doc)} |"
+                f"{_cell(help_text(k))} |"
             )
     return "\n".join(rows)
 

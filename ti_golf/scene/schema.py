@@ -51,9 +51,25 @@ class Air:
     gamma: int = key(
         "int", 2, "-", "flow type γ: 1 laminar (drag ∝ v), 2 turbulent (drag ∝ v²)", OneOf((1, 2)), "1 or 2"
     )
-    C_D: float = key("float", 0.3, "-", "drag coefficient; k_D = ½ρA·C_D (L.22)", NON_NEGATIVE)
-    C_M: float = key("float", 0.0, "-", "Magnus coefficient; k_M = ½ρA·C_M/ω_M (L.2, L.21)", NON_NEGATIVE)
-    omega_M: float = key("float", 1.0, "1/s", "reference angular velocity ω_M of the Magnus law (L.2)", POSITIVE)
+    C_D: float = key(
+        "float", 0.3, "-", "drag coefficient; k_D = ½ρA·C_D (L.22)", NON_NEGATIVE, read_when=("model", ("lab",))
+    )
+    C_M: float = key(
+        "float",
+        0.0,
+        "-",
+        "Magnus coefficient; k_M = ½ρA·C_M/ω_M (L.2, L.21)",
+        NON_NEGATIVE,
+        read_when=("model", ("lab",)),
+    )
+    omega_M: float = key(
+        "float",
+        1.0,
+        "1/s",
+        "reference angular velocity ω_M of the Magnus law (L.2)",
+        POSITIVE,
+        read_when=("model", ("lab",)),
+    )
     C_omega: float = key("float", 0.0, "-", "spin-decay coefficient; k_ω = ½ρA·C_ω/m (L.17, L.23)", NON_NEGATIVE)
     wind: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "constant wind; forces use v_rel = v − wind (L.21–L.23)")
     model: str = key(
@@ -155,6 +171,7 @@ class Contact:
         "-",
         "Jacobi sweeps over all touching pairs per step (more: stiffer stacks)",
         Interval(1, 100),
+        read_when=("world.collisions", (True,)),
     )
     relax: float = key(
         "float",
@@ -162,6 +179,7 @@ class Contact:
         "-",
         "Jacobi relaxation of resting ball–ball impulses (1: full; lower is steadier in dense piles)",
         Interval(0.0, 1.0, lo_open=True),
+        read_when=("world.collisions", (True,)),
     )
     skin: float = key(
         "float",
@@ -170,6 +188,7 @@ class Contact:
         "neighbour-list skin as a fraction of the largest radius, bar a few much bigger balls "
         "(lists are rebuilt when a ball moves skin/2)",
         Interval(0.0, 2.0, lo_open=True),
+        read_when=("world.collisions", (True,)),
     )
     turf: bool = key(
         "bool",
@@ -210,6 +229,7 @@ class TerrainConfig:
         "-",
         "the .npy file of heights [m], shape (nx, nz), nx, nz >= 2 (relative paths: from the scene file's "
         "folder; from the current folder for --set)",
+        read_when=("kind", ("file",)),
     )
     origin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m", "the grid's first corner [x, y, z]; heights are added to its y")
     size: tuple[float, float] = key(
@@ -225,21 +245,32 @@ class TerrainConfig:
         "-",
         "grid points [nx, nz] of generated terrain",
         WholeCounts(2, 2, 50_000_000, "points"),
+        read_when=("kind", ("generated",)),
     )
-    seed: int = key("int", 0, "-", "random seed of generated terrain (the same seed gives the same heights everywhere)")
-    amplitude: float = key("float", 1.0, "m", "generated heights lie within ±amplitude", NON_NEGATIVE)
+    seed: int = key(
+        "int",
+        0,
+        "-",
+        "random seed of generated terrain (the same seed gives the same heights everywhere)",
+        read_when=("kind", ("generated",)),
+    )
+    amplitude: float = key(
+        "float", 1.0, "m", "generated heights lie within ±amplitude", NON_NEGATIVE, read_when=("kind", ("generated",))
+    )
     roughness: float = key(
         "float",
         0.5,
         "-",
         "amplitude ratio of successive noise octaves (each half the wavelength): small is smooth, near 1 rugged",
         Interval(0.0, 1.0, lo_open=True, hi_open=True),
+        read_when=("kind", ("generated",)),
     )
     profile: bool = key(
         "bool",
         False,
         "-",
         "generated heights vary along x only (a 2-D profile, constant along z; resolution [nx, 2] suffices)",
+        read_when=("kind", ("generated",)),
     )
     slope: tuple[float, float] = key(
         "vec2",
@@ -367,20 +398,41 @@ class Block:
         OneOf(("lattice", "random")),
     )
     count: Vec3 = key(
-        "vec3", (1.0, 1.0, 1.0), "-", "lattice size along x, y, z", WholeCounts(3, 1, 50_000_000, "balls")
+        "vec3",
+        (1.0, 1.0, 1.0),
+        "-",
+        "lattice size along x, y, z",
+        WholeCounts(3, 1, 50_000_000, "balls"),
+        read_when=("kind", ("lattice",)),
     )
-    number: int = key("int", 0, "-", "number of balls of a random block", Interval(0, 50_000_000))
-    origin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m", "centre of the lattice's first ball")
-    spacing: float | None = key("float", None, "m", "lattice spacing (default: one diameter plus 1 %)", POSITIVE)
+    number: int = key(
+        "int", 0, "-", "number of balls of a random block", Interval(0, 50_000_000), read_when=("kind", ("random",))
+    )
+    origin: Vec3 = key(
+        "vec3", (0.0, 0.0, 0.0), "m", "centre of the lattice's first ball", read_when=("kind", ("lattice",))
+    )
+    spacing: float | None = key(
+        "float",
+        None,
+        "m",
+        "lattice spacing (default: one diameter plus 1 %)",
+        POSITIVE,
+        read_when=("kind", ("lattice",)),
+    )
     jitter: float = key(
         "float",
         0.0,
         "m",
         "uniform random offset of each lattice ball (at most half the free gap)",
         NON_NEGATIVE,
+        read_when=("kind", ("lattice",)),
     )
-    box_min: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m", "lower corner of a random block's box")
-    box_max: Vec3 = key("vec3", (1.0, 1.0, 1.0), "m", "upper corner of a random block's box")
+    box_min: Vec3 = key(
+        "vec3", (0.0, 0.0, 0.0), "m", "lower corner of a random block's box", read_when=("kind", ("random",))
+    )
+    box_max: Vec3 = key(
+        "vec3", (1.0, 1.0, 1.0), "m", "upper corner of a random block's box", read_when=("kind", ("random",))
+    )
     velocity: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "initial velocity of every ball")
     velocity_jitter: float = key("float", 0.0, "m/s", "uniform random velocity added per component", NON_NEGATIVE)
     speed: tuple[float, float] | None = key(
