@@ -267,11 +267,15 @@ def test_play_asks_again_after_bad_answers_and_stops_at_the_end_of_input(green_f
         ("0 5 95 0\n", "shots.txt:1: key 'loft' must be a number in [-10, 90] deg (got 95.0)"),
         ("0 5\n", "shots.txt:1: a stroke is 'direction speed loft [spin]'"),
         ("\n0 fast 0\n", "shots.txt:2: key 'speed' must be a number (got 'fast')"),
+        (b"0 5 \xff\n", "shots.txt' is not UTF-8 text (byte 4)"),
     ],
 )
 def test_play_rejects_a_bad_shots_file_naming_the_line_and_field(green_file, tmp_path, capsys, content, needle):
     shots = tmp_path / "shots.txt"
-    shots.write_text(content)
+    if isinstance(content, bytes):
+        shots.write_bytes(content)
+    else:
+        shots.write_text(content)
     assert cli.main(["play", str(green_file), "--shots", str(shots)]) == 2
     err = capsys.readouterr().err
     assert needle in err and "Traceback" not in err

@@ -178,9 +178,11 @@ def _number(text: str, name: str, game: GolfGame) -> float:
 def _file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
     """The shots of a ``--shots`` file, checked line by line (errors name the file, line and field)."""
     try:
-        lines = Path(path).read_text().splitlines()
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
     except OSError as exc:
         raise ConfigError("--shots", None, f"cannot read {path!r}: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError("--shots", None, f"{path!r} is not UTF-8 text (byte {exc.start})") from None
     parsed = []
     for number, line in enumerate(lines, 1):
         text = line.split("#", 1)[0].replace(",", " ").split()
