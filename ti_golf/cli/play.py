@@ -19,6 +19,7 @@ from pathlib import Path
 from ti_golf.cli._common import check_writable, runtime_options, scene_options
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
+from ti_golf.game.course_map import plot_round
 from ti_golf.game.rules import (
     SHOT_FIELDS,
     GolfGame,
@@ -29,7 +30,6 @@ from ti_golf.game.rules import (
     describe_wind,
 )
 from ti_golf.game.window import GolfWindow, check_display
-from ti_golf.render.plots import plot_round
 from ti_golf.scene.loader import load_scene
 
 DEFAULT_SCENE = "golf_hole"

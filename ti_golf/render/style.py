@@ -43,7 +43,7 @@ SURFACE_COLORS = {
 }
 """Terrain colours of the surface types (``[[surfaces]]``) by name; the cells of a type not named
 here, and a terrain without types, are tinted by height (``TERRAIN_COLORS``). The course map of
-:func:`ti_golf.render.plots.plot_round` uses the same colours."""
+:func:`ti_golf.game.course_map.plot_round` uses the same colours."""
 SURFACE_SHADE = (0.88, 1.05)
 """A surface type's colour is scaled from the first factor at the terrain's lowest point to the
 second at its highest, so that the relief still reads within one type."""
