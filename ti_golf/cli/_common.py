@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -53,14 +53,22 @@ def scene_options(
 
 
 def check_writable(path: str | None, option: str) -> None:
-    """Fail before a long computation rather than lose its result to an unwritable output path."""
-    if not path:
+    """Fail before a long computation rather than lose its result to an unwritable output path
+    (``None``: the option was not given)."""
+    if path is None:
         return
+    if not path.strip():
+        raise ConfigError(option, None, "needs a file name (got an empty path)")
+    if Path(path).is_dir() or Path(path).name in ("", ".", ".."):
+        raise ConfigError(option, None, f"cannot write {path!r}: it is a folder; give a file name")
     parent = Path(path).resolve().parent
     if not parent.is_dir():
         raise ConfigError(option, None, f"cannot write {path!r}: folder {str(parent)!r} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise ConfigError(option, None, f"cannot write {path!r}: folder is not writable")
+    try:  # the one sure test (permission bits say yes to root where the file system says no)
+        with tempfile.NamedTemporaryFile(dir=parent, prefix=".ti-golf-check-"):
+            pass
+    except OSError as exc:
+        raise ConfigError(option, None, f"cannot write {path!r}: {exc.strerror or exc}") from None
 
 
 SIZE_RANGE = (16, 8192)

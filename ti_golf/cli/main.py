@@ -82,6 +82,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except TiGolfError as exc:  # pragma: no cover - future error kinds
         print(f"ti-golf: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # a file that went away or a full disk while reading or writing: no traceback
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"ti-golf: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt as exc:
         print(f"ti-golf: interrupted{f' {exc}' if exc.args else ''}", file=sys.stderr)
         return 130

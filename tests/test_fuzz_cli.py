@@ -1,0 +1,167 @@
+"""Fuzzed command lines: every generated ``ti-golf`` command runs or exits with code 2 in one line.
+
+Property-based (hypothesis): each command's options get numbers, garbage, empty, negative,
+non-finite and huge values, and output paths that exist or not. The simulations behind the
+commands are cut short (two steps of a run, two launch conditions per list of a sweep, the
+benchmarks and pictures not run), so that a case takes milliseconds while the options' checks,
+the scene loading and the outputs run for real. A case must return 0, or 2 with its last line of
+standard error a ``ti-golf: error:`` line; a traceback, any other code or a multi-line error is a
+defect. Derandomised and bounded, as ``test_fuzz.py``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from unittest import mock
+
+from hypothesis import HealthCheck, example, given, settings
+from hypothesis import strategies as st
+from PIL import Image
+
+from ti_golf.cli import main
+from ti_golf.sim.simulation import Simulation
+from ti_golf.sim.sweep import sweep as real_sweep
+
+FUZZ = settings(
+    max_examples=120, derandomize=True, deadline=None, database=None, suppress_health_check=list(HealthCheck)
+)
+
+WORDS = st.sampled_from(
+    [
+        "0",
+        "-1",
+        "1",
+        "2",
+        "0.5",
+        "1e999",
+        "-1e999",
+        "nan",
+        "inf",
+        "",
+        " ",
+        "abc",
+        "1x1",
+        "0x0",
+        "16x16",
+        "640x360",
+        "9000x10",
+        "3:1:1",
+        "1:2:0",
+        "1:2:0.5",
+        "5,6",
+        "1,,2",
+        "[1]",
+        "rest",
+        "landed",
+        "iso",
+        "top",
+        "cpu",
+        "f32",
+        "f128",
+        "1000000000000",
+    ]
+)
+VALUES = st.one_of(WORDS, st.text(max_size=8))
+
+OPTIONS = {
+    "run": ["--t", "--steps", "--until", "--record-every", "--frames-every", "--camera", "--size", "--set"],
+    "sweep": ["--angles", "--speeds", "--spins", "--trajectories", "--set"],
+    "render": ["--t", "--steps", "--until", "--camera", "--size", "--color-by", "--fov", "--backend", "--set"],
+    "bench collide": ["--n", "--steps", "--iterations", "--boulder"],
+    "bench pit": ["--n", "--t"],
+    "bench sweep": ["--n", "--dt", "--repeats"],
+    "bench render": ["--n", "--frames"],
+}
+SCENES = {"run": "break_shot", "sweep": "lab_vacuum", "render": "break_shot"}
+
+
+def short_run(self, t=None, steps=None, until=None, record_every=0, progress=None, every=0, on_every=None):
+    return Simulation._real_run(
+        self,
+        steps=2,
+        until=until,
+        record_every=min(record_every, 1),
+        progress=progress,
+        every=min(every, 1),
+        on_every=on_every,
+    )
+
+
+def short_sweep(scene, angles=None, speeds=None, spins=None, overrides=None, trajectories=0):
+    def cut(values):
+        return None if values is None else values[:2]
+
+    return real_sweep(scene, cut(angles), cut(speeds), cut(spins), overrides, min(trajectories, 2))
+
+
+def fake_render(sim, path, **kwargs) -> str:
+    """A 16x16 picture in place of a render (the frames of a GIF must exist)."""
+    Image.new("RGB", (16, 16)).save(path)
+    return "ggui"
+
+
+def run_cli(argv: list[str]) -> tuple[int, str]:
+    """``main(argv)`` with the simulations cut short: its exit code and standard error."""
+    err = io.StringIO()
+    with contextlib.ExitStack() as stack:
+        stack.enter_context(contextlib.redirect_stderr(err))
+        stack.enter_context(contextlib.redirect_stdout(io.StringIO()))
+        stack.enter_context(mock.patch.object(Simulation, "_real_run", Simulation.run, create=True))
+        stack.enter_context(mock.patch.object(Simulation, "run", short_run))
+        stack.enter_context(mock.patch("ti_golf.cli.sweep.sweep", short_sweep))
+        stack.enter_context(mock.patch("ti_golf.cli.run.render", fake_render))
+        stack.enter_context(mock.patch("ti_golf.cli.render.render", lambda *a, **k: "ggui"))
+        for name in ("bench_collide", "bench_pit", "bench_sweep", "bench_render"):
+            stack.enter_context(mock.patch(f"ti_golf.cli.bench.{name}", lambda **k: {"benchmark": "fuzz"}))
+        try:
+            code = main(argv)
+        except SystemExit as exc:  # argparse's usage errors
+            code = exc.code if isinstance(exc.code, int) else 2
+    return code, err.getvalue()
+
+
+def assert_runs_or_refuses(argv: list[str]) -> None:
+    code, err = run_cli(argv)
+    assert code in (0, 2), (argv, code, err)
+    assert "Traceback" not in err, (argv, err)
+    if code == 2:
+        last = err.strip().splitlines()[-1]
+        assert last.startswith("ti-golf: error:"), (argv, err)
+
+
+def command_lines(command: str):
+    words = command.split()
+    scene = [SCENES[command]] if command in SCENES else []
+    pairs = st.lists(st.tuples(st.sampled_from(OPTIONS[command]), VALUES), max_size=3)
+    return pairs.map(lambda ps: words + scene + [w for p in ps for w in p])
+
+
+@FUZZ
+@given(argv=st.sampled_from(sorted(OPTIONS)).flatmap(command_lines))
+@example(argv=["run", "break_shot", "--frames-every", "1", "--size", "0x0"])
+@example(argv=["render", "break_shot", "--fov", "nan"])
+@example(argv=["sweep", "lab_vacuum", "--trajectories", "-5"])
+def test_fuzzed_command_lines_run_or_are_refused(argv, tmp_path_factory):
+    out = tmp_path_factory.mktemp("out")
+    extra = {
+        "run": ["--out", str(out / "r.npz"), "--frames", str(out / "f")],
+        "sweep": ["--out", str(out / "s.csv"), "--plot", str(out / "s.png")],
+        "render": ["--out", str(out / "p.png")],
+    }.get(argv[0], [])
+    assert_runs_or_refuses(argv + extra)
+
+
+@FUZZ
+@given(
+    st.sampled_from(["run", "sweep", "render"]),
+    st.sampled_from(["--out", "--plot", "--gif"]),
+    st.sampled_from(["missing/dir/x.png", "", ".", "/proc/x.png"]),
+)
+def test_unwritable_outputs_are_refused_before_anything_runs(command, option, path):
+    if command == "render" and option != "--out" or command == "sweep" and option == "--gif":
+        return
+    argv = [command, SCENES[command], option, path]
+    if command == "render" and option != "--out":
+        argv += ["--out", "x.png"]
+    assert_runs_or_refuses(argv)
