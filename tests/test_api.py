@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import background
 import numpy as np
 import pytest
@@ -188,6 +190,9 @@ def test_outputs_are_written_whole_or_not_at_all(tmp_path, monkeypatch):
         res.to_csv(tmp_path / "s.csv")
     assert (tmp_path / "s.csv").read_text() == text
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.npz", "s.csv"]
+    mask = os.umask(0o022)
+    os.umask(mask)
+    assert (tmp_path / "s.csv").stat().st_mode & 0o777 == 0o666 & ~mask  # as any file written
 
 
 def test_a_scene_too_big_for_the_memory_is_refused_before_any_ball_is_made(tmp_path, monkeypatch):

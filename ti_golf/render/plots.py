@@ -4,6 +4,7 @@ the report's Table 3.1-1 families, run trajectories and spin decay, and a golf r
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import matplotlib
@@ -19,9 +20,13 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int) -> None:
-    """Write ``fig`` to ``path`` (format from its suffix) whole or not at all."""
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=dpi)
+    """Write ``fig`` to ``path`` whole or not at all, in the format of its suffix (``.png`` is
+    added to a path without one, as matplotlib does)."""
+    target = Path(path)
+    if not target.suffix:
+        target = target.with_name(target.name + ".png")
+    with atomic_path(target) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=target.suffix[1:].lower())
 
 
 def plot_sweep(res: "SweepResult", path: str | os.PathLike[str], title: str | None = None) -> None:
