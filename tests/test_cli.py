@@ -11,6 +11,7 @@ import csv
 import io
 import json
 import math
+import os
 import re
 import signal
 import subprocess
@@ -564,3 +565,48 @@ def test_an_interrupted_run_keeps_what_it_computed(sig, tmp_path):
     with np.load(out) as d:
         assert bool(d["partial"]) and 0.0 < float(d["t"]) < 100.0
         assert d["x"].shape == (400, 3) and np.isfinite(d["x"]).all()
+
+
+def test_an_interrupted_sweep_keeps_its_results(tmp_path, capsys, monkeypatch):
+    # a sweep is one kernel launch, which cannot stop half-way: SIGTERM (or Ctrl-C) during it is
+    # held until its results are written, then the command stops with one line and code 130
+    from ti_golf.cli import sweep as sweep_command
+
+    real = sweep_command.sweep
+
+    def interrupted_sweep(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGTERM)  # arrives while the sweep runs
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(sweep_command, "sweep", interrupted_sweep)
+    out = tmp_path / "s.csv"
+    before = signal.getsignal(signal.SIGTERM)
+    assert main(["sweep", "lab_vacuum", "--angles", "30,45,60", "--out", str(out)]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("ti-golf: interrupted during the sweep") and str(out) in err[0]
+    assert len(out.read_text().splitlines()) == 1 + 3  # header and the three launches
+    assert signal.getsignal(signal.SIGTERM) == before  # the handlers are put back
+
+
+def test_an_interrupted_render_draws_the_state_it_reached(tmp_path):
+    out = tmp_path / "p.png"
+    proc = subprocess.Popen(
+        cli("render", "terrain_3d", "--t", "100", "--out", str(out), "--size", "160x120"),
+        stderr=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+    )
+    try:
+        for line in proc.stderr:  # the first progress line comes a few seconds into the run
+            if line.startswith("progress:"):
+                break
+        proc.send_signal(signal.SIGTERM)
+        rest = proc.stderr.read()
+        code = proc.wait(timeout=120)
+    finally:
+        proc.kill()
+    assert code == 130, rest
+    last = rest.strip().splitlines()[-1]
+    assert last.startswith("ti-golf: interrupted at t = ") and "picture of that state is saved" in last, rest
+    assert out.read_bytes().startswith(PNG_SIGNATURE)

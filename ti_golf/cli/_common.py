@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import rich.console
 import rich.progress
@@ -132,3 +135,27 @@ class Progress:
         if self._bar is not None:
             self._bar.stop()
             self._bar = None
+
+
+class HeldInterrupt:
+    """Holds Ctrl-C and SIGTERM while work that cannot stop half-way runs (a sweep is one kernel
+    launch), so that what it computes is kept: ``requested`` says whether one came, and the
+    caller stops once its outputs are written. Outside the main thread it holds nothing."""
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._previous: dict[int, Any] = {}
+
+    def _hold(self, signum: int, frame: object) -> None:
+        self.requested = True
+
+    def __enter__(self) -> HeldInterrupt:
+        if threading.current_thread() is threading.main_thread():
+            self._previous = {s: signal.signal(s, self._hold) for s in self.SIGNALS}
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for s, handler in self._previous.items():
+            signal.signal(s, handler)

@@ -7,6 +7,7 @@ import math
 import time
 
 from ti_golf.cli._common import (
+    Progress,
     check_writable,
     parse_size,
     runtime_options,
@@ -64,8 +65,20 @@ def cmd_render(args: argparse.Namespace) -> int:
         duration = args.t if args.t is not None else (sim.scene.world.t_end if args.until else 0.0)
         steps = int(math.ceil(duration / sim.dt - 1e-9))
     rec = None
-    if steps > 0:
-        rec = sim.run(steps=steps, until=args.until, record_every=max(1, steps // 200) if args.trails else 0)
+    interrupted = False
+    progress = Progress()
+    try:
+        if steps > 0:
+            rec = sim.run(
+                steps=steps,
+                until=args.until,
+                record_every=max(1, steps // 200) if args.trails else 0,
+                progress=progress,
+            )
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the picture shows the state reached
+        interrupted = True
+    finally:
+        progress.close()
     t0 = time.perf_counter()
     used = render(
         sim,
@@ -78,4 +91,6 @@ def cmd_render(args: argparse.Namespace) -> int:
         backend=args.backend,
     )
     print(f"wrote {args.out} ({used}, {sim.n} ball(s) at t = {sim.t:.4g} s, {time.perf_counter() - t0:.2f} s)")
+    if interrupted:
+        raise KeyboardInterrupt(f"at t = {sim.t:.4g} s; the picture of that state is saved in {args.out}")
     return 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from ti_golf.cli._common import check_writable, runtime_options, scene_options
+from ti_golf.cli._common import HeldInterrupt, check_writable, runtime_options, scene_options
 from ti_golf.render.plots import plot_sweep
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.loader import load_scene
@@ -38,7 +38,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     speeds = _parse_opt_range(args.speeds, "--speeds")
     spins = _parse_opt_range(args.spins, "--spins")
     t0 = time.perf_counter()
-    res = sweep(scene, angles, speeds, spins, trajectories=args.trajectories if args.plot else 0)
+    with HeldInterrupt() as interrupt:  # one kernel launch: an interrupt takes effect once its results are kept
+        res = sweep(scene, angles, speeds, spins, trajectories=args.trajectories if args.plot else 0)
     elapsed = time.perf_counter() - t0
     n = res.angle_deg.size
     landed = int(res.flight.landed.sum())
@@ -62,4 +63,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.plot:
         plot_sweep(res, args.plot)
         print(f"wrote {args.plot}")
+    if interrupt.requested:
+        kept = ", ".join(p for p in (args.out, args.plot) if p)
+        raise KeyboardInterrupt(
+            "during the sweep, which is one kernel launch: it ran to its end"
+            + (f" and is saved in {kept}" if kept else "")
+        )
     return 0
