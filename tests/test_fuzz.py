@@ -121,3 +121,52 @@ def test_fuzzed_ranges_parse_or_are_refused(text):
 @pytest.mark.parametrize("doc", [BASE])
 def test_the_fuzz_base_scene_loads(doc):
     load_scene(SOURCE, data=doc)
+
+
+@FUZZ
+@given(
+    st.one_of(
+        st.binary(max_size=200),
+        st.text(max_size=200).map(lambda t: t.encode("utf-8")),
+        st.lists(
+            st.sampled_from(
+                [
+                    "[air]",
+                    "[world]",
+                    "[[blocks]]",
+                    "[terrain]",
+                    "rho = 1.2",
+                    "rho = 1.2",
+                    "dt = ",
+                    "dt = 0.01",
+                    'kind = "file"',
+                    "count = [2, 2, 2]",
+                    "= 3",
+                    "[air",
+                    "x = [1, 2",
+                    '"',
+                    "\\u00ff",
+                    "[launch]",
+                    "speed = 1e309",
+                    "number = -1",
+                ]
+            ),
+            max_size=8,
+        ).map(lambda lines: "\n".join(lines).encode("utf-8")),
+    )
+)
+@example(b"\xff\xfe[air]")
+@example(b"[air]\nrho = 1.2\nrho = 1.3\n")  # a duplicate key
+@example(b"[air]\n[air]\n")  # a duplicate table
+def test_fuzzed_scene_files_load_or_are_refused(content):
+    # raw files: binary, non-UTF-8, broken TOML, duplicate keys and tables; refused naming the file
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "fuzz.toml"
+        path.write_bytes(content)
+        try:
+            load_scene(path)
+        except ConfigError as exc:
+            assert "\n" not in str(exc) and str(exc).startswith(str(path)), str(exc)

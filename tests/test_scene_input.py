@@ -182,6 +182,7 @@ def test_every_key_that_its_setting_leaves_unread_is_refused(tmp_path):
     cases = [(s, k, key) for s, keys in SCHEMA.items() for k, key in keys.items() if key.read_when]
     cases += [(a, k, key) for a, keys in ARRAY_SCHEMA.items() for k, key in keys.items() if key.read_when]
     assert {(s, k) for s, k, _ in cases} >= {
+        ("game", "wind_max"),
         ("air", "C_D"),
         ("terrain", "seed"),
         ("blocks", "number"),
@@ -189,6 +190,13 @@ def test_every_key_that_its_setting_leaves_unread_is_refused(tmp_path):
     }
     for section, name, key in cases:
         other, allowed = key.read_when
+        if other.startswith("["):  # a table the scene must have: leave it out
+            doc = {**base, section: {name: sample.get(key.kind, 1.0)}}
+            doc.pop(other.strip("[]"), None)
+            with pytest.raises(ConfigError) as err:
+                ti_golf.load_scene("s.toml", data=doc)
+            assert err.value.key == f"{section}.{name}" and f"only read when the scene has a {other}" in str(err.value)
+            continue
         table_of_other, other_key = other.split(".") if "." in other else (section, other)
         other_decl = (SCHEMA | ARRAY_SCHEMA)[table_of_other][other_key]
         choices = (True, False) if other_decl.kind == "bool" else other_decl.check.choices

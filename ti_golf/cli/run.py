@@ -47,6 +47,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def cmd_run(args: argparse.Namespace) -> int:
     check_writable(args.out, "--out")
     check_writable(args.plot, "--plot")
+    check_writable(args.gif, "--gif")
+    if args.frames is not None and not args.frames.strip():
+        raise ConfigError("--frames", None, "needs a folder name (got an empty path)")
     if args.t is not None and not args.t > 0:
         raise ConfigError("--t", None, f"must be > 0 seconds (got {args.t})")
     if args.steps is not None and args.steps <= 0:

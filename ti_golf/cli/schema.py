@@ -25,11 +25,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def cmd_schema(args: argparse.Namespace) -> int:
     """Print or write (atomically) the scene files' JSON Schema."""
+    check_writable(args.out, "--out")
     text = json.dumps(json_schema(), indent=2, ensure_ascii=False) + "\n"
-    if not args.out:
+    if args.out is None:
         print(text, end="")
         return 0
-    check_writable(args.out, "--out")
     write_text(args.out, text)
     print(f"wrote {args.out}")
     return 0

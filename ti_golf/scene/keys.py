@@ -47,7 +47,8 @@ class Key:
     required: bool = False
     read_when: tuple[str, tuple[Any, ...]] | None = None
     """``(other, values)``: the key is read only while the key ``other`` (of the same table, or
-    dotted, ``"world.collisions"``) has one of ``values``; given otherwise, it is refused."""
+    dotted, ``"world.collisions"``) has one of ``values``, or, for ``other`` a table in brackets
+    (``"[hole]"``), while the scene has that table; given otherwise, it is refused."""
 
 
 def key(
@@ -78,6 +79,8 @@ def help_text(k: Key) -> str:
     if k.read_when is None:
         return k.doc
     other, values = k.read_when
+    if other.startswith("["):
+        return f"{k.doc} (read only when the scene has a {other} table)"
     shown = " or ".join(
         ("true" if v else "false") if isinstance(v, bool) else f'"{v}"' if isinstance(v, str) else str(v)
         for v in values

@@ -345,6 +345,12 @@ def _refuse_unread(
         if condition is None:
             continue
         other, allowed = condition
+        if other.startswith("["):  # a table the scene must have
+            if other.strip("[]") not in doc:
+                raise_config(
+                    sources.get(name, source), f"{prefix}.{name}", f"is only read when the scene has a {other} table"
+                )
+            continue
         if "." in other:  # a key of another table, as given (its value is checked there) or its default
             table, other_key = other.split(".")
             given = doc.get(table, {})

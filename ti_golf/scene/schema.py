@@ -327,6 +327,7 @@ class GameConfig:
         "m",
         "where the ball lies for the first stroke of `ti-golf play`, [x, z] on the terrain (default: a "
         "random point of the course, from --seed)",
+        read_when=("[hole]", (True,)),
     )
     wind_max: float = key(
         "float",
@@ -335,14 +336,23 @@ class GameConfig:
         "each stroke's wind blows level from a random direction at a random speed up to this (0: the "
         "scene's air.wind throughout)",
         NON_NEGATIVE,
+        read_when=("[hole]", (True,)),
     )
-    max_strokes: int = key("int", 20, "-", "the round ends unfinished after this many strokes", Interval(1, 1000))
+    max_strokes: int = key(
+        "int",
+        20,
+        "-",
+        "the round ends unfinished after this many strokes",
+        Interval(1, 1000),
+        read_when=("[hole]", (True,)),
+    )
     shot_time: float = key(
         "float",
         60.0,
         "s",
         "longest a stroke is simulated; a ball still moving then is played from where it is",
         POSITIVE,
+        read_when=("[hole]", (True,)),
     )
 
 
