@@ -541,23 +541,27 @@ def test_the_first_run_on_a_machine_is_announced(tmp_path):
     assert "first run" not in warm.stderr
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
-def test_an_interrupted_run_keeps_what_it_computed(sig, tmp_path):
-    # a real process, stopped mid-run: it saves the state it reached, marked partial, says so in
-    # one line and exits with code 130
-    out = tmp_path / "run.npz"
-    proc = subprocess.Popen(
-        cli("run", "terrain_3d", "--t", "100", "--out", str(out)), stderr=subprocess.PIPE, text=True, cwd=ROOT
-    )
+def interrupt_mid_run(args: list[str], sig: int = signal.SIGTERM) -> tuple[int, str]:
+    """Start ``ti-golf ARGS`` in a real process, send it ``sig`` once its first progress line shows
+    it is simulating, and return its exit code and the rest of its standard error."""
+    proc = subprocess.Popen(cli(*args), stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=ROOT)
     try:
         for line in proc.stderr:  # the first progress line comes a few seconds into the run
             if line.startswith("progress:"):
                 break
         proc.send_signal(sig)
         rest = proc.stderr.read()
-        code = proc.wait(timeout=120)
+        return proc.wait(timeout=120), rest
     finally:
         proc.kill()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_an_interrupted_run_keeps_what_it_computed(sig, tmp_path):
+    # a real process, stopped mid-run: it saves the state it reached, marked partial, says so in
+    # one line and exits with code 130
+    out = tmp_path / "run.npz"
+    code, rest = interrupt_mid_run(["run", "terrain_3d", "--t", "100", "--out", str(out)], sig)
     assert code == 130, rest
     last = rest.strip().splitlines()[-1]
     assert last.startswith("ti-golf: interrupted at t = ") and "marked partial" in last, rest
@@ -590,22 +594,7 @@ def test_an_interrupted_sweep_keeps_its_results(tmp_path, capsys, monkeypatch):
 
 def test_an_interrupted_render_draws_the_state_it_reached(tmp_path):
     out = tmp_path / "p.png"
-    proc = subprocess.Popen(
-        cli("render", "terrain_3d", "--t", "100", "--out", str(out), "--size", "160x120"),
-        stderr=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        text=True,
-        cwd=ROOT,
-    )
-    try:
-        for line in proc.stderr:  # the first progress line comes a few seconds into the run
-            if line.startswith("progress:"):
-                break
-        proc.send_signal(signal.SIGTERM)
-        rest = proc.stderr.read()
-        code = proc.wait(timeout=120)
-    finally:
-        proc.kill()
+    code, rest = interrupt_mid_run(["render", "terrain_3d", "--t", "100", "--out", str(out), "--size", "160x120"])
     assert code == 130, rest
     last = rest.strip().splitlines()[-1]
     assert last.startswith("ti-golf: interrupted at t = ") and "picture of that state is saved" in last, rest
