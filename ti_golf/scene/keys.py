@@ -74,18 +74,28 @@ def key(
     return dataclasses.field(default=default, metadata={"key": info})
 
 
-def help_text(k: Key) -> str:
-    """A key's help, with the setting under which it is read (``read_when``) when it has one."""
-    if k.read_when is None:
-        return k.doc
+def toml_value(value: Any) -> str:
+    """A value as a TOML file writes it: ``"file"``, ``true``, ``2``."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return f'"{value}"' if isinstance(value, str) else str(value)
+
+
+def read_when_text(k: Key, table: str = "") -> str:
+    """The setting under which key ``k`` is read, in words (``kind = "file"``, ``the scene has a
+    [hole] table``); a key of the same table is named after ``table`` when one is given."""
+    assert k.read_when is not None
     other, values = k.read_when
     if other.startswith("["):
-        return f"{k.doc} (read only when the scene has a {other} table)"
-    shown = " or ".join(
-        ("true" if v else "false") if isinstance(v, bool) else f'"{v}"' if isinstance(v, str) else str(v)
-        for v in values
-    )
-    return f"{k.doc} (read only when {other} = {shown})"
+        return f"the scene has a {other} table"
+    if table and "." not in other:
+        other = f"{table}.{other}"
+    return f"{other} = " + " or ".join(toml_value(v) for v in values)
+
+
+def help_text(k: Key) -> str:
+    """A key's help, with the setting under which it is read (``read_when``) when it has one."""
+    return k.doc if k.read_when is None else f"{k.doc} (read only when {read_when_text(k)})"
 
 
 def keys_of(cls: type) -> dict[str, Key]:

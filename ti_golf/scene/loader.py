@@ -21,7 +21,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 from ti_golf.errors import ConfigError
 from ti_golf.scene.checks import parse_range, raise_config
-from ti_golf.scene.keys import Key
+from ti_golf.scene.keys import Key, read_when_text
 from ti_golf.scene.schema import (
     ARRAY_SCHEMA,
     SCHEMA,
@@ -341,36 +341,25 @@ def _refuse_unread(
     """Refuse each key of one table that its setting would leave unread (``Key.read_when``): a key
     never silently does nothing."""
     for name in values:
-        condition = keys[name].read_when
-        if condition is None:
+        key = keys[name]
+        if key.read_when is None:
             continue
-        other, allowed = condition
+        other, allowed = key.read_when
         if other.startswith("["):  # a table the scene must have
-            if other.strip("[]") not in doc:
-                raise_config(
-                    sources.get(name, source), f"{prefix}.{name}", f"is only read when the scene has a {other} table"
-                )
-            continue
-        if "." in other:  # a key of another table, as given (its value is checked there) or its default
+            read = other.strip("[]") in doc
+        elif "." in other:  # a key of another table, as given (its value is checked there) or its default
             table, other_key = other.split(".")
             given = doc.get(table, {})
             current = given.get(other_key, SCHEMA[table][other_key].default) if isinstance(given, dict) else None
             if isinstance(current, tuple) and len(current) == 2 and current[0] == "--set":
                 current = current[1]
-            shown = other
+            read = current in allowed
         else:
-            current = values.get(other, keys[other].default)
-            shown = f"{prefix}.{other}"
-        if current not in allowed:
-            wanted = " or ".join(_toml(v) for v in allowed)
-            raise_config(sources.get(name, source), f"{prefix}.{name}", f"is only read when {shown} = {wanted}")
-
-
-def _toml(value: Any) -> str:
-    """A value as a TOML file writes it: ``"file"``, ``true``, ``2``."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    return f'"{value}"' if isinstance(value, str) else str(value)
+            read = values.get(other, keys[other].default) in allowed
+        if not read:
+            raise_config(
+                sources.get(name, source), f"{prefix}.{name}", f"is only read when {read_when_text(key, prefix)}"
+            )
 
 
 def _ball_spec(values: dict[str, Any], source: str, i: int) -> BallSpec:
