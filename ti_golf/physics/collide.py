@@ -141,7 +141,6 @@ def collision_step(
             contact,
             terrain,
             params,
-            h,
             ti.cast(params.t0, float),
             integrator,
             model,
@@ -183,7 +182,6 @@ def collision_step(
                 contact,
                 terrain,
                 params,
-                h,
                 ti.cast(t, float),
                 integrator,
                 model,
@@ -208,7 +206,6 @@ def step_balls(
     contact: ti.template(),
     terrain: ti.template(),
     params: ti.template(),
-    h,
     t0,
     integrator: ti.template(),
     model: ti.template(),
@@ -219,21 +216,22 @@ def step_balls(
 ):
     """One step of all balls, the body of :func:`collision_step` (see there) in parallel and serially,
     or the part of it that ``warm``, ``sweeps`` and ``last`` name."""
+    h = params.h
     v_inelastic = contact.v_bounce + 2.0 * params.gravity.norm() * h
     bits = slot_bits(lists.upper.shape[1])  # lower-list slots: owner · 2^bits + column (once, not per ball)
     if ti.static(warm):
         start_step(
-            air, contact, terrain, params, h, t0, integrator, v_inelastic, bits, model, lists, state, flight, scratch
+            air, contact, terrain, params, t0, integrator, v_inelastic, bits, model, lists, state, flight, scratch
         )
     # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
     if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
         for _ in range(sweeps):
-            sweep(False, contact, terrain, params, h, v_inelastic, bits, model, lists, state, scratch)
+            sweep(False, contact, terrain, params, v_inelastic, bits, model, lists, state, scratch)
     else:  # unrolled, so that each sweep's loops stay top-level loops (parallel)
         for _ in ti.static(range(sweeps)):
-            sweep(False, contact, terrain, params, h, v_inelastic, bits, model, lists, state, scratch)
+            sweep(False, contact, terrain, params, v_inelastic, bits, model, lists, state, scratch)
     if ti.static(last):
-        sweep(True, contact, terrain, params, h, v_inelastic, bits, model, lists, state, scratch)
+        sweep(True, contact, terrain, params, v_inelastic, bits, model, lists, state, scratch)
 
 
 @ti.func
@@ -242,7 +240,6 @@ def start_step(
     contact: ti.template(),
     terrain: ti.template(),
     params: ti.template(),
-    h,
     t0,
     integrator: ti.template(),
     v_inelastic,
@@ -256,6 +253,7 @@ def start_step(
     """1. Free flight of every ball to ``x_free``, ``v_free``, then the warm start: last step's
     resting impulses (ball pairs, planes and terrain) applied again, so a stack starts the step
     supported (see the module's docstring)."""
+    h = params.h
     tracking = flight.landed.shape[0] == state.x.shape[0]
     for i in range(state.x.shape[0]):
         xi = state.x[i]
@@ -311,7 +309,6 @@ def sweep(
     contact: ti.template(),
     terrain: ti.template(),
     params: ti.template(),
-    h,
     v_inelastic,
     bits,
     model: ti.template(),
@@ -325,6 +322,7 @@ def sweep(
     impact (:func:`impact_keys`, :func:`matched`).
     A quiet ball gets no impulse (its pairs are skipped) and stays where it is; the last pair pass
     still visits its pairs, for the projections its awake neighbours gather."""
+    h = params.h
     scratch.flag[1] = 0
     for i in range(state.x.shape[0]):
         if ti.static(last) or scratch.calm[i] != QUIET:
@@ -387,7 +385,7 @@ def sweep(
             if ti.static(not last):
                 state.v[i], state.w[i] = v_new, w_new
             else:
-                finish(i, v_new, w_new, dx, touching, contact, terrain, params, h, model, lists, state, scratch)
+                finish(i, v_new, w_new, dx, touching, contact, terrain, params, model, lists, state, scratch)
 
 
 @ti.func
@@ -400,7 +398,6 @@ def finish(
     contact: ti.template(),
     terrain: ti.template(),
     params: ti.template(),
-    h,
     model: ti.template(),
     lists: ti.template(),
     state: ti.template(),
@@ -410,6 +407,7 @@ def finish(
     projection ``dx`` of its ball overlaps and whether it ``touching`` a ball: new position in
     ``x_free`` (split at a plane's time of impact, overlaps projected out), status, rest timer,
     out-of-bounds; sets ``flag[0]`` when the neighbour lists must be rebuilt before the next step."""
+    h = params.h
     st = state.status[i]
     xi, ri = state.x[i], of_ball(model.radius, i)
     x1 = scratch.x_free[i] + h * (v_final - scratch.v_free[i])
