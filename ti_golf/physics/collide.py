@@ -40,13 +40,15 @@ launch overhead that dominates a step of a few balls.
 import taichi as ti
 
 from ti_golf.physics.aero import V, W, X, coefficients, column
+from ti_golf.physics.colour import inelastic_speed, serial_projection, serial_sweeps
 from ti_golf.physics.contact import (
+    GAUSS_SEIDEL,
     plane_position,
     rest_update,
 )
 from ti_golf.physics.integrate import IN_FLIGHT, step_free, track_flight
 from ti_golf.physics.kernels import lane_state
-from ti_golf.physics.links import relist_all_pairs, slot_bits
+from ti_golf.physics.links import moved_past, relist_all_pairs, slot_bits
 from ti_golf.physics.pairs import QUIET, gather, impact_keys, owned_pairs, warm_start
 from ti_golf.physics.surfaces import beyond_reach, rounded_down, surface_clearance, surface_impulses
 from ti_golf.physics.terrain import (
@@ -65,7 +67,6 @@ from ti_golf.physics.types import (
     StepParams,
     StepScratch,
     TerrainParams,
-    is_f64,
     kernel,
     of_ball,
     zero3,
@@ -170,6 +171,8 @@ def collision_step(
                     lists.x_at_build,
                     lists.lam,
                     scratch.J,
+                    lists.friction,
+                    contact.solver == GAUSS_SEIDEL,
                 )
                 result += 1
                 scratch.flag[0] = 0
@@ -190,6 +193,8 @@ def collision_step(
                 flight,
                 scratch,
             )
+            if contact.solver == GAUSS_SEIDEL:
+                serial_projection(params, contact.k_p, model, lists, state, scratch)
             for i in range(state.x.shape[0]):
                 state.x[i] = scratch.x_free[i]
             t += params.dt
@@ -217,7 +222,7 @@ def step_balls(
     """One step of all balls, the body of :func:`collision_step` (see there) in parallel and serially,
     or the part of it that ``warm``, ``sweeps`` and ``last`` name."""
     h = params.h
-    v_inelastic = contact.v_bounce + 2.0 * params.gravity.norm() * h
+    v_inelastic = inelastic_speed(contact, params)
     bits = slot_bits(lists.upper.shape[1])  # lower-list slots: owner · 2^bits + column (once, not per ball)
     if ti.static(warm):
         start_step(
@@ -225,8 +230,11 @@ def step_balls(
         )
     # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
     if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
-        for _ in range(sweeps):
-            sweep(False, contact, terrain, params, v_inelastic, bits, model, lists, state, scratch)
+        if contact.solver == GAUSS_SEIDEL:  # all the step's sweeps: the last one only finishes it
+            serial_sweeps(sweeps + 1, contact, terrain, h, v_inelastic, model, lists, state, scratch)
+        else:
+            for _ in range(sweeps):
+                sweep(False, contact, terrain, params, v_inelastic, bits, model, lists, state, scratch)
     else:  # unrolled, so that each sweep's loops stay top-level loops (parallel)
         for _ in ti.static(range(sweeps)):
             sweep(False, contact, terrain, params, v_inelastic, bits, model, lists, state, scratch)
@@ -282,7 +290,7 @@ def start_step(
                     )
         scratch.x_free[i], scratch.v_free[i] = x1, v1
         scratch.clear[i] = rounded_down(surface_clearance(i, x1, terrain, model, lists, state))
-        dv, scratch.calm[i] = warm_start(
+        dv, dw, scratch.calm[i] = warm_start(
             i,
             state.x,
             model.radius,
@@ -296,9 +304,13 @@ def start_step(
             bits,
             lists.lam,
             scratch.J,
+            lists.friction,
+            contact.mu,
+            contact.solver == GAUSS_SEIDEL,
         )
         if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
             v1 += dv
+            w1 += dw
             v1, w1 = surface_impulses(i, True, v1, w1, contact, terrain, h, v_inelastic, model, lists, state, scratch)
         state.v[i], state.w[i] = v1, w1
 
@@ -368,20 +380,11 @@ def sweep(
                 scratch.flag[1],
                 contact.k_p,
             )
-            v_new, w_new = surface_impulses(
-                i,
-                False,
-                state.v[i] + dv,
-                state.w[i] + dw,
-                contact,
-                terrain,
-                h,
-                v_inelastic,
-                model,
-                lists,
-                state,
-                scratch,
-            )
+            v_new, w_new = state.v[i] + dv, state.w[i] + dw
+            if contact.solver != GAUSS_SEIDEL:  # (its sweeps are done)
+                v_new, w_new = surface_impulses(
+                    i, False, v_new, w_new, contact, terrain, h, v_inelastic, model, lists, state, scratch
+                )
             if ti.static(not last):
                 state.v[i], state.w[i] = v_new, w_new
             else:
@@ -442,7 +445,8 @@ def finish(
         x1 = terrain_position(xi, x1, pt, nt, ri, model.heights, terrain)
         if (x1 - pt).dot(nt) - ri < 0.01 * ri:
             touching = ti.max(touching, 1)
-    x1 += dx  # position projection k_p·m_red·Δx·n̂ of the ball overlaps (B.18)
+    if contact.solver != GAUSS_SEIDEL:  # (Gauss–Seidel projects after the step: colour.project_sweep)
+        x1 += dx  # position projection k_p·m_red·Δx·n̂ of the ball overlaps (B.18)
     if st == AT_REST and (v_final.norm() > 0.0 or w_final.norm() > 0.0):
         st = FLYING  # woken by an impulse
     if st != AT_REST:
@@ -464,20 +468,3 @@ def finish(
     state.v[i], state.w[i] = v_final, w_final
     if moved_past(x1, lists.x_at_build[i], 2.0 * h * v_final.norm(), params.half_skin):
         scratch.flag[0] = 1
-
-
-@ti.func
-def moved_past(x1, x_build, reach, half_skin):
-    """Whether a ball now at ``x1`` [m], which may move ``reach`` [m] more before the next step's
-    test, can be farther than ``half_skin`` [m] from where it was when the lists were built.
-
-    The position at the build, ``x_build``, is kept in f32 (12 bytes per ball less in f64): it
-    only serves this test. Rounding moved it by at most 2^-24·|x| (round to nearest), so the test
-    adds twice that, |x_build|·2^-23 (in f64; nothing in f32, where nothing was rounded): a ball
-    never moves past half the skin unseen, and the lists are rebuilt a little early, by 2 % of
-    half the skin of a golf ball (1.07 mm) for a ball 170 m from the origin, by 11 % at 1 km."""
-    xb = ti.cast(x_build, float)
-    margin = 0.0
-    if ti.static(is_f64()):
-        margin = xb.norm() * 2.0**-23
-    return (x1 - xb).norm() + margin + reach > half_skin

@@ -29,6 +29,13 @@ from ti_golf.scene.schema import AT_REST, FLYING, ROLLING
 
 _TINY = 1e-12
 
+GAUSS_SEIDEL = 1
+"""``ContactParams.solver`` of the Gauss–Seidel sweeps (:mod:`.colour`; 0: the Jacobi sweeps)."""
+
+FIRST, SOLVE, BOUNCE = 0, 1, 2
+"""Phases of a Gauss–Seidel step (:func:`pair_step`): the first sweep (which also applies the
+friction carried from the last step), the later sweeps, then the restitution pass."""
+
 
 @ti.func
 def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e, mu, v_inelastic, h, relax=1.0):
@@ -77,6 +84,93 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
         if j_n > 0.0:
             P += friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, relax * m_eff, mu * j_n)
     return P, lam, touching, impact
+
+
+@ti.func
+def pair_step(phase, n, gap, v_n0, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, F, e, mu, v_inelastic, h):
+    """One Gauss–Seidel update of a contact (``contact.solver = "gauss_seidel"``): (the impulse P
+    [N·s] on body a, −P on b; the contact's new accumulated normal impulse λ [N·s] and friction
+    impulse F [N·s] on a). ``n``: unit normal from b to a; ``gap``: surface gap [m] at the start
+    of the step; ``v_n0``: the normal velocity [m/s] before the step's contacts (after the free
+    flight); ``lam``, ``F``: what the contact has applied so far; ``inv_m_b = 0`` and ``r_b = 0``
+    make b a plane.
+
+    ``SOLVE``: sequential impulses toward a normal velocity v_n ≥ −max(gap, 0)/h, the pair
+    closing its gap within the step but not overlapping more (what overlaps is projected out
+    after the step, B.18). What is clamped is the accumulated λ ≥ 0, so a warm start that pushed
+    too hard is taken back. Every contact is inelastic here. Coulomb friction (B.15): the
+    accumulated F, toward stopping the slip at the contact point (solid spheres, see
+    :func:`friction_impulse`), is clamped to |F| ≤ μ·λ.
+
+    ``BOUNCE``: restitution, once per step after the sweeps, for a contact that approached faster
+    than ``v_inelastic`` and is pressed (λ > 0): toward v_n = −e·v_n0 (B.9), again through the
+    clamped λ. Slower approaches are resting contacts and never bounce: a resting contact gains no
+    energy."""
+    m_eff = 1.0 / (inv_m_a + inv_m_b)
+    v_n = (v_a - v_b).dot(n)
+    target = -ti.max(gap, 0.0) / h
+    if phase == BOUNCE:
+        target = v_n  # no change
+        if v_n0 < -v_inelastic and lam > 0.0:
+            target = -e * v_n0
+    lam_new = ti.max(lam + m_eff * (target - v_n), 0.0)
+    P = (lam_new - lam) * n
+    F_new = F
+    if phase != BOUNCE:
+        F_new = F + friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff, 1e30)
+        F_new = clamp_friction(F_new, n, mu * lam_new)
+        P += F_new - F
+    return P, lam_new, F_new
+
+
+@ti.func
+def clamp_friction(F, n, bound):
+    """The friction impulse F [N·s] in the tangent plane of ``n``, at most ``bound`` long."""
+    F_t = F - F.dot(n) * n
+    size = F_t.norm()
+    if size > bound:
+        F_t *= bound / size
+    return F_t
+
+
+@ti.func
+def surface_step(phase, n, gap, v0, v, w, radius, lam, contact, v_inelastic, h):
+    """:func:`pair_step` of a ball against a static surface (a plane, or the terrain's patch) with
+    normal n̂, per unit mass [m/s] (``v0``: the ball's velocity before the step's contacts), with
+    ``contact``'s restitution, or with ``contact.turf`` in the turf frame of :func:`turf_impact`.
+    In the ``BOUNCE`` pass a pressed ball also meets rolling resistance and the resistance to spin
+    about the normal, bounded by μ_roll·λ (once per step, as :func:`plane_jolt` does). Returns
+    (v, ω, λ)."""
+    n_eff, e = n, contact.e
+    if contact.turf != 0:
+        n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
+    P, lam_new, _ = pair_step(
+        phase,
+        n_eff,
+        gap,
+        v0.dot(n_eff),
+        v,
+        w,
+        radius,
+        1.0,
+        zero3(),
+        zero3(),
+        0.0,
+        0.0,
+        lam,
+        zero3(),
+        e,
+        contact.mu,
+        v_inelastic,
+        h,
+    )
+    v_new = v + P
+    w_new = w + spin_jolt(P, n_eff, radius, 1.0)
+    if phase == BOUNCE and lam_new > 0.0:
+        dv, dw = rolling_resistance(v_new, radius, contact.mu_roll, lam_new, n_eff)
+        v_new += dv
+        w_new += dw + pivot_resistance(w_new, radius, contact.mu_roll, lam_new, n_eff)
+    return v_new, w_new, lam_new
 
 
 @ti.func

@@ -16,9 +16,11 @@ from ti_golf.physics.types import (
     float_grid,
     int_array,
     int_table,
+    is_f64,
     kernel,
     of_ball,
     pair_table,
+    vec3f_table,
 )
 
 
@@ -92,15 +94,19 @@ def link_and_carry(
     lam: float_grid,
     moved: ti.template(),
     old_id: int_array,
+    friction: ti.template(),
+    old_friction: vec3f_table,
+    new_friction: vec3f_table,
 ):
     """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
     :func:`stash` and :func:`carry_ball`) to the new ones, in one launch (neither writes what the
     other reads). With ``moved`` the balls were stored in a new order since the stash: ball i was
-    ball ``old_id[i]`` of the stashed lists."""
+    ball ``old_id[i]`` of the stashed lists. With ``friction`` the pairs' friction impulses (of
+    the Gauss–Seidel sweeps) are carried from ``old_friction`` to ``new_friction`` too."""
     bits = slot_bits(upper.shape[1])
     for i in range(lower.shape[1]):
         link_ball(i, bits, upper, n_upper, lower, n_lower)
-        carry_ball(i, stashed, upper, n_upper, lam, old_id, moved)
+        carry_ball(i, stashed, upper, n_upper, lam, old_id, moved, friction, old_friction, new_friction)
 
 
 @ti.func
@@ -112,9 +118,13 @@ def carry_ball(
     lam: ti.template(),
     old_id: ti.template(),
     moved: ti.template(),
+    friction: ti.template(),
+    old_friction: ti.template(),
+    new_friction: ti.template(),
 ):
     """Carry the accumulated impulse of each pair ball i owns in the new lists from the stashed old
-    ones (see :func:`stash_ball`); new pairs start at zero. The pair of balls a and b (their old
+    ones (see :func:`stash_ball`), and with ``friction`` its friction impulse from the table of the
+    old lists to that of the new ones; new pairs start at zero. The pair of balls a and b (their old
     ids: ``old_id`` of i and j when ``moved``) is looked up in the row of its old owner, which is
     a's, or b's when the pair changed hands (a pair's owner is the ball behind the other along
     their main axis, see :func:`owns`, and that axis can change as the balls move)."""
@@ -122,24 +132,33 @@ def carry_ball(
         a, b = i, upper[i, k]
         if ti.static(moved):
             a, b = old_id[a], old_id[b]
-        found, value = stashed_impulse(stashed, a, b)
-        if not found:
-            found, value = stashed_impulse(stashed, b, a)
+        found, value, slot = stashed_impulse(stashed, a, b)
+        F = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
+        if found:
+            if ti.static(friction):
+                F = old_friction[a, slot]
+        else:
+            found, value, slot = stashed_impulse(stashed, b, a)
+            if ti.static(friction):
+                if found:
+                    F = -old_friction[b, slot]  # (the friction on the other ball of the pair)
         lam[i, k] = value
+        if ti.static(friction):
+            new_friction[i, k] = F
 
 
 @ti.func
 def stashed_impulse(stashed: ti.template(), a, b):
-    """(whether, and with which accumulated impulse) the stashed row of ball a holds its pair with
-    ball b: a search of a row sorted by id, stopping at the first id past b."""
-    found, value = 0, 0.0
+    """(whether, with which accumulated impulse, and in which slot) the stashed row of ball a holds
+    its pair with ball b: a search of a row sorted by id, stopping at the first id past b."""
+    found, value, slot = 0, 0.0, 0
     for k in range(stashed.shape[1]):
         j = stashed_id(stashed, a, k)
         if j < 0 or j > b:
             break
         if j == b:
-            found, value = 1, stashed[a, k][0]
-    return found, value
+            found, value, slot = 1, stashed[a, k][0], k
+    return found, value, slot
 
 
 @ti.func
@@ -164,13 +183,17 @@ def relist_all_pairs(
     x_at_build: ti.template(),
     lam: ti.template(),
     scratch: ti.template(),
+    friction: ti.template(),
+    clear_friction,
 ):
     """Rebuild the neighbour lists of a few balls in place without a grid, by testing every pair:
     the lists, slots and carried-over impulses that ``list_neighbours`` and ``link_and_carry``
     give on a CPU backend (with the same owners: the balls faster than ``v_cut`` or bigger than
     ``r_cut`` are listed apart unless there are more than ``APART_MAX``), in O(n²) work. The
     tables must be n − 1 wide (no list can overflow). Meant for a serial loop (the ``serial``
-    variant of ``collide.collision_step``); ``scratch`` as in :func:`stash_ball`."""
+    variant of ``collide.collision_step``); ``scratch`` as in :func:`stash_ball`. With
+    ``clear_friction`` the pairs' friction impulses (of the Gauss–Seidel sweeps) are set to zero:
+    they are not carried over in place."""
     n_apart = 0
     for i in range(x.shape[0]):
         stash_ball(i, upper, n_upper, lam, scratch)
@@ -197,4 +220,24 @@ def relist_all_pairs(
     for i in range(x.shape[0]):
         link_ball(i, bits, upper, n_upper, lower, n_lower)
     for i in range(x.shape[0]):
-        carry_ball(i, scratch, upper, n_upper, lam, n_upper, False)  # ids unchanged: old_id (n_upper) unread
+        carry_ball(i, scratch, upper, n_upper, lam, n_upper, False, False, friction, friction)  # ids unchanged
+        if clear_friction:  # (not carried: the pairs' friction impulses start again from zero)
+            for k in range(n_upper[i]):
+                friction[i, k] = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
+
+
+@ti.func
+def moved_past(x1, x_build, reach, half_skin):
+    """Whether a ball now at ``x1`` [m], which may move ``reach`` [m] more before the next step's
+    test, can be farther than ``half_skin`` [m] from where it was when the lists were built.
+
+    The position at the build, ``x_build``, is kept in f32 (12 bytes per ball less in f64): it
+    only serves this test. Rounding moved it by at most 2^-24·|x| (round to nearest), so the test
+    adds twice that, |x_build|·2^-23 (in f64; nothing in f32, where nothing was rounded): a ball
+    never moves past half the skin unseen, and the lists are rebuilt a little early, by 2 % of
+    half the skin of a golf ball (1.07 mm) for a ball 170 m from the origin, by 11 % at 1 km."""
+    xb = ti.cast(x_build, float)
+    margin = 0.0
+    if ti.static(is_f64()):
+        margin = xb.norm() * 2.0**-23
+    return (x1 - xb).norm() + margin + reach > half_skin

@@ -10,7 +10,9 @@ and a ball takes one impact per sweep (:func:`impact_keys`, :func:`matched`).
 import taichi as ti
 
 from ti_golf.physics.contact import (
+    GAUSS_SEIDEL,
     PRESSED,
+    clamp_friction,
     pair_impulse,
 )
 from ti_golf.physics.links import owner_slot
@@ -94,7 +96,7 @@ def owned_pairs(
         kick = 0
         if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
             lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
-        elif ok and not skip_pair(status, i, j):
+        elif ok and not skip_pair(status, i, j) and contact.solver != GAUSS_SEIDEL:  # (its sweeps are done)
             P, lam[i, k], _, kick = pair_impulse(
                 n,
                 gap,
@@ -151,10 +153,16 @@ def warm_start(
     bits,
     lam: ti.template(),
     J: ti.template(),
+    friction: ti.template(),
+    mu,
+    carried,
 ):
-    """Δv [m/s] of ball i from last step's resting impulses λ of its ball pairs, each along the
-    pair's normal at the start of the step, summed in id order (lower then upper). A normal
-    impulse gives no spin; friction is left to the sweeps. Also stores the geometry of the pairs
+    """Δv [m/s] and Δω [rad/s] of ball i from last step's resting impulses λ of its ball pairs, each
+    along the pair's normal at the start of the step, summed in id order (lower then upper). A
+    normal impulse gives no spin; friction is left to the sweeps, but with ``carried`` (the
+    Gauss–Seidel sweeps), where each pair's friction impulse F from the last step is applied too,
+    in the pair's tangent plane and at most μ·λ (:func:`.contact.clamp_friction`: the same on both
+    balls, bit for bit). Also stores the geometry of the pairs
     ball i owns for the sweeps: J[i, k] = (0, 1/|x_i − x_j|, the surface gap [m]), which marks
     no impact (:func:`impact_mark`). Reads only
     what the free-flight loop does not write (start-of-step positions, status, λ, rest timers),
@@ -162,26 +170,48 @@ def warm_start(
     of the ball and the balls it touches, see :func:`finish`; or ``QUIET`` for a ball at rest
     whose listed neighbours are all at rest or out of bounds: nothing can touch it this step, so
     the step leaves it exactly as it is and the sweeps skip it)."""
-    P = zero3()
+    P, T = zero3(), zero3()
     calm, xi = rest_time[i], x[i]
     quiet = status[i] == AT_REST
     for m in range(n_lower[i]):
         slot = lower[m, i]
         j, k = owner_slot(slot, bits)  # the pair's owner j keeps its λ
         inv, gap = pair_geometry(x, radius, i, j)
-        P += resting_impulse(status, i, j, pair_normal(xi, x[j], inv), lam[j, k])
+        n = pair_normal(xi, x[j], inv)
+        P += resting_impulse(status, i, j, n, lam[j, k])
+        if carried:
+            F = carried_friction(status, i, j, n, lam[j, k], friction[j, k], mu)
+            P -= F
+            T += n.cross(F)
         calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j])
         quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
     for k in range(n_upper[i]):
         j = upper[i, k]
         inv, gap = pair_geometry(x, radius, i, j)
         J[i, k] = ti.Vector([0.0, 0.0, 0.0, inv, gap])
-        P += resting_impulse(status, i, j, pair_normal(xi, x[j], inv), lam[i, k])
+        n = pair_normal(xi, x[j], inv)
+        P += resting_impulse(status, i, j, n, lam[i, k])
+        if carried:
+            F = carried_friction(status, i, j, n, lam[i, k], friction[i, k], mu)
+            P += F
+            T -= n.cross(F)
         calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j])
         quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
     if quiet:
         calm = QUIET
-    return P / of_ball(mass, i), calm
+    m = of_ball(mass, i)
+    return P / m, T * (2.5 / (m * of_ball(radius, i))), calm
+
+
+@ti.func
+def carried_friction(status: ti.template(), i, j, n, lam, F, mu):
+    """The friction impulse [N·s] that a pair (i, j) with normal ``n`` and resting impulse ``lam``
+    carries into the step, from its stored impulse ``F`` (f32) on the pair's owner; zero when the
+    pair gets no impulse."""
+    F_t = zero3()
+    if lam > 0.0 and not skip_pair(status, i, j):
+        F_t = clamp_friction(ti.cast(F, float), n, mu * lam)
+    return F_t
 
 
 @ti.func

@@ -73,6 +73,13 @@ def storage_order(
     so the order does not depend on thread scheduling. The balls of each row of cells, and of
     the rows a ball's neighbours lie in, end up in runs of consecutive indices."""
     counting_sort(x, inv_cell, mask, origin, stride, rank, start, chunk_start, sorted_ids)
+    sort_buckets(x, start, sorted_ids)
+
+
+@ti.func
+def sort_buckets(x: ti.template(), start: ti.template(), sorted_ids: ti.template()):
+    """Sort the ball ids of every bucket of a counting sort by position, y then z then x (then
+    id): :func:`stored_after`."""
     for b in range(start.shape[0] - 1):  # a bucket holds a few balls: an insertion sort
         for k in range(start[b] + 1, start[b + 1]):
             j = sorted_ids[k]

@@ -11,6 +11,7 @@ import taichi as ti
 from ti_golf.physics.contact import (
     plane_jolt,
     surface_impulse,
+    surface_step,
     warm_impulse,
 )
 from ti_golf.physics.terrain import (
@@ -89,13 +90,15 @@ def surface_impulses(
     lists: ti.template(),
     state: ti.template(),
     scratch: ti.template(),
+    phase=-1,
 ):
     """Ball i's contacts with the planes, then the terrain (the plane of the patch under its
     free-flight end point; its resting impulse is kept in the column after the planes' in
     ``lam_plane``, in f32: 4 bytes instead of 8 for every ball and plane, though most balls touch
     none; only the ball reads and writes its own λ, so nothing can disagree about it, and the next
     sweep or step corrects what the rounding left, 2^-24 of the impulse), applied in turn to
-    (vi, wi): the warm start (``warm``) or a sweep. A sweep skips
+    (vi, wi): the warm start (``warm``) or a sweep, Jacobi (``phase`` −1, :func:`.contact.surface_impulse`)
+    or Gauss–Seidel (``phase``: that of :func:`.contact.surface_step`). A sweep skips
     them when the ball is too far from all of them (``clear[i]``, see :func:`surface_clearance`)
     to touch one within the step at its speed, and marks the ball ``NEAR`` once it rests on one
     (that resting impulse must be visited in later sweeps, to be given back). Returns (v, ω)."""
@@ -116,9 +119,15 @@ def surface_impulses(
         else:
             gap = (state.x[i] - model.plane_p[p]).dot(n) - r
             if gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam0 > 0.0:  # else no impulse (pair_impulse)
-                P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, contact, v_inelastic, h)
-                if P.dot(n) != 0.0:
-                    vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, contact.mu_roll)
+                lam_p = 0.0
+                if phase >= 0:
+                    vi, wi, lam_p = surface_step(
+                        phase, n, gap, scratch.v_free[i], vi, wi, r, lam0, contact, v_inelastic, h
+                    )
+                else:
+                    P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, contact, v_inelastic, h)
+                    if P.dot(n) != 0.0:
+                        vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, contact.mu_roll)
                 lists.lam_plane[i, p] = ti.cast(lam_p, ti.f32)
                 if lam_p > 0.0:
                     scratch.clear[i] = ti.cast(NEAR, ti.f32)
@@ -135,9 +144,13 @@ def surface_impulses(
                 vi, wi = plane_jolt(P, lam0, vi, wi, r, n, ct.mu_roll)
             else:
                 gap = (state.x[i] - pt).dot(n) - r
-                P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, ct, v_inelastic, h)
-                if P.dot(n) != 0.0:
-                    vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, ct.mu_roll)
+                lam_p = 0.0
+                if phase >= 0:
+                    vi, wi, lam_p = surface_step(phase, n, gap, scratch.v_free[i], vi, wi, r, lam0, ct, v_inelastic, h)
+                else:
+                    P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, ct, v_inelastic, h)
+                    if P.dot(n) != 0.0:
+                        vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, ct.mu_roll)
                 lists.lam_plane[i, q] = ti.cast(lam_p, ti.f32)
                 if lam_p > 0.0:
                     scratch.clear[i] = ti.cast(NEAR, ti.f32)

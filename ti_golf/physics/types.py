@@ -116,6 +116,7 @@ ContactParams = Deferred(
         relax=float,  # Jacobi relaxation of resting ball–ball impulses
         v_bounce=float,  # approach speeds below v_bounce + 2|g|h are inelastic [m/s]
         turf=ti.i32,  # 1: ground impacts as on turf (contact.turf_impact); 0: restitution e
+        solver=ti.i32,  # the sweeps: 0 Jacobi, 1 Gauss–Seidel (scene.schema.SOLVERS)
     ),
     "ContactParams",
 )
@@ -153,6 +154,7 @@ vec3f = ti.types.vector(3, ti.f32)
 vec3f_array = ti.types.ndarray(dtype=vec3f, ndim=1)
 f32_array = ti.types.ndarray(dtype=ti.f32, ndim=1)
 f32_table = ti.types.ndarray(dtype=ti.f32, ndim=2)
+vec3f_table = ti.types.ndarray(dtype=vec3f, ndim=2)
 int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
 """2-D int array (neighbour lists: a row per ball)."""
 
@@ -227,10 +229,21 @@ NeighbourLists = Deferred(
         x_at_build=vec3f_array,  # positions when the lists were built [m], f32, (N,)
         lam=float_grid.get(),  # each pair's accumulated resting impulse [N·s], the shape of upper
         lam_plane=f32_table,  # each ball's accumulated impulse on each plane and the terrain [N·s], (N, P + 1)
+        friction=vec3f_table,  # each pair's friction impulse on its owner [N·s], f32, the shape of upper (Gauss–Seidel)
     ),
     "NeighbourLists",
 )
 """The collision solver's neighbour lists and the impulses it carries from step to step."""
+
+BlockOrder = Deferred(
+    lambda: ti.types.argpack(
+        start=int_array,  # each hash bucket's first entry in ids, (B + 1,)
+        ids=int_array,  # the balls bucket by bucket, bottom-up in each, (N,)
+        colour=int_array,  # the colour of each entry's block, (N,)
+    ),
+    "BlockOrder",
+)
+"""The balls grouped by block of grid columns for the Gauss–Seidel sweeps (:mod:`.colour`)."""
 
 StepScratch = Deferred(
     lambda: ti.types.argpack(

@@ -39,6 +39,7 @@ STATUS_NAMES = {FLYING: "flying", ROLLING: "rolling", AT_REST: "at_rest", OUT_OF
 
 INTEGRATORS = ("semi_implicit", "rk4")
 AIR_MODELS = ("lab", "spin_ratio")
+SOLVERS = ("jacobi", "gauss_seidel")
 """Aerodynamic models (``air.model``): the report's laws, or coefficients of the spin ratio."""
 
 
@@ -165,11 +166,20 @@ class Contact:
         "rolling-resistance coefficient: a rolling ball decelerates at μ_roll·g",
         NON_NEGATIVE,
     )
+    solver: str = key(
+        "str",
+        "jacobi",
+        "-",
+        "jacobi (the report's B.5-B.18: every pair at once from the last sweep's velocities) or "
+        "gauss_seidel (each pair at once after the last, columns of balls bottom-up: for piles)",
+        OneOf(SOLVERS),
+        read_when=("world.collisions", (True,)),
+    )
     iterations: int = key(
         "int",
         4,
         "-",
-        "Jacobi sweeps over all touching pairs per step (more: stiffer stacks)",
+        "sweeps over all touching pairs per step (more: stiffer stacks)",
         Interval(1, 100),
         read_when=("world.collisions", (True,)),
     )

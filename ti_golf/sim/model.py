@@ -9,7 +9,7 @@ from ti_golf.physics.aero import air_params
 from ti_golf.physics.integrate import INTEGRATOR_CODES
 from ti_golf.physics.types import ContactParams, TerrainParams, vec3
 from ti_golf.runtime import np_float
-from ti_golf.scene.schema import Scene, Surface
+from ti_golf.scene.schema import SOLVERS, Scene, Surface
 from ti_golf.scene.terrain import build_terrain
 
 
@@ -63,7 +63,14 @@ class Model:
         a, c, w = scene.air, scene.contact, scene.world
         self.air = air_params(a)
         self.contact = ContactParams(
-            e=c.e, mu=c.mu, k_p=c.k_p, mu_roll=c.mu_roll, relax=c.relax, v_bounce=c.v_bounce, turf=int(c.turf)
+            e=c.e,
+            mu=c.mu,
+            k_p=c.k_p,
+            mu_roll=c.mu_roll,
+            relax=c.relax,
+            v_bounce=c.v_bounce,
+            turf=int(c.turf),
+            solver=SOLVERS.index(c.solver),
         )
         self.gravity = vec3(*w.gravity)
         self.integrator = INTEGRATOR_CODES[w.integrator]

@@ -71,6 +71,7 @@ class Packs:
             x_at_build=c.x_at_build,
             lam=c.lam,
             lam_plane=c.lam_plane,
+            friction=c.friction,
         )
 
     def scratch(self, c: Any) -> Any:

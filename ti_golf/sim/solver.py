@@ -9,8 +9,9 @@ import numpy as np
 import taichi as ti
 
 from ti_golf.errors import SimulationError
-from ti_golf.physics import apart, collide, grid, links, sort
+from ti_golf.physics import apart, collide, colour, grid, links, sort
 from ti_golf.physics.types import (
+    BlockOrder,
     GridParams,
     GridScratch,
     StepParams,
@@ -177,6 +178,13 @@ class CollisionSolver:
         self.n_apart = 0
         # the loop iterations after which a thread stops its loops without a word (grid.LOOP_CAP)
         self.loop_cap = grid.LOOP_CAP if ensure_init().arch == "vulkan" else None
+        self.gauss_seidel = model.scene.contact.solver == "gauss_seidel"
+        if self.gauss_seidel and not self.serial:  # the balls by grid column (colour.column_order)
+            self.col_ids, self.col_colour = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
+        self.col_start = self.col_chunk = None
+        # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only)
+        self.friction = self.spare_friction = ti.ndarray(vec3f, (1, 1))
+        self.far_owners = 0
         self._valid = False
         self._rebuild = True
         self._ids: ti.Ndarray | None = None  # the state's storage order at the last build (see pairs)
@@ -262,19 +270,76 @@ class CollisionSolver:
             )
         if stashed is not None:
             # after a reorder, sorted_ids still maps each ball to its index in the stashed lists
+            carry_friction = self.gauss_seidel and self.spare_friction.shape == self.upper.shape
+            if self.gauss_seidel and not carry_friction:
+                self.spare_friction = None
+                self.spare_friction = ti.ndarray(vec3f, self.upper.shape)
+                carry_friction = True
             links.link_and_carry(
-                self.upper, self.n_upper, self.lower, self.n_lower, stashed, self.lam, self.reorder, self.sorted_ids
+                self.upper,
+                self.n_upper,
+                self.lower,
+                self.n_lower,
+                stashed,
+                self.lam,
+                self.reorder,
+                self.sorted_ids,
+                carry_friction,
+                self.friction,
+                self.spare_friction,
             )
+            if carry_friction:
+                self.friction, self.spare_friction = self.spare_friction, self.friction
             stashed = None
         else:
             links.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
             grid.clear2(self.lam)
+            if self.gauss_seidel:  # each pair's friction impulse (colour.sweep_ball): none yet
+                if self.friction.shape != self.upper.shape:
+                    self.friction = None
+                    self.friction = ti.ndarray(vec3f, self.upper.shape)
+                self.friction.fill(0.0)
         if self.impulse is None or self.impulse.shape != self.upper.shape:
             self.impulse = None  # free the old table before allocating
             # each pair's impulse, inverse distance, and gap or projection in a sweep (pairs.owned_pairs)
             self.impulse = ti.ndarray(pair_entry.get(), self.upper.shape)
         self.rebuilds += 1
         self._valid = True
+        if self.gauss_seidel and not self.serial:
+            self._order_columns(state)
+
+    def _order_columns(self, state: State) -> None:
+        """Group the balls by grid column for the Gauss–Seidel sweeps (``colour.column_order``):
+        the columns of the box of cells ``bounds`` numbered one after another when there are no
+        more of them than there are balls, else hashed."""
+        bounds = grid.cell_bounds(state.x, 0.5 / self.cell)  # in blocks of 2 x 2 columns
+        lo, hi = [int(b) for b in bounds[:3]], [int(b) for b in bounds[3:]]
+        ext_x, ext_z = hi[0] - lo[0] + 3, hi[2] - lo[2] + 3
+        n = self._model.n
+        dense = ext_x * ext_z <= max(n, 16)
+        columns = ext_x * ext_z if dense else n
+        buckets = 1 << max(4, int(np.ceil(np.log2(columns))))
+        if self.col_start is None or self.col_start.shape[0] != buckets + 1:
+            self.col_start = ti.ndarray(ti.i32, buckets + 1)
+            self.col_chunk = ti.ndarray(ti.i32, sort.scan_chunks(buckets))
+        if dense:
+            origin, stride = (lo[0] - 1, 0, lo[2] - 1), (1, 0, ext_x)
+        else:
+            origin, stride = (0, 0, 0), (grid.SCATTERED_HASH[0], 0, grid.SCATTERED_HASH[2])
+        inv_cell = 1.0 / self.cell
+        colour.column_order(
+            self.x_at_build,
+            inv_cell,
+            buckets - 1,
+            ti.Vector(origin, dt=ti.i32),
+            ti.Vector(stride, dt=ti.i32),
+            self.rank,
+            self.col_start,
+            self.col_chunk,
+            self.col_ids,
+            self.col_colour,
+        )
+        self.far_owners = int(colour.count_far_owners(self.x_at_build, inv_cell, self._packs.lists(self)))
 
     def _check_table_memory(self, state: State, widths: tuple[int, int]) -> None:
         """Raise :class:`SimulationError` before pair tables of ``widths`` (upper, lower) take more
@@ -418,11 +483,35 @@ class CollisionSolver:
         if not self._valid or self._rebuild:
             self.build(state)
         arguments = self._arguments(model, state, 1)
-        for warm, sweeps, last in sweep_launches(model.scene.contact.iterations):
-            rebuild = collide.collision_step(*arguments, False, warm, sweeps, last)
+        if self.gauss_seidel:
+            rebuild = self._gauss_seidel_step(model.scene.contact.iterations, arguments)
+        else:
+            for warm, sweeps, last in sweep_launches(model.scene.contact.iterations):
+                rebuild = collide.collision_step(*arguments, False, warm, sweeps, last)
         state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
         state.t += model.dt
         self._rebuild = bool(rebuild)
+
+    def _gauss_seidel_step(self, iterations: int, arguments: tuple) -> int:
+        """One parallel step with Gauss–Seidel sweeps (see ``physics.colour``): the free flight and
+        warm start, ``iterations`` coloured sweeps and the restitution pass, then the last
+        sweep, which only finishes the step. Returns whether the lists must be rebuilt."""
+        collide.collision_step(*arguments, False, True, 0, False)
+        air, contact, terrain, params, _, model, lists, state, _, scratch = arguments
+        inv_cell = 1.0 / self.cell
+        any_far = int(self.far_owners > 0)
+        phases = [colour.FIRST] + [colour.SOLVE] * (iterations - 1) + [colour.BOUNCE]
+        blocks = self._packs.get(BlockOrder, start=self.col_start, ids=self.col_ids, colour=self.col_colour)
+        for phase in phases:
+            colour.gauss_seidel_sweep(
+                phase, any_far, inv_cell, contact, terrain, params, model, lists, state, scratch, blocks
+            )
+            if any_far:
+                colour.far_pairs(phase, inv_cell, contact, terrain, params, model, lists, state, scratch)
+        collide.collision_step(*arguments, False, False, 0, True)
+        if any_far:
+            colour.far_pairs(colour.PROJECT, inv_cell, contact, terrain, params, model, lists, state, scratch)
+        return colour.project_sweep(any_far, inv_cell, contact, params, model, lists, state, scratch, blocks)
 
     def _arguments(self, m: Model, s: State, steps: int) -> tuple:
         """The arguments of ``collide.collision_step`` before ``serial``: the model, the lists, the

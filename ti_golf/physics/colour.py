@@ -1,0 +1,396 @@
+"""Gauss–Seidel sweeps over the ball pairs, coloured by grid columns (``contact.solver =
+"gauss_seidel"``).
+
+A Jacobi sweep (:mod:`.collide`) computes every pair's impulse from the velocities of the sweep
+before, so a support found at the bottom of a pile climbs one layer per sweep, and a ball pressed
+by many neighbours gets all their corrections at once. A Gauss–Seidel sweep applies each pair's
+impulse at once, so the next pair already sees it: down a column of balls handled bottom-up, the
+floor's support reaches the top in one sweep.
+
+To run in parallel and still give the same result on every thread order, the balls are grouped by
+the vertical *column* of grid cells (x, z) they were in when the neighbour lists were built
+(:func:`column_order`), sorted bottom-up inside a column, and the columns are given one of nine
+colours by their coordinates modulo 3. A listed pair's balls were at most one cell apart along x
+and z at the build (the cells are wider than any listed pair reaches, see :mod:`.grid`), so a
+column's pairs touch only balls of that column and the eight around it, and two columns of one
+colour are three columns apart: the columns of a colour are swept in parallel, one thread per
+column, without two threads ever writing one ball. The nine colours follow one another
+(:func:`colour_sweep`, one launch each). The few pairs whose balls were farther apart (a ball
+set apart as much bigger or faster than the rest, see :mod:`.apart`) are swept after the colours,
+one after another (:func:`far_pairs`).
+
+Each pair's impulse is the report's impulse (:func:`.contact.pair_impulse`), with its accumulated
+resting impulse carried from step to step as in the Jacobi sweeps; each ball meets its planes and
+the terrain right after its pairs.
+"""
+
+import taichi as ti
+
+from ti_golf.physics.contact import BOUNCE, FIRST, SOLVE, clamp_friction, pair_step, spin_jolt
+from ti_golf.physics.links import moved_past
+from ti_golf.physics.pairs import QUIET, pair_normal, skip_pair
+from ti_golf.physics.sort import cell_of, counting_sort, sort_buckets
+from ti_golf.physics.surfaces import surface_impulses
+from ti_golf.physics.types import (
+    BallState,
+    BlockOrder,
+    ContactParams,
+    ModelArrays,
+    NeighbourLists,
+    StepParams,
+    StepScratch,
+    TerrainParams,
+    int_array,
+    ivec3,
+    kernel,
+    of_ball,
+    vec3f_array,
+)
+from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
+
+PROJECT = 2
+"""The phase of the position projection after a step (:func:`project_ball`), after the sweeps'
+``SOLVE`` and ``BOUNCE`` (:func:`.contact.pair_step`)."""
+
+COLOURS = 4
+"""Colours of the blocks of 2 × 2 grid columns: the parities of the block's coordinates."""
+
+
+@ti.func
+def column_of(x, inv_cell):
+    """Integer (x, z) coordinates of the grid column holding point ``x`` [m]."""
+    c = cell_of(x, inv_cell)
+    return ti.Vector([c[0], c[2]])
+
+
+@ti.func
+def block_of(x, inv_cell):
+    """Integer (x, z) coordinates of the *block* holding point ``x`` [m]: a column two grid cells
+    wide along x and z."""
+    return column_of(x, 0.5 * inv_cell)
+
+
+@ti.func
+def colour_of(block):
+    """The colour, 0 to 3, of a block (:func:`block_of`): its coordinates' parities."""
+    return (block[0] % 2 + 2) % 2 + 2 * ((block[1] % 2 + 2) % 2)
+
+
+@ti.func
+def adjacent(col_a, col_b):
+    """Whether two grid columns are the same or neighbours (8-connected)."""
+    d = col_a - col_b
+    return ti.abs(d[0]) <= 1 and ti.abs(d[1]) <= 1
+
+
+@kernel
+def column_order(
+    x_at_build: vec3f_array,
+    inv_cell: float,
+    mask: ti.i32,
+    origin: ivec3,
+    stride: ivec3,
+    rank: int_array,
+    start: int_array,
+    chunk_start: int_array,
+    ids: int_array,
+    colour: int_array,
+):
+    """Group the balls by block for the sweeps: ``ids[start[b] : start[b + 1]]`` are the balls of
+    hash bucket b (the blocks, cells of side 2/``inv_cell`` hashed with ``origin`` and ``stride``,
+    whose y stride is 0), bottom-up (then by z, x and id, so the order does not depend on thread
+    scheduling), and ``colour[s]`` is the colour of ball ``ids[s]``'s block. Positions are those of the lists' build, in f32, so that
+    the columns are those the pair tests of the sweeps see."""
+    inv_block = 0.5 * inv_cell
+    counting_sort(x_at_build, inv_block, mask, origin, stride, rank, start, chunk_start, ids)
+    sort_buckets(x_at_build, start, ids)
+    for s in range(ids.shape[0]):
+        colour[s] = colour_of(block_of(x_at_build[ids[s]], inv_cell))
+
+
+@kernel
+def count_far_owners(x_at_build: vec3f_array, inv_cell: float, lists: NeighbourLists) -> ti.i32:
+    """How many balls own a pair whose other ball was not in their grid column or one beside it
+    at the lists' build (an integer sum: the same on every thread order)."""
+    count = 0
+    for i in range(x_at_build.shape[0]):
+        col = column_of(x_at_build[i], inv_cell)
+        far = 0
+        for k in range(lists.n_upper[i]):
+            if not adjacent(col, column_of(x_at_build[lists.upper[i, k]], inv_cell)):
+                far = 1
+        count += far
+    return count
+
+
+@kernel
+def gauss_seidel_sweep(
+    phase: ti.i32,
+    any_far: ti.i32,
+    inv_cell: float,
+    contact: ContactParams,
+    terrain: TerrainParams,
+    params: StepParams,
+    model: ModelArrays,
+    lists: NeighbourLists,
+    state: BallState,
+    scratch: StepScratch,
+    blocks: BlockOrder,
+):
+    """One Gauss–Seidel sweep of ``phase`` (:func:`pair_step`), colour after colour: the balls of
+    every block of a colour, each block bottom-up in one thread (see the module's docstring;
+    ``blocks`` from :func:`column_order`), meet the pairs they own (but, when ``any_far``, those
+    whose other ball was not beside them at the build), then their planes and the terrain."""
+    v_inelastic = inelastic_speed(contact, params)
+    for c in ti.static(range(COLOURS)):  # a top-level loop per colour: the colours in turn
+        for b in range(blocks.start.shape[0] - 1):
+            for s in range(blocks.start[b], blocks.start[b + 1]):
+                if blocks.colour[s] == c:
+                    sweep_ball(
+                        blocks.ids[s],
+                        phase,
+                        False,
+                        any_far,
+                        inv_cell,
+                        contact,
+                        terrain,
+                        params.h,
+                        v_inelastic,
+                        model,
+                        lists,
+                        state,
+                        scratch,
+                    )
+
+
+@kernel
+def far_pairs(
+    phase: ti.i32,
+    inv_cell: float,
+    contact: ContactParams,
+    terrain: TerrainParams,
+    params: StepParams,
+    model: ModelArrays,
+    lists: NeighbourLists,
+    state: BallState,
+    scratch: StepScratch,
+):
+    """The pairs the colours left out (their balls were farther apart than beside each other at the
+    build), one ball after another in storage order."""
+    v_inelastic = inelastic_speed(contact, params)
+    ti.loop_config(serialize=True)
+    for i in range(state.x.shape[0]):
+        if phase == PROJECT:
+            project_ball(i, True, 1, inv_cell, contact.k_p, model, lists, state, scratch)
+        else:
+            sweep_ball(
+                i, phase, True, 1, inv_cell, contact, terrain, params.h, v_inelastic, model, lists, state, scratch
+            )
+
+
+@ti.func
+def serial_sweeps(
+    sweeps: ti.template(),
+    contact: ti.template(),
+    terrain: ti.template(),
+    h,
+    v_inelastic,
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    scratch: ti.template(),
+):
+    """A step's ``sweeps`` Gauss–Seidel sweeps and the restitution pass, every ball in storage
+    order, in the calling (serial) loop's thread."""
+    serial_sweep(FIRST, contact, terrain, h, v_inelastic, model, lists, state, scratch)
+    for _ in range(sweeps - 1):
+        serial_sweep(SOLVE, contact, terrain, h, v_inelastic, model, lists, state, scratch)
+    serial_sweep(BOUNCE, contact, terrain, h, v_inelastic, model, lists, state, scratch)
+
+
+@ti.func
+def serial_sweep(
+    phase,
+    contact: ti.template(),
+    terrain: ti.template(),
+    h,
+    v_inelastic,
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    scratch: ti.template(),
+):
+    """A Gauss–Seidel sweep of every ball in storage order, in the calling (serial) loop's thread."""
+    for i in range(state.x.shape[0]):
+        sweep_ball(i, phase, False, 0, 1.0, contact, terrain, h, v_inelastic, model, lists, state, scratch)
+
+
+@ti.func
+def inelastic_speed(contact: ti.template(), params: ti.template()):
+    """Approach speed [m/s] below which a contact is inelastic: v_bounce + 2|g|h."""
+    return contact.v_bounce + 2.0 * params.gravity.norm() * params.h
+
+
+@ti.func
+def sweep_ball(
+    i,
+    phase,
+    far_only: ti.template(),
+    any_far,
+    inv_cell,
+    contact: ti.template(),
+    terrain: ti.template(),
+    h,
+    v_inelastic,
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    scratch: ti.template(),
+):
+    """Ball i's Gauss–Seidel step: each pair it owns (:func:`pair_step`, from the current velocities
+    of both balls, applied to both at once, with the normal and gap the warm start stored in
+    ``scratch.J``), then (in the ``FIRST`` and ``SOLVE`` phases, unless ``far_only``) its planes and
+    the terrain. When ``any_far``, a pair whose other ball was not in a column beside i's at the
+    build is taken only with ``far_only`` (:func:`far_pairs`), and the others only without. A quiet
+    ball (at rest among balls at rest) is skipped, and gets nothing from its neighbours' pairs, as
+    in a Jacobi sweep."""
+    if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
+        xi, vi, wi = state.x[i], state.v[i], state.w[i]
+        ri, inv_mi = of_ball(model.radius, i), 1.0 / of_ball(model.mass, i)
+        col = column_of(lists.x_at_build[i], inv_cell)
+        for k in range(lists.n_upper[i]):
+            j = lists.upper[i, k]
+            far = False
+            if any_far != 0:
+                far = not adjacent(col, column_of(lists.x_at_build[j], inv_cell))
+            if far == far_only:
+                if state.status[j] == OUT_OF_BOUNDS:
+                    lists.lam[i, k] = 0.0  # a frozen ball no longer supports anything
+                elif not skip_pair(state.status, i, j):
+                    Jk = scratch.J[i, k]
+                    n = pair_normal(xi, state.x[j], ti.abs(Jk[3]))
+                    if n.norm_sqr() > 0.0:
+                        rj, inv_mj = of_ball(model.radius, j), 1.0 / of_ball(model.mass, j)
+                        F = ti.cast(lists.friction[i, k], float)
+                        lam = lists.lam[i, k]
+                        if phase == FIRST:  # what the warm start applied (pairs.carried_friction)
+                            F = clamp_friction(F, n, contact.mu * lam)
+                        P, lists.lam[i, k], F = pair_step(
+                            phase,
+                            n,
+                            Jk[4],
+                            (scratch.v_free[i] - scratch.v_free[j]).dot(n),
+                            vi,
+                            wi,
+                            ri,
+                            inv_mi,
+                            state.v[j],
+                            state.w[j],
+                            rj,
+                            inv_mj,
+                            lam,
+                            F,
+                            contact.e,
+                            contact.mu,
+                            v_inelastic,
+                            h,
+                        )
+                        lists.friction[i, k] = ti.cast(F, ti.f32)
+                        vi += P * inv_mi
+                        wi += spin_jolt(P, n, ri, inv_mi)
+                        if scratch.calm[j] != QUIET:
+                            state.v[j] -= P * inv_mj
+                            state.w[j] += spin_jolt(-P, -n, rj, inv_mj)
+        if not far_only:
+            vi, wi = surface_impulses(
+                i, False, vi, wi, contact, terrain, h, v_inelastic, model, lists, state, scratch, phase
+            )
+        state.v[i], state.w[i] = vi, wi
+
+
+@kernel
+def project_sweep(
+    any_far: ti.i32,
+    inv_cell: float,
+    contact: ContactParams,
+    params: StepParams,
+    model: ModelArrays,
+    lists: NeighbourLists,
+    state: BallState,
+    scratch: StepScratch,
+    blocks: BlockOrder,
+) -> ti.i32:
+    """The position projection (B.18) of a Gauss–Seidel step, colour after colour as in
+    :func:`gauss_seidel_sweep`, on the step's new positions ``scratch.x_free``
+    (:func:`project_ball`). Returns 1 (and sets ``scratch.flag[0]``) when the lists must be
+    rebuilt before the next step, as the step's end does (:func:`.collide.finish`)."""
+    for c in ti.static(range(COLOURS)):
+        for b in range(blocks.start.shape[0] - 1):
+            for s in range(blocks.start[b], blocks.start[b + 1]):
+                if blocks.colour[s] == c:
+                    project_ball(blocks.ids[s], False, any_far, inv_cell, contact.k_p, model, lists, state, scratch)
+    for i in range(state.x.shape[0]):
+        if moved_past(scratch.x_free[i], lists.x_at_build[i], 2.0 * params.h * state.v[i].norm(), params.half_skin):
+            scratch.flag[0] = 1
+    return scratch.flag[0]
+
+
+@ti.func
+def serial_projection(
+    params: ti.template(), k_p, model: ti.template(), lists: ti.template(), state: ti.template(), scratch: ti.template()
+):
+    """The position projection of :func:`project_sweep`, every ball in storage order, in the
+    calling (serial) loop's thread."""
+    for i in range(state.x.shape[0]):
+        project_ball(i, False, 0, 1.0, k_p, model, lists, state, scratch)
+    for i in range(state.x.shape[0]):
+        if moved_past(scratch.x_free[i], lists.x_at_build[i], 2.0 * params.h * state.v[i].norm(), params.half_skin):
+            scratch.flag[0] = 1
+
+
+@ti.func
+def project_ball(
+    i,
+    far_only: ti.template(),
+    any_far,
+    inv_cell,
+    k_p,
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    scratch: ti.template(),
+):
+    """Ball i's position projection at the end of a Gauss–Seidel step, on the new positions
+    ``scratch.x_free`` [m]: each pair it owns that overlaps by Δx moves apart by k_p·Δx, ball i by
+    k_p·m_red·Δx along the normal and the other ball the rest (B.18); a ball at rest does not move
+    (the other ball takes the whole projection). Then (unless ``far_only``) what overlaps a plane
+    moves out by k_p of the overlap. Pairs are split between the colours and :func:`far_pairs` as
+    in :func:`sweep_ball`. Moves only positions: the velocities, and so the energy, are untouched."""
+    if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
+        xi, ri = scratch.x_free[i], of_ball(model.radius, i)
+        inv_mi = 0.0
+        if state.status[i] != AT_REST:
+            inv_mi = 1.0 / of_ball(model.mass, i)
+        col = column_of(lists.x_at_build[i], inv_cell)
+        for k in range(lists.n_upper[i]):
+            j = lists.upper[i, k]
+            far = False
+            if any_far != 0:
+                far = not adjacent(col, column_of(lists.x_at_build[j], inv_cell))
+            if far == far_only and state.status[j] != OUT_OF_BOUNDS:
+                inv_mj = 0.0
+                if state.status[j] != AT_REST and scratch.calm[j] != QUIET:
+                    inv_mj = 1.0 / of_ball(model.mass, j)
+                d = xi - scratch.x_free[j]
+                dist = d.norm()
+                overlap = ri + of_ball(model.radius, j) - dist
+                if overlap > 0.0 and dist > 0.0 and inv_mi + inv_mj > 0.0:
+                    q = (k_p * overlap / (inv_mi + inv_mj)) * (d / dist)
+                    xi += q * inv_mi
+                    scratch.x_free[j] -= q * inv_mj
+        if not far_only and inv_mi > 0.0:
+            for p in range(model.plane_n.shape[0]):
+                gap = (xi - model.plane_p[p]).dot(model.plane_n[p]) - ri
+                if gap < 0.0:
+                    xi -= k_p * gap * model.plane_n[p]
+        scratch.x_free[i] = xi
