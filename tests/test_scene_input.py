@@ -203,6 +203,8 @@ def test_every_key_that_its_setting_leaves_unread_is_refused(tmp_path):
         bad = next(c for c in choices if c not in allowed)  # a valid setting that leaves the key unread
         doc = {k: dict(v) for k, v in base.items() if isinstance(v, dict)} | {"description": "t"}
         value = sample.get(key.kind, 1.0)
+        if getattr(key.check, "choices", None):  # a valid value: only the setting is wrong
+            value = key.check.choices[0]
         if section in ARRAY_SCHEMA:
             doc[section] = [{name: value, other_key: bad}]
             where = f"{section}[0].{name}"

@@ -26,7 +26,7 @@ the terrain right after its pairs.
 
 import taichi as ti
 
-from ti_golf.physics.contact import BOUNCE, FIRST, SOLVE, clamp_friction, pair_step, spin_jolt
+from ti_golf.physics.contact import BOUNCE, FIRST, SHOCK, SOLVE, clamp_friction, pair_step, spin_jolt
 from ti_golf.physics.links import moved_past
 from ti_golf.physics.pairs import QUIET, pair_normal, skip_pair
 from ti_golf.physics.sort import cell_of, counting_sort, sort_buckets
@@ -156,6 +156,7 @@ def gauss_seidel_sweep(
                         terrain,
                         params.h,
                         v_inelastic,
+                        upward(params),
                         model,
                         lists,
                         state,
@@ -184,7 +185,20 @@ def far_pairs(
             project_ball(i, True, 1, inv_cell, contact.k_p, model, lists, state, scratch)
         else:
             sweep_ball(
-                i, phase, True, 1, inv_cell, contact, terrain, params.h, v_inelastic, model, lists, state, scratch
+                i,
+                phase,
+                True,
+                1,
+                inv_cell,
+                contact,
+                terrain,
+                params.h,
+                v_inelastic,
+                upward(params),
+                model,
+                lists,
+                state,
+                scratch,
             )
 
 
@@ -195,17 +209,20 @@ def serial_sweeps(
     terrain: ti.template(),
     h,
     v_inelastic,
+    up,
     model: ti.template(),
     lists: ti.template(),
     state: ti.template(),
     scratch: ti.template(),
 ):
-    """A step's ``sweeps`` Gauss–Seidel sweeps and the restitution pass, every ball in storage
-    order, in the calling (serial) loop's thread."""
-    serial_sweep(FIRST, contact, terrain, h, v_inelastic, model, lists, state, scratch)
-    for _ in range(sweeps - 1):
-        serial_sweep(SOLVE, contact, terrain, h, v_inelastic, model, lists, state, scratch)
-    serial_sweep(BOUNCE, contact, terrain, h, v_inelastic, model, lists, state, scratch)
+    """A step's ``sweeps`` Gauss–Seidel sweeps (:func:`step_phases`) and the restitution pass,
+    every ball in storage order, in the calling (serial) loop's thread."""
+    serial_sweep(FIRST, contact, terrain, h, v_inelastic, up, model, lists, state, scratch)
+    for _ in range(sweeps - 2):
+        serial_sweep(SOLVE, contact, terrain, h, v_inelastic, up, model, lists, state, scratch)
+    if sweeps > 1:
+        serial_sweep(SHOCK, contact, terrain, h, v_inelastic, up, model, lists, state, scratch)
+    serial_sweep(BOUNCE, contact, terrain, h, v_inelastic, up, model, lists, state, scratch)
 
 
 @ti.func
@@ -215,6 +232,7 @@ def serial_sweep(
     terrain: ti.template(),
     h,
     v_inelastic,
+    up,
     model: ti.template(),
     lists: ti.template(),
     state: ti.template(),
@@ -222,7 +240,24 @@ def serial_sweep(
 ):
     """A Gauss–Seidel sweep of every ball in storage order, in the calling (serial) loop's thread."""
     for i in range(state.x.shape[0]):
-        sweep_ball(i, phase, False, 0, 1.0, contact, terrain, h, v_inelastic, model, lists, state, scratch)
+        sweep_ball(i, phase, False, 0, 1.0, contact, terrain, h, v_inelastic, up, model, lists, state, scratch)
+
+
+def step_phases(iterations: int) -> list[int]:
+    """The phases of a step's ``iterations`` sweeps and its restitution pass: ``FIRST``, then
+    ``SOLVE``, the last sweep ``SHOCK`` (with two or more), then ``BOUNCE``."""
+    sweeps = [FIRST] + [SOLVE] * max(iterations - 2, 0) + [SHOCK] * (iterations > 1)
+    return sweeps + [BOUNCE]
+
+
+@ti.func
+def upward(params: ti.template()):
+    """The unit vector against gravity (zero without gravity)."""
+    g = params.gravity.norm()
+    up = ti.Vector([0.0, 0.0, 0.0], dt=float)
+    if g > 0.0:
+        up = -params.gravity / g
+    return up
 
 
 @ti.func
@@ -242,6 +277,7 @@ def sweep_ball(
     terrain: ti.template(),
     h,
     v_inelastic,
+    up,
     model: ti.template(),
     lists: ti.template(),
     state: ti.template(),
@@ -275,6 +311,12 @@ def sweep_ball(
                         lam = lists.lam[i, k]
                         if phase == FIRST:  # what the warm start applied (pairs.carried_friction)
                             F = clamp_friction(F, n, contact.mu * lam)
+                        inv_a, inv_b = inv_mi, inv_mj
+                        if phase == SHOCK and up.norm_sqr() > 0.0:  # the lower ball stands firm
+                            if n.dot(up) > 0.0:
+                                inv_b = 0.0
+                            else:
+                                inv_a = 0.0
                         P, lists.lam[i, k], F = pair_step(
                             phase,
                             n,
@@ -283,11 +325,11 @@ def sweep_ball(
                             vi,
                             wi,
                             ri,
-                            inv_mi,
+                            inv_a,
                             state.v[j],
                             state.w[j],
                             rj,
-                            inv_mj,
+                            inv_b,
                             lam,
                             F,
                             contact.e,
@@ -296,11 +338,11 @@ def sweep_ball(
                             h,
                         )
                         lists.friction[i, k] = ti.cast(F, ti.f32)
-                        vi += P * inv_mi
-                        wi += spin_jolt(P, n, ri, inv_mi)
+                        vi += P * inv_a
+                        wi += spin_jolt(P, n, ri, inv_a)
                         if scratch.calm[j] != QUIET:
-                            state.v[j] -= P * inv_mj
-                            state.w[j] += spin_jolt(-P, -n, rj, inv_mj)
+                            state.v[j] -= P * inv_b
+                            state.w[j] += spin_jolt(-P, -n, rj, inv_b)
         if not far_only:
             vi, wi = surface_impulses(
                 i, False, vi, wi, contact, terrain, h, v_inelastic, model, lists, state, scratch, phase

@@ -32,9 +32,10 @@ _TINY = 1e-12
 GAUSS_SEIDEL = 1
 """``ContactParams.solver`` of the Gauss–Seidel sweeps (:mod:`.colour`; 0: the Jacobi sweeps)."""
 
-FIRST, SOLVE, BOUNCE = 0, 1, 2
+FIRST, SOLVE, SHOCK, BOUNCE = 0, 1, 3, 4
 """Phases of a Gauss–Seidel step (:func:`pair_step`): the first sweep (which also applies the
-friction carried from the last step), the later sweeps, then the restitution pass."""
+friction carried from the last step), the later sweeps, the last sweep with shock propagation
+(the lower ball of each pair stands firm, see :mod:`.colour`), then the restitution pass."""
 
 
 @ti.func
@@ -134,17 +135,18 @@ def clamp_friction(F, n, bound):
 
 
 @ti.func
-def surface_step(phase, n, gap, v0, v, w, radius, lam, contact, v_inelastic, h):
+def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, h):
     """:func:`pair_step` of a ball against a static surface (a plane, or the terrain's patch) with
-    normal n̂, per unit mass [m/s] (``v0``: the ball's velocity before the step's contacts), with
+    normal n̂, per unit mass [m/s] (``v0``: the ball's velocity before the step's contacts; ``F``:
+    the friction impulse applied so far), with
     ``contact``'s restitution, or with ``contact.turf`` in the turf frame of :func:`turf_impact`.
     In the ``BOUNCE`` pass a pressed ball also meets rolling resistance and the resistance to spin
     about the normal, bounded by μ_roll·λ (once per step, as :func:`plane_jolt` does). Returns
-    (v, ω, λ)."""
+    (v, ω, λ, F)."""
     n_eff, e = n, contact.e
     if contact.turf != 0:
         n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
-    P, lam_new, _ = pair_step(
+    P, lam_new, F_new = pair_step(
         phase,
         n_eff,
         gap,
@@ -158,7 +160,7 @@ def surface_step(phase, n, gap, v0, v, w, radius, lam, contact, v_inelastic, h):
         0.0,
         0.0,
         lam,
-        zero3(),
+        F,
         e,
         contact.mu,
         v_inelastic,
@@ -170,7 +172,7 @@ def surface_step(phase, n, gap, v0, v, w, radius, lam, contact, v_inelastic, h):
         dv, dw = rolling_resistance(v_new, radius, contact.mu_roll, lam_new, n_eff)
         v_new += dv
         w_new += dw + pivot_resistance(w_new, radius, contact.mu_roll, lam_new, n_eff)
-    return v_new, w_new, lam_new
+    return v_new, w_new, lam_new, F_new
 
 
 @ti.func

@@ -9,7 +9,11 @@ skips them, which changes no result.
 import taichi as ti
 
 from ti_golf.physics.contact import (
+    FIRST,
+    GAUSS_SEIDEL,
+    clamp_friction,
     plane_jolt,
+    spin_jolt,
     surface_impulse,
     surface_step,
     warm_impulse,
@@ -111,47 +115,66 @@ def surface_impulses(
         n_planes = 0
     for p in range(n_planes):
         n = model.plane_n[p]
-        lam0 = ti.cast(lists.lam_plane[i, p], float)  # f32 in the table (see above)
-        if ti.static(warm):
-            if lam0 > 0.0:
-                P = warm_impulse(n, vi, wi, r, zero3(), zero3(), 0.0, 1.0, lam0, contact.mu)
-                vi, wi = plane_jolt(P, lam0, vi, wi, r, n, contact.mu_roll)
-        else:
-            gap = (state.x[i] - model.plane_p[p]).dot(n) - r
-            if gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam0 > 0.0:  # else no impulse (pair_impulse)
-                lam_p = 0.0
-                if phase >= 0:
-                    vi, wi, lam_p = surface_step(
-                        phase, n, gap, scratch.v_free[i], vi, wi, r, lam0, contact, v_inelastic, h
-                    )
-                else:
-                    P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, contact, v_inelastic, h)
-                    if P.dot(n) != 0.0:
-                        vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, contact.mu_roll)
-                lists.lam_plane[i, p] = ti.cast(lam_p, ti.f32)
-                if lam_p > 0.0:
-                    scratch.clear[i] = ti.cast(NEAR, ti.f32)
+        gap = (state.x[i] - model.plane_p[p]).dot(n) - r
+        vi, wi = surface_contact_step(i, p, warm, n, gap, vi, wi, r, contact, h, v_inelastic, lists, scratch, phase)
     if terrain.on != 0 and not far:
         q = model.plane_n.shape[0]
-        lam0 = ti.cast(lists.lam_plane[i, q], float)
-        if ti.static(not warm) or lam0 > 0.0:
+        if ti.static(not warm) or lists.lam_plane[i, q] > 0.0:
             pt, n = surface(model.heights, terrain, scratch.x_free[i])
             ct = surface_contact(
                 contact, model.surface_table, model.terrain_cells, model.heights, terrain, scratch.x_free[i]
             )
-            if ti.static(warm):
-                P = warm_impulse(n, vi, wi, r, zero3(), zero3(), 0.0, 1.0, lam0, ct.mu)
-                vi, wi = plane_jolt(P, lam0, vi, wi, r, n, ct.mu_roll)
+            gap = (state.x[i] - pt).dot(n) - r
+            vi, wi = surface_contact_step(i, q, warm, n, gap, vi, wi, r, ct, h, v_inelastic, lists, scratch, phase)
+    return vi, wi
+
+
+@ti.func
+def surface_contact_step(
+    i,
+    column,
+    warm: ti.template(),
+    n,
+    gap,
+    vi,
+    wi,
+    r,
+    contact,
+    h,
+    v_inelastic,
+    lists: ti.template(),
+    scratch: ti.template(),
+    phase,
+):
+    """Ball i's contact with one surface of normal ``n`` and surface gap ``gap`` [m], whose resting
+    impulse (and, for the Gauss–Seidel sweeps, friction impulse) per unit mass is kept in
+    ``column`` of ``lists.lam_plane`` (and ``lists.friction_plane``): see :func:`surface_impulses`.
+    Returns (v, ω)."""
+    lam0 = ti.cast(lists.lam_plane[i, column], float)  # f32 in the table (see surface_impulses)
+    if ti.static(warm):
+        if lam0 > 0.0:
+            if contact.solver == GAUSS_SEIDEL:  # the normal and friction impulses carried from the last step
+                P = lam0 * n + clamp_friction(ti.cast(lists.friction_plane[i, column], float), n, contact.mu * lam0)
+                vi += P
+                wi += spin_jolt(P, n, r, 1.0)
             else:
-                gap = (state.x[i] - pt).dot(n) - r
-                lam_p = 0.0
-                if phase >= 0:
-                    vi, wi, lam_p = surface_step(phase, n, gap, scratch.v_free[i], vi, wi, r, lam0, ct, v_inelastic, h)
-                else:
-                    P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, ct, v_inelastic, h)
-                    if P.dot(n) != 0.0:
-                        vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, ct.mu_roll)
-                lists.lam_plane[i, q] = ti.cast(lam_p, ti.f32)
-                if lam_p > 0.0:
-                    scratch.clear[i] = ti.cast(NEAR, ti.f32)
+                P = warm_impulse(n, vi, wi, r, zero3(), zero3(), 0.0, 1.0, lam0, contact.mu)
+                vi, wi = plane_jolt(P, lam0, vi, wi, r, n, contact.mu_roll)
+    elif gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam0 > 0.0:  # else no impulse (pair_impulse)
+        lam_p = 0.0
+        if phase >= 0:
+            F = ti.cast(lists.friction_plane[i, column], float)
+            if phase == FIRST:  # what the warm start applied
+                F = clamp_friction(F, n, contact.mu * lam0)
+            vi, wi, lam_p, F = surface_step(
+                phase, n, gap, scratch.v_free[i], vi, wi, r, lam0, F, contact, v_inelastic, h
+            )
+            lists.friction_plane[i, column] = ti.cast(F, ti.f32)
+        else:
+            P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, contact, v_inelastic, h)
+            if P.dot(n) != 0.0:
+                vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, contact.mu_roll)
+        lists.lam_plane[i, column] = ti.cast(lam_p, ti.f32)
+        if lam_p > 0.0:
+            scratch.clear[i] = ti.cast(NEAR, ti.f32)
     return vi, wi

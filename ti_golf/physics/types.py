@@ -230,6 +230,7 @@ NeighbourLists = Deferred(
         lam=float_grid.get(),  # each pair's accumulated resting impulse [N·s], the shape of upper
         lam_plane=f32_table,  # each ball's accumulated impulse on each plane and the terrain [N·s], (N, P + 1)
         friction=vec3f_table,  # each pair's friction impulse on its owner [N·s], f32, the shape of upper (Gauss–Seidel)
+        friction_plane=vec3f_table,  # each ball's friction impulse per unit mass [m/s] on each surface, as lam_plane
     ),
     "NeighbourLists",
 )

@@ -189,7 +189,7 @@ class Contact:
         "-",
         "Jacobi relaxation of resting ball–ball impulses (1: full; lower is steadier in dense piles)",
         Interval(0.0, 1.0, lo_open=True),
-        read_when=("world.collisions", (True,)),
+        read_when=("contact.solver", ("jacobi",)),
     )
     skin: float = key(
         "float",

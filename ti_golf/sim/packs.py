@@ -72,6 +72,7 @@ class Packs:
             lam=c.lam,
             lam_plane=c.lam_plane,
             friction=c.friction,
+            friction_plane=c.friction_plane,
         )
 
     def scratch(self, c: Any) -> Any:

@@ -184,6 +184,9 @@ class CollisionSolver:
         self.col_start = self.col_chunk = None
         # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only)
         self.friction = self.spare_friction = ti.ndarray(vec3f, (1, 1))
+        # each ball's friction impulse per unit mass on each plane and the terrain (Gauss–Seidel only)
+        self.friction_plane = ti.ndarray(vec3f, self.lam_plane.shape if self.gauss_seidel else (1, 1))
+        self.friction_plane.fill(0.0)
         self.far_owners = 0
         self._valid = False
         self._rebuild = True
@@ -415,6 +418,8 @@ class CollisionSolver:
         self.v_free, self.calm, self.rank = spares
         for column in range(self.lam_plane.shape[1]):
             sort.gather_column(self.lam_plane, column, order, self.clear)  # (f32 scratch between steps)
+            if self.gauss_seidel:  # (the positions at the last build: vec3f scratch until this one ends)
+                sort.gather_column(self.friction_plane, column, order, self.x_at_build)
         if state.ids is None:  # the first reorder: the ids are this build's order (gathered above from then on)
             state.ids = ti.ndarray(ti.i32, state.n)
             state.ids.copy_from(order)
@@ -500,7 +505,7 @@ class CollisionSolver:
         air, contact, terrain, params, _, model, lists, state, _, scratch = arguments
         inv_cell = 1.0 / self.cell
         any_far = int(self.far_owners > 0)
-        phases = [colour.FIRST] + [colour.SOLVE] * (iterations - 1) + [colour.BOUNCE]
+        phases = colour.step_phases(iterations)
         blocks = self._packs.get(BlockOrder, start=self.col_start, ids=self.col_ids, colour=self.col_colour)
         for phase in phases:
             colour.gauss_seidel_sweep(

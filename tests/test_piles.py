@@ -1,0 +1,177 @@
+"""Dense piles with the Gauss–Seidel contact sweeps (``contact.solver = "gauss_seidel"``).
+
+The pile checks are the ones a user sees in the bundled ball pit, in a bin narrowed to 0.3 m so
+that the pour is as deep as the full one (34 layers, about 1.45 m) with 2,250 balls instead of
+100,000 (``bench.pit.pit_scene``). Settled means what the pit benchmark prints: no pair overlapping
+by more than 1 % of a radius, 99 % of the balls slower than 5 mm/s, every ball in the bin, and,
+once the last ball has landed, a kinetic energy that only falls (a resting contact never gains
+energy: restitution acts only on approaches faster than v_bounce + 2|g|h, see
+``contact.pair_step``).
+"""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import ti_golf as tg
+from ti_golf.bench.pit import pile_quality, pit_scene
+
+NARROW_PIT = 2250
+"""Balls of a pit as deep as the bundled one in a 0.3 m bin."""
+
+LANDED = 1.5
+"""Time [s] by which every ball of the pour has landed: the highest starts 4.3 m up at −1 m/s and
+meets the pile's top (1.45 m) after 0.7 s."""
+
+
+def _with(scene, section: str, **values):
+    return dataclasses.replace(scene, **{section: dataclasses.replace(getattr(scene, section), **values)})
+
+
+def _kinetic(sim) -> float:
+    """Translational and rotational kinetic energy [J] (solid spheres)."""
+    m, r = np.asarray(sim.model.mass_np), np.asarray(sim.model.radius_np)
+    return float(0.5 * np.sum(m * (sim.v**2).sum(axis=1)) + 0.5 * np.sum(0.4 * m * r**2 * (sim.w**2).sum(axis=1)))
+
+
+def _pour(scene, side: float, t: float = 4.0):
+    """Run a pour to ``t`` and return it, its pile figures and its kinetic energy every 0.25 s
+    from ``LANDED`` on."""
+    sim = tg.Simulation(scene)
+    sim.run(t=LANDED)
+    energy = [_kinetic(sim)]
+    while sim.t < t - 1e-9:
+        sim.run(t=0.25)
+        energy.append(_kinetic(sim))
+    return sim, pile_quality(sim, side), np.array(energy)
+
+
+@pytest.fixture(scope="module")
+def settled_pit():
+    scene, side = pit_scene(NARROW_PIT)
+    return (*_pour(scene, side), side)
+
+
+def test_bundled_pit_needs_no_solver_calming_keys():
+    pit = tg.load_scene("ball_pit")
+    assert pit.contact.solver == "gauss_seidel" and pit.contact.e >= 0.5
+    defaults = tg.load_scene(None, data={"description": "defaults"}).contact
+    for key in ("iterations", "v_bounce", "k_p", "skin"):  # left at their defaults, the same in every scene
+        assert getattr(pit.contact, key) == getattr(defaults, key), key
+
+
+def _assert_settled(quality, energy):
+    assert quality["deepest_overlap"] <= 0.01, quality
+    assert quality["p99_speed_mps"] <= 0.005, quality
+    assert quality["outside_bin"] == 0, quality
+    assert np.all(np.diff(energy) <= 0.0), energy  # only falls once every ball has landed
+
+
+def test_pit_with_restitution_settles(settled_pit):
+    sim, quality, energy, side = settled_pit
+    _assert_settled(quality, energy)
+    r = float(np.max(sim.model.radius_np))
+    assert 1.3 < np.percentile(sim.x[:, 1], 99) < 1.6  # 34 layers, no ball left bouncing above them
+    assert sim.x[:, 1].min() > r * 0.99
+
+
+def test_pit_settles_with_sleeping_off():
+    # sleeping (world.v_rest, t_rest) is an optimisation, not what holds the pile: with no ball
+    # ever put to rest the same pour settles the same way
+    scene, side = pit_scene(NARROW_PIT)
+    sim, quality, energy = _pour(_with(scene, "world", v_rest=0.0), side)
+    assert quality["asleep_fraction"] == 0.0
+    _assert_settled(quality, energy)
+
+
+def test_pit_of_lively_balls_settles():
+    # real golf balls bounce (e ≈ 0.8, golf_data.md): the pour still settles
+    scene, side = pit_scene(NARROW_PIT)
+    sim, quality, energy = _pour(_with(scene, "contact", e=0.8), side)
+    _assert_settled(quality, energy)
+
+
+def test_pour_is_deterministic():
+    # Gauss–Seidel in parallel: each block of columns in one thread, the colours in turn, so
+    # the run does not depend on thread scheduling
+    scene, _ = pit_scene(NARROW_PIT)
+    runs = []
+    for _ in range(2):
+        sim = tg.Simulation(scene)
+        sim.run(t=0.9)  # the pour is landing: every kind of contact at once
+        runs.append((sim.x, sim.v, sim.w))
+    for a, b in zip(*runs):
+        np.testing.assert_array_equal(a, b)
+
+
+def _column_scene():
+    return tg.load_scene(
+        "lab_vacuum",
+        ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.5", "contact.solver=gauss_seidel"],
+    )
+
+
+def test_heavy_ball_on_a_column_is_held():
+    # a ball 100 times heavier than a golf ball on top of a column of 20: the column stands and
+    # shortens by less than 2 % of a radius in 5 s (each contact's λ carries the weight above it
+    # from step to step, so the sweeps need not rebuild a 2,000-fold load ratio every step)
+    sc = _column_scene()
+    r, m = sc.ball.radius, sc.ball.mass
+    x = np.array([[0.0, r + 2.0 * r * i, 0.0] for i in range(21)])
+    mass = np.full(21, m)
+    mass[-1] = 100.0 * m
+    sim = tg.Simulation(sc, x=x, mass=mass)
+    sim.run(t=5.0)
+    assert x[-1, 1] - sim.x[-1, 1] < 0.02 * r
+    np.testing.assert_allclose(sim.x[:, [0, 2]], 0.0, atol=1e-9)  # still a column
+    assert np.all(np.diff(sim.x[:, 1]) > 2.0 * r * (1.0 - 0.01))  # no pair overlapping by 1 % of a radius
+
+
+def test_heavy_ball_dropped_on_the_pit_stays_near_the_top(settled_pit):
+    # the same heavy ball dropped from 0.5 m onto the settled pit ends in the top quarter of it
+    pit, _, _, side = settled_pit
+    r, m = float(np.max(pit.model.radius_np)), float(np.max(pit.model.mass_np))
+    top = float(np.percentile(pit.x[:, 1], 99))
+    x = np.vstack([pit.x, [[side / 2, top + 0.5, side / 2]]])
+    v, w = np.vstack([pit.v, np.zeros((1, 3))]), np.vstack([pit.w, np.zeros((1, 3))])
+    mass = np.append(np.full(pit.n, m), 100.0 * m)
+    sim = tg.Simulation(pit.scene, x=x, v=v, w=w, radius=r, mass=mass)
+    sim.run(t=2.0)
+    y = sim.x[-1, 1]
+    assert y > 0.75 * top, (y, top)
+    assert np.linalg.norm(sim.v[-1]) < 0.005  # it rests there, not sinking on
+    assert pile_quality(sim, side)["outside_bin"] == 0
+
+
+def _heap_angle(mu: float) -> float:
+    """Angle of repose [deg] of 1,500 balls poured from a narrow chute onto an open floor, with
+    friction ``mu`` between the balls and on the floor: atan of the heap's height over the radius
+    of the disc that holds 80 % of the balls."""
+    data = {
+        "description": "a heap on an open floor",
+        "world": {"dt": 0.001},
+        "contact": {"solver": "gauss_seidel", "e": 0.5, "mu": mu},
+        "planes": [{"point": [0, 0, 0], "normal": [0, 1, 0]}],
+        "blocks": [
+            {
+                "kind": "random",
+                "number": 1500,
+                "box_min": [-0.1, 0.05, -0.1],
+                "box_max": [0.1, 2.0, 0.1],
+                "velocity": [0.0, -0.5, 0.0],
+                "seed": 3,
+            }
+        ],
+    }
+    sim = tg.Simulation(tg.load_scene(None, data=data))
+    sim.run(t=3.0)
+    x = sim.x
+    spread = np.percentile(np.hypot(x[:, 0], x[:, 2]), 80)
+    height = np.percentile(x[:, 1], 99.5)
+    return float(np.degrees(np.arctan2(height, spread)))
+
+
+def test_friction_steepens_the_heap():
+    loose, rough = _heap_angle(0.1), _heap_angle(0.5)
+    assert rough > loose + 5.0, (loose, rough)
