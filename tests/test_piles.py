@@ -181,3 +181,36 @@ def _heap_angle(mu: float) -> float:
 def test_friction_steepens_the_heap():
     loose, rough = _heap_angle(0.1), _heap_angle(0.5)
     assert rough > loose + 4.0, (loose, rough)  # measured: 9.2° and 14.8°
+
+
+def test_boulder_pushed_into_a_pile_takes_its_far_pairs_in_turn():
+    # a ball five times the size of the rest is set apart (physics.apart): the balls beside it
+    # touch it two or three grid columns from its centre, so the colours leave those pairs to a
+    # serial pass (colour.far_pairs); a boulder rolled into a three-layer pile at 1 m/s
+    sc = _column_scene()
+    r, m = sc.ball.radius, sc.ball.mass
+    side = 12
+    grid = np.array([[i, k, j] for k in range(3) for i in range(side) for j in range(side)], dtype=float)
+    x = np.vstack([grid * 2.0 * r + [r, r, r], [[-7.0 * r, 5.0 * r, side * r]]])
+    v = np.zeros_like(x)
+    v[-1] = [1.0, 0.0, 0.0]
+    radius = np.append(np.full(len(grid), r), 5.0 * r)
+    mass = np.append(np.full(len(grid), m), 125.0 * m)
+    walls = [{"point": [-15 * r, 0, 0], "normal": [1, 0, 0]}, {"point": [2 * side * r, 0, 0], "normal": [-1, 0, 0]}]
+    walls += [{"point": [0, 0, 0], "normal": [0, 0, 1]}, {"point": [0, 0, 2 * side * r], "normal": [0, 0, -1]}]
+    data = {"description": "a boulder rolled into a pile", "world": {"dt": 0.001}, "planes": walls}
+    data["contact"] = {"solver": "gauss_seidel", "e": 0.5}
+    scene = tg.load_scene(None, data=data)
+    runs = []
+    for _ in range(2):
+        sim = tg.Simulation(scene, x=x, v=v, radius=radius, mass=mass)
+        far = 0
+        for _ in range(10):
+            sim.run(t=0.05)
+            far = max(far, sim.solver.far_owners)
+        assert far > 0
+        runs.append(sim.x)
+    np.testing.assert_array_equal(*runs)  # the serial pass keeps the run deterministic
+    assert np.abs(sim.x[:-1] - x[:-1]).max() > 0.001  # it met the pile and moved balls of it
+    deepest = sim.deepest_overlap()
+    assert deepest is None or deepest.fraction < 0.02, deepest

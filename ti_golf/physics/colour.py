@@ -83,6 +83,17 @@ def adjacent(col_a, col_b):
     return ti.abs(d[0]) <= 1 and ti.abs(d[1]) <= 1
 
 
+@ti.func
+def in_this_pass(col, j, far_only: ti.template(), any_far, inv_cell, lists: ti.template()):
+    """Whether a pair of a ball in grid column ``col`` with ball j is taken by the colours
+    (``far_only`` False) or by :func:`far_pairs` (True): with ``any_far``, the pairs whose balls
+    were not in columns beside each other at the build are :func:`far_pairs`' alone."""
+    far = False
+    if any_far != 0:
+        far = not adjacent(col, column_of(lists.x_at_build[j], inv_cell))
+    return far == far_only
+
+
 @kernel
 def column_order(
     x_at_build: vec3f_array,
@@ -296,10 +307,7 @@ def sweep_ball(
         col = column_of(lists.x_at_build[i], inv_cell)
         for k in range(lists.n_upper[i]):
             j = lists.upper[i, k]
-            far = False
-            if any_far != 0:
-                far = not adjacent(col, column_of(lists.x_at_build[j], inv_cell))
-            if far == far_only:
+            if in_this_pass(col, j, far_only, any_far, inv_cell, lists):
                 if state.status[j] == OUT_OF_BOUNDS:
                     lists.lam[i, k] = 0.0  # a frozen ball no longer supports anything
                 elif not skip_pair(state.status, i, j):
@@ -416,10 +424,7 @@ def project_ball(
         col = column_of(lists.x_at_build[i], inv_cell)
         for k in range(lists.n_upper[i]):
             j = lists.upper[i, k]
-            far = False
-            if any_far != 0:
-                far = not adjacent(col, column_of(lists.x_at_build[j], inv_cell))
-            if far == far_only and state.status[j] != OUT_OF_BOUNDS:
+            if in_this_pass(col, j, far_only, any_far, inv_cell, lists) and state.status[j] != OUT_OF_BOUNDS:
                 inv_mj = 0.0
                 if state.status[j] != AT_REST and scratch.calm[j] != QUIET:
                     inv_mj = 1.0 / of_ball(model.mass, j)
