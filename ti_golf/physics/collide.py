@@ -40,7 +40,7 @@ launch overhead that dominates a step of a few balls.
 import taichi as ti
 
 from ti_golf.physics.aero import V, W, X, coefficients, column
-from ti_golf.physics.colour import inelastic_speed, serial_projection, serial_sweeps, upward
+from ti_golf.physics.colour import inelastic_speed, serial_projection, serial_sweeps
 from ti_golf.physics.contact import (
     GAUSS_SEIDEL,
     plane_position,
@@ -221,7 +221,6 @@ def step_balls(
 ):
     """One step of all balls, the body of :func:`collision_step` (see there) in parallel and serially,
     or the part of it that ``warm``, ``sweeps`` and ``last`` name."""
-    h = params.h
     v_inelastic = inelastic_speed(contact, params)
     bits = slot_bits(lists.upper.shape[1])  # lower-list slots: owner · 2^bits + column (once, not per ball)
     if ti.static(warm):
@@ -231,7 +230,7 @@ def step_balls(
     # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
     if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
         if contact.solver == GAUSS_SEIDEL:  # all the step's sweeps: the last one only finishes it
-            serial_sweeps(sweeps + 1, contact, terrain, h, v_inelastic, upward(params), model, lists, state, scratch)
+            serial_sweeps(sweeps + 1, contact, terrain, params, model, lists, state, scratch)
         else:
             for _ in range(sweeps):
                 sweep(False, contact, terrain, params, v_inelastic, bits, model, lists, state, scratch)

@@ -106,32 +106,28 @@ def column_order(
     chunk_start: int_array,
     ids: int_array,
     colour: int_array,
-):
+    lists: NeighbourLists,
+) -> ti.i32:
     """Group the balls by block for the sweeps: ``ids[start[b] : start[b + 1]]`` are the balls of
     hash bucket b (the blocks, cells of side 2/``inv_cell`` hashed with ``origin`` and ``stride``,
     whose y stride is 0), bottom-up (then by z, x and id, so the order does not depend on thread
     scheduling), and ``colour[s]`` is the colour of ball ``ids[s]``'s block. Positions are those of the lists' build, in f32, so that
-    the columns are those the pair tests of the sweeps see."""
+    the columns are those the pair tests of the sweeps see. Returns how many balls own a pair whose
+    other ball was not in their grid column or one beside it (:func:`far_pairs` takes those)."""
     inv_block = 0.5 * inv_cell
     counting_sort(x_at_build, inv_block, mask, origin, stride, rank, start, chunk_start, ids)
     sort_buckets(x_at_build, start, ids)
     for s in range(ids.shape[0]):
         colour[s] = colour_of(block_of(x_at_build[ids[s]], inv_cell))
-
-
-@kernel
-def count_far_owners(x_at_build: vec3f_array, inv_cell: float, lists: NeighbourLists) -> ti.i32:
-    """How many balls own a pair whose other ball was not in their grid column or one beside it
-    at the lists' build (an integer sum: the same on every thread order)."""
-    count = 0
+    far_owners = 0  # the balls that own a pair with a ball not in their grid column or one beside it
     for i in range(x_at_build.shape[0]):
         col = column_of(x_at_build[i], inv_cell)
         far = 0
         for k in range(lists.n_upper[i]):
             if not adjacent(col, column_of(x_at_build[lists.upper[i, k]], inv_cell)):
                 far = 1
-        count += far
-    return count
+        far_owners += far  # (an integer sum: the same on every thread order)
+    return far_owners
 
 
 @kernel
@@ -152,7 +148,6 @@ def gauss_seidel_sweep(
     every block of a colour, each block bottom-up in one thread (see the module's docstring;
     ``blocks`` from :func:`column_order`), meet the pairs they own (but, when ``any_far``, those
     whose other ball was not beside them at the build), then their planes and the terrain."""
-    v_inelastic = inelastic_speed(contact, params)
     for c in ti.static(range(COLOURS)):  # a top-level loop per colour: the colours in turn
         for b in range(blocks.start.shape[0] - 1):
             for s in range(blocks.start[b], blocks.start[b + 1]):
@@ -165,9 +160,7 @@ def gauss_seidel_sweep(
                         inv_cell,
                         contact,
                         terrain,
-                        params.h,
-                        v_inelastic,
-                        upward(params),
+                        params,
                         model,
                         lists,
                         state,
@@ -189,7 +182,6 @@ def far_pairs(
 ):
     """The pairs the colours left out (their balls were farther apart than beside each other at the
     build), one ball after another in storage order."""
-    v_inelastic = inelastic_speed(contact, params)
     ti.loop_config(serialize=True)
     for i in range(state.x.shape[0]):
         if phase == PROJECT:
@@ -203,9 +195,7 @@ def far_pairs(
                 inv_cell,
                 contact,
                 terrain,
-                params.h,
-                v_inelastic,
-                upward(params),
+                params,
                 model,
                 lists,
                 state,
@@ -218,9 +208,7 @@ def serial_sweeps(
     sweeps: ti.template(),
     contact: ti.template(),
     terrain: ti.template(),
-    h,
-    v_inelastic,
-    up,
+    params: ti.template(),
     model: ti.template(),
     lists: ti.template(),
     state: ti.template(),
@@ -228,12 +216,12 @@ def serial_sweeps(
 ):
     """A step's ``sweeps`` Gauss–Seidel sweeps (:func:`step_phases`) and the restitution pass,
     every ball in storage order, in the calling (serial) loop's thread."""
-    serial_sweep(FIRST, contact, terrain, h, v_inelastic, up, model, lists, state, scratch)
+    serial_sweep(FIRST, contact, terrain, params, model, lists, state, scratch)
     for _ in range(sweeps - 2):
-        serial_sweep(SOLVE, contact, terrain, h, v_inelastic, up, model, lists, state, scratch)
+        serial_sweep(SOLVE, contact, terrain, params, model, lists, state, scratch)
     if sweeps > 1:
-        serial_sweep(SHOCK, contact, terrain, h, v_inelastic, up, model, lists, state, scratch)
-    serial_sweep(BOUNCE, contact, terrain, h, v_inelastic, up, model, lists, state, scratch)
+        serial_sweep(SHOCK, contact, terrain, params, model, lists, state, scratch)
+    serial_sweep(BOUNCE, contact, terrain, params, model, lists, state, scratch)
 
 
 @ti.func
@@ -241,9 +229,7 @@ def serial_sweep(
     phase,
     contact: ti.template(),
     terrain: ti.template(),
-    h,
-    v_inelastic,
-    up,
+    params: ti.template(),
     model: ti.template(),
     lists: ti.template(),
     state: ti.template(),
@@ -251,7 +237,7 @@ def serial_sweep(
 ):
     """A Gauss–Seidel sweep of every ball in storage order, in the calling (serial) loop's thread."""
     for i in range(state.x.shape[0]):
-        sweep_ball(i, phase, False, 0, 1.0, contact, terrain, h, v_inelastic, up, model, lists, state, scratch)
+        sweep_ball(i, phase, False, 0, 1.0, contact, terrain, params, model, lists, state, scratch)
 
 
 def step_phases(iterations: int) -> list[int]:
@@ -286,9 +272,7 @@ def sweep_ball(
     inv_cell,
     contact: ti.template(),
     terrain: ti.template(),
-    h,
-    v_inelastic,
-    up,
+    params: ti.template(),
     model: ti.template(),
     lists: ti.template(),
     state: ti.template(),
@@ -296,12 +280,13 @@ def sweep_ball(
 ):
     """Ball i's Gauss–Seidel step: each pair it owns (:func:`pair_step`, from the current velocities
     of both balls, applied to both at once, with the normal and gap the warm start stored in
-    ``scratch.J``), then (in the ``FIRST`` and ``SOLVE`` phases, unless ``far_only``) its planes and
-    the terrain. When ``any_far``, a pair whose other ball was not in a column beside i's at the
+    ``scratch.J``), then (unless ``far_only``) its planes and the terrain, with the step's scalars
+    ``params`` (h, and gravity for the inelastic speed and the shock sweep's "up"). When ``any_far``, a pair whose other ball was not in a column beside i's at the
     build is taken only with ``far_only`` (:func:`far_pairs`), and the others only without. A quiet
     ball (at rest among balls at rest) is skipped, and gets nothing from its neighbours' pairs, as
     in a Jacobi sweep."""
     if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
+        h, v_inelastic, up = params.h, inelastic_speed(contact, params), upward(params)
         xi, vi, wi = state.x[i], state.v[i], state.w[i]
         ri, inv_mi = of_ball(model.radius, i), 1.0 / of_ball(model.mass, i)
         col = column_of(lists.x_at_build[i], inv_cell)

@@ -273,11 +273,8 @@ class CollisionSolver:
             )
         if stashed is not None:
             # after a reorder, sorted_ids still maps each ball to its index in the stashed lists
-            carry_friction = self.gauss_seidel and self.spare_friction.shape == self.upper.shape
-            if self.gauss_seidel and not carry_friction:
-                self.spare_friction = None
-                self.spare_friction = ti.ndarray(vec3f, self.upper.shape)
-                carry_friction = True
+            if self.gauss_seidel:
+                self._fit_pair_table("spare_friction")
             links.link_and_carry(
                 self.upper,
                 self.n_upper,
@@ -287,20 +284,18 @@ class CollisionSolver:
                 self.lam,
                 self.reorder,
                 self.sorted_ids,
-                carry_friction,
+                self.gauss_seidel,
                 self.friction,
                 self.spare_friction,
             )
-            if carry_friction:
+            if self.gauss_seidel:
                 self.friction, self.spare_friction = self.spare_friction, self.friction
             stashed = None
         else:
             links.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
             grid.clear2(self.lam)
             if self.gauss_seidel:  # each pair's friction impulse (colour.sweep_ball): none yet
-                if self.friction.shape != self.upper.shape:
-                    self.friction = None
-                    self.friction = ti.ndarray(vec3f, self.upper.shape)
+                self._fit_pair_table("friction")
                 self.friction.fill(0.0)
         if self.impulse is None or self.impulse.shape != self.upper.shape:
             self.impulse = None  # free the old table before allocating
@@ -311,10 +306,18 @@ class CollisionSolver:
         if self.gauss_seidel and not self.serial:
             self._order_columns(state)
 
+    def _fit_pair_table(self, name: str) -> None:
+        """Give the vec3f table of pair friction impulses held in attribute ``name`` the lists'
+        shape (a new table, the old one freed first, when the shape changed)."""
+        if getattr(self, name).shape != self.upper.shape:
+            setattr(self, name, None)
+            setattr(self, name, ti.ndarray(vec3f, self.upper.shape))
+
     def _order_columns(self, state: State) -> None:
-        """Group the balls by grid column for the Gauss–Seidel sweeps (``colour.column_order``):
-        the columns of the box of cells ``bounds`` numbered one after another when there are no
-        more of them than there are balls, else hashed."""
+        """Group the balls by block of grid columns for the Gauss–Seidel sweeps
+        (``colour.column_order``): the blocks of the box around the balls numbered one after
+        another when there are no more of them than there are balls, else hashed; and count the
+        balls with pairs that the colours leave to ``colour.far_pairs``."""
         bounds = grid.cell_bounds(state.x, 0.5 / self.cell)  # in blocks of 2 x 2 columns
         lo, hi = [int(b) for b in bounds[:3]], [int(b) for b in bounds[3:]]
         ext_x, ext_z = hi[0] - lo[0] + 3, hi[2] - lo[2] + 3
@@ -330,7 +333,7 @@ class CollisionSolver:
         else:
             origin, stride = (0, 0, 0), (grid.SCATTERED_HASH[0], 0, grid.SCATTERED_HASH[2])
         inv_cell = 1.0 / self.cell
-        colour.column_order(
+        far_owners = colour.column_order(
             self.x_at_build,
             inv_cell,
             buckets - 1,
@@ -341,8 +344,9 @@ class CollisionSolver:
             self.col_chunk,
             self.col_ids,
             self.col_colour,
+            self._packs.lists(self),
         )
-        self.far_owners = int(colour.count_far_owners(self.x_at_build, inv_cell, self._packs.lists(self)))
+        self.far_owners = int(far_owners)
 
     def _check_table_memory(self, state: State, widths: tuple[int, int]) -> None:
         """Raise :class:`SimulationError` before pair tables of ``widths`` (upper, lower) take more
