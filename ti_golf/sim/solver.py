@@ -512,9 +512,10 @@ class CollisionSolver:
         phases = colour.step_phases(iterations)
         blocks = self._packs.get(BlockOrder, start=self.col_start, ids=self.col_ids, colour=self.col_colour)
         for phase in phases:
-            colour.gauss_seidel_sweep(
-                phase, any_far, inv_cell, contact, terrain, params, model, lists, state, scratch, blocks
-            )
+            with plain_compile():  # see runtime.plain_compile
+                colour.gauss_seidel_sweep(
+                    phase, any_far, inv_cell, contact, terrain, params, model, lists, state, scratch, blocks
+                )
             if any_far:
                 colour.far_pairs(phase, inv_cell, contact, terrain, params, model, lists, state, scratch)
         collide.collision_step(*arguments, False, False, 0, True)
