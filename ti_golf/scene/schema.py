@@ -148,8 +148,8 @@ class Air:
         "float",
         None,
         "m",
-        "height above sea level; a weather key: sets the pressure (standard atmosphere, barometric "
-        "formula) and the default temperature",
+        "height above sea level (a weather key; default 0): sets the pressure (standard atmosphere, "
+        "barometric formula) and the default temperature",
         Interval(-500.0, 5000.0),
     )
     humidity: float | None = key(
