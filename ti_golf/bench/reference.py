@@ -2,10 +2,11 @@
 
 * :func:`carry_numpy`: a vectorised numpy RK4 over all balls with the same Hermite landing as the
   kernels (the "obvious numpy code" baseline).
-* :func:`carry_scipy`: one ``scipy.integrate.solve_ivp`` call per trajectory with event location
-  (DOP853 at tight tolerances is the high-accuracy reference).
+* :func:`carry_scipy`, :func:`landing_scipy`: one ``scipy.integrate.solve_ivp`` call per
+  trajectory with event location (DOP853 at tight tolerances is the high-accuracy reference).
 
-Model (report L.21–L.23), v_rel = v − wind, A = πR²:
+Model (report L.21–L.23), v_rel = v − u(y), A = πR², u the wind at the ball's height
+(:func:`wind_at`: ``air.wind``, or its log profile):
 dv/dt = g − (k_D/m)|v_rel|^(γ−1) v_rel + (k_M/m)|v_rel| (ω × v_rel),
 dω/dt = −k_ω (|v_rel| + R|ω|)^(γ−1) ω;
 with ``air.model = "spin_ratio"`` drag and lift take C_D(S) and C_L(S) of S = R|ω|/|v_rel|
@@ -36,10 +37,29 @@ def spin_ratio_coefficients(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return 0.1304 + 0.9287 * c - 0.8259 * c**2, (0.0504 + 1.2031 * c - 1.1490 * c**2) * np.minimum(s / 0.02, 1.0)
 
 
-def derivatives(scene: Scene, v: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(dv/dt, dω/dt) for arrays of shape (N, 3)."""
+def wind_at(scene: Scene, y: np.ndarray) -> np.ndarray:
+    """The wind [m/s] (N, 3) at heights ``y`` [m] (N,): ``air.wind``, or with ``air.wind_profile =
+    "log"`` wind·ln(z/z₀)/ln(z_ref/z₀) at z = y − world.ground_height above z₀, zero below."""
+    a = scene.air
+    wind = np.asarray(a.wind, dtype=float)[None, :]
+    if a.wind_profile == "constant":
+        return np.repeat(wind, len(y), axis=0)
+    z = np.asarray(y, dtype=float) - scene.world.ground_height
+    scale = np.where(z > a.wind_z0, np.log(np.maximum(z, a.wind_z0) / a.wind_z0), 0.0) / math.log(
+        a.wind_height / a.wind_z0
+    )
+    return scale[:, None] * wind
+
+
+def derivatives(
+    scene: Scene, v: np.ndarray, w: np.ndarray, x: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(dv/dt, dω/dt) for velocities, angular velocities and positions ``x`` of shape (N, 3)
+    (``x`` may be left out when the wind does not vary with height)."""
     kD, kM, kw = coefficients(scene)
-    v_rel = v - np.asarray(scene.air.wind)
+    if x is None and scene.air.wind_profile != "constant":
+        raise ValueError("the log wind profile needs the positions x")
+    v_rel = v - (wind_at(scene, np.asarray(x)[:, 1]) if x is not None else np.asarray(scene.air.wind))
     speed = np.sqrt(np.einsum("ij,ij->i", v_rel, v_rel))[:, None]
     spin = np.sqrt(np.einsum("ij,ij->i", w, w))[:, None]
     if scene.air.gamma == 2:
@@ -69,13 +89,13 @@ def carry_numpy(
     t = 0.0
     while idx.size and t < t_max:
         xa, va, wa = x[idx], v[idx], w[idx]
-        a1, b1 = derivatives(scene, va, wa)
+        a1, b1 = derivatives(scene, va, wa, xa)
         v2, w2 = va + 0.5 * h * a1, wa + 0.5 * h * b1
-        a2, b2 = derivatives(scene, v2, w2)
+        a2, b2 = derivatives(scene, v2, w2, xa + 0.5 * h * va)
         v3, w3 = va + 0.5 * h * a2, wa + 0.5 * h * b2
-        a3, b3 = derivatives(scene, v3, w3)
+        a3, b3 = derivatives(scene, v3, w3, xa + 0.5 * h * v2)
         v4, w4 = va + h * a3, wa + h * b3
-        a4, b4 = derivatives(scene, v4, w4)
+        a4, b4 = derivatives(scene, v4, w4, xa + h * v3)
         x1 = xa + h / 6 * (va + 2 * v2 + 2 * v3 + v4)
         v1 = va + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
         w1 = wa + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
@@ -118,15 +138,32 @@ def carry_scipy(
     t_max: float | None = None,
 ) -> np.ndarray:
     """Carry [m] of each ball by ``solve_ivp`` (one call per trajectory) with an exact landing event."""
+    p = landing_scipy(scene, x0, v0, w0, method, rtol, atol, t_max)
+    d = p - np.asarray(x0, dtype=float)
+    return np.hypot(d[:, 0], d[:, 2])
+
+
+def landing_scipy(
+    scene: Scene,
+    x0: np.ndarray,
+    v0: np.ndarray,
+    w0: np.ndarray,
+    method: str = "DOP853",
+    rtol: float = 1e-12,
+    atol: float = 1e-12,
+    t_max: float | None = None,
+) -> np.ndarray:
+    """Landing points [m] (N, 3) of each ball, where it comes down through its launch height, by
+    ``solve_ivp`` (one call per trajectory) with an exact event; NaN where it has not landed."""
     from scipy.integrate import solve_ivp  # scipy is optional (the bench and test extras): imported on use
 
     t_max = scene.world.t_max if t_max is None else t_max
-    out = np.full(len(x0), np.nan)
+    out = np.full((len(x0), 3), np.nan)
     for i in range(len(x0)):
         level = float(x0[i][1])
 
         def rhs(_t: float, y: np.ndarray) -> np.ndarray:
-            dv, dw = derivatives(scene, y[3:6][None, :], y[6:9][None, :])
+            dv, dw = derivatives(scene, y[3:6][None, :], y[6:9][None, :], y[0:3][None, :])
             return np.concatenate([y[3:6], dv[0], dw[0]])
 
         def landing(_t: float, y: np.ndarray, level: float = level) -> float:
@@ -136,6 +173,5 @@ def carry_scipy(
         y0 = np.concatenate([x0[i], v0[i], w0[i]]).astype(float)
         sol = solve_ivp(rhs, (0.0, t_max), y0, method=method, rtol=rtol, atol=atol, events=landing)
         if sol.t_events[0].size:
-            p = sol.y_events[0][0]
-            out[i] = math.hypot(p[0] - x0[i][0], p[2] - x0[i][2])
+            out[i] = sol.y_events[0][0][0:3]
     return out

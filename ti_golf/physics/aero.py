@@ -1,12 +1,15 @@
-"""Aerodynamics of a spinning ball in a constant wind: drag, Magnus force and spin decay.
+"""Aerodynamics of a spinning ball in the wind: drag, Magnus force and spin decay.
 
-All laws use the velocity relative to the air, v_rel = v − wind (report L.21–L.23):
+All laws use the velocity relative to the air, v_rel = v − u(y) (report L.21–L.23), u the wind
+at the ball's height: the scene's ``air.wind`` at every height, or with ``air.wind_profile =
+"log"`` the logarithmic profile of the surface layer, u(z) = wind·ln(z/z₀)/ln(z_ref/z₀) for
+z > z₀ and 0 below, z = y − ``world.ground_height`` (:func:`wind_scale`):
 
 * drag       f_D = −k_D |v_rel|^(γ−1) v_rel,          k_D = ½ρA·C_D          (L.22)
 * Magnus     f_M = k_M |v_rel| (ω × v_rel),            k_M = ½ρA·C_M/ω_M      (L.1, L.2, L.21)
 * spin decay dω/dt = −k_ω (|v_rel| + R|ω|)^(γ−1) ω,    k_ω = ½ρA·C_ω/m        (L.17, L.20, L.23)
 
-with A = πR² the cross-section. Forces do not depend on position.
+with A = πR² the cross-section. Forces depend on position only through the wind's height.
 
 With ``air.model = "spin_ratio"`` (γ = 2) drag and lift take coefficients of the spin ratio
 S = R|ω|/|v_rel| instead (golf_data.md: Ferguson, McNally & McPhee 2022, a fit to 1040
@@ -39,6 +42,9 @@ from ti_golf.physics.types import AirParams, vec, vec3
 LAB, SPIN_RATIO = 0, 1
 AIR_MODEL_CODES = {"lab": LAB, "spin_ratio": SPIN_RATIO}
 """Kernel codes of ``air.model`` (:data:`ti_golf.scene.schema.AIR_MODELS`)."""
+CONSTANT_WIND, LOG_WIND = 0, 1
+WIND_PROFILE_CODES = {"constant": CONSTANT_WIND, "log": LOG_WIND}
+"""Kernel codes of ``air.wind_profile`` (:data:`ti_golf.scene.schema.WIND_PROFILES`)."""
 S_MIN, S_MAX = 0.02, 0.75
 """The range of spin ratios of the C_D(S), C_L(S) fit; the coefficients are held at its ends."""
 _TINY = 1e-12
@@ -60,12 +66,17 @@ def column(S, first: ti.template(), lane: ti.template()):
     return vec(S[first, lane], S[first + 1, lane], S[first + 2, lane])
 
 
-def air_params(air: Any) -> Any:
-    """The kernels' :data:`~.types.AirParams` of a scene's ``Air`` (see ``ti_golf.scene.schema.Air``)."""
+def air_params(air: Any, ground_height: float) -> Any:
+    """The kernels' :data:`~.types.AirParams` of a scene's ``Air`` (see ``ti_golf.scene.schema.Air``),
+    whose log wind profile measures heights from y = ``ground_height`` [m] (``world.ground_height``)."""
     if air.model not in AIR_MODEL_CODES:
         raise ValueError(f"air.model must be one of {', '.join(AIR_MODEL_CODES)} (got {air.model!r})")
     if air.model == "spin_ratio" and air.gamma != 2:
         raise ValueError(f"air.gamma must be 2 with air.model = 'spin_ratio' (got {air.gamma})")
+    if air.wind_profile not in WIND_PROFILE_CODES:
+        raise ValueError(f"air.wind_profile must be one of {', '.join(WIND_PROFILE_CODES)} (got {air.wind_profile!r})")
+    if air.wind_profile == "log" and not 0.0 < air.wind_z0 < air.wind_height:
+        raise ValueError(f"air.wind_z0 must lie in (0, air.wind_height) (got {air.wind_z0}, {air.wind_height})")
     return AirParams(
         rho=air.rho,
         gamma=air.gamma,
@@ -75,6 +86,11 @@ def air_params(air: Any) -> Any:
         C_omega=air.C_omega,
         wind=vec3(*air.wind),
         model=AIR_MODEL_CODES[air.model],
+        viscosity=air.viscosity,
+        wind_profile=WIND_PROFILE_CODES[air.wind_profile],
+        wind_height=air.wind_height,
+        wind_z0=air.wind_z0,
+        ground_height=ground_height,
     )
 
 
@@ -108,11 +124,23 @@ def spin_ratio_coefficients(s):
 
 
 @ti.func
+def wind_scale(y, air):
+    """u(z)/|wind| at heights ``y`` [m] (a vector over lanes): 1 with the constant profile; with
+    the log profile ln(z/z₀)/ln(z_ref/z₀) for z = y − ground_height > z₀, else 0."""
+    scale = ti.Vector([1.0 for _ in ti.static(range(y.n))], dt=float)
+    if air.wind_profile == LOG_WIND:
+        z0 = air.wind_z0
+        scale = ti.log(ti.max(y - air.ground_height, z0) / z0) / ti.log(air.wind_height / z0)
+    return scale
+
+
+@ti.func
 def rates(S, coef, air, gravity):
     """dS/dt of a lane state matrix S (10, L): (v, dv/dt [m/s²], dω/dt [rad/s²], d|ω|/dt) per lane."""
     vx, vy, vz = row(S, 3), row(S, 4), row(S, 5)
     wx, wy, wz = row(S, 6), row(S, 7), row(S, 8)
-    rx, ry, rz = vx - air.wind[0], vy - air.wind[1], vz - air.wind[2]
+    u = wind_scale(row(S, 1), air)
+    rx, ry, rz = vx - u * air.wind[0], vy - u * air.wind[1], vz - u * air.wind[2]
     speed = ti.sqrt(rx * rx + ry * ry + rz * rz)
     drag = row(coef, 0)
     decay = row(coef, 2)

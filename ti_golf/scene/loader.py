@@ -42,6 +42,7 @@ from ti_golf.scene.schema import (
     World,
 )
 from ti_golf.scene.terrain import load_heights_file
+from ti_golf.scene.weather import WEATHER_KEYS, air_from_weather
 
 _SECTION_TYPES = {"air": Air, "ball": Ball, "launch": Launch, "world": World, "contact": Contact, "game": GameConfig}
 
@@ -266,6 +267,8 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
         if section == "terrain" and "file" in values and "kind" not in values:
             values["kind"] = "file"  # a heights file names the kind of terrain it is
         _refuse_unread(values, keys, section, sources, source, doc)
+        if section == "air":
+            values = _air(values, sources, source)
         if section == "sweep":
             kwargs["sweep"] = SweepDefaults(**values)
         elif section == "terrain":
@@ -360,6 +363,68 @@ def _refuse_unread(
             raise_config(
                 sources.get(name, source), f"{prefix}.{name}", f"is only read when {read_when_text(key, prefix)}"
             )
+
+
+def _air(values: dict[str, Any], sources: dict[str, str], source: str) -> dict[str, Any]:
+    """The ``[air]`` table's values with ρ and μ from the weather when a weather key is given
+    (:func:`~ti_golf.scene.weather.air_from_weather`).
+
+    Keys that would leave another without effect are refused when they come from the same place
+    (both in the file, or both ``--set``): ``rho`` or ``viscosity`` beside a weather key,
+    ``altitude`` beside ``pressure``. Across places the command line wins, as ``--set`` does
+    everywhere: a ``--set`` weather key replaces the file's ``rho`` and ``viscosity``, a ``--set``
+    ``rho`` or ``viscosity`` what the file's weather gives for that one quantity, ``--set``
+    ``pressure`` the file's ``altitude`` and the other way round. A log profile's reference height
+    must exceed its roughness length.
+    """
+    values = dict(values)
+    cli = {k for k in values if sources.get(k) == "--set"}
+
+    def drop_file(*names: str) -> None:
+        for name in names:
+            if name in values and name not in cli:
+                del values[name]
+
+    if values.get("wind_profile") == "log":
+        z_ref, z0 = values.get("wind_height", Air.wind_height), values.get("wind_z0", Air.wind_z0)
+        if z_ref <= z0:
+            where, rule = (
+                ("wind_height", "exceed air.wind_z0")
+                if "wind_height" in values
+                else ("wind_z0", "be below air.wind_height")
+            )
+            raise_config(
+                sources.get(where, source),
+                f"air.{where}",
+                f"must {rule} (got wind_height = {z_ref:g} m, wind_z0 = {z0:g} m)",
+            )
+    if cli & set(WEATHER_KEYS):
+        drop_file("rho", "viscosity")
+    if "pressure" in cli:
+        drop_file("altitude")
+    if "altitude" in cli:
+        drop_file("pressure")
+    weather = [k for k in WEATHER_KEYS if k in values]
+    if not weather:
+        return values
+    given = ", ".join(f"air.{k}" for k in weather)
+    if "pressure" in values and "altitude" in values:
+        raise_config(
+            sources.get("altitude", source),
+            "air.altitude",
+            "cannot be given with air.pressure: the altitude only sets the pressure (and the default temperature)",
+        )
+    rho, mu = air_from_weather(**{k: values[k] for k in weather})
+    for name, what, value in (("rho", "ρ", rho), ("viscosity", "μ", mu)):
+        if name not in values:
+            values[name] = value
+        elif name not in cli or cli & set(weather):  # (a --set value over the file's weather stays)
+            raise_config(
+                sources.get(name, source),
+                f"air.{name}",
+                f"cannot be given with the weather ({given}), which sets {what}: give one or the other",
+            )
+    return values
 
 
 def _ball_spec(values: dict[str, Any], source: str, i: int) -> BallSpec:

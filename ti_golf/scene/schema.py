@@ -41,6 +41,8 @@ INTEGRATORS = ("semi_implicit", "rk4")
 AIR_MODELS = ("lab", "spin_ratio")
 SOLVERS = ("jacobi", "gauss_seidel")
 """Aerodynamic models (``air.model``): the report's laws, or coefficients of the spin ratio."""
+WIND_PROFILES = ("constant", "log")
+"""How the wind varies with height (``air.wind_profile``): not at all, or logarithmically."""
 
 
 # -- the scene's tables -------------------------------------------------------------------------
@@ -48,7 +50,14 @@ SOLVERS = ("jacobi", "gauss_seidel")
 class Air:
     """Air properties (report L.1–L.23)."""
 
-    rho: float = key("float", 1.3, "kg/m^3", "air density ρ", NON_NEGATIVE)
+    rho: float = key(
+        "float",
+        1.3,
+        "kg/m^3",
+        "air density ρ (set from the weather instead when a weather key is given: air.temperature, "
+        "air.pressure, air.altitude, air.humidity)",
+        NON_NEGATIVE,
+    )
     gamma: int = key(
         "int", 2, "-", "flow type γ: 1 laminar (drag ∝ v), 2 turbulent (drag ∝ v²)", OneOf((1, 2)), "1 or 2"
     )
@@ -72,7 +81,37 @@ class Air:
         read_when=("model", ("lab",)),
     )
     C_omega: float = key("float", 0.0, "-", "spin-decay coefficient; k_ω = ½ρA·C_ω/m (L.17, L.23)", NON_NEGATIVE)
-    wind: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "constant wind; forces use v_rel = v − wind (L.21–L.23)")
+    wind: Vec3 = key(
+        "vec3",
+        (0.0, 0.0, 0.0),
+        "m/s",
+        "the wind (with wind_profile = log: at the height wind_height); forces use v_rel = v − wind (L.21–L.23)",
+    )
+    wind_profile: str = key(
+        "str",
+        "constant",
+        "-",
+        "constant: the same wind at every height; log: the wind grows with the height z above "
+        "world.ground_height as u(z) = wind·ln(z/wind_z0)/ln(wind_height/wind_z0), none below wind_z0",
+        OneOf(WIND_PROFILES),
+    )
+    wind_height: float = key(
+        "float",
+        10.0,
+        "m",
+        "reference height of the log profile: the height above the ground at which the wind is air.wind",
+        POSITIVE,
+        read_when=("wind_profile", ("log",)),
+    )
+    wind_z0: float = key(
+        "float",
+        0.03,
+        "m",
+        "roughness length z₀ of the log profile (0.03 m: open grass; 0.0002 m: water; 0.1 m: rough with bushes); "
+        "below wind_height",
+        POSITIVE,
+        read_when=("wind_profile", ("log",)),
+    )
     model: str = key(
         "str",
         "lab",
@@ -81,6 +120,40 @@ class Air:
         "C_D(S) and C_L(S) of the spin ratio S = R|ω|/|v_rel| fitted to launch-monitor shots "
         "(Ferguson, McNally & McPhee 2022; C_D, C_M and omega_M unused; needs gamma = 2)",
         OneOf(AIR_MODELS),
+    )
+    viscosity: float = key(
+        "float",
+        1.81e-5,
+        "Pa s",
+        "dynamic viscosity μ of the air (set from the weather instead when a weather key is given)",
+        POSITIVE,
+    )
+    temperature: float | None = key(
+        "float",
+        None,
+        "°C",
+        "air temperature (a weather key: ρ and μ then come from the weather; default: the standard "
+        "atmosphere's at the altitude, 15 °C at sea level)",
+        Interval(-40.0, 50.0),
+    )
+    pressure: float | None = key(
+        "float",
+        None,
+        "Pa",
+        "station pressure, as measured on site (1013.25 hPa = 101325 Pa); a weather key (default: the "
+        "standard atmosphere's at air.altitude; not given with it)",
+        Interval(50_000.0, 110_000.0, unit_word="Pa (hPa × 100)"),
+    )
+    altitude: float | None = key(
+        "float",
+        None,
+        "m",
+        "height above sea level (a weather key; default 0): sets the pressure (standard atmosphere, "
+        "barometric formula) and the default temperature",
+        Interval(-500.0, 5000.0),
+    )
+    humidity: float | None = key(
+        "float", None, "-", "relative humidity φ (a weather key; default 0: dry air)", UNIT_INTERVAL
     )
 
 

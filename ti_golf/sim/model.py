@@ -61,7 +61,7 @@ class Model:
         self.radius_np = _compact(radius)
         self.mass_np = _compact(mass)
         a, c, w = scene.air, scene.contact, scene.world
-        self.air = air_params(a)
+        self.air = air_params(a, w.ground_height)
         self.contact = ContactParams(
             e=c.e,
             mu=c.mu,

@@ -169,7 +169,7 @@ def fly(
     apex, t_land = np.zeros(n0, f), np.zeros(n0, f)
     land_x, land_v = np.zeros((n0, 3), f), np.zeros((n0, 3), f)
     traj = np.zeros((n0, n_samples, 3) if record_every else (1, 1, 3), f)
-    air = air_params(a)
+    air = air_params(a, wld.ground_height)
     with plain_compile():  # minutes less of compiling on first use, see runtime.plain_compile
         kernels.fly_to_landing(
             air,
