@@ -393,9 +393,11 @@ def test_bench_pit_pours_the_scene_and_reports_the_piles_quality():
     assert small_side == pytest.approx(2.0 * (1000 / PIT_BALLS) ** 0.5)
     lo, hi = small.blocks[0].box_min, small.blocks[0].box_max
     assert 0 < lo[0] < hi[0] < small_side and lo[1] == full.blocks[0].box_min[1]  # as high, narrower
+    assert pit_scene(1000, ["contact.e=0.8"])[0].contact.e == 0.8 != small.contact.e  # --set reaches the scene
     lines = []
-    result = bench_pit(n=1000, t=0.05, log=lines.append)
+    result = bench_pit(n=1000, t=0.05, overrides=["contact.mu=0.5"], log=lines.append)
     assert result["n"] == 1000 and result["steps"] == 50 and result["t_s"] == pytest.approx(0.05)
+    assert result["set"] == ["contact.mu=0.5"]
     for key in ("wall_s", "compile_s", "sim_s_per_wall_s", "ball_steps_per_s", "peak_rss_bytes"):
         assert result[key] > 0, key
     assert result["outside_bin"] == 0

@@ -70,7 +70,7 @@ OPTIONS = {
     "sweep": ["--angles", "--speeds", "--spins", "--trajectories", "--set"],
     "render": ["--t", "--steps", "--until", "--camera", "--size", "--color-by", "--fov", "--backend", "--set"],
     "bench collide": ["--n", "--steps", "--iterations", "--boulder"],
-    "bench pit": ["--n", "--t"],
+    "bench pit": ["--n", "--t", "--set"],
     "bench sweep": ["--n", "--dt", "--repeats"],
     "bench render": ["--n", "--frames"],
 }

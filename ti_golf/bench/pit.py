@@ -14,7 +14,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -37,10 +37,11 @@ WARM_UP_BALLS = 8192
 the grid's order, as the full pour is."""
 
 
-def pit_scene(n: int | None = None) -> tuple[Scene, float]:
+def pit_scene(n: int | None = None, overrides: Sequence[str] = ()) -> tuple[Scene, float]:
     """The bundled ball pit with ``n`` balls (default: the scene's), its bin widened or narrowed
-    so that the pile is as deep; returns the scene and the bin's side [m]."""
-    scene = load_scene(PIT_SCENE)
+    so that the pile is as deep, and the scene's keys changed by ``overrides`` (``--set``
+    syntax); returns the scene and the bin's side [m]."""
+    scene = load_scene(PIT_SCENE, overrides)
     block = scene.blocks[0]
     side = max(p.point[0] for p in scene.planes)  # the wall at x = side
     if n is None or n == block.number:
@@ -77,14 +78,17 @@ def pile_quality(sim: Simulation, side: float) -> dict[str, Any]:
     }
 
 
-def bench_pit(n: int | None = None, t: float = 4.0, log: Callable[[str], None] = print) -> dict[str, Any]:
-    """Pour the ball pit (``n`` balls, default the scene's 100,000) for ``t`` simulated seconds
-    and measure it (see the module's docstring); returns the figures as a dict."""
+def bench_pit(
+    n: int | None = None, t: float = 4.0, overrides: Sequence[str] = (), log: Callable[[str], None] = print
+) -> dict[str, Any]:
+    """Pour the ball pit (``n`` balls, default the scene's 100,000) for ``t`` simulated seconds,
+    with the scene's keys changed by ``overrides`` (``--set`` syntax), and measure it (see the
+    module's docstring); returns the figures as a dict."""
     info = ensure_init()
-    scene, side = pit_scene(n)
+    scene, side = pit_scene(n, overrides)
     n_balls = scene.blocks[0].number
     t0 = time.perf_counter()
-    warm_scene, _ = pit_scene(WARM_UP_BALLS)
+    warm_scene, _ = pit_scene(WARM_UP_BALLS, overrides)
     warm = Simulation(warm_scene)
     warm.run(steps=3)
     compile_s = time.perf_counter() - t0
@@ -107,6 +111,7 @@ def bench_pit(n: int | None = None, t: float = 4.0, log: Callable[[str], None] =
     result: dict[str, Any] = {
         "benchmark": "pit",
         "n": n_balls,
+        "set": list(overrides),
         "t_s": sim.t,
         "dt_s": sim.dt,
         "steps": steps,

@@ -45,14 +45,12 @@ def scene_options(
         p.add_argument("scene", help=scene_help)
     else:
         p.add_argument("scene", nargs="?", default=default, help=scene_help)
-    p.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help=f"override a scene key with a TOML value, e.g. --set {example} (repeatable)",
-    )
+    set_option(p, f"override a scene key with a TOML value, e.g. --set {example} (repeatable)")
+
+
+def set_option(p: argparse.ArgumentParser, help: str) -> None:
+    """``--set KEY=VALUE`` (repeatable) into ``args.overrides``."""
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE", help=help)
 
 
 def check_writable(path: str | None, option: str) -> None:

@@ -9,7 +9,7 @@ from ti_golf.bench.common import to_json
 from ti_golf.bench.pit import PIT_BALLS, bench_pit
 from ti_golf.bench.render import bench_render
 from ti_golf.bench.sweep import bench_sweep
-from ti_golf.cli._common import Parser, runtime_options
+from ti_golf.cli._common import Parser, runtime_options, set_option
 from ti_golf.errors import ConfigError
 
 
@@ -64,6 +64,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--n", type=int, default=PIT_BALLS, help=f"balls (default {PIT_BALLS}, the scene's; the bin scales)"
     )
     bp.add_argument("--t", type=float, default=4.0, help="simulated time [s] (default 4)")
+    set_option(bp, "override a key of the pit's scene with a TOML value, e.g. --set contact.e=0.8 (repeatable)")
     bp.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(bp)
     br = bsub.add_parser("render", help="seconds per off-screen frame of N balls over a terrain")
@@ -83,7 +84,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
             raise ConfigError("--t", None, f"must be in (0, 60] s (got {args.t})")
         if args.n < 16:
             raise ConfigError("--n", None, f"must be >= 16 balls (got {args.n})")
-        result = bench_pit(n=args.n, t=args.t)
+        result = bench_pit(n=args.n, t=args.t, overrides=args.overrides)
     elif args.bench == "collide":
         if args.n < 2 or args.steps <= 0:
             raise ConfigError("--n" if args.n < 2 else "--steps", None, "must be >= 2 balls and > 0 steps")
