@@ -147,8 +147,9 @@ def fly(
 
     Uses the scene's integrator and ``world.dt``; gives up on a ball after ``world.t_max``.
     Balls are ordered by their drag-free flight time before they are grouped into SIMD lanes, so a
-    group's balls land at about the same step. Returns the raw per-ball arrays: landed, apex,
-    t_land, land_x, land_v, the final x, v, w and, when recording, traj (N, n_samples, 3).
+    group's balls land at about the same step. Returns the raw per-ball arrays: landed (N,), apex
+    (N,), t_land (N,), the landing point land_x, velocity land_v and spin land_w (N, 3) and, when
+    recording, traj (N, n_samples, 3).
     """
     ensure_init()
     lanes = default_lanes() if lanes is None else int(lanes)
@@ -167,7 +168,7 @@ def fly(
     radius, mass = np.full(n0, scene.ball.radius, f), np.full(n0, scene.ball.mass, f)
     landed = np.zeros(n0, np.int32)
     apex, t_land = np.zeros(n0, f), np.zeros(n0, f)
-    land_x, land_v = np.zeros((n0, 3), f), np.zeros((n0, 3), f)
+    land_x, land_v, land_w = np.zeros((n0, 3), f), np.zeros((n0, 3), f), np.zeros((n0, 3), f)
     traj = np.zeros((n0, n_samples, 3) if record_every else (1, 1, 3), f)
     air = air_params(a)
     with plain_compile():  # minutes less of compiling on first use, see runtime.plain_compile
@@ -190,9 +191,10 @@ def fly(
             t_land,
             land_x,
             land_v,
+            land_w,
             traj,
         )
-    out = dict(landed=landed, apex=apex, t_land=t_land, land_x=land_x, land_v=land_v)
+    out = dict(landed=landed, apex=apex, t_land=t_land, land_x=land_x, land_v=land_v, land_w=land_w)
     if record_every:
         out["traj"] = traj
     bad = ~np.all(np.isfinite(np.concatenate([out["land_x"], out["land_v"], out["apex"][:, None]], axis=1)), axis=1)
