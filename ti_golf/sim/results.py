@@ -22,6 +22,10 @@ CSV_COLUMNS = (
     "landing_speed_mps",
 )
 
+GOLFER_CSV_COLUMNS = ("offline_m", "apex_height_m", "landing_spin_radps", "total_m", "roll_m")
+"""The numbers golfers read that :data:`CSV_COLUMNS` lacks, appended to a sweep's CSV (SI; carry,
+hang time, land angle and land speed are there already; total and roll are NaN unless rolled out)."""
+
 
 @dataclass(frozen=True)
 class Flight:

@@ -9,6 +9,7 @@ import numpy as np
 
 from ti_golf.errors import ConfigError
 from ti_golf.scene.schema import AT_REST, Scene
+from ti_golf.sim.results import Flight, Shots
 from ti_golf.sim.simulation import Simulation
 
 
@@ -44,3 +45,24 @@ def roll_out(
     sim = Simulation(apart, x=x, v=v, w=w, track=False)
     sim.run(t=scene.world.t_max, until="rest", progress=progress)
     return sim.x, sim.status == AT_REST
+
+
+def shots_from_landing(
+    scene: Scene,
+    x0: np.ndarray,
+    raw: dict[str, np.ndarray],
+    to_rest: bool,
+    progress: Callable[[float, float], None] | None = None,
+) -> Shots:
+    """The :class:`Shots` of balls launched from ``x0`` (N, 3) whose flight to landing is ``raw``
+    (:func:`ti_golf.sim.sweep.fly`'s record), rolled out to rest with ``to_rest``; the target line
+    is the scene's launch azimuth."""
+    flight = Flight.from_arrays(x0, raw["landed"], raw["apex"], raw["t_land"], raw["land_x"], raw["land_v"])
+    rest_x = at_rest = None
+    if to_rest:
+        idx = np.flatnonzero(flight.landed)
+        rest_x, at_rest = np.full((len(x0), 3), np.nan), np.zeros(len(x0), bool)
+        x, v, w = (raw[k][idx].astype(np.float64) for k in ("land_x", "land_v", "land_w"))
+        rest_x[idx], at_rest[idx] = roll_out(scene, x, v, w, progress=progress)
+    direction = scene.launch.direction_deg if scene.launch is not None else 0.0  # the target line
+    return Shots.from_flight(flight, x0, raw["land_w"].astype(np.float64), direction, rest_x, at_rest)

@@ -18,8 +18,8 @@ import numpy as np
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import MonitorLaunch
 from ti_golf.scene.schema import Scene
-from ti_golf.sim.results import Flight, Shots
-from ti_golf.sim.rollout import roll_out
+from ti_golf.sim.results import Shots
+from ti_golf.sim.rollout import shots_from_landing
 from ti_golf.sim.sweep import fly
 
 
@@ -46,14 +46,7 @@ def fly_shots(
     x0 = np.asarray(x0, dtype=float)
     flown = scene if flight_dt is None else replace(scene, world=replace(scene.world, dt=float(flight_dt)))
     raw = fly(flown, x0, v0, w0)
-    flight = Flight.from_arrays(x0, raw["landed"], raw["apex"], raw["t_land"], raw["land_x"], raw["land_v"])
-    rest_x = at_rest = None
-    if to_rest:
-        idx = np.flatnonzero(flight.landed)
-        rest_x, at_rest = np.full((len(x0), 3), np.nan), np.zeros(len(x0), bool)
-        x, v, w = (raw[k][idx].astype(np.float64) for k in ("land_x", "land_v", "land_w"))
-        rest_x[idx], at_rest[idx] = roll_out(scene, x, v, w, progress=progress)
-    return Shots.from_flight(flight, x0, raw["land_w"].astype(np.float64), target_direction(scene), rest_x, at_rest)
+    return shots_from_landing(scene, x0, raw, to_rest, progress)
 
 
 def shots(

@@ -21,7 +21,8 @@ from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene, backspin_axis
-from ti_golf.sim.results import CSV_COLUMNS, Flight
+from ti_golf.sim.results import CSV_COLUMNS, GOLFER_CSV_COLUMNS, Flight, Shots
+from ti_golf.sim.rollout import shots_from_landing
 
 
 @dataclass(frozen=True)
@@ -36,6 +37,8 @@ class SweepResult:
             (after landing a trajectory repeats its landing point); ``None`` if not recorded.
         traj_dt: sampling interval of ``traj`` [s].
         scene: the scene the sweep ran.
+        shots: the numbers golfers read (offline, apex above launch, land spin; total and roll
+            when rolled out to rest), shape (N,) each; ``None`` for a result built without them.
     """
 
     angle_deg: np.ndarray
@@ -46,6 +49,7 @@ class SweepResult:
     traj_index: np.ndarray | None = None
     traj: np.ndarray | None = None
     traj_dt: float = 0.0
+    shots: Shots | None = None
 
     @property
     def carry(self) -> np.ndarray:
@@ -58,9 +62,10 @@ class SweepResult:
         return int(np.argmax(c))
 
     def columns(self) -> dict[str, np.ndarray]:
-        """The CSV columns (see :data:`ti_golf.sim.results.CSV_COLUMNS`) as arrays."""
+        """The CSV columns (see :data:`ti_golf.sim.results.CSV_COLUMNS`), then, with :attr:`shots`,
+        :data:`~ti_golf.sim.results.GOLFER_CSV_COLUMNS`, as arrays (SI)."""
         f = self.flight
-        return dict(
+        cols = dict(
             zip(
                 CSV_COLUMNS,
                 (
@@ -77,14 +82,18 @@ class SweepResult:
                 ),
             )
         )
+        if self.shots is not None:
+            s = self.shots
+            cols.update(zip(GOLFER_CSV_COLUMNS, (s.offline, s.apex, s.land_spin, s.total, s.roll)))
+        return cols
 
     def to_csv(self, path: str | os.PathLike[str]) -> None:
-        """Write one row per launch condition with the :data:`CSV_COLUMNS` header (whole or not at
+        """Write one row per launch condition with the :meth:`columns` header (whole or not at
         all)."""
         cols = self.columns()
         with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
             out = csv.writer(fh)
-            out.writerow(CSV_COLUMNS)
+            out.writerow(cols)
             for row in zip(*cols.values()):
                 out.writerow([f"{v:.10g}" for v in row])
 
@@ -215,6 +224,7 @@ def sweep(
     spins: Sequence[float] | None = None,
     overrides: Mapping[str, Any] | Iterable[str] | None = None,
     trajectories: int = 0,
+    to_rest: bool = False,
 ) -> SweepResult:
     """Fly one ball per launch condition, all together, until every ball has landed.
 
@@ -226,6 +236,8 @@ def sweep(
         spins: spin magnitudes [rad/s] along the scene's spin axis, likewise.
         overrides: scene overrides (``{"air.wind": [-5, 0, 0]}`` or ``["air.wind=[-5,0,0]"]``).
         trajectories: also record the trajectories of up to this many evenly spaced conditions.
+        to_rest: also bounce and roll every ball from its landing to rest on the scene's ground
+            (:func:`ti_golf.sim.rollout.roll_out`), for total and roll.
 
     Example:
         >>> res = sweep("lab_turbulent", angles_deg=np.arange(36, 37.41, 0.02))   # doctest: +SKIP
@@ -238,7 +250,8 @@ def sweep(
     an, sp, sn, x0, v0, w0 = launch_grid(scene, angles_deg, speeds, spins)
     raw = fly(scene, x0, v0, w0)
     flight = Flight.from_arrays(x0, raw["landed"], raw["apex"], raw["t_land"], raw["land_x"], raw["land_v"])
-    res = SweepResult(an, sp, sn, flight, scene)
+    shots = shots_from_landing(scene, x0, raw, to_rest)
+    res = SweepResult(an, sp, sn, flight, scene, shots=shots)
     if trajectories > 0:
         k = min(int(trajectories), an.size)
         idx = np.unique(np.linspace(0, an.size - 1, k).round().astype(int))
@@ -248,5 +261,5 @@ def sweep(
         every = max(1, int(t_span / dt / 400))
         n_samples = int(math.ceil(t_span / dt / every)) + 2
         rec = fly(scene, x0[idx], v0[idx], w0[idx], record_every=every, n_samples=n_samples)
-        res = SweepResult(an, sp, sn, flight, scene, traj_index=idx, traj=rec["traj"], traj_dt=every * dt)
+        res = SweepResult(an, sp, sn, flight, scene, traj_index=idx, traj=rec["traj"], traj_dt=every * dt, shots=shots)
     return res
