@@ -142,8 +142,10 @@ def test_hla_turns_the_whole_flight_about_the_vertical(tour):
 
 def test_two_phase_roll_out_agrees_with_one_simulation(tour):
     # flight in lanes, then bounce and roll from the landing state, against one Simulation from the
-    # tee to rest: they step at different instants around the landing, so the points of rest may
-    # differ by up to about a step's travel at landing (v_land · h ≈ 2.4 cm)
+    # tee to rest: the same flight (carry to 1e-9 m), but the first turf contact falls up to a step
+    # apart (the Simulation meets the turf at the end of the step that crosses it), and each of the
+    # few bounces that follow adds as much: the points of rest agree to a few steps' travel at
+    # landing, 4·v_land·h ≈ 10 cm of a 3 m roll (the benchmark measures 2–5 cm over 8 shots)
     launch = replace(SEVEN_IRON, axis_deg=8.0)
     res = shots(tour, launch)
     assert res.at_rest[0] and res.total[0] > res.carry[0]
@@ -154,7 +156,7 @@ def test_two_phase_roll_out_agrees_with_one_simulation(tour):
     assert sim.flight().carry[0] == pytest.approx(res.carry[0], abs=1e-9)
     h = tour.world.dt
     rest = np.array([res.rest_along[0], res.rest_offline[0]])
-    assert np.hypot(*(rest - sim.x[0, [0, 2]])) < res.land_speed[0] * h
+    assert np.hypot(*(rest - sim.x[0, [0, 2]])) < 4 * res.land_speed[0] * h
 
 
 def test_sweep_columns_hold_the_same_numbers(tour):

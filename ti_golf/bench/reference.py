@@ -139,3 +139,35 @@ def carry_scipy(
             p = sol.y_events[0][0]
             out[i] = math.hypot(p[0] - x0[i][0], p[2] - x0[i][2])
     return out
+
+
+def landing_scipy(
+    scene: Scene,
+    x0: np.ndarray,
+    v0: np.ndarray,
+    w0: np.ndarray,
+    rtol: float = 1e-12,
+    atol: float = 1e-12,
+    t_max: float | None = None,
+) -> np.ndarray:
+    """Landing points [m] (N, 3) at launch height by ``solve_ivp`` DOP853 (one call per
+    trajectory, exact landing event); NaN where a ball does not land within ``t_max``."""
+    from scipy.integrate import solve_ivp
+
+    t_max = scene.world.t_max if t_max is None else t_max
+    out = np.full((len(x0), 3), np.nan)
+    for i in range(len(x0)):
+
+        def rhs(_t: float, y: np.ndarray) -> np.ndarray:
+            dv, dw = derivatives(scene, y[3:6][None, :], y[6:9][None, :])
+            return np.concatenate([y[3:6], dv[0], dw[0]])
+
+        def landing(_t: float, y: np.ndarray, level: float = float(x0[i][1])) -> float:
+            return y[1] - level
+
+        landing.terminal, landing.direction = True, -1  # type: ignore[attr-defined]
+        y0 = np.concatenate([x0[i], v0[i], w0[i]]).astype(float)
+        sol = solve_ivp(rhs, (0.0, t_max), y0, method="DOP853", rtol=rtol, atol=atol, events=landing)
+        if sol.t_events[0].size:
+            out[i] = sol.y_events[0][0][:3]
+    return out

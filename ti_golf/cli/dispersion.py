@@ -12,14 +12,12 @@ from ti_golf.cli._common import Progress, check_writable, runtime_options, scene
 from ti_golf.cli.shot import LAUNCH_OPTIONS, launch_line, launch_options, read_launch, units_option
 from ti_golf.errors import ConfigError
 from ti_golf.render.dispersion import plot_dispersion
-from ti_golf.scene.launch_monitor import MPH, RPM, UNITS, MonitorLaunch, Units, check_launch
+from ti_golf.scene.launch_monitor import UNITS, MonitorLaunch, Units, check_launch
 from ti_golf.scene.loader import load_scene
-from ti_golf.sim.dispersion import MAX_SHOTS, dispersion
+from ti_golf.sim.dispersion import MAX_SHOTS, PLAYER_SPREAD, dispersion
 from ti_golf.sim.rollout import has_ground
 
-SPREAD = MonitorLaunch(speed=1.5 * MPH, vla_deg=1.0, hla_deg=1.5, spin=300.0 * RPM, axis_deg=3.0)
-"""The default standard deviations (illustrative, not measured: a consistent player's iron)."""
-
+SPREAD = PLAYER_SPREAD
 SPREAD_OPTIONS = {name: f"--sd-{option[2:]}" for name, option in LAUNCH_OPTIONS.items()}
 """The option of each standard deviation."""
 

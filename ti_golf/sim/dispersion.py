@@ -19,13 +19,17 @@ from pathlib import Path
 import numpy as np
 
 from ti_golf.files import atomic_path
-from ti_golf.scene.launch_monitor import MonitorLaunch, Units
+from ti_golf.scene.launch_monitor import MPH, RPM, MonitorLaunch, Units
 from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import Shots
 from ti_golf.sim.shots import shots
 
 MAX_SHOTS = 1_000_000
 """The most shots one dispersion flies."""
+
+PLAYER_SPREAD = MonitorLaunch(speed=1.5 * MPH, vla_deg=1.0, hla_deg=1.5, spin=300.0 * RPM, axis_deg=3.0)
+"""Default standard deviations (illustrative, not measured): ball speed 1.5 mph, VLA 1°, HLA 1.5°,
+spin 300 rpm, spin axis 3°, about a consistent player's iron."""
 
 
 def draw_launches(mean: MonitorLaunch, sd: MonitorLaunch, n: int, seed: int) -> MonitorLaunch:
