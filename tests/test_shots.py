@@ -318,3 +318,18 @@ def test_dispersion_command_writes_its_shots_and_plot(tmp_path):
         np.testing.assert_allclose(z["carry_yd"], table[:, header.index("carry_yd")], rtol=1e-8)
         assert np.isnan(z["total_yd"]).all() and int(z["seed"]) == 2 and str(z["units"]) == "imperial"
     assert UNITS["imperial"].distance == YARD
+
+
+def test_bench_dispersion_reports_rates_baselines_and_accuracy():
+    from ti_golf.bench.dispersion import bench_dispersion
+
+    lines: list[str] = []
+    r = bench_dispersion(n=64, rest=16, n_reference=3, n_single=2, n_numpy=16, n_scipy=2, n_compare=1, log=lines.append)
+    fine, coarse = r["landing"]["dt_0.001"], r["landing"]["dt_0.01"]
+    assert fine["landed_fraction"] == coarse["landed_fraction"] == 1.0
+    # RK4's global error is O(h⁴): tiny at 1 ms, 10⁴ times that at 10 ms, still below a millimetre
+    assert fine["max_carry_error_m"] < 1e-6 and coarse["max_carry_error_m"] < 1e-3
+    assert r["rest"]["at_rest_fraction"] == 1.0 and r["rest"]["max_rest_gap_vs_one_simulation_m"] < 0.1
+    assert set(r["baselines"]) == set(r["speedup"]) == set(r["baseline_sizes"])
+    assert all(rate > 0 for rate in r["baselines"].values())
+    assert any("shots/s" in line for line in lines)
