@@ -22,7 +22,7 @@ def plot_dispersion(d: "Dispersion", units: Units, path: str | os.PathLike[str],
     """Landing points (and points of rest, when rolled out) seen from above, the target up the page,
     right to the right, with the 68 % and 95 % landing ellipses, in ``units``' distances."""
     f, lab = units.distance, units.distance_label
-    fig = Figure(figsize=(6.5, 7.5))
+    fig = Figure(figsize=(8.0, 5.5))
     ax = fig.subplots()
     n = len(d.shots)
     k = min(n, MAX_DRAWN)
