@@ -107,12 +107,15 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
     summary = d.summary()
     print(f"{'':<8} {'mean':>9} {'sd':>7}")
     for name, (m, sdv) in summary.items():
+        if not math.isfinite(m):
+            continue  # total without a roll-out
         print(f"{name:<8} {m / f:9.1f} {sdv / f:7.1f} {lab}" + ("  (+ right)" if name == "offline" else ""))
     ellipses = d.ellipses() if landed > 2 else []
     for e in ellipses:
+        angle = 90.0 if e.angle_deg < -89.5 else e.angle_deg  # ±90°: across the target line either way
         print(
             f"{100 * e.p:.0f} % landing ellipse: semi-axes {e.semi_major / f:.1f} × {e.semi_minor / f:.1f} {lab}, "
-            f"major axis {e.angle_deg:+.0f}° from the target line, holds {100 * e.inside:.1f} % of the shots"
+            f"major axis {angle:+.0f}° from the target line, holds {100 * e.inside:.1f} % of the shots"
         )
     if args.out:
         d.save(args.out, units)
