@@ -282,6 +282,7 @@ def test_shot_prints_the_numbers_golfers_read_in_either_units():
         (["shot", "tour_shot", "--spin", "-10"], "--spin"),
         (["shot", "tour_shot", "--axis", "nan"], "--axis"),
         (["shot", "tour_shot", "--units", "furlongs"], "--units"),
+        (["shot", "driving_range", "--speed", "150"], "--vla"),  # no [launch] to take VLA and spin from
         (["dispersion", "tour_shot", "--n", "1"], "--n"),
         (["dispersion", "tour_shot", "--n", "1000001"], "--n"),
         (["dispersion", "tour_shot", "--sd-vla", "-1"], "--sd-vla"),

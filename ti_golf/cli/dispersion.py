@@ -81,8 +81,6 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
     check_writable(args.out, "--out")
     check_writable(args.plot, "--plot")
     scene = load_scene(args.scene, args.overrides)
-    if scene.launch is None and args.speed is None:
-        raise ConfigError("--speed", None, f"is needed: scene {scene.name!r} has no [launch] table")
     mean = read_launch(args, scene, units)
     sd = read_spread(args, units)
     to_rest = not args.no_roll and has_ground(scene)

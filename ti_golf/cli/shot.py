@@ -60,6 +60,10 @@ def launch_options(p: argparse.ArgumentParser) -> None:
 
 def read_launch(args: argparse.Namespace, scene: Scene, units: Units) -> MonitorLaunch:
     """The launch of the options given, the scene's launch for the others, checked (SI)."""
+    if scene.launch is None:
+        for option in ("--speed", "--vla", "--spin"):
+            if getattr(args, option[2:]) is None:
+                raise ConfigError(option, None, f"required: scene {scene.name!r} has no [launch] table to take it from")
     values = scene_launch(scene).in_units(units)
     for name, option in LAUNCH_OPTIONS.items():
         if getattr(args, option[2:]) is not None:
@@ -129,8 +133,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def cmd_shot(args: argparse.Namespace) -> int:
     units = UNITS[args.units]
     scene = load_scene(args.scene, args.overrides)
-    if scene.launch is None and args.speed is None:
-        raise ConfigError("--speed", None, f"is needed: scene {scene.name!r} has no [launch] table")
     launch = read_launch(args, scene, units)
     to_rest = has_ground(scene)
     res = shots(scene, launch, to_rest=to_rest)
