@@ -115,7 +115,7 @@ def test_keys_is_a_well_formed_markdown_table(keys_output):
 
 def test_help_and_unknown_subcommand():
     proc = ok(run_cli("--help"))
-    for command in ("scenes", "keys", "sweep", "run", "table", "bench", "render", "play"):
+    for command in ("scenes", "keys", "sweep", "shot", "dispersion", "run", "table", "bench", "render", "play"):
         assert command in proc.stdout
     proc = run_cli("frobnicate")
     assert proc.returncode == 2

@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 from PIL import Image
 
 from ti_golf.cli import main
+from ti_golf.sim.dispersion import dispersion as real_dispersion
 from ti_golf.sim.simulation import Simulation
 from ti_golf.sim.sweep import sweep as real_sweep
 
@@ -67,14 +68,22 @@ VALUES = st.one_of(WORDS, st.text(max_size=8))
 
 OPTIONS = {
     "run": ["--t", "--steps", "--until", "--record-every", "--frames-every", "--camera", "--size", "--set"],
-    "sweep": ["--angles", "--speeds", "--spins", "--trajectories", "--set"],
+    "sweep": ["--angles", "--speeds", "--spins", "--trajectories", "--units", "--set"],
+    "shot": ["--speed", "--vla", "--hla", "--spin", "--axis", "--units", "--set"],
+    "dispersion": ["--n", "--seed", "--speed", "--sd-speed", "--sd-axis", "--units", "--flight-dt", "--set"],
     "render": ["--t", "--steps", "--until", "--camera", "--size", "--color-by", "--fov", "--backend", "--set"],
     "bench collide": ["--n", "--steps", "--iterations", "--boulder"],
     "bench pit": ["--n", "--t", "--set"],
     "bench sweep": ["--n", "--dt", "--repeats"],
     "bench render": ["--n", "--frames"],
 }
-SCENES = {"run": "break_shot", "sweep": "lab_vacuum", "render": "break_shot"}
+SCENES = {
+    "run": "break_shot",
+    "sweep": "lab_vacuum",
+    "render": "break_shot",
+    "shot": "tour_shot",
+    "dispersion": "tour_shot",
+}
 
 
 def short_run(self, t=None, steps=None, until=None, record_every=0, progress=None, every=0, on_every=None):
@@ -89,11 +98,15 @@ def short_run(self, t=None, steps=None, until=None, record_every=0, progress=Non
     )
 
 
-def short_sweep(scene, angles=None, speeds=None, spins=None, overrides=None, trajectories=0):
+def short_sweep(scene, angles=None, speeds=None, spins=None, overrides=None, trajectories=0, to_rest=False):
     def cut(values):
         return None if values is None else values[:2]
 
-    return real_sweep(scene, cut(angles), cut(speeds), cut(spins), overrides, min(trajectories, 2))
+    return real_sweep(scene, cut(angles), cut(speeds), cut(spins), overrides, min(trajectories, 2), to_rest)
+
+
+def short_dispersion(scene, mean, sd, n=10_000, seed=0, **kwargs):
+    return real_dispersion(scene, mean, sd, min(n, 8), seed, **kwargs)
 
 
 def fake_render(sim, path, **kwargs) -> str:
@@ -111,6 +124,7 @@ def run_cli(argv: list[str]) -> tuple[int, str]:
         stack.enter_context(mock.patch.object(Simulation, "_real_run", Simulation.run, create=True))
         stack.enter_context(mock.patch.object(Simulation, "run", short_run))
         stack.enter_context(mock.patch("ti_golf.cli.sweep.sweep", short_sweep))
+        stack.enter_context(mock.patch("ti_golf.cli.dispersion.dispersion", short_dispersion))
         stack.enter_context(mock.patch("ti_golf.cli.run.render", fake_render))
         stack.enter_context(mock.patch("ti_golf.cli.render.render", lambda *a, **k: "ggui"))
         for name in ("bench_collide", "bench_pit", "bench_sweep", "bench_render"):
@@ -148,6 +162,7 @@ def test_fuzzed_command_lines_run_or_are_refused(argv, tmp_path_factory):
     extra = {
         "run": ["--out", str(out / "r.npz"), "--frames", str(out / "f")],
         "sweep": ["--out", str(out / "s.csv"), "--plot", str(out / "s.png")],
+        "dispersion": ["--out", str(out / "d.npz"), "--plot", str(out / "d.png")],
         "render": ["--out", str(out / "p.png")],
     }.get(argv[0], [])
     assert_runs_or_refuses(argv + extra)
@@ -162,6 +177,8 @@ def test_fuzzed_command_lines_run_or_are_refused(argv, tmp_path_factory):
         ["run", "break_shot", "--gif"],
         ["sweep", "lab_vacuum", "--out"],
         ["sweep", "lab_vacuum", "--plot"],
+        ["dispersion", "tour_shot", "--out"],
+        ["dispersion", "tour_shot", "--plot"],
         ["render", "break_shot", "--out"],
         ["schema", "--out"],
         ["table", "--plot"],

@@ -6,6 +6,7 @@ import argparse
 
 from ti_golf.bench.collide import bench_collide
 from ti_golf.bench.common import to_json
+from ti_golf.bench.dispersion import bench_dispersion
 from ti_golf.bench.pit import PIT_BALLS, bench_pit
 from ti_golf.bench.render import bench_render
 from ti_golf.bench.sweep import bench_sweep
@@ -67,6 +68,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     set_option(bp, "override a key of the pit's scene with a TOML value, e.g. --set contact.e=0.8 (repeatable)")
     bp.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(bp)
+    bd = bsub.add_parser(
+        "dispersion", help="a player's shots to landing and to rest (tour_shot) vs one-at-a-time, numpy and scipy"
+    )
+    bd.add_argument("--n", type=int, default=100_000, help="shots flown to landing (default 100000)")
+    bd.add_argument("--rest", type=int, default=10_000, help="of them rolled out to rest (default 10000; 0: none)")
+    bd.add_argument(
+        "--flight-dt", type=float, default=0.01, help="a second, coarser RK4 step timed to landing [s] (default 0.01)"
+    )
+    bd.add_argument("--json", action="store_true", help="end with one line of JSON")
+    runtime_options(bd)
     br = bsub.add_parser("render", help="seconds per off-screen frame of N balls over a terrain")
     br.add_argument("--n", type=int, default=100_000, help="balls (default 100000)")
     br.add_argument("--frames", type=int, default=3, help="timed frames (default 3)")
@@ -77,7 +88,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def cmd_bench(args: argparse.Namespace) -> int:
     if args.n <= 0:
         raise ConfigError("--n", None, f"must be > 0 (got {args.n})")
-    if args.bench == "render":
+    if args.bench == "dispersion":
+        if not 0 <= args.rest <= args.n:
+            raise ConfigError("--rest", None, f"must be in [0, --n] shots (got {args.rest})")
+        if not 1e-5 <= args.flight_dt <= 0.05:  # (also false for NaN)
+            raise ConfigError("--flight-dt", None, f"must be in [1e-05, 0.05] s (got {args.flight_dt})")
+        result = bench_dispersion(n=args.n, rest=args.rest, flight_dt=args.flight_dt)
+    elif args.bench == "render":
         result = bench_render(n=args.n, frames=max(1, args.frames))
     elif args.bench == "pit":
         if not 0.0 < args.t <= 60.0:  # (also false for NaN)

@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 
 import ti_golf
 from ti_golf import runtime
-from ti_golf.cli import bench, play, render, run, scenes, schema, sweep, table
+from ti_golf.cli import bench, dispersion, play, render, run, scenes, schema, shot, sweep, table
 from ti_golf.cli._common import Parser
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
 
@@ -24,6 +24,8 @@ COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "keys": scenes.cmd_keys,
     "schema": schema.cmd_schema,
     "sweep": sweep.cmd_sweep,
+    "shot": shot.cmd_shot,
+    "dispersion": dispersion.cmd_dispersion,
     "run": run.cmd_run,
     "table": table.cmd_table,
     "bench": bench.cmd_bench,
@@ -41,7 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = Parser(prog="ti-golf", description="Golf-ball physics on Taichi: flights, sweeps, collisions.")
     p.add_argument("--version", action="version", version=f"ti-golf {ti_golf.__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (scenes, schema, sweep, run, table, bench, render, play):
+    for module in (scenes, schema, sweep, shot, dispersion, run, table, bench, render, play):
         module.add_parser(sub)
     return p
 

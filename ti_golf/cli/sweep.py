@@ -6,8 +6,10 @@ import argparse
 import time
 
 from ti_golf.cli._common import HeldInterrupt, check_writable, runtime_options, scene_options
+from ti_golf.cli.shot import golfer_table
 from ti_golf.render.plots import plot_sweep
 from ti_golf.scene.balls import launch_position
+from ti_golf.scene.launch_monitor import UNITS
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import parse_range
 from ti_golf.sim.sweep import sweep
@@ -23,6 +25,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--out", help="write one CSV row per launch condition")
     s.add_argument("--plot", help="write a PNG: trajectories (side view) and carry vs angle")
     s.add_argument("--trajectories", type=int, default=21, help="trajectories drawn in --plot (default 21)")
+    s.add_argument(
+        "--to-rest",
+        action="store_true",
+        help="also bounce and roll every ball to rest on the scene's ground, for total and roll (CSV and --units)",
+    )
+    s.add_argument(
+        "--units",
+        choices=tuple(UNITS),
+        help="also print one row per launch condition of the numbers golfers read (carry, total, roll, "
+        "offline, apex, hang time, land angle, speed and spin) in imperial (yd, mph, rpm) or metric "
+        "(m, m/s, rad/s) units",
+    )
     runtime_options(s)
 
 
@@ -39,7 +53,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     spins = _parse_opt_range(args.spins, "--spins")
     t0 = time.perf_counter()
     with HeldInterrupt() as interrupt:  # one kernel launch: an interrupt takes effect once its results are kept
-        res = sweep(scene, angles, speeds, spins, trajectories=args.trajectories if args.plot else 0)
+        res = sweep(
+            scene, angles, speeds, spins, trajectories=args.trajectories if args.plot else 0, to_rest=args.to_rest
+        )
     elapsed = time.perf_counter() - t0
     n = res.angle_deg.size
     landed = int(res.flight.landed.sum())
@@ -57,6 +73,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             f" -> carry {f.carry[b]:.4f} m (apex {f.apex[b] - launch_position(scene)[1]:.2f} m, "
             f"flight {f.flight_time[b]:.3f} s, lands at {f.landing_angle[b]:.1f} deg, {f.landing_speed[b]:.2f} m/s)"
         )
+    if args.units and res.shots is not None:
+        first = {"angle [deg]": res.angle_deg, "speed [m/s]": res.speed_mps, "spin [rad/s]": res.spin_radps}
+        print("\n".join(golfer_table(res.shots, UNITS[args.units], first)))
     if args.out:
         res.to_csv(args.out)
         print(f"wrote {args.out}")

@@ -68,6 +68,7 @@ def fly_to_landing(
     t_land: float_array,
     land_x: vec3_array,
     land_v: vec3_array,
+    land_w: vec3_array,
     traj: vec3_table,
 ):
     """Integrate balls from their launch state until they land at their launch height (sweeps).
@@ -77,7 +78,8 @@ def fly_to_landing(
     put balls of similar flight time next to each other, and its length is a multiple of ``lanes``
     (pad by repeating an id: each ball's results are written once, by its first slot).
     ``traj`` (N, S): positions every ``record_every`` steps while ``record_every > 0``; after
-    landing a trajectory repeats its landing point.
+    landing a trajectory repeats its landing point. ``land_w``: ω at landing [rad/s], linear in
+    time inside the landing step (error O(h²·d²ω/dt²), far below the spin decay per step).
     """
     n_samples = traj.shape[1]
     for group in range(order.shape[0] // lanes):
@@ -100,6 +102,7 @@ def fly_to_landing(
         tl = ti.Vector.zero(float, lanes)
         LX = ti.Matrix.zero(float, 3, lanes)
         LV = ti.Matrix.zero(float, 3, lanes)
+        LW = ti.Matrix.zero(float, 3, lanes)
         if record_every > 0 and n_samples > 0:
             for l in ti.static(range(lanes)):
                 traj[ids[l], 0] = column(S, X, l)
@@ -122,8 +125,10 @@ def fly_to_landing(
                             column(S, X, l), column(S, V, l), column(S1, X, l), column(S1, V, l), h, k * h, level[l]
                         )
                         state[l], tl[l] = LANDED, t1
+                        f = t1 / h - k  # the landing's fraction of the step
                         for c in ti.static(range(3)):
                             LX[c, l], LV[c, l] = p[c], u[c]
+                            LW[c, l] = S[W + c, l] + f * (S1[W + c, l] - S[W + c, l])
                 flying = ti.cast((state == IN_FLIGHT).any(), ti.i32)
             S = S1
             k += 1
@@ -142,7 +147,7 @@ def fly_to_landing(
             if first:
                 i = ids[l]
                 landed[i], apex[i], t_land[i] = state[l], top[l], tl[l]
-                land_x[i], land_v[i] = column(LX, 0, l), column(LV, 0, l)
+                land_x[i], land_v[i], land_w[i] = column(LX, 0, l), column(LV, 0, l), column(LW, 0, l)
 
 
 @kernel

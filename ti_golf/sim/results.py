@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ti_golf.scene.launch_monitor import Units, along, right_of
+
 #: CSV columns of a sweep, in order (units in the names).
 CSV_COLUMNS = (
     "angle_deg",
@@ -19,6 +21,10 @@ CSV_COLUMNS = (
     "landing_angle_deg",
     "landing_speed_mps",
 )
+
+GOLFER_CSV_COLUMNS = ("offline_m", "apex_height_m", "landing_spin_radps", "total_m", "roll_m")
+"""The numbers golfers read that :data:`CSV_COLUMNS` lacks, appended to a sweep's CSV (SI; carry,
+hang time, land angle and land speed are there already; total and roll are NaN unless rolled out)."""
 
 
 @dataclass(frozen=True)
@@ -72,3 +78,118 @@ class Flight:
             landing_angle=np.degrees(np.arctan2(-v[:, 1], v_h)),
             landing_speed=np.linalg.norm(v, axis=1),
         )
+
+
+GOLFER_COLUMNS = (
+    ("carry", "distance"),
+    ("total", "distance"),
+    ("roll", "distance"),
+    ("offline", "distance"),
+    ("apex", "distance"),
+    ("hang_time", "s"),
+    ("land_angle", "deg"),
+    ("land_speed", "speed"),
+    ("land_spin", "spin"),
+)
+"""The numbers golfers read, in order, each with its kind of unit (a kind of
+:class:`~ti_golf.scene.launch_monitor.Units`, or the unit itself)."""
+
+
+@dataclass(frozen=True)
+class Shots:
+    """Per-shot outcomes as golfers read them, SI, shape (N,) each; NaN where not defined (a ball
+    that did not land, or was not rolled out to rest).
+
+    Distances are horizontal, from the launch point; "along" and "offline" are measured along and
+    to the right of the target line (the launch azimuth ``launch.direction_deg``; + right).
+
+    Attributes:
+        landed: True where the ball came back down through its launch height.
+        at_rest: True where the ball was rolled out and came to rest.
+        carry: distance to the landing point at launch height [m].
+        total: distance to the point of rest [m].
+        roll: total − carry [m] (negative when a ball checks and spins back).
+        offline: the landing point's distance right of the target line [m].
+        along: the landing point's distance along the target line [m].
+        rest_offline, rest_along: the same for the point of rest [m].
+        apex: highest point of the ball's centre above its launch point [m].
+        hang_time: time from launch to landing [s].
+        land_angle: descent angle below the horizontal at landing [deg].
+        land_speed: speed at landing [m/s].
+        land_spin: |ω| at landing [rad/s].
+    """
+
+    landed: np.ndarray
+    at_rest: np.ndarray
+    carry: np.ndarray
+    total: np.ndarray
+    roll: np.ndarray
+    offline: np.ndarray
+    along: np.ndarray
+    rest_offline: np.ndarray
+    rest_along: np.ndarray
+    apex: np.ndarray
+    hang_time: np.ndarray
+    land_angle: np.ndarray
+    land_speed: np.ndarray
+    land_spin: np.ndarray
+
+    @classmethod
+    def from_flight(
+        cls,
+        flight: Flight,
+        launch_x: np.ndarray,
+        land_w: np.ndarray,
+        direction_deg: float = 0.0,
+        rest_x: np.ndarray | None = None,
+        at_rest: np.ndarray | None = None,
+    ) -> "Shots":
+        """Build from a :class:`Flight`, the launch points (N, 3), the spins at landing (N, 3)
+        [rad/s], the target line's azimuth [deg] and, when rolled out, the points of rest (N, 3)
+        [m] and which balls came to rest (N,)."""
+        d_hat, r_hat = along(direction_deg), right_of(direction_deg)
+        n = flight.carry.size
+        land = np.stack([flight.landing_x, np.full(n, np.nan), flight.landing_z], axis=1) - launch_x
+        land[:, 1] = 0.0
+        nan = np.full(n, np.nan)
+        rest_ok = np.zeros(n, bool) if at_rest is None else np.asarray(at_rest, bool) & flight.landed
+        total, rest_along, rest_offline = nan, nan, nan
+        if rest_x is not None:
+            rest = np.where(rest_ok[:, None], np.asarray(rest_x, float) - launch_x, np.nan)
+            total = np.hypot(rest[:, 0], rest[:, 2])
+            rest_along, rest_offline = rest @ d_hat, rest @ r_hat
+        return cls(
+            landed=flight.landed,
+            at_rest=rest_ok,
+            carry=flight.carry,
+            total=total,
+            roll=total - flight.carry,
+            offline=land @ r_hat,
+            along=land @ d_hat,
+            rest_offline=rest_offline,
+            rest_along=rest_along,
+            apex=flight.apex - launch_x[:, 1],
+            hang_time=flight.flight_time,
+            land_angle=flight.landing_angle,
+            land_speed=flight.landing_speed,
+            land_spin=np.where(flight.landed, np.linalg.norm(land_w, axis=1), np.nan),
+        )
+
+    def __len__(self) -> int:
+        return int(self.carry.size)
+
+    def columns(self, units: Units) -> dict[str, np.ndarray]:
+        """:data:`GOLFER_COLUMNS` converted to ``units`` (a :class:`~ti_golf.scene.launch_monitor.Units`),
+        keyed ``name_unit`` (e.g. ``carry_yd``, ``land_speed_mph``, ``land_spin_radps``)."""
+        out = {}
+        for name, kind in GOLFER_COLUMNS:
+            factor, label = _unit(units, kind)
+            out[f"{name}_{label.replace('/', 'p')}"] = getattr(self, name) / factor
+        return out
+
+
+def _unit(units: Units, kind: str) -> tuple[float, str]:
+    """(SI per unit, label) of a kind of :data:`GOLFER_COLUMNS` in ``units``."""
+    if kind in ("distance", "speed", "spin"):
+        return getattr(units, kind), getattr(units, f"{kind}_label")
+    return 1.0, kind

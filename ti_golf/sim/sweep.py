@@ -21,7 +21,8 @@ from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene, backspin_axis
-from ti_golf.sim.results import CSV_COLUMNS, Flight
+from ti_golf.sim.results import CSV_COLUMNS, GOLFER_CSV_COLUMNS, Flight, Shots
+from ti_golf.sim.rollout import shots_from_landing
 
 
 @dataclass(frozen=True)
@@ -36,6 +37,8 @@ class SweepResult:
             (after landing a trajectory repeats its landing point); ``None`` if not recorded.
         traj_dt: sampling interval of ``traj`` [s].
         scene: the scene the sweep ran.
+        shots: the numbers golfers read (offline, apex above launch, land spin; total and roll
+            when rolled out to rest), shape (N,) each; ``None`` for a result built without them.
     """
 
     angle_deg: np.ndarray
@@ -46,6 +49,7 @@ class SweepResult:
     traj_index: np.ndarray | None = None
     traj: np.ndarray | None = None
     traj_dt: float = 0.0
+    shots: Shots | None = None
 
     @property
     def carry(self) -> np.ndarray:
@@ -58,9 +62,10 @@ class SweepResult:
         return int(np.argmax(c))
 
     def columns(self) -> dict[str, np.ndarray]:
-        """The CSV columns (see :data:`ti_golf.sim.results.CSV_COLUMNS`) as arrays."""
+        """The CSV columns (see :data:`ti_golf.sim.results.CSV_COLUMNS`), then, with :attr:`shots`,
+        :data:`~ti_golf.sim.results.GOLFER_CSV_COLUMNS`, as arrays (SI)."""
         f = self.flight
-        return dict(
+        cols = dict(
             zip(
                 CSV_COLUMNS,
                 (
@@ -77,14 +82,18 @@ class SweepResult:
                 ),
             )
         )
+        if self.shots is not None:
+            s = self.shots
+            cols.update(zip(GOLFER_CSV_COLUMNS, (s.offline, s.apex, s.land_spin, s.total, s.roll)))
+        return cols
 
     def to_csv(self, path: str | os.PathLike[str]) -> None:
-        """Write one row per launch condition with the :data:`CSV_COLUMNS` header (whole or not at
+        """Write one row per launch condition with the :meth:`columns` header (whole or not at
         all)."""
         cols = self.columns()
         with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
             out = csv.writer(fh)
-            out.writerow(CSV_COLUMNS)
+            out.writerow(cols)
             for row in zip(*cols.values()):
                 out.writerow([f"{v:.10g}" for v in row])
 
@@ -147,8 +156,9 @@ def fly(
 
     Uses the scene's integrator and ``world.dt``; gives up on a ball after ``world.t_max``.
     Balls are ordered by their drag-free flight time before they are grouped into SIMD lanes, so a
-    group's balls land at about the same step. Returns the raw per-ball arrays: landed, apex,
-    t_land, land_x, land_v, the final x, v, w and, when recording, traj (N, n_samples, 3).
+    group's balls land at about the same step. Returns the raw per-ball arrays: landed (N,), apex
+    (N,), t_land (N,), the landing point land_x, velocity land_v and spin land_w (N, 3) and, when
+    recording, traj (N, n_samples, 3).
     """
     ensure_init()
     lanes = default_lanes() if lanes is None else int(lanes)
@@ -167,7 +177,7 @@ def fly(
     radius, mass = np.full(n0, scene.ball.radius, f), np.full(n0, scene.ball.mass, f)
     landed = np.zeros(n0, np.int32)
     apex, t_land = np.zeros(n0, f), np.zeros(n0, f)
-    land_x, land_v = np.zeros((n0, 3), f), np.zeros((n0, 3), f)
+    land_x, land_v, land_w = np.zeros((n0, 3), f), np.zeros((n0, 3), f), np.zeros((n0, 3), f)
     traj = np.zeros((n0, n_samples, 3) if record_every else (1, 1, 3), f)
     air = air_params(a, wld.ground_height)
     with plain_compile():  # minutes less of compiling on first use, see runtime.plain_compile
@@ -190,9 +200,10 @@ def fly(
             t_land,
             land_x,
             land_v,
+            land_w,
             traj,
         )
-    out = dict(landed=landed, apex=apex, t_land=t_land, land_x=land_x, land_v=land_v)
+    out = dict(landed=landed, apex=apex, t_land=t_land, land_x=land_x, land_v=land_v, land_w=land_w)
     if record_every:
         out["traj"] = traj
     bad = ~np.all(np.isfinite(np.concatenate([out["land_x"], out["land_v"], out["apex"][:, None]], axis=1)), axis=1)
@@ -213,6 +224,7 @@ def sweep(
     spins: Sequence[float] | None = None,
     overrides: Mapping[str, Any] | Iterable[str] | None = None,
     trajectories: int = 0,
+    to_rest: bool = False,
 ) -> SweepResult:
     """Fly one ball per launch condition, all together, until every ball has landed.
 
@@ -224,6 +236,8 @@ def sweep(
         spins: spin magnitudes [rad/s] along the scene's spin axis, likewise.
         overrides: scene overrides (``{"air.wind": [-5, 0, 0]}`` or ``["air.wind=[-5,0,0]"]``).
         trajectories: also record the trajectories of up to this many evenly spaced conditions.
+        to_rest: also bounce and roll every ball from its landing to rest on the scene's ground
+            (:func:`ti_golf.sim.rollout.roll_out`), for total and roll.
 
     Example:
         >>> res = sweep("lab_turbulent", angles_deg=np.arange(36, 37.41, 0.02))   # doctest: +SKIP
@@ -236,7 +250,8 @@ def sweep(
     an, sp, sn, x0, v0, w0 = launch_grid(scene, angles_deg, speeds, spins)
     raw = fly(scene, x0, v0, w0)
     flight = Flight.from_arrays(x0, raw["landed"], raw["apex"], raw["t_land"], raw["land_x"], raw["land_v"])
-    res = SweepResult(an, sp, sn, flight, scene)
+    shots = shots_from_landing(scene, x0, raw, to_rest)
+    res = SweepResult(an, sp, sn, flight, scene, shots=shots)
     if trajectories > 0:
         k = min(int(trajectories), an.size)
         idx = np.unique(np.linspace(0, an.size - 1, k).round().astype(int))
@@ -246,5 +261,5 @@ def sweep(
         every = max(1, int(t_span / dt / 400))
         n_samples = int(math.ceil(t_span / dt / every)) + 2
         rec = fly(scene, x0[idx], v0[idx], w0[idx], record_every=every, n_samples=n_samples)
-        res = SweepResult(an, sp, sn, flight, scene, traj_index=idx, traj=rec["traj"], traj_dt=every * dt)
+        res = SweepResult(an, sp, sn, flight, scene, traj_index=idx, traj=rec["traj"], traj_dt=every * dt, shots=shots)
     return res

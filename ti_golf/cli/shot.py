@@ -1,0 +1,161 @@
+"""``ti-golf shot``: one launch as a launch monitor gives it, and the numbers golfers read."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+
+import numpy as np
+
+from ti_golf.cli._common import runtime_options, scene_options
+from ti_golf.errors import ConfigError
+from ti_golf.scene.launch_monitor import UNITS, MonitorLaunch, Units, check_launch, scene_launch
+from ti_golf.scene.loader import load_scene
+from ti_golf.scene.schema import Scene
+from ti_golf.sim.results import GOLFER_COLUMNS, Shots
+from ti_golf.sim.rollout import has_ground
+from ti_golf.sim.shots import shots
+
+LAUNCH_OPTIONS = {"speed": "--speed", "vla_deg": "--vla", "hla_deg": "--hla", "spin": "--spin", "axis_deg": "--axis"}
+"""The option of each launch-monitor value."""
+
+LABELS = {
+    "carry": "carry",
+    "total": "total",
+    "roll": "roll",
+    "offline": "offline",
+    "apex": "apex",
+    "hang_time": "hang time",
+    "land_angle": "land angle",
+    "land_speed": "land speed",
+    "land_spin": "land spin",
+}
+
+
+def units_option(p: argparse.ArgumentParser) -> None:
+    """``--units imperial|metric``."""
+    p.add_argument(
+        "--units",
+        choices=tuple(UNITS),
+        default="imperial",
+        help="units of the launch options and of the output: imperial (mph, rpm, yards; the default) "
+        "or metric (m/s, rad/s, metres); angles are in degrees in both",
+    )
+
+
+def launch_options(p: argparse.ArgumentParser) -> None:
+    """The launch-monitor options: ball speed, VLA, HLA, total spin and spin axis (default: the scene's launch)."""
+    g = p.add_argument_group("launch (as a launch monitor reports it; default: the scene's [launch])")
+    g.add_argument("--speed", type=float, help="ball speed [mph; m/s with --units metric]")
+    g.add_argument("--vla", type=float, help="vertical launch angle above the horizontal [deg]")
+    g.add_argument("--hla", type=float, help="horizontal launch angle [deg], + right of the target line (default 0)")
+    g.add_argument("--spin", type=float, help="total spin [rpm; rad/s with --units metric]")
+    g.add_argument(
+        "--axis",
+        type=float,
+        help="spin axis [deg]: + tilts the lift to the right, a fade for a right-handed player; − a draw",
+    )
+
+
+def read_launch(args: argparse.Namespace, scene: Scene, units: Units) -> MonitorLaunch:
+    """The launch of the options given, the scene's launch for the others, checked (SI)."""
+    if scene.launch is None:
+        for option in ("--speed", "--vla", "--spin"):
+            if getattr(args, option[2:]) is None:
+                raise ConfigError(option, None, f"required: scene {scene.name!r} has no [launch] table to take it from")
+    values = scene_launch(scene).in_units(units)
+    for name, option in LAUNCH_OPTIONS.items():
+        if getattr(args, option[2:]) is not None:
+            values[name] = getattr(args, option[2:])
+    launch = MonitorLaunch.from_units(values, units)
+    check_launch(launch, units, LAUNCH_OPTIONS)
+    return launch
+
+
+def launch_line(launch: MonitorLaunch, units: Units, signed: bool = True) -> str:
+    """``ball speed 123.0 mph, VLA 16.1°, HLA +0.0°, spin 7124 rpm, axis +0.0°`` (HLA and axis
+    without their sign unless ``signed``: for standard deviations)."""
+    u = launch.in_units(units)
+    sign = "+" if signed else ""
+    spin = f"{float(u['spin']):.0f}" if units.spin_label == "rpm" else f"{float(u['spin']):.1f}"
+    return (
+        f"ball speed {float(u['speed']):.1f} {units.speed_label}, VLA {float(u['vla_deg']):.1f}°, "
+        f"HLA {float(u['hla_deg']):{sign}.1f}°, spin {spin} {units.spin_label}, axis {float(u['axis_deg']):{sign}.1f}°"
+    )
+
+
+def fmt(value: float, kind: str, units: Units) -> str:
+    """A value of a :data:`GOLFER_COLUMNS` kind, in ``units``, with as many digits as golfers read."""
+    if not math.isfinite(value):
+        return "-"
+    if kind == "spin" and units.spin_label == "rpm":
+        return f"{value:.0f}"
+    return f"{value:.2f}" if kind == "s" else f"{value:.1f}"
+
+
+def unit_label(kind: str, units: Units) -> str:
+    """The unit of a :data:`GOLFER_COLUMNS` kind in ``units``."""
+    return getattr(units, f"{kind}_label") if kind in ("distance", "speed", "spin") else kind
+
+
+def golfer_table(res: Shots, units: Units, first: dict[str, np.ndarray] | None = None) -> list[str]:
+    """Rows of the golfer columns, one per shot, with ``first`` columns (already formatted
+    strings or numbers) in front; a header line first."""
+    cols = list(res.columns(units).values())
+    heads = [f"{LABELS[name]} [{unit_label(kind, units)}]" for name, kind in GOLFER_COLUMNS]
+    pre = first or {}
+    widths = [max(len(h), 7) for h in list(pre) + heads]
+    lines = ["  ".join(h.rjust(w) for h, w in zip(list(pre) + heads, widths))]
+    for i in range(len(res)):
+        cells = [f"{float(v[i]):g}" for v in pre.values()]
+        cells += [fmt(float(c[i]), kind, units) for c, (_, kind) in zip(cols, GOLFER_COLUMNS)]
+        lines.append("  ".join(c.rjust(w) for c, w in zip(cells, widths)))
+    return lines
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Add ``shot`` to ``ti-golf``'s subcommands."""
+    s = sub.add_parser(
+        "shot",
+        help="fly one launch-monitor launch to rest: carry, total, roll, offline, apex, hang time, landing",
+        description="Fly one shot given as a launch monitor reports it and print the numbers golfers read. "
+        "Carry is measured to launch height; total and roll need the ball to bounce and roll to rest on "
+        "the scene's ground (tour_shot: turf).",
+    )
+    scene_options(s)
+    launch_options(s)
+    units_option(s)
+    s.add_argument("--json", action="store_true", help="print one line of JSON instead (the same numbers and units)")
+    runtime_options(s)
+
+
+def cmd_shot(args: argparse.Namespace) -> int:
+    units = UNITS[args.units]
+    scene = load_scene(args.scene, args.overrides)
+    launch = read_launch(args, scene, units)
+    to_rest = has_ground(scene)
+    res = shots(scene, launch, to_rest=to_rest)
+    values = {k: float(v[0]) for k, v in res.columns(units).items()}
+    if args.json:
+        out: dict[str, object] = {
+            "scene": scene.name,
+            "units": units.name,
+            "launch": {k: float(v) for k, v in launch.in_units(units).items()},
+        }
+        out.update({k: (round(v, 6) if math.isfinite(v) else None) for k, v in values.items()})
+        out["landed"], out["at_rest"] = bool(res.landed[0]), bool(res.at_rest[0])
+        print(json.dumps(out))
+        return 0
+    print(f"{scene.name}: {launch_line(launch, units)}")
+    if not res.landed[0]:
+        print(f"the ball did not land within world.t_max = {scene.world.t_max:g} s")
+        return 0
+    for (name, kind), v in zip(GOLFER_COLUMNS, values.values()):
+        note = "  (+ right of the target line)" if name == "offline" else ""
+        print(f"  {LABELS[name]:<11} {fmt(v, kind, units):>8} {unit_label(kind, units)}{note}")
+    if not to_rest:
+        print("  (total and roll need a ground to roll out on: the scene has none)")
+    elif not res.at_rest[0]:
+        print(f"  (the ball was still moving after world.t_max = {scene.world.t_max:g} s: no total)")
+    return 0
