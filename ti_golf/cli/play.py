@@ -16,7 +16,7 @@ import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-from ti_golf.cli._common import check_writable, runtime_options, scene_options
+from ti_golf.cli._common import check_plot, check_writable, plot_help, runtime_options, scene_options
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.game.course_map import plot_round
@@ -61,7 +61,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "--gui", action="store_true", help="play in a window: the course in 3-D, clubs and sliders, a camera to move"
     )
     p.add_argument("--out", help="write the round as CSV, one row per stroke (rewritten after every stroke)")
-    p.add_argument("--plot", help="write a PNG map of the course with every stroke's path at the end")
+    p.add_argument("--plot", help=plot_help("a map of the course with every stroke's path at the end"))
     runtime_options(p)
     return p
 
@@ -69,11 +69,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def cmd_play(args: argparse.Namespace) -> int:
     """Play a round of ``args.scene``; 0 when it ends (holed, out of bounds, no strokes or input left)."""
     check_writable(args.out, "--out")
-    check_writable(args.plot, "--plot")
+    check_plot(args.plot)
     game = GolfGame(load_scene(args.scene, args.overrides), seed=args.seed)
     if args.gui:
         return _play_in_window(game, args)
-    shots = _file_shots(args.shots, game) if args.shots else _asked_shots(game, input, sys.stdin.isatty())
+    shots = file_shots(args.shots, game) if args.shots else _asked_shots(game, input, sys.stdin.isatty())
     hole = game.hole.position
     print(
         f"{game.scene.name}: a cup {2000 * game.hole.radius:.0f} mm across at x = {hole[0]:g} m, "
@@ -175,7 +175,7 @@ def _number(text: str, name: str, game: GolfGame) -> float:
         raise ValueError(f"{name} must be a number (got {text!r})") from None
 
 
-def _file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
+def file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
     """The shots of a ``--shots`` file, checked line by line (errors name the file, line and field)."""
     try:
         lines = Path(path).read_text(encoding="utf-8").splitlines()
