@@ -52,7 +52,8 @@ def scene_options(
         action="append",
         default=[],
         metavar="KEY=VALUE",
-        help=f"override a scene key with a TOML value, e.g. --set {example} (repeatable)",
+        help=f"override a scene key with a TOML value, e.g. --set {example}; KEY= (no value) clears it, back "
+        "to its default (repeatable)",
     )
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import secrets
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -48,7 +49,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         example="game.wind_max=0",
     )
     p.add_argument(
-        "--seed", type=int, default=None, help="seed of the random start and winds (default: a new round every time)"
+        "--seed",
+        type=seed_value,
+        default=None,
+        help="seed of the random start (a course without game.start, or with --set game.start=) and of the winds "
+        "(default: a new round every time, its seed printed)",
     )
     how = p.add_mutually_exclusive_group()
     how.add_argument(
@@ -66,12 +71,25 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
+def seed_value(text: str) -> int:
+    """A ``--seed``: a whole number, 0 or more; argparse turns the error into a usage line (exit code 2)."""
+    try:
+        seed = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, 0 or more (got {text!r})") from None
+    if seed < 0:
+        raise argparse.ArgumentTypeError(f"must be a whole number, 0 or more (got {seed})")
+    return seed
+
+
 def cmd_play(args: argparse.Namespace) -> int:
     """Play a round of ``args.scene``; 0 when it ends (holed, out of bounds, no strokes or input left)."""
     check_writable(args.out, "--out")
     check_plot(args.plot)
-    game = GolfGame(load_scene(args.scene, args.overrides), seed=args.seed)
+    seed = args.seed if args.seed is not None else secrets.randbelow(2**31)  # (said, so a round can be played again)
+    game = GolfGame(load_scene(args.scene, args.overrides), seed=seed)
     if args.gui:
+        _say_random_start(game, seed, args.seed is None)
         return _play_in_window(game, args)
     shots = file_shots(args.shots, game) if args.shots else _asked_shots(game, input, sys.stdin.isatty())
     hole = game.hole.position
@@ -79,6 +97,7 @@ def cmd_play(args: argparse.Namespace) -> int:
         f"{game.scene.name}: a cup {2000 * game.hole.radius:.0f} mm across at x = {hole[0]:g} m, "
         f"z = {hole[1]:g} m; directions are degrees from +x toward +z"
     )
+    _say_random_start(game, seed, args.seed is None)
     ended = "no more input"
     try:
         while not game.over:
@@ -95,6 +114,17 @@ def cmd_play(args: argparse.Namespace) -> int:
         ended = "interrupted"
     _finish(game, ended, args)
     return 130 if ended == "interrupted" and not game.over else 0
+
+
+def _say_random_start(game: GolfGame, seed: int, drawn: bool) -> None:
+    """Where a course without ``game.start`` put the ball, and the seed that puts it there again
+    (``drawn``: no ``--seed`` was given, so one was drawn)."""
+    if game.scene.game.start is None:
+        again = f"; --seed {seed} plays this start and these winds again" if drawn else ""
+        print(
+            f"The ball starts at a random point of the course (seed {seed}{again}): "
+            f"x = {game.ball[0]:.2f} m, z = {game.ball[2]:.2f} m."
+        )
 
 
 def _play_in_window(game: GolfGame, args: argparse.Namespace) -> int:
