@@ -61,8 +61,8 @@ def _nine_iron(path: str) -> None:
     has landed: trajectories and |ω|(t), each ball's curves ending where it lands."""
     scene = load_scene("lab_spin_decay", ["world.collisions=false"])
     launch = scene.launch
-    assert launch is not None and scene.sweep is not None
-    angles = parse_range(scene.sweep.angles, "lab_spin_decay", "sweep.angles")
+    assert launch is not None and scene.sweep is not None and scene.sweep.angles is not None
+    angles = scene.sweep.angles
     n = len(angles)
     v0 = np.array([launch_velocity(launch.speed, a, launch.direction_deg) for a in angles])
     spin = float(np.linalg.norm(launch.spin))
