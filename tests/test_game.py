@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import math
+import re
 
 import background
 import numpy as np
@@ -174,6 +175,60 @@ def test_a_random_start_and_the_winds_follow_the_seed():
         assert g.to_hole()[0] >= 0.25 * g.terrain.size.max()
         assert g.terrain.gap(g.ball[None], g.radius)[0] == pytest.approx(0.0, abs=1e-12)  # resting on it
         assert g.wind[1] == 0.0 and np.hypot(g.wind[0], g.wind[2]) <= 3.0
+
+
+def test_an_empty_set_clears_the_fixed_start():
+    # `--set game.start=` (and None in a mapping) takes the key back to its default: no fixed
+    # start, so the ball starts at a random point drawn from the seed; other keys go back to theirs
+    sc = tg.load_scene("golf_hole")
+    assert sc.game.start == (0.0, 0.0)
+    for overrides in (["game.start="], {"game.start": None}):
+        free = tg.load_scene("golf_hole", overrides)
+        assert free.game.start is None and free.game.wind_max == sc.game.wind_max
+        a, b = GolfGame(free, seed=7), GolfGame(free, seed=7)
+        np.testing.assert_array_equal(a.ball, b.ball)
+        assert np.hypot(*a.ball[[0, 2]]) > 1.0  # not the tee
+    assert tg.load_scene("golf_hole", ["contact.mu_roll="]).contact.mu_roll == 0.05  # the schema's default
+    assert tg.load_scene("golf_hole", ["launch.angle_deg= "]).launch.angle_deg == 45.0
+    assert tg.load_scene("lab_vacuum", ["hole.position="]).hole is None  # (no table is made to clear a key)
+
+
+def _first_lie(text: str) -> str:
+    return re.search(r"^Stroke 1: the ball lies at (x = [-\d.]+ m, z = [-\d.]+ m)", text, re.M).group(1)
+
+
+def test_both_game_modes_start_at_the_same_random_point_of_the_seed(green_file, tmp_path, capsys, monkeypatch):
+    # the report's game places the ball at a random position: the console and the window take it
+    # from --seed alike; without --seed the round's seed is printed and plays the same start again
+    shots = tmp_path / "shots.txt"
+    shots.write_text("0 1 0 0\n")
+    console = ["play", str(green_file), "--set", "game.start=", "--shots", str(shots)]
+    assert cli.main([*console, "--seed", "4"]) == 0
+    seeded = capsys.readouterr().out
+    assert "The ball starts at a random point of the course (seed 4): " in seeded
+    assert cli.main([*console, "--seed", "5"]) == 0
+    assert _first_lie(capsys.readouterr().out) != _first_lie(seeded)
+    assert cli.main(console) == 0
+    drawn = capsys.readouterr().out
+    seed = re.search(r"--seed (\d+) plays this start and these winds again", drawn).group(1)
+    assert cli.main([*console, "--seed", seed]) == 0
+    assert _first_lie(capsys.readouterr().out) == _first_lie(drawn)
+
+    windows = []
+
+    class Window:  # the window's game, without a display
+        def __init__(self, game, on_stroke):
+            windows.append(game)
+
+        def run(self):
+            pass
+
+    monkeypatch.setattr("ti_golf.cli.play.check_display", lambda: None)
+    monkeypatch.setattr("ti_golf.cli.play.GolfWindow", Window)
+    assert cli.main(["play", str(green_file), "--set", "game.start=", "--gui", "--seed", "4"]) == 0
+    assert "The ball starts at a random point of the course (seed 4): " in capsys.readouterr().out
+    x, z = windows[0].ball[[0, 2]]
+    assert _first_lie(seeded) == f"x = {x:.2f} m, z = {z:.2f} m"
 
 
 def test_shot_conventions():

@@ -15,6 +15,7 @@ import rich.console
 import rich.progress
 
 from ti_golf.errors import ConfigError
+from ti_golf.render.plots import PLOT_FORMATS_HELP, plot_format
 from ti_golf.runtime import ARCHES, PRECISIONS
 
 
@@ -45,7 +46,11 @@ def scene_options(
         p.add_argument("scene", help=scene_help)
     else:
         p.add_argument("scene", nargs="?", default=default, help=scene_help)
-    set_option(p, f"override a scene key with a TOML value, e.g. --set {example} (repeatable)")
+    set_option(
+        p,
+        f"override a scene key with a TOML value, e.g. --set {example}; KEY= (no value) clears it, back "
+        "to its default (repeatable)",
+    )
 
 
 def set_option(p: argparse.ArgumentParser, help: str) -> None:
@@ -70,6 +75,19 @@ def check_writable(path: str | None, option: str) -> None:
             pass
     except OSError as exc:
         raise ConfigError(option, None, f"cannot write {path!r}: {exc.strerror or exc}") from None
+
+
+def check_plot(path: str | None, option: str = "--plot") -> None:
+    """:func:`check_writable`, and the plot's format from its extension (:data:`PLOT_FORMATS_HELP`;
+    none: PNG): a one-line error naming ``option`` and the allowed extensions for any other."""
+    check_writable(path, option)
+    if path is not None:
+        plot_format(path, option)
+
+
+def plot_help(what: str) -> str:
+    """The help of a ``--plot`` option that writes ``what``."""
+    return f"write {what}: {PLOT_FORMATS_HELP}"
 
 
 SIZE_RANGE = (16, 8192)

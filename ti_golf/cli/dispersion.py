@@ -8,7 +8,7 @@ import math
 import time
 from pathlib import Path
 
-from ti_golf.cli._common import Progress, check_writable, runtime_options, scene_options
+from ti_golf.cli._common import Progress, check_plot, check_writable, plot_help, runtime_options, scene_options
 from ti_golf.cli.shot import LAUNCH_OPTIONS, launch_line, launch_options, read_launch, units_option
 from ti_golf.errors import ConfigError
 from ti_golf.render.dispersion import plot_dispersion
@@ -52,7 +52,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "uses world.dt). RK4's carry error at 0.01 s is below a micrometre (docs: Shots and dispersion)",
     )
     d.add_argument("--no-roll", action="store_true", help="stop at landing (no total or roll): much faster")
-    d.add_argument("--plot", help="write a PNG: the landing points from above with the 68 %% and 95 %% ellipses")
+    d.add_argument("--plot", help=plot_help("the landing points from above with the 68 %% and 95 %% ellipses"))
     d.add_argument("--out", help="write every shot (launch and outcome, in --units) as .csv or .npz")
     d.add_argument("--json", action="store_true", help="end with one line of JSON (the summary, in --units)")
     runtime_options(d)
@@ -79,7 +79,7 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
     if args.out and Path(args.out).suffix.lower() not in (".csv", ".npz"):
         raise ConfigError("--out", None, f"must end in .csv or .npz (got {args.out!r})")
     check_writable(args.out, "--out")
-    check_writable(args.plot, "--plot")
+    check_plot(args.plot)
     scene = load_scene(args.scene, args.overrides)
     mean = read_launch(args, scene, units)
     sd = read_spread(args, units)

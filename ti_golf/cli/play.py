@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import argparse
 import csv
+import secrets
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-from ti_golf.cli._common import check_writable, runtime_options, scene_options
+from ti_golf.cli._common import check_plot, check_writable, plot_help, runtime_options, scene_options
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.game.course_map import plot_round
@@ -48,7 +49,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         example="game.wind_max=0",
     )
     p.add_argument(
-        "--seed", type=int, default=None, help="seed of the random start and winds (default: a new round every time)"
+        "--seed",
+        type=seed_value,
+        default=None,
+        help="seed of the random start (a course without game.start, or with --set game.start=) and of the winds "
+        "(default: a new round every time, its seed printed)",
     )
     how = p.add_mutually_exclusive_group()
     how.add_argument(
@@ -61,24 +66,38 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "--gui", action="store_true", help="play in a window: the course in 3-D, clubs and sliders, a camera to move"
     )
     p.add_argument("--out", help="write the round as CSV, one row per stroke (rewritten after every stroke)")
-    p.add_argument("--plot", help="write a PNG map of the course with every stroke's path at the end")
+    p.add_argument("--plot", help=plot_help("a map of the course with every stroke's path at the end"))
     runtime_options(p)
     return p
+
+
+def seed_value(text: str) -> int:
+    """A ``--seed``: a whole number, 0 or more; argparse turns the error into a usage line (exit code 2)."""
+    try:
+        seed = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, 0 or more (got {text!r})") from None
+    if seed < 0:
+        raise argparse.ArgumentTypeError(f"must be a whole number, 0 or more (got {seed})")
+    return seed
 
 
 def cmd_play(args: argparse.Namespace) -> int:
     """Play a round of ``args.scene``; 0 when it ends (holed, out of bounds, no strokes or input left)."""
     check_writable(args.out, "--out")
-    check_writable(args.plot, "--plot")
-    game = GolfGame(load_scene(args.scene, args.overrides), seed=args.seed)
+    check_plot(args.plot)
+    seed = args.seed if args.seed is not None else secrets.randbelow(2**31)  # (said, so a round can be played again)
+    game = GolfGame(load_scene(args.scene, args.overrides), seed=seed)
     if args.gui:
+        _say_random_start(game, seed, args.seed is None)
         return _play_in_window(game, args)
-    shots = _file_shots(args.shots, game) if args.shots else _asked_shots(game, input, sys.stdin.isatty())
+    shots = file_shots(args.shots, game) if args.shots else _asked_shots(game, input, sys.stdin.isatty())
     hole = game.hole.position
     print(
         f"{game.scene.name}: a cup {2000 * game.hole.radius:.0f} mm across at x = {hole[0]:g} m, "
         f"z = {hole[1]:g} m; directions are degrees from +x toward +z"
     )
+    _say_random_start(game, seed, args.seed is None)
     ended = "no more input"
     try:
         while not game.over:
@@ -95,6 +114,17 @@ def cmd_play(args: argparse.Namespace) -> int:
         ended = "interrupted"
     _finish(game, ended, args)
     return 130 if ended == "interrupted" and not game.over else 0
+
+
+def _say_random_start(game: GolfGame, seed: int, drawn: bool) -> None:
+    """Where a course without ``game.start`` put the ball, and the seed that puts it there again
+    (``drawn``: no ``--seed`` was given, so one was drawn)."""
+    if game.scene.game.start is None:
+        again = f"; --seed {seed} plays this start and these winds again" if drawn else ""
+        print(
+            f"The ball starts at a random point of the course (seed {seed}{again}): "
+            f"x = {game.ball[0]:.2f} m, z = {game.ball[2]:.2f} m."
+        )
 
 
 def _play_in_window(game: GolfGame, args: argparse.Namespace) -> int:
@@ -175,7 +205,7 @@ def _number(text: str, name: str, game: GolfGame) -> float:
         raise ValueError(f"{name} must be a number (got {text!r})") from None
 
 
-def _file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
+def file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
     """The shots of a ``--shots`` file, checked line by line (errors name the file, line and field)."""
     try:
         lines = Path(path).read_text(encoding="utf-8").splitlines()

@@ -12,8 +12,10 @@ from PIL import Image
 
 from ti_golf.cli._common import (
     Progress,
+    check_plot,
     check_writable,
     parse_size,
+    plot_help,
     runtime_options,
     scene_options,
 )
@@ -35,7 +37,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--until", choices=("rest", "landed"), help="stop early once every ball is at rest / has landed")
     r.add_argument("--record-every", type=int, default=0, metavar="K", help="record positions and spins every K steps")
     r.add_argument("--out", help="write an .npz with x, v, w (N, 3), t, status (and traj_* when recording)")
-    r.add_argument("--plot", help="write a PNG: trajectory and |ω| vs time (records automatically)")
+    r.add_argument("--plot", help=plot_help("trajectory and |ω| vs time (records automatically)"))
     r.add_argument("--frames-every", type=int, default=0, metavar="K", help="render a frame every K steps")
     r.add_argument("--frames", metavar="DIR", help="write the frames as DIR/frame_00000.png, …")
     r.add_argument("--gif", help="write the frames as an animated GIF (Pillow)")
@@ -46,7 +48,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def cmd_run(args: argparse.Namespace) -> int:
     check_writable(args.out, "--out")
-    check_writable(args.plot, "--plot")
+    check_plot(args.plot)
     check_writable(args.gif, "--gif")
     if args.frames is not None and not args.frames.strip():
         raise ConfigError("--frames", None, "needs a folder name (got an empty path)")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from ti_golf.cli._common import HeldInterrupt, check_writable, runtime_options, scene_options
+from ti_golf.cli._common import HeldInterrupt, check_plot, check_writable, plot_help, runtime_options, scene_options
 from ti_golf.cli.shot import golfer_table
 from ti_golf.render.plots import plot_sweep
 from ti_golf.scene.balls import launch_position
@@ -23,7 +23,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--speeds", help="launch speeds [m/s]: START:STOP:STEP or a,b,c")
     s.add_argument("--spins", help="spin magnitudes [rad/s] along the scene's spin axis: START:STOP:STEP or a,b,c")
     s.add_argument("--out", help="write one CSV row per launch condition")
-    s.add_argument("--plot", help="write a PNG: trajectories (side view) and carry vs angle")
+    s.add_argument("--plot", help=plot_help("trajectories (side view) and carry vs angle"))
     s.add_argument("--trajectories", type=int, default=21, help="trajectories drawn in --plot (default 21)")
     s.add_argument(
         "--to-rest",
@@ -46,7 +46,7 @@ def _parse_opt_range(text: str | None, option: str) -> tuple[float, ...] | None:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     check_writable(args.out, "--out")
-    check_writable(args.plot, "--plot")
+    check_plot(args.plot)
     scene = load_scene(args.scene, args.overrides)
     angles = _parse_opt_range(args.angles, "--angles")
     speeds = _parse_opt_range(args.speeds, "--speeds")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ti_golf.cli._common import check_writable, runtime_options
+from ti_golf.cli._common import check_plot, plot_help, runtime_options
 from ti_golf.render.plots import plot_table
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import parse_range
@@ -23,12 +23,12 @@ angles of its Figures 3.1-1 to 3.1-4 (trajectories 0.5° apart)."""
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``table`` to ``ti-golf``'s subcommands."""
     t = sub.add_parser("table", help="reproduce the report's Table 3.1-1 from the lab scenes")
-    t.add_argument("--plot", help="write a PNG of the four lab trajectory families")
+    t.add_argument("--plot", help=plot_help("the four lab trajectory families (Figures 3.1-1 to 3.1-4)"))
     runtime_options(t)
 
 
 def cmd_table(args: argparse.Namespace) -> int:
-    check_writable(args.plot, "--plot")
+    check_plot(args.plot)
     print("Table 3.1-1 (report) reproduced: best launch angle and maximum distance, v0 = 80 m/s")
     print(f"{'conditions':<36} {'report':>16} {'ti_golf':>22}")
     results = []

@@ -454,7 +454,7 @@ def finish(
         # together and fall asleep in the same step, and a ball pressed by a moving one stays
         # awake (asleep, it would feel no gravity and the balls above it would keep rocking)
         st, state.rest_time[i] = rest_update(
-            touching, v_final, w_final, ri, scratch.calm[i], h, params.v_rest, params.t_rest
+            touching, v_final, w_final, ri, scratch.calm[i], h, params.v_rest, params.t_rest, contact.friction
         )
         if st == AT_REST:
             v_final, w_final = zero3(), zero3()

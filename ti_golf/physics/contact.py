@@ -18,6 +18,12 @@ along the unit normal n̂ (from b to a):
    spot stops, its spin falling at (5/2)·μ_roll·g/R);
 5. (planes) the step is split at the time of impact, so a bounce starts on the surface;
 6. position projection of what still overlaps, k_p·m_red·Δx·n̂ (B.18).
+
+Ball–surface friction has a second model (``contact.friction_model = "report"``,
+:data:`CENTRE_FRICTION`): the report's own (Appendix B, c.3–c.4, B.15), in which friction opposes
+the tangential velocity of the ball's centre, v_t = v − n̂⟨n̂, v⟩ (L.7, B.13), with the impulse
+μ·j_n clipped so that it can at most stop v_t (:func:`centre_friction`); the spin plays no part and
+no surface contact changes it (nor does rolling resistance, which then slows the centre only).
 """
 
 import math
@@ -25,12 +31,15 @@ import math
 import taichi as ti
 
 from ti_golf.physics.types import is_f64, zero3
-from ti_golf.scene.schema import AT_REST, FLYING, ROLLING
+from ti_golf.scene.schema import AT_REST, FLYING, FRICTION_MODELS, ROLLING
 
 _TINY = 1e-12
 
 GAUSS_SEIDEL = 1
 """``ContactParams.solver`` of the Gauss–Seidel sweeps (:mod:`.colour`; 0: the Jacobi sweeps)."""
+
+CENTRE_FRICTION = FRICTION_MODELS.index("report")
+"""``ContactParams.friction`` of the report's friction from the centre's velocity (0: at the contact point)."""
 
 FIRST, SOLVE, SHOCK, BOUNCE = 0, 1, 3, 4
 """Phases of a Gauss–Seidel step (:func:`pair_step`): the first sweep (which also applies the
@@ -88,7 +97,9 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
 
 
 @ti.func
-def pair_step(phase, n, gap, v_n0, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, F, e, mu, v_inelastic, h):
+def pair_step(
+    phase, n, gap, v_n0, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, F, e, mu, v_inelastic, h, friction=0
+):
     """One Gauss–Seidel update of a contact (``contact.solver = "gauss_seidel"``): (the impulse P
     [N·s] on body a, −P on b; the contact's new accumulated normal impulse λ [N·s] and friction
     impulse F [N·s] on a). ``n``: unit normal from b to a; ``gap``: surface gap [m] at the start
@@ -106,7 +117,8 @@ def pair_step(phase, n, gap, v_n0, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_
     ``BOUNCE``: restitution, once per step after the sweeps, for a contact that approached faster
     than ``v_inelastic`` and is pressed (λ > 0): toward v_n = −e·v_n0 (B.9), again through the
     clamped λ. Slower approaches are resting contacts and never bounce: a resting contact gains no
-    energy."""
+    energy. ``friction`` = :data:`CENTRE_FRICTION`: the friction stops the centres' tangential
+    velocity instead (:func:`centre_friction`)."""
     m_eff = 1.0 / (inv_m_a + inv_m_b)
     v_n = (v_a - v_b).dot(n)
     target = -ti.max(gap, 0.0) / h
@@ -118,7 +130,10 @@ def pair_step(phase, n, gap, v_n0, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_
     P = (lam_new - lam) * n
     F_new = F
     if phase != BOUNCE:
-        F_new = F + friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff, 1e30)
+        if friction == CENTRE_FRICTION:
+            F_new = F + centre_friction(n, v_a - v_b, m_eff, 1e30)
+        else:
+            F_new = F + friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff, 1e30)
         F_new = clamp_friction(F_new, n, mu * lam_new)
         P += F_new - F
     return P, lam_new, F_new
@@ -141,8 +156,8 @@ def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, 
     the friction impulse applied so far), with
     ``contact``'s restitution, or with ``contact.turf`` in the turf frame of :func:`turf_impact`.
     In the ``BOUNCE`` pass a pressed ball also meets rolling resistance and the resistance to spin
-    about the normal, bounded by μ_roll·λ (once per step, as :func:`plane_jolt` does). Returns
-    (v, ω, λ, F)."""
+    about the normal, bounded by μ_roll·λ (once per step, as :func:`plane_jolt` does). With the
+    report's friction (``contact.friction``) the spin is left as it is. Returns (v, ω, λ, F)."""
     n_eff, e = n, contact.e
     if contact.turf != 0:
         n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
@@ -165,13 +180,18 @@ def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, 
         contact.mu,
         v_inelastic,
         h,
+        contact.friction,
     )
+    spin = contact.friction != CENTRE_FRICTION
     v_new = v + P
-    w_new = w + spin_jolt(P, n_eff, radius, 1.0)
+    w_new = w
+    if spin:
+        w_new = w + spin_jolt(P, n_eff, radius, 1.0)
     if phase == BOUNCE and lam_new > 0.0:
         dv, dw = rolling_resistance(v_new, radius, contact.mu_roll, lam_new, n_eff)
         v_new += dv
-        w_new += dw + pivot_resistance(w_new, radius, contact.mu_roll, lam_new, n_eff)
+        if spin:
+            w_new += dw + pivot_resistance(w_new, radius, contact.mu_roll, lam_new, n_eff)
     return v_new, w_new, lam_new, F_new
 
 
@@ -186,6 +206,22 @@ def friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff, bound):
     P = zero3()
     if s > _TINY:
         P = -ti.min(bound, s * m_eff * (2.0 / 7.0)) * (slip_t * (1.0 / s))
+    return P
+
+
+@ti.func
+def centre_friction(n, v, m_eff, bound):
+    """The report's friction impulse [N·s] on a body whose centre moves at ``v`` [m/s] relative to
+    the other along the contact normal n̂ (Appendix B c.3–c.4, B.15): −min(``bound``, m_eff·|v_t|)·t̂
+    with v_t = v − n̂⟨n̂, v⟩ (L.7, B.13) and t̂ = v_t/|v_t|, ``bound`` = μ·j_n and the clip
+    m_eff·|v_t| (the report's "clip μ·v_jolt not to exceed v_t": at most stop the centre's
+    sliding; ``m_eff``: the pair's effective mass, 1 per unit mass against a surface). Spin plays no
+    part."""
+    v_t = v - v.dot(n) * n
+    s = v_t.norm()
+    P = zero3()
+    if s > _TINY:
+        P = -ti.min(bound, s * m_eff) * (v_t * (1.0 / s))
     return P
 
 
@@ -281,14 +317,22 @@ def surface_impulse(n, gap, v, w, radius, lam, contact, v_inelastic, h):
     """A ball's impulse per unit mass [m/s] from a static surface (a plane, or the terrain's patch)
     with normal n̂ and surface gap ``gap`` [m]: :func:`pair_impulse` against a body of infinite
     mass, with ``contact``'s restitution, or with ``contact.turf`` in the turf frame of
-    :func:`turf_impact`. Returns (P, λ, touching, n̂'), n̂' the normal the impulse was solved along
-    (its contact point is −R·n̂', see :func:`plane_jolt`)."""
+    :func:`turf_impact`. With the report's friction (``contact.friction``) the friction is
+    :func:`centre_friction`, bounded by μ times the normal impulse. Returns (P, λ, touching, n̂'),
+    n̂' the normal the impulse was solved along (its contact point is −R·n̂', see :func:`plane_jolt`)."""
     n_eff, e = n, contact.e
     if contact.turf != 0:
         n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
+    mu = contact.mu
+    if contact.friction == CENTRE_FRICTION:
+        mu = 0.0  # (added below)
     P, lam_new, touching, _ = pair_impulse(
-        n_eff, gap, v, w, radius, 1.0, zero3(), zero3(), 0.0, 0.0, lam, e, contact.mu, v_inelastic, h
+        n_eff, gap, v, w, radius, 1.0, zero3(), zero3(), 0.0, 0.0, lam, e, mu, v_inelastic, h
     )
+    if contact.friction == CENTRE_FRICTION:
+        j_n = P.dot(n_eff)  # the normal impulse per unit mass (P is j_n·n̂' so far)
+        if j_n > 0.0:
+            P += centre_friction(n_eff, v, 1.0, contact.mu * j_n)
     return P, lam_new, touching, n_eff
 
 
@@ -298,22 +342,27 @@ def plane_impulse(x, v, w, radius, p, n, contact, v_inelastic, h):
     gap = (x - p).dot(n) - radius
     P, lam, touching, n_eff = surface_impulse(n, gap, v, w, radius, 0.0, contact, v_inelastic, h)
     if touching != 0 and P.dot(n) > 0.0:
-        v, w = plane_jolt(P, lam, v, w, radius, n_eff, contact.mu_roll)
+        v, w = plane_jolt(P, lam, v, w, radius, n_eff, contact.mu_roll, contact.friction)
     return v, w, touching
 
 
 @ti.func
-def plane_jolt(P, lam, v, w, radius, n, mu_roll):
+def plane_jolt(P, lam, v, w, radius, n, mu_roll, friction):
     """Apply a plane's impulse per unit mass P [m/s] to a ball and, when it is a resting impulse
     (it added ``lam`` > 0), rolling resistance bounded by μ_roll·P·n̂ and the like resistance to
-    spin about the normal (:func:`pivot_resistance`). Returns (v, ω)."""
+    spin about the normal (:func:`pivot_resistance`). With the report's friction (``friction`` =
+    :data:`CENTRE_FRICTION`) the spin is left as it is. Returns (v, ω)."""
+    spin = friction != CENTRE_FRICTION
     v_new = v + P
-    w_new = w + spin_jolt(P, n, radius, 1.0)
+    w_new = w
+    if spin:
+        w_new = w + spin_jolt(P, n, radius, 1.0)
     if lam > 0.0:
         j_n = P.dot(n)
         dv, dw = rolling_resistance(v_new, radius, mu_roll, j_n, n)
         v_new += dv
-        w_new += dw + pivot_resistance(w_new, radius, mu_roll, j_n, n)
+        if spin:
+            w_new += dw + pivot_resistance(w_new, radius, mu_roll, j_n, n)
     return v_new, w_new
 
 
@@ -346,12 +395,14 @@ projection (B.18) is still pushing them apart, so it is not at rest (see :func:`
 
 
 @ti.func
-def rest_update(touching, v, w, radius, rest_time, h, v_rest, t_rest):
+def rest_update(touching, v, w, radius, rest_time, h, v_rest, t_rest, friction):
     """Status and rest timer of a ball after a step: a touching ball (``touching`` 1; not
     ``PRESSED``) whose speed and R|ω| stay below ``v_rest`` [m/s] for ``t_rest`` [s] is put at
-    rest. Returns (status, rest_time)."""
+    rest. With the report's friction (``friction`` = :data:`CENTRE_FRICTION`) the spin is not
+    asked: no contact changes it, so a ball that stopped sliding would otherwise never rest.
+    Returns (status, rest_time)."""
     rt = 0.0
-    if touching == 1 and v.norm() < v_rest and radius * w.norm() < v_rest:
+    if touching == 1 and v.norm() < v_rest and (radius * w.norm() < v_rest or friction == CENTRE_FRICTION):
         rt = rest_time + h
     st = ROLLING if touching != 0 else FLYING
     if rt >= t_rest and touching != 0:

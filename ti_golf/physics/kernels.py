@@ -220,7 +220,7 @@ def advance(
                     x1 = plane_position(xi, x_free, x1, v_free, v1, r, pt, nt, contact.k_p, h)
                     x1 = terrain_position(xi, x1, pt, nt, r, model.heights, terrain)
                 xi, vi, wi = x1, v1, w1
-                st, rt = rest_update(touching, vi, wi, r, rt, h, params.v_rest, params.t_rest)
+                st, rt = rest_update(touching, vi, wi, r, rt, h, params.v_rest, params.t_rest, contact.friction)
                 if terrain.on != 0 and outside(model.heights, terrain, xi):
                     st = OUT_OF_BOUNDS
                     vi = zero3()

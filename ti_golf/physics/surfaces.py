@@ -9,8 +9,10 @@ skips them, which changes no result.
 import taichi as ti
 
 from ti_golf.physics.contact import (
+    CENTRE_FRICTION,
     FIRST,
     GAUSS_SEIDEL,
+    centre_friction,
     clamp_friction,
     plane_jolt,
     spin_jolt,
@@ -156,10 +158,15 @@ def surface_contact_step(
             if contact.solver == GAUSS_SEIDEL:  # the normal and friction impulses carried from the last step
                 P = lam0 * n + clamp_friction(ti.cast(lists.friction_plane[i, column], float), n, contact.mu * lam0)
                 vi += P
-                wi += spin_jolt(P, n, r, 1.0)
+                if contact.friction != CENTRE_FRICTION:
+                    wi += spin_jolt(P, n, r, 1.0)
             else:
-                P = warm_impulse(n, vi, wi, r, zero3(), zero3(), 0.0, 1.0, lam0, contact.mu)
-                vi, wi = plane_jolt(P, lam0, vi, wi, r, n, contact.mu_roll)
+                P = zero3()
+                if contact.friction == CENTRE_FRICTION:
+                    P = lam0 * n + centre_friction(n, vi, 1.0, contact.mu * lam0)
+                else:
+                    P = warm_impulse(n, vi, wi, r, zero3(), zero3(), 0.0, 1.0, lam0, contact.mu)
+                vi, wi = plane_jolt(P, lam0, vi, wi, r, n, contact.mu_roll, contact.friction)
     elif gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam0 > 0.0:  # else no impulse (pair_impulse)
         lam_p = 0.0
         if phase >= 0:
@@ -173,7 +180,7 @@ def surface_contact_step(
         else:
             P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, contact, v_inelastic, h)
             if P.dot(n) != 0.0:
-                vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, contact.mu_roll)
+                vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, contact.mu_roll, contact.friction)
         lists.lam_plane[i, column] = ti.cast(lam_p, ti.f32)
         if lam_p > 0.0:
             scratch.clear[i] = ti.cast(NEAR, ti.f32)

@@ -3,6 +3,7 @@ the report's Table 3.1-1 families, run trajectories and spin decay, and a golf r
 
 from __future__ import annotations
 
+import logging
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -11,22 +12,59 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
+from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.scene.balls import launch_position
+
+TERRAIN_FILL = (0.62, 0.74, 0.50)
+"""The ground under a terrain profile: pale green."""
 
 if TYPE_CHECKING:  # pragma: no cover
     from ti_golf.sim.simulation import Recording
     from ti_golf.sim.sweep import SweepResult
 
 
+PLOT_FORMATS = ("png", "svg", "pdf", "eps")
+"""The formats a plot is written in, chosen by the file's suffix (the report's figures are EPS)."""
+
+PLOT_FORMATS_HELP = "PNG, SVG, PDF or EPS by the file's extension (.png, .svg, .pdf, .eps)"
+"""How the ``--plot`` options' help names the formats."""
+
+
+def plot_format(path: str | os.PathLike[str], option: str = "plot") -> str:
+    """The format of a plot written to ``path``: its suffix, lower case (``png`` without one);
+    a :class:`ConfigError` naming ``option`` and the allowed extensions for any other suffix."""
+    suffix = Path(path).suffix.lower()
+    fmt = suffix[1:] if suffix else "png"
+    if fmt not in PLOT_FORMATS:
+        allowed = ", ".join(f".{f}" for f in PLOT_FORMATS)
+        raise ConfigError(option, None, f"cannot write a plot as {suffix!r} ({str(path)!r}): use {allowed}")
+    return fmt
+
+
+class _NoTransparencyNotice(logging.Filter):
+    """Drops the PostScript backend's notice that EPS has no transparency (said in the help)."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "does not support transparency" not in record.getMessage()
+
+
 def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int) -> None:
-    """Write ``fig`` to ``path`` whole or not at all, in the format of its suffix (``.png`` is
-    added to a path without one, as matplotlib does)."""
+    """Write ``fig`` to ``path`` whole or not at all, in the format of its suffix (:data:`PLOT_FORMATS`;
+    ``.png`` is added to a path without one, as matplotlib does). In EPS, which has no
+    transparency, see-through parts come out opaque."""
+    fmt = plot_format(path)
     target = Path(path)
     if not target.suffix:
         target = target.with_name(target.name + ".png")
-    with atomic_path(target) as tmp:
-        fig.savefig(tmp, dpi=dpi, format=target.suffix[1:].lower())
+    quiet = _NoTransparencyNotice()
+    ps_log = logging.getLogger("matplotlib.backends.backend_ps")
+    ps_log.addFilter(quiet)
+    try:
+        with atomic_path(target) as tmp:
+            fig.savefig(tmp, dpi=dpi, format=fmt)
+    finally:
+        ps_log.removeFilter(quiet)
 
 
 def plot_sweep(res: "SweepResult", path: str | os.PathLike[str], title: str | None = None) -> None:
@@ -134,3 +172,77 @@ def plot_run(rec: "Recording", path: str | os.PathLike[str], title: str = "", ma
     ax2.grid(alpha=0.3)
     fig.tight_layout()
     save_figure(fig, path, dpi=120)
+
+
+def plot_terrain_path(
+    profile: tuple[np.ndarray, np.ndarray],
+    t: np.ndarray,
+    x: np.ndarray,
+    energy: np.ndarray,
+    path: str | os.PathLike[str],
+    title: str = "",
+    rest: bool = False,
+) -> None:
+    """A ball on a 2-D terrain (as the report's Figures 3.2-1, 3.2-6 and 3.2-7): the profile (x [m],
+    height [m]), each (K,), with the ball's path ``x`` (S, 3) [m] and, below, its mechanical
+    energy per unit mass ``energy`` (S,) [J/kg] against ``t`` (S,) [s]. ``rest``: the ball ended
+    at rest (its last point is marked so). The heights are drawn to a larger scale than the
+    distances when the profile is long and low."""
+    px, ph = profile
+    fig = Figure(figsize=(10, 6))
+    ax1, ax2 = fig.subplots(2, 1, gridspec_kw={"height_ratios": [1.4, 1]})
+    low = float(min(ph.min(), x[:, 1].min())) - 0.5
+    ax1.fill_between(px, ph, low, color=TERRAIN_FILL, lw=0)
+    ax1.plot(px, ph, color="darkgreen", lw=1.0)
+    ax1.plot(x[:, 0], x[:, 1], color="tab:red", lw=0.9, label="the ball's centre")
+    ax1.plot(x[0, 0], x[0, 1], "o", color="tab:red", ms=5, label="start")
+    ax1.plot(x[-1, 0], x[-1, 1], "s" if rest else "D", color="tab:blue", ms=6, label="at rest" if rest else "end")
+    top = float(max(ph.max(), np.nanmax(x[:, 1])))
+    ax1.set_xlim(float(px.min()), float(px.max()))
+    ax1.set_ylim(low, top + 0.15 * (top - low))
+    ax1.set_xlabel("x [m]")
+    ax1.set_ylabel("y [m]")
+    ax1.grid(alpha=0.3)
+    ax1.legend(fontsize=7, loc="upper right")
+    ax1.set_title(title, fontsize=9)
+    ax2.plot(t, energy, color="tab:purple", lw=1.0)
+    ax2.set_xlabel("t [s]")
+    ax2.set_ylabel("v²/2 + g·y [J/kg]")
+    ax2.set_ylim(bottom=min(0.0, float(energy.min())))
+    ax2.grid(alpha=0.3)
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110)
+
+
+def plot_spin_family(
+    labels: list[str],
+    t: np.ndarray,
+    x: np.ndarray,
+    w: np.ndarray,
+    path: str | os.PathLike[str],
+    title: str = "",
+) -> None:
+    """Shots launched at several angles (as the report's Figure 3.2-3): the spin |ω| [rad/s] of each
+    against time on top, the trajectories (side view, distance and height from the launch point)
+    below. ``labels`` (N,), ``t`` (S,) [s], ``x`` and ``w`` (S, N, 3) [m], [rad/s]."""
+    fig = Figure(figsize=(10, 7.5))
+    ax1, ax2 = fig.subplots(2, 1, gridspec_kw={"height_ratios": [1, 1.3]})
+    cmap = matplotlib.colormaps.get_cmap("viridis")
+    n = x.shape[1]
+    for i in range(n):
+        color = cmap(i / max(n - 1, 1))
+        ax1.plot(t, np.linalg.norm(w[:, i], axis=1), color=color, lw=1.0, label=labels[i])
+        d = np.hypot(x[:, i, 0] - x[0, i, 0], x[:, i, 2] - x[0, i, 2])
+        ax2.plot(d, x[:, i, 1] - x[0, i, 1], color=color, lw=1.0, label=labels[i])
+    ax1.set_xlabel("t [s]")
+    ax1.set_ylabel("|ω| [rad/s]")
+    ax1.set_ylim(bottom=0)
+    ax1.grid(alpha=0.3)
+    ax1.legend(fontsize=7, ncol=2, title="launch angle")
+    ax1.set_title(title, fontsize=9)
+    ax2.set_xlabel("downrange distance [m]")
+    ax2.set_ylabel("height above launch [m]")
+    ax2.set_aspect("equal", adjustable="datalim")
+    ax2.grid(alpha=0.3)
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110)

@@ -108,13 +108,16 @@ def _unit(key: Key) -> str:
 
 def parse_override(text: str) -> tuple[str, Any]:
     """Split ``KEY=VALUE`` and parse VALUE as TOML (``[-5,0,0]``, ``0.25``, ``true``); bare words and
-    paths (letters, digits and ``_-./~``) are strings."""
+    paths (letters, digits and ``_-./~``) are strings. An empty VALUE (``KEY=``) is ``None``: the
+    key is cleared, back to its default (``game.start=``: a random start)."""
     if "=" not in text:
         raise ConfigError("--set", text, "must be KEY=VALUE, e.g. --set air.wind=[-5,0,0]")
     dotted, raw = text.split("=", 1)
     dotted, raw = dotted.strip(), raw.strip()
     if not dotted:
         raise ConfigError("--set", None, f"missing KEY in {text!r} (expected KEY=VALUE)")
+    if not raw:
+        return dotted, None
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
@@ -128,17 +131,26 @@ def parse_override(text: str) -> tuple[str, Any]:
 
 
 def _apply_override(data: dict[str, Any], dotted: str, value: Any) -> None:
+    """Set ``dotted`` in the scene document ``data`` to ``value``, or clear it (``None``: the key
+    takes its default; a table the scene does not have is not made)."""
     parts = dotted.split(".")
     if len(parts) == 1:
         if parts[0] not in TOP_LEVEL:
             raise ConfigError("--set", dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
-        data[parts[0]] = ("--set", value)
+        if value is None:
+            data.pop(parts[0], None)
+        else:
+            data[parts[0]] = ("--set", value)
         return
     if len(parts) != 2:
         raise ConfigError("--set", dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
     section, name = parts
     if section not in SCHEMA or name not in SCHEMA[section]:
         raise ConfigError("--set", dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
+    if value is None:
+        if isinstance(data.get(section), dict):
+            data[section].pop(name, None)
+        return
     table = data.setdefault(section, {})
     if not isinstance(table, dict):
         raise ConfigError("--set", dotted, f"cannot be set: '{section}' is not a table in the scene")
@@ -202,7 +214,8 @@ def load_scene(
 
     Args:
         path: a TOML file, or a bundled scene's name (``"lab_turbulent"``); ``None`` with ``data``.
-        overrides: ``{"air.C_D": 0.25}`` or ``["air.C_D=0.25", ...]`` (``--set`` syntax).
+        overrides: ``{"air.C_D": 0.25}`` or ``["air.C_D=0.25", ...]`` (``--set`` syntax); a value
+            ``None`` (``"game.start="``) clears the key, back to its default.
         data: an already-parsed TOML document (used instead of reading ``path``).
 
     Raises:

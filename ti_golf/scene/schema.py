@@ -39,10 +39,14 @@ STATUS_NAMES = {FLYING: "flying", ROLLING: "rolling", AT_REST: "at_rest", OUT_OF
 
 INTEGRATORS = ("semi_implicit", "rk4")
 AIR_MODELS = ("lab", "spin_ratio")
-SOLVERS = ("jacobi", "gauss_seidel")
 """Aerodynamic models (``air.model``): the report's laws, or coefficients of the spin ratio."""
+SOLVERS = ("jacobi", "gauss_seidel")
+"""Contact solvers (``contact.solver``): the report's Jacobi sweeps, or coloured Gauss–Seidel sweeps."""
 WIND_PROFILES = ("constant", "log")
 """How the wind varies with height (``air.wind_profile``): not at all, or logarithmically."""
+FRICTION_MODELS = ("spin", "report")
+"""Friction of the ball–surface contacts (``contact.friction_model``): at the contact point, coupled
+to the spin, or the report's, from the centre's velocity alone (see :mod:`ti_golf.physics.contact`)."""
 
 
 # -- the scene's tables -------------------------------------------------------------------------
@@ -213,7 +217,7 @@ class World:
         "float",
         0.01,
         "m/s",
-        "a touching ball slower than this (and R|ω| below it) may come to rest",
+        "a touching ball slower than this (and R|ω| below it, unless contact.friction_model = report) may come to rest",
         NON_NEGATIVE,
     )
     t_rest: float = key(
@@ -231,6 +235,15 @@ class Contact:
 
     e: float = key("float", 0.5, "-", "coefficient of restitution e (B.9)", UNIT_INTERVAL)
     mu: float = key("float", 0.4, "-", "Coulomb friction coefficient μ (B.15)", NON_NEGATIVE)
+    friction_model: str = key(
+        "str",
+        "spin",
+        "-",
+        "friction of the ball on the planes and the terrain: spin (at the contact point, which it "
+        "spins up: a ball rolls) or report (the report's B.15 from the centre's tangential velocity "
+        "alone, clipped to stop it; spin untouched: a ball stops on a slope with tan θ ≤ μ)",
+        OneOf(FRICTION_MODELS),
+    )
     k_p: float = key("float", 0.2, "-", "position-projection factor k_p (B.18; stable below 0.5)", UNIT_INTERVAL)
     mu_roll: float = key(
         "float",

@@ -9,7 +9,7 @@ from ti_golf.physics.aero import air_params
 from ti_golf.physics.integrate import INTEGRATOR_CODES
 from ti_golf.physics.types import ContactParams, TerrainParams, vec3
 from ti_golf.runtime import np_float
-from ti_golf.scene.schema import SOLVERS, Scene, Surface
+from ti_golf.scene.schema import FRICTION_MODELS, SOLVERS, Scene, Surface
 from ti_golf.scene.terrain import build_terrain
 
 
@@ -71,6 +71,7 @@ class Model:
             v_bounce=c.v_bounce,
             turf=int(c.turf),
             solver=SOLVERS.index(c.solver),
+            friction=FRICTION_MODELS.index(c.friction_model),
         )
         self.gravity = vec3(*w.gravity)
         self.integrator = INTEGRATOR_CODES[w.integrator]
