@@ -128,6 +128,12 @@ def test_balls_given_as_arrays_are_saved_for_reset(tmp_path):
         loaded,
         tg.Simulation(scene, x=[[0.0, 1.0, 0.0], [5.0, 2.0, 0.0]], v=v, radius=[0.02, 0.03], track=[True, False]),
     )
+    unkept = tg.Simulation(scene, x=x, keep_initial=False)  # a big pile that is never reset
+    assert unkept.initial is None
+    unkept.save(tmp_path / "u.npz")
+    for sim in (unkept, tg.Simulation.load(tmp_path / "u.npz")):
+        with pytest.raises(ValueError, match="keep_initial=False"):
+            sim.reset()
 
 
 def test_a_file_that_cannot_be_continued_is_refused_in_one_line(tmp_path):

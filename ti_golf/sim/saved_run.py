@@ -90,6 +90,7 @@ def write_run(sim: Simulation, path: str | os.PathLike[str], recording: Recordin
         "scene_name": sim.scene.name,
         "scene_path": sim.scene.path,
         "steps": sim.state.steps,
+        "initial_kept": sim.initial_kept,
         "tracking": state.tracking,
         "precision": runtime.precision,
         "arch": runtime.arch,
@@ -127,6 +128,7 @@ def read_run(cls: type[Simulation], path: str | os.PathLike[str]) -> Simulation:
     launch_x = data["launch_x"] if tracking else x
     sim = cls.__new__(cls)
     sim.initial = _initial(data)
+    sim.initial_kept = bool(meta["initial_kept"])
     solver = meta["solver"]
     flags = None
     if solver is not None:

@@ -98,6 +98,13 @@ class Simulation:
         mass: per-ball mass [kg], a scalar or (N,). Default: the scene's ball.
         track: which balls get landing detection (carry, apex ...); default all. When no ball is
             tracked (a pile), no flight record is kept at all (``State.tracking``).
+        keep_initial: keep a copy of the balls given (``x``, ``v``, ``w``, ``radius``, ``mass``) for
+            :meth:`reset`; ``False`` saves their memory (24 bytes per ball and array in f64) for a
+            big pile that is never reset, and :meth:`reset` is then refused.
+
+    Between runs, read and assign ``x``, ``v`` and ``w`` (or :meth:`set_ball` for some balls),
+    change scene keys with :meth:`set`, go back to t0 with :meth:`reset`, and :meth:`save` the run
+    to continue it later with :meth:`load`.
     """
 
     def __init__(
@@ -109,12 +116,16 @@ class Simulation:
         radius: float | np.ndarray | None = None,
         mass: float | np.ndarray | None = None,
         track: bool | np.ndarray = True,
+        *,
+        keep_initial: bool = True,
     ) -> None:
         ensure_init()
         given = x is not None or radius is not None or mass is not None
-        self.initial = InitialBalls.copy_of(x, v, w, radius, mass, track) if given else None
+        self.initial = InitialBalls.copy_of(x, v, w, radius, mass, track) if given and keep_initial else None
         """The balls at t0 as given to the constructor (:meth:`reset` goes back to them), or ``None``
-        when the scene's balls are built from the scene (and :meth:`reset` builds them again)."""
+        when they are the scene's (and :meth:`reset` builds them again) or were not kept."""
+        self.initial_kept = keep_initial or not given
+        """Whether :meth:`reset` can go back to t0 (``False``: balls given with ``keep_initial=False``)."""
         self._set_up(scene, x, v, w, radius, mass, track)
 
     def _set_up(
@@ -224,8 +235,9 @@ class Simulation:
         scene = with_changes(self.scene, changes)
         for key in changes:
             refuse_unread(key)
-            if self.initial is not None and self.initial.x is not None:
-                refuse_for_given_balls(key, self.initial.radius is not None, self.initial.mass is not None)
+            if not self.initial_kept or (self.initial is not None and self.initial.x is not None):
+                i = self.initial
+                refuse_for_given_balls(key, i is None or i.radius is not None, i is None or i.mass is not None)
         return scene
 
     def _take_parameters(self, scene: Scene) -> None:
@@ -244,6 +256,8 @@ class Simulation:
 
     def _initial_balls(self) -> tuple[Any, ...]:
         """``_set_up``'s balls at t0: x, v, w, radius, mass, track (``x`` ``None``: the scene's)."""
+        if not self.initial_kept:
+            raise ValueError("the balls at t0 were not kept (Simulation(..., keep_initial=False)): nothing to reset to")
         i = self.initial
         if i is None:
             return None, None, None, None, None, True
