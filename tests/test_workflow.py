@@ -4,6 +4,8 @@ go back to t0; save a run and continue it later, bit for bit as if it had never 
 from __future__ import annotations
 
 import json
+import os
+import signal
 
 import numpy as np
 import pytest
@@ -11,6 +13,7 @@ from conftest import SERIAL_OR_PARALLEL
 
 import ti_golf as tg
 from ti_golf.cli import main
+from ti_golf.physics import collide, kernels
 from ti_golf.scene.document import scene_document, with_changes
 from ti_golf.sim.solver import CollisionSolver
 from ti_golf.sim.state import State
@@ -335,3 +338,42 @@ def test_run_resume_with_set_changes_the_continuation(tmp_path, capsys):
     assert "file not found" in capsys.readouterr().err
     assert main(["run"]) == 2
     assert "needs a SCENE" in capsys.readouterr().err
+
+
+def test_an_interrupted_run_saves_whole_steps_that_can_be_continued(tmp_path, monkeypatch, capsys):
+    # Ctrl-C arrives while the third chunk of steps runs in the kernel: those steps end first
+    # (t, step count), so the partial file holds the state of a run of that many steps, bit for bit
+    real, calls = collide.collision_step, []
+
+    def interrupted(*args):
+        calls.append(1)
+        if len(calls) == 3:
+            os.kill(os.getpid(), signal.SIGINT)
+        return real(*args)
+
+    monkeypatch.setattr(collide, "collision_step", interrupted)
+    out = tmp_path / "partial.npz"
+    assert main(["run", "break_shot", "--t", "10", "--out", str(out)]) == 130
+    assert "marked partial" in capsys.readouterr().err
+    monkeypatch.undo()
+    partial = tg.Simulation.load(out)
+    assert partial.step_count == 3 * 100  # three chunks of 0.05 s
+    whole = tg.Simulation.from_scene("break_shot")
+    whole.run(steps=partial.step_count)
+    assert_same_state(partial, whole)
+
+
+def test_a_signal_during_steps_waits_for_them_to_end(monkeypatch):
+    sim = tg.Simulation.from_scene("lab_vacuum")
+    real = kernels.advance
+
+    def interrupted(*args):
+        os.kill(os.getpid(), signal.SIGINT)  # arrives while the kernel runs
+        return real(*args)
+
+    monkeypatch.setattr(kernels, "advance", interrupted)
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt):
+        sim.step(10)
+    assert sim.step_count == 10 and sim.t == pytest.approx(10 * sim.dt)
+    assert signal.getsignal(signal.SIGINT) == before

@@ -35,6 +35,7 @@ from ti_golf.sim.changes import (
 from ti_golf.sim.model import Model
 from ti_golf.sim.packs import Packs
 from ti_golf.sim.results import Flight
+from ti_golf.sim.signals import whole_steps
 from ti_golf.sim.solver import CollisionSolver, available_memory
 from ti_golf.sim.state import State
 
@@ -407,7 +408,9 @@ class Simulation:
         m, s, w = self.model, self.state, self.scene.world
         if self.solver is not None:
             self.solver.advance(m, s, int(n))
-        else:
+            self.check_finite()
+            return
+        with whole_steps():  # the kernel, then t and the step count, or none of them
             params = StepParams(
                 gravity=m.gravity,
                 h=m.dt,
@@ -432,7 +435,7 @@ class Simulation:
                 self._packs.flight(s),
             )
             s.t += n * m.dt
-        s.steps += int(n)
+            s.steps += int(n)
         self.check_finite()
 
     def check_finite(self) -> None:

@@ -29,6 +29,7 @@ from ti_golf.runtime import (
 )
 from ti_golf.sim.model import Model
 from ti_golf.sim.packs import Packs
+from ti_golf.sim.signals import whole_steps
 from ti_golf.sim.state import State
 
 SERIAL_MAX_BALLS = 256
@@ -556,12 +557,15 @@ class CollisionSolver:
 
     def advance(self, model: Model, state: State, steps: int) -> None:
         """Advance all balls by ``steps`` steps of ``model.dt``: serially in one launch, or one
-        parallel launch per step (see ``serial``)."""
+        parallel launch per step (see ``serial``); Ctrl-C and SIGTERM wait for whole steps
+        (:func:`~ti_golf.sim.signals.whole_steps`)."""
         if self.serial:
-            self._advance_serially(model, state, int(steps))
+            with whole_steps():
+                self._advance_serially(model, state, int(steps))
         else:
             for _ in range(int(steps)):
-                self._step_in_parallel(model, state)
+                with whole_steps():
+                    self._step_in_parallel(model, state)
 
     def _advance_serially(self, model: Model, state: State, steps: int) -> None:
         width = max(1, state.n - 1)
@@ -575,6 +579,7 @@ class CollisionSolver:
             )
         for _ in range(steps):
             state.t += model.dt  # as one step at a time adds it, to the same round-off
+        state.steps += steps
 
     def _step_in_parallel(self, model: Model, state: State) -> None:
         if not self._valid or self._rebuild:
@@ -587,6 +592,7 @@ class CollisionSolver:
                 rebuild = collide.collision_step(*arguments, False, warm, sweeps, last)
         state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
         state.t += model.dt
+        state.steps += 1
         self._rebuild = bool(rebuild)
 
     def _gauss_seidel_step(self, iterations: int, arguments: tuple) -> int:
