@@ -191,7 +191,5 @@ def _initial(data: dict[str, np.ndarray]) -> Any:
 
     if not any(f"initial.{name}" in data for name in INITIAL):
         return None
-    values = {name: data.get(f"initial.{name}") for name in INITIAL}
-    track = values["track"]
-    values["track"] = bool(track) if track is not None and track.ndim == 0 else track
+    values: dict[str, Any] = {name: data.get(f"initial.{name}") for name in INITIAL}
     return InitialBalls(**values)

@@ -37,5 +37,5 @@ def whole_steps() -> Iterator[None]:
     finally:
         for s, handler in previous.items():
             signal.signal(s, signal.SIG_DFL if handler is None else handler)  # None: set outside Python
-        for s in dict.fromkeys(came):
-            signal.raise_signal(s)
+        for signum in dict.fromkeys(came):
+            signal.raise_signal(signum)

@@ -255,7 +255,7 @@ class Simulation:
         else:
             self.solver.retune(self.model)
 
-    def _initial_balls(self) -> tuple[Any, ...]:
+    def _initial_balls(self) -> tuple[Any, Any, Any, Any, Any, Any]:
         """``_set_up``'s balls at t0: x, v, w, radius, mass, track (``x`` ``None``: the scene's)."""
         if not self.initial_kept:
             raise ValueError("the balls at t0 were not kept (Simulation(..., keep_initial=False)): nothing to reset to")
