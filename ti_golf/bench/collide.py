@@ -125,7 +125,7 @@ def bench_collide(
         if with_boulder:
             x, v, radius, mass = drop_boulder(scene, x, boulder)
         # a pile keeps no flight records, as a scene's [[blocks]]
-        sim = Simulation(scene, x=x, v=v, radius=radius, mass=mass, track=False)
+        sim = Simulation(scene, x=x, v=v, radius=radius, mass=mass, track=False, keep_initial=False)
         if parallel or reorder is not None:
             sim.solver = CollisionSolver(sim.model, serial=False if parallel else None, reorder=reorder)
         return sim

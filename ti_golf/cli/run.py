@@ -30,13 +30,26 @@ from ti_golf.sim.simulation import Simulation
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``run`` to ``ti-golf``'s subcommands."""
     r = sub.add_parser("run", help="run a scene and save the final state (and trajectories)")
-    scene_options(r)
+    scene_options(
+        r,
+        default="",
+        scene_help="scene file, or the name of a bundled scene (see `ti-golf scenes`); none with --resume",
+    )
+    r.add_argument(
+        "--resume",
+        metavar="RUN.npz",
+        help="continue a run saved with --out from where it stopped, for --t (or --steps) more, with its scene "
+        "and any --set changes (air, contact, world keys): it ends bit for bit where one unbroken run ends",
+    )
     g = r.add_mutually_exclusive_group()
-    g.add_argument("--t", type=float, help="simulated time [s] (default: world.t_end)")
+    g.add_argument("--t", type=float, help="simulated time [s] (default: world.t_end); more time with --resume")
     g.add_argument("--steps", type=int, help="number of time steps")
     r.add_argument("--until", choices=("rest", "landed"), help="stop early once every ball is at rest / has landed")
     r.add_argument("--record-every", type=int, default=0, metavar="K", help="record positions and spins every K steps")
-    r.add_argument("--out", help="write an .npz with x, v, w (N, 3), t, status (and traj_* when recording)")
+    r.add_argument(
+        "--out",
+        help="write an .npz with x, v, w (N, 3), t, status (and traj_* when recording), which --resume continues",
+    )
     r.add_argument("--plot", help=plot_help("trajectory and |ω| vs time (records automatically)"))
     r.add_argument("--frames-every", type=int, default=0, metavar="K", help="render a frame every K steps")
     r.add_argument("--frames", metavar="DIR", help="write the frames as DIR/frame_00000.png, …")
@@ -58,7 +71,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise ConfigError("--steps", None, f"must be > 0 (got {args.steps})")
     if args.record_every < 0:
         raise ConfigError("--record-every", None, f"must be >= 0 (got {args.record_every})")
-    sim = Simulation.from_scene(args.scene, args.overrides)
+    sim = _simulation(args)
+    resumed_at = sim.t if args.resume else None
     record_every = args.record_every
     if args.plot and not record_every:
         duration = args.t if args.t is not None else (args.steps or 0) * sim.dt or sim.scene.world.t_end
@@ -92,8 +106,9 @@ def cmd_run(args: argparse.Namespace) -> int:
             sim.save(args.out, rec, partial=partial)  # save what was simulated even if the run stopped early
     elapsed = time.perf_counter() - t0
     counts = sim.counts()
+    resumed = "" if resumed_at is None else f" (resumed at t = {resumed_at:.4g} s)"
     print(
-        f"{sim.scene.name}: {sim.n} ball(s), t = {sim.t:.4g} s in {elapsed:.2f} s; "
+        f"{sim.scene.name}: {sim.n} ball(s), t = {sim.t:.4g} s{resumed} in {elapsed:.2f} s; "
         + ", ".join(f"{counts[name]} {name.replace('_', ' ')}" for name in STATUS_NAMES.values())
     )
     if sim.solver is not None:
@@ -133,6 +148,20 @@ def cmd_run(args: argparse.Namespace) -> int:
         plot_run(rec, args.plot, title=sim.scene.description or sim.scene.name)
         print(f"wrote {args.plot}")
     return 0
+
+
+def _simulation(args: argparse.Namespace) -> Simulation:
+    """The scene's simulation at t0, or with ``--resume`` the saved run, each with ``--set``'s changes."""
+    if not args.resume:
+        if not args.scene:
+            raise ConfigError("run", None, "needs a SCENE (a scene file or a bundled scene's name) or --resume RUN.npz")
+        return Simulation.from_scene(args.scene, args.overrides)
+    if args.scene:
+        raise ConfigError("--resume", None, f"takes the scene from {args.resume}: leave out SCENE (got {args.scene!r})")
+    sim = Simulation.load(args.resume)
+    if args.overrides:
+        sim.set(args.overrides)
+    return sim
 
 
 class _Frames:

@@ -10,6 +10,7 @@ import difflib
 import importlib.resources
 import math
 import os
+import sys
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -482,4 +483,12 @@ def _plane(values: dict[str, Any]) -> Plane:
     plane = Plane(**values)
     n = plane.normal
     length = math.sqrt(sum(c * c for c in n))
+    if abs(length - 1.0) <= UNIT_LENGTH_ULPS * sys.float_info.epsilon:
+        return plane  # already a unit normal: dividing again could move its last bit (see scene.document)
     return Plane(point=plane.point, normal=(n[0] / length, n[1] / length, n[2] / length))
+
+
+UNIT_LENGTH_ULPS = 4
+"""A plane's normal whose length is within this many units of round-off of 1 is taken as it is: a
+normalised normal is (its length within 1.5 of them), and so a scene written back from a loaded one
+(``scene.document.scene_document``) loads with the same normals, bit for bit."""

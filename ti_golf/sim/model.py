@@ -60,28 +60,6 @@ class Model:
         self.launch_height.from_numpy(np.asarray(launch_height, dtype=f))
         self.radius_np = _compact(radius)
         self.mass_np = _compact(mass)
-        a, c, w = scene.air, scene.contact, scene.world
-        self.air = air_params(a, w.ground_height)
-        self.contact = ContactParams(
-            e=c.e,
-            mu=c.mu,
-            k_p=c.k_p,
-            mu_roll=c.mu_roll,
-            relax=c.relax,
-            v_bounce=c.v_bounce,
-            turf=int(c.turf),
-            solver=SOLVERS.index(c.solver),
-            friction=FRICTION_MODELS.index(c.friction_model),
-        )
-        self.gravity = vec3(*w.gravity)
-        self.integrator = INTEGRATOR_CODES[w.integrator]
-        self.dt = w.dt
-        planes = [(pl.point, pl.normal) for pl in scene.planes]
-        if w.ground:
-            planes.append(((0.0, w.ground_height, 0.0), (0.0, 1.0, 0.0)))
-        self.plane_p = np.array([p for p, _ in planes], dtype=f).reshape(-1, 3)
-        self.plane_n = np.array([n for _, n in planes], dtype=f).reshape(-1, 3)
-        self.v_inelastic = c.v_bounce + 2.0 * float(np.linalg.norm(w.gravity)) * w.dt
         self.terrain = None
         heights = np.zeros((2, 2))
         origin, spacing, kill = (0.0, 0.0, 0.0), (1.0, 1.0), 0.0
@@ -105,6 +83,36 @@ class Model:
         cells = self.terrain.cells if self.terrain is not None else np.zeros((1, 1), np.int32)
         self.terrain_cells = ti.ndarray(ti.i32, cells.shape)
         self.terrain_cells.from_numpy(np.ascontiguousarray(cells, dtype=np.int32))
+        self.set_parameters(scene)
+
+    def set_parameters(self, scene: Scene) -> None:
+        """Take the physical parameters of ``scene``: air, contact, gravity, the integrator, the time
+        step, the planes and the surface table. The balls and the terrain stay as they are (the
+        caller makes sure that ``scene`` has the same ``[terrain]``)."""
+        f = np_float()
+        self.scene = scene
+        a, c, w = scene.air, scene.contact, scene.world
+        self.air = air_params(a, w.ground_height)
+        self.contact = ContactParams(
+            e=c.e,
+            mu=c.mu,
+            k_p=c.k_p,
+            mu_roll=c.mu_roll,
+            relax=c.relax,
+            v_bounce=c.v_bounce,
+            turf=int(c.turf),
+            solver=SOLVERS.index(c.solver),
+            friction=FRICTION_MODELS.index(c.friction_model),
+        )
+        self.gravity = vec3(*w.gravity)
+        self.integrator = INTEGRATOR_CODES[w.integrator]
+        self.dt = w.dt
+        planes = [(pl.point, pl.normal) for pl in scene.planes]
+        if w.ground:
+            planes.append(((0.0, w.ground_height, 0.0), (0.0, 1.0, 0.0)))
+        self.plane_p = np.array([p for p, _ in planes], dtype=f).reshape(-1, 3)
+        self.plane_n = np.array([n for _, n in planes], dtype=f).reshape(-1, 3)
+        self.v_inelastic = c.v_bounce + 2.0 * float(np.linalg.norm(w.gravity)) * w.dt
         surfaces = scene.surfaces or (Surface(),)
         self.surface_table = np.array(
             [

@@ -10,23 +10,32 @@ import math
 import os
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import taichi as ti
 
 from ti_golf.errors import ConfigError, SimulationError
-from ti_golf.files import atomic_path
 from ti_golf.physics import kernels
 from ti_golf.physics.types import StepParams
 from ti_golf.runtime import ensure_init, np_float
 from ti_golf.scene.balls import ball_count, block_size, build_balls
+from ti_golf.scene.document import with_changes
 from ti_golf.scene.loader import load_scene
-from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS, STATUS_NAMES, Scene
+from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, STATUS_NAMES, Scene
+from ti_golf.sim.changes import (
+    _UNSET,
+    MOVES_T0_BALLS,
+    as_changes,
+    at_t0,
+    refuse_after_t0,
+    refuse_for_given_balls,
+    refuse_unread,
+)
 from ti_golf.sim.model import Model
 from ti_golf.sim.packs import Packs
 from ti_golf.sim.results import Flight
+from ti_golf.sim.signals import whole_steps
 from ti_golf.sim.solver import CollisionSolver, available_memory
 from ti_golf.sim.state import State
 
@@ -55,6 +64,28 @@ class Overlap:
     j: int
 
 
+@dataclass(frozen=True)
+class InitialBalls:
+    """The balls at t0 as given to :class:`Simulation`: ``x``, ``v``, ``w`` (N, 3) or ``None``
+    (``x`` ``None``: the scene's balls), ``radius`` and ``mass`` (a scalar, (N,), or ``None``: the
+    scene's ball), ``track`` (a bool or (N,)). Copies, so that later edits of the arrays passed
+    in do not change them."""
+
+    x: np.ndarray | None
+    v: np.ndarray | None
+    w: np.ndarray | None
+    radius: float | np.ndarray | None
+    mass: float | np.ndarray | None
+    track: bool | np.ndarray
+
+    @classmethod
+    def copy_of(cls, x: Any, v: Any, w: Any, radius: Any, mass: Any, track: Any) -> "InitialBalls":
+        def copy(a: Any) -> Any:
+            return None if a is None else np.array(a, copy=True)
+
+        return cls(copy(x), copy(v), copy(w), copy(radius), copy(mass), np.array(track, copy=True))
+
+
 class Simulation:
     """Many balls under the scene's air, gravity and ground, advanced by data-parallel kernels.
 
@@ -68,6 +99,13 @@ class Simulation:
         mass: per-ball mass [kg], a scalar or (N,). Default: the scene's ball.
         track: which balls get landing detection (carry, apex ...); default all. When no ball is
             tracked (a pile), no flight record is kept at all (``State.tracking``).
+        keep_initial: keep a copy of the balls given (``x``, ``v``, ``w``, ``radius``, ``mass``) for
+            :meth:`reset`; ``False`` saves their memory (24 bytes per ball and array in f64) for a
+            big pile that is never reset, and :meth:`reset` is then refused.
+
+    Between runs, read and assign ``x``, ``v`` and ``w`` (or :meth:`set_ball` for some balls),
+    change scene keys with :meth:`set`, go back to t0 with :meth:`reset`, and :meth:`save` the run
+    to continue it later with :meth:`load`.
     """
 
     def __init__(
@@ -79,8 +117,32 @@ class Simulation:
         radius: float | np.ndarray | None = None,
         mass: float | np.ndarray | None = None,
         track: bool | np.ndarray = True,
+        *,
+        keep_initial: bool = True,
     ) -> None:
         ensure_init()
+        given = x is not None or radius is not None or mass is not None
+        self.initial = InitialBalls.copy_of(x, v, w, radius, mass, track) if given and keep_initial else None
+        """The balls at t0 as given to the constructor (:meth:`reset` goes back to them), or ``None``
+        when they are the scene's (and :meth:`reset` builds them again) or were not kept."""
+        self.initial_kept = keep_initial or not given
+        """Whether :meth:`reset` can go back to t0 (``False``: balls given with ``keep_initial=False``)."""
+        self._set_up(scene, x, v, w, radius, mass, track)
+
+    def _set_up(
+        self,
+        scene: Scene,
+        x: np.ndarray | None,
+        v: np.ndarray | None,
+        w: np.ndarray | None,
+        radius: float | np.ndarray | None,
+        mass: float | np.ndarray | None,
+        track: bool | np.ndarray,
+        solver_flags: dict[str, bool] | None = None,
+    ) -> None:
+        """Build the model, the state at t0 and the collision solver (made with ``solver_flags``,
+        ``serial`` and ``reorder``, when given) for ``scene`` and these balls (``x`` ``None``: the
+        scene's)."""
         self.scene = scene
         if x is None:
             check_memory(scene)
@@ -96,6 +158,7 @@ class Simulation:
         radius = _per_ball(scene.ball.radius if radius is None else radius, n, "radius")
         mass = _per_ball(scene.ball.mass if mass is None else mass, n, "mass")
         tracking = bool(np.any(track))  # else no flight record is kept (a pile: 96 bytes per ball less in f64)
+        self.solver = None  # the old one's arrays go before the new ones are made
         self.model = Model(scene, radius, mass, launch_height=x[:, 1] if tracking else np.zeros(1))
         self.state = State(n, tracking)
         self.state.reset(x, v, w, track)
@@ -106,7 +169,7 @@ class Simulation:
         self.solver = None
         """The CollisionSolver when balls can collide (several balls and ``world.collisions``)."""
         if n > 1 and scene.world.collisions:
-            self.solver = CollisionSolver(self.model)
+            self.solver = CollisionSolver(self.model, **(solver_flags or {}))
 
     @classmethod
     def from_scene(
@@ -114,6 +177,96 @@ class Simulation:
     ) -> "Simulation":
         """Load a TOML scene (path or bundled name) with optional overrides and build a simulation."""
         return cls(load_scene(path, overrides), **kwargs)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> "Simulation":
+        """A simulation continued from a run saved by :meth:`save`: its scene (with every change
+        made by :meth:`set`), the state at the time it was saved and the collision solver's lists
+        and carried impulses, so that running on gives, bit for bit, what the saved simulation
+        would have given (on the same backend and precision). :meth:`reset` goes back to the
+        run's t0. Raises :class:`ConfigError` naming the file when it cannot be continued (a
+        file written before runs could be resumed, another precision)."""
+        from ti_golf.sim.saved_run import read_run
+
+        return read_run(cls, path)
+
+    # -- changing the scene between runs ----------------------------------------------------------
+    def set(self, changes: Mapping[str, Any] | Iterable[str] | str, value: Any = _UNSET) -> None:
+        """Change scene keys between runs: ``set("air.C_D", 0.25)``, ``set({"contact.e": 0.5,
+        "world.dt": 5e-4})`` or ``set(["air.wind=[-5,0,0]"])`` (``--set`` texts).
+
+        Each value is checked as the scene loader checks ``--set`` (the same errors and ranges; a
+        key left unread by the scene's settings is refused), and so is a key that no simulation
+        reads (``sweep.*``, ``game.*``, ``world.t_max``, ``description``). The air, contact,
+        gravity, time step, integrator, sleeping, ground, collision and solver keys apply from the
+        next step on, continuing from the current state (a new ``contact.skin`` or ``world.dt``
+        rebuilds the neighbour lists, each touching pair keeping its carried impulse; a new
+        ``contact.solver`` or ``world.collisions`` makes a new collision solver, whose contacts start
+        without carried impulses, as at t0). The keys that set up the balls or the ground
+        (``launch.*``, ``ball.*``, ``terrain.*``) apply at t0 only: there the simulation is set up
+        again, as ``Simulation`` of the changed scene would be (``world.ground_height`` too, which
+        places a launched ball), and later in a run they are refused: use :meth:`reset` with them.
+        The changes stay through :meth:`reset`, :meth:`save` and :meth:`load`.
+
+        Raises:
+            ConfigError: naming ``--set``, the key and what is allowed; nothing is changed then.
+        """
+        changed = as_changes(changes, value)
+        scene = self._changed_scene(changed)
+        if self.state.steps > 0:
+            for key in changed:
+                refuse_after_t0(key, self.t)
+        if self.state.steps == 0 and any(at_t0(k) or k in MOVES_T0_BALLS for k in changed):
+            self._set_up(scene, *self._initial_balls(), solver_flags=self._solver_flags())
+        else:
+            self._take_parameters(scene)
+
+    def reset(self, changes: Mapping[str, Any] | Iterable[str] | str | None = None) -> None:
+        """Go back to t0: the balls as they started (built again from the scene, or as given to
+        the constructor), t = 0, no steps, every ball flying, the flight records and the collision
+        solver's lists and carried impulses as at the start; bit for bit the state of a new
+        ``Simulation`` of the current scene (the same solver options included). Parameters
+        changed by :meth:`set` stay. ``changes`` (as :meth:`set` takes them, any key that a
+        simulation reads) are made first."""
+        scene = self.scene if not changes else self._changed_scene(as_changes(changes, _UNSET))
+        self._set_up(scene, *self._initial_balls(), solver_flags=self._solver_flags())
+
+    def _changed_scene(self, changes: dict[str, Any]) -> Scene:
+        """The scene with ``changes``, refusing keys that would have no effect."""
+        scene = with_changes(self.scene, changes)
+        for key in changes:
+            refuse_unread(key)
+            if not self.initial_kept or (self.initial is not None and self.initial.x is not None):
+                i = self.initial
+                refuse_for_given_balls(key, i is None or i.radius is not None, i is None or i.mass is not None)
+        return scene
+
+    def _take_parameters(self, scene: Scene) -> None:
+        """Continue with ``scene``'s parameters (the balls and the terrain unchanged)."""
+        old = self.scene
+        self.scene = scene
+        self.model.set_parameters(scene)
+        if self.n == 1 or not scene.world.collisions:
+            self.solver = None
+        elif self.solver is None or scene.contact.solver != old.contact.solver:
+            flags = self._solver_flags()
+            self.solver = None
+            self.solver = CollisionSolver(self.model, **(flags or {}))
+        else:
+            self.solver.retune(self.model)
+
+    def _initial_balls(self) -> tuple[Any, Any, Any, Any, Any, Any]:
+        """``_set_up``'s balls at t0: x, v, w, radius, mass, track (``x`` ``None``: the scene's)."""
+        if not self.initial_kept:
+            raise ValueError("the balls at t0 were not kept (Simulation(..., keep_initial=False)): nothing to reset to")
+        i = self.initial
+        if i is None:
+            return None, None, None, None, None, True
+        return i.x, i.v, i.w, i.radius, i.mass, i.track
+
+    def _solver_flags(self) -> dict[str, bool] | None:
+        """The collision solver's ``serial`` and ``reorder`` options, to make another like it."""
+        return None if self.solver is None else {"serial": self.solver.serial, "reorder": self.solver.reorder}
 
     # -- inspection -------------------------------------------------------------------------------
     @property
@@ -125,6 +278,11 @@ class Simulation:
     def t(self) -> float:
         """Simulated time [s]."""
         return self.state.t
+
+    @property
+    def step_count(self) -> int:
+        """Time steps taken since t0."""
+        return self.state.steps
 
     @property
     def dt(self) -> float:
@@ -208,13 +366,51 @@ class Simulation:
         self.state.status.from_numpy(s)
         self.state.rest_time.from_numpy(np.zeros(self.n, self.state.rest_time.to_numpy().dtype))
 
+    def set_ball(
+        self,
+        i: int | Iterable[int],
+        x: Any = None,
+        v: Any = None,
+        w: Any = None,
+    ) -> None:
+        """Edit the balls ``i`` (a ball id, or several) between runs: their centre ``x`` [m],
+        velocity ``v`` [m/s] and spin ``w`` [rad/s], each (3,) (the same for every ball ``i``) or
+        (len(i), 3); ``None`` leaves it. The edited balls are flying again (awake, back in play if
+        they were out of bounds: a ball still outside is out again after the next step); the others
+        keep their status. Moved balls get their neighbour lists rebuilt before the next step.
+
+        Raises:
+            ValueError: a ball id outside 0 … N − 1, a value of another shape, or NaN or infinite.
+        """
+        ids = np.atleast_1d(np.asarray(i))
+        if ids.ndim != 1 or ids.size == 0 or ids.dtype.kind not in "iu" or ids.min() < 0 or ids.max() >= self.n:
+            raise ValueError(f"ball ids must be integers in 0 … {self.n - 1} (got {i!r})")
+        for name, value in (("x", x), ("v", v), ("w", w)):
+            if value is None:
+                continue
+            arr = np.asarray(value, dtype=np.float64)
+            if arr.shape == (3,):
+                arr = np.broadcast_to(arr, (ids.size, 3))
+            arr = _as_vectors(arr, f"{name} of balls {ids.tolist()}", ids.size)
+            values = self._vectors(name)
+            values[ids] = arr
+            self.state.write(name, values.astype(np_float()))
+        status, rest = self.status, self.state.read("rest_time")
+        status[ids], rest[ids] = FLYING, 0.0
+        self.state.write("status", status)
+        self.state.write("rest_time", rest)
+        if x is not None and self.solver is not None:
+            self.solver.invalidate()
+
     # -- stepping ---------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
         """Advance ``n`` time steps; raises SimulationError naming the balls that went non-finite."""
         m, s, w = self.model, self.state, self.scene.world
         if self.solver is not None:
             self.solver.advance(m, s, int(n))
-        else:
+            self.check_finite()
+            return
+        with whole_steps():  # the kernel, then t and the step count, or none of them
             params = StepParams(
                 gravity=m.gravity,
                 h=m.dt,
@@ -239,6 +435,7 @@ class Simulation:
                 self._packs.flight(s),
             )
             s.t += n * m.dt
+            s.steps += int(n)
         self.check_finite()
 
     def check_finite(self) -> None:
@@ -311,34 +508,17 @@ class Simulation:
         return bool(np.all(landed != 0))
 
     def save(self, path: str | os.PathLike[str], recording: Recording | None = None, partial: bool = False) -> None:
-        """Write an ``.npz`` with ``x``, ``v``, ``w`` (N, 3), ``t``, ``status``, ``radius``, ``mass``,
-        with a terrain ``terrain_heights`` (nx, nz), ``terrain_origin`` (3,) and ``terrain_spacing``
-        (dx, dz), and, if given, the recording; ``partial`` (a bool) says whether the run was stopped
-        before the time it was asked to reach. ``.npz`` is added to a path without it. The file is
-        written whole or not at all (a temporary file renamed into place)."""
-        data: dict[str, Any] = {
-            "x": self.x,
-            "v": self.v,
-            "w": self.w,
-            "t": np.float64(self.t),
-            "status": self.status,
-            "radius": self.model.radius_np,
-            "mass": self.model.mass_np,
-            "partial": np.bool_(partial),
-        }
-        if self.terrain is not None:
-            data.update(
-                terrain_heights=self.terrain.heights,
-                terrain_origin=self.terrain.origin,
-                terrain_spacing=self.terrain.spacing,
-            )
-        if recording is not None and recording.t:
-            data.update(recording.arrays())
-        target = Path(path)
-        if target.suffix != ".npz":
-            target = target.with_name(target.name + ".npz")  # as np.savez names it
-        with atomic_path(target) as tmp, open(tmp, "wb") as fh:
-            np.savez(fh, **data)
+        """Write the run to an ``.npz``, whole or not at all (a temporary file renamed into place;
+        ``.npz`` is added to a path without it): ``x``, ``v``, ``w`` (N, 3), ``t``, ``status``,
+        ``radius``, ``mass`` by ball id; with a terrain ``terrain_heights`` (nx, nz),
+        ``terrain_origin`` (3,) and ``terrain_spacing`` (dx, dz); the recording, if given
+        (``traj_t``, ``traj_x``, ``traj_w``); ``partial`` (a bool), whether the run was stopped
+        before the time it was asked to reach; and all that :meth:`load` needs to continue the
+        run bit for bit (the scene, the step count, the flight records, the sleeping timers, the
+        collision solver's lists and carried impulses, the balls at t0; see the docs' lab page)."""
+        from ti_golf.sim.saved_run import write_run
+
+        write_run(self, path, recording, partial)
 
 
 BYTES_PER_BALL = 2048

@@ -4,6 +4,7 @@ sweeps and the end-of-step position update, in that fixed order (see physics/col
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import numpy as np
 import taichi as ti
@@ -28,6 +29,7 @@ from ti_golf.runtime import (
 )
 from ti_golf.sim.model import Model
 from ti_golf.sim.packs import Packs
+from ti_golf.sim.signals import whole_steps
 from ti_golf.sim.state import State
 
 SERIAL_MAX_BALLS = 256
@@ -146,6 +148,7 @@ class CollisionSolver:
         self.r_cut, self.r_ref = apart.size_cut(model.radius_np)
         self.skin = model.scene.contact.skin * self.r_ref
         self.v_cut = apart.fast_speed(self.r_ref, self.skin, model.dt)  # faster balls are listed apart
+        self.h = model.dt  # the time step the lists are built for [s]
         self.cell = grid.cell_size(self._r_max, self.skin, model.dt, 0.0)[0]
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
         self.serial = steps_serially(n) if serial is None else bool(serial)
@@ -442,6 +445,92 @@ class CollisionSolver:
         grid.clear(self.flag)  # build() left the longest lists there
         self._rebuild = False
 
+    def retune(self, model: Model) -> None:
+        """Take the model's parameters as changed between steps (``Model.set_parameters``): a new
+        skin (``contact.skin``) or time step changes which pairs the lists must hold, so they are
+        rebuilt before the next step (each pair that stays listed keeps its impulse); a new number of
+        planes (``world.ground``) starts every ball's plane impulses again from zero. The kind of
+        solver (``contact.solver``) is fixed: a change of it needs a new solver."""
+        skin = model.scene.contact.skin * self.r_ref
+        if (skin, model.dt) != (self.skin, self.h):
+            self.skin, self.h = skin, model.dt
+            self.v_cut = apart.fast_speed(self.r_ref, self.skin, model.dt)
+            self.invalidate()
+        columns = max(1, len(model.plane_p) + (model.terrain is not None))
+        if self.lam_plane.shape[1] != columns:
+            self.lam_plane = ti.ndarray(ti.f32, (model.n, columns))
+            self.lam_plane.fill(0.0)
+            self.friction_plane = ti.ndarray(vec3f, self.lam_plane.shape if self.gauss_seidel else (1, 1))
+            self.friction_plane.fill(0.0)
+
+    SCRATCH = (
+        "x_free",
+        "v_free",
+        "calm",
+        "clear",
+        "rank",
+        "start",
+        "chunk_start",
+        "sorted_ids",
+        "impulse",
+        "impact",
+        "spare_friction",
+    )
+    """Arrays that each step or list build writes before it reads them: :meth:`saved` keeps only
+    their shapes."""
+
+    _NOT_SAVED = ("_model", "_packs", "_ids", "serial", "reorder", "loop_cap", "gauss_seidel")
+    """Attributes the constructor sets from its arguments, the model and the backend."""
+
+    def saved(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """What the next steps read of this solver, to continue bit for bit after :meth:`restore`:
+        the neighbour lists, each pair's and each ball's carried impulses, the Gauss–Seidel column
+        order and the numbers they were built with. Returns (arrays by attribute name, in storage
+        order; a JSON-ready description: the scalars, each array's element shape, the scratch
+        arrays' shapes and types, and which attributes hold the same array)."""
+        arrays: dict[str, np.ndarray] = {}
+        meta: dict[str, Any] = {"values": {}, "elements": {}, "scratch": {}, "same": {}}
+        seen: dict[int, str] = {}
+        for name, value in vars(self).items():
+            if name in self._NOT_SAVED:
+                continue
+            if isinstance(value, ti.Ndarray):
+                if id(value) in seen:
+                    meta["same"][name] = seen[id(value)]
+                    continue
+                seen[id(value)] = name
+                element = list(getattr(value, "element_shape", ()))
+                if name in self.SCRATCH:
+                    meta["scratch"][name] = [list(value.shape), element, str(value.to_numpy().dtype)]
+                else:
+                    arrays[name] = value.to_numpy()
+                    meta["elements"][name] = element
+            elif name == "_hash":
+                meta["values"][name] = None if value is None else [[int(c) for c in v.to_list()] for v in value]
+            elif value is None or isinstance(value, (bool, int, float, tuple)):
+                meta["values"][name] = [int(c) for c in value] if isinstance(value, tuple) else value
+            else:
+                raise TypeError(f"CollisionSolver.{name} ({type(value).__name__}) cannot be saved")
+        return arrays, meta
+
+    def restore(self, state: State, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
+        """Take back what :meth:`saved` returned, for ``state`` restored to the same moment (its
+        storage order included): the next step is then the one that the saved solver would have made."""
+        for name, value in meta["values"].items():
+            if name == "_hash":
+                value = None if value is None else tuple(ti.Vector(v, dt=ti.i32) for v in value)
+            elif isinstance(getattr(self, name, None), tuple):
+                value = tuple(value)
+            setattr(self, name, value)
+        for name, a in arrays.items():
+            setattr(self, name, _ndarray(a.shape[: a.ndim - len(meta["elements"][name])], meta["elements"][name], a))
+        for name, (shape, element, dtype) in meta["scratch"].items():
+            setattr(self, name, _ndarray(tuple(shape), element, np.zeros(0, dtype)))
+        for name, other in meta["same"].items():
+            setattr(self, name, getattr(self, other))
+        self._ids = state.ids
+        self._packs = Packs()
+
     def invalidate(self) -> None:
         """Rebuild the neighbour lists before the next step (balls were moved between steps), each
         pair that stays listed keeping its accumulated impulse."""
@@ -468,12 +557,15 @@ class CollisionSolver:
 
     def advance(self, model: Model, state: State, steps: int) -> None:
         """Advance all balls by ``steps`` steps of ``model.dt``: serially in one launch, or one
-        parallel launch per step (see ``serial``)."""
+        parallel launch per step (see ``serial``); Ctrl-C and SIGTERM wait for whole steps
+        (:func:`~ti_golf.sim.signals.whole_steps`)."""
         if self.serial:
-            self._advance_serially(model, state, int(steps))
+            with whole_steps():
+                self._advance_serially(model, state, int(steps))
         else:
             for _ in range(int(steps)):
-                self._step_in_parallel(model, state)
+                with whole_steps():
+                    self._step_in_parallel(model, state)
 
     def _advance_serially(self, model: Model, state: State, steps: int) -> None:
         width = max(1, state.n - 1)
@@ -487,6 +579,7 @@ class CollisionSolver:
             )
         for _ in range(steps):
             state.t += model.dt  # as one step at a time adds it, to the same round-off
+        state.steps += steps
 
     def _step_in_parallel(self, model: Model, state: State) -> None:
         if not self._valid or self._rebuild:
@@ -499,6 +592,7 @@ class CollisionSolver:
                 rebuild = collide.collision_step(*arguments, False, warm, sweeps, last)
         state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
         state.t += model.dt
+        state.steps += 1
         self._rebuild = bool(rebuild)
 
     def _gauss_seidel_step(self, iterations: int, arguments: tuple) -> int:
@@ -553,3 +647,16 @@ class CollisionSolver:
             packs.flight(s),
             packs.scratch(self),
         )
+
+
+_TAICHI_TYPES = {"float64": ti.f64, "float32": ti.f32, "int32": ti.i32}
+
+
+def _ndarray(shape: tuple[int, ...], element: list[int], values: np.ndarray) -> ti.Ndarray:
+    """A Taichi array of ``shape`` whose elements are scalars (``element`` empty) or vectors of
+    ``element[0]`` entries of ``values``' type, holding ``values`` unless they are empty."""
+    dtype = _TAICHI_TYPES[str(values.dtype)]
+    out = ti.ndarray(ti.types.vector(element[0], dtype) if element else dtype, shape)
+    if values.size:
+        out.from_numpy(np.ascontiguousarray(values))
+    return out

@@ -32,6 +32,7 @@ class State:
             entry each, which the kernels do not read (72 bytes per ball less in f64 for a pile,
             with the model's launch heights), and :meth:`read` gives the record of untracked balls.
         t: simulated time [s] (a Python float).
+        steps: time steps taken since t0.
         ids: the storage order: ``ids[p]`` is the id of the ball stored at index p of every
             per-ball array, shape (N,), i32; ``None`` while the balls are stored in id order. A large
             pile is stored so that neighbours lie close in memory (see ``CollisionSolver.reorder``),
@@ -59,6 +60,7 @@ class State:
         self.land_x = ti.ndarray(vec3.get(), m)
         self.land_v = ti.ndarray(vec3.get(), m)
         self.t = 0.0
+        self.steps = 0
         self.ids: ti.Ndarray | None = None
 
     @property
@@ -122,6 +124,7 @@ class State:
         else:
             self.landed.from_numpy(np.full(1, NOT_TRACKED, np.int32))
         self.t = 0.0
+        self.steps = 0
 
     def numpy(self) -> dict[str, np.ndarray]:
         """Copies of all per-ball arrays as numpy by ball id (float64 for floats)."""

@@ -1,0 +1,379 @@
+"""The report's lab workflow (section 2.2): simulate, change parameters or the state, continue;
+go back to t0; save a run and continue it later, bit for bit as if it had never stopped."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+
+import numpy as np
+import pytest
+from conftest import SERIAL_OR_PARALLEL
+
+import ti_golf as tg
+from ti_golf.cli import main
+from ti_golf.physics import collide, kernels
+from ti_golf.scene.document import scene_document, with_changes
+from ti_golf.sim.solver import CollisionSolver
+from ti_golf.sim.state import State
+
+
+def _state(sim) -> dict:
+    """Everything a step reads of the balls, by ball id, with t and the step count."""
+    out = {name: sim.state.read(name) for name in State.PER_BALL}
+    out.update(t=sim.t, steps=sim.step_count)
+    return out
+
+
+def assert_same_state(a, b) -> None:
+    sa, sb = _state(a), _state(b)
+    for name in sa:
+        np.testing.assert_array_equal(sa[name], sb[name], err_msg=name)  # NaN (balls not tracked) equal NaN
+
+
+def _continued(make, t1: float, t2: float, path):
+    """(a run of t1 + t2 unbroken, a run of t1 saved to ``path`` and loaded into a new simulation
+    that runs t2 more)."""
+    whole = make()
+    whole.run(t=t1 + t2)
+    first = make()
+    first.run(t=t1)
+    first.save(path)
+    second = tg.Simulation.load(path)
+    second.run(t=t2)
+    return whole, second
+
+
+# ----------------------------------------------------------------------------------------------
+# save and load
+# ----------------------------------------------------------------------------------------------
+def test_a_flight_saved_mid_air_lands_as_if_it_never_stopped(tmp_path):
+    # saved at 2 s, before the apex; continued through the landing, the bounces and the roll: the
+    # state and the flight record (carry, apex, landing) are those of the unbroken run, bit for bit
+    whole, resumed = _continued(lambda: tg.Simulation.from_scene("lab_spin_decay"), 2.0, 4.0, tmp_path / "a.npz")
+    assert whole.flight().landed.all()  # the landing happened after the save
+    assert_same_state(whole, resumed)
+    for name in ("carry", "apex", "flight_time", "landing_angle", "landing_speed"):
+        np.testing.assert_array_equal(getattr(whole.flight(), name), getattr(resumed.flight(), name), err_msg=name)
+
+
+def test_the_break_shot_saved_during_the_break_goes_on_bit_for_bit(tmp_path):
+    # Jacobi sweeps with resting impulses carried from step to step (contact.solver = "jacobi"),
+    # saved 40 ms into the break, while the rack's balls are in contact
+    whole, resumed = _continued(lambda: tg.Simulation.from_scene("break_shot"), 0.2, 0.1, tmp_path / "b.npz")
+    assert np.linalg.norm(whole.v[1:], axis=1).max() > 0.5  # the rack has broken
+    assert resumed.solver.rebuilds == whole.solver.rebuilds
+    assert_same_state(whole, resumed)
+
+
+def _columns_scene() -> tg.Scene:
+    """27 balls in 3 × 3 columns of 3 on the ground (Gauss–Seidel sweeps, quickly asleep) and a
+    ball rolling into them at 1 m/s, which arrives after 0.1 s; no air."""
+    r = 0.02
+    balls = [{"position": [2 * r * i, r + 2 * r * k, 2 * r * j]} for i in range(3) for j in range(3) for k in range(3)]
+    balls.append({"position": [-0.1, r, 2 * r], "velocity": [1.0, 0.0, 0.0]})
+    data = {
+        "air": {"rho": 0.0},
+        "world": {"dt": 0.001, "t_rest": 0.03},
+        "contact": {"solver": "gauss_seidel", "e": 0.5, "mu": 0.4},
+        "balls": balls,
+    }
+    return tg.load_scene(None, data=data)
+
+
+@SERIAL_OR_PARALLEL
+def test_a_pile_saved_asleep_wakes_as_if_it_never_stopped(serial, tmp_path):
+    # Gauss-Seidel sweeps with each pair's friction impulse carried, balls put to sleep, the
+    # storage order of a reordered pile (parallel): saved while the columns sleep, continued
+    # through the rolling ball's impact
+    scene = _columns_scene()
+
+    def make():
+        sim = tg.Simulation(scene)
+        sim.solver = CollisionSolver(sim.model, serial=serial, reorder=not serial)
+        return sim
+
+    saved = tmp_path / "p.npz"
+    whole, resumed = _continued(make, 0.07, 0.1, saved)
+    with np.load(saved) as d:
+        assert np.count_nonzero(d["status"] == tg.AT_REST) == 27  # the columns sleep at the save
+        assert ("order" in d.files) == (not serial)
+    assert np.count_nonzero(whole.status == tg.AT_REST) < 27  # and are woken after it
+    assert (resumed.solver.serial, resumed.solver.reorder) == (serial, not serial)
+    assert_same_state(whole, resumed)
+
+
+def test_a_loaded_run_keeps_its_changed_parameters_and_resets_to_its_t0(tmp_path):
+    sim = tg.Simulation.from_scene("break_shot")
+    sim.run(t=0.05)
+    sim.set({"contact.e": 0.6, "contact.mu": 0.3})
+    sim.save(tmp_path / "r")  # .npz added
+    loaded = tg.Simulation.load(tmp_path / "r.npz")
+    assert loaded.scene == sim.scene and loaded.scene.contact.e == 0.6
+    loaded.reset()
+    fresh = tg.Simulation(sim.scene)
+    assert_same_state(loaded, fresh)
+
+
+def test_balls_given_as_arrays_are_saved_for_reset(tmp_path):
+    scene = tg.load_scene("lab_vacuum", ["world.collisions=false"])
+    x = np.array([[0.0, 1.0, 0.0], [5.0, 2.0, 0.0]])
+    v = np.array([[10.0, 10.0, 0.0], [0.0, 5.0, 1.0]])
+    sim = tg.Simulation(scene, x=x, v=v, radius=[0.02, 0.03], track=[True, False])
+    x[:] = 0.0  # the simulation keeps its own copy
+    sim.run(t=0.5)
+    sim.save(tmp_path / "g.npz")
+    loaded = tg.Simulation.load(tmp_path / "g.npz")
+    assert_same_state(loaded, sim)
+    loaded.reset()
+    assert_same_state(
+        loaded,
+        tg.Simulation(scene, x=[[0.0, 1.0, 0.0], [5.0, 2.0, 0.0]], v=v, radius=[0.02, 0.03], track=[True, False]),
+    )
+    unkept = tg.Simulation(scene, x=x, keep_initial=False)  # a big pile that is never reset
+    assert unkept.initial is None
+    unkept.save(tmp_path / "u.npz")
+    for sim in (unkept, tg.Simulation.load(tmp_path / "u.npz")):
+        with pytest.raises(ValueError, match="keep_initial=False"):
+            sim.reset()
+
+
+def test_a_file_that_cannot_be_continued_is_refused_in_one_line(tmp_path):
+    old = tmp_path / "old.npz"  # as save() wrote it before runs could be continued
+    np.savez(old, x=np.zeros((1, 3)), v=np.zeros((1, 3)), w=np.zeros((1, 3)), t=np.float64(1.0))
+    with pytest.raises(tg.ConfigError, match="final state only"):
+        tg.Simulation.load(old)
+    with pytest.raises(tg.ConfigError, match="file not found"):
+        tg.Simulation.load(tmp_path / "missing.npz")
+    (tmp_path / "text.npz").write_text("not a zip")
+    with pytest.raises(tg.ConfigError, match="is not a run saved by ti-golf"):
+        tg.Simulation.load(tmp_path / "text.npz")
+    sim = tg.Simulation.from_scene("lab_vacuum")
+    sim.save(tmp_path / "f32.npz")
+    with np.load(tmp_path / "f32.npz") as d:
+        data = {k: d[k] for k in d.files}
+    meta = json.loads(str(data["run"]))
+    meta["precision"] = "f32"
+    data["run"] = np.array(json.dumps(meta))
+    np.savez(tmp_path / "f32.npz", **data)
+    with pytest.raises(tg.ConfigError, match=r"saved in f32 precision .* \(--precision f32\)"):
+        tg.Simulation.load(tmp_path / "f32.npz")
+
+
+def test_every_bundled_scene_is_written_back_as_it_loads():
+    # a saved run carries its scene as a document; loaded again it is the same scene
+    from ti_golf.bench.pit import pit_scene
+    from ti_golf.scene.loader import scenes_dir
+
+    scenes = [tg.load_scene(p) for p in sorted(scenes_dir().glob("*.toml"))] + [pit_scene(500)[0]]
+    tilted = tg.load_scene(None, data={"planes": [{"normal": [0.3, 1.0, 0.2]}, {"normal": [-1.0, 2.0, 7.0]}]})
+    for scene in scenes + [tilted]:
+        assert with_changes(scene, {}) == scene, scene.name
+        assert json.loads(json.dumps(scene_document(scene))) == scene_document(scene)
+
+
+# ----------------------------------------------------------------------------------------------
+# change parameters and continue
+# ----------------------------------------------------------------------------------------------
+def test_drag_turned_off_mid_flight_leaves_the_vacuum_parabola():
+    # from the state at 1 s, with C_D = 0 (no Magnus, no spin decay in this scene) the ball
+    # falls freely: x(T) = x0 + v0·T + g·T²/2, which RK4 integrates exactly (a quadratic), here
+    # with half the time step
+    sim = tg.Simulation.from_scene("lab_turbulent", ["world.ground=false"])
+    sim.run(t=1.0)
+    x0, v0 = sim.x[0], sim.v[0]
+    sim.set({"air.C_D": 0.0, "world.dt": 5e-4})
+    assert sim.dt == 5e-4 and sim.scene.air.C_D == 0.0
+    sim.run(t=2.0)
+    assert sim.step_count == 100 + 4000
+    g = np.array(sim.scene.world.gravity)
+    np.testing.assert_allclose(sim.x[0], x0 + 2.0 * v0 + 0.5 * g * 2.0**2, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(sim.v[0], v0 + 2.0 * g, rtol=0, atol=1e-11)
+
+
+def test_continuing_with_changed_parameters_equals_a_new_run_of_the_changed_scene():
+    # one ball: nothing is carried but x, v, ω, so going on after set() is a new simulation of
+    # the changed scene started from the same state, bit for bit
+    sim = tg.Simulation.from_scene("lab_magnus")
+    sim.run(t=1.5)
+    changes = {"air.wind": [-5.0, 0.0, 2.0], "air.C_D": 0.2, "world.integrator": "semi_implicit"}
+    fresh = tg.Simulation(with_changes(sim.scene, changes), x=sim.x, v=sim.v, w=sim.w)
+    sim.set(changes)
+    sim.run(t=1.0)
+    fresh.run(t=1.0)
+    for name in ("x", "v", "w"):
+        np.testing.assert_array_equal(getattr(sim, name), getattr(fresh, name))
+
+
+def test_set_checks_values_as_the_scene_loader_does():
+    sim = tg.Simulation.from_scene("lab_turbulent")
+    before = sim.scene
+    for changes in ({"air.C_D": -1.0}, {"air.CD": 0.2}, {"world.dt": "fast"}, {"contact.e": 1.5}):
+        with pytest.raises(tg.ConfigError) as got:
+            sim.set(changes)
+        with pytest.raises(tg.ConfigError) as loader:
+            tg.load_scene("lab_turbulent", changes)
+        assert str(got.value) == str(loader.value)
+    with pytest.raises(tg.ConfigError) as got:  # a key the scene's settings leave unread
+        tg.Simulation.from_scene("tour_shot").set("air.C_D", 0.2)
+    assert 'air.model = "lab"' in str(got.value)
+    for key, value in (("sweep.angles", [10, 20]), ("world.t_max", 9.0), ("description", "a shot")):
+        with pytest.raises(tg.ConfigError, match="has no effect on a simulation"):
+            sim.set(key, value)
+    assert sim.scene == before  # nothing changed
+
+
+def test_a_change_that_leaves_a_key_unread_drops_it():
+    # lab_magnus gives C_D and C_M: the spin-ratio model reads neither, so they go
+    sim = tg.Simulation.from_scene("lab_magnus")
+    sim.set("air.model=spin_ratio")
+    assert sim.scene.air.model == "spin_ratio" and sim.scene.air.C_M == tg.load_scene(None, data={}).air.C_M
+
+
+def test_keys_that_set_up_the_balls_apply_at_t0_only():
+    sim = tg.Simulation.from_scene("lab_vacuum")
+    sim.set({"launch.speed": 30.0, "launch.angle_deg": 20.0})  # at t0: set up again
+    assert_same_state(sim, tg.Simulation.from_scene("lab_vacuum", {"launch.speed": 30.0, "launch.angle_deg": 20.0}))
+    sim.run(t=0.1)
+    with pytest.raises(tg.ConfigError, match="sets up the balls or the ground at t0"):
+        sim.set("launch.speed", 10.0)
+    sim.reset({"launch.speed": 10.0})  # with reset they apply
+    assert sim.t == 0.0 and np.linalg.norm(sim.v[0]) == pytest.approx(10.0)
+    given = tg.Simulation(sim.scene, x=[[0.0, 1.0, 0.0]])
+    with pytest.raises(tg.ConfigError, match="given as arrays"):
+        given.set("launch.speed", 5.0)
+
+
+def test_reset_goes_back_to_t0_bit_for_bit_with_the_changed_parameters():
+    sim = tg.Simulation.from_scene("break_shot")
+    start = _state(sim)
+    sim.run(t=0.2)
+    sim.set({"contact.e": 0.5, "contact.solver": "gauss_seidel"})
+    sim.reset()
+    assert sim.scene.contact.e == 0.5 and sim.scene.contact.solver == "gauss_seidel"
+    for name, value in start.items():
+        np.testing.assert_array_equal(_state(sim)[name], value, err_msg=name)
+    assert sim.solver.gauss_seidel and sim.solver.rebuilds == 0
+    fresh = tg.Simulation(sim.scene)  # no carried impulse, no list survives the reset
+    sim.run(t=0.2)
+    fresh.run(t=0.2)
+    assert_same_state(sim, fresh)
+
+
+def test_collisions_and_the_solver_can_change_mid_run():
+    sim = tg.Simulation.from_scene("break_shot")
+    sim.run(t=0.17)
+    sim.set("world.collisions", False)
+    assert sim.solver is None
+    sim.run(t=0.01)
+    sim.set({"world.collisions": True, "contact.solver": "gauss_seidel", "contact.skin": 0.2})
+    assert sim.solver.gauss_seidel and sim.solver.skin == pytest.approx(0.2 * 0.02)
+    sim.run(t=0.05)
+    again = tg.Simulation.from_scene("break_shot")
+    again.run(t=0.17)
+    again.set("world.collisions", False)
+    again.run(t=0.01)
+    again.set({"world.collisions": True, "contact.solver": "gauss_seidel", "contact.skin": 0.2})
+    again.run(t=0.05)
+    assert_same_state(sim, again)  # deterministic
+    deepest = sim.deepest_overlap()
+    assert deepest is None or deepest.fraction < 0.05
+
+
+def test_set_ball_edits_one_ball_and_wakes_it():
+    sim = tg.Simulation(_columns_scene())
+    sim.run(t=0.05)
+    assert np.all(sim.status[:27] == tg.AT_REST)
+    x, v = sim.x, sim.v
+    sim.set_ball(2, v=[0.0, 2.0, 0.0])  # the top ball of the first column, thrown up
+    assert sim.status[2] == tg.FLYING and np.all(np.delete(sim.status, [2, 27])[:26] == tg.AT_REST)
+    np.testing.assert_array_equal(np.delete(sim.v, 2, axis=0), np.delete(v, 2, axis=0))
+    sim.run(t=0.1)  # up at 2 m/s, no air: n semi-implicit Euler steps of h rise n·h·v0 − h²·g·n(n + 1)/2
+    n, h, g = 100, 0.001, 9.81
+    assert sim.x[2, 1] - x[2, 1] == pytest.approx(n * h * 2.0 - h * h * g * n * (n + 1) / 2, abs=1e-12)
+    sim.set_ball([0, 1], x=[[1.0, 0.02, 1.0], [1.1, 0.02, 1.0]])
+    np.testing.assert_array_equal(sim.x[[0, 1]], [[1.0, 0.02, 1.0], [1.1, 0.02, 1.0]])
+    for bad, match in (
+        ({"i": 28, "v": [0, 0, 0]}, "ball ids"),
+        ({"i": 0, "v": [0, 0]}, "shape"),
+        ({"i": 0, "w": [np.nan, 0, 0]}, "NaN"),
+    ):
+        with pytest.raises(ValueError, match=match):
+            sim.set_ball(**bad)
+
+
+# ----------------------------------------------------------------------------------------------
+# the command line
+# ----------------------------------------------------------------------------------------------
+def test_run_resume_ends_where_one_unbroken_run_ends(tmp_path, capsys):
+    first, resumed, again, whole = (str(tmp_path / f"{n}.npz") for n in ("first", "resumed", "again", "whole"))
+    assert main(["run", "break_shot", "--t", "0.1", "--out", first]) == 0
+    assert main(["run", "--resume", first, "--t", "0.1", "--out", resumed]) == 0
+    assert "resumed at t = 0.1 s" in capsys.readouterr().out
+    assert main(["run", "--resume", resumed, "--steps", "200", "--out", again]) == 0  # a resumed run resumes too
+    assert main(["run", "break_shot", "--t", "0.3", "--out", whole]) == 0
+    with np.load(again) as a, np.load(whole) as b:
+        for name in ("x", "v", "w", "t", "status", "rest_time"):
+            np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+
+
+def test_run_resume_with_set_changes_the_continuation(tmp_path, capsys):
+    first, out = str(tmp_path / "first.npz"), str(tmp_path / "out.npz")
+    assert main(["run", "lab_turbulent", "--t", "1", "--out", first]) == 0
+    assert main(["run", "--resume", first, "--t", "1", "--set", "air.C_D=0", "--out", out]) == 0
+    sim = tg.Simulation.load(out)
+    assert sim.scene.air.C_D == 0.0 and sim.t == pytest.approx(2.0)
+    capsys.readouterr()
+    cases = (
+        (["--set", "launch.speed=5"], "key 'launch.speed' sets up the balls or the ground at t0"),
+        (["--set", "air.C_D=-1"], "key 'air.C_D' must be >= 0"),
+        (["lab_turbulent"], "--resume: takes the scene from"),
+    )
+    for extra, message in cases:
+        assert main(["run", "--resume", first, "--t", "1", *extra]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and message in err[0], err
+    assert main(["run", "--resume", str(tmp_path / "none.npz")]) == 2
+    assert "file not found" in capsys.readouterr().err
+    assert main(["run"]) == 2
+    assert "needs a SCENE" in capsys.readouterr().err
+
+
+def test_an_interrupted_run_saves_whole_steps_that_can_be_continued(tmp_path, monkeypatch, capsys):
+    # Ctrl-C arrives while the third chunk of steps runs in the kernel: those steps end first
+    # (t, step count), so the partial file holds the state of a run of that many steps, bit for bit
+    real, calls = collide.collision_step, []
+
+    def interrupted(*args):
+        calls.append(1)
+        if len(calls) == 3:
+            os.kill(os.getpid(), signal.SIGINT)
+        return real(*args)
+
+    monkeypatch.setattr(collide, "collision_step", interrupted)
+    out = tmp_path / "partial.npz"
+    assert main(["run", "break_shot", "--t", "10", "--out", str(out)]) == 130
+    assert "marked partial" in capsys.readouterr().err
+    monkeypatch.undo()
+    partial = tg.Simulation.load(out)
+    assert partial.step_count == 3 * 100  # three chunks of 0.05 s
+    whole = tg.Simulation.from_scene("break_shot")
+    whole.run(steps=partial.step_count)
+    assert_same_state(partial, whole)
+
+
+def test_a_signal_during_steps_waits_for_them_to_end(monkeypatch):
+    sim = tg.Simulation.from_scene("lab_vacuum")
+    real = kernels.advance
+
+    def interrupted(*args):
+        os.kill(os.getpid(), signal.SIGINT)  # arrives while the kernel runs
+        return real(*args)
+
+    monkeypatch.setattr(kernels, "advance", interrupted)
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt):
+        sim.step(10)
+    assert sim.step_count == 10 and sim.t == pytest.approx(10 * sim.dt)
+    assert signal.getsignal(signal.SIGINT) == before

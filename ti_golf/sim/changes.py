@@ -1,0 +1,102 @@
+"""Which scene keys a :class:`~ti_golf.sim.simulation.Simulation` can change, and when.
+
+A change between runs is one of:
+
+* *live*: the air, the contact, gravity, the time step, the integrator, sleeping, the ground
+  plane, collisions and the solver: the next step uses the new value, from the current state;
+* *at t0*: the keys that set up the balls or the ground (``launch.*``, ``ball.*``,
+  ``terrain.*``): they apply when the simulation is at t0 (it is set up again, as a new
+  simulation of the changed scene would be), and are refused later in a run;
+* *not read*: keys that no simulation reads (``description``, ``world.t_max``, ``sweep.*``,
+  ``game.*``): refused, as the scene loader refuses a key that would have no effect.
+
+Plain Python, no Taichi.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+from ti_golf.errors import ConfigError
+from ti_golf.scene.loader import parse_override
+
+SOURCE = "--set"
+"""The source that errors about changed keys name (as the scene loader names overrides)."""
+
+AT_T0 = ("launch", "ball", "terrain")
+"""Tables whose keys set up the balls or the ground at t0."""
+
+MOVES_T0_BALLS = ("world.ground_height",)
+"""Live keys that also place the balls at t0 (a launched ball rests on the ground): at t0 they set
+the simulation up again, as the keys of :data:`AT_T0` do."""
+
+NOT_READ = {
+    "description": "it is text for `ti-golf scenes`",
+    "world.t_max": "sweeps read it (`ti-golf sweep`, ti_golf.sweep)",
+    "sweep": "`ti-golf sweep` reads it",
+    "game": "`ti-golf play` reads it",
+}
+"""Keys (or whole tables) that no simulation reads, with who does."""
+
+
+def as_changes(changes: Mapping[str, Any] | Iterable[str] | str, value: Any) -> dict[str, Any]:
+    """``set``'s arguments as ``{dotted key: value}``: a key and a value, a mapping, or
+    ``KEY=VALUE`` texts (one, or several) as ``--set`` takes them."""
+    if isinstance(changes, str):
+        if value is not _UNSET:
+            return {changes: value}
+        return dict([parse_override(changes)])
+    if value is not _UNSET:
+        raise TypeError("set(key, value) takes a value only with a single key")
+    if isinstance(changes, Mapping):
+        return dict(changes)
+    return dict(parse_override(text) for text in changes)
+
+
+class _Unset:
+    def __repr__(self) -> str:
+        return "<unset>"
+
+
+_UNSET: Any = _Unset()
+"""``set``'s value when none is given (``None`` is a value)."""
+
+
+def table_of(key: str) -> str:
+    """The table of a dotted key (``"air"`` of ``"air.C_D"``; a top-level key is its own table)."""
+    return key.split(".", 1)[0]
+
+
+def at_t0(key: str) -> bool:
+    """Whether ``key`` sets up the balls or the ground at t0."""
+    return table_of(key) in AT_T0
+
+
+def refuse_unread(key: str) -> None:
+    """Raise :class:`ConfigError` for a key that no simulation reads."""
+    reader = NOT_READ.get(key, NOT_READ.get(table_of(key)))
+    if reader is not None:
+        raise ConfigError(SOURCE, key, f"has no effect on a simulation ({reader})")
+
+
+def refuse_after_t0(key: str, t: float) -> None:
+    """Raise :class:`ConfigError` for a key of :data:`AT_T0` changed at time ``t`` [s] after t0."""
+    if at_t0(key):
+        raise ConfigError(
+            SOURCE,
+            key,
+            f"sets up the balls or the ground at t0, and this run is at t = {t:.6g} s: start again from t0 "
+            "with it (Simulation.reset(changes) in Python; ti-golf run SCENE --set KEY=VALUE)",
+        )
+
+
+def refuse_for_given_balls(key: str, radius_given: bool, mass_given: bool) -> None:
+    """Raise :class:`ConfigError` for a ball key that balls given as arrays do not read."""
+    given = table_of(key) == "launch" or (key == "ball.radius" and radius_given) or (key == "ball.mass" and mass_given)
+    if given:
+        raise ConfigError(
+            SOURCE,
+            key,
+            "has no effect: this simulation's balls were given as arrays (edit them with x, v, w or set_ball)",
+        )

@@ -1,0 +1,195 @@
+"""A run saved to ``.npz`` and loaded again to continue bit for bit (``Simulation.save``/``load``).
+
+Beside the arrays a reader of the results wants (``x``, ``v``, ``w``, ``t``, ``status``, ``radius``,
+``mass``, the terrain and the recording), the file holds ``run``, a JSON text: the format, the
+scene as the document a TOML file holds (every change made by ``Simulation.set`` in it), the step
+count, the precision and backend, and the collision solver's numbers; and the arrays the next steps
+read: the sleeping timers (``rest_time``), the flight records (``landed``, ``apex``, ``t_land``,
+``land_x``, ``land_v``, ``launch_x``), the storage order of a reordered pile (``order``), the
+collision solver's lists and carried impulses (``solver.*``) and the balls at t0 as given to the
+constructor (``initial.*``). Per-ball arrays are by ball id.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import zipfile
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import taichi as ti
+
+from ti_golf.errors import ConfigError
+from ti_golf.files import atomic_path
+from ti_golf.physics.integrate import NOT_TRACKED
+from ti_golf.runtime import ensure_init, np_float, on_cpu
+from ti_golf.scene.document import scene_document
+from ti_golf.scene.loader import load_scene
+
+if TYPE_CHECKING:
+    from ti_golf.sim.simulation import Recording, Simulation
+
+FORMAT = 2
+"""The layout of a saved run. Files without ``run`` (format 1) hold the final state only, and
+cannot be continued."""
+
+STATE = ("x", "v", "w", "status", "rest_time")
+"""The state's per-ball arrays a saved run holds, by ball id."""
+
+FLIGHT = ("landed", "apex", "t_land", "land_x", "land_v")
+"""The flight record's arrays, saved while some ball is tracked."""
+
+INITIAL = ("x", "v", "w", "radius", "mass", "track")
+"""The fields of ``InitialBalls``, saved as ``initial.NAME`` when given."""
+
+
+def write_run(sim: Simulation, path: str | os.PathLike[str], recording: Recording | None, partial: bool) -> None:
+    """Write ``sim`` to ``path`` (``.npz`` added when missing) as the module says."""
+    state = sim.state
+    data: dict[str, Any] = {
+        "x": sim.x,
+        "v": sim.v,
+        "w": sim.w,
+        "t": np.float64(sim.t),
+        "status": sim.status,
+        "radius": sim.model.radius_np,
+        "mass": sim.model.mass_np,
+        "partial": np.bool_(partial),
+        "rest_time": state.read("rest_time"),
+    }
+    if sim.terrain is not None:
+        data.update(
+            terrain_heights=sim.terrain.heights,
+            terrain_origin=sim.terrain.origin,
+            terrain_spacing=sim.terrain.spacing,
+        )
+    if recording is not None and recording.t:
+        data.update(recording.arrays())
+    if state.tracking:
+        data.update({name: state.read(name) for name in FLIGHT})
+        data["launch_x"] = sim.launch_x
+    if state.order is not None:
+        data["order"] = state.order
+    solver_meta = None
+    if sim.solver is not None:
+        arrays, solver_meta = sim.solver.saved()
+        solver_meta["serial"], solver_meta["reorder"] = sim.solver.serial, sim.solver.reorder
+        data.update({f"solver.{name}": a for name, a in arrays.items()})
+    if sim.initial is not None:
+        for name in INITIAL:
+            value = getattr(sim.initial, name)
+            if value is not None:
+                data[f"initial.{name}"] = value
+    runtime = ensure_init()
+    meta = {
+        "format": FORMAT,
+        "scene": scene_document(sim.scene),
+        "scene_name": sim.scene.name,
+        "scene_path": sim.scene.path,
+        "steps": sim.state.steps,
+        "initial_kept": sim.initial_kept,
+        "tracking": state.tracking,
+        "precision": runtime.precision,
+        "arch": runtime.arch,
+        "solver": solver_meta,
+    }
+    data["run"] = np.array(json.dumps(meta))
+    target = Path(path)
+    if target.suffix != ".npz":
+        target = target.with_name(target.name + ".npz")  # as np.savez names it
+    with atomic_path(target) as tmp, open(tmp, "wb") as fh:
+        np.savez(fh, **data)
+
+
+def read_run(cls: type[Simulation], path: str | os.PathLike[str]) -> Simulation:
+    """A ``cls`` simulation continued from the run saved in ``path``."""
+    source = str(path)
+    data, meta = _read(source)
+    precision = ensure_init().precision
+    if meta["precision"] != precision:
+        raise ConfigError(
+            source,
+            None,
+            f"was saved in {meta['precision']} precision and this process runs in {precision}: "
+            f"continue it in {meta['precision']} (--precision {meta['precision']})",
+        )
+    try:
+        scene = load_scene(meta["scene_path"] or None, data=meta["scene"])
+    except ConfigError as exc:
+        raise ConfigError(f"{source} (its scene)", exc.key, exc.reason) from None
+    scene = dataclasses.replace(scene, name=meta["scene_name"], path=meta["scene_path"])
+    f = np_float()
+    tracking = bool(meta["tracking"])
+    x = data["x"]
+    track = data["landed"] != NOT_TRACKED if tracking else False
+    launch_x = data["launch_x"] if tracking else x
+    sim = cls.__new__(cls)
+    sim.initial = _initial(data)
+    sim.initial_kept = bool(meta["initial_kept"])
+    solver = meta["solver"]
+    flags = None
+    if solver is not None:
+        flags = {"serial": bool(solver["serial"]) and on_cpu(), "reorder": bool(solver["reorder"])}
+    sim._set_up(scene, launch_x, None, None, data["radius"], data["mass"], track, solver_flags=flags)
+    state, model = sim.state, sim.model
+    if "order" in data:  # the balls stored as the solver last sorted them, the model's per-ball arrays too
+        order = data["order"].astype(np.int32)
+        state.ids = ti.ndarray(ti.i32, state.n)
+        state.ids.from_numpy(order)
+        for name in model.per_ball():
+            values = getattr(model, name)
+            values.from_numpy(np.ascontiguousarray(values.to_numpy()[order]))
+    for name in STATE + (FLIGHT if tracking else ()):
+        values = data[name]
+        state.write(name, values.astype(f if values.dtype.kind == "f" else np.int32))
+    state.t = float(data["t"])
+    state.steps = int(meta["steps"])
+    if solver is not None and sim.solver is not None:
+        arrays = {name[len("solver.") :]: a for name, a in data.items() if name.startswith("solver.")}
+        sim.solver.restore(state, arrays, solver)
+        if bool(solver["serial"]) != sim.solver.serial:  # saved on a CPU, stepped in parallel now
+            sim.solver.invalidate()
+    return sim
+
+
+def _read(source: str) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """The arrays and the ``run`` description of a saved run, or a :class:`ConfigError` that says
+    why it cannot be continued."""
+    p = Path(source)
+    if not p.is_file():
+        raise ConfigError(source, None, "file not found" if not p.exists() else "is not a file")
+    try:
+        with np.load(p, allow_pickle=False) as npz:
+            data = {name: npz[name] for name in npz.files}
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
+        raise ConfigError(source, None, f"is not a run saved by ti-golf (an .npz file): {exc}") from None
+    if "run" not in data:
+        if "x" in data and "t" in data:
+            raise ConfigError(
+                source,
+                None,
+                "holds the final state only (saved before runs could be continued): run its scene again, "
+                "with --out, to get a run that can be continued",
+            )
+        raise ConfigError(source, None, "is not a run saved by ti-golf (no 'run' entry)")
+    try:
+        meta = json.loads(str(data["run"]))
+        fmt = meta["format"]
+    except (ValueError, KeyError, TypeError):
+        raise ConfigError(source, None, "is not a run saved by ti-golf (its 'run' entry is not readable)") from None
+    if fmt != FORMAT:
+        raise ConfigError(source, None, f"is a saved run of format {fmt}; this ti-golf reads format {FORMAT}")
+    return data, meta
+
+
+def _initial(data: dict[str, np.ndarray]) -> Any:
+    """The ``InitialBalls`` saved with the run, or ``None``."""
+    from ti_golf.sim.simulation import InitialBalls
+
+    if not any(f"initial.{name}" in data for name in INITIAL):
+        return None
+    values: dict[str, Any] = {name: data.get(f"initial.{name}") for name in INITIAL}
+    return InitialBalls(**values)

@@ -1,0 +1,41 @@
+"""Steps that Ctrl-C (SIGINT) or SIGTERM cannot cut in half.
+
+A step updates the state in several places (the kernels' arrays, then the time and the step
+count; a parallel step swaps the positions with the solver's scratch), and a signal arriving in
+between would leave a state that no step produced: a run saved after it could not be continued
+as the run that never stopped. :func:`whole_steps` holds the signals while steps run and delivers
+them, to the handlers that were there, once the steps are done.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+HELD = (signal.SIGINT, signal.SIGTERM)
+"""The signals held while steps run."""
+
+
+@contextmanager
+def whole_steps() -> Iterator[None]:
+    """Hold :data:`HELD` inside the block and raise each one that came, in order, when it ends
+    (with the handlers restored: Ctrl-C then raises ``KeyboardInterrupt`` after the last whole
+    step). Outside the main thread, where Python runs no signal handler, it holds nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    came: list[int] = []
+
+    def hold(signum: int, frame: object) -> None:
+        came.append(signum)
+
+    previous = {s: signal.signal(s, hold) for s in HELD}
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, signal.SIG_DFL if handler is None else handler)  # None: set outside Python
+        for signum in dict.fromkeys(came):
+            signal.raise_signal(signum)
