@@ -231,6 +231,18 @@ def test_a_change_that_leaves_a_key_unread_drops_it():
     assert sim.scene.air.model == "spin_ratio" and sim.scene.air.C_M == tg.load_scene(None, data={}).air.C_M
 
 
+def test_weather_and_a_density_over_it_survive_later_changes():
+    # the weather gives ρ and μ (the loader refuses ρ beside it): the scene keeps one source of each
+    scene = with_changes(tg.load_scene("tour_shot"), {"air.altitude": 1600.0})
+    weather = scene.air.rho, scene.air.viscosity
+    assert weather[0] < 1.1  # thinner air at 1,600 m (tests/test_weather.py has the figures)
+    again = with_changes(scene, {"air.C_omega": 0.04})
+    assert (again.air.rho, again.air.viscosity, again.air.altitude) == (*weather, 1600.0)
+    dense = with_changes(scene, {"air.rho": 1.3})  # a --set ρ over the weather wins, and stays
+    later = with_changes(dense, {"air.C_omega": 0.04})
+    assert (later.air.rho, later.air.viscosity) == (1.3, weather[1])
+
+
 def test_keys_that_set_up_the_balls_apply_at_t0_only():
     sim = tg.Simulation.from_scene("lab_vacuum")
     sim.set({"launch.speed": 30.0, "launch.angle_deg": 20.0})  # at t0: set up again

@@ -16,6 +16,7 @@ from typing import Any
 from ti_golf.scene.keys import Key
 from ti_golf.scene.loader import load_scene, parse_override
 from ti_golf.scene.schema import ARRAY_SCHEMA, SCHEMA, TOP_LEVEL, Scene
+from ti_golf.scene.weather import WEATHER_KEYS, air_from_weather
 
 OPTIONAL_TABLES = ("launch", "terrain", "hole")
 """Tables whose presence means something even when every key is left at its default."""
@@ -39,6 +40,8 @@ def scene_document(scene: Scene) -> dict[str, Any]:
         values = _table(table, keys, scene)
         if section == "world":
             values["ground"] = scene.world.ground
+        if section == "air":
+            _drop_weather_derived(values, table)
         if section == "terrain" and values.get("file"):
             values["file"] = os.path.abspath(values["file"])
         if values or section in OPTIONAL_TABLES:
@@ -48,6 +51,22 @@ def scene_document(scene: Scene) -> dict[str, Any]:
         if tables:
             doc[name] = [_table(t, keys, scene) for t in tables]
     return doc
+
+
+def _drop_weather_derived(values: dict[str, Any], air: Any) -> None:
+    """Keep only one source of ρ and μ in the ``[air]`` table ``values`` of the scene's ``air``, as
+    the loader refuses ρ or μ beside the weather: the weather keys when they give the scene's ρ
+    and μ, else (a ``--set`` ρ or μ over a file's weather) ρ and μ themselves."""
+    weather = {k: values[k] for k in WEATHER_KEYS if k in values}
+    if not weather:
+        return
+    if air_from_weather(**weather) == (air.rho, air.viscosity):
+        for name in ("rho", "viscosity"):
+            values.pop(name, None)
+    else:
+        for name in weather:
+            del values[name]
+        values["rho"], values["viscosity"] = air.rho, air.viscosity
 
 
 def with_changes(scene: Scene, changes: Mapping[str, Any] | Iterable[str]) -> Scene:
