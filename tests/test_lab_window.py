@@ -1,0 +1,90 @@
+"""``ti-golf lab``: bad input refused before a window opens, and the window itself off screen
+(a process of its own: one GGUI window per process) against a baseline picture."""
+
+from __future__ import annotations
+
+import background
+import pytest
+from test_render import compare_with_baseline, matches, read_png
+
+from ti_golf import cli
+from ti_golf.render import STATUS_COLORS
+from ti_golf.scene.schema import ROLLING
+
+
+# ----------------------------------------------------------------------------------------------
+# the command
+# ----------------------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["lab", "no_such_scene"], "no_such_scene: file not found"),
+        (["lab", "--set", "air.C_D=-1"], "--set: key 'air.C_D' must be >= 0"),
+        (["lab", "--out", "no/such/folder"], "--out: folder 'no/such/folder' does not exist"),
+        (["lab", "--speed", "-1"], "--speed: must be a number >= 0"),
+    ],
+)
+def test_lab_refuses_bad_input_before_opening_a_window(args, needle, capsys):
+    assert cli.main(args) == 2
+    assert needle in capsys.readouterr().err
+
+
+def test_lab_needs_a_display(capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert cli.main(["lab"]) == 2
+    assert "ti-golf lab: needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set)" in capsys.readouterr().err
+
+
+WINDOW_SCRIPT = """
+import os
+import sys
+from pathlib import Path
+import ti_golf as tg
+from ti_golf.render import ggui_available
+if not ggui_available():
+    sys.exit(77)
+tg.init()
+from ti_golf.lab.app import Lab
+from ti_golf.lab.window import LabWindow
+out = Path(sys.argv[1])
+os.chdir(out)  # the user's folder, which must get no imgui.ini
+lab = Lab("lab_magnus")
+window = LabWindow(lab, (960, 540), show_window=False, out_dir=out, rates=False)
+window.frame()
+lab.start()
+window.frame(max_steps=150)  # 1.5 s of the flight
+window.frame(max_steps=0)
+window.screenshot(out / "lab_window.png")
+window.ask("save")  # as S does
+window.frame(max_steps=0)
+print(lab.message)
+lab.load("break_shot")
+lab.start()
+for _ in range(4):
+    window.frame(max_steps=100)
+window.screenshot(out / "break_shot.png")
+print(lab.readout().lines()[1])
+window.close()
+"""
+
+
+def _window_run(workdir):
+    return background.python("-c", WINDOW_SCRIPT, str(workdir)), {}
+
+
+background.declare("lab-window", _window_run)
+
+
+@pytest.mark.background("lab-window")
+def test_the_lab_window_draws_a_flight_and_the_break_shot_and_saves(background_runs, tmp_path):
+    # one GGUI window per process: a process of its own, hidden (show_window=False)
+    done, workdir = background_runs.succeeded("lab-window", "GGUI needs Vulkan (apt-get install mesa-vulkan-drivers)")
+    compare_with_baseline(workdir / "lab_window.png", "lab_window.png", tmp_path)
+    saved = ["lab_magnus_001.npz"] + [f"lab_magnus_001_{k}.png" for k in ("trajectory", "speed", "spin", "screen")]
+    assert done.stdout.splitlines()[0] == f"saved {', '.join(saved)} in {workdir}"
+    assert read_png(workdir / "lab_magnus_001_screen.png").shape == (540, 960, 3)
+    assert done.stdout.splitlines()[1].startswith("16 balls: ")
+    img = read_png(workdir / "break_shot.png")
+    assert matches(img[:, 300:660], STATUS_COLORS[ROLLING]).sum() > 100  # the rack's balls, rolling
+    assert not (workdir / "imgui.ini").exists()
