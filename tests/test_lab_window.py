@@ -1,5 +1,6 @@
-"""``ti-golf lab``: bad input refused before a window opens, and the window itself off screen
-(a process of its own: one GGUI window per process) against a baseline picture."""
+"""``ti-golf lab``: bad input refused before a window opens, the window's keys and mouse without
+a window, and the window itself off screen (a process of its own: one GGUI window per process)
+against a baseline picture."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ import pytest
 from test_render import compare_with_baseline, matches, read_png
 
 from ti_golf import cli
+from ti_golf.lab.app import Lab
+from ti_golf.lab.controls import LEFT, PITCH_DEG, RIGHT, YAW_DEG, Controls
 from ti_golf.render import STATUS_COLORS
 from ti_golf.scene.schema import ROLLING
 
@@ -56,7 +59,7 @@ lab.start()
 window.frame(max_steps=150)  # 1.5 s of the flight
 window.frame(max_steps=0)
 window.screenshot(out / "lab_window.png")
-window.ask("save")  # as S does
+window.controls.key("s")
 window.frame(max_steps=0)
 print(lab.message)
 lab.load("break_shot")
@@ -88,3 +91,47 @@ def test_the_lab_window_draws_a_flight_and_the_break_shot_and_saves(background_r
     img = read_png(workdir / "break_shot.png")
     assert matches(img[:, 300:660], STATUS_COLORS[ROLLING]).sum() > 100  # the rack's balls, rolling
     assert not (workdir / "imgui.ini").exists()
+
+
+# ----------------------------------------------------------------------------------------------
+# the keys and the mouse, without a window
+# ----------------------------------------------------------------------------------------------
+def test_space_starts_stops_and_continues_r_resets_and_s_saves_in_the_next_frame():
+    c = Controls(Lab("lab_magnus"))
+    lab = c.lab
+    c.key(" ")
+    assert lab.running
+    lab.advance(max_steps=3)
+    c.key(" ")
+    assert not lab.running and lab.sim.step_count == 3
+    c.key(" ")  # continue, not start again
+    assert lab.running and lab.sim.step_count == 3
+    c.key("R")
+    assert not lab.running and lab.sim.step_count == 0
+    c.key("s")
+    assert lab.message == "saving ..." and c.take_pending() == "save" and c.take_pending() is None
+    c.key("f")
+    assert c.follow
+    c.key("c")
+    assert not c.follow and (c.yaw, c.pitch, c.zoom) == (YAW_DEG, PITCH_DEG, 1.0)
+
+
+def test_a_drag_orbits_the_camera_unless_it_began_on_a_panel():
+    c = Controls(Lab("lab_magnus"))
+    middle = LEFT[0] + LEFT[2] + 0.1
+    c.pointer(middle, 0.5, left=True, right=False)
+    c.pointer(middle + 0.1, 0.5 + 0.1, left=True, right=False)
+    assert c.yaw == pytest.approx(YAW_DEG + 18.0) and c.pitch == pytest.approx(PITCH_DEG + 9.0)
+    c.pointer(middle, 0.5, left=False, right=False)
+    on_panel = RIGHT[0] + 0.05
+    c.pointer(on_panel, 0.5, left=True, right=False)  # a slider being dragged
+    c.pointer(on_panel + 0.1, 0.9, left=True, right=False)
+    assert c.yaw == pytest.approx(YAW_DEG + 18.0) and c.pitch == pytest.approx(PITCH_DEG + 9.0)
+    c.pointer(on_panel, 0.5, left=False, right=False)
+    c.pointer(on_panel, 0.5, left=False, right=True)  # the right button orbits anywhere
+    c.pointer(on_panel, 0.5 + 2.0, left=False, right=True)
+    assert c.pitch == 89.0  # never over the top
+    c.zoom_in(10)
+    assert c.zoom == pytest.approx(1.03**-10)
+    view = c.view((800, 450))
+    assert view.size == (800, 450)

@@ -178,6 +178,7 @@ class Lab:
         self.scenes = bundled_scenes()
         """The scenes the lab offers: the bundled ones, and the scene file it was given."""
         self.sim: Simulation = None  # type: ignore[assignment]
+        self._params: tuple[Scene | None, list[Parameter]] = (None, [])
         self._open(load_scene(scene, overrides))
 
     # -- the scene --------------------------------------------------------------------------------
@@ -212,9 +213,12 @@ class Lab:
         self._pace = _Pace()
         self._new_recording()
 
-    def parameters(self) -> list[Parameter]:
-        """The scene's editable keys with unit, value, help and slider span (:mod:`.params`)."""
-        return parameters(self.scene)
+    def parameters(self, table: str | None = None) -> list[Parameter]:
+        """The scene's editable keys (of ``table`` only, when given) with unit, value, help and
+        slider span (:mod:`.params`); worked out once per change of the scene."""
+        if self._params[0] is not self.scene:
+            self._params = (self.scene, parameters(self.scene))
+        return [p for p in self._params[1] if table is None or p.table == table]
 
     def set(self, key: str, value: Any) -> str | None:
         """Change the scene key ``key`` (``"air.C_D"``) to ``value``, checked as the scene loader
@@ -371,8 +375,8 @@ class Lab:
         done, chunk = 0, 1
         while done < n:
             k = int(min(n - done, chunk))
-            if self.recording is not None:
-                k = min(k, self._record_every - self._since_sample)
+            if self.recording is not None:  # (a sample falls due after at most this many)
+                k = max(min(k, self._record_every - self._since_sample), 1)
             try:
                 self.sim.step(k)
             except SimulationError as exc:

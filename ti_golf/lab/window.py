@@ -16,7 +16,7 @@ checkboxes, and keys with a few choices get a button per choice.
 The camera orbits the scene: drag with the right mouse button (or with the left one outside the
 panels) to turn around it, Up and Down to zoom; it frames the balls and their trails unless it
 follows the selected ball (F). Keys: space starts, stops and continues, R resets to t0, S saves,
-C frames the scene again, Escape closes the window.
+C frames the scene again. The window's close button ends the lab.
 
 Taichi allows one GGUI window per process: the window is opened once and scenes are loaded into
 it until it is closed.
@@ -24,7 +24,6 @@ it until it is closed.
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import textwrap
 import time
@@ -36,7 +35,8 @@ import taichi as ti
 
 from ti_golf.errors import ConfigError
 from ti_golf.lab.app import Lab
-from ti_golf.lab.params import Parameter, panel_text, slider_value, table_parameters
+from ti_golf.lab.controls import LEFT, RIGHT, Controls
+from ti_golf.lab.params import Parameter, panel_text, slider_value
 from ti_golf.render import (
     BACKGROUND_COLOR,
     build_frame,
@@ -44,18 +44,8 @@ from ti_golf.render import (
     draw_scene,
     ggui_problem,
     non_cpu_arch,
-    orbit_view,
     write_png,
 )
-
-LEFT = (0.005, 0.01, 0.28, 0.98)
-"""The "Lab" panel: x, y, width, height as fractions of the window (y from the top)."""
-RIGHT = (0.715, 0.01, 0.28, 0.98)
-"""The "Parameters" panel."""
-
-YAW_DEG, PITCH_DEG = 116.6, 28.2
-"""The camera's first azimuth and elevation [deg]: behind (−x), above and on the +z side, as the
-``iso`` preset of ``ti-golf render``."""
 
 BALL_SPANS = {"x": (-5.0, 5.0), "v": (-100.0, 100.0), "w": (-1000.0, 1000.0)}
 """Slider spans of the selected ball's position [m], velocity [m/s] and spin [rad/s] (widened to
@@ -115,103 +105,37 @@ class LabWindow:
         self.canvas = self.window.get_canvas()
         self.camera = ti.ui.Camera()
         self.gui = self.window.get_gui()
-        self.yaw, self.pitch, self.zoom = YAW_DEG, PITCH_DEG, 1.0
-        self.follow = False
-        """Whether the camera follows the selected ball (else it frames the whole scene)."""
+        self.controls = Controls(lab)
+        """The keys, the mouse and the camera."""
         self.table = "air"
         """The table the "Parameters" panel shows."""
         self.show_help = True
         self.edit_ball = False
-        self.scene_index = self._scene_index()
-        self._pending: str | None = None  # "load" or "save": done in the next frame, after "... " is shown
-        self._drag: str | None = None
-        self._cursor: tuple[float, float] | None = None
         self._last = time.perf_counter()
         self._image: np.ndarray | None = None
         self._draw: Any = None
 
-    # -- the camera ----------------------------------------------------------------------------------
-    def view(self) -> Any:
-        """The :class:`~ti_golf.render.View` of the next frame."""
-        lab = self.lab
-        target = lab.sim.x[lab.selected] if self.follow else None
-        w, h = self.size
-        between = (RIGHT[0] - LEFT[0] - LEFT[2]) * w  # the view is fitted to the part between the panels
-        view = orbit_view(
-            lab.sim, self.yaw, self.pitch, self.zoom, (max(int(between), 16), h), 45.0, lab.trails(), target
-        )
-        return dataclasses.replace(view, size=self.size)
-
-    def frame_scene(self) -> None:
-        """Look at the whole scene again from the first angle (C)."""
-        self.yaw, self.pitch, self.zoom, self.follow = YAW_DEG, PITCH_DEG, 1.0, False
-
-    def orbit(self, dx: float, dy: float) -> None:
-        """Turn the camera around its look-at point by a cursor move (dx, dy) in window fractions."""
-        self.yaw += 180.0 * dx
-        self.pitch = float(np.clip(self.pitch - 90.0 * dy, -89.0, 89.0))
-
-    def _mouse(self) -> None:
-        """Orbit with a right drag anywhere or a left drag that began outside the panels; zoom
-        with Up and Down."""
+    # -- the keys and the mouse -------------------------------------------------------------------
+    def _input(self) -> None:
+        """Hand the keys pressed and the cursor to :attr:`controls`; Up and Down zoom."""
         w = self.window
+        for event in w.get_events(ti.ui.PRESS):
+            self.controls.key(event.key)
         x, y = w.get_cursor_pos()
-        y = 1.0 - y  # (GGUI's cursor y goes up; the panels' y goes down)
-        left, right = w.is_pressed(ti.ui.LMB), w.is_pressed(ti.ui.RMB)
-        if not (left or right):
-            self._drag = None
-        elif self._drag is None:
-            in_panel = any(p[0] <= x <= p[0] + p[2] and p[1] <= y <= p[1] + p[3] for p in (LEFT, RIGHT))
-            self._drag = "orbit" if right or not in_panel else "panel"
-        if self._drag == "orbit" and self._cursor is not None:
-            self.orbit(x - self._cursor[0], y - self._cursor[1])
-        self._cursor = (x, y)
+        self.controls.pointer(x, 1.0 - y, w.is_pressed(ti.ui.LMB), w.is_pressed(ti.ui.RMB))  # (GGUI's y goes up)
         if w.is_pressed(ti.ui.UP):
-            self.zoom = max(self.zoom / 1.03, 0.02)
+            self.controls.zoom_in()
         if w.is_pressed(ti.ui.DOWN):
-            self.zoom = min(self.zoom * 1.03, 50.0)
-
-    def _keys(self) -> None:
-        """Space, R, S, F, C and Escape."""
-        for event in self.window.get_events(ti.ui.PRESS):
-            key = event.key
-            if key == ti.ui.ESCAPE:
-                self.window.running = False
-            elif key == ti.ui.SPACE:
-                self.lab.toggle()
-            elif key in ("r", "R"):
-                self.lab.reset()
-            elif key in ("s", "S"):
-                self.ask("save")
-            elif key in ("f", "F"):
-                self.follow = not self.follow
-            elif key in ("c", "C"):
-                self.frame_scene()
+            self.controls.zoom_out()
 
     # -- the panels ----------------------------------------------------------------------------------
-    def _scene_index(self) -> int:
-        lab = self.lab
-        for i, name in enumerate(lab.scenes):
-            if name in (lab.scene.name, lab.scene.path):
-                return i
-        return 0
-
-    def ask(self, what: str) -> None:
-        """Do ``what``, ``"load"`` (the scene picked) or ``"save"``, in the next frame, after this
-        one has said that it is under way (loading compiles kernels; saving draws plots)."""
-        self._pending = what
-        name = Path(self.lab.scenes[self.scene_index]).stem
-        self.lab.message, self.lab.refused = (f"loading {name} ..." if what == "load" else "saving ..."), False
-
     def _lab_panel(self) -> None:
         lab = self.lab
         with self.gui.sub_window("Lab", *LEFT) as g:
-            names = lab.scenes
-            self.scene_index = g.slider_int(
-                f"{Path(names[self.scene_index]).stem}###scene", self.scene_index, 0, len(names) - 1
-            )
+            c, names = self.controls, lab.scenes
+            c.scene_index = g.slider_int(f"{Path(names[c.scene_index]).stem}###scene", c.scene_index, 0, len(names) - 1)
             if g.button("Load the scene"):
-                self.ask("load")
+                c.ask("load")
             for line in textwrap.wrap(panel_text(lab.scene.description), self._chars(LEFT))[:3]:
                 g.text(line, HELP_COLOR)
             if g.button("Start (from t0)"):
@@ -225,7 +149,7 @@ class LabWindow:
             if g.button("Reset t0"):
                 lab.reset()
             if g.button("Save"):
-                self.ask("save")
+                c.ask("save")
             real_time = g.checkbox("Real time (else as fast as it goes)", lab.speed is not None)
             if real_time and lab.speed is None:
                 lab.speed = 1.0
@@ -238,7 +162,7 @@ class LabWindow:
                 for part in textwrap.wrap(panel_text(line), self._chars(LEFT), subsequent_indent="  "):
                     g.text(part)
             self._ball_editor(g)
-            self.follow = g.checkbox("Follow the selected ball (F)", self.follow)
+            c.follow = g.checkbox("Follow the selected ball (F)", c.follow)
             for line in KEYS_HELP:
                 g.text(line, HELP_COLOR)
             for line in textwrap.wrap(panel_text(lab.message), self._chars(LEFT))[:6]:
@@ -265,16 +189,14 @@ class LabWindow:
     def _parameter_panel(self) -> None:
         lab = self.lab
         with self.gui.sub_window("Parameters", *RIGHT) as g:
-            tables = [
-                t for t in ("air", "ball", "launch", "world", "contact", "terrain") if table_parameters(lab.scene, t)
-            ]
+            tables = list(dict.fromkeys(p.table for p in lab.parameters()))
             if self.table not in tables:
                 self.table = tables[0]
             for t in tables:
                 if g.button(f"[{t}]" + (" <" if t == self.table else "") + f"###table-{t}"):
                     self.table = t
             self.show_help = g.checkbox("Show the help", self.show_help)
-            params = table_parameters(lab.scene, self.table)
+            params = lab.parameters(self.table)
             if params and params[0].at_t0:
                 g.text("These keys set up the balls or the ground:", HELP_COLOR)
                 g.text("they change at t0 (Reset t0 first).", HELP_COLOR)
@@ -335,14 +257,13 @@ class LabWindow:
         steps for the time since the last frame (or exactly ``max_steps``), the 3-D view."""
         now = time.perf_counter()
         wall_dt, self._last = min(now - self._last, 0.1), now
-        pending, self._pending = self._pending, None
+        pending = self.controls.take_pending()
         if pending == "load":
-            self.lab.load(self.lab.scenes[self.scene_index])
-            self.scene_index = self._scene_index()
-            self.frame_scene()
+            self.lab.load(self.lab.scenes[self.controls.scene_index])
+            self.controls.scene_index = self.controls.current_scene()
+            self.controls.frame_scene()
         if self.shown:  # (a hidden window has no keys and no cursor)
-            self._keys()
-            self._mouse()
+            self._input()
         self._lab_panel()
         self._parameter_panel()
         self.lab.advance(wall_dt, max_steps=max_steps)
@@ -352,7 +273,7 @@ class LabWindow:
 
     def _draw_view(self) -> None:
         lab = self.lab
-        frame = build_frame(lab.sim, self.view(), "status", lab.trails(), 3.0, None)
+        frame = build_frame(lab.sim, self.controls.view(self.size), "status", lab.trails(), 3.0, None)
         draw = draw_scene(frame, self.scene, self.camera)
         self.canvas.set_background_color(BACKGROUND_COLOR)
         self.canvas.scene(self.scene)
@@ -368,12 +289,11 @@ class LabWindow:
         write_png(self._image, str(path))
 
     def run(self) -> None:
-        """Show the window until it is closed or Escape is pressed, then close it."""
+        """Show the window until it is closed, then close it."""
         try:
             while self.window.running:
                 self.frame()
-                if self.window.running:
-                    self.window.show()
+                self.window.show()
         finally:
             self.close()
 
