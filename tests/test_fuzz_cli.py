@@ -73,8 +73,9 @@ OPTIONS = {
     "bench pit": ["--n", "--t"],
     "bench sweep": ["--n", "--dt", "--repeats"],
     "bench render": ["--n", "--frames"],
+    "lab": ["--out", "--speed", "--size", "--set"],
 }
-SCENES = {"run": "break_shot", "sweep": "lab_vacuum", "render": "break_shot"}
+SCENES = {"run": "break_shot", "sweep": "lab_vacuum", "render": "break_shot", "lab": "lab_magnus"}
 
 
 def short_run(self, t=None, steps=None, until=None, record_every=0, progress=None, every=0, on_every=None):
@@ -113,6 +114,9 @@ def run_cli(argv: list[str]) -> tuple[int, str]:
         stack.enter_context(mock.patch("ti_golf.cli.sweep.sweep", short_sweep))
         stack.enter_context(mock.patch("ti_golf.cli.run.render", fake_render))
         stack.enter_context(mock.patch("ti_golf.cli.render.render", lambda *a, **k: "ggui"))
+        stack.enter_context(mock.patch("ti_golf.cli.lab.check_display", lambda: None))  # no window opens:
+        stack.enter_context(mock.patch("ti_golf.cli.lab.LabWindow.run", lambda self: None))  # it closes at once
+        stack.enter_context(mock.patch("ti_golf.cli.lab.LabWindow.__init__", lambda self, *a, **k: None))
         for name in ("bench_collide", "bench_pit", "bench_sweep", "bench_render"):
             stack.enter_context(mock.patch(f"ti_golf.cli.bench.{name}", lambda **k: {"benchmark": "fuzz"}))
         try:

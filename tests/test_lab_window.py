@@ -25,6 +25,9 @@ from ti_golf.scene.schema import ROLLING
         (["lab", "--set", "air.C_D=-1"], "--set: key 'air.C_D' must be >= 0"),
         (["lab", "--out", "no/such/folder"], "--out: folder 'no/such/folder' does not exist"),
         (["lab", "--speed", "-1"], "--speed: must be a number >= 0"),
+        (["lab", "--speed", "nan"], "--speed: must be a number >= 0"),
+        (["lab", "--out", ""], "--out: needs a folder name (got an empty path)"),
+        (["lab", "--out", "/proc"], "--out: cannot write '/proc/lab.npz'"),
     ],
 )
 def test_lab_refuses_bad_input_before_opening_a_window(args, needle, capsys):

@@ -49,6 +49,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def cmd_lab(args: argparse.Namespace) -> int:
     """Open the lab on ``args.scene`` until its window is closed; 0 then."""
     out = Path(args.out)
+    if not args.out.strip():
+        raise ConfigError("--out", None, "needs a folder name (got an empty path)")
     if not out.is_dir():
         raise ConfigError("--out", None, f"folder {args.out!r} does not exist (Save writes several files into it)")
     check_writable(str(out / "lab.npz"), "--out")
