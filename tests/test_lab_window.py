@@ -65,8 +65,12 @@ window.screenshot(out / "lab_window.png")
 window.controls.key("s")
 window.frame(max_steps=0)
 print(lab.message)
+for table in ("ball", "launch", "world", "contact"):  # every editor draws
+    window.table = table
+    window.frame(max_steps=0)
 lab.load("break_shot")
 lab.start()
+window.edit_ball = True
 for _ in range(4):
     window.frame(max_steps=100)
 window.screenshot(out / "break_shot.png")

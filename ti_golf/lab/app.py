@@ -85,7 +85,8 @@ class Readout:
         ball: the selected ball's id; ``x``, ``v``, ``w``: its position [m], velocity [m/s] and
             spin [rad/s], each (3,).
         running: whether the run goes on in the next frames; ``t_stop``: the time [s] it stops at.
-        steps_per_s: time steps per second of wall-clock time in the last frames (0: stopped).
+        steps_per_s: time steps per second of wall-clock time over the last frames (of the
+            time spent stepping, when no frame times are given; 0: stopped).
         message: the last thing the lab has to say (a refused value, a saved file ...).
     """
 
@@ -132,13 +133,14 @@ class Readout:
             f"({self.spin * 30.0 / math.pi:.0f} rpm), height {self.height:.3f} m",
         ]
         if rates and self.running:
-            out.append(f"{self.steps_per_s:,.0f} steps/s = {self.steps_per_s * self.dt:.2f} s simulated per second")
+            out.append(f"{self.steps_per_s:,.0f} steps/s: {self.steps_per_s * self.dt:.2f} s simulated per second")
         return out
 
 
 @dataclass
 class _Pace:
-    """Wall-clock pacing: steps owed to real time, and the measured stepping rate."""
+    """Wall-clock pacing: simulated time owed to real time [s], and the steps per second over
+    the last frames."""
 
     owed_s: float = 0.0
     rate: float = 0.0
@@ -327,7 +329,7 @@ class Lab:
     def _go(self, what: str) -> None:
         self.running = True
         self.finished = False
-        self._pace.owed_s = 0.0
+        self._pace = _Pace()
         self._begin()
         self._say(f"{what} from t = {self.sim.t:.4f} s")
 
@@ -360,7 +362,7 @@ class Lab:
         budget = math.inf if max_steps is not None else budget_s
         start = time.perf_counter()
         done = self._steps(want, budget) if want > 0 else 0
-        self._pace.note(time.perf_counter() - start, done)
+        self._pace.note(time.perf_counter() - start if wall_dt is None else wall_dt, done)
         if max_steps is None and self.speed is not None and wall_dt is not None:
             self._pace.owed_s = 0.0 if done < want else self._pace.owed_s - done * dt  # (too slow: no catching up)
         if self.running and self.sim.t >= self.t_stop - 0.5 * dt:
