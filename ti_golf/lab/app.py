@@ -204,8 +204,7 @@ class Lab:
         return None
 
     def _open(self, scene: Scene) -> None:
-        self.sim = None  # type: ignore[assignment]  # (the old simulation's arrays go first)
-        self.sim = Simulation(scene)
+        self.sim = Simulation(scene)  # (made first: when it cannot be, the lab keeps its scene)
         if scene.path and Path(scene.path).resolve().parent != scenes_dir().resolve() and scene.path not in self.scenes:
             self.scenes.append(scene.path)  # a scene file of the user's, offered beside the bundled ones
         self.selected = 0
