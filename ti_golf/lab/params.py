@@ -164,7 +164,9 @@ def format_value(value: Any) -> str:
         return f"{value:.6g}"
     if isinstance(value, (tuple, list)):
         return "[" + ", ".join(format_value(v) for v in value) + "]"
-    return "(unset)" if value is None else str(value)
+    if value is None:
+        return "(unset)"
+    return str(value) if value != "" else '""'
 
 
 def parameters(scene: Scene) -> list[Parameter]:
