@@ -76,6 +76,7 @@ OPTIONS = {
     "bench pit": ["--n", "--t", "--set"],
     "bench sweep": ["--n", "--dt", "--repeats"],
     "bench render": ["--n", "--frames"],
+    "lab": ["--out", "--speed", "--size", "--set"],
 }
 SCENES = {
     "run": "break_shot",
@@ -83,6 +84,7 @@ SCENES = {
     "render": "break_shot",
     "shot": "tour_shot",
     "dispersion": "tour_shot",
+    "lab": "lab_magnus",
 }
 
 
@@ -127,6 +129,9 @@ def run_cli(argv: list[str]) -> tuple[int, str]:
         stack.enter_context(mock.patch("ti_golf.cli.dispersion.dispersion", short_dispersion))
         stack.enter_context(mock.patch("ti_golf.cli.run.render", fake_render))
         stack.enter_context(mock.patch("ti_golf.cli.render.render", lambda *a, **k: "ggui"))
+        stack.enter_context(mock.patch("ti_golf.cli.lab.check_display", lambda: None))  # no window opens:
+        stack.enter_context(mock.patch("ti_golf.cli.lab.LabWindow.run", lambda self: None))  # it closes at once
+        stack.enter_context(mock.patch("ti_golf.cli.lab.LabWindow.__init__", lambda self, *a, **k: None))
         for name in ("bench_collide", "bench_pit", "bench_sweep", "bench_render"):
             stack.enter_context(mock.patch(f"ti_golf.cli.bench.{name}", lambda **k: {"benchmark": "fuzz"}))
         try:

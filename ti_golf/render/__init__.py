@@ -5,7 +5,7 @@
 package starts no Taichi runtime.
 """
 
-from ti_golf.render.camera import View, ball_colors, camera_view
+from ti_golf.render.camera import View, ball_colors, camera_view, orbit_view
 from ti_golf.render.frame import build_frame
 from ti_golf.render.ggui import (
     destroy_window,
@@ -60,6 +60,7 @@ __all__ = [
     "ggui_available",
     "ggui_problem",
     "non_cpu_arch",
+    "orbit_view",
     "render",
     "write_png",
 ]

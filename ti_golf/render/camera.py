@@ -266,6 +266,41 @@ def camera_view(
     )
 
 
+def orbit_view(
+    sim: "Simulation",
+    yaw_deg: float,
+    pitch_deg: float,
+    zoom: float = 1.0,
+    size: tuple[int, int] = (1280, 720),
+    fov: float = 45.0,
+    trails: Any = None,
+    target: Sequence[float] | None = None,
+) -> View:
+    """A camera on a sphere around the scene: at azimuth ``yaw_deg`` (from +x toward +z) and
+    elevation ``pitch_deg`` above the horizontal, seen from the look-at point. Without ``target``
+    it looks at the middle of the balls, trails and ground under them from the distance that
+    shows all of them (as the presets do) times ``zoom``; with ``target`` (3,) [m] it looks at
+    that point from ``zoom`` × 60 ball radii (as ``follow`` does)."""
+    size = _check_size(size)
+    yaw, pitch = math.radians(yaw_deg), math.radians(pitch_deg)
+    toward_camera = np.array([math.cos(pitch) * math.cos(yaw), math.sin(pitch), math.cos(pitch) * math.sin(yaw)])
+    forward = -toward_camera
+    up = np.array([0.0, 1.0, 0.0])
+    lo, hi = _bounds(sim, _trail_array(trails, sim.n))
+    if target is None:
+        fitted = _fit(lo, hi, forward, up, size, fov)
+        center = np.asarray(fitted.lookat)
+        d = zoom * float(np.linalg.norm(np.subtract(fitted.position, center)))
+        half_diag = float(np.linalg.norm(hi - lo)) / 2.0
+        z_near = max(1e-4 * d, 0.5 * (d - half_diag), 1e-3 * float(np.max(sim.model.radius_np)))
+        z_far = 4.0 * (d + half_diag) + 10.0 * half_diag
+    else:
+        center = np.asarray(target, float)
+        d = zoom * 60.0 * float(np.max(sim.model.radius_np))
+        z_near, z_far = 0.05 * d, _FOLLOW_REACH * d + 4.0 * float(np.linalg.norm(hi - lo))
+    return View(tuple(center + d * toward_camera), tuple(center), tuple(up), float(fov), size, z_near, z_far)
+
+
 # -- colours --------------------------------------------------------------------------------------
 def ball_colors(
     sim: "Simulation", color_by: str | np.ndarray = "status", value_range: tuple[float, float] | None = None

@@ -246,3 +246,49 @@ def plot_spin_family(
     ax2.grid(alpha=0.3)
     fig.tight_layout()
     save_figure(fig, path, dpi=110)
+
+
+def plot_trajectory(x: np.ndarray, path: str | os.PathLike[str], title: str = "", max_balls: int = 20) -> None:
+    """The balls' paths ``x`` (S, N, 3) [m] seen from the side (x, y), or from above (x, z) when
+    they stay near the ground; at most ``max_balls`` of them."""
+    fig = Figure(figsize=(8, 4.5))
+    ax = fig.subplots()
+    shown = x[:, :max_balls]
+    spread = np.ptp(shown.reshape(-1, 3), axis=0)
+    top = spread[1] < 0.05 * max(spread[0], spread[2], 1e-12)  # everything on the ground: the top view
+    for i in range(shown.shape[1]):
+        ax.plot(shown[:, i, 0], shown[:, i, 2] if top else shown[:, i, 1], lw=1.0)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("z [m] (top view)" if top else "y [m]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(alpha=0.3)
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    save_figure(fig, path, dpi=120)
+
+
+def plot_speed(
+    t: np.ndarray, v: np.ndarray, path: str | os.PathLike[str], title: str = "", max_balls: int = 20
+) -> None:
+    """Speed |v| [m/s] against time ``t`` (S,) [s] of velocities ``v`` (S, N, 3), at most ``max_balls``."""
+    _time_series(t, np.linalg.norm(v[:, :max_balls], axis=2), "|v| [m/s]", path, title)
+
+
+def plot_spin(t: np.ndarray, w: np.ndarray, path: str | os.PathLike[str], title: str = "", max_balls: int = 20) -> None:
+    """Spin |ω| [rad/s] against time ``t`` (S,) [s] of angular velocities ``w`` (S, N, 3), at most
+    ``max_balls`` (as the report's Figure 3.2-3, lower panel)."""
+    _time_series(t, np.linalg.norm(w[:, :max_balls], axis=2), "|ω| [rad/s]", path, title)
+
+
+def _time_series(t: np.ndarray, values: np.ndarray, ylabel: str, path: str | os.PathLike[str], title: str) -> None:
+    """One line per ball of ``values`` (S, N) against ``t`` (S,) [s]."""
+    fig = Figure(figsize=(8, 3.5))
+    ax = fig.subplots()
+    for i in range(values.shape[1]):
+        ax.plot(t, values[:, i], lw=1.0)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    save_figure(fig, path, dpi=120)

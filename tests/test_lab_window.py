@@ -1,0 +1,144 @@
+"""``ti-golf lab``: bad input refused before a window opens, the window's keys and mouse without
+a window, and the window itself off screen (a process of its own: one GGUI window per process)
+against a baseline picture."""
+
+from __future__ import annotations
+
+import background
+import pytest
+from test_render import compare_with_baseline, matches, read_png
+
+from ti_golf import cli
+from ti_golf.lab.app import Lab
+from ti_golf.lab.controls import LEFT, PITCH_DEG, RIGHT, YAW_DEG, Controls
+from ti_golf.render import STATUS_COLORS
+from ti_golf.scene.schema import ROLLING
+
+
+# ----------------------------------------------------------------------------------------------
+# the command
+# ----------------------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["lab", "no_such_scene"], "no_such_scene: file not found"),
+        (["lab", "--set", "air.C_D=-1"], "--set: key 'air.C_D' must be >= 0"),
+        (["lab", "--out", "no/such/folder"], "--out: folder 'no/such/folder' does not exist"),
+        (["lab", "--speed", "-1"], "--speed: must be a number >= 0"),
+        (["lab", "--speed", "nan"], "--speed: must be a number >= 0"),
+        (["lab", "--out", ""], "--out: needs a folder name (got an empty path)"),
+        (["lab", "--out", "/proc"], "--out: cannot write '/proc/lab.npz'"),
+    ],
+)
+def test_lab_refuses_bad_input_before_opening_a_window(args, needle, capsys):
+    assert cli.main(args) == 2
+    assert needle in capsys.readouterr().err
+
+
+def test_lab_needs_a_display(capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert cli.main(["lab"]) == 2
+    assert "ti-golf lab: needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set)" in capsys.readouterr().err
+
+
+WINDOW_SCRIPT = """
+import os
+import sys
+from pathlib import Path
+import ti_golf as tg
+from ti_golf.render import ggui_available
+if not ggui_available():
+    sys.exit(77)
+tg.init()
+from ti_golf.lab.app import Lab
+from ti_golf.lab.window import LabWindow
+out = Path(sys.argv[1])
+os.chdir(out)  # the user's folder, which must get no imgui.ini
+lab = Lab("lab_magnus")
+window = LabWindow(lab, (960, 540), show_window=False, out_dir=out, rates=False)
+window.frame()
+lab.start()
+window.frame(max_steps=150)  # 1.5 s of the flight
+window.frame(max_steps=0)
+window.screenshot(out / "lab_window.png")
+window.controls.key("s")
+window.frame(max_steps=0)
+print(lab.message)
+for table in ("ball", "launch", "world", "contact"):  # every editor draws
+    window.table = table
+    window.frame(max_steps=0)
+lab.load("break_shot")
+lab.start()
+window.edit_ball = True
+for _ in range(4):
+    window.frame(max_steps=100)
+window.screenshot(out / "break_shot.png")
+print(lab.readout().lines()[1])
+window.close()
+"""
+
+
+def _window_run(workdir):
+    return background.python("-c", WINDOW_SCRIPT, str(workdir)), {}
+
+
+background.declare("lab-window", _window_run)
+
+
+@pytest.mark.background("lab-window")
+def test_the_lab_window_draws_a_flight_and_the_break_shot_and_saves(background_runs, tmp_path):
+    # one GGUI window per process: a process of its own, hidden (show_window=False)
+    done, workdir = background_runs.succeeded("lab-window", "GGUI needs Vulkan (apt-get install mesa-vulkan-drivers)")
+    compare_with_baseline(workdir / "lab_window.png", "lab_window.png", tmp_path)
+    saved = ["lab_magnus_001.npz"] + [f"lab_magnus_001_{k}.png" for k in ("trajectory", "speed", "spin", "screen")]
+    assert done.stdout.splitlines()[0] == f"saved {', '.join(saved)} in {workdir}"
+    assert read_png(workdir / "lab_magnus_001_screen.png").shape == (540, 960, 3)
+    assert done.stdout.splitlines()[1].startswith("16 balls: ")
+    img = read_png(workdir / "break_shot.png")
+    assert matches(img[:, 300:660], STATUS_COLORS[ROLLING]).sum() > 100  # the rack's balls, rolling
+    assert not (workdir / "imgui.ini").exists()
+
+
+# ----------------------------------------------------------------------------------------------
+# the keys and the mouse, without a window
+# ----------------------------------------------------------------------------------------------
+def test_space_starts_stops_and_continues_r_resets_and_s_saves_in_the_next_frame():
+    c = Controls(Lab("lab_magnus"))
+    lab = c.lab
+    c.key(" ")
+    assert lab.running
+    lab.advance(max_steps=3)
+    c.key(" ")
+    assert not lab.running and lab.sim.step_count == 3
+    c.key(" ")  # continue, not start again
+    assert lab.running and lab.sim.step_count == 3
+    c.key("R")
+    assert not lab.running and lab.sim.step_count == 0
+    c.key("s")
+    assert lab.message == "saving ..." and c.take_pending() == "save" and c.take_pending() is None
+    c.key("f")
+    assert c.follow
+    c.key("c")
+    assert not c.follow and (c.yaw, c.pitch, c.zoom) == (YAW_DEG, PITCH_DEG, 1.0)
+
+
+def test_a_drag_orbits_the_camera_unless_it_began_on_a_panel():
+    c = Controls(Lab("lab_magnus"))
+    middle = LEFT[0] + LEFT[2] + 0.1
+    c.pointer(middle, 0.5, left=True, right=False)
+    c.pointer(middle + 0.1, 0.5 + 0.1, left=True, right=False)
+    assert c.yaw == pytest.approx(YAW_DEG + 18.0) and c.pitch == pytest.approx(PITCH_DEG + 9.0)
+    c.pointer(middle, 0.5, left=False, right=False)
+    on_panel = RIGHT[0] + 0.05
+    c.pointer(on_panel, 0.5, left=True, right=False)  # a slider being dragged
+    c.pointer(on_panel + 0.1, 0.9, left=True, right=False)
+    assert c.yaw == pytest.approx(YAW_DEG + 18.0) and c.pitch == pytest.approx(PITCH_DEG + 9.0)
+    c.pointer(on_panel, 0.5, left=False, right=False)
+    c.pointer(on_panel, 0.5, left=False, right=True)  # the right button orbits anywhere
+    c.pointer(on_panel, 0.5 + 2.0, left=False, right=True)
+    assert c.pitch == 89.0  # never over the top
+    c.zoom_in(10)
+    assert c.zoom == pytest.approx(1.03**-10)
+    view = c.view((800, 450))
+    assert view.size == (800, 450)

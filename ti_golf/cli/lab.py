@@ -1,0 +1,66 @@
+"""``ti-golf lab [SCENE]``: the lab application in a window (report §2.4, "lab3"; see
+:mod:`ti_golf.lab.window`): pick a scene, change its parameters, Start, Stop, Continue, Step,
+Reset t0, and Save the run, its plots and a screenshot."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from ti_golf.cli._common import check_writable, parse_size, runtime_options, scene_options
+from ti_golf.errors import ConfigError
+from ti_golf.lab.app import DEFAULT_SCENE, Lab
+from ti_golf.lab.window import LabWindow, check_display
+from ti_golf.scene.loader import load_scene
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add the ``lab`` subcommand to ``ti-golf``'s subparsers; returns its parser."""
+    p = sub.add_parser(
+        "lab",
+        help="the lab in a window: pick a scene, change its parameters, start, stop, continue, reset t0, save",
+    )
+    scene_options(
+        p,
+        default=DEFAULT_SCENE,
+        scene_help=f"the scene to open: a scene file or a bundled scene's name (default {DEFAULT_SCENE}); "
+        "the window offers every bundled scene too",
+        example="air.C_D=0.25",
+    )
+    p.add_argument(
+        "--out",
+        default=".",
+        metavar="FOLDER",
+        help="where Save (S) writes SCENE_NNN.npz, its trajectory, speed and spin plots and a screenshot "
+        "(default: the current folder)",
+    )
+    p.add_argument(
+        "--speed",
+        type=float,
+        default=1.0,
+        help="simulated seconds per second of a running simulation (default 1: real time; 0: as fast as it goes)",
+    )
+    p.add_argument("--size", type=parse_size, default=(1280, 720), help="window size WIDTHxHEIGHT (default 1280x720)")
+    runtime_options(p)
+    return p
+
+
+def cmd_lab(args: argparse.Namespace) -> int:
+    """Open the lab on ``args.scene`` until its window is closed; 0 then."""
+    out = Path(args.out)
+    if not args.out.strip():
+        raise ConfigError("--out", None, "needs a folder name (got an empty path)")
+    if not out.is_dir():
+        raise ConfigError("--out", None, f"folder {args.out!r} does not exist (Save writes several files into it)")
+    check_writable(str(out / "lab.npz"), "--out")
+    if not (math.isfinite(args.speed) and args.speed >= 0):
+        raise ConfigError("--speed", None, f"must be a number >= 0 (got {args.speed!r})")
+    load_scene(args.scene, args.overrides)  # a bad scene is refused before any window opens
+    check_display()
+    lab = Lab(args.scene, args.overrides, speed=args.speed or None)
+    try:
+        LabWindow(lab, args.size, out_dir=out).run()
+    except KeyboardInterrupt:
+        return 130
+    return 0
