@@ -214,7 +214,7 @@ def test_every_key_a_run_reads_is_listed_with_its_unit_help_and_value():
     # unset weather keys stand for the standard atmosphere at sea level, dry (the air's ρ is the file's)
     weather = [listed[f"air.{k}"].value for k in ("temperature", "pressure", "altitude", "humidity")]
     assert weather == [pytest.approx(15.0), pytest.approx(101325.0), 0.0, 0.0]
-    numeric = ("float", "int", "vec3", "vec2", "range")
+    numeric = ("float", "int", "vec3", "vec2")  # (a "range", terrain.surface_levels, may be unset: no slider)
     assert not [p.key for p in listed.values() if p.kind in numeric and p.value is None]  # every slider has a value
     assert listed["air.wind"].kind == "vec3" and listed["air.wind"].at_t0 is False
     assert listed["terrain.seed"].at_t0 and listed["ball.mass"].at_t0
