@@ -37,7 +37,7 @@ from typing import Any
 
 import taichi as ti
 
-from ti_golf.physics.types import AirParams, vec, vec3
+from ti_golf.physics.types import AirParams, log, vec, vec3
 
 LAB, SPIN_RATIO = 0, 1
 AIR_MODEL_CODES = {"lab": LAB, "spin_ratio": SPIN_RATIO}
@@ -130,7 +130,7 @@ def wind_scale(y, air):
     scale = ti.Vector([1.0 for _ in ti.static(range(y.n))], dt=float)
     if air.wind_profile == LOG_WIND:
         z0 = air.wind_z0
-        scale = ti.log(ti.max(y - air.ground_height, z0) / z0) / ti.log(air.wind_height / z0)
+        scale = log(ti.max(y - air.ground_height, z0) / z0) / log(air.wind_height / z0)
     return scale
 
 

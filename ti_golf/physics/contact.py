@@ -30,7 +30,7 @@ import math
 
 import taichi as ti
 
-from ti_golf.physics.types import is_f64, zero3
+from ti_golf.physics.types import no_f64_transcendentals, zero3
 from ti_golf.scene.schema import AT_REST, FLYING, FRICTION_MODELS, ROLLING
 
 _TINY = 1e-12
@@ -300,7 +300,7 @@ def turf_tilt(v_n, u, speed):
     in f64, the angles are worked out in f32 (θ_c to about 1e-7 of itself), elsewhere in the
     float type."""
     cos_t, sin_t = 1.0, 0.0
-    if ti.static(is_f64() and ti.lang.impl.current_cfg().arch == ti.vulkan):
+    if ti.static(no_f64_transcendentals()):
         phi = ti.atan2(ti.cast(v_n, ti.f32), ti.cast(u, ti.f32))
         rate = ti.cast(TURF_TILT * (speed / TURF_SPEED) / TURF_ANGLE, ti.f32)
         theta = ti.min(rate * phi, ti.cast(0.5 * math.pi, ti.f32) - phi)

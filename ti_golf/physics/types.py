@@ -73,6 +73,25 @@ def is_f64() -> bool:
     return runtime.ensure_init().precision == "f64"
 
 
+def no_f64_transcendentals() -> bool:
+    """Whether kernels run on Taichi's Vulkan backend in f64, which has no 64-bit log, exp, sin,
+    cos or atan2 (SPIR-V's GLSL.std.450 set stops at 32 bits): there they are worked out in f32
+    (for ``ti.static`` branches in kernels)."""
+    return is_f64() and ti.lang.impl.current_cfg().arch == ti.vulkan
+
+
+@ti.func
+def log(x):
+    """ln x (a scalar or a vector) in the float type; in f32 where :func:`no_f64_transcendentals`
+    (about 1e-7 of itself)."""
+    y = x
+    if ti.static(no_f64_transcendentals()):
+        y = ti.cast(ti.log(ti.cast(x, ti.f32)), float)
+    else:
+        y = ti.log(x)
+    return y
+
+
 @ti.func
 def vec(a, b, c):
     """The 3-vector (a, b, c) in the chosen float type, inside kernels."""
