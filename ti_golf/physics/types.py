@@ -101,7 +101,13 @@ AirParams = Deferred(
         omega_M=float,  # Magnus reference angular velocity ω_M [1/s] (L.2)
         C_omega=float,  # spin-decay coefficient (L.23)
         wind=vec3.get(),  # constant wind velocity [m/s]
-        model=ti.i32,  # aerodynamic model (aero.AIR_MODEL_CODES): 0 the report's laws, 1 coefficients of the spin ratio
+        model=ti.i32,  # aerodynamic model (aero.AIR_MODEL_CODES): 0 the report's laws, 1 coefficients of the spin ratio, 2 of S and Re
+        viscosity=float,  # dynamic viscosity μ [Pa·s] (Re = ρ|v_rel|·2R/μ; model 2)
+        C_D_S=vec3.get(),  # C_D0, C_D1, C_D2 of C_D(S) above the drag crisis (model 2)
+        C_L_S=vec3.get(),  # C_L0, C_L1, C_L2 of C_L(S) (model 2)
+        C_D_crisis=float,  # rise of C_D through the drag crisis (model 2)
+        Re_crisis=float,  # Reynolds number at the middle of the crisis (model 2)
+        spin_decay=float,  # λ of dω/dt = −λ|v_rel|ω/R (model 2)
     ),
     "AirParams",
 )
