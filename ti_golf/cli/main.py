@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 
 import ti_golf
 from ti_golf import runtime
-from ti_golf.cli import bench, play, render, run, scenes, schema, sweep, table
+from ti_golf.cli import bench, play, render, run, scenes, schema, sweep, table, tour
 from ti_golf.cli._common import Parser
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
 
@@ -26,6 +26,8 @@ COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "sweep": sweep.cmd_sweep,
     "run": run.cmd_run,
     "table": table.cmd_table,
+    "tour": tour.cmd_tour,
+    "fit-aero": tour.cmd_fit_aero,
     "bench": bench.cmd_bench,
     "render": render.cmd_render,
     "play": play.cmd_play,
@@ -41,7 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = Parser(prog="ti-golf", description="Golf-ball physics on Taichi: flights, sweeps, collisions.")
     p.add_argument("--version", action="version", version=f"ti-golf {ti_golf.__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (scenes, schema, sweep, run, table, bench, render, play):
+    for module in (scenes, schema, sweep, run, table, tour, bench, render, play):
         module.add_parser(sub)
     return p
 
