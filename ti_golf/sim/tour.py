@@ -87,7 +87,7 @@ class TourFlight:
             f"{int(ok.sum())} of {len(ok)} rows within {CARRY_TOL:g} % carry, {APEX_TOL:g} yd apex and "
             f"{LAND_TOL:g}° land angle" + ("" if ok.all() else " (* marks the others)")
         )
-        return "\n".join(lines)
+        return "\n".join(line.rstrip() for line in lines)
 
 
 def launch_states(scene: Scene, rows: Sequence[TourShot]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
