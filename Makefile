@@ -33,6 +33,7 @@ system-deps:
 demo: setup system-deps
 	mkdir -p $(OUT)
 	$(TIGOLF) table --plot $(OUT)/lab_table.png
+	$(TIGOLF) tour --plot $(OUT)/tour_table.png
 	$(TIGOLF) sweep lab_turbulent --angles 32:42:0.5 --out $(OUT)/sweep_turbulent.csv --plot $(OUT)/sweep_turbulent.png
 	$(TIGOLF) dispersion tour_shot --seed 1 --plot $(OUT)/dispersion.png
 	$(TIGOLF) run lab_spin_decay --until rest --out $(OUT)/spin_decay.npz --plot $(OUT)/spin_decay.png

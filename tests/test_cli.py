@@ -115,7 +115,20 @@ def test_keys_is_a_well_formed_markdown_table(keys_output):
 
 def test_help_and_unknown_subcommand():
     proc = ok(run_cli("--help"))
-    for command in ("scenes", "keys", "sweep", "shot", "dispersion", "run", "table", "bench", "render", "play"):
+    for command in (
+        "scenes",
+        "keys",
+        "sweep",
+        "shot",
+        "dispersion",
+        "run",
+        "table",
+        "tour",
+        "fit-aero",
+        "bench",
+        "render",
+        "play",
+    ):
         assert command in proc.stdout
     proc = run_cli("frobnicate")
     assert proc.returncode == 2
@@ -366,6 +379,71 @@ def test_table_reproduces_report():
         # the report's best angle is the best of a 0.5° grid: for a single-peaked carry curve the
         # true optimum lies within 0.5° of it
         assert abs(float(m["a"]) - angle) < 0.5, m.group(0)
+
+
+# ----------------------------------------------------------------------------------------------
+# tour and fit-aero: the TrackMan tour averages and the fit of the spin_reynolds air
+# ----------------------------------------------------------------------------------------------
+TOUR_ROW = re.compile(
+    r"^(?P<name>(PGA|LPGA) \S+)\s+(?P<mph>\d+)\s+[\d.]+\s+\d+ \|\s+(?P<carry>\d+)\s+(?P<model_carry>[\d.]+)\s+"
+    r"(?P<carry_err>[+-][\d.]+)% \|\s+(?P<apex>\d+)\s+(?P<model_apex>[\d.]+)\s+[+-][\d.]+ \|\s+(?P<land>\d+)\s+"
+    r"(?P<model_land>[\d.]+)\s+[+-][\d.]+(?P<mark>  \*)?$"
+)
+
+
+def test_tour_prints_the_23_rows_beside_the_table_and_plots_them(tmp_path, capsys):
+    png = tmp_path / "tour.png"
+    proc = ok(run_cli("tour", "--plot", str(png)))
+    rows = [m for m in (TOUR_ROW.match(ln) for ln in proc.stdout.splitlines()) if m]
+    from ti_golf.sim.tour import fly_tour
+    from ti_golf.sim.trackman import TOUR
+
+    assert [m["name"] for m in rows] == [r.name for r in TOUR], proc.stdout
+    # the table's columns are the data module's, and the model's are what the API flies
+    flight = fly_tour(ti_golf.load_scene("tour_shot"))
+    for m, r, carry, apex, land in zip(rows, TOUR, flight.carry, flight.apex, flight.land):
+        assert (int(m["mph"]), int(m["carry"]), int(m["apex"]), int(m["land"])) == (
+            r.ball_mph,
+            r.carry_yd,
+            r.apex_yd,
+            r.land_deg,
+        )
+        assert (float(m["model_carry"]), float(m["model_apex"]), float(m["model_land"])) == pytest.approx(
+            (carry, apex, land), abs=0.051
+        )
+        assert float(m["carry_err"]) == pytest.approx(100 * (carry / r.carry_yd - 1), abs=0.051)
+    marked = sum(bool(m["mark"]) for m in rows)
+    assert f"{23 - marked} of 23 rows within 3 % carry, 2 yd apex and 2° land angle" in proc.stdout
+    assert png.read_bytes()[:8] == PNG_SIGNATURE
+    # --rows picks a tour; a scene key the air model does not read is refused
+    lpga = ok(run_cli("tour", "--rows", "lpga", "--set", 'air.model="spin_ratio"', "--set", "air.C_omega=0.03"))
+    assert [m["name"] for m in map(TOUR_ROW.match, lpga.stdout.splitlines()) if m] == [r.name for r in TOUR[12:]]
+    assert main(["tour", "--set", 'air.model="lab"', "--set", "air.viscosity=2e-5"]) == 2
+    err = capsys.readouterr().err
+    assert "air.viscosity" in err and "spin_reynolds" in err, err
+
+
+def test_fit_aero_finds_the_bundled_coefficients_from_its_start():
+    # the documented, repeatable fit: from Ferguson's coefficients it finds the defaults that
+    # tour_shot flies (schema.SPIN_REYNOLDS_*), to the 4 decimals printed, within published ranges
+    from ti_golf.scene.schema import SPIN_REYNOLDS_C_D, SPIN_REYNOLDS_C_L, SPIN_REYNOLDS_CRISIS
+
+    proc = ok(run_cli("fit-aero"))
+    out = proc.stdout
+    assert "converged after" in out and "OUTSIDE" not in out, out
+    assert f"C_D_S = [{', '.join(f'{c:.4f}' for c in SPIN_REYNOLDS_C_D)}]" in out, out
+    assert f"C_L_S = [{', '.join(f'{c:.4f}' for c in SPIN_REYNOLDS_C_L)}]" in out, out
+    assert f"C_D_crisis = {SPIN_REYNOLDS_CRISIS[0]:.4f}" in out and f"Re_crisis = {SPIN_REYNOLDS_CRISIS[1]:.4g}" in out
+    assert len([ln for ln in out.splitlines() if TOUR_ROW.match(ln)]) == 23
+
+
+def test_fit_aero_without_scipy_says_what_it_needs(capsys, monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "scipy.optimize", None)  # import scipy.optimize raises ImportError
+    assert main(["fit-aero"]) == 2
+    err = capsys.readouterr().err
+    assert "needs scipy" in err and "ti-golf[fit]" in err and len(err.strip().splitlines()) == 1, err
 
 
 # ----------------------------------------------------------------------------------------------

@@ -187,6 +187,7 @@ def test_fuzzed_command_lines_run_or_are_refused(argv, tmp_path_factory):
         ["render", "break_shot", "--out"],
         ["schema", "--out"],
         ["table", "--plot"],
+        ["tour", "--plot"],
         ["play", "putting_green", "--out"],
         ["play", "putting_green", "--plot"],
     ],

@@ -15,6 +15,8 @@ from scipy.integrate import solve_ivp
 import ti_golf as tg
 from ti_golf.bench.reference import derivatives as reference_derivatives
 from ti_golf.scene.schema import backspin_axis, launch_velocity
+from ti_golf.sim.tour import APEX_TOL, CARRY_TOL, LAND_TOL, fly_tour
+from ti_golf.sim.trackman import PGA_TOUR, TOUR, YD
 
 G = 9.81
 
@@ -209,6 +211,11 @@ def test_headwind_shortens_the_shot():
 # ---------------------------------------------------------------------------------------------
 # Drag and lift of the spin ratio (air.model = "spin_ratio", golf_data.md)
 # ---------------------------------------------------------------------------------------------
+SPIN_RATIO_AIR = ('air.model="spin_ratio"', "air.C_omega=0.03")
+"""tour_shot's air before it took the spin_reynolds model: C_D(S), C_L(S) of Ferguson et al. and
+the report's spin decay with C_ω = 0.03."""
+
+
 @pytest.mark.parametrize(
     "speed, angle, spin, wind",
     [
@@ -225,7 +232,7 @@ def test_spin_ratio_aerodynamics_match_scipy(speed, angle, spin, wind):
     w0 = spin * (np.array(backspin_axis(5.0)) + np.array([0.0, 0.2, 0.0])) / math.hypot(1.0, 0.2)
     errors = []
     for dt in (0.2, 0.1, 0.005):
-        scene = lab("tour_shot", "world.ground=false", f"world.dt={dt}", f"air.wind={wind}")
+        scene = lab("tour_shot", *SPIN_RATIO_AIR, "world.ground=false", f"world.dt={dt}", f"air.wind={wind}")
         sim = tg.Simulation(scene, x=[x0], v=[v0], w=[w0])
         rec = sim.run(t=3.0, record_every=round(0.2 / dt))
         ref_x, ref_w = _scipy_trajectory(scene, x0, v0, w0, np.asarray(rec.t))
@@ -255,39 +262,20 @@ def test_spin_ratio_aerodynamics_match_scipy(speed, angle, spin, wind):
     assert np.linalg.norm(lab_law.x[0] - ref_x[-1]) > 1.0
 
 
-# TrackMan 2023 PGA Tour averages (golf_data.md): ball mph, launch deg, spin rpm; max height yd,
-# land angle deg, carry yd
-PGA_TOUR = {
-    "driver": (171, 10.4, 2545, 35, 39, 282),
-    "3-wood": (162, 9.3, 3663, 32, 44, 249),
-    "5-wood": (156, 9.7, 4322, 33, 48, 236),
-    "hybrid": (149, 10.2, 4587, 31, 49, 231),
-    "3-iron": (145, 10.3, 4404, 30, 48, 218),
-    "4-iron": (140, 10.8, 4782, 31, 49, 209),
-    "5-iron": (135, 11.9, 5280, 33, 50, 199),
-    "6-iron": (130, 14.0, 6204, 32, 50, 188),
-    "7-iron": (123, 16.1, 7124, 34, 51, 176),
-    "8-iron": (118, 17.8, 8078, 33, 51, 164),
-    "9-iron": (112, 20.0, 8793, 32, 52, 152),
-    "PW": (104, 23.7, 9316, 32, 52, 142),
-}
-
-
 def test_spin_ratio_aerodynamics_carry_the_tour_averages():
     # golf_data.md: "simple point-mass models with one shared C_D/C_L set typically reach carry
     # within about 5 %, max height within about 4 yd, and land 2–5° shallower than the table".
-    # tour_shot (sea-level air, a Rules-of-Golf ball, C_D(S) and C_L(S)) flies every club of the
+    # tour_shot's former air (sea-level, a Rules-of-Golf ball, C_D(S) and C_L(S)) flies every club of the
     # table from its launch numbers: carry within 5 %, apex within 4 yd (RK4 at h = 1 ms: its error
     # is far below both). Every club lands shallower than the table, by 1.9° (driver) to 7.5°
     # (4-iron), a little more than the 5° quoted.
-    yd, mph, rpm = 0.9144, 0.44704, 2.0 * math.pi / 60.0
-    scene = lab("tour_shot")
-    for club, (speed, launch, spin, apex, land, carry) in PGA_TOUR.items():
-        res = tg.sweep(scene, angles_deg=[launch], speeds=[speed * mph], spins=[spin * rpm])
-        got_carry, got_apex = res.carry[0] / yd, (res.flight.apex[0] - scene.ball.radius) / yd
-        assert got_carry == pytest.approx(carry, rel=0.05), club
-        assert got_apex == pytest.approx(apex, abs=4.0), club
-        assert 0.0 < land - res.flight.landing_angle[0] <= 8.0, club
+    scene = lab("tour_shot", *SPIN_RATIO_AIR)
+    for row in PGA_TOUR:
+        res = tg.sweep(scene, angles_deg=[row.launch_deg], speeds=[row.speed_si], spins=[row.spin_si])
+        got_carry, got_apex = res.carry[0] / YD, (res.flight.apex[0] - scene.ball.radius) / YD
+        assert got_carry == pytest.approx(row.carry_yd, rel=0.05), row.name
+        assert got_apex == pytest.approx(row.apex_yd, abs=4.0), row.name
+        assert 0.0 < row.land_deg - res.flight.landing_angle[0] <= 8.0, row.name
     # the lab's law with one Magnus constant (golf_hole's before this model) cannot fit both ends
     # of the bag: a driver launched as on tour carries 40 % short
     old = lab(
@@ -299,8 +287,144 @@ def test_spin_ratio_aerodynamics_carry_the_tour_averages():
         "air.omega_M=100",
         "air.C_omega=1",
     )
-    speed, launch, spin, _, _, carry = PGA_TOUR["driver"]
-    assert tg.sweep(old, angles_deg=[launch], speeds=[speed * mph], spins=[spin * rpm]).carry[0] / yd < 0.7 * carry
+    driver = PGA_TOUR[0]
+    res = tg.sweep(old, angles_deg=[driver.launch_deg], speeds=[driver.speed_si], spins=[driver.spin_si])
+    assert res.carry[0] / YD < 0.7 * driver.carry_yd
+
+
+# ---------------------------------------------------------------------------------------------
+# Drag and lift of the spin ratio and the Reynolds number (air.model = "spin_reynolds")
+# ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "speed, angle, spin, wind",
+    [
+        (76.4, 10.4, 266.5, "[3, 0, -2]"),  # a tour driver in a crosswind: Re 2.1e5 down to 1.0e5
+        (30.0, 35.0, 500.0, "[0, 0, 0]"),  # a slow pitch: Re 8.6e4 down to 4.2e4, through the crisis (6.65e4)
+    ],
+)
+def test_spin_reynolds_aerodynamics_match_scipy(speed, angle, spin, wind):
+    # dv/dt = g − (½ρA/m)|v_rel|·(C_D(S, Re) v_rel − C_L(S) (ω × v_rel)/|ω|), Re = ρ|v_rel|2R/μ,
+    # dω/dt = −λ|v_rel|ω/R (Smits & Smith): the kernels against DOP853 on the numpy law
+    # (reference.py), RK4 converging at 4th order (the S range's ends are kinks these flights do not
+    # reach)
+    x0, v0 = np.zeros(3), np.array(launch_velocity(speed, angle, 5.0))
+    w0 = spin * (np.array(backspin_axis(5.0)) + np.array([0.0, 0.2, 0.0])) / math.hypot(1.0, 0.2)
+    errors = []
+    for dt in (0.2, 0.1, 0.005):
+        scene = lab("tour_shot", "world.ground=false", f"world.dt={dt}", f"air.wind={wind}")
+        sim = tg.Simulation(scene, x=[x0], v=[v0], w=[w0])
+        rec = sim.run(t=3.0, record_every=round(0.2 / dt))
+        ref_x, ref_w = _scipy_trajectory(scene, x0, v0, w0, np.asarray(rec.t))
+        errors.append(
+            (np.max(np.abs(np.asarray(rec.x)[:, 0] - ref_x)), np.max(np.abs(np.asarray(rec.w)[:, 0] - ref_w)) / spin)
+        )
+    (ex1, _), (ex2, _), (ex3, ew3) = errors
+    assert 10.0 < ex1 / ex2 < 22.0, errors
+    assert ex3 < 1e-6 and ew3 < 1e-8, errors
+    # the Reynolds number matters: without the drag crisis the same ball ends elsewhere
+    plain = tg.Simulation(
+        lab("tour_shot", "world.ground=false", "air.C_D_crisis=0", f"air.wind={wind}"), x=[x0], v=[v0], w=[w0]
+    )
+    plain.run(t=3.0)
+    assert np.linalg.norm(plain.x[0] - ref_x[-1]) > 0.5
+
+
+def test_spin_reynolds_spin_decays_with_the_distance_flown():
+    # Smits & Smith: dω/dt = −λ|v|ω/R, so ω = ω0·exp(−λ d/R) after a distance d, whatever the drag.
+    # Without gravity and with ω along v (no lift: ω × v = 0) the ball flies straight; λ = 2e-4
+    # (ten times golf's) takes about half the spin in 3 s. RK4 at h = 1 ms: both sides to ~1e-12.
+    lam, R = 2e-4, 0.021335
+    scene = lab("tour_shot", "world.ground=false", "world.gravity=[0, 0, 0]", f"air.spin_decay={lam}")
+    v0 = np.array([40.0, 20.0, 5.0])
+    w0 = 800.0 * v0 / np.linalg.norm(v0)
+    sim = tg.Simulation(scene, x=[[0.0, 1.0, 0.0]], v=[v0], w=[w0])
+    sim.run(t=3.0)
+    d = np.linalg.norm(sim.x[0] - [0.0, 1.0, 0.0])
+    assert np.linalg.norm(np.cross(sim.x[0] - [0.0, 1.0, 0.0], v0)) < 1e-9 * d  # straight
+    assert np.linalg.norm(sim.w[0]) == pytest.approx(800.0 * math.exp(-lam * d / R), rel=1e-9)
+    assert 0.3 < np.linalg.norm(sim.w[0]) / 800.0 < 0.7
+
+
+@pytest.mark.parametrize("viscosity", [1.81e-5, 3.62e-5])
+def test_spin_reynolds_drag_crisis_as_a_quadrature(viscosity):
+    # A ball without spin or gravity slows along a line: dv/dt = −k·C_D(Re)·v², k = ½ρA/m, so the
+    # distance flown while slowing from v0 to v is x = ∫_v^v0 du / (k·C_D(Re(u))·u) (C_D: the
+    # coefficients at S = 0.02, where the S range is held, plus the crisis
+    # C_D_crisis/(1 + (Re/Re_crisis)⁴), Re = ρu·2R/μ). RK4 at h = 1 ms against scipy's quad.
+    from scipy.integrate import quad
+
+    scene = lab("tour_shot", "world.ground=false", "world.gravity=[0, 0, 0]", f"air.viscosity={viscosity}")
+    a, R = scene.air, scene.ball.radius
+    k = 0.5 * a.rho * math.pi * R**2 / scene.ball.mass
+
+    def C_D(u: float, crisis: float = a.C_D_crisis) -> float:
+        c = 0.02
+        re = a.rho * u * 2.0 * R / a.viscosity
+        return a.C_D_S[0] + a.C_D_S[1] * c + a.C_D_S[2] * c * c + crisis / (1.0 + (re / a.Re_crisis) ** 4)
+
+    sim = tg.Simulation(scene, x=[[0.0, 1.0, 0.0]], v=[[40.0, 0.0, 0.0]])
+    sim.run(t=4.0)
+    v, x = sim.v[0, 0], sim.x[0, 0]
+    expected, _ = quad(lambda u: 1.0 / (k * C_D(u) * u), v, 40.0, epsabs=1e-12, epsrel=1e-12)
+    assert x == pytest.approx(expected, rel=1e-9)
+    # the crisis matters: without it the ball would have slowed to v over a fifth more distance
+    without, _ = quad(lambda u: 1.0 / (k * C_D(u, 0.0) * u), v, 40.0)
+    assert without > 1.2 * x
+
+
+@pytest.fixture(scope="module")
+def tour_flight():
+    """All 23 rows of the TrackMan table flown at once in tour_shot's air."""
+    return fly_tour(lab("tour_shot"))
+
+
+TOUR_MISSES = {
+    "PGA Driver": "lands 2.6° steep",
+    "PGA 3-wood": "carries 3.6 % long",
+    "PGA 5-wood": "apex 2.2 yd high",
+    "PGA Hybrid": "apex 2.4 yd high",
+    "PGA 4-iron": "lands 2.2° shallow",
+    "PGA 5-iron": "apex 2.1 yd low",
+    "LPGA 3-wood": "apex 4.9 yd low, lands 5.1° shallow: lower and slower than the LPGA driver yet lands steeper",
+    "LPGA 4-iron": "carries 5.2 % short",
+    "LPGA 5-iron": "carries 5.3 % short, apex 2.3 yd low",
+    "LPGA 6-iron": "carries 3.1 % short",
+    "LPGA 9-iron": "apex 2.2 yd low",
+    "LPGA PW": "apex 5.2 yd low",
+}
+"""The rows outside the issue's targets with the fitted coefficients (docs/real_shots.md)."""
+
+
+@pytest.mark.parametrize("i", range(len(TOUR)), ids=[r.name.replace(" ", "-") for r in TOUR])
+def test_tour_shot_flies_the_trackman_table(tour_flight, i, request):
+    # the issue's targets for each of the 23 rows (the fit saw the 12 PGA rows only): carry within
+    # 3 %, apex within 2 yd, land angle within 2° of the table, all at the launch height as the
+    # table's (RK4 at h = 1 ms: its error is far below these). The rows the model misses are
+    # expected failures, strict: a row that starts to pass must leave the list.
+    row = TOUR[i]
+    if row.name in TOUR_MISSES:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=TOUR_MISSES[row.name]))
+    f = tour_flight
+    got = f"carry {f.carry[i]:.1f} yd ({f.carry_error[i]:+.1f} %), apex {f.apex[i]:.1f} yd ({f.apex_error[i]:+.1f}), land {f.land[i]:.1f}° ({f.land_error[i]:+.1f})"
+    assert abs(f.carry_error[i]) <= CARRY_TOL, f"{row.name}: {got}"
+    assert abs(f.apex_error[i]) <= APEX_TOL, f"{row.name}: {got}"
+    assert abs(f.land_error[i]) <= LAND_TOL, f"{row.name}: {got}"
+
+
+def test_tour_shot_misses_are_bounded_and_land_angles_follow_the_table(tour_flight):
+    # every row, the misses included, within 5.5 %, 5.5 yd and 5.5°; and the drag crisis fixes the
+    # spin-ratio model's shallow landings (golf_data.md: 2–5° shallow): the PGA rows' mean land
+    # angle error is within 1° with spin_reynolds and more than 3° shallow with spin_ratio
+    f = tour_flight
+    assert np.max(np.abs(f.carry_error)) < 5.5 and np.max(np.abs(f.apex_error)) < 5.5, f.table()
+    assert np.max(np.abs(f.land_error)) < 5.5, f.table()
+    pga = np.array([r.tour == "PGA" for r in TOUR])
+    assert abs(np.mean(f.land_error[pga])) < 1.0, f.table()
+    old = fly_tour(lab("tour_shot", *SPIN_RATIO_AIR), PGA_TOUR)
+    assert np.mean(old.land_error) < -3.0, old.table()
+    assert sorted(r.name for r in TOUR if r.name not in TOUR_MISSES) == sorted(
+        TOUR[i].name for i in np.flatnonzero(f.within())
+    )
 
 
 # ---------------------------------------------------------------------------------------------

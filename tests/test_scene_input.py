@@ -155,18 +155,19 @@ BAD_VALUES = {
 }
 
 
-def test_the_spin_ratio_model_needs_turbulent_flow(tmp_path):
-    # its C_D(S), C_L(S) are quadratic-drag coefficients: with γ = 1 the scene is refused, in the
+@pytest.mark.parametrize("model", ["spin_ratio", "spin_reynolds"])
+def test_the_spin_ratio_models_need_turbulent_flow(tmp_path, model):
+    # their C_D, C_L are quadratic-drag coefficients: with γ = 1 the scene is refused, in the
     # file and through the API, rather than flown with a law nobody asked for
-    text = edit_scene("air", "gamma", "1", edit_scene("air", "model", '"spin_ratio"'))
-    text = "\n".join(ln for ln in text.splitlines() if not re.match(r"\s*(C_D|C_M|omega_M)\s*=", ln))  # unread
+    text = edit_scene("air", "gamma", "1", edit_scene("air", "model", f'"{model}"'))
+    text = "\n".join(ln for ln in text.splitlines() if not re.match(r"\s*(C_D|C_M|omega_M|C_omega)\s*=", ln))  # unread
     path = write_scene(tmp_path, text)
     with pytest.raises(ConfigError) as info:
         ti_golf.load_scene(path)
     assert info.value.key == "air.gamma" and info.value.source == str(path)
-    assert "must be 2" in str(info.value) and "spin_ratio" in str(info.value)
+    assert "must be 2" in str(info.value) and model in str(info.value)
     laminar = ti_golf.load_scene("lab_laminar")
-    scene = dataclasses.replace(laminar, air=dataclasses.replace(laminar.air, model="spin_ratio"))
+    scene = dataclasses.replace(laminar, air=dataclasses.replace(laminar.air, model=model))
     with pytest.raises(ValueError, match="air.gamma must be 2"):
         ti_golf.Simulation(scene)
 

@@ -236,10 +236,10 @@ def test_weather_and_a_density_over_it_survive_later_changes():
     scene = with_changes(tg.load_scene("tour_shot"), {"air.altitude": 1600.0})
     weather = scene.air.rho, scene.air.viscosity
     assert weather[0] < 1.1  # thinner air at 1,600 m (tests/test_weather.py has the figures)
-    again = with_changes(scene, {"air.C_omega": 0.04})
+    again = with_changes(scene, {"air.spin_decay": 2.5e-5})
     assert (again.air.rho, again.air.viscosity, again.air.altitude) == (*weather, 1600.0)
     dense = with_changes(scene, {"air.rho": 1.3})  # a --set ρ over the weather wins, and stays
-    later = with_changes(dense, {"air.C_omega": 0.04})
+    later = with_changes(dense, {"air.spin_decay": 2.5e-5})
     assert (later.air.rho, later.air.viscosity) == (1.3, weather[1])
 
 

@@ -10,7 +10,9 @@ Model (report L.21–L.23), v_rel = v − u(y), A = πR², u the wind at the bal
 dv/dt = g − (k_D/m)|v_rel|^(γ−1) v_rel + (k_M/m)|v_rel| (ω × v_rel),
 dω/dt = −k_ω (|v_rel| + R|ω|)^(γ−1) ω;
 with ``air.model = "spin_ratio"`` drag and lift take C_D(S) and C_L(S) of S = R|ω|/|v_rel|
-(:func:`spin_ratio_coefficients`): dv/dt = g − (½ρA/m)|v_rel|·(C_D v_rel − C_L (ω × v_rel)/|ω|).
+(:func:`spin_ratio_coefficients`): dv/dt = g − (½ρA/m)|v_rel|·(C_D v_rel − C_L (ω × v_rel)/|ω|);
+with ``air.model = "spin_reynolds"`` C_D(S, Re) and C_L(S) (:func:`spin_reynolds_coefficients`),
+Re = ρ|v_rel|·2R/μ, and dω/dt = −λ|v_rel|ω/R.
 """
 
 from __future__ import annotations
@@ -35,6 +37,17 @@ def spin_ratio_coefficients(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     the ends; below S = 0.02, C_L in proportion to S (golf_data.md; physics/aero.py)."""
     c = np.clip(s, 0.02, 0.75)
     return 0.1304 + 0.9287 * c - 0.8259 * c**2, (0.0504 + 1.2031 * c - 1.1490 * c**2) * np.minimum(s / 0.02, 1.0)
+
+
+def spin_reynolds_coefficients(scene: Scene, s: np.ndarray, re: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(C_D, C_L) at spin ratios ``s`` and Reynolds numbers ``re``: C_D = C_D0 + C_D1 S + C_D2 S² +
+    C_D_crisis/(1 + (Re/Re_crisis)⁴), C_L = C_L0 + C_L1 S + C_L2 S², S held within 0.02–0.75 and
+    C_L in proportion to S below 0.02 (physics/aero.py)."""
+    a = scene.air
+    c = np.clip(s, 0.02, 0.75)
+    C_D = a.C_D_S[0] + a.C_D_S[1] * c + a.C_D_S[2] * c**2 + a.C_D_crisis / (1.0 + (re / a.Re_crisis) ** 4)
+    C_L = (a.C_L_S[0] + a.C_L_S[1] * c + a.C_L_S[2] * c**2) * np.minimum(s / 0.02, 1.0)
+    return C_D, C_L
 
 
 def wind_at(scene: Scene, y: np.ndarray) -> np.ndarray:
@@ -68,9 +81,15 @@ def derivatives(
     else:
         drag, decay = kD, kw
     lift = kM * speed
-    if scene.air.model == "spin_ratio":
-        half_rho_A_over_m = 0.5 * scene.air.rho * math.pi * scene.ball.radius**2 / scene.ball.mass
-        C_D, C_L = spin_ratio_coefficients(scene.ball.radius * spin / np.maximum(speed, 1e-12))
+    if scene.air.model in ("spin_ratio", "spin_reynolds"):
+        R = scene.ball.radius
+        half_rho_A_over_m = 0.5 * scene.air.rho * math.pi * R**2 / scene.ball.mass
+        s = R * spin / np.maximum(speed, 1e-12)
+        if scene.air.model == "spin_ratio":
+            C_D, C_L = spin_ratio_coefficients(s)
+        else:
+            C_D, C_L = spin_reynolds_coefficients(scene, s, scene.air.rho * speed * 2.0 * R / scene.air.viscosity)
+            decay = scene.air.spin_decay * speed / R
         drag = half_rho_A_over_m * C_D * speed
         lift = half_rho_A_over_m * C_L * speed / np.maximum(spin, 1e-12)
     dv = np.asarray(scene.world.gravity) - drag * v_rel + lift * np.cross(w, v_rel)

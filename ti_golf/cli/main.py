@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 
 import ti_golf
 from ti_golf import runtime
-from ti_golf.cli import bench, dispersion, figure, lab, play, render, run, scenes, schema, shot, sweep, table
+from ti_golf.cli import bench, dispersion, figure, lab, play, render, run, scenes, schema, shot, sweep, table, tour
 from ti_golf.cli._common import Parser
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
 
@@ -29,6 +29,8 @@ COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "run": run.cmd_run,
     "table": table.cmd_table,
     "figure": figure.cmd_figure,
+    "tour": tour.cmd_tour,
+    "fit-aero": tour.cmd_fit_aero,
     "bench": bench.cmd_bench,
     "render": render.cmd_render,
     "play": play.cmd_play,
@@ -45,7 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = Parser(prog="ti-golf", description="Golf-ball physics on Taichi: flights, sweeps, collisions.")
     p.add_argument("--version", action="version", version=f"ti-golf {ti_golf.__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (scenes, schema, sweep, shot, dispersion, run, table, figure, bench, render, play, lab):
+    for module in (scenes, schema, sweep, shot, dispersion, run, table, tour, figure, bench, render, play, lab):
         module.add_parser(sub)
     return p
 

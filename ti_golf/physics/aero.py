@@ -24,6 +24,18 @@ Real lift depends on S and saturates; the lab's constant k_M makes it grow with 
 that one constant cannot fit both a driver (S ≈ 0.07 at launch) and a wedge (S ≈ 0.45).
 Spin decay keeps the law above.
 
+With ``air.model = "spin_reynolds"`` (γ = 2) drag also depends on the Reynolds number
+Re = ρ|v_rel|·2R/μ (μ = ``air.viscosity``): a dimpled ball's drag crisis, C_D rising as the ball
+slows late in flight; and spin decays as Smits & Smith (1994) measured it (golf_data.md):
+
+* C_D = C_D0 + C_D1 S + C_D2 S² + ΔC_D / (1 + (Re/Re_c)⁴)        (``air.C_D_S``, ``C_D_crisis``, ``Re_crisis``)
+* C_L = C_L0 + C_L1 S + C_L2 S²                                  (``air.C_L_S``)
+* spin decay dω/dt = −λ |v_rel| ω / R                            (λ = ``air.spin_decay``)
+
+with S held within S_MIN–S_MAX and C_L in proportion to S below S_MIN, as for ``spin_ratio``
+(:func:`spin_reynolds_coefficients`). The coefficients' defaults are fitted to the PGA Tour
+averages by ``ti-golf fit-aero`` (:mod:`ti_golf.sim.aero_fit`).
+
 Balls are integrated in *lanes*: a state matrix ``S`` of shape (10, L) holds L balls side by side,
 rows x, y, z, v_x, v_y, v_z, ω_x, ω_y, ω_z and |ω|. The spin magnitude has a row of its own because
 spin decay only scales ω (dω/dt ∥ ω), so d|ω|/dt = −(decay rate)·|ω| exactly and no square root of
@@ -39,8 +51,8 @@ import taichi as ti
 
 from ti_golf.physics.types import AirParams, log, vec, vec3
 
-LAB, SPIN_RATIO = 0, 1
-AIR_MODEL_CODES = {"lab": LAB, "spin_ratio": SPIN_RATIO}
+LAB, SPIN_RATIO, SPIN_REYNOLDS = 0, 1, 2
+AIR_MODEL_CODES = {"lab": LAB, "spin_ratio": SPIN_RATIO, "spin_reynolds": SPIN_REYNOLDS}
 """Kernel codes of ``air.model`` (:data:`ti_golf.scene.schema.AIR_MODELS`)."""
 CONSTANT_WIND, LOG_WIND = 0, 1
 WIND_PROFILE_CODES = {"constant": CONSTANT_WIND, "log": LOG_WIND}
@@ -71,8 +83,8 @@ def air_params(air: Any, ground_height: float) -> Any:
     whose log wind profile measures heights from y = ``ground_height`` [m] (``world.ground_height``)."""
     if air.model not in AIR_MODEL_CODES:
         raise ValueError(f"air.model must be one of {', '.join(AIR_MODEL_CODES)} (got {air.model!r})")
-    if air.model == "spin_ratio" and air.gamma != 2:
-        raise ValueError(f"air.gamma must be 2 with air.model = 'spin_ratio' (got {air.gamma})")
+    if air.model in ("spin_ratio", "spin_reynolds") and air.gamma != 2:
+        raise ValueError(f"air.gamma must be 2 with air.model = {air.model!r} (got {air.gamma})")
     if air.wind_profile not in WIND_PROFILE_CODES:
         raise ValueError(f"air.wind_profile must be one of {', '.join(WIND_PROFILE_CODES)} (got {air.wind_profile!r})")
     if air.wind_profile == "log" and not 0.0 < air.wind_z0 < air.wind_height:
@@ -91,23 +103,31 @@ def air_params(air: Any, ground_height: float) -> Any:
         wind_height=air.wind_height,
         wind_z0=air.wind_z0,
         ground_height=ground_height,
+        C_D_S=vec3(*air.C_D_S),
+        C_L_S=vec3(*air.C_L_S),
+        C_D_crisis=air.C_D_crisis,
+        Re_crisis=air.Re_crisis,
+        spin_decay=air.spin_decay,
     )
 
 
 @ti.func
 def coefficients(air, radius, mass):
     """(4, L) matrix of k_D/m, k_M/m, k_ω [1/m] and R [m] for lanes of radius [m] and mass [kg];
-    with the spin-ratio model the first two rows are ½ρA/m, which :func:`rates` multiplies by
-    C_D(S) and C_L(S)/|ω|."""
+    with the spin-ratio models the first two rows are ½ρA/m, which :func:`rates` multiplies by
+    C_D and C_L/|ω|, and with ``spin_reynolds`` k_ω is λ/R."""
     half_rho_A = 0.5 * air.rho * math.pi * radius * radius
     c_D, c_M = air.C_D, air.C_M / air.omega_M
-    if air.model == SPIN_RATIO:
+    k_omega = half_rho_A * air.C_omega / mass
+    if air.model != LAB:
         c_D, c_M = 1.0, 1.0
+    if air.model == SPIN_REYNOLDS:
+        k_omega = air.spin_decay / radius
     return ti.Matrix.rows(
         [
             half_rho_A * c_D / mass,
             half_rho_A * c_M / mass,
-            half_rho_A * air.C_omega / mass,
+            k_omega,
             radius,
         ]
     )
@@ -135,6 +155,18 @@ def wind_scale(y, air):
 
 
 @ti.func
+def spin_reynolds_coefficients(s, re, air):
+    """(C_D, C_L) at spin ratios ``s`` and Reynolds numbers ``re`` (lanes): quadratics in S held
+    within S_MIN ≤ S ≤ S_MAX (C_L times S/S_MIN below S_MIN), C_D raised by the drag crisis
+    C_D_crisis/(1 + (Re/Re_crisis)⁴)."""
+    c = ti.min(ti.max(s, S_MIN), S_MAX)
+    r2 = (re / air.Re_crisis) ** 2
+    C_D = air.C_D_S[0] + c * (air.C_D_S[1] + air.C_D_S[2] * c) + air.C_D_crisis / (1.0 + r2 * r2)
+    C_L = (air.C_L_S[0] + c * (air.C_L_S[1] + air.C_L_S[2] * c)) * ti.min(s / S_MIN, 1.0)
+    return C_D, C_L
+
+
+@ti.func
 def rates(S, coef, air, gravity):
     """dS/dt of a lane state matrix S (10, L): (v, dv/dt [m/s²], dω/dt [rad/s²], d|ω|/dt) per lane."""
     vx, vy, vz = row(S, 3), row(S, 4), row(S, 5)
@@ -148,9 +180,15 @@ def rates(S, coef, air, gravity):
         drag = drag * speed
         decay = decay * (speed + row(coef, 3) * row(S, SPIN))
     lift = row(coef, 1) * speed
-    if air.model == SPIN_RATIO:  # (γ = 2: the scene is checked when read)
+    if air.model != LAB:  # (γ = 2: the scene is checked when read)
         spin = row(S, SPIN)
-        C_D, C_L = spin_ratio_coefficients(row(coef, 3) * spin / ti.max(speed, _TINY))
+        s = row(coef, 3) * spin / ti.max(speed, _TINY)
+        C_D, C_L = 0.0 * s, 0.0 * s
+        if air.model == SPIN_REYNOLDS:
+            C_D, C_L = spin_reynolds_coefficients(s, (2.0 * air.rho / air.viscosity) * row(coef, 3) * speed, air)
+            decay = row(coef, 2) * speed  # λ|v_rel|/R
+        else:
+            C_D, C_L = spin_ratio_coefficients(s)
         drag = row(coef, 0) * C_D * speed
         lift = row(coef, 1) * C_L * speed / ti.max(spin, _TINY)  # |ω × v_rel|/|ω| = |v_rel| at right angles
     return ti.Matrix.rows(

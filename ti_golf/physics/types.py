@@ -120,12 +120,17 @@ AirParams = Deferred(
         omega_M=float,  # Magnus reference angular velocity ω_M [1/s] (L.2)
         C_omega=float,  # spin-decay coefficient (L.23)
         wind=vec3.get(),  # wind velocity [m/s]; with the log profile, at the height wind_height
-        model=ti.i32,  # aerodynamic model (aero.AIR_MODEL_CODES): 0 the report's laws, 1 coefficients of the spin ratio
-        viscosity=float,  # dynamic viscosity μ [Pa·s]
+        model=ti.i32,  # aerodynamic model (aero.AIR_MODEL_CODES): 0 the report's laws, 1 coefficients of the spin ratio, 2 of S and Re
+        viscosity=float,  # dynamic viscosity μ [Pa·s] (Re = ρ|v_rel|·2R/μ; model 2)
         wind_profile=ti.i32,  # aero.WIND_PROFILE_CODES: 0 constant, 1 logarithmic in the height
         wind_height=float,  # reference height z_ref of the log profile [m]
         wind_z0=float,  # roughness length z₀ of the log profile [m]
         ground_height=float,  # y [m] from which the log profile's heights are measured
+        C_D_S=vec3.get(),  # C_D0, C_D1, C_D2 of C_D(S) above the drag crisis (model 2)
+        C_L_S=vec3.get(),  # C_L0, C_L1, C_L2 of C_L(S) (model 2)
+        C_D_crisis=float,  # rise of C_D through the drag crisis (model 2)
+        Re_crisis=float,  # Reynolds number at the middle of the crisis (model 2)
+        spin_decay=float,  # λ of dω/dt = −λ|v_rel|ω/R (model 2)
     ),
     "AirParams",
 )

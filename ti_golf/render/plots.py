@@ -1,5 +1,6 @@
 """Matplotlib figures written to files (no pyplot, no global backend): sweep trajectories and carry,
-the report's Table 3.1-1 families, run trajectories and spin decay, and a golf round on its course."""
+the report's Table 3.1-1 families, run trajectories and spin decay, the tour table beside the model, and a
+golf round on its course."""
 
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ TERRAIN_FILL = (0.62, 0.74, 0.50)
 if TYPE_CHECKING:  # pragma: no cover
     from ti_golf.sim.simulation import Recording
     from ti_golf.sim.sweep import SweepResult
+    from ti_golf.sim.tour import TourFlight
 
 
 PLOT_FORMATS = ("png", "svg", "pdf", "eps")
@@ -292,3 +294,50 @@ def _time_series(t: np.ndarray, values: np.ndarray, ylabel: str, path: str | os.
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
     save_figure(fig, path, dpi=120)
+
+
+def plot_tour(flight: "TourFlight", path: str | os.PathLike[str], title: str = "") -> None:
+    """Each row of the tour table: the model's carry, apex and land-angle errors against the table,
+    with the tolerance shaded (bars in blue within it, red outside)."""
+    from ti_golf.sim.tour import APEX_TOL, CARRY_TOL, LAND_TOL
+
+    rows = flight.rows
+    n = len(rows)
+    x = np.arange(n)
+    fig = Figure(figsize=(12, 8))
+    axes = fig.subplots(3, 1, sharex=True)
+    panels = (
+        (flight.carry_error, CARRY_TOL, "carry error [%]", [r.carry_yd for r in rows], "{:.0f} yd"),
+        (flight.apex_error, APEX_TOL, "apex error [yd]", [r.apex_yd for r in rows], "{:.0f} yd"),
+        (flight.land_error, LAND_TOL, "land angle error [deg]", [r.land_deg for r in rows], "{:.0f}°"),
+    )
+    for ax, (err, tol, label, table, fmt) in zip(axes, panels):
+        ax.axhspan(-tol, tol, color="0.88", label=f"within ±{tol:g}")
+        inside = np.abs(err) <= tol
+        ax.bar(x, err, width=0.6, color=np.where(inside, "tab:blue", "tab:red"))
+        for i in range(n):  # the table's value under each bar
+            ax.annotate(
+                fmt.format(table[i]),
+                (x[i], 0),
+                xytext=(0, -3 if err[i] >= 0 else 3),
+                textcoords="offset points",
+                ha="center",
+                va="top" if err[i] >= 0 else "bottom",
+                fontsize=6,
+                color="0.3",
+            )
+        ax.axhline(0.0, color="k", lw=0.6)
+        lim = max(2.0 * tol, float(np.nanmax(np.abs(err))) * 1.15)
+        ax.set_ylim(-lim, lim)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3, axis="y")
+        for s in (i for i in range(1, n) if rows[i].tour != rows[i - 1].tour):
+            ax.axvline(s - 0.5, color="0.5", lw=0.8)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[-1].set_xticks(x)
+    axes[-1].set_xticklabels([r.name for r in rows], rotation=60, ha="right", fontsize=8)
+    axes[0].set_title(
+        (title or "TrackMan 2023 tour averages") + ": model − table (grey numbers: the table's values)", fontsize=10
+    )
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110)

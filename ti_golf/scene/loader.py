@@ -293,11 +293,11 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
             kwargs["hole"] = HoleConfig(**values)
         else:
             kwargs[section] = _SECTION_TYPES[section](**values)
-        if section == "air" and kwargs["air"].model == "spin_ratio" and kwargs["air"].gamma != 2:
+        if section == "air" and kwargs["air"].model in ("spin_ratio", "spin_reynolds") and kwargs["air"].gamma != 2:
             raise_config(
                 sources.get("gamma", sources.get("model", source)),
                 "air.gamma",
-                'must be 2 with air.model = "spin_ratio" (its drag and lift are for turbulent flow)',
+                f'must be 2 with air.model = "{kwargs["air"].model}" (its drag and lift are for turbulent flow)',
             )
     if "launch" not in doc:
         kwargs["launch"] = None

@@ -38,8 +38,9 @@ FLYING, ROLLING, AT_REST, OUT_OF_BOUNDS = 0, 1, 2, 3
 STATUS_NAMES = {FLYING: "flying", ROLLING: "rolling", AT_REST: "at_rest", OUT_OF_BOUNDS: "out_of_bounds"}
 
 INTEGRATORS = ("semi_implicit", "rk4")
-AIR_MODELS = ("lab", "spin_ratio")
-"""Aerodynamic models (``air.model``): the report's laws, or coefficients of the spin ratio."""
+AIR_MODELS = ("lab", "spin_ratio", "spin_reynolds")
+"""Aerodynamic models (``air.model``): the report's laws, coefficients of the spin ratio, or of the
+spin ratio and the Reynolds number."""
 SOLVERS = ("jacobi", "gauss_seidel")
 """Contact solvers (``contact.solver``): the report's Jacobi sweeps, or coloured Gauss–Seidel sweeps."""
 WIND_PROFILES = ("constant", "log")
@@ -47,6 +48,13 @@ WIND_PROFILES = ("constant", "log")
 FRICTION_MODELS = ("spin", "report")
 """Friction of the ball–surface contacts (``contact.friction_model``): at the contact point, coupled
 to the spin, or the report's, from the centre's velocity alone (see :mod:`ti_golf.physics.contact`)."""
+
+SPIN_REYNOLDS_C_D = (0.1304, 0.6683, -0.8259)
+"""Default ``air.C_D_S`` [C_D0, C_D1, C_D2] of ``air.model = "spin_reynolds"`` (``ti-golf fit-aero``)."""
+SPIN_REYNOLDS_C_L = (0.0504, 1.2031, -1.3073)
+"""Default ``air.C_L_S`` [C_L0, C_L1, C_L2] (``ti-golf fit-aero``)."""
+SPIN_REYNOLDS_CRISIS = (0.4668, 66500.0)
+"""Default ``air.C_D_crisis`` and ``air.Re_crisis`` (``ti-golf fit-aero``)."""
 
 
 # -- the scene's tables -------------------------------------------------------------------------
@@ -84,7 +92,14 @@ class Air:
         POSITIVE,
         read_when=("model", ("lab",)),
     )
-    C_omega: float = key("float", 0.0, "-", "spin-decay coefficient; k_ω = ½ρA·C_ω/m (L.17, L.23)", NON_NEGATIVE)
+    C_omega: float = key(
+        "float",
+        0.0,
+        "-",
+        "spin-decay coefficient; k_ω = ½ρA·C_ω/m (L.17, L.23)",
+        NON_NEGATIVE,
+        read_when=("model", ("lab", "spin_ratio")),
+    )
     wind: Vec3 = key(
         "vec3",
         (0.0, 0.0, 0.0),
@@ -122,14 +137,17 @@ class Air:
         "-",
         "drag and lift: lab = the report's constant C_D and Magnus law (L.21, L.22); spin_ratio = "
         "C_D(S) and C_L(S) of the spin ratio S = R|ω|/|v_rel| fitted to launch-monitor shots "
-        "(Ferguson, McNally & McPhee 2022; C_D, C_M and omega_M unused; needs gamma = 2)",
+        "(Ferguson, McNally & McPhee 2022; C_D, C_M and omega_M unused; needs gamma = 2); "
+        "spin_reynolds = C_D(S, Re) with a drag crisis and C_L(S), fitted to the PGA Tour averages, "
+        "and spin decay dω/dt = −λ|v_rel|ω/R (needs gamma = 2; see docs/real_shots.md)",
         OneOf(AIR_MODELS),
     )
     viscosity: float = key(
         "float",
         1.81e-5,
         "Pa s",
-        "dynamic viscosity μ of the air (set from the weather instead when a weather key is given)",
+        "dynamic viscosity μ of the air, for the Reynolds number Re = ρ|v_rel|·2R/μ of air.model = spin_reynolds "
+        "(set from the weather instead when a weather key is given)",
         POSITIVE,
     )
     temperature: float | None = key(
@@ -158,6 +176,45 @@ class Air:
     )
     humidity: float | None = key(
         "float", None, "-", "relative humidity φ (a weather key; default 0: dry air)", UNIT_INTERVAL
+    )
+    C_D_S: Vec3 = key(
+        "vec3",
+        SPIN_REYNOLDS_C_D,
+        "-",
+        "[C_D0, C_D1, C_D2]: drag coefficient C_D0 + C_D1·S + C_D2·S² above the drag crisis (S held within 0.02–0.75)",
+        read_when=("model", ("spin_reynolds",)),
+    )
+    C_L_S: Vec3 = key(
+        "vec3",
+        SPIN_REYNOLDS_C_L,
+        "-",
+        "[C_L0, C_L1, C_L2]: lift coefficient C_L0 + C_L1·S + C_L2·S² (S held within 0.02–0.75; "
+        "in proportion to S below 0.02)",
+        read_when=("model", ("spin_reynolds",)),
+    )
+    C_D_crisis: float = key(
+        "float",
+        SPIN_REYNOLDS_CRISIS[0],
+        "-",
+        "drag crisis: C_D rises by C_D_crisis/(1 + (Re/Re_crisis)⁴) as the ball slows",
+        NON_NEGATIVE,
+        read_when=("model", ("spin_reynolds",)),
+    )
+    Re_crisis: float = key(
+        "float",
+        SPIN_REYNOLDS_CRISIS[1],
+        "-",
+        "Reynolds number at the middle of the drag crisis",
+        POSITIVE,
+        read_when=("model", ("spin_reynolds",)),
+    )
+    spin_decay: float = key(
+        "float",
+        2.0e-5,
+        "-",
+        "spin-decay constant λ of dω/dt = −λ|v_rel|ω/R (Smits & Smith 1994: about 2e-5)",
+        NON_NEGATIVE,
+        read_when=("model", ("spin_reynolds",)),
     )
 
 
