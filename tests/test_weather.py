@@ -101,7 +101,13 @@ def test_weather_keys_set_density_and_viscosity():
 REFUSED = {
     # (air table in the file, --set overrides, the key named, fragment of the message)
     "rho_beside_weather": ({"rho": 1.2, "temperature": 20.0}, [], "air.rho", "air.temperature"),
-    "viscosity_beside_weather": ({"viscosity": 1.8e-5, "humidity": 0.5}, [], "air.viscosity", "sets μ"),
+    "viscosity_beside_weather": (
+        {"model": "spin_reynolds", "gamma": 2, "viscosity": 1.8e-5, "humidity": 0.5},
+        [],
+        "air.viscosity",
+        "sets μ",
+    ),
+    "viscosity_of_the_lab_air": ({"viscosity": 1.8e-5}, [], "air.viscosity", 'air.model = "spin_reynolds"'),
     "altitude_beside_pressure": ({"pressure": 90000.0, "altitude": 1000.0}, [], "air.altitude", "air.pressure"),
     "both_on_the_command_line": ({}, ["air.rho=1.2", "air.altitude=100"], "air.rho", "give one or the other"),
     "z0_above_reference": ({"wind_profile": "log", "wind_z0": 20.0}, [], "air.wind_z0", "below air.wind_height"),

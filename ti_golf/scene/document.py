@@ -41,7 +41,7 @@ def scene_document(scene: Scene) -> dict[str, Any]:
         if section == "world":
             values["ground"] = scene.world.ground
         if section == "air":
-            _drop_weather_derived(values, table)
+            _drop_weather_derived(values, table, scene)
         if section == "terrain" and values.get("file"):
             values["file"] = os.path.abspath(values["file"])
         if values or section in OPTIONAL_TABLES:
@@ -53,7 +53,7 @@ def scene_document(scene: Scene) -> dict[str, Any]:
     return doc
 
 
-def _drop_weather_derived(values: dict[str, Any], air: Any) -> None:
+def _drop_weather_derived(values: dict[str, Any], air: Any, scene: Scene) -> None:
     """Keep only one source of ρ and μ in the ``[air]`` table ``values`` of the scene's ``air``, as
     the loader refuses ρ or μ beside the weather: the weather keys when they give the scene's ρ
     and μ, else (a ``--set`` ρ or μ over a file's weather) ρ and μ themselves."""
@@ -66,7 +66,9 @@ def _drop_weather_derived(values: dict[str, Any], air: Any) -> None:
     else:
         for name in weather:
             del values[name]
-        values["rho"], values["viscosity"] = air.rho, air.viscosity
+        values["rho"] = air.rho
+        if _read(SCHEMA["air"]["viscosity"], air, scene):
+            values["viscosity"] = air.viscosity
 
 
 def with_changes(scene: Scene, changes: Mapping[str, Any] | Iterable[str]) -> Scene:

@@ -149,6 +149,7 @@ class Air:
         "dynamic viscosity μ of the air, for the Reynolds number Re = ρ|v_rel|·2R/μ of air.model = spin_reynolds "
         "(set from the weather instead when a weather key is given)",
         POSITIVE,
+        read_when=("model", ("spin_reynolds",)),
     )
     temperature: float | None = key(
         "float",
