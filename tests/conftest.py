@@ -91,3 +91,21 @@ def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 600)
     """Run ``python -m ti_golf ARGS`` in a fresh process; returns the completed process (text mode)."""
     full_env = {**os.environ, **(env or {})}
     return subprocess.run(cli(*args), capture_output=True, text=True, env=full_env, timeout=timeout, cwd=ROOT)
+
+
+def sim_state(sim) -> dict:
+    """Everything a step reads of a simulation's balls, by ball id, with t and the step count."""
+    from ti_golf.sim.state import State
+
+    out = {name: sim.state.read(name) for name in State.PER_BALL}
+    out.update(t=sim.t, steps=sim.step_count)
+    return out
+
+
+def assert_same_state(a, b) -> None:
+    """Two simulations' states equal bit for bit (NaN, in the records of balls not tracked, equal NaN)."""
+    import numpy as np
+
+    sa, sb = sim_state(a), sim_state(b)
+    for name in sa:
+        np.testing.assert_array_equal(sa[name], sb[name], err_msg=name)

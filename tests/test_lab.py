@@ -8,6 +8,7 @@ import json
 
 import numpy as np
 import pytest
+from conftest import assert_same_state
 
 import ti_golf as tg
 from ti_golf.lab.app import Lab, bundled_scenes
@@ -16,22 +17,8 @@ from ti_golf.render import orbit_view
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.keys import help_text
 from ti_golf.scene.schema import SCHEMA
-from ti_golf.sim.state import State
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-
-
-def _state(sim) -> dict:
-    """Everything a step reads of the balls, by ball id, with t and the step count."""
-    out = {name: sim.state.read(name) for name in State.PER_BALL}
-    out.update(t=sim.t, steps=sim.step_count)
-    return out
-
-
-def assert_same_state(a, b) -> None:
-    sa, sb = _state(a), _state(b)
-    for name in sa:
-        np.testing.assert_array_equal(sa[name], sb[name], err_msg=name)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -9,27 +9,13 @@ import signal
 
 import numpy as np
 import pytest
-from conftest import SERIAL_OR_PARALLEL
+from conftest import SERIAL_OR_PARALLEL, assert_same_state, sim_state
 
 import ti_golf as tg
 from ti_golf.cli import main
 from ti_golf.physics import collide, kernels
 from ti_golf.scene.document import scene_document, with_changes
 from ti_golf.sim.solver import CollisionSolver
-from ti_golf.sim.state import State
-
-
-def _state(sim) -> dict:
-    """Everything a step reads of the balls, by ball id, with t and the step count."""
-    out = {name: sim.state.read(name) for name in State.PER_BALL}
-    out.update(t=sim.t, steps=sim.step_count)
-    return out
-
-
-def assert_same_state(a, b) -> None:
-    sa, sb = _state(a), _state(b)
-    for name in sa:
-        np.testing.assert_array_equal(sa[name], sb[name], err_msg=name)  # NaN (balls not tracked) equal NaN
 
 
 def _continued(make, t1: float, t2: float, path):
@@ -259,13 +245,13 @@ def test_keys_that_set_up_the_balls_apply_at_t0_only():
 
 def test_reset_goes_back_to_t0_bit_for_bit_with_the_changed_parameters():
     sim = tg.Simulation.from_scene("break_shot")
-    start = _state(sim)
+    start = sim_state(sim)
     sim.run(t=0.2)
     sim.set({"contact.e": 0.5, "contact.solver": "gauss_seidel"})
     sim.reset()
     assert sim.scene.contact.e == 0.5 and sim.scene.contact.solver == "gauss_seidel"
     for name, value in start.items():
-        np.testing.assert_array_equal(_state(sim)[name], value, err_msg=name)
+        np.testing.assert_array_equal(sim_state(sim)[name], value, err_msg=name)
     assert sim.solver.gauss_seidel and sim.solver.rebuilds == 0
     fresh = tg.Simulation(sim.scene)  # no carried impulse, no list survives the reset
     sim.run(t=0.2)

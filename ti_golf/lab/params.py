@@ -19,7 +19,7 @@ import numpy as np
 
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.checks import Interval, OneOf
-from ti_golf.scene.keys import Key, help_text
+from ti_golf.scene.keys import Key, help_text, is_read
 from ti_golf.scene.schema import SCHEMA, Scene
 from ti_golf.scene.weather import isa_pressure, isa_temperature
 from ti_golf.sim.changes import NOT_READ, at_t0
@@ -211,7 +211,7 @@ def _parameter(scene: Scene, table: str, obj: Any, k: Key) -> Parameter:
         help_text(k),
         k.allowed,
         value,
-        is_read(scene, obj, k),
+        is_read(k, obj, scene),
         at_t0(dotted),
         choices,
         low,
@@ -230,19 +230,6 @@ def _weather_stand_in(scene: Scene, name: str) -> float | None:
         "humidity": 0.0,
     }
     return stand_in.get(name)
-
-
-def is_read(scene: Scene, obj: Any, k: Key) -> bool:
-    """Whether key ``k`` of table ``obj`` is read under ``scene``'s settings (``Key.read_when``)."""
-    if k.read_when is None:
-        return True
-    other, allowed = k.read_when
-    if other.startswith("["):
-        return getattr(scene, other.strip("[]")) is not None
-    if "." in other:
-        table, name = other.split(".")
-        return getattr(getattr(scene, table), name) in allowed
-    return getattr(obj, other) in allowed
 
 
 def slider_span(dotted: str, k: Key, value: Any) -> tuple[float, float]:

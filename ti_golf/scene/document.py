@@ -13,7 +13,7 @@ import os
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from ti_golf.scene.keys import Key
+from ti_golf.scene.keys import Key, is_read
 from ti_golf.scene.loader import load_scene, parse_override
 from ti_golf.scene.schema import ARRAY_SCHEMA, SCHEMA, TOP_LEVEL, Scene
 from ti_golf.scene.weather import WEATHER_KEYS, air_from_weather
@@ -67,7 +67,7 @@ def _drop_weather_derived(values: dict[str, Any], air: Any, scene: Scene) -> Non
         for name in weather:
             del values[name]
         values["rho"] = air.rho
-        if _read(SCHEMA["air"]["viscosity"], air, scene):
+        if is_read(SCHEMA["air"]["viscosity"], air, scene):
             values["viscosity"] = air.viscosity
 
 
@@ -112,23 +112,10 @@ def _table(obj: Any, keys: dict[str, Key], scene: Scene) -> dict[str, Any]:
     out = {}
     for name, key in keys.items():
         value = getattr(obj, name)
-        if value is None or (value == key.default and not key.required) or not _read(key, obj, scene):
+        if value is None or (value == key.default and not key.required) or not is_read(key, obj, scene):
             continue
         out[name] = _plain(value)
     return out
-
-
-def _read(key: Key, obj: Any, scene: Scene) -> bool:
-    """Whether ``key`` of table ``obj`` is read under the scene's settings (``Key.read_when``)."""
-    if key.read_when is None:
-        return True
-    other, allowed = key.read_when
-    if other.startswith("["):
-        return getattr(scene, other.strip("[]")) is not None
-    if "." in other:
-        table, name = other.split(".")
-        return getattr(getattr(scene, table), name) in allowed
-    return getattr(obj, other) in allowed
 
 
 def _plain(value: Any) -> Any:

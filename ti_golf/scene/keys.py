@@ -105,3 +105,18 @@ def keys_of(cls: type) -> dict[str, Key]:
         for f in dataclasses.fields(cls)
         if "key" in f.metadata
     }
+
+
+def is_read(k: Key, obj: Any, scene: Any) -> bool:
+    """Whether key ``k`` of table ``obj`` (a dataclass of a :class:`~ti_golf.scene.schema.Scene`)
+    is read under ``scene``'s settings (``Key.read_when``): ``air.C_D`` is not once ``air.model``
+    is ``spin_ratio``."""
+    if k.read_when is None:
+        return True
+    other, allowed = k.read_when
+    if other.startswith("["):
+        return getattr(scene, other.strip("[]")) is not None
+    if "." in other:
+        table, name = other.split(".")
+        return getattr(getattr(scene, table), name) in allowed
+    return getattr(obj, other) in allowed
