@@ -166,10 +166,10 @@ def plain_compile() -> Iterator[None]:
     For kernels whose bodies are long straight-line code: the lane-unrolled sweep kernel
     (``physics.kernels.fly_to_landing``, every lane of every RK4 stage spelled out), the
     ``serial`` collision step of small scenes, and the Gauss–Seidel sweep
-    (``physics.colour.gauss_seidel_sweep``, its contact laws spelled out once per colour). Taichi's own IR passes grow much faster than
-    linearly with such a body, while LLVM still optimises the code, so the kernels compile many
-    times faster and run no slower (figures on the docs' performance page, "Design
-    measurements").
+    (``physics.colour.gauss_seidel_sweep``, its contact laws spelled out once per colour).
+    Taichi's own IR passes grow much faster than linearly with such a body, while LLVM still
+    optimises the code, so the kernels compile many times faster and run little or no slower
+    (figures on the docs' performance page, "Design measurements").
 
     On the CPU only: elsewhere kernels have one lane (short bodies, quick to compile with the
     passes), and Taichi's SPIR-V code generator (Vulkan) cannot compile the sweep kernel without
