@@ -89,9 +89,8 @@ def fmt(value: float, kind: str, units: Units) -> str:
     """A value of a :data:`GOLFER_COLUMNS` kind, in ``units``, with as many digits as golfers read."""
     if not math.isfinite(value):
         return "-"
-    if kind == "spin" and units.spin_label == "rpm":
-        return f"{value:.0f}"
-    return f"{value:.2f}" if kind == "s" else f"{value:.1f}"
+    digits = 0 if kind == "spin" and units.spin_label == "rpm" else 2 if kind == "s" else 1
+    return f"{round(value, digits) + 0.0:.{digits}f}"  # (+ 0.0: no "-0.0" for a roll of a few millimetres back)
 
 
 def unit_label(kind: str, units: Units) -> str:
