@@ -109,3 +109,22 @@ def assert_same_state(a, b) -> None:
     sa, sb = sim_state(a), sim_state(b)
     for name in sa:
         np.testing.assert_array_equal(sa[name], sb[name], err_msg=name)
+
+
+@pytest.fixture
+def ctrl_c():
+    """Ctrl-C (SIGINT) raises ``KeyboardInterrupt`` in this test, as in a terminal, even where the
+    tests were started with SIGINT ignored (a shell's background job)."""
+    import signal
+
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
+def sigint_as_in_a_terminal() -> None:
+    """For ``subprocess.Popen(preexec_fn=...)``: the child starts with SIGINT's default action, so
+    that Python turns it into ``KeyboardInterrupt`` (see :func:`ctrl_c`)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

@@ -21,7 +21,7 @@ from pathlib import Path
 import background
 import numpy as np
 import pytest
-from conftest import ROOT, SCENES, cli, run_cli
+from conftest import ROOT, SCENES, cli, run_cli, sigint_as_in_a_terminal
 
 try:  # Python >= 3.11
     import tomllib
@@ -624,7 +624,14 @@ def test_the_first_run_on_a_machine_is_announced(tmp_path):
 def interrupt_mid_run(args: list[str], sig: int = signal.SIGTERM) -> tuple[int, str]:
     """Start ``ti-golf ARGS`` in a real process, send it ``sig`` once its first progress line shows
     it is simulating, and return its exit code and the rest of its standard error."""
-    proc = subprocess.Popen(cli(*args), stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=ROOT)
+    proc = subprocess.Popen(
+        cli(*args),
+        stderr=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+        preexec_fn=sigint_as_in_a_terminal,
+    )
     try:
         for line in proc.stderr:  # the first progress line comes a few seconds into the run
             if line.startswith("progress:"):

@@ -338,7 +338,7 @@ def test_run_resume_with_set_changes_the_continuation(tmp_path, capsys):
     assert "needs a SCENE" in capsys.readouterr().err
 
 
-def test_an_interrupted_run_saves_whole_steps_that_can_be_continued(tmp_path, monkeypatch, capsys):
+def test_an_interrupted_run_saves_whole_steps_that_can_be_continued(tmp_path, monkeypatch, capsys, ctrl_c):
     # Ctrl-C arrives while the third chunk of steps runs in the kernel: those steps end first
     # (t, step count), so the partial file holds the state of a run of that many steps, bit for bit
     real, calls = collide.collision_step, []
@@ -361,7 +361,7 @@ def test_an_interrupted_run_saves_whole_steps_that_can_be_continued(tmp_path, mo
     assert_same_state(partial, whole)
 
 
-def test_a_signal_during_steps_waits_for_them_to_end(monkeypatch):
+def test_a_signal_during_steps_waits_for_them_to_end(monkeypatch, ctrl_c):
     sim = tg.Simulation.from_scene("lab_vacuum")
     real = kernels.advance
 
