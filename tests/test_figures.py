@@ -54,6 +54,7 @@ def test_a_plot_is_written_in_the_format_of_its_extension(tmp_path, fmt):
         ["play", "golf_hole", "--shots", str(ROOT / "scenes" / "golf_hole_round.txt")],
         ["figure", "3.2-3"],
         ["dispersion", "tour_shot", "--n", "10"],
+        ["tour"],
     ],
     ids=lambda c: c[0],
 )
@@ -69,7 +70,7 @@ def test_an_unknown_plot_extension_is_one_line_naming_the_option_and_the_formats
 
 
 def test_every_plot_option_names_the_formats():
-    for command in ("sweep", "run", "table", "play", "figure", "dispersion"):
+    for command in ("sweep", "run", "table", "play", "figure", "dispersion", "tour"):
         code, out, _ = run_main(command, "--help")
         assert code == 0
         assert re.search(r"PNG,\s+SVG,\s+PDF\s+or\s+EPS", out), command

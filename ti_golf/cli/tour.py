@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from ti_golf.cli._common import check_writable, runtime_options, scene_options
+from ti_golf.cli._common import check_plot, plot_help, runtime_options, scene_options
 from ti_golf.errors import ConfigError
 from ti_golf.render.plots import plot_tour
 from ti_golf.scene.loader import load_scene
@@ -26,7 +26,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     scene_options(t, default="tour_shot", example="air.rho=1.15")
     t.add_argument("--rows", choices=tuple(ROWS), default="all", help="which tour's rows (default all)")
-    t.add_argument("--plot", help="write a PNG: carry, apex and land angle of each row, table and model")
+    t.add_argument("--plot", help=plot_help("carry, apex and land angle of each row, table and model"))
     runtime_options(t)
     f = sub.add_parser(
         "fit-aero",
@@ -42,7 +42,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_tour(args: argparse.Namespace) -> int:
-    check_writable(args.plot, "--plot")
+    check_plot(args.plot)
     scene = load_scene(args.scene, args.overrides)
     if scene.launch is None:  # the rows launch from the scene's launch point
         raise ConfigError(scene.path, "launch", "the tour rows need a [launch] table in the scene")
