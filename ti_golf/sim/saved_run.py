@@ -28,6 +28,7 @@ from ti_golf.physics.integrate import NOT_TRACKED
 from ti_golf.runtime import ensure_init, np_float, on_cpu
 from ti_golf.scene.document import scene_document
 from ti_golf.scene.loader import load_scene
+from ti_golf.sim.solver_state import restore_solver, solver_arrays
 
 if TYPE_CHECKING:
     from ti_golf.sim.simulation import Recording, Simulation
@@ -75,7 +76,7 @@ def write_run(sim: Simulation, path: str | os.PathLike[str], recording: Recordin
         data["order"] = state.order
     solver_meta = None
     if sim.solver is not None:
-        arrays, solver_meta = sim.solver.saved()
+        arrays, solver_meta = solver_arrays(sim.solver)
         solver_meta["serial"], solver_meta["reorder"] = sim.solver.serial, sim.solver.reorder
         data.update({f"solver.{name}": a for name, a in arrays.items()})
     if sim.initial is not None:
@@ -149,7 +150,7 @@ def read_run(cls: type[Simulation], path: str | os.PathLike[str]) -> Simulation:
     state.steps = int(meta["steps"])
     if solver is not None and sim.solver is not None:
         arrays = {name[len("solver.") :]: a for name, a in data.items() if name.startswith("solver.")}
-        sim.solver.restore(state, arrays, solver)
+        restore_solver(sim.solver, state, arrays, solver)
         if bool(solver["serial"]) != sim.solver.serial:  # saved on a CPU, stepped in parallel now
             sim.solver.invalidate()
     return sim

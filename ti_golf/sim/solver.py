@@ -4,7 +4,6 @@ sweeps and the end-of-step position update, in that fixed order (see physics/col
 from __future__ import annotations
 
 import os
-from typing import Any
 
 import numpy as np
 import taichi as ti
@@ -476,60 +475,8 @@ class CollisionSolver:
         "impact",
         "spare_friction",
     )
-    """Arrays that each step or list build writes before it reads them: :meth:`saved` keeps only
-    their shapes."""
-
-    _NOT_SAVED = ("_model", "_packs", "_ids", "serial", "reorder", "loop_cap", "gauss_seidel")
-    """Attributes the constructor sets from its arguments, the model and the backend."""
-
-    def saved(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        """What the next steps read of this solver, to continue bit for bit after :meth:`restore`:
-        the neighbour lists, each pair's and each ball's carried impulses, the Gauss–Seidel column
-        order and the numbers they were built with. Returns (arrays by attribute name, in storage
-        order; a JSON-ready description: the scalars, each array's element shape, the scratch
-        arrays' shapes and types, and which attributes hold the same array)."""
-        arrays: dict[str, np.ndarray] = {}
-        meta: dict[str, Any] = {"values": {}, "elements": {}, "scratch": {}, "same": {}}
-        seen: dict[int, str] = {}
-        for name, value in vars(self).items():
-            if name in self._NOT_SAVED:
-                continue
-            if isinstance(value, ti.Ndarray):
-                if id(value) in seen:
-                    meta["same"][name] = seen[id(value)]
-                    continue
-                seen[id(value)] = name
-                element = list(getattr(value, "element_shape", ()))
-                if name in self.SCRATCH:
-                    meta["scratch"][name] = [list(value.shape), element, str(value.to_numpy().dtype)]
-                else:
-                    arrays[name] = value.to_numpy()
-                    meta["elements"][name] = element
-            elif name == "_hash":
-                meta["values"][name] = None if value is None else [[int(c) for c in v.to_list()] for v in value]
-            elif value is None or isinstance(value, (bool, int, float, tuple)):
-                meta["values"][name] = [int(c) for c in value] if isinstance(value, tuple) else value
-            else:
-                raise TypeError(f"CollisionSolver.{name} ({type(value).__name__}) cannot be saved")
-        return arrays, meta
-
-    def restore(self, state: State, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
-        """Take back what :meth:`saved` returned, for ``state`` restored to the same moment (its
-        storage order included): the next step is then the one that the saved solver would have made."""
-        for name, value in meta["values"].items():
-            if name == "_hash":
-                value = None if value is None else tuple(ti.Vector(v, dt=ti.i32) for v in value)
-            elif isinstance(getattr(self, name, None), tuple):
-                value = tuple(value)
-            setattr(self, name, value)
-        for name, a in arrays.items():
-            setattr(self, name, _ndarray(a.shape[: a.ndim - len(meta["elements"][name])], meta["elements"][name], a))
-        for name, (shape, element, dtype) in meta["scratch"].items():
-            setattr(self, name, _ndarray(tuple(shape), element, np.zeros(0, dtype)))
-        for name, other in meta["same"].items():
-            setattr(self, name, getattr(self, other))
-        self._ids = state.ids
-        self._packs = Packs()
+    """Arrays that each step or list build writes before it reads them: :func:`.solver_state.solver_arrays`
+    keeps only their shapes."""
 
     def invalidate(self) -> None:
         """Rebuild the neighbour lists before the next step (balls were moved between steps), each
@@ -647,16 +594,3 @@ class CollisionSolver:
             packs.flight(s),
             packs.scratch(self),
         )
-
-
-_TAICHI_TYPES = {"float64": ti.f64, "float32": ti.f32, "int32": ti.i32}
-
-
-def _ndarray(shape: tuple[int, ...], element: list[int], values: np.ndarray) -> ti.Ndarray:
-    """A Taichi array of ``shape`` whose elements are scalars (``element`` empty) or vectors of
-    ``element[0]`` entries of ``values``' type, holding ``values`` unless they are empty."""
-    dtype = _TAICHI_TYPES[str(values.dtype)]
-    out = ti.ndarray(ti.types.vector(element[0], dtype) if element else dtype, shape)
-    if values.size:
-        out.from_numpy(np.ascontiguousarray(values))
-    return out

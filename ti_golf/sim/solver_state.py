@@ -1,0 +1,82 @@
+"""A collision solver's state saved with a run and given back to a new solver (:mod:`.saved_run`):
+the neighbour lists, the carried impulses and the numbers they were built with, so that a run
+loaded again continues bit for bit."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import taichi as ti
+
+from ti_golf.sim.packs import Packs
+from ti_golf.sim.solver import CollisionSolver
+from ti_golf.sim.state import State
+
+NOT_SAVED = ("_model", "_packs", "_ids", "serial", "reorder", "loop_cap", "gauss_seidel")
+"""Attributes of a :class:`CollisionSolver` that its constructor sets from its arguments, the
+model and the backend."""
+
+
+def solver_arrays(solver: CollisionSolver) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """What the next steps read of ``solver``, to continue bit for bit after :func:`restore_solver`:
+    the neighbour lists, each pair's and each ball's carried impulses, the Gauss–Seidel column
+    order and the numbers they were built with. Returns (arrays by attribute name, in storage
+    order; a JSON-ready description: the scalars, each array's element shape, the scratch
+    arrays' shapes and types, and which attributes hold the same array)."""
+    arrays: dict[str, np.ndarray] = {}
+    meta: dict[str, Any] = {"values": {}, "elements": {}, "scratch": {}, "same": {}}
+    seen: dict[int, str] = {}
+    for name, value in vars(solver).items():
+        if name in NOT_SAVED:
+            continue
+        if isinstance(value, ti.Ndarray):
+            if id(value) in seen:
+                meta["same"][name] = seen[id(value)]
+                continue
+            seen[id(value)] = name
+            element = list(getattr(value, "element_shape", ()))
+            if name in solver.SCRATCH:
+                meta["scratch"][name] = [list(value.shape), element, str(value.to_numpy().dtype)]
+            else:
+                arrays[name] = value.to_numpy()
+                meta["elements"][name] = element
+        elif name == "_hash":
+            meta["values"][name] = None if value is None else [[int(c) for c in v.to_list()] for v in value]
+        elif value is None or isinstance(value, (bool, int, float, tuple)):
+            meta["values"][name] = [int(c) for c in value] if isinstance(value, tuple) else value
+        else:
+            raise TypeError(f"CollisionSolver.{name} ({type(value).__name__}) cannot be saved")
+    return arrays, meta
+
+
+def restore_solver(solver: CollisionSolver, state: State, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
+    """Give ``solver`` back what :func:`solver_arrays` returned, for ``state`` restored to the same moment (its
+    storage order included): the next step is then the one that the saved solver would have made."""
+    for name, value in meta["values"].items():
+        if name == "_hash":
+            value = None if value is None else tuple(ti.Vector(v, dt=ti.i32) for v in value)
+        elif isinstance(getattr(solver, name, None), tuple):
+            value = tuple(value)
+        setattr(solver, name, value)
+    for name, a in arrays.items():
+        setattr(solver, name, _ndarray(a.shape[: a.ndim - len(meta["elements"][name])], meta["elements"][name], a))
+    for name, (shape, element, dtype) in meta["scratch"].items():
+        setattr(solver, name, _ndarray(tuple(shape), element, np.zeros(0, dtype)))
+    for name, other in meta["same"].items():
+        setattr(solver, name, getattr(solver, other))
+    solver._ids = state.ids
+    solver._packs = Packs()
+
+
+_TAICHI_TYPES = {"float64": ti.f64, "float32": ti.f32, "int32": ti.i32}
+
+
+def _ndarray(shape: tuple[int, ...], element: list[int], values: np.ndarray) -> ti.Ndarray:
+    """A Taichi array of ``shape`` whose elements are scalars (``element`` empty) or vectors of
+    ``element[0]`` entries of ``values``' type, holding ``values`` unless they are empty."""
+    dtype = _TAICHI_TYPES[str(values.dtype)]
+    out = ti.ndarray(ti.types.vector(element[0], dtype) if element else dtype, shape)
+    if values.size:
+        out.from_numpy(np.ascontiguousarray(values))
+    return out
