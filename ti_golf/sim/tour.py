@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ti_golf.scene.balls import launch_position
-from ti_golf.scene.schema import Scene, backspin_axis
+from ti_golf.scene.launch_monitor import launch_vectors
+from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import Flight
 from ti_golf.sim.sweep import fly
 from ti_golf.sim.trackman import TOUR, YD, TourShot
@@ -93,12 +94,9 @@ class TourFlight:
 def launch_states(scene: Scene, rows: Sequence[TourShot]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(x0, v0, w0), each (N, 3): the rows' balls at the scene's launch point, flying along +x with
     their ball speed [m/s] and launch angle, spinning backward at their spin [rad/s]."""
-    n = len(rows)
-    x0 = np.tile(np.asarray(launch_position(scene), float), (n, 1))
-    th = np.radians([r.launch_deg for r in rows])
-    speed = np.array([r.speed_si for r in rows])
-    v0 = np.stack([speed * np.cos(th), speed * np.sin(th), np.zeros(n)], axis=1)
-    w0 = np.array([r.spin_si for r in rows])[:, None] * np.asarray(backspin_axis(0.0))[None, :]
+    x0 = np.tile(np.asarray(launch_position(scene), float), (len(rows), 1))
+    speed, launch, spin = (np.array([getattr(r, a) for r in rows]) for a in ("speed_si", "launch_deg", "spin_si"))
+    v0, w0 = launch_vectors(speed, launch, 0.0, spin, 0.0)  # straight along +x, pure backspin
     return x0, v0, w0
 
 
