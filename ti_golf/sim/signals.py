@@ -19,21 +19,22 @@ HELD = (signal.SIGINT, signal.SIGTERM)
 
 
 @contextmanager
-def whole_steps() -> Iterator[None]:
+def whole_steps() -> Iterator[list[int]]:
     """Hold :data:`HELD` inside the block and raise each one that came, in order, when it ends
     (with the handlers restored: Ctrl-C then raises ``KeyboardInterrupt`` after the last whole
-    step). Outside the main thread, where Python runs no signal handler, it holds nothing."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
+    step). The block gets the list of the signals held so far, to stop early between its steps
+    when one came. Outside the main thread, where Python runs no signal handler, it holds nothing."""
     came: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield came
+        return
 
     def hold(signum: int, frame: object) -> None:
         came.append(signum)
 
     previous = {s: signal.signal(s, hold) for s in HELD}
     try:
-        yield
+        yield came
     finally:
         for s, handler in previous.items():
             signal.signal(s, signal.SIG_DFL if handler is None else handler)  # None: set outside Python

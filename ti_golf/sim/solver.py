@@ -510,9 +510,11 @@ class CollisionSolver:
             with whole_steps():
                 self._advance_serially(model, state, int(steps))
         else:
-            for _ in range(int(steps)):
-                with whole_steps():
+            with whole_steps() as came:  # (the handlers set once, not at every step)
+                for _ in range(int(steps)):
                     self._step_in_parallel(model, state)
+                    if came:  # Ctrl-C or SIGTERM: stop after this whole step
+                        break
 
     def _advance_serially(self, model: Model, state: State, steps: int) -> None:
         width = max(1, state.n - 1)
