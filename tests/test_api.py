@@ -137,6 +137,30 @@ def test_plain_compile_restores_the_compiler_setting():
     assert cfg.advanced_optimization == before
 
 
+def test_dropped_vector_arrays_give_their_memory_back():
+    # Taichi 1.7.4 frees only scalar ndarrays when Python drops them (taichi issue 8763);
+    # runtime.free_every_ndarray frees vector ones too: 24 arrays of 24 MB, each widened a little
+    # as the solver's pair tables are, leave the process no bigger than a few of them would
+    # (collected as the solver collects them: a first fill leaves an array in a reference cycle)
+    import gc
+
+    import taichi as ti
+
+    from ti_golf.bench.common import _rss_bytes
+    from ti_golf.runtime import ensure_init, release_freed_memory
+
+    ensure_init()
+    table = ti.types.vector(5, ti.f64)
+    before = _rss_bytes()
+    for width in range(24):
+        a = ti.ndarray(table, (100_000 + 1000 * width, 6))  # 24 MB, a little more each time
+        a.fill(1.0)  # touch every page
+        del a
+        gc.collect()
+    release_freed_memory()
+    assert _rss_bytes() - before < 3 * 24e6
+
+
 def test_a_putt_is_not_a_flight_but_a_lob_is():
     # carry, apex and landing describe a ball that leaves the ground: a putt (launch angle 0) rolls
     # over the green and must not report a landing at t = 0 with zero carry; a lob from the same

@@ -397,6 +397,8 @@ def test_run_writes_numbered_frames_and_a_gif(tmp_path):
         "160x120",
         "--camera",
         "top",
+        "--out",
+        str(tmp_path / "run.npz"),
     )
     assert out.returncode == 0, out.stderr
     frames = sorted((tmp_path / "f").glob("frame_*.png"))
@@ -409,6 +411,20 @@ def test_run_writes_numbered_frames_and_a_gif(tmp_path):
     first = np.asarray(Image.open(frames[0]).convert("RGB"), dtype=float)
     last = np.asarray(Image.open(frames[-1]).convert("RGB"), dtype=float)
     assert np.abs(first - last).mean() > 0.01
+    # ti-golf render --resume draws the saved run where it stopped: the run's last frame
+    drawn = run_cli(
+        "render",
+        "--resume",
+        str(tmp_path / "run.npz"),
+        "--size",
+        "160x120",
+        "--camera",
+        "top",
+        "--out",
+        str(tmp_path / "p.png"),
+    )
+    assert drawn.returncode == 0, drawn.stderr
+    np.testing.assert_array_equal(np.asarray(Image.open(tmp_path / "p.png").convert("RGB"), dtype=float), last)
 
 
 @pytest.mark.parametrize("backend", BACKENDS)

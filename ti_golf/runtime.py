@@ -92,6 +92,7 @@ def init(arch: str | None = None, precision: str | None = None, *, debug: bool =
     for line in banner.getvalue().splitlines():  # keep stdout clean for JSON; pass on anything unusual
         if not line.startswith("[Taichi] Starting on arch"):
             print(line, file=sys.stderr)
+    free_every_ndarray()
     actual = ti.lang.impl.current_cfg().arch
     _info = RuntimeInfo(requested_arch=want_arch, arch=str(actual).split(".")[-1], precision=want_prec)
     if announce_first_compile and not kernels_cached():
@@ -101,6 +102,24 @@ def init(arch: str | None = None, precision: str | None = None, *, debug: bool =
             file=sys.stderr,
         )
     return _info
+
+
+def free_every_ndarray() -> None:
+    """Make Taichi free the memory of vector and matrix ndarrays when Python drops them, as it
+    does for scalar ones.
+
+    In Taichi 1.7.4 only ``ScalarNdarray`` has a ``__del__`` that hands its memory back
+    (``Program.delete_ndarray``); a dropped ``VectorNdarray`` or ``MatrixNdarray`` keeps its
+    memory until the runtime ends (taichi-dev/taichi issue 8763, fixed upstream by moving the
+    method to the ``Ndarray`` base class, as this does). Every widening of the collision solver's
+    pair tables, every ``Simulation.reset`` and every saved run loaded would otherwise leave the
+    old vector arrays in the process. An array that a kernel was compiled with also sits in a
+    reference cycle (the compiler's context keeps the arguments), freed when Python's cycle
+    collector next runs: the collision solver runs it after widening its tables."""
+    from taichi.lang._ndarray import Ndarray, ScalarNdarray
+
+    if "__del__" not in Ndarray.__dict__:
+        Ndarray.__del__ = ScalarNdarray.__del__  # type: ignore[attr-defined]
 
 
 def exit_process(code: int) -> NoReturn:

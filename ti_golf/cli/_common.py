@@ -9,7 +9,7 @@ import tempfile
 import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import rich.console
 import rich.progress
@@ -17,6 +17,9 @@ import rich.progress
 from ti_golf.errors import ConfigError
 from ti_golf.render.plots import PLOT_FORMATS_HELP, plot_format
 from ti_golf.runtime import ARCHES, PRECISIONS
+
+if TYPE_CHECKING:
+    from ti_golf.sim.simulation import Simulation
 
 
 class Parser(argparse.ArgumentParser):
@@ -51,6 +54,32 @@ def scene_options(
         f"override a scene key with a TOML value, e.g. --set {example}; KEY= (no value) clears it, back "
         "to its default (repeatable)",
     )
+
+
+def resume_option(p: argparse.ArgumentParser, what: str) -> None:
+    """``--resume RUN.npz``: a run saved with ``ti-golf run --out`` in place of the scene (see
+    :func:`scene_or_saved_run`); ``what`` says what the command does with it."""
+    p.add_argument("--resume", metavar="RUN.npz", help=f"a run saved with `ti-golf run --out` instead of SCENE: {what}")
+
+
+def scene_or_saved_run(args: argparse.Namespace, command: str) -> Simulation:
+    """The simulation of ``args.scene`` at t0, or with ``args.resume`` the saved run where it
+    stopped (:meth:`Simulation.load`), each with ``--set``'s changes; ``command`` names the
+    subcommand in the error when neither or both are given."""
+    from ti_golf.sim.simulation import Simulation
+
+    if not args.resume:
+        if not args.scene:
+            raise ConfigError(
+                command, None, "needs a SCENE (a scene file or a bundled scene's name) or --resume RUN.npz"
+            )
+        return Simulation.from_scene(args.scene, args.overrides)
+    if args.scene:
+        raise ConfigError("--resume", None, f"takes the scene from {args.resume}: leave out SCENE (got {args.scene!r})")
+    sim = Simulation.load(args.resume)
+    if args.overrides:
+        sim.set(args.overrides)
+    return sim
 
 
 def set_option(p: argparse.ArgumentParser, help: str) -> None:

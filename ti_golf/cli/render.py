@@ -10,18 +10,24 @@ from ti_golf.cli._common import (
     Progress,
     check_writable,
     parse_size,
+    resume_option,
     runtime_options,
     scene_options,
+    scene_or_saved_run,
 )
 from ti_golf.errors import ConfigError
 from ti_golf.render import BACKENDS, CAMERAS, COLOR_BY, render
-from ti_golf.sim.simulation import Simulation
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Add the ``render`` subcommand to ``ti-golf``'s subparsers; returns its parser."""
     p = sub.add_parser("render", help="run a scene and write a PNG of its balls (GGUI off screen, else matplotlib)")
-    scene_options(p)
+    scene_options(
+        p,
+        default="",
+        scene_help="scene file, or the name of a bundled scene (see `ti-golf scenes`); none with --resume",
+    )
+    resume_option(p, "draw it where it stopped, or --t (or --steps) later")
     g = p.add_mutually_exclusive_group()
     g.add_argument(
         "--t",
@@ -49,7 +55,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
-    """Run ``args.scene`` for ``--t`` / ``--steps`` (default: not at all) and write ``--out``."""
+    """Run ``args.scene`` (or the saved run ``--resume``) for ``--t`` / ``--steps`` (default: not at
+    all) and write ``--out``."""
     check_writable(args.out, "--out")
     if args.t is not None and not args.t >= 0:
         raise ConfigError("--t", None, f"must be >= 0 seconds (got {args.t})")
@@ -58,7 +65,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     w, h = args.size
     if not 1.0 <= args.fov <= 170.0:
         raise ConfigError("--fov", None, f"must be in [1, 170] degrees (got {args.fov})")
-    sim = Simulation.from_scene(args.scene, args.overrides)
+    sim = scene_or_saved_run(args, "render")
     if args.steps is not None:
         steps = args.steps
     else:  # default: the initial state, or up to world.t_end with --until

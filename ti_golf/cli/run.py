@@ -16,15 +16,16 @@ from ti_golf.cli._common import (
     check_writable,
     parse_size,
     plot_help,
+    resume_option,
     runtime_options,
     scene_options,
+    scene_or_saved_run,
 )
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.render import render
 from ti_golf.render.plots import plot_run
 from ti_golf.scene.schema import STATUS_NAMES
-from ti_golf.sim.simulation import Simulation
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -35,11 +36,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default="",
         scene_help="scene file, or the name of a bundled scene (see `ti-golf scenes`); none with --resume",
     )
-    r.add_argument(
-        "--resume",
-        metavar="RUN.npz",
-        help="continue a run saved with --out from where it stopped, for --t (or --steps) more, with its scene "
-        "and any --set changes (air, contact, world keys): it ends bit for bit where one unbroken run ends",
+    resume_option(
+        r,
+        "continue it from where it stopped, for --t (or --steps) more, with its scene and any --set changes (air, "
+        "contact, world keys): it ends bit for bit where one unbroken run ends",
     )
     g = r.add_mutually_exclusive_group()
     g.add_argument("--t", type=float, help="simulated time [s] (default: world.t_end); more time with --resume")
@@ -71,7 +71,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         raise ConfigError("--steps", None, f"must be > 0 (got {args.steps})")
     if args.record_every < 0:
         raise ConfigError("--record-every", None, f"must be >= 0 (got {args.record_every})")
-    sim = _simulation(args)
+    sim = scene_or_saved_run(args, "run")
     resumed_at = sim.t if args.resume else None
     record_every = args.record_every
     if args.plot and not record_every:
@@ -148,20 +148,6 @@ def cmd_run(args: argparse.Namespace) -> int:
         plot_run(rec, args.plot, title=sim.scene.description or sim.scene.name)
         print(f"wrote {args.plot}")
     return 0
-
-
-def _simulation(args: argparse.Namespace) -> Simulation:
-    """The scene's simulation at t0, or with ``--resume`` the saved run, each with ``--set``'s changes."""
-    if not args.resume:
-        if not args.scene:
-            raise ConfigError("run", None, "needs a SCENE (a scene file or a bundled scene's name) or --resume RUN.npz")
-        return Simulation.from_scene(args.scene, args.overrides)
-    if args.scene:
-        raise ConfigError("--resume", None, f"takes the scene from {args.resume}: leave out SCENE (got {args.scene!r})")
-    sim = Simulation.load(args.resume)
-    if args.overrides:
-        sim.set(args.overrides)
-    return sim
 
 
 class _Frames:

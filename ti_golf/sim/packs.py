@@ -25,18 +25,32 @@ class Packs:
     """Packs kept before the oldest are dropped (a solver alternates between two per kind)."""
 
     def __init__(self) -> None:
-        self._kept: dict[tuple[Any, ...], Any] = {}
+        self._kept: dict[tuple[Any, ...], tuple[tuple[Any, ...], Any]] = {}
 
     def get(self, kind: Any, **members: Any) -> Any:
-        """The pack of type ``kind`` holding ``members`` (made now if these arrays have none yet)."""
+        """The pack of type ``kind`` holding ``members`` (made now if these arrays have none yet).
+
+        A new pack drops the kept packs of its kind whose arrays have other shapes than these: arrays
+        that were replaced by bigger ones (the solver's pair tables, widened), which the old packs
+        would otherwise keep in memory beside the new ones."""
         key = (id(kind), *(id(a) for a in members.values()))
-        pack = self._kept.get(key)
-        if pack is None:
-            if len(self._kept) >= self.MAX_KEPT:
-                self._kept.pop(next(iter(self._kept)))
-            pack = kind(**members)
-            self._kept[key] = pack
+        kept = self._kept.get(key)
+        if kept is not None:
+            return kept[1]
+        shapes = (id(kind), *(getattr(a, "shape", None) for a in members.values()))
+        for old in [
+            k for k, (old_shapes, _) in self._kept.items() if old_shapes[0] == id(kind) and old_shapes != shapes
+        ]:
+            del self._kept[old]
+        if len(self._kept) >= self.MAX_KEPT:
+            self._kept.pop(next(iter(self._kept)))
+        pack = kind(**members)
+        self._kept[key] = (shapes, pack)
         return pack
+
+    def clear(self) -> None:
+        """Drop every kept pack, and with them their references to arrays about to be replaced."""
+        self._kept.clear()
 
     def model(self, m: Any) -> Any:
         """:data:`~ti_golf.physics.types.ModelArrays` of a :class:`~ti_golf.sim.model.Model`."""

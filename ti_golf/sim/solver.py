@@ -3,6 +3,7 @@ sweeps and the end-of-step position update, in that fixed order (see physics/col
 
 from __future__ import annotations
 
+import gc
 import os
 
 import numpy as np
@@ -199,6 +200,7 @@ class CollisionSolver:
         """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
         pair's accumulated impulse over (the tables widen to the longest list when one overflows)."""
         n = state.n
+        widths = self.upper.shape if self.upper is not None else None
         if n >= REORDER_MIN_BALLS:  # 0.2 ms, against the build's tens of milliseconds
             release_freed_memory()  # before the tables: numpy copies freed since (balls set up, storage order)
         stashed = None
@@ -225,6 +227,8 @@ class CollisionSolver:
         self._ids = state.ids
         while True:
             if self.upper is None or self.upper.shape[1] != self.capacity[0]:
+                self._packs.clear()  # (their references would keep the narrower tables in memory)
+                self.upper = self.lam = None
                 self.upper = ti.ndarray(ti.i32, (n, self.capacity[0]))
                 self.lam = ti.ndarray(float, (n, self.capacity[0]))
             if self.lower is None or self.lower.shape[0] != self.capacity[1]:
@@ -307,6 +311,8 @@ class CollisionSolver:
         self._valid = True
         if self.gauss_seidel and not self.serial:
             self._order_columns(state)
+        if self.upper.shape != widths:  # the tables were widened: free the old ones now (see free_every_ndarray)
+            gc.collect()
 
     def _fit_pair_table(self, name: str) -> None:
         """Give the vec3f table of pair friction impulses held in attribute ``name`` the lists'
