@@ -29,7 +29,7 @@ import taichi as ti
 from ti_golf.physics.contact import BOUNCE, FIRST, SHOCK, SOLVE, clamp_friction, pair_step, spin_jolt
 from ti_golf.physics.links import moved_past
 from ti_golf.physics.pairs import QUIET, pair_normal, skip_pair
-from ti_golf.physics.sort import cell_of, counting_sort, sort_buckets
+from ti_golf.physics.sort import bucket_in_turn, cell_of, counting_sort, sort_buckets
 from ti_golf.physics.surfaces import surface_impulses
 from ti_golf.physics.types import (
     BallState,
@@ -149,7 +149,8 @@ def gauss_seidel_sweep(
     ``blocks`` from :func:`column_order`), meet the pairs they own (but, when ``any_far``, those
     whose other ball was not beside them at the build), then their planes and the terrain."""
     for c in ti.static(range(COLOURS)):  # a top-level loop per colour: the colours in turn
-        for b in range(blocks.start.shape[0] - 1):
+        for turn in range(blocks.start.shape[0] - 1):  # (blocks spread over the threads: see bucket_in_turn)
+            b = bucket_in_turn(turn, blocks.start.shape[0] - 1)
             for s in range(blocks.start[b], blocks.start[b + 1]):
                 if blocks.colour[s] == c:
                     sweep_ball(
@@ -360,7 +361,8 @@ def project_sweep(
     (:func:`project_ball`). Returns 1 (and sets ``scratch.flag[0]``) when the lists must be
     rebuilt before the next step, as the step's end does (:func:`.collide.finish`)."""
     for c in ti.static(range(COLOURS)):
-        for b in range(blocks.start.shape[0] - 1):
+        for turn in range(blocks.start.shape[0] - 1):  # (blocks spread over the threads: see bucket_in_turn)
+            b = bucket_in_turn(turn, blocks.start.shape[0] - 1)
             for s in range(blocks.start[b], blocks.start[b + 1]):
                 if blocks.colour[s] == c:
                     project_ball(blocks.ids[s], False, any_far, inv_cell, contact.k_p, model, lists, state, scratch)

@@ -42,7 +42,7 @@ from ti_golf.physics.types import (
 
 real_table = float_grid
 
-SCATTERED_HASH = (1, 19349663, 83492791)
+SCATTERED_HASH = (19349663, 1, 83492791)
 
 """Strides of the cell coordinates (x, y, z) in the hash of a grid whose balls are too spread out
 for a dense one (see :func:`hash_strides`)."""
@@ -106,7 +106,7 @@ def hash_strides(bounds, buckets: int) -> tuple[tuple[int, int, int], tuple[int,
     lo, hi = [int(b) for b in bounds[:3]], [int(b) for b in bounds[3:]]
     ext = [h - lo_ + 3 for lo_, h in zip(lo, hi)]
     if ext[0] * ext[1] * ext[2] <= buckets:
-        return (lo[0] - 1, lo[1] - 1, lo[2] - 1), (1, ext[0] * ext[2], ext[0])
+        return (lo[0] - 1, lo[1] - 1, lo[2] - 1), (ext[1], 1, ext[0] * ext[1])
     return (0, 0, 0), SCATTERED_HASH
 
 
@@ -278,8 +278,8 @@ def list_ball(
         # that side, with room for the rounding of 1/inv_cell and of the pair's reach
         cell_sqr = (1.0 + 1e-4) / (inv_cell * inv_cell)
         for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2)))):
-            # the row of three cells c + (−1…1, dy, dz): consecutive buckets, one range unless it wraps
-            row = c + ti.Vector([-1, d[0], d[1]])
+            # the column of three cells c + (dx, −1…1, dz): consecutive buckets, one range unless it wraps
+            row = c + ti.Vector([d[0], -1, d[1]])
             b = bucket_of(row, mask, origin, stride)
             for part in range(2):
                 lo, hi = start[b], start[ti.min(b + 3, mask + 1)]
@@ -296,12 +296,12 @@ def list_ball(
                     if (xj - xi).norm_sqr() < cell_sqr:
                         cj = cell_of(xj, inv_cell)
                         apart_j = is_apart(v, radius, j, v_cut, r_cut, n_apart)
-                        # a ball of the row (not of another cell sharing its buckets), not one listed apart
+                        # a ball of the column (not of another cell sharing its buckets), not one listed apart
                         if (
                             j != i
-                            and cj[1] == row[1]
+                            and cj[0] == row[0]
                             and cj[2] == row[2]
-                            and ti.abs(cj[0] - c[0]) <= 1
+                            and ti.abs(cj[1] - c[1]) <= 1
                             and not (apart_j and scan_apart != 0)
                         ):
                             n_up, n_low = list_pair(
