@@ -99,10 +99,12 @@ def hash_strides(bounds, buckets: int) -> tuple[tuple[int, int, int], tuple[int,
 
     When the box of cells around the balls, one cell wider on every side (the cells a ball's
     neighbours are looked for in), has no more cells than there are ``buckets``, the hash numbers
-    that box's cells one after another, x fastest, then z, then y: no two cells share a bucket,
-    and the grid's order (:func:`storage_order`) is the box's rows and layers in turn, so that a
-    ball's neighbours in the rows beside and above it lie close in memory too. Else (balls spread
-    far apart) the cells are hashed with ``SCATTERED_HASH``, still linear in x."""
+    that box's cells one after another, y fastest, then x, then z: no two cells share a bucket,
+    and the grid's order (:func:`storage_order`) is the box's columns of cells in turn, bottom-up,
+    so that a ball's neighbours above and below it and in the column beside it lie close in
+    memory too, and the Gauss–Seidel sweeps, which take the balls column by column
+    (``colour.column_order``), read memory in runs. Else (balls spread far apart) the cells are
+    hashed with ``SCATTERED_HASH``, still linear in y."""
     lo, hi = [int(b) for b in bounds[:3]], [int(b) for b in bounds[3:]]
     ext = [h - lo_ + 3 for lo_, h in zip(lo, hi)]
     if ext[0] * ext[1] * ext[2] <= buckets:

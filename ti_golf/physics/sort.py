@@ -85,9 +85,9 @@ def storage_order(
 ):
     """The order in which to store the balls so that neighbours lie close in memory: ``sorted_ids``
     lists the ball ids bucket by bucket (the grid's counting sort), and within a bucket by
-    position, y then z then x (then id), as the buckets of a dense hash run (:func:`hash_strides`),
-    so the order does not depend on thread scheduling. The balls of each row of cells, and of
-    the rows a ball's neighbours lie in, end up in runs of consecutive indices."""
+    position, y then z then x (then id), so the order does not depend on thread scheduling. The
+    balls of each column of cells (:func:`hash_strides`), and of the columns a ball's neighbours
+    lie in, end up in runs of consecutive indices."""
     counting_sort(x, inv_cell, mask, origin, stride, rank, start, chunk_start, sorted_ids)
     sort_buckets(x, start, sorted_ids)
 
