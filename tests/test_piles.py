@@ -16,6 +16,7 @@ import pytest
 
 import ti_golf as tg
 from ti_golf.bench.pit import pile_quality, pit_scene
+from ti_golf.scene.schema import AT_REST
 
 NARROW_PIT = 2250
 """Balls of a pit as deep as the bundled one in a 0.3 m bin."""
@@ -146,6 +147,33 @@ def test_heavy_ball_dropped_on_the_pit_stays_near_the_top(settled_pit):
     assert y > 0.75 * top, (y, top)
     quality = pile_quality(sim, side)
     assert quality["outside_bin"] == 0 and quality["deepest_overlap"] < 0.02, quality
+
+
+def test_the_settled_pit_sleeps_by_regions_and_a_landing_ball_wakes_its_own(settled_pit, tmp_path):
+    # with the Gauss–Seidel sweeps a ball sleeps once every ball within colour.REGION_HOPS contacts
+    # of it is calm: the pit, one island, never slept as a whole (0 % asleep at 4 s), but its
+    # regions do
+    pit, quality, _, side = settled_pit
+    assert quality["asleep_fraction"] > 0.3, quality
+    pit.save(tmp_path / "pit.npz")  # (the fixture's run stays as it is for the other tests)
+    sim = tg.Simulation.load(tmp_path / "pit.npz")
+    r = float(np.max(sim.model.radius_np))
+    x, asleep = sim.x, sim.status == AT_REST
+    # a ball of the top is lifted 0.3 m above the pile's middle and dropped onto it at 2 m/s
+    top = int(np.argmax(x[:, 1]))
+    drop = np.array([side / 2, x[:, 1].max() + 0.3, side / 2])
+    below = np.linalg.norm(x[:, [0, 2]] - drop[[0, 2]], axis=1) < 2 * r  # the balls in its path
+    below[top] = False
+    sim.set_ball(top, x=drop, v=[0.0, -2.0, 0.0])
+    sim.run(t=0.2)  # it lands after 0.11 s
+    landed = np.linalg.norm(sim.x - sim.x[top], axis=1) < 2.05 * r  # the balls it now touches
+    landed[top] = False
+    assert landed.any() and not np.any(sim.status[landed] == AT_REST), sim.status[landed]
+    assert np.any(asleep[landed | below])  # ... some of which were asleep: it woke them
+    # far from it (the bottom half, away from the drop's column) the pile sleeps on
+    far = (x[:, 1] < 0.5 * x[:, 1].max()) & (np.linalg.norm(x[:, [0, 2]] - drop[[0, 2]], axis=1) > 0.1)
+    assert np.mean(sim.status[far & asleep] == AT_REST) > 0.9
+    assert pile_quality(sim, side)["deepest_overlap"] <= 0.01
 
 
 def _heap_angle(mu: float) -> float:

@@ -139,6 +139,26 @@ def exit_process(code: int) -> NoReturn:
         os._exit(code)
 
 
+def available_memory() -> int | None:
+    """Bytes of memory available to new allocations (Linux: MemAvailable), or ``None`` if unknown."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, OSError, ValueError):
+        return None
+
+
+def byte_size(nbytes: float) -> str:
+    """A byte count for people: MiB below a GiB, else GiB."""
+    return f"{nbytes / 2**20:.1f} MiB" if nbytes < 2**30 else f"{nbytes / 2**30:.1f} GiB"
+
+
 def release_freed_memory() -> None:
     """Give the C heap's freed pages back to the OS (glibc's ``malloc_trim``; nothing elsewhere).
 

@@ -40,7 +40,14 @@ launch overhead that dominates a step of a few balls.
 import taichi as ti
 
 from ti_golf.physics.aero import V, W, X, coefficients, column
-from ti_golf.physics.colour import inelastic_speed, serial_projection, serial_sweeps
+from ti_golf.physics.colour import (
+    ASLEEP_OVERLAP,
+    inelastic_speed,
+    region_hop,
+    serial_projection,
+    serial_sweeps,
+    stands_firm,
+)
 from ti_golf.physics.contact import (
     GAUSS_SEIDEL,
     plane_position,
@@ -49,7 +56,7 @@ from ti_golf.physics.contact import (
 from ti_golf.physics.integrate import IN_FLIGHT, step_free, track_flight
 from ti_golf.physics.kernels import lane_state
 from ti_golf.physics.links import moved_past, relist_all_pairs, slot_bits
-from ti_golf.physics.pairs import QUIET, gather, impact_keys, owned_pairs, warm_start
+from ti_golf.physics.pairs import QUIET, gather, impact_keys, owned_pairs, touched_by_moving, warm_start
 from ti_golf.physics.surfaces import beyond_reach, rounded_down, surface_clearance, surface_impulses
 from ti_golf.physics.terrain import (
     outside,
@@ -71,7 +78,7 @@ from ti_golf.physics.types import (
     of_ball,
     zero3,
 )
-from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS
+from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING
 
 
 @kernel
@@ -262,6 +269,10 @@ def start_step(
     supported (see the module's docstring)."""
     h = params.h
     tracking = flight.landed.shape[0] == state.x.shape[0]
+    for i in range(state.x.shape[0]):  # a ball asleep in a Gauss–Seidel pile wakes when a moving ball touches it
+        if stands_firm(contact, state.status[i]):
+            if touched_by_moving(i, state.status, state.rest_time, lists, bits):
+                state.status[i] = ROLLING
     for i in range(state.x.shape[0]):
         xi = state.x[i]
         x1, v1, w1 = xi, zero3(), zero3()
@@ -306,8 +317,9 @@ def start_step(
             lists.friction,
             contact.mu,
             contact.solver == GAUSS_SEIDEL,
+            region_hop(contact, params),
         )
-        if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
+        if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET and not stands_firm(contact, state.status[i]):
             v1 += dv
             w1 += dw
             v1, w1 = surface_impulses(i, True, v1, w1, contact, terrain, h, v_inelastic, model, lists, state, scratch)
@@ -358,6 +370,9 @@ def sweep(
     for i in range(state.x.shape[0]):
         if scratch.flag[1] != 0:  # (a loop inside the test would not run in parallel)
             impact_keys(i, lists.n_upper, lists.lower, lists.n_lower, bits, scratch.J, scratch.impact)
+    pressed = 0.01  # the overlap [share of a radius] that keeps a ball awake
+    if contact.solver == GAUSS_SEIDEL:
+        pressed = ASLEEP_OVERLAP
     for i in range(state.x.shape[0]):
         if scratch.calm[i] == QUIET:
             if ti.static(last):
@@ -378,6 +393,7 @@ def sweep(
                 scratch.impact,
                 scratch.flag[1],
                 contact.k_p,
+                pressed,
             )
             v_new, w_new = state.v[i] + dv, state.w[i] + dw
             if contact.solver != GAUSS_SEIDEL:  # (its sweeps are done)

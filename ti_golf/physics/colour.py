@@ -26,7 +26,16 @@ the terrain right after its pairs.
 
 import taichi as ti
 
-from ti_golf.physics.contact import BOUNCE, FIRST, SHOCK, SOLVE, clamp_friction, pair_step, spin_jolt
+from ti_golf.physics.contact import (
+    BOUNCE,
+    FIRST,
+    GAUSS_SEIDEL,
+    SHOCK,
+    SOLVE,
+    clamp_friction,
+    pair_step,
+    spin_jolt,
+)
 from ti_golf.physics.links import moved_past
 from ti_golf.physics.pairs import QUIET, pair_normal, skip_pair
 from ti_golf.physics.sort import bucket_in_turn, cell_of, counting_sort, sort_buckets
@@ -54,6 +63,36 @@ PROJECT = 2
 
 COLOURS = 4
 """Colours of the blocks of 2 × 2 grid columns: the parities of the block's coordinates."""
+
+REGION_HOPS = 8
+"""Contacts between a ball and the nearest moving one beyond which the ball may fall asleep, with
+the Gauss–Seidel sweeps (``pairs.island_calm``): each contact nearer the moving ball takes
+``world.t_rest`` / ``REGION_HOPS`` off how long the ball counts as calm."""
+
+ASLEEP_OVERLAP = 0.005
+"""Deepest overlap, as a share of the radius, with which a ball may fall asleep with the
+Gauss–Seidel sweeps (1 % with the Jacobi sweeps): a ball asleep is no longer projected out of its
+overlaps with other balls asleep, so it falls asleep only with half the overlap a settled pile may
+have."""
+
+
+@ti.func
+def region_hop(contact: ti.template(), params: ti.template()):
+    """What each contact nearer a moving ball takes off how long a ball counts as calm [s]
+    (``pairs.island_calm``): t_rest / ``REGION_HOPS`` with the Gauss–Seidel sweeps, else 0 (the
+    Jacobi sweeps put islands to sleep)."""
+    hop = 0.0
+    if contact.solver == GAUSS_SEIDEL:
+        hop = params.t_rest / REGION_HOPS
+    return hop
+
+
+@ti.func
+def stands_firm(contact: ti.template(), status_i):
+    """Whether a ball with status ``status_i`` stands firm in a step: with the Gauss–Seidel sweeps, a
+    ball asleep takes no impulse and does not move, and the awake balls touching it meet it as they
+    meet a wall, until a moving ball touches it (``collide.wake_touched``)."""
+    return contact.solver == GAUSS_SEIDEL and status_i == AT_REST
 
 
 @ti.func
@@ -290,6 +329,9 @@ def sweep_ball(
         h, v_inelastic, up = params.h, inelastic_speed(contact, params), upward(params)
         xi, vi, wi = state.x[i], state.v[i], state.w[i]
         ri, inv_mi = of_ball(model.radius, i), 1.0 / of_ball(model.mass, i)
+        firm = stands_firm(contact, state.status[i])
+        if firm:
+            inv_mi = 0.0
         col = column_of(lists.x_at_build[i], inv_cell)
         for k in range(lists.n_upper[i]):
             j = lists.upper[i, k]
@@ -301,6 +343,8 @@ def sweep_ball(
                     n = pair_normal(xi, state.x[j], ti.abs(Jk[3]))
                     if n.norm_sqr() > 0.0:
                         rj, inv_mj = of_ball(model.radius, j), 1.0 / of_ball(model.mass, j)
+                        if stands_firm(contact, state.status[j]):
+                            inv_mj = 0.0
                         F = ti.cast(lists.friction[i, k], float)
                         lam = lists.lam[i, k]
                         if phase == FIRST:  # what the warm start applied (pairs.carried_friction)
@@ -311,33 +355,34 @@ def sweep_ball(
                                 inv_b = 0.0
                             else:
                                 inv_a = 0.0
-                        P, lists.lam[i, k], F = pair_step(
-                            phase,
-                            n,
-                            Jk[4],
-                            (scratch.v_free[i] - scratch.v_free[j]).dot(n),
-                            vi,
-                            wi,
-                            ri,
-                            inv_a,
-                            state.v[j],
-                            state.w[j],
-                            rj,
-                            inv_b,
-                            lam,
-                            F,
-                            contact.e,
-                            contact.mu,
-                            v_inelastic,
-                            h,
-                        )
-                        lists.friction[i, k] = ti.cast(F, ti.f32)
-                        vi += P * inv_a
-                        wi += spin_jolt(P, n, ri, inv_a)
-                        if scratch.calm[j] != QUIET:
-                            state.v[j] -= P * inv_b
-                            state.w[j] += spin_jolt(-P, -n, rj, inv_b)
-        if not far_only:
+                        if inv_a + inv_b > 0.0:  # (not both standing firm: a ball asleep, and the shock sweep)
+                            P, lists.lam[i, k], F = pair_step(
+                                phase,
+                                n,
+                                Jk[4],
+                                (scratch.v_free[i] - scratch.v_free[j]).dot(n),
+                                vi,
+                                wi,
+                                ri,
+                                inv_a,
+                                state.v[j],
+                                state.w[j],
+                                rj,
+                                inv_b,
+                                lam,
+                                F,
+                                contact.e,
+                                contact.mu,
+                                v_inelastic,
+                                h,
+                            )
+                            lists.friction[i, k] = ti.cast(F, ti.f32)
+                            vi += P * inv_a
+                            wi += spin_jolt(P, n, ri, inv_a)
+                            if scratch.calm[j] != QUIET:
+                                state.v[j] -= P * inv_b
+                                state.w[j] += spin_jolt(-P, -n, rj, inv_b)
+        if not far_only and not firm:
             vi, wi = surface_impulses(
                 i, False, vi, wi, contact, terrain, h, v_inelastic, model, lists, state, scratch, phase
             )

@@ -156,6 +156,7 @@ def warm_start(
     friction: ti.template(),
     mu,
     carried,
+    hop,
 ):
     """Δv [m/s] and Δω [rad/s] of ball i from last step's resting impulses λ of its ball pairs, each
     along the pair's normal at the start of the step, summed in id order (lower then upper). A
@@ -166,8 +167,9 @@ def warm_start(
     ball i owns for the sweeps: J[i, k] = (0, 1/|x_i − x_j|, the surface gap [m]), which marks
     no impact (:func:`impact_mark`). Reads only
     what the free-flight loop does not write (start-of-step positions, status, λ, rest timers),
-    so it runs inside that loop. Returns (Δv, the calm time [s] of ball i: the least rest timer
-    of the ball and the balls it touches, see :func:`finish`; or ``QUIET`` for a ball at rest
+    so it runs inside that loop. Returns (Δv, the calm time [s] of ball i: the least of its rest
+    timer and the rest timers of the balls it touches, each plus ``hop`` [s] (:func:`island_calm`),
+    see :func:`finish`; or ``QUIET`` for a ball at rest
     whose listed neighbours are all at rest or out of bounds: nothing can touch it this step, so
     the step leaves it exactly as it is and the sweeps skip it)."""
     P, T = zero3(), zero3()
@@ -183,7 +185,7 @@ def warm_start(
             F = carried_friction(status, i, j, n, lam[j, k], friction[j, k], mu)
             P -= F
             T += n.cross(F)
-        calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j])
+        calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop)
         quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
     for k in range(n_upper[i]):
         j = upper[i, k]
@@ -195,7 +197,7 @@ def warm_start(
             F = carried_friction(status, i, j, n, lam[i, k], friction[i, k], mu)
             P += F
             T -= n.cross(F)
-        calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j])
+        calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop)
         quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
     if quiet:
         calm = QUIET
@@ -215,12 +217,34 @@ def carried_friction(status: ti.template(), i, j, n, lam, F, mu):
 
 
 @ti.func
-def island_calm(calm, gap, r, status_j, rest_time_j):
+def island_calm(calm, gap, r, status_j, rest_time_j, hop):
     """The calm time [s] so far, lowered to the rest timer of a neighbour that touches the ball
-    (surface gap below 1 % of its radius ``r``) and is not out of bounds."""
+    (surface gap below 1 % of its radius ``r``) and is not out of bounds, plus ``hop`` [s].
+
+    With ``hop`` 0 a calm group falls asleep as a whole (an island: every ball of it calm for
+    ``t_rest``). With ``hop`` = t_rest / ``colour.REGION_HOPS`` (the Gauss–Seidel sweeps) a ball
+    falls asleep once every ball within ``REGION_HOPS`` contacts of it is calm, each for as much
+    longer as it is nearer: a ball moving somewhere in a pile of 100,000 keeps only its region
+    awake."""
     if gap < 0.01 * r and status_j != OUT_OF_BOUNDS:
-        calm = ti.min(calm, rest_time_j)
+        calm = ti.min(calm, rest_time_j + hop)
     return calm
+
+
+@ti.func
+def touched_by_moving(i, status: ti.template(), rest_time: ti.template(), lists: ti.template(), bits):
+    """Whether a listed neighbour of ball i moved faster than ``v_rest`` in the last step or flew
+    (its rest timer is 0) and is not out of bounds: a ball asleep among the Gauss–Seidel sweeps
+    wakes then (``collide.wake_touched``). Reads only rest timers and the out-of-bounds status,
+    which waking does not change."""
+    moving = False
+    for m in range(lists.n_lower[i]):
+        j, _ = owner_slot(lists.lower[m, i], bits)
+        moving |= rest_time[j] == 0.0 and status[j] != OUT_OF_BOUNDS
+    for k in range(lists.n_upper[i]):
+        j = lists.upper[i, k]
+        moving |= rest_time[j] == 0.0 and status[j] != OUT_OF_BOUNDS
+    return moving
 
 
 @ti.func
@@ -275,16 +299,17 @@ def matched(impact: ti.template(), a, b, key):
 
 
 @ti.func
-def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p):
+def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p, pressed):
     """0, 1 or ``PRESSED`` (see :func:`gather`) for the pair of ball i (radius ``r``, 1/m_i
     ``inv_m_i``) with ball j whose last-sweep J[·, ·][4] is ``g`` (the projection q ≥ 0 of an
-    overlap, or minus the gap: see :func:`owned_pairs`). Ball j's mass is read only for an
-    overlap (this runs for every pair of the step's last sweep)."""
+    overlap, or minus the gap: see :func:`owned_pairs`): pressed when they overlap by more than
+    ``pressed`` of ``r``. Ball j's mass is read only for an overlap (this runs for every pair of
+    the step's last sweep)."""
     state = 0
     if g > -0.01 * r:
         state = 1
         if g > 0.0:
-            if g * (inv_m_i + 1.0 / of_ball(mass, j)) > 0.01 * r * k_p:
+            if g * (inv_m_i + 1.0 / of_ball(mass, j)) > pressed * r * k_p:
                 state = PRESSED
     return state
 
@@ -305,6 +330,7 @@ def gather(
     impact: ti.template(),
     any_impact,
     k_p,
+    pressed,
 ):
     """What ball i gets from all its pairs, summed in id order (lower then upper): (Δv [m/s],
     Δω [rad/s], and with ``final`` the position projection Δx [m] and whether it touches a ball:
@@ -331,7 +357,7 @@ def gather(
         T += n_k.cross(P_k)
         if ti.static(final):
             q_n -= ti.max(Jk[4], 0.0) * n_k
-            touching = ti.max(touching, contact_state(Jk[4], r, inv_m, mass, j, k_p))
+            touching = ti.max(touching, contact_state(Jk[4], r, inv_m, mass, j, k_p, pressed))
     for k in range(n_upper[i]):
         Jk = J[i, k]
         P_k, n_k = Jk.xyz, pair_normal(xi, x[upper[i, k]], ti.abs(Jk[3]))
@@ -342,5 +368,5 @@ def gather(
         T += n_k.cross(P_k)
         if ti.static(final):
             q_n += ti.max(Jk[4], 0.0) * n_k
-            touching = ti.max(touching, contact_state(Jk[4], r, inv_m, mass, upper[i, k], k_p))
+            touching = ti.max(touching, contact_state(Jk[4], r, inv_m, mass, upper[i, k], k_p, pressed))
     return P * inv_m, T * (-2.5 * inv_m / r), q_n * inv_m, touching

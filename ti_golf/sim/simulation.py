@@ -18,7 +18,7 @@ import taichi as ti
 from ti_golf.errors import ConfigError, SimulationError
 from ti_golf.physics import kernels
 from ti_golf.physics.types import StepParams
-from ti_golf.runtime import ensure_init, np_float
+from ti_golf.runtime import available_memory, ensure_init, np_float
 from ti_golf.scene.balls import ball_count, block_size, build_balls
 from ti_golf.scene.document import with_changes
 from ti_golf.scene.loader import load_scene
@@ -36,7 +36,7 @@ from ti_golf.sim.model import Model
 from ti_golf.sim.packs import Packs
 from ti_golf.sim.results import Flight
 from ti_golf.sim.signals import whole_steps
-from ti_golf.sim.solver import CollisionSolver, available_memory
+from ti_golf.sim.solver import CollisionSolver
 from ti_golf.sim.state import State
 
 

@@ -4,7 +4,6 @@ sweeps and the end-of-step position update, in that fixed order (see physics/col
 from __future__ import annotations
 
 import gc
-import os
 
 import numpy as np
 import taichi as ti
@@ -21,6 +20,8 @@ from ti_golf.physics.types import (
     vec3f,
 )
 from ti_golf.runtime import (
+    available_memory,
+    byte_size,
     ensure_init,
     np_float,
     on_cpu,
@@ -71,26 +72,6 @@ def table_bytes(n: int, widths: tuple[int, int]) -> int:
     inverse distance, gap); per lower entry a slot."""
     f = np.dtype(np_float()).itemsize
     return n * (widths[0] * (4 + 6 * f) + widths[1] * 4)
-
-
-def available_memory() -> int | None:
-    """Bytes of memory available to new allocations (Linux: MemAvailable), or ``None`` if unknown."""
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    try:
-        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
-    except (AttributeError, OSError, ValueError):
-        return None
-
-
-def _size(nbytes: float) -> str:
-    """A byte count for people: MiB below a GiB, else GiB."""
-    return f"{nbytes / 2**20:.1f} MiB" if nbytes < 2**30 else f"{nbytes / 2**30:.1f} GiB"
 
 
 LONG_LOWER = 16
@@ -368,7 +349,7 @@ class CollisionSolver:
             return
         ball, farthest = self._farthest_reaching(state)
         raise SimulationError(
-            f"the neighbour lists would take {_size(need)}, more than half the {_size(avail)} of memory "
+            f"the neighbour lists would take {byte_size(need)}, more than half the {byte_size(avail)} of memory "
             f"available: a ball has {max(widths):,} balls within reach of one step, and the pair tables are as "
             f"wide as the longest list. {farthest}; lower world.dt, or that ball's speed or radius",
             [ball],
