@@ -10,15 +10,18 @@ id order: no float atomics, results do not depend on thread order.
 
 The kernel's top-level loops run one after another, each over all balls in parallel:
 
-1. free flight and warm start: every awake ball flies under gravity and air forces (the
-   integrator) to a predicted position, and flight records (apex, landing) are updated; then
+1. free flight and warm start (with the Gauss–Seidel sweeps, first a ball asleep that a moving
+   ball touches wakes: :func:`.pairs.touched_by_moving`): every awake ball flies under gravity
+   and air forces (the integrator) to a predicted position, and flight records (apex, landing)
+   are updated; then
    last step's *resting* impulses are applied again (ball pairs along their normals, planes and
    terrain with their friction), so a stack starts the step supported instead of re-learning its
    support every step. The ball pairs' part reads only start-of-step positions and ``lam``, which
    this loop does not write, so it needs no loop of its own; the same reads give each owned
    pair's normal and gap, stored for the sweeps (positions do not change during them), and each
-   ball's calm time for island-like sleeping (a *quiet* ball, at rest among balls at rest, is
-   then skipped by the sweeps) and its clearance from the planes and the terrain (the sweeps
+   ball's calm time for sleeping, by islands or, with Gauss–Seidel, by regions
+   (:func:`.pairs.island_calm`; a *quiet* ball, at rest among balls at rest, is then skipped by
+   the sweeps) and its clearance from the planes and the terrain (the sweeps
    skip them for a ball that cannot reach one within the step);
 2. ``iterations`` Jacobi sweeps, each a pair loop (impulses from the velocities of the previous
    sweep, with the normals and gaps that the first loop stored) and a ball loop (gather, then the

@@ -91,7 +91,7 @@ def region_hop(contact: ti.template(), params: ti.template()):
 def stands_firm(contact: ti.template(), status_i):
     """Whether a ball with status ``status_i`` stands firm in a step: with the Gauss–Seidel sweeps, a
     ball asleep takes no impulse and does not move, and the awake balls touching it meet it as they
-    meet a wall, until a moving ball touches it (``collide.wake_touched``)."""
+    meet a wall, until a moving ball touches it (:func:`.pairs.touched_by_moving`)."""
     return contact.solver == GAUSS_SEIDEL and status_i == AT_REST
 
 

@@ -235,8 +235,8 @@ def island_calm(calm, gap, r, status_j, rest_time_j, hop):
 def touched_by_moving(i, status: ti.template(), rest_time: ti.template(), lists: ti.template(), bits):
     """Whether a listed neighbour of ball i moved faster than ``v_rest`` in the last step or flew
     (its rest timer is 0) and is not out of bounds: a ball asleep among the Gauss–Seidel sweeps
-    wakes then (``collide.wake_touched``). Reads only rest timers and the out-of-bounds status,
-    which waking does not change."""
+    wakes then (the first loop of ``collide.start_step``). Reads only rest timers and the
+    out-of-bounds status, which waking does not change."""
     moving = False
     for m in range(lists.n_lower[i]):
         j, _ = owner_slot(lists.lower[m, i], bits)
