@@ -59,7 +59,15 @@ from ti_golf.physics.contact import (
 from ti_golf.physics.integrate import IN_FLIGHT, step_free, track_flight
 from ti_golf.physics.kernels import lane_state
 from ti_golf.physics.links import moved_past, relist_all_pairs, slot_bits
-from ti_golf.physics.pairs import QUIET, gather, impact_keys, owned_pairs, touched_by_moving, warm_start
+from ti_golf.physics.pairs import (
+    QUIET,
+    gather,
+    impact_keys,
+    owned_pairs,
+    touched_by_moving,
+    touching_by_gaps,
+    warm_start,
+)
 from ti_golf.physics.surfaces import beyond_reach, rounded_down, surface_clearance, surface_impulses
 from ti_golf.physics.terrain import (
     outside,
@@ -351,25 +359,26 @@ def sweep(
     h = params.h
     scratch.flag[1] = 0
     for i in range(state.x.shape[0]):
-        if ti.static(last) or scratch.calm[i] != QUIET:
-            owned_pairs(
-                i,
-                last,
-                contact,
-                h,
-                v_inelastic,
-                state.x,
-                model.radius,
-                model.mass,
-                state.status,
-                lists.upper,
-                lists.n_upper,
-                lists.lam,
-                scratch.J,
-                state.v,
-                state.w,
-                scratch.flag,
-            )
+        if contact.solver != GAUSS_SEIDEL:  # (its sweeps are done and leave each pair's gap in J: all it needs)
+            if ti.static(last) or scratch.calm[i] != QUIET:
+                owned_pairs(
+                    i,
+                    last,
+                    contact,
+                    h,
+                    v_inelastic,
+                    state.x,
+                    model.radius,
+                    model.mass,
+                    state.status,
+                    lists.upper,
+                    lists.n_upper,
+                    lists.lam,
+                    scratch.J,
+                    state.v,
+                    state.w,
+                    scratch.flag,
+                )
     for i in range(state.x.shape[0]):
         if scratch.flag[1] != 0:  # (a loop inside the test would not run in parallel)
             impact_keys(i, lists.n_upper, lists.lower, lists.n_lower, bits, scratch.J, scratch.impact)
@@ -381,23 +390,38 @@ def sweep(
             if ti.static(last):
                 scratch.x_free[i] = state.x[i]
         elif state.status[i] != OUT_OF_BOUNDS:
-            dv, dw, dx, touching = gather(
-                i,
-                last,
-                state.x,
-                model.radius,
-                model.mass,
-                lists.upper,
-                lists.n_upper,
-                lists.lower,
-                lists.n_lower,
-                bits,
-                scratch.J,
-                scratch.impact,
-                scratch.flag[1],
-                contact.k_p,
-                pressed,
-            )
+            dv, dw, dx, touching = zero3(), zero3(), zero3(), 0
+            if contact.solver == GAUSS_SEIDEL:  # (only its last launch comes here)
+                touching = touching_by_gaps(
+                    i,
+                    of_ball(model.radius, i),
+                    lists.upper,
+                    lists.n_upper,
+                    lists.lower,
+                    lists.n_lower,
+                    bits,
+                    scratch.J,
+                    contact.k_p,
+                    pressed,
+                )
+            else:
+                dv, dw, dx, touching = gather(
+                    i,
+                    last,
+                    state.x,
+                    model.radius,
+                    model.mass,
+                    lists.upper,
+                    lists.n_upper,
+                    lists.lower,
+                    lists.n_lower,
+                    bits,
+                    scratch.J,
+                    scratch.impact,
+                    scratch.flag[1],
+                    contact.k_p,
+                    pressed,
+                )
             v_new, w_new = state.v[i] + dv, state.w[i] + dw
             if contact.solver != GAUSS_SEIDEL:  # (its sweeps are done)
                 v_new, w_new = surface_impulses(

@@ -324,7 +324,9 @@ def sweep_ball(
     ``params`` (h, and gravity for the inelastic speed and the shock sweep's "up"). When ``any_far``, a pair whose other ball was not in a column beside i's at the
     build is taken only with ``far_only`` (:func:`far_pairs`), and the others only without. A quiet
     ball (at rest among balls at rest) is skipped, and gets nothing from its neighbours' pairs, as
-    in a Jacobi sweep."""
+    in a Jacobi sweep. The first sweep marks in ``scratch.impact[i]`` whether one of ball i's pairs
+    approached faster than the inelastic speed; the restitution pass (``BOUNCE``), which changes
+    no other pair, visits only the pairs of the balls so marked."""
     if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
         h, v_inelastic, up = params.h, inelastic_speed(contact, params), upward(params)
         xi, vi, wi = state.x[i], state.v[i], state.w[i]
@@ -333,7 +335,11 @@ def sweep_ball(
         if firm:
             inv_mi = 0.0
         col = column_of(lists.x_at_build[i], inv_cell)
-        for k in range(lists.n_upper[i]):
+        listed = lists.n_upper[i]
+        if phase == BOUNCE and scratch.impact[i] == 0:
+            listed = 0  # none of its pairs approached fast enough to bounce: the pass changes none
+        approached = 0
+        for k in range(listed):
             j = lists.upper[i, k]
             if in_this_pass(col, j, far_only, any_far, inv_cell, lists):
                 if state.status[j] == OUT_OF_BOUNDS:
@@ -356,11 +362,16 @@ def sweep_ball(
                             else:
                                 inv_a = 0.0
                         if inv_a + inv_b > 0.0:  # (not both standing firm: a ball asleep, and the shock sweep)
+                            v_n0 = 0.0  # the approach before the contacts: read where it is used
+                            if phase == FIRST or phase == BOUNCE:
+                                v_n0 = (scratch.v_free[i] - scratch.v_free[j]).dot(n)
+                                if v_n0 < -v_inelastic:
+                                    approached = 1
                             P, lists.lam[i, k], F = pair_step(
                                 phase,
                                 n,
                                 Jk[4],
-                                (scratch.v_free[i] - scratch.v_free[j]).dot(n),
+                                v_n0,
                                 vi,
                                 wi,
                                 ri,
@@ -382,6 +393,11 @@ def sweep_ball(
                             if scratch.calm[j] != QUIET:
                                 state.v[j] -= P * inv_b
                                 state.w[j] += spin_jolt(-P, -n, rj, inv_b)
+        if phase == FIRST:  # the restitution pass visits the pairs of the balls marked here
+            if ti.static(far_only):
+                scratch.impact[i] = ti.max(scratch.impact[i], approached)  # (after the colours)
+            else:
+                scratch.impact[i] = approached
         if not far_only and not firm:
             vi, wi = surface_impulses(
                 i, False, vi, wi, contact, terrain, h, v_inelastic, model, lists, state, scratch, phase

@@ -315,6 +315,44 @@ def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p, pressed):
 
 
 @ti.func
+def touching_by_gaps(
+    i,
+    r,
+    upper: ti.template(),
+    n_upper: ti.template(),
+    lower: ti.template(),
+    n_lower: ti.template(),
+    bits,
+    J: ti.template(),
+    k_p,
+    pressed,
+):
+    """Whether ball i (radius ``r`` [m]) touches a ball, as :func:`gather` tells it with ``final``
+    (0, 1 or ``PRESSED``), from the surface gaps [m] its pairs keep in J[·, ·][4] through the
+    Gauss–Seidel sweeps (:func:`warm_start` stores them; the sweeps apply their impulses at once
+    and leave nothing else in J): touching below 1 % of ``r``, pressed when overlapping by more
+    than ``pressed`` of ``r`` (with a projection, ``k_p`` > 0, as :func:`contact_state`)."""
+    touching = 0
+    for m in range(n_lower[i]):
+        j, k = owner_slot(lower[m, i], bits)
+        touching = ti.max(touching, gap_state(J[j, k][4], r, k_p, pressed))
+    for k in range(n_upper[i]):
+        touching = ti.max(touching, gap_state(J[i, k][4], r, k_p, pressed))
+    return touching
+
+
+@ti.func
+def gap_state(gap, r, k_p, pressed):
+    """:func:`contact_state` of a pair from its surface gap [m] (see :func:`touching_by_gaps`)."""
+    state = 0
+    if gap < 0.01 * r:
+        state = 1
+        if k_p > 0.0 and -gap > pressed * r:
+            state = PRESSED
+    return state
+
+
+@ti.func
 def gather(
     i,
     final: ti.template(),

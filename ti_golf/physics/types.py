@@ -283,7 +283,7 @@ StepScratch = Deferred(
         calm=float_array.get(),  # least rest timer of the balls touching each ball [s], (N,)
         clear=f32_array,  # clearance to the nearest plane or terrain [m], (N,)
         J=pair_table.get(),  # each pair's impulse, inverse distance and gap in a sweep, the shape of upper
-        impact=int_array,  # each ball's first impact key, (N,)
+        impact=int_array,  # Jacobi: each ball's first impact key; Gauss–Seidel: 1 for a ball to bounce, (N,)
         flag=int_array,  # [0]: rebuild the lists; [1]: the sweep marked impacts, (2,)
     ),
     "StepScratch",
