@@ -10,7 +10,6 @@ and a ball takes one impact per sweep (:func:`impact_keys`, :func:`matched`).
 import taichi as ti
 
 from ti_golf.physics.contact import (
-    GAUSS_SEIDEL,
     PRESSED,
     clamp_friction,
     pair_impulse,
@@ -96,7 +95,7 @@ def owned_pairs(
         kick = 0
         if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
             lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
-        elif ok and not skip_pair(status, i, j) and contact.solver != GAUSS_SEIDEL:  # (its sweeps are done)
+        elif ok and not skip_pair(status, i, j):  # (Jacobi only: the Gauss–Seidel step's end reads the gaps alone)
             P, lam[i, k], _, kick = pair_impulse(
                 n,
                 gap,
