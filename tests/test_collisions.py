@@ -14,6 +14,7 @@ from conftest import ON_CPU, SERIAL_OR_PARALLEL
 
 import ti_golf as tg
 from ti_golf.bench.collide import pile_scene
+from ti_golf.bench.pit import pit_scene
 from ti_golf.physics import apart, grid
 from ti_golf.scene.schema import AT_REST, Plane
 from ti_golf.sim.solver import CollisionSolver
@@ -536,28 +537,78 @@ def test_a_pile_that_tracks_no_flight_keeps_no_flight_record_and_steps_the_same(
     assert untracked.t == pytest.approx(tracked.t + 0.05)  # one chunk of 0.05 s, the first check
 
 
-def test_rebuild_keeps_each_pairs_resting_impulse():
+@pytest.mark.parametrize("method", ["jacobi", "gauss_seidel"])
+def test_rebuild_keeps_each_pairs_resting_impulse(method):
     # the warm start needs each pair's accumulated impulse λ to survive a rebuild of the lists
-    # (rebuilt in place, widened when a list overflows): the same pair keeps the same λ
+    # (rebuilt in place, widened when a list overflows): the same pair keeps the same λ, and under
+    # Gauss–Seidel the same friction impulse (on the ball of the lower id: a pair can change owner)
     x, r = _random_sets()["clustered"]
-    sc = scene("world.gravity=[0,-9.81,0]", "world.ground=true", "contact.mu=0.3")
+    sc = scene("world.gravity=[0,-9.81,0]", "world.ground=true", "contact.mu=0.3", f"contact.solver={method}")
     sim = tg.Simulation(sc, x=x[:400] * 0.3 + [0, 0.2, 0], radius=np.full(400, 0.02))
     sim.run(t=0.3)  # a heap on the ground: many pairs with λ > 0
     solver: CollisionSolver = sim.solver
+    with_friction = method == "gauss_seidel"
 
-    def lam_by_pair():
+    def by_pair():
         upper, n_upper, lam = solver.upper.to_numpy(), solver.n_upper.to_numpy(), solver.lam.to_numpy()
-        return {tuple(sorted((i, int(upper[i, k])))): lam[i, k] for i in range(len(n_upper)) for k in range(n_upper[i])}
+        F = solver.friction.to_numpy() if with_friction else np.zeros((*upper.shape, 3))
+        pairs = {}
+        for i in range(len(n_upper)):
+            for k in range(n_upper[i]):
+                j = int(upper[i, k])
+                pairs[(min(i, j), max(i, j))] = (lam[i, k], *(F[i, k] if i < j else -F[i, k]))
+        return pairs
 
-    before = lam_by_pair()
-    assert sum(v > 0 for v in before.values()) > 20
+    before = by_pair()
+    assert sum(v[0] > 0 for v in before.values()) > 20
+    if with_friction:
+        assert sum(any(v[1:]) for v in before.values()) > 20  # pairs with a friction impulse
     for capacity in (solver.capacity, (1, 1)):  # in place, then from width 1 (widened again)
         solver.capacity = capacity
         solver.build(sim.state)
-        after = lam_by_pair()
-        assert all(after[p] == before.get(p, 0.0) for p in after)  # pairs new to the lists start at 0
-        assert sum(after[p] > 0 for p in after) == sum(before[p] > 0 for p in before)  # no pressing pair lost
+        after = by_pair()
+        assert all(after[p] == before.get(p, (0.0, 0.0, 0.0, 0.0)) for p in after)  # new pairs start at 0
+        assert sum(after[p][0] > 0 for p in after) == sum(before[p][0] > 0 for p in before)  # no pressing pair lost
+        assert sum(any(after[p][1:]) for p in after) == sum(any(before[p][1:]) for p in before)
         before = after
+
+
+def test_widening_the_pair_tables_never_holds_the_old_and_the_new_together(monkeypatch):
+    # the peak memory of a pour is reached while its lists widen: the narrower tables must be freed
+    # before the wider ones are allocated (the stash of the old impulses, narrower than the new
+    # sweep table, aside), so that the pair tables alive at any allocation take no more than
+    # they do once the lists are built
+    import gc
+
+    import taichi as ti
+    from taichi.lang._ndarray import Ndarray
+
+    n = 2250
+    sim = tg.Simulation(pit_scene(n)[0])  # a pour into a bin: the lists widen as the balls land
+
+    def table_bytes():  # every 2-D array with a row or a column per ball, alive or not yet collected
+        total = 0
+        for a in gc.get_objects():
+            if isinstance(a, Ndarray) and len(a.shape) == 2 and n in a.shape:
+                item = 8 if "64" in str(a.dtype) else 4
+                total += int(np.prod(a.shape)) * int(np.prod(getattr(a, "element_shape", ()) or (1,))) * item
+        return total
+
+    allocate, peaks = ti.ndarray, []
+
+    def counting(*args, **kwargs):
+        out = allocate(*args, **kwargs)
+        peaks.append(table_bytes())
+        return out
+
+    monkeypatch.setattr(ti, "ndarray", counting)
+    widths = {sim.solver.capacity}
+    for _ in range(10):
+        sim.run(t=0.03)
+        widths.add(sim.solver.capacity)
+    monkeypatch.undo()
+    assert len(widths) >= 3  # widened at least twice
+    assert max(peaks) <= table_bytes()
 
 
 # ---------------------------------------------------------------------------------------------

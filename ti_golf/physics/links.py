@@ -23,6 +23,10 @@ from ti_golf.physics.types import (
     vec3f_table,
 )
 
+ID_EXACT_F32 = 2**24
+"""Balls an f32 run can hold: :func:`stash_ball` keeps the neighbours' ids in the float type, exact
+below 2^24 in f32 (below 2^53 in f64)."""
+
 
 @ti.func
 def slot_bits(width):
@@ -65,23 +69,43 @@ def link_ball(i, bits, upper: ti.template(), n_upper: ti.template(), lower: ti.t
 
 
 @kernel
-def stash(upper: int_table, n_upper: int_array, lam: float_grid, scratch: pair_table):
-    """Keep every pair's (neighbour id, accumulated impulse) in ``scratch`` (see :func:`stash_ball`)."""
+def stash(
+    upper: int_table,
+    n_upper: int_array,
+    lam: float_grid,
+    scratch: pair_table,
+    with_friction: ti.template(),
+    friction: vec3f_table,
+):
+    """Keep every pair's (accumulated impulse, neighbour id, friction impulse) in ``scratch`` (see
+    :func:`stash_ball`)."""
     for i in range(scratch.shape[0]):
-        stash_ball(i, upper, n_upper, lam, scratch)
+        stash_ball(i, upper, n_upper, lam, scratch, with_friction, friction)
 
 
 @ti.func
-def stash_ball(i, upper: ti.template(), n_upper: ti.template(), lam: ti.template(), scratch: ti.template()):
-    """Keep the (neighbour id, accumulated impulse) of every pair that ball i owns in row i of
-    ``scratch`` (a table of upper's shape that is free between steps: the pair impulses) so the
-    lists can be rebuilt in place; the id is split in two halves below 2¹² so it is exact in f32
-    as well. Unused slots get the id −1."""
+def stash_ball(
+    i,
+    upper: ti.template(),
+    n_upper: ti.template(),
+    lam: ti.template(),
+    scratch: ti.template(),
+    with_friction: ti.template(),
+    friction: ti.template(),
+):
+    """Keep the (accumulated impulse, neighbour id, friction impulse) of every pair that ball i owns
+    in row i of ``scratch`` (a table of upper's shape that is free between steps: the pair
+    impulses) so the lists and the friction table can be rebuilt in place; the friction impulse
+    (of the Gauss–Seidel sweeps) only ``with_friction``, else zero. The id is exact in f32 as well
+    below 2^24 (``ID_EXACT_F32``). Unused slots get the id −1."""
     for k in range(scratch.shape[1]):
         j = -1
+        F = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
         if k < n_upper[i]:
             j = upper[i, k]
-        scratch[i, k] = ti.Vector([lam[i, k], j // 4096, j % 4096, 0.0, 0.0], dt=float)
+            if ti.static(with_friction):
+                F = friction[i, k]
+        scratch[i, k] = ti.Vector([lam[i, k], j, F[0], F[1], F[2]], dt=float)
 
 
 @kernel
@@ -94,19 +118,18 @@ def link_and_carry(
     lam: float_grid,
     moved: ti.template(),
     old_id: int_array,
-    friction: ti.template(),
-    old_friction: vec3f_table,
-    new_friction: vec3f_table,
+    with_friction: ti.template(),
+    friction: vec3f_table,
 ):
     """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
     :func:`stash` and :func:`carry_ball`) to the new ones, in one launch (neither writes what the
     other reads). With ``moved`` the balls were stored in a new order since the stash: ball i was
-    ball ``old_id[i]`` of the stashed lists. With ``friction`` the pairs' friction impulses (of
-    the Gauss–Seidel sweeps) are carried from ``old_friction`` to ``new_friction`` too."""
+    ball ``old_id[i]`` of the stashed lists. ``with_friction``, the pairs' stashed friction
+    impulses (of the Gauss–Seidel sweeps) are carried into ``friction`` too."""
     bits = slot_bits(upper.shape[1])
     for i in range(lower.shape[1]):
         link_ball(i, bits, upper, n_upper, lower, n_lower)
-        carry_ball(i, stashed, upper, n_upper, lam, old_id, moved, friction, old_friction, new_friction)
+        carry_ball(i, stashed, upper, n_upper, lam, old_id, moved, with_friction, friction)
 
 
 @ti.func
@@ -118,13 +141,12 @@ def carry_ball(
     lam: ti.template(),
     old_id: ti.template(),
     moved: ti.template(),
+    with_friction: ti.template(),
     friction: ti.template(),
-    old_friction: ti.template(),
-    new_friction: ti.template(),
 ):
     """Carry the accumulated impulse of each pair ball i owns in the new lists from the stashed old
-    ones (see :func:`stash_ball`), and with ``friction`` its friction impulse from the table of the
-    old lists to that of the new ones; new pairs start at zero. The pair of balls a and b (their old
+    ones (see :func:`stash_ball`), and ``with_friction`` its friction impulse into ``friction``;
+    new pairs start at zero. The pair of balls a and b (their old
     ids: ``old_id`` of i and j when ``moved``) is looked up in the row of its old owner, which is
     a's, or b's when the pair changed hands (a pair's owner is the ball behind the other along
     their main axis, see :func:`owns`, and that axis can change as the balls move)."""
@@ -135,16 +157,16 @@ def carry_ball(
         found, value, slot = stashed_impulse(stashed, a, b)
         F = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
         if found:
-            if ti.static(friction):
-                F = old_friction[a, slot]
+            if ti.static(with_friction):
+                F = stashed_friction(stashed, a, slot)
         else:
             found, value, slot = stashed_impulse(stashed, b, a)
-            if ti.static(friction):
+            if ti.static(with_friction):
                 if found:
-                    F = -old_friction[b, slot]  # (the friction on the other ball of the pair)
+                    F = -stashed_friction(stashed, b, slot)  # (the friction on the other ball of the pair)
         lam[i, k] = value
-        if ti.static(friction):
-            new_friction[i, k] = F
+        if ti.static(with_friction):
+            friction[i, k] = F
 
 
 @ti.func
@@ -164,7 +186,14 @@ def stashed_impulse(stashed: ti.template(), a, b):
 @ti.func
 def stashed_id(stashed: ti.template(), i, k):
     """The neighbour id kept by :func:`stash_ball` in slot (i, k) (−1: unused)."""
-    return ti.cast(stashed[i, k][1], ti.i32) * 4096 + ti.cast(stashed[i, k][2], ti.i32)
+    return ti.cast(stashed[i, k][1], ti.i32)
+
+
+@ti.func
+def stashed_friction(stashed: ti.template(), i, k):
+    """The friction impulse [N·s] kept by :func:`stash_ball` in slot (i, k) (exact: it was f32)."""
+    s = stashed[i, k]
+    return ti.Vector([s[2], s[3], s[4]], dt=ti.f32)
 
 
 @ti.func
@@ -196,7 +225,7 @@ def relist_all_pairs(
     they are not carried over in place."""
     n_apart = 0
     for i in range(x.shape[0]):
-        stash_ball(i, upper, n_upper, lam, scratch)
+        stash_ball(i, upper, n_upper, lam, scratch, False, friction)
         if is_apart(v, radius, i, v_cut, r_cut, 1):  # as apart_balls counts them
             n_apart += 1
     if n_apart > APART_MAX:
@@ -220,7 +249,7 @@ def relist_all_pairs(
     for i in range(x.shape[0]):
         link_ball(i, bits, upper, n_upper, lower, n_lower)
     for i in range(x.shape[0]):
-        carry_ball(i, scratch, upper, n_upper, lam, n_upper, False, False, friction, friction)  # ids unchanged
+        carry_ball(i, scratch, upper, n_upper, lam, n_upper, False, False, friction)  # ids unchanged
         if clear_friction:  # (not carried: the pairs' friction impulses start again from zero)
             for k in range(n_upper[i]):
                 friction[i, k] = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)

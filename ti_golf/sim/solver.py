@@ -85,6 +85,14 @@ def steps_serially(n: int) -> bool:
     return n <= SERIAL_MAX_BALLS and on_cpu()
 
 
+def _free_dropped_arrays() -> None:
+    """Free the Taichi arrays dropped since the last call before larger ones are allocated, so that
+    the old and new tables are never in memory together: an array that a kernel was compiled with
+    sits in a reference cycle (see ``runtime.free_every_ndarray``) that only the cycle collector
+    breaks. Called only when the tables change shape, a few times in a pour."""
+    gc.collect()
+
+
 class CollisionSolver:
     """Buffers and neighbour lists for stepping N colliding balls.
 
@@ -125,6 +133,11 @@ class CollisionSolver:
         self._model = model
         self._packs = Packs()
         n = model.n
+        if np_float() == np.float32 and n > links.ID_EXACT_F32:
+            raise SimulationError(
+                f"{n:,} balls are more than an f32 run can hold ({links.ID_EXACT_F32:,}: the neighbour lists keep "
+                "ball ids in the float type); run in f64 (--precision f64 or TI_GOLF_PRECISION=f64)"
+            )
         self._r_max = float(model.radius_np.max())
         self.r_cut, self.r_ref = apart.size_cut(model.radius_np)
         self.skin = model.scene.contact.skin * self.r_ref
@@ -167,7 +180,7 @@ class CollisionSolver:
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
         self.col_start = self.col_chunk = None
         # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only)
-        self.friction = self.spare_friction = ti.ndarray(vec3f, (1, 1))
+        self.friction = ti.ndarray(vec3f, (1, 1))
         # each ball's friction impulse per unit mass on each plane and the terrain (Gauss–Seidel only)
         self.friction_plane = ti.ndarray(vec3f, self.lam_plane.shape if self.gauss_seidel else (1, 1))
         self.friction_plane.fill(0.0)
@@ -181,13 +194,12 @@ class CollisionSolver:
         """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
         pair's accumulated impulse over (the tables widen to the longest list when one overflows)."""
         n = state.n
-        widths = self.upper.shape if self.upper is not None else None
         if n >= REORDER_MIN_BALLS:  # 0.2 ms, against the build's tens of milliseconds
             release_freed_memory()  # before the tables: numpy copies freed since (balls set up, storage order)
         stashed = None
-        if self._valid:  # the pair impulses are scratch between steps: they keep the old lists' λ
+        if self._valid:  # the pair impulses are scratch between steps: they keep the old lists' λ and friction
             stashed = self.impulse
-            links.stash(self.upper, self.n_upper, self.lam, stashed)
+            links.stash(self.upper, self.n_upper, self.lam, stashed, self.gauss_seidel, self.friction)
         h = self._model.dt
         v_max, v_rest, n_apart = (
             float(s) for s in apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
@@ -207,12 +219,21 @@ class CollisionSolver:
                 apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
         self._ids = state.ids
         while True:
-            if self.upper is None or self.upper.shape[1] != self.capacity[0]:
+            new_upper = self.upper is None or self.upper.shape[1] != self.capacity[0]
+            new_lower = self.lower is None or self.lower.shape[0] != self.capacity[1]
+            if new_upper or new_lower:
                 self._packs.clear()  # (their references would keep the narrower tables in memory)
-                self.upper = self.lam = None
+                if new_upper:
+                    self.upper = self.lam = None
+                    if self.gauss_seidel:  # (its values are in the stash; _fit_friction_table widens it)
+                        self.friction = ti.ndarray(vec3f, (1, 1))
+                if new_lower:
+                    self.lower = None
+                _free_dropped_arrays()
+            if new_upper:
                 self.upper = ti.ndarray(ti.i32, (n, self.capacity[0]))
                 self.lam = ti.ndarray(float, (n, self.capacity[0]))
-            if self.lower is None or self.lower.shape[0] != self.capacity[1]:
+            if new_lower:
                 self.lower = ti.ndarray(ti.i32, (self.capacity[1], n))  # column i: ball i's list (see grid)
             params = GridParams(
                 inv_cell=1.0 / self.cell,
@@ -258,10 +279,10 @@ class CollisionSolver:
                 f"{n} balls with up to {self.capacity[0]} neighbours each are more than the "
                 f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)"
             )
+        if self.gauss_seidel:  # each pair's friction impulse (colour.sweep_ball)
+            self._fit_friction_table()
         if stashed is not None:
             # after a reorder, sorted_ids still maps each ball to its index in the stashed lists
-            if self.gauss_seidel:
-                self._fit_pair_table("spare_friction")
             links.link_and_carry(
                 self.upper,
                 self.n_upper,
@@ -273,34 +294,30 @@ class CollisionSolver:
                 self.sorted_ids,
                 self.gauss_seidel,
                 self.friction,
-                self.spare_friction,
             )
-            if self.gauss_seidel:
-                self.friction, self.spare_friction = self.spare_friction, self.friction
             stashed = None
         else:
             links.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
             grid.clear2(self.lam)
-            if self.gauss_seidel:  # each pair's friction impulse (colour.sweep_ball): none yet
-                self._fit_pair_table("friction")
+            if self.gauss_seidel:  # none yet
                 self.friction.fill(0.0)
         if self.impulse is None or self.impulse.shape != self.upper.shape:
-            self.impulse = None  # free the old table before allocating
+            self.impulse = None  # free the old table (the stash) before allocating
+            _free_dropped_arrays()
             # each pair's impulse, inverse distance, and gap or projection in a sweep (pairs.owned_pairs)
             self.impulse = ti.ndarray(pair_entry.get(), self.upper.shape)
         self.rebuilds += 1
         self._valid = True
         if self.gauss_seidel and not self.serial:
             self._order_columns(state)
-        if self.upper.shape != widths:  # the tables were widened: free the old ones now (see free_every_ndarray)
-            gc.collect()
 
-    def _fit_pair_table(self, name: str) -> None:
-        """Give the vec3f table of pair friction impulses held in attribute ``name`` the lists'
-        shape (a new table, the old one freed first, when the shape changed)."""
-        if getattr(self, name).shape != self.upper.shape:
-            setattr(self, name, None)
-            setattr(self, name, ti.ndarray(vec3f, self.upper.shape))
+    def _fit_friction_table(self) -> None:
+        """Give the table of the pairs' friction impulses the lists' shape (a new table, the old
+        one freed first, when the shape changed: its values are in the stash)."""
+        if self.friction.shape != self.upper.shape:
+            self.friction = None
+            _free_dropped_arrays()
+            self.friction = ti.ndarray(vec3f, self.upper.shape)
 
     def _order_columns(self, state: State) -> None:
         """Group the balls by block of grid columns for the Gauss–Seidel sweeps
@@ -460,7 +477,6 @@ class CollisionSolver:
         "sorted_ids",
         "impulse",
         "impact",
-        "spare_friction",
     )
     """Arrays that each step or list build writes before it reads them: :func:`.solver_state.solver_arrays`
     keeps only their shapes."""

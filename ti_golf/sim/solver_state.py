@@ -62,6 +62,8 @@ def restore_solver(solver: CollisionSolver, state: State, arrays: dict[str, np.n
     for name, a in arrays.items():
         setattr(solver, name, _ndarray(a.shape[: a.ndim - len(meta["elements"][name])], meta["elements"][name], a))
     for name, (shape, element, dtype) in meta["scratch"].items():
+        if name not in solver.SCRATCH:  # (a table an earlier version kept)
+            continue
         setattr(solver, name, _ndarray(tuple(shape), element, np.zeros(0, dtype)))
     for name, other in meta["same"].items():
         setattr(solver, name, getattr(solver, other))
