@@ -1055,6 +1055,24 @@ def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypa
     assert max(sim.solver.capacity) >= 400
 
 
+def test_an_f32_run_refuses_more_balls_than_its_floats_can_number(monkeypatch):
+    # a rebuild keeps each pair's neighbour id in the float type (links.stash_ball): exact below
+    # 2^24 in f32. A run of more balls must refuse to start, naming the limit, not mix up pairs;
+    # here the limit is made small and the float type f32, and f64 (this process) is not limited
+    import ti_golf.sim.solver as solver_module
+    from ti_golf.physics import links
+
+    pile, x = pile_scene(400)
+    sim = tg.Simulation(pile, x=x, track=False)
+    monkeypatch.setattr(links, "ID_EXACT_F32", 399)
+    CollisionSolver(sim.model, serial=False)  # f64
+    monkeypatch.setattr(solver_module, "np_float", lambda: np.float32)
+    with pytest.raises(tg.SimulationError, match=r"400 balls are more than an f32 run can hold \(399"):
+        CollisionSolver(sim.model, serial=False)
+    monkeypatch.setattr(links, "ID_EXACT_F32", 400)
+    CollisionSolver(sim.model, serial=False)
+
+
 def test_balls_all_alike_share_one_radius_and_one_mass():
     # the model keeps one radius and one mass when every ball has the same (8 bytes per ball each
     # in f64; docs, performance: "Where the f64 bytes go"), and one per ball when they vary; the kernels read
