@@ -10,6 +10,7 @@ from __future__ import annotations
 import atexit
 import contextlib
 import ctypes
+import gc
 import io
 import os
 import sys
@@ -115,11 +116,19 @@ def free_every_ndarray() -> None:
     pair tables, every ``Simulation.reset`` and every saved run loaded would otherwise leave the
     old vector arrays in the process. An array that a kernel was compiled with also sits in a
     reference cycle (the compiler's context keeps the arguments), freed when Python's cycle
-    collector next runs: the collision solver runs it after widening its tables."""
+    collector next runs: :func:`free_dropped_arrays` runs it."""
     from taichi.lang._ndarray import Ndarray, ScalarNdarray
 
     if "__del__" not in Ndarray.__dict__:
         Ndarray.__del__ = ScalarNdarray.__del__  # type: ignore[attr-defined]
+
+
+def free_dropped_arrays() -> None:
+    """Free the Taichi arrays that Python dropped since the last call, before larger ones are
+    allocated, so that the old and the new are never in memory together: an array that a kernel
+    was compiled with sits in a reference cycle (see :func:`free_every_ndarray`) that only the
+    cycle collector breaks. Costs a full collection: for when tables change shape, not per step."""
+    gc.collect()
 
 
 def exit_process(code: int) -> NoReturn:

@@ -124,7 +124,7 @@ def link_and_carry(
     """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
     :func:`stash` and :func:`carry_ball`) to the new ones, in one launch (neither writes what the
     other reads). With ``moved`` the balls were stored in a new order since the stash: ball i was
-    ball ``old_id[i]`` of the stashed lists. ``with_friction``, the pairs' stashed friction
+    ball ``old_id[i]`` of the stashed lists. With ``with_friction`` the pairs' stashed friction
     impulses (of the Gauss–Seidel sweeps) are carried into ``friction`` too."""
     bits = slot_bits(upper.shape[1])
     for i in range(lower.shape[1]):
@@ -145,10 +145,10 @@ def carry_ball(
     friction: ti.template(),
 ):
     """Carry the accumulated impulse of each pair ball i owns in the new lists from the stashed old
-    ones (see :func:`stash_ball`), and ``with_friction`` its friction impulse into ``friction``;
-    new pairs start at zero. The pair of balls a and b (their old
-    ids: ``old_id`` of i and j when ``moved``) is looked up in the row of its old owner, which is
-    a's, or b's when the pair changed hands (a pair's owner is the ball behind the other along
+    ones (see :func:`stash_ball`), and with ``with_friction`` its friction impulse into
+    ``friction``; new pairs start at zero. The pair of balls a and b (their old ids: ``old_id``
+    of i and j when ``moved``) is looked up in the row of its old owner, which is a's, or b's
+    when the pair changed hands (a pair's owner is the ball behind the other along
     their main axis, see :func:`owns`, and that axis can change as the balls move)."""
     for k in range(n_upper[i]):
         a, b = i, upper[i, k]

@@ -3,8 +3,6 @@ sweeps and the end-of-step position update, in that fixed order (see physics/col
 
 from __future__ import annotations
 
-import gc
-
 import numpy as np
 import taichi as ti
 
@@ -23,6 +21,7 @@ from ti_golf.runtime import (
     available_memory,
     byte_size,
     ensure_init,
+    free_dropped_arrays,
     np_float,
     on_cpu,
     plain_compile,
@@ -83,14 +82,6 @@ def steps_serially(n: int) -> bool:
     """Whether :class:`CollisionSolver` steps ``n`` balls serially by default: few balls, on the CPU
     (a GPU would run the serial loop on one slow thread)."""
     return n <= SERIAL_MAX_BALLS and on_cpu()
-
-
-def _free_dropped_arrays() -> None:
-    """Free the Taichi arrays dropped since the last call before larger ones are allocated, so that
-    the old and new tables are never in memory together: an array that a kernel was compiled with
-    sits in a reference cycle (see ``runtime.free_every_ndarray``) that only the cycle collector
-    breaks. Called only when the tables change shape, a few times in a pour."""
-    gc.collect()
 
 
 class CollisionSolver:
@@ -229,7 +220,7 @@ class CollisionSolver:
                         self.friction = ti.ndarray(vec3f, (1, 1))
                 if new_lower:
                     self.lower = None
-                _free_dropped_arrays()
+                free_dropped_arrays()
             if new_upper:
                 self.upper = ti.ndarray(ti.i32, (n, self.capacity[0]))
                 self.lam = ti.ndarray(float, (n, self.capacity[0]))
@@ -303,7 +294,7 @@ class CollisionSolver:
                 self.friction.fill(0.0)
         if self.impulse is None or self.impulse.shape != self.upper.shape:
             self.impulse = None  # free the old table (the stash) before allocating
-            _free_dropped_arrays()
+            free_dropped_arrays()
             # each pair's impulse, inverse distance, and gap or projection in a sweep (pairs.owned_pairs)
             self.impulse = ti.ndarray(pair_entry.get(), self.upper.shape)
         self.rebuilds += 1
@@ -316,7 +307,7 @@ class CollisionSolver:
         one freed first, when the shape changed: its values are in the stash)."""
         if self.friction.shape != self.upper.shape:
             self.friction = None
-            _free_dropped_arrays()
+            free_dropped_arrays()
             self.friction = ti.ndarray(vec3f, self.upper.shape)
 
     def _order_columns(self, state: State) -> None:
