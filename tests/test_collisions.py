@@ -129,7 +129,7 @@ def test_grid_neighbours_equal_brute_force(name, fast):
         # far apart for that: there the lists must just miss nothing)
         assert len(expected) > len(_brute_force_pairs(x, r, solver.skin))
     xs = sim.state.x.to_numpy()  # the positions the kernels saw (float type of the run)
-    upper, n_upper = solver.upper.to_numpy(), solver.n_upper.to_numpy()
+    upper, n_upper = solver.upper.to_numpy(), _n_upper(solver)
     lower, n_lower = solver.lower.to_numpy(), solver.n_lower.to_numpy()
     assert upper.shape[1] <= 1 << solver.slot_bits
     within = [set() for _ in range(len(x))]  # each ball's expected neighbours
@@ -143,6 +143,11 @@ def test_grid_neighbours_equal_brute_force(name, fast):
         assert np.all(np.diff(owners) > 0)
         assert set(owners.tolist()) == {j for j in within[i] if _owns(xs, j, i, set_apart)}
         assert np.all(upper[owners, entries] == i)
+
+
+def _n_upper(solver: CollisionSolver) -> np.ndarray:
+    """The length of each ball's upper list (in storage order)."""
+    return np.diff(solver.first.to_numpy())
 
 
 def _owns(x, i, j, apart):
@@ -220,7 +225,7 @@ def test_a_boulder_owns_none_of_its_pairs_so_the_impulse_table_stays_narrow():
     reach = r[-1] + r[:-1] + solver.skin
     within = set(np.flatnonzero(np.linalg.norm(x[:-1] - centre, axis=1) < reach).tolist())
     assert len(within) > 80
-    n_upper, n_lower = solver.n_upper.to_numpy(), solver.n_lower.to_numpy()
+    n_upper, n_lower = _n_upper(solver), solver.n_lower.to_numpy()
     assert n_upper[-1] == 0 and n_lower[-1] == len(within)
     owners = solver.lower.to_numpy()[: n_lower[-1], len(x) - 1] >> solver.slot_bits
     assert set(owners.tolist()) == within
@@ -240,7 +245,7 @@ def test_each_ball_of_a_jostled_lattice_owns_three_pairs():
         solver = _grid_ordered(sim) if reorder else sim.solver
         solver.build(sim.state)
         assert solver.capacity == (3, 3)
-        n_upper = sim.state.to_ids(solver.n_upper.to_numpy())
+        n_upper = sim.state.to_ids(_n_upper(solver))
         top, right, back = (np.isclose(sim.x[:, k], x[:, k].max(), atol=0.003) for k in (1, 0, 2))
         np.testing.assert_array_equal(n_upper, 3 - top - right - back)
 
@@ -257,15 +262,15 @@ def test_a_pair_that_changes_hands_keeps_its_resting_impulse():
         solver = _grid_ordered(sim) if reorder else sim.solver
         solver.build(sim.state)
         owner = int(sim.state.from_ids(np.arange(2))[0])  # ball 0 (behind along x) owns the pair
-        assert solver.n_upper.to_numpy()[owner] == 1
-        lam = solver.lam.to_numpy()
-        lam[owner, 0] = 0.25
+        assert _n_upper(solver)[owner] == 1
+        lam, first = solver.lam.to_numpy(), solver.first.to_numpy()
+        lam[first[owner]] = 0.25
         solver.lam.from_numpy(lam)
         sim.x = np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.0] + s * after])  # ball 1 now behind along y
         solver.build(sim.state)
         owner = int(sim.state.from_ids(np.arange(2))[1])
-        assert solver.n_upper.to_numpy()[owner] == 1 and solver.n_upper.to_numpy()[1 - owner] == 0
-        assert solver.lam.to_numpy()[owner, 0] == 0.25
+        assert _n_upper(solver)[owner] == 1 and _n_upper(solver)[1 - owner] == 0
+        assert solver.lam.to_numpy()[solver.first.to_numpy()[owner]] == 0.25
 
 
 # A pile of 70,000 balls: its hash grid has 2^18 buckets, more than the 65,535 iterations after
@@ -550,21 +555,23 @@ def test_rebuild_keeps_each_pairs_resting_impulse(method):
     with_friction = method == "gauss_seidel"
 
     def by_pair():
-        upper, n_upper, lam = solver.upper.to_numpy(), solver.n_upper.to_numpy(), solver.lam.to_numpy()
-        F = solver.friction.to_numpy() if with_friction else np.zeros((*upper.shape, 3))
+        upper, n_upper, lam = solver.upper.to_numpy(), _n_upper(solver), solver.lam.to_numpy()
+        first = solver.first.to_numpy()
+        F = solver.friction.to_numpy() if with_friction else np.zeros((len(lam), 3))
         pairs = {}
         for i in range(len(n_upper)):
             for k in range(n_upper[i]):
-                j = int(upper[i, k])
-                pairs[(min(i, j), max(i, j))] = (lam[i, k], *(F[i, k] if i < j else -F[i, k]))
+                j, p = int(upper[i, k]), first[i] + k
+                pairs[(min(i, j), max(i, j))] = (lam[p], *(F[p] if i < j else -F[p]))
         return pairs
 
     before = by_pair()
     assert sum(v[0] > 0 for v in before.values()) > 20
     if with_friction:
         assert sum(any(v[1:]) for v in before.values()) > 20  # pairs with a friction impulse
-    for capacity in (solver.capacity, (1, 1)):  # in place, then from width 1 (widened again)
-        solver.capacity = capacity
+    # in place, then from width 1 (widened again), then into new pair tables
+    for capacity, pair_capacity in ((solver.capacity, solver.pair_capacity), ((1, 1), solver.pair_capacity), (None, 1)):
+        solver.capacity, solver.pair_capacity = capacity or solver.capacity, pair_capacity
         solver.build(sim.state)
         after = by_pair()
         assert all(after[p] == before.get(p, (0.0, 0.0, 0.0, 0.0)) for p in after)  # new pairs start at 0
@@ -574,10 +581,11 @@ def test_rebuild_keeps_each_pairs_resting_impulse(method):
 
 
 def test_widening_the_pair_tables_never_holds_the_old_and_the_new_together(monkeypatch):
-    # the peak memory of a pour is reached while its lists widen: the narrower tables must be freed
-    # before the wider ones are allocated (the stash of the old impulses, narrower than the new
-    # sweep table, aside), so that the pair tables alive at any allocation take no more than
-    # they do once the lists are built
+    # the peak memory of a pour is reached while its lists widen and its pairs grow in number: the
+    # narrower or shorter tables must be freed before the new ones are allocated (the stash of the
+    # old impulses, shorter than the new sweep table, aside), so that the tables alive at any
+    # allocation take no more than they do once the lists are built. And the pair tables hold
+    # the pairs listed, ball after ball, not as many per ball as the longest list
     import gc
 
     import taichi as ti
@@ -586,10 +594,10 @@ def test_widening_the_pair_tables_never_holds_the_old_and_the_new_together(monke
     n = 2250
     sim = tg.Simulation(pit_scene(n)[0])  # a pour into a bin: the lists widen as the balls land
 
-    def table_bytes():  # every 2-D array with a row or a column per ball, alive or not yet collected
+    def table_bytes():  # every array with an entry per ball or more, alive or not yet collected
         total = 0
         for a in gc.get_objects():
-            if isinstance(a, Ndarray) and len(a.shape) == 2 and n in a.shape:
+            if isinstance(a, Ndarray) and (a.shape[0] >= n or n in a.shape):
                 item = 8 if "64" in str(a.dtype) else 4
                 total += int(np.prod(a.shape)) * int(np.prod(getattr(a, "element_shape", ()) or (1,))) * item
         return total
@@ -602,13 +610,19 @@ def test_widening_the_pair_tables_never_holds_the_old_and_the_new_together(monke
         return out
 
     monkeypatch.setattr(ti, "ndarray", counting)
-    widths = {sim.solver.capacity}
+    widths, lengths = {sim.solver.capacity}, {sim.solver.pair_capacity}
     for _ in range(10):
         sim.run(t=0.03)
         widths.add(sim.solver.capacity)
+        lengths.add(sim.solver.pair_capacity)
     monkeypatch.undo()
-    assert len(widths) >= 3  # widened at least twice
+    assert len(widths) >= 3 and len(lengths) >= 3  # widened and grown at least twice
     assert max(peaks) <= table_bytes()
+    s = sim.solver
+    first = s.first.to_numpy()
+    assert first[0] == 0 and np.all(np.diff(first) >= 0)  # each ball's pairs after the last one's
+    assert first[-1] <= s.pair_capacity == len(s.lam.to_numpy()) == len(s.friction.to_numpy())
+    assert s.pair_capacity < 0.75 * n * s.capacity[0]  # the longest list is well above the mean
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1043,7 +1057,7 @@ def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypa
     x = np.vstack([x, [[x[:, 0].mean(), x[:, 1].max() + 0.1, x[:, 2].mean()]]])
     v = np.zeros_like(x)
     v[-1] = [0.0, -2000.0, 0.0]
-    narrow = solver_module.table_bytes(len(x), (8, 8))  # room for lists of eight, not for the 400 in reach
+    narrow = solver_module.table_bytes(len(x), (8, 8), 8 * len(x), True)  # lists of eight, not the 400 in reach
     monkeypatch.setattr(solver_module, "available_memory", lambda: 2 * narrow)
     sim = tg.Simulation(pile, x=x, v=v, track=False)
     sim.solver = CollisionSolver(sim.model, serial=False)
@@ -1091,8 +1105,9 @@ def test_balls_all_alike_share_one_radius_and_one_mass():
 
 def test_the_memory_guard_counts_the_bytes_the_pair_tables_take():
     # table_bytes is the memory guard's estimate (above) and the performance page's byte count: it must
-    # match the tables the solver allocates, whatever they keep per pair (neighbour, resting
-    # impulse, the sweep's impulse, inverse distance and gap, and the links of the other balls).
+    # match the tables the solver allocates, whatever they keep (per list entry a neighbour or a
+    # link; per pair its resting impulse, the sweep's impulse, inverse distance and gap, and under
+    # Gauss–Seidel its friction impulse).
     import ti_golf.sim.solver as solver_module
 
     pile, x = pile_scene(400)
@@ -1100,8 +1115,10 @@ def test_the_memory_guard_counts_the_bytes_the_pair_tables_take():
     sim.solver = CollisionSolver(sim.model, serial=False)
     sim.step(1)
     s = sim.solver
-    allocated = sum(a.to_numpy().nbytes for a in (s.upper, s.lower, s.lam, s.impulse))
-    assert s.capacity[0] >= 3 and allocated == solver_module.table_bytes(len(x), s.capacity)
+    tables = (s.upper, s.lower, s.lam, s.impulse) + ((s.friction,) if s.gauss_seidel else ())
+    allocated = sum(a.to_numpy().nbytes for a in tables)
+    assert s.capacity[0] >= 3 and s.pair_capacity >= len(x)
+    assert allocated == solver_module.table_bytes(len(x), s.capacity, s.pair_capacity, s.gauss_seidel)
 
 
 def test_a_build_past_the_vulkan_loop_cap_stops_the_run_and_names_the_ball():

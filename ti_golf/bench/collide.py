@@ -315,7 +315,7 @@ def one_pass_contacts(sim: Any) -> tuple[Callable[[], None], Any, Any]:
             m.radius,
             m.mass,
             solver.upper,
-            solver.n_upper,
+            solver.first,
             solver.lower,
             solver.n_lower,
             dv,

@@ -2,7 +2,7 @@
 what the memory system allows, and what the report's pair impulse costs at the least."""
 
 from ti_golf.physics.contact import pair_impulse
-from ti_golf.physics.links import owner_slot, slot_bits
+from ti_golf.physics.links import listed, owner_slot, slot_bits
 from ti_golf.physics.pairs import pair_geometry, pair_normal
 from ti_golf.physics.types import (
     ContactParams,
@@ -38,7 +38,7 @@ def one_pass_contacts(
     radius: float_array,
     mass: float_array,
     upper: int_table,
-    n_upper: int_array,
+    first: int_array,
     lower: int_table,
     n_lower: int_array,
     dv: vec3_array,
@@ -60,7 +60,7 @@ def one_pass_contacts(
         r_i, inv_m_i, xi = of_ball(radius, i), 1.0 / of_ball(mass, i), x[i]
         vi = v[i] + h * gravity
         P, T = zero3(), zero3()
-        for q in range(n_lower[i] + n_upper[i]):
+        for q in range(n_lower[i] + listed(first, i)):
             j = 0
             if q < n_lower[i]:
                 j = owner_slot(lower[q, i], bits)[0]

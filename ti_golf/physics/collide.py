@@ -183,7 +183,7 @@ def collision_step(
                     params.v_cut,
                     params.r_cut,
                     lists.upper,
-                    lists.n_upper,
+                    lists.first,
                     lists.lower,
                     lists.n_lower,
                     lists.x_at_build,
@@ -319,7 +319,7 @@ def start_step(
             state.status,
             state.rest_time,
             lists.upper,
-            lists.n_upper,
+            lists.first,
             lists.lower,
             lists.n_lower,
             bits,
@@ -372,7 +372,7 @@ def sweep(
                     model.mass,
                     state.status,
                     lists.upper,
-                    lists.n_upper,
+                    lists.first,
                     lists.lam,
                     scratch.J,
                     state.v,
@@ -381,7 +381,7 @@ def sweep(
                 )
     for i in range(state.x.shape[0]):
         if scratch.flag[1] != 0:  # (a loop inside the test would not run in parallel)
-            impact_keys(i, lists.n_upper, lists.lower, lists.n_lower, bits, scratch.J, scratch.impact)
+            impact_keys(i, lists.first, lists.lower, lists.n_lower, bits, scratch.J, scratch.impact)
     pressed = 0.01  # the overlap [share of a radius] that keeps a ball awake
     if contact.solver == GAUSS_SEIDEL:
         pressed = ASLEEP_OVERLAP
@@ -395,8 +395,7 @@ def sweep(
                 touching = touching_by_gaps(
                     i,
                     of_ball(model.radius, i),
-                    lists.upper,
-                    lists.n_upper,
+                    lists.first,
                     lists.lower,
                     lists.n_lower,
                     bits,
@@ -412,7 +411,7 @@ def sweep(
                     model.radius,
                     model.mass,
                     lists.upper,
-                    lists.n_upper,
+                    lists.first,
                     lists.lower,
                     lists.n_lower,
                     bits,

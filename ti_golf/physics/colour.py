@@ -36,7 +36,7 @@ from ti_golf.physics.contact import (
     pair_step,
     spin_jolt,
 )
-from ti_golf.physics.links import moved_past
+from ti_golf.physics.links import listed, moved_past
 from ti_golf.physics.pairs import QUIET, pair_normal, skip_pair
 from ti_golf.physics.sort import bucket_in_turn, cell_of, counting_sort, sort_buckets
 from ti_golf.physics.surfaces import surface_impulses
@@ -162,7 +162,7 @@ def column_order(
     for i in range(x_at_build.shape[0]):
         col = column_of(x_at_build[i], inv_cell)
         far = 0
-        for k in range(lists.n_upper[i]):
+        for k in range(listed(lists.first, i)):
             if not adjacent(col, column_of(x_at_build[lists.upper[i, k]], inv_cell)):
                 far = 1
         far_owners += far  # (an integer sum: the same on every thread order)
@@ -335,24 +335,25 @@ def sweep_ball(
         if firm:
             inv_mi = 0.0
         col = column_of(lists.x_at_build[i], inv_cell)
-        listed = lists.n_upper[i]
+        owned = listed(lists.first, i)
         if phase == BOUNCE and scratch.impact[i] == 0:
-            listed = 0  # none of its pairs approached fast enough to bounce: the pass changes none
+            owned = 0  # none of its pairs approached fast enough to bounce: the pass changes none
         approached = 0
-        for k in range(listed):
-            j = lists.upper[i, k]
+        p0 = lists.first[i]
+        for k in range(owned):
+            j, p = lists.upper[i, k], p0 + k
             if in_this_pass(col, j, far_only, any_far, inv_cell, lists):
                 if state.status[j] == OUT_OF_BOUNDS:
-                    lists.lam[i, k] = 0.0  # a frozen ball no longer supports anything
+                    lists.lam[p] = 0.0  # a frozen ball no longer supports anything
                 elif not skip_pair(state.status, i, j):
-                    Jk = scratch.J[i, k]
+                    Jk = scratch.J[p]
                     n = pair_normal(xi, state.x[j], ti.abs(Jk[3]))
                     if n.norm_sqr() > 0.0:
                         rj, inv_mj = of_ball(model.radius, j), 1.0 / of_ball(model.mass, j)
                         if stands_firm(contact, state.status[j]):
                             inv_mj = 0.0
-                        F = ti.cast(lists.friction[i, k], float)
-                        lam = lists.lam[i, k]
+                        F = ti.cast(lists.friction[p], float)
+                        lam = lists.lam[p]
                         if phase == FIRST:  # what the warm start applied (pairs.carried_friction)
                             F = clamp_friction(F, n, contact.mu * lam)
                         inv_a, inv_b = inv_mi, inv_mj
@@ -367,7 +368,7 @@ def sweep_ball(
                                 v_n0 = (scratch.v_free[i] - scratch.v_free[j]).dot(n)
                                 if v_n0 < -v_inelastic:
                                     approached = 1
-                            P, lists.lam[i, k], F = pair_step(
+                            P, lists.lam[p], F = pair_step(
                                 phase,
                                 n,
                                 Jk[4],
@@ -387,7 +388,7 @@ def sweep_ball(
                                 v_inelastic,
                                 h,
                             )
-                            lists.friction[i, k] = ti.cast(F, ti.f32)
+                            lists.friction[p] = ti.cast(F, ti.f32)
                             vi += P * inv_a
                             wi += spin_jolt(P, n, ri, inv_a)
                             if scratch.calm[j] != QUIET:
@@ -470,7 +471,7 @@ def project_ball(
         if state.status[i] != AT_REST:
             inv_mi = 1.0 / of_ball(model.mass, i)
         col = column_of(lists.x_at_build[i], inv_cell)
-        for k in range(lists.n_upper[i]):
+        for k in range(listed(lists.first, i)):
             j = lists.upper[i, k]
             if in_this_pass(col, j, far_only, any_far, inv_cell, lists) and state.status[j] != OUT_OF_BOUNDS:
                 inv_mj = 0.0

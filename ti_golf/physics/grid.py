@@ -32,15 +32,12 @@ from ti_golf.physics.types import (
     GridScratch,
     NeighbourLists,
     float_array,
-    float_grid,
     int_array,
     ivec3,
     kernel,
     of_ball,
     vec3_array,
 )
-
-real_table = float_grid
 
 SCATTERED_HASH = (19349663, 1, 83492791)
 
@@ -120,13 +117,6 @@ def clear(a: int_array):
 
 
 @kernel
-def clear2(a: real_table):
-    """Set every entry of a float table to zero."""
-    for i, k in a:
-        a[i, k] = 0.0
-
-
-@kernel
 def list_neighbours(
     # In:
     g: GridParams,
@@ -147,8 +137,9 @@ def list_neighbours(
     than ``v_cut`` or bigger than ``r_cut`` whose indices are in ``apart_ids``, see
     :func:`apart_balls`, own none of their pairs with the others, and with ``scan_apart`` they
     are listed apart: see :func:`list_ball`): row i of ``upper`` holds the neighbours whose pairs
-    ball i owns (:func:`owns`), column i of ``lower`` the others (to be turned into slots by
-    :func:`link_lower` or :func:`link_and_carry`). ``lower`` is stored transposed, (width, n), so
+    ball i owns (:func:`owns`), and ``first[i + 1]`` their number (``links.pair_starts`` turns
+    the numbers into the lists' starts in the pair tables), column i of ``lower`` the others (to
+    be turned into slots by :func:`link_lower` or :func:`link_and_carry`). ``lower`` is stored transposed, (width, n), so
     that the few first entries of consecutive balls lie side by side however wide one ball's list
     makes it (a boulder's hundreds), and the sweeps' gathers read few cache lines. The sort and
     the lists are built in one launch. The counting sort: each ball's rank among the balls of its
@@ -204,7 +195,7 @@ def list_neighbours(
             lists.lower,
             stored_sorted,
         )
-        lists.n_upper[i] = ti.min(n_up, lists.upper.shape[1])
+        lists.first[i + 1] = ti.min(n_up, lists.upper.shape[1])  # its length, until links.pair_starts
         lists.n_lower[i] = ti.min(n_low, lists.lower.shape[0])
         lists.x_at_build[i] = ti.cast(x[i], ti.f32)
         ti.atomic_max(longest[0], n_up)
@@ -239,7 +230,7 @@ def list_ball(
 ):
     """Ball i's neighbours into its row of ``upper`` and its column of ``lower`` in id order (as
     many as fit; ``stored_sorted``: see :func:`list_neighbours`). Returns how many there are
-    (n_upper, n_lower) and a bound on the iterations of the thread's loops (see ``LOOP_CAP``).
+    (upper, lower) and a bound on the iterations of the thread's loops (see ``LOOP_CAP``).
 
     The balls in its own and the 26 adjacent cells, but, with ``scan_apart``, for the balls
     listed apart (:func:`is_apart`): those are tested by every ball, and a ball listed apart tests
@@ -376,14 +367,15 @@ def owns(xi, xj, i, j, apart_i, apart_j):
     the two balls of a pair exactly one owns it (x_j − x_i is exactly −(x_i − x_j) in floating
     point, so both find the same axis and opposite signs). Each ball of a cubic lattice owns
     exactly its three pairs in +x, +y and +z however the lattice is jostled, and a random pile's
-    longest list, the width of the pair tables, is shorter than with ownership by storage order
+    longest list, the width of the neighbour table, is shorter than with ownership by storage order
     (7-8 pairs against 10 in a 20,000-ball pour): an order along a grid flips for every pair
     that straddles a cell boundary.
 
     But a ball listed apart (``apart_j``; see :func:`is_apart`) never owns a pair with a ball
-    that is not (``apart_i`` false): a boulder sunk into a pile touches hundreds of balls, and the
-    upper table, which keeps each pair's impulse and geometry (52 bytes a pair in f64), is as wide
-    as the longest upper list for every ball; the lower table keeps 4 bytes a pair."""
+    that is not (``apart_i`` false): a boulder sunk into a pile touches hundreds of balls, and
+    owned by them its pairs are taken one by each of their threads rather than all by the
+    boulder's, while the upper table, as wide as the longest upper list for every ball, stays
+    narrow; the boulder's lower list is long instead (see ``solver.LONG_LOWER``)."""
     owner = False
     if apart_i != apart_j:
         owner = apart_j

@@ -12,15 +12,16 @@ import taichi as ti
 
 from ti_golf.physics.apart import APART_MAX, is_apart
 from ti_golf.physics.grid import owns, pair_reach
+from ti_golf.physics.sort import bucket_starts
 from ti_golf.physics.types import (
-    float_grid,
+    float_array,
     int_array,
     int_table,
     is_f64,
     kernel,
     of_ball,
-    pair_table,
-    vec3f_table,
+    pair_array,
+    vec3f_array,
 )
 
 ID_EXACT_F32 = 2**24
@@ -45,99 +46,128 @@ def owner_slot(slot, bits):
     return slot >> bits, slot & ((1 << bits) - 1)
 
 
+@ti.func
+def listed(first: ti.template(), i):
+    """How many pairs ball i owns: the length of its upper list, ``first[i + 1] − first[i]`` (see
+    ``NeighbourLists.first``)."""
+    return first[i + 1] - first[i]
+
+
 @kernel
-def link_lower(upper: int_table, n_upper: int_array, lower: int_table, n_lower: int_array):
+def link_lower(upper: int_table, first: int_array, lower: int_table, n_lower: int_array):
     """Replace each lower neighbour j of every ball by the slot of the pair in j's upper list
     (see :func:`link_ball`)."""
     bits = slot_bits(upper.shape[1])
     for i in range(lower.shape[1]):
-        link_ball(i, bits, upper, n_upper, lower, n_lower)
+        link_ball(i, bits, upper, first, lower, n_lower)
 
 
 @ti.func
-def link_ball(i, bits, upper: ti.template(), n_upper: ti.template(), lower: ti.template(), n_lower: ti.template()):
+def link_ball(i, bits, upper: ti.template(), first: ti.template(), lower: ti.template(), n_lower: ti.template()):
     """Replace each lower neighbour j of ball i by the slot of the pair in j's upper list,
     ``j · 2^bits + k`` with ``upper[j, k] = i`` (see :func:`slot_bits`): the ball that owns a
     pair stores its impulse there, and the other ball gathers it from there."""
     for m in range(n_lower[i]):
         j = lower[m, i]
         slot = -1
-        for k in range(n_upper[j]):
+        for k in range(listed(first, j)):
             if upper[j, k] == i:
                 slot = (j << bits) | k
         lower[m, i] = slot
 
 
 @kernel
+def pair_starts(first: int_array, chunk_start: int_array) -> ti.i32:
+    """Lay the pair tables out ball after ball, each ball's pairs as many entries as its list
+    holds: from the lists' lengths in ``first[1:]`` (as :func:`.grid.list_neighbours` leaves
+    them), ``first[i]`` = the lengths of the lists before ball i's (``first[0]`` = 0, ``first[N]``
+    the pairs in all), in place, by the grid's chunked scan (:func:`.sort.bucket_starts`;
+    ``chunk_start``: its scratch, ``sort.scan_chunks(N)`` entries). Returns the pairs in all. The
+    tables are then as long as the lists are in all, not N times the longest list (8 pairs while
+    a pour lands, 3.5 on average)."""
+    bucket_starts(first, chunk_start)
+    return first[first.shape[0] - 1]
+
+
+@kernel
 def stash(
     upper: int_table,
-    n_upper: int_array,
-    lam: float_grid,
-    scratch: pair_table,
+    first: int_array,
+    lam: float_array,
+    scratch: pair_array,
     with_friction: ti.template(),
-    friction: vec3f_table,
+    friction: vec3f_array,
 ):
-    """Keep every pair's (accumulated impulse, neighbour id, friction impulse) in ``scratch`` (see
-    :func:`stash_ball`)."""
-    for i in range(scratch.shape[0]):
-        stash_ball(i, upper, n_upper, lam, scratch, with_friction, friction)
+    """Keep every pair's (accumulated impulse, neighbour id, friction impulse) in ``scratch``, laid
+    out as the pair tables (see :func:`stash_ball`)."""
+    for i in range(first.shape[0] - 1):
+        stash_ball(i, upper, first, lam, scratch, 0, with_friction, friction)
 
 
 @ti.func
 def stash_ball(
     i,
     upper: ti.template(),
-    n_upper: ti.template(),
+    first: ti.template(),
     lam: ti.template(),
     scratch: ti.template(),
+    width,
     with_friction: ti.template(),
     friction: ti.template(),
 ):
     """Keep the (accumulated impulse, neighbour id, friction impulse) of every pair that ball i owns
-    in row i of ``scratch`` (a table of upper's shape that is free between steps: the pair
-    impulses) so the lists and the friction table can be rebuilt in place; the friction impulse
-    (of the Gauss–Seidel sweeps) only ``with_friction``, else zero. The id is exact in f32 as well
-    below 2^24 (``ID_EXACT_F32``). Unused slots get the id −1."""
-    for k in range(scratch.shape[1]):
-        j = -1
+    in ``scratch`` (the sweep's table, free between steps) so the lists and the pair tables can be
+    rebuilt in place: in the pair tables' entries of ball i, or with ``width`` > 0 in entries
+    i · width onwards, followed by the id −1 when the list is shorter (the serial rebuild, which
+    overwrites ``first`` before it carries the impulses over). The friction impulse (of the
+    Gauss–Seidel sweeps) only ``with_friction``, else zero. The id is exact in f32 as well below
+    2^24 (``ID_EXACT_F32``)."""
+    p0, count = first[i], listed(first, i)
+    if width > 0:
+        p0 = i * width
+        if count < width:
+            scratch[p0 + count] = ti.Vector([0.0, -1.0, 0.0, 0.0, 0.0], dt=float)
+    for k in range(count):
         F = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
-        if k < n_upper[i]:
-            j = upper[i, k]
-            if ti.static(with_friction):
-                F = friction[i, k]
-        scratch[i, k] = ti.Vector([lam[i, k], j, F[0], F[1], F[2]], dt=float)
+        if ti.static(with_friction):
+            F = friction[first[i] + k]
+        scratch[p0 + k] = ti.Vector([lam[first[i] + k], upper[i, k], F[0], F[1], F[2]], dt=float)
 
 
 @kernel
 def link_and_carry(
     upper: int_table,
-    n_upper: int_array,
+    first: int_array,
     lower: int_table,
     n_lower: int_array,
-    stashed: pair_table,
-    lam: float_grid,
+    stashed: pair_array,
+    stash_first: int_array,
+    lam: float_array,
     moved: ti.template(),
     old_id: int_array,
     with_friction: ti.template(),
-    friction: vec3f_table,
+    friction: vec3f_array,
 ):
     """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
-    :func:`stash` and :func:`carry_ball`) to the new ones, in one launch (neither writes what the
-    other reads). With ``moved`` the balls were stored in a new order since the stash: ball i was
-    ball ``old_id[i]`` of the stashed lists. With ``with_friction`` the pairs' stashed friction
-    impulses (of the Gauss–Seidel sweeps) are carried into ``friction`` too."""
+    :func:`stash` and :func:`carry_ball`; ``stash_first``: their layout) to the new ones, in one
+    launch (neither writes what the other reads). With ``moved`` the balls were stored in a new
+    order since the stash: ball i was ball ``old_id[i]`` of the stashed lists. With
+    ``with_friction`` the pairs' stashed friction impulses (of the Gauss–Seidel sweeps) are
+    carried into ``friction`` too."""
     bits = slot_bits(upper.shape[1])
     for i in range(lower.shape[1]):
-        link_ball(i, bits, upper, n_upper, lower, n_lower)
-        carry_ball(i, stashed, upper, n_upper, lam, old_id, moved, with_friction, friction)
+        link_ball(i, bits, upper, first, lower, n_lower)
+        carry_ball(i, stashed, stash_first, 0, upper, first, lam, old_id, moved, with_friction, friction)
 
 
 @ti.func
 def carry_ball(
     i,
     stashed: ti.template(),
+    stash_first: ti.template(),
+    width,
     upper: ti.template(),
-    n_upper: ti.template(),
+    first: ti.template(),
     lam: ti.template(),
     old_id: ti.template(),
     moved: ti.template(),
@@ -145,54 +175,54 @@ def carry_ball(
     friction: ti.template(),
 ):
     """Carry the accumulated impulse of each pair ball i owns in the new lists from the stashed old
-    ones (see :func:`stash_ball`), and with ``with_friction`` its friction impulse into
-    ``friction``; new pairs start at zero. The pair of balls a and b (their old ids: ``old_id``
-    of i and j when ``moved``) is looked up in the row of its old owner, which is a's, or b's
-    when the pair changed hands (a pair's owner is the ball behind the other along
-    their main axis, see :func:`owns`, and that axis can change as the balls move)."""
-    for k in range(n_upper[i]):
+    ones (see :func:`stash_ball`: laid out by ``stash_first``, or ``width`` a ball), and with
+    ``with_friction`` its friction impulse into ``friction``; new pairs start at zero. The pair
+    of balls a and b (their old ids: ``old_id`` of i and j when ``moved``) is looked up in the
+    entries of its old owner, which is a's, or b's when the pair changed hands (a pair's owner
+    is the ball behind the other along their main axis, see :func:`owns`, and that axis can
+    change as the balls move)."""
+    p = first[i]
+    for k in range(listed(first, i)):
         a, b = i, upper[i, k]
         if ti.static(moved):
             a, b = old_id[a], old_id[b]
-        found, value, slot = stashed_impulse(stashed, a, b)
+        found, value, entry = stashed_impulse(stashed, stash_first, width, a, b)
         F = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
         if found:
             if ti.static(with_friction):
-                F = stashed_friction(stashed, a, slot)
+                F = stashed_friction(stashed, entry)
         else:
-            found, value, slot = stashed_impulse(stashed, b, a)
+            found, value, entry = stashed_impulse(stashed, stash_first, width, b, a)
             if ti.static(with_friction):
                 if found:
-                    F = -stashed_friction(stashed, b, slot)  # (the friction on the other ball of the pair)
-        lam[i, k] = value
+                    F = -stashed_friction(stashed, entry)  # (the friction on the other ball of the pair)
+        lam[p + k] = value
         if ti.static(with_friction):
-            friction[i, k] = F
+            friction[p + k] = F
 
 
 @ti.func
-def stashed_impulse(stashed: ti.template(), a, b):
-    """(whether, with which accumulated impulse, and in which slot) the stashed row of ball a holds
-    its pair with ball b: a search of a row sorted by id, stopping at the first id past b."""
-    found, value, slot = 0, 0.0, 0
-    for k in range(stashed.shape[1]):
-        j = stashed_id(stashed, a, k)
+def stashed_impulse(stashed: ti.template(), stash_first: ti.template(), width, a, b):
+    """(whether, with which accumulated impulse, and in which entry) the stashed pairs of ball a hold
+    its pair with ball b (see :func:`stash_ball` for the layouts): a search of entries sorted by
+    id, stopping at the first id past b."""
+    found, value, entry = 0, 0.0, 0
+    lo, hi = a * width, a * width + width
+    if width == 0:
+        lo, hi = stash_first[a], stash_first[a + 1]
+    for p in range(lo, hi):
+        j = ti.cast(stashed[p][1], ti.i32)  # the neighbour id kept by stash_ball (−1: the list's end)
         if j < 0 or j > b:
             break
         if j == b:
-            found, value, slot = 1, stashed[a, k][0], k
-    return found, value, slot
+            found, value, entry = 1, stashed[p][0], p
+    return found, value, entry
 
 
 @ti.func
-def stashed_id(stashed: ti.template(), i, k):
-    """The neighbour id kept by :func:`stash_ball` in slot (i, k) (−1: unused)."""
-    return ti.cast(stashed[i, k][1], ti.i32)
-
-
-@ti.func
-def stashed_friction(stashed: ti.template(), i, k):
-    """The friction impulse [N·s] kept by :func:`stash_ball` in slot (i, k) (exact: it was f32)."""
-    s = stashed[i, k]
+def stashed_friction(stashed: ti.template(), p):
+    """The friction impulse [N·s] kept by :func:`stash_ball` in entry p (exact: it was f32)."""
+    s = stashed[p]
     return ti.Vector([s[2], s[3], s[4]], dt=ti.f32)
 
 
@@ -206,7 +236,7 @@ def relist_all_pairs(
     v_cut,
     r_cut,
     upper: ti.template(),
-    n_upper: ti.template(),
+    first: ti.template(),
     lower: ti.template(),
     n_lower: ti.template(),
     x_at_build: ti.template(),
@@ -219,17 +249,20 @@ def relist_all_pairs(
     the lists, slots and carried-over impulses that ``list_neighbours`` and ``link_and_carry``
     give on a CPU backend (with the same owners: the balls faster than ``v_cut`` or bigger than
     ``r_cut`` are listed apart unless there are more than ``APART_MAX``), in O(n²) work. The
-    tables must be n − 1 wide (no list can overflow). Meant for a serial loop (the ``serial``
-    variant of ``collide.collision_step``); ``scratch`` as in :func:`stash_ball`. With
+    tables must be n − 1 wide (no list can overflow), and ``scratch`` hold n (n − 1) entries:
+    the old impulses are stashed n − 1 a ball (:func:`stash_ball`), as ``first`` is rewritten.
+    Meant for a serial loop (the ``serial`` variant of ``collide.collision_step``). With
     ``clear_friction`` the pairs' friction impulses (of the Gauss–Seidel sweeps) are set to zero:
     they are not carried over in place."""
+    width = upper.shape[1]
     n_apart = 0
     for i in range(x.shape[0]):
-        stash_ball(i, upper, n_upper, lam, scratch, False, friction)
+        stash_ball(i, upper, first, lam, scratch, width, False, friction)
         if is_apart(v, radius, i, v_cut, r_cut, 1):  # as apart_balls counts them
             n_apart += 1
     if n_apart > APART_MAX:
         n_apart = 0
+    first[0] = 0
     for i in range(x.shape[0]):
         xi, ri = x[i], of_ball(radius, i)
         apart_i = is_apart(v, radius, i, v_cut, r_cut, n_apart)
@@ -243,16 +276,16 @@ def relist_all_pairs(
                 else:
                     lower[n_low, i] = j
                     n_low += 1
-        n_upper[i], n_lower[i] = n_up, n_low
+        first[i + 1], n_lower[i] = first[i] + n_up, n_low
         x_at_build[i] = ti.cast(xi, ti.f32)
-    bits = slot_bits(upper.shape[1])
+    bits = slot_bits(width)
     for i in range(x.shape[0]):
-        link_ball(i, bits, upper, n_upper, lower, n_lower)
+        link_ball(i, bits, upper, first, lower, n_lower)
     for i in range(x.shape[0]):
-        carry_ball(i, scratch, upper, n_upper, lam, n_upper, False, False, friction)  # ids unchanged
+        carry_ball(i, scratch, first, width, upper, first, lam, first, False, False, friction)  # ids unchanged
         if clear_friction:  # (not carried: the pairs' friction impulses start again from zero)
-            for k in range(n_upper[i]):
-                friction[i, k] = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
+            for k in range(listed(first, i)):
+                friction[first[i] + k] = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
 
 
 @ti.func

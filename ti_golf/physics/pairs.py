@@ -14,7 +14,7 @@ from ti_golf.physics.contact import (
     clamp_friction,
     pair_impulse,
 )
-from ti_golf.physics.links import owner_slot
+from ti_golf.physics.links import listed, owner_slot
 from ti_golf.physics.types import (
     of_ball,
     zero3,
@@ -63,7 +63,7 @@ def owned_pairs(
     mass: ti.template(),
     status: ti.template(),
     upper: ti.template(),
-    n_upper: ti.template(),
+    first: ti.template(),
     lam: ti.template(),
     J: ti.template(),
     v: ti.template(),
@@ -72,21 +72,21 @@ def owned_pairs(
 ):
     """One Jacobi sweep over the pairs that ball i owns, with its neighbours j = upper[i, k]: the
     impulse P on i (−P acts on j) from the current velocities (which updates the resting impulse
-    ``lam``), stored as J[i, k] = (P, 1/|x_i − x_j|, gap). The inverse distance [1/m], which gives
+    ``lam``), stored in the pair's entry p = first[i] + k as J[p] = (P, 1/|x_i − x_j|, gap). The inverse distance [1/m], which gives
     the unit normal n̂ from j to i (:func:`pair_normal`), and the surface gap [m] were stored there
     by :func:`warm_start` (positions do not change during the sweeps).
     An impact (see :func:`.contact.pair_impulse`) is marked by the inverse distance's sign, negative
     (:func:`impact_mark`; and ``flag[1]`` is set, so that :func:`impact_keys` looks for the balls'
     first impacts; :func:`gather` takes one impact per ball, see :func:`matched`).
 
-    With ``final`` (the last sweep) the gap's place, J[i, k][4], takes, for an overlapping pair,
+    With ``final`` (the last sweep) the gap's place, J[p][4], takes, for an overlapping pair,
     q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position projection (B.18: ball i moves by
     q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the other way); for a pair apart,
     −gap ≤ 0 (the surface gap [m]: the balls touch while it is below 1 % of a radius)."""
-    inv_mi, xi = 1.0 / of_ball(mass, i), x[i]
-    for k in range(n_upper[i]):
-        j = upper[i, k]
-        Jk = J[i, k]
+    inv_mi, xi, p0 = 1.0 / of_ball(mass, i), x[i], first[i]
+    for k in range(listed(first, i)):
+        j, p = upper[i, k], p0 + k
+        Jk = J[p]
         inv = ti.abs(Jk[3])  # (the mark of an impact in the last sweep, see impact_mark)
         n, gap = pair_normal(xi, x[j], inv), Jk[4]
         ok = n.norm_sqr() > 0.0
@@ -94,9 +94,9 @@ def owned_pairs(
         P = zero3()
         kick = 0
         if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
-            lam[i, k] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
+            lam[p] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
         elif ok and not skip_pair(status, i, j):  # (Jacobi only: the Gauss–Seidel step's end reads the gaps alone)
-            P, lam[i, k], _, kick = pair_impulse(
+            P, lam[p], _, kick = pair_impulse(
                 n,
                 gap,
                 v[i],
@@ -107,7 +107,7 @@ def owned_pairs(
                 w[j],
                 of_ball(radius, j),
                 inv_mj,
-                lam[i, k],
+                lam[p],
                 contact.e,
                 contact.mu,
                 v_inelastic,
@@ -125,7 +125,7 @@ def owned_pairs(
                     g = -contact.k_p * gap / (inv_mi + inv_mj)
         if kick != 0:
             inv = -inv
-        J[i, k] = ti.Vector([P[0], P[1], P[2], inv, g])
+        J[p] = ti.Vector([P[0], P[1], P[2], inv, g])
 
 
 @ti.func
@@ -146,7 +146,7 @@ def warm_start(
     status: ti.template(),
     rest_time: ti.template(),
     upper: ti.template(),
-    n_upper: ti.template(),
+    first: ti.template(),
     lower: ti.template(),
     n_lower: ti.template(),
     bits,
@@ -163,7 +163,7 @@ def warm_start(
     Gauss–Seidel sweeps), where each pair's friction impulse F from the last step is applied too,
     in the pair's tangent plane and at most μ·λ (:func:`.contact.clamp_friction`: the same on both
     balls, bit for bit). Also stores the geometry of the pairs
-    ball i owns for the sweeps: J[i, k] = (0, 1/|x_i − x_j|, the surface gap [m]), which marks
+    ball i owns for the sweeps: J[first[i] + k] = (0, 1/|x_i − x_j|, the surface gap [m]), which marks
     no impact (:func:`impact_mark`). Reads only
     what the free-flight loop does not write (start-of-step positions, status, λ, rest timers),
     so it runs inside that loop. Returns (Δv, the calm time [s] of ball i: the least of its rest
@@ -177,23 +177,25 @@ def warm_start(
     for m in range(n_lower[i]):
         slot = lower[m, i]
         j, k = owner_slot(slot, bits)  # the pair's owner j keeps its λ
+        p = first[j] + k
         inv, gap = pair_geometry(x, radius, i, j)
         n = pair_normal(xi, x[j], inv)
-        P += resting_impulse(status, i, j, n, lam[j, k])
+        P += resting_impulse(status, i, j, n, lam[p])
         if carried:
-            F = carried_friction(status, i, j, n, lam[j, k], friction[j, k], mu)
+            F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
             P -= F
             T += n.cross(F)
         calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop)
         quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
-    for k in range(n_upper[i]):
-        j = upper[i, k]
+    p0 = first[i]
+    for k in range(listed(first, i)):
+        j, p = upper[i, k], p0 + k
         inv, gap = pair_geometry(x, radius, i, j)
-        J[i, k] = ti.Vector([0.0, 0.0, 0.0, inv, gap])
+        J[p] = ti.Vector([0.0, 0.0, 0.0, inv, gap])
         n = pair_normal(xi, x[j], inv)
-        P += resting_impulse(status, i, j, n, lam[i, k])
+        P += resting_impulse(status, i, j, n, lam[p])
         if carried:
-            F = carried_friction(status, i, j, n, lam[i, k], friction[i, k], mu)
+            F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
             P += F
             T -= n.cross(F)
         calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop)
@@ -240,7 +242,7 @@ def touched_by_moving(i, status: ti.template(), rest_time: ti.template(), lists:
     for m in range(lists.n_lower[i]):
         j, _ = owner_slot(lists.lower[m, i], bits)
         moving |= rest_time[j] == 0.0 and status[j] != OUT_OF_BOUNDS
-    for k in range(lists.n_upper[i]):
+    for k in range(listed(lists.first, i)):
         j = lists.upper[i, k]
         moving |= rest_time[j] == 0.0 and status[j] != OUT_OF_BOUNDS
     return moving
@@ -258,7 +260,7 @@ def resting_impulse(status: ti.template(), i, j, n, lam):
 @ti.func
 def impact_keys(
     i,
-    n_upper: ti.template(),
+    first: ti.template(),
     lower: ti.template(),
     n_lower: ti.template(),
     bits,
@@ -266,17 +268,17 @@ def impact_keys(
     impact: ti.template(),
 ):
     """Keep in ``impact[i]`` the greatest key of ball i's impacts in this sweep (0 when it has
-    none): the key of a pair is its slot in the pair tables, owner·2^bits + column (as in the
+    none): the key of a pair is its slot, owner·2^bits + column (as in the
     lower lists, see :func:`.grid.owner_slot`), plus one. Gathered from the pairs' marks
     (:func:`impact_mark`), as the impulses are: no atomics."""
     key = 0
     for m in range(n_lower[i]):
         slot = lower[m, i]
         j, k = owner_slot(slot, bits)
-        if impact_mark(J[j, k]):
+        if impact_mark(J[first[j] + k]):
             key = ti.max(key, slot + 1)
-    for k in range(n_upper[i]):
-        if impact_mark(J[i, k]):
+    for k in range(listed(first, i)):
+        if impact_mark(J[first[i] + k]):
             key = ti.max(key, (i << bits) + k + 1)
     impact[i] = key
 
@@ -300,7 +302,7 @@ def matched(impact: ti.template(), a, b, key):
 @ti.func
 def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p, pressed):
     """0, 1 or ``PRESSED`` (see :func:`gather`) for the pair of ball i (radius ``r``, 1/m_i
-    ``inv_m_i``) with ball j whose last-sweep J[·, ·][4] is ``g`` (the projection q ≥ 0 of an
+    ``inv_m_i``) with ball j whose last-sweep J[·][4] is ``g`` (the projection q ≥ 0 of an
     overlap, or minus the gap: see :func:`owned_pairs`): pressed when they overlap by more than
     ``pressed`` of ``r``. Ball j's mass is read only for an overlap (this runs for every pair of
     the step's last sweep)."""
@@ -317,8 +319,7 @@ def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p, pressed):
 def touching_by_gaps(
     i,
     r,
-    upper: ti.template(),
-    n_upper: ti.template(),
+    first: ti.template(),
     lower: ti.template(),
     n_lower: ti.template(),
     bits,
@@ -327,16 +328,16 @@ def touching_by_gaps(
     pressed,
 ):
     """Whether ball i (radius ``r`` [m]) touches a ball, as :func:`gather` tells it with ``final``
-    (0, 1 or ``PRESSED``), from the surface gaps [m] its pairs keep in J[·, ·][4] through the
+    (0, 1 or ``PRESSED``), from the surface gaps [m] its pairs keep in J[·][4] through the
     Gauss–Seidel sweeps (:func:`warm_start` stores them; the sweeps apply their impulses at once
     and leave nothing else in J): touching below 1 % of ``r``, pressed when overlapping by more
     than ``pressed`` of ``r`` (with a projection, ``k_p`` > 0, as :func:`contact_state`)."""
     touching = 0
     for m in range(n_lower[i]):
         j, k = owner_slot(lower[m, i], bits)
-        touching = ti.max(touching, gap_state(J[j, k][4], r, k_p, pressed))
-    for k in range(n_upper[i]):
-        touching = ti.max(touching, gap_state(J[i, k][4], r, k_p, pressed))
+        touching = ti.max(touching, gap_state(J[first[j] + k][4], r, k_p, pressed))
+    for k in range(listed(first, i)):
+        touching = ti.max(touching, gap_state(J[first[i] + k][4], r, k_p, pressed))
     return touching
 
 
@@ -359,7 +360,7 @@ def gather(
     radius: ti.template(),
     mass: ti.template(),
     upper: ti.template(),
-    n_upper: ti.template(),
+    first: ti.template(),
     lower: ti.template(),
     n_lower: ti.template(),
     bits,
@@ -385,7 +386,7 @@ def gather(
     for m in range(n_lower[i]):
         slot = lower[m, i]
         j, k = owner_slot(slot, bits)  # the pair's owner j stores it
-        Jk = J[j, k]
+        Jk = J[first[j] + k]
         P_k, n_k = Jk.xyz, pair_normal(x[j], xi, ti.abs(Jk[3]))
         if any_impact != 0:  # (the marks are read only in a sweep that has impacts)
             if impact_mark(Jk) and not matched(impact, i, j, slot + 1):
@@ -395,8 +396,8 @@ def gather(
         if ti.static(final):
             q_n -= ti.max(Jk[4], 0.0) * n_k
             touching = ti.max(touching, contact_state(Jk[4], r, inv_m, mass, j, k_p, pressed))
-    for k in range(n_upper[i]):
-        Jk = J[i, k]
+    for k in range(listed(first, i)):
+        Jk = J[first[i] + k]
         P_k, n_k = Jk.xyz, pair_normal(xi, x[upper[i, k]], ti.abs(Jk[3]))
         if any_impact != 0:
             if impact_mark(Jk) and not matched(impact, i, upper[i, k], (i << bits) + k + 1):

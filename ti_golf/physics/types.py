@@ -172,7 +172,8 @@ float_grid = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=2), "float
 """2-D float array (terrain heights, tables)."""
 pair_entry = Deferred(lambda: ti.types.vector(5, float), "pair_entry")
 """A pair's entry in a sweep: its impulse [N·s], inverse distance [1/m] and gap [m] (see pairs.owned_pairs)."""
-pair_table = Deferred(lambda: ti.types.ndarray(dtype=pair_entry.get(), ndim=2), "pair_table")
+pair_array = Deferred(lambda: ti.types.ndarray(dtype=pair_entry.get(), ndim=1), "pair_array")
+"""The pairs' sweep entries, one per listed pair (see ``NeighbourLists.first``)."""
 
 # Types that do not depend on the precision.
 int_array = ti.types.ndarray(dtype=ti.i32, ndim=1)
@@ -252,14 +253,14 @@ FlightRecord = Deferred(
 
 NeighbourLists = Deferred(
     lambda: ti.types.argpack(
-        upper=int_table,  # each ball's neighbours of higher storage index, (N, K)
-        n_upper=int_array,  # how many, (N,)
+        upper=int_table,  # the neighbours whose pairs each ball owns (grid.owns), sorted by index, (N, K)
+        first=int_array,  # ball i's pairs: upper[i, :first[i + 1] − first[i]]; in lam, friction, J, entries first[i]…, (N + 1,)
         lower=int_table,  # each ball's lower neighbours, as slots of the pairs in their upper lists, (N, K')
         n_lower=int_array,  # how many, (N,)
         x_at_build=vec3f_array,  # positions when the lists were built [m], f32, (N,)
-        lam=float_grid.get(),  # each pair's accumulated resting impulse [N·s], the shape of upper
+        lam=float_array.get(),  # each pair's accumulated resting impulse [N·s], (pairs,) (see first)
         lam_plane=f32_table,  # each ball's accumulated impulse on each plane and the terrain [N·s], (N, P + 1)
-        friction=vec3f_table,  # each pair's friction impulse on its owner [N·s], f32, the shape of upper (Gauss–Seidel)
+        friction=vec3f_array,  # each pair's friction impulse on its owner [N·s], f32, as lam (Gauss–Seidel; else (1,))
         friction_plane=vec3f_table,  # each ball's friction impulse per unit mass [m/s] on each surface, as lam_plane
     ),
     "NeighbourLists",
@@ -282,7 +283,7 @@ StepScratch = Deferred(
         v_free=vec3_array.get(),  # free-flight velocities [m/s], (N,)
         calm=float_array.get(),  # least rest timer of the balls touching each ball [s], (N,)
         clear=f32_array,  # clearance to the nearest plane or terrain [m], (N,)
-        J=pair_table.get(),  # each pair's impulse, inverse distance and gap in a sweep, the shape of upper
+        J=pair_array.get(),  # each pair's impulse, inverse distance and gap in a sweep, as lam
         impact=int_array,  # Jacobi: each ball's first impact key; Gauss–Seidel: 1 for a ball to bounce, (N,)
         flag=int_array,  # [0]: rebuild the lists; [1]: the sweep marked impacts, (2,)
     ),

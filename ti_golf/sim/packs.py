@@ -79,7 +79,7 @@ class Packs:
         return self.get(
             NeighbourLists,
             upper=c.upper,
-            n_upper=c.n_upper,
+            first=c.first,
             lower=c.lower,
             n_lower=c.n_lower,
             x_at_build=c.x_at_build,

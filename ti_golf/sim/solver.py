@@ -65,12 +65,19 @@ def sweep_launches(iterations: int) -> list[tuple[bool, int, bool]]:
     return launches
 
 
-def table_bytes(n: int, widths: tuple[int, int]) -> int:
+def table_bytes(n: int, widths: tuple[int, int], pairs: int, friction: bool) -> int:
     """Bytes of the neighbour and pair tables of ``n`` balls with lists ``widths`` (upper, lower)
-    wide: per upper entry the neighbour, its resting impulse and the sweep's 5-vector (impulse,
-    inverse distance, gap); per lower entry a slot."""
+    wide and room for ``pairs`` pairs: per list entry a neighbour or a slot (4 bytes); per pair
+    its resting impulse, the sweep's 5-vector (impulse, inverse distance, gap) and, with
+    ``friction`` (Gauss–Seidel), its friction impulse (3 f32)."""
     f = np.dtype(np_float()).itemsize
-    return n * (widths[0] * (4 + 6 * f) + widths[1] * 4)
+    return n * (widths[0] + widths[1]) * 4 + pairs * (6 * f + (12 if friction else 0))
+
+
+PAIR_ROOM = 8
+"""The pair tables grow to the pairs listed plus 1/PAIR_ROOM of them (see
+``CollisionSolver.build``): room for the lists to grow a little before the tables are allocated
+again, while a pour lands."""
 
 
 LONG_LOWER = 16
@@ -102,6 +109,8 @@ class CollisionSolver:
         loop_cap: on Taichi's Vulkan backend, the loop iterations after which a thread stops (see
             ``grid.LOOP_CAP``): a build that needs more stops the run; ``None`` elsewhere.
         capacity: widths of the (upper, lower) neighbour tables (they grow when a list overflows).
+        pair_capacity: entries of the pair tables (resting and friction impulses, the sweep's
+            entries): the pairs listed, laid out ball after ball (``first``), plus room to grow.
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
         serial: whether steps run serially, many per launch, with the lists rebuilt in the kernel
             by testing every pair (default: :func:`steps_serially`; CPU backends only); else one
@@ -155,8 +164,15 @@ class CollisionSolver:
         self.v_free = ti.ndarray(vec3.get(), n)
         self.calm = ti.ndarray(float, n)  # least rest timer of each ball and the balls it touches [s]
         self.clear = ti.ndarray(ti.f32, n)  # least gap of each ball to the planes [m] (collide.surface_clearance)
-        self.n_upper, self.n_lower = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
-        self.upper = self.lower = self.lam = self.impulse = None
+        self.n_lower = ti.ndarray(ti.i32, n)
+        self.upper = self.lower = self.impulse = None
+        # ball i's upper list's length, first[i + 1] − first[i], and its pairs' entries in the pair tables
+        # from first[i] on (links.pair_starts); and the layout of the stashed pairs during a rebuild
+        self.first, self.stash_first = ti.ndarray(ti.i32, n + 1), ti.ndarray(ti.i32, n + 1)
+        self.first.fill(0)
+        self.pair_chunk = ti.ndarray(ti.i32, sort.scan_chunks(n))
+        self.pair_capacity = 1
+        self.lam = ti.ndarray(float, self.pair_capacity)
         self.impact = ti.ndarray(ti.i32, n)  # each ball's first impact in a sweep (pairs.impact_keys)
         # resting impulses per unit mass [m/s] of the planes and (one column more) the terrain, in f32 (see
         # collide.surface_impulses): 20 bytes per ball less for a bin of five planes in f64
@@ -171,7 +187,7 @@ class CollisionSolver:
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
         self.col_start = self.col_chunk = None
         # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only)
-        self.friction = ti.ndarray(vec3f, (1, 1))
+        self.friction = ti.ndarray(vec3f, 1)
         # each ball's friction impulse per unit mass on each plane and the terrain (Gauss–Seidel only)
         self.friction_plane = ti.ndarray(vec3f, self.lam_plane.shape if self.gauss_seidel else (1, 1))
         self.friction_plane.fill(0.0)
@@ -183,14 +199,16 @@ class CollisionSolver:
 
     def build(self, state: State) -> None:
         """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
-        pair's accumulated impulse over (the tables widen to the longest list when one overflows)."""
+        pair's accumulated impulse over (the neighbour tables widen to the longest list when one
+        overflows; the pair tables grow with the pairs listed in all)."""
         n = state.n
         if n >= REORDER_MIN_BALLS:  # 0.2 ms, against the build's tens of milliseconds
             release_freed_memory()  # before the tables: numpy copies freed since (balls set up, storage order)
         stashed = None
         if self._valid:  # the pair impulses are scratch between steps: they keep the old lists' λ and friction
             stashed = self.impulse
-            links.stash(self.upper, self.n_upper, self.lam, stashed, self.gauss_seidel, self.friction)
+            links.stash(self.upper, self.first, self.lam, stashed, self.gauss_seidel, self.friction)
+            self.stash_first.copy_from(self.first)
         h = self._model.dt
         v_max, v_rest, n_apart = (
             float(s) for s in apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
@@ -215,15 +233,12 @@ class CollisionSolver:
             if new_upper or new_lower:
                 self._packs.clear()  # (their references would keep the narrower tables in memory)
                 if new_upper:
-                    self.upper = self.lam = None
-                    if self.gauss_seidel:  # (its values are in the stash; _fit_friction_table widens it)
-                        self.friction = ti.ndarray(vec3f, (1, 1))
+                    self.upper = None
                 if new_lower:
                     self.lower = None
                 free_dropped_arrays()
             if new_upper:
                 self.upper = ti.ndarray(ti.i32, (n, self.capacity[0]))
-                self.lam = ti.ndarray(float, (n, self.capacity[0]))
             if new_lower:
                 self.lower = ti.ndarray(ti.i32, (self.capacity[1], n))  # column i: ball i's list (see grid)
             params = GridParams(
@@ -262,7 +277,7 @@ class CollisionSolver:
             low = int(longest[1])
             low += low // 4 if low > LONG_LOWER else 0
             wider = (max(self.capacity[0], int(longest[0])), max(self.capacity[1], low))
-            self._check_table_memory(state, wider)
+            self._check_table_memory(state, wider, self.pair_capacity)
             self.capacity = wider
         self._check_loop_cap(state, int(longest[2]))
         if n << self.slot_bits > 2**31:  # the largest slot, (n − 1)·2^bits + 2^bits − 1, must fit an i32
@@ -270,16 +285,20 @@ class CollisionSolver:
                 f"{n} balls with up to {self.capacity[0]} neighbours each are more than the "
                 f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)"
             )
-        if self.gauss_seidel:  # each pair's friction impulse (colour.sweep_ball)
-            self._fit_friction_table()
+        pairs = int(links.pair_starts(self.first, self.pair_chunk))
+        if self.serial:  # the kernel rebuilds the lists in place: room for every list to grow to n − 1
+            self._fit_pair_tables(state, n * self.capacity[0], 0)  # (and the stash, links.relist_all_pairs)
+        else:
+            self._fit_pair_tables(state, pairs, PAIR_ROOM)
         if stashed is not None:
             # after a reorder, sorted_ids still maps each ball to its index in the stashed lists
             links.link_and_carry(
                 self.upper,
-                self.n_upper,
+                self.first,
                 self.lower,
                 self.n_lower,
                 stashed,
+                self.stash_first,
                 self.lam,
                 self.reorder,
                 self.sorted_ids,
@@ -288,27 +307,34 @@ class CollisionSolver:
             )
             stashed = None
         else:
-            links.link_lower(self.upper, self.n_upper, self.lower, self.n_lower)
-            grid.clear2(self.lam)
+            links.link_lower(self.upper, self.first, self.lower, self.n_lower)
+            self.lam.fill(0.0)
             if self.gauss_seidel:  # none yet
                 self.friction.fill(0.0)
-        if self.impulse is None or self.impulse.shape != self.upper.shape:
+        if self.impulse is None or self.impulse.shape != self.lam.shape:
             self.impulse = None  # free the old table (the stash) before allocating
             free_dropped_arrays()
             # each pair's impulse, inverse distance, and gap or projection in a sweep (pairs.owned_pairs)
-            self.impulse = ti.ndarray(pair_entry.get(), self.upper.shape)
+            self.impulse = ti.ndarray(pair_entry.get(), self.lam.shape)
         self.rebuilds += 1
         self._valid = True
         if self.gauss_seidel and not self.serial:
             self._order_columns(state)
 
-    def _fit_friction_table(self) -> None:
-        """Give the table of the pairs' friction impulses the lists' shape (a new table, the old
-        one freed first, when the shape changed: its values are in the stash)."""
-        if self.friction.shape != self.upper.shape:
-            self.friction = None
-            free_dropped_arrays()
-            self.friction = ti.ndarray(vec3f, self.upper.shape)
+    def _fit_pair_tables(self, state: State, pairs: int, room: int) -> None:
+        """Make room for ``pairs`` pairs in the tables of the pairs' resting impulses and (Gauss–Seidel)
+        friction impulses: when they hold fewer, new tables for ``pairs`` plus 1/``room`` of them
+        (none with ``room`` 0), the old ones freed first (their values are in the stash)."""
+        if pairs <= self.pair_capacity:
+            return
+        capacity = max(1, pairs + (pairs // room if room else 0))
+        self._check_table_memory(state, self.capacity, capacity)
+        self._packs.clear()  # (their references would keep the old tables in memory)
+        self.lam = self.friction = None
+        free_dropped_arrays()
+        self.pair_capacity = capacity
+        self.lam = ti.ndarray(float, capacity)
+        self.friction = ti.ndarray(vec3f, capacity if self.gauss_seidel else 1)
 
     def _order_columns(self, state: State) -> None:
         """Group the balls by block of grid columns for the Gauss–Seidel sweeps
@@ -345,13 +371,14 @@ class CollisionSolver:
         )
         self.far_owners = int(far_owners)
 
-    def _check_table_memory(self, state: State, widths: tuple[int, int]) -> None:
-        """Raise :class:`SimulationError` before pair tables of ``widths`` (upper, lower) take more
-        than half the memory available (:func:`available_memory`), naming the ball that reaches
-        farthest within a step (r + h·|v|): the tables are as wide as the longest list, so one
-        ball shot at 1,000 m/s into a pile of 20,000 (3,100 balls within its reach of one 1 ms
-        step) would make them take gigabytes, and then swap or be killed, losing the run."""
-        need = table_bytes(state.n, widths)
+    def _check_table_memory(self, state: State, widths: tuple[int, int], pairs: int) -> None:
+        """Raise :class:`SimulationError` before neighbour tables of ``widths`` (upper, lower) and
+        pair tables of ``pairs`` entries take more than half the memory available
+        (:func:`available_memory`), naming the ball that reaches farthest within a step (r + h·|v|):
+        the neighbour tables are as wide as the longest list, so one ball shot at 1,000 m/s into a
+        pile of 20,000 (3,100 balls within its reach of one 1 ms step) would make them take
+        gigabytes, and then swap or be killed, losing the run."""
+        need = table_bytes(state.n, widths, pairs, self.gauss_seidel)
         avail = available_memory()
         if avail is None or need <= 0.5 * avail:
             return
@@ -468,6 +495,8 @@ class CollisionSolver:
         "sorted_ids",
         "impulse",
         "impact",
+        "stash_first",
+        "pair_chunk",
     )
     """Arrays that each step or list build writes before it reads them: :func:`.solver_state.solver_arrays`
     keeps only their shapes."""
@@ -487,7 +516,7 @@ class CollisionSolver:
     def pairs(self) -> np.ndarray:
         """The listed neighbour pairs (i, j) by ball id, each once, sorted: int array of shape (n_pairs, 2)
         with i < j."""
-        upper, count = self.upper.to_numpy(), self.n_upper.to_numpy()
+        upper, count = self.upper.to_numpy(), np.diff(self.first.to_numpy())
         listed = np.arange(upper.shape[1])[None, :] < count[:, None]
         i = np.broadcast_to(np.arange(len(count))[:, None], upper.shape)
         pairs = np.stack([i[listed], upper[listed]], axis=1)
