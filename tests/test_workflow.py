@@ -90,6 +90,57 @@ def test_a_pile_saved_asleep_wakes_as_if_it_never_stopped(serial, tmp_path):
     assert_same_state(whole, resumed)
 
 
+def _pairs_in_rows(path) -> None:
+    """Rewrite the solver's arrays of the saved run at ``path`` as solvers saved them until
+    2026-11-26: the pair tables with a row per ball as wide as the longest list, and each list's
+    length in ``n_upper`` (now the pairs lie ball after ball, from ``first``)."""
+    with np.load(path) as d:
+        data = dict(d)
+    meta = json.loads(str(data["run"]))
+    solver = meta["solver"]
+    first = data.pop("solver.first")
+    n_upper = np.diff(first).astype(np.int32)
+    width = data["solver.upper"].shape[1]
+    listed = np.arange(width)[None, :] < n_upper[:, None]
+
+    def rows(flat):
+        out = np.zeros((len(n_upper), width, *flat.shape[1:]), flat.dtype)
+        out[listed] = flat[: first[-1]]
+        return out
+
+    data["solver.n_upper"], data["solver.lam"], data["solver.friction"] = (
+        n_upper,
+        rows(data["solver.lam"]),
+        rows(data["solver.friction"]),  # (Gauss–Seidel: one per pair)
+    )
+    solver["elements"]["n_upper"] = solver["elements"].pop("first")
+    del solver["values"]["pair_capacity"], solver["scratch"]["stash_first"], solver["scratch"]["pair_chunk"]
+    solver["scratch"]["impulse"][0] = [len(n_upper), width]
+    data["run"] = np.array(json.dumps(meta))
+    np.savez(path, **data)
+
+
+@SERIAL_OR_PARALLEL
+def test_a_run_saved_with_the_pair_tables_in_rows_still_continues_bit_for_bit(serial, tmp_path):
+    # a solver saved before its pair tables were laid out ball after ball (see _pairs_in_rows) is
+    # given its pairs and their impulses in the new layout, and steps on as the unbroken run does
+    def make():
+        sim = tg.Simulation(_columns_scene())
+        sim.solver = CollisionSolver(sim.model, serial=serial, reorder=not serial)
+        return sim
+
+    whole = make()
+    whole.run(t=0.17)
+    first = make()
+    first.run(t=0.07)
+    first.save(tmp_path / "p.npz")
+    _pairs_in_rows(tmp_path / "p.npz")
+    resumed = tg.Simulation.load(tmp_path / "p.npz")
+    assert hasattr(resumed.solver, "n_upper") is False and resumed.solver.pair_capacity >= 27
+    resumed.run(t=0.1)
+    assert_same_state(whole, resumed)
+
+
 def test_a_loaded_run_keeps_its_changed_parameters_and_resets_to_its_t0(tmp_path):
     sim = tg.Simulation.from_scene("break_shot")
     sim.run(t=0.05)

@@ -53,6 +53,8 @@ def solver_arrays(solver: CollisionSolver) -> tuple[dict[str, np.ndarray], dict[
 def restore_solver(solver: CollisionSolver, state: State, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
     """Give ``solver`` back what :func:`solver_arrays` returned, for ``state`` restored to the same moment (its
     storage order included): the next step is then the one that the saved solver would have made."""
+    if "n_upper" in arrays:
+        arrays, meta = _pairs_ball_after_ball(solver, arrays, meta)
     for name, value in meta["values"].items():
         if name == "_hash":
             value = None if value is None else tuple(ti.Vector(v, dt=ti.i32) for v in value)
@@ -82,3 +84,36 @@ def _ndarray(shape: tuple[int, ...], element: list[int], values: np.ndarray) -> 
     if values.size:
         out.from_numpy(np.ascontiguousarray(values))
     return out
+
+
+def _pairs_ball_after_ball(
+    solver: CollisionSolver, arrays: dict[str, np.ndarray], meta: dict[str, Any]
+) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """The arrays and description of a solver saved before its pair tables were laid out ball
+    after ball (until 2026-11-26: a row per ball as wide as the longest list, and each list's
+    length in ``n_upper``), laid out as the solver keeps them now (``first``): the same pairs
+    with the same impulses, so that a run saved then continues as it would have."""
+    arrays, meta = dict(arrays), {key: dict(value) if isinstance(value, dict) else value for key, value in meta.items()}
+    n_upper = arrays.pop("n_upper")
+    meta["elements"].pop("n_upper", None)
+    width = arrays["lam"].shape[1]
+    listed = np.arange(width)[None, :] < n_upper[:, None]
+    pairs = int(n_upper.sum())
+    capacity = len(n_upper) * width if solver.serial else max(1, pairs)  # (see CollisionSolver.build)
+
+    def ball_after_ball(table: np.ndarray) -> np.ndarray:
+        out = np.zeros((capacity, *table.shape[2:]), table.dtype)
+        out[:pairs] = table[listed]
+        return out
+
+    arrays["first"] = np.concatenate([[0], np.cumsum(n_upper)]).astype(np.int32)
+    meta["elements"]["first"] = []
+    arrays["lam"] = ball_after_ball(arrays["lam"])
+    friction = arrays["friction"]
+    arrays["friction"] = (
+        ball_after_ball(friction) if friction.shape[:2] == listed.shape else friction.reshape(-1, 3)[:1]
+    )
+    meta["values"]["pair_capacity"] = capacity
+    shape, element, dtype = meta["scratch"]["impulse"]
+    meta["scratch"]["impulse"] = [[capacity], element, dtype]
+    return arrays, meta
