@@ -38,6 +38,11 @@ sweeps, a few launches: see ``solver.sweep_launches``); for a few balls, its ``s
 variant runs the same loops (:func:`step_balls`) one ball after another, many steps per launch,
 and rebuilds the lists itself by testing every pair: the same step, bit for bit, without the
 launch overhead that dominates a step of a few balls.
+
+Loop 1 reads almost every array of the step, and Taichi 1.7.4's Vulkan backend crashes the
+process on a loop that reads more than 33 arrays (each loop of a kernel is counted apart; the
+loop crashed so with the lists' lengths beside the pair tables' starts): an array more that it
+needs must come with one less, or go to a loop of its own.
 """
 
 import taichi as ti

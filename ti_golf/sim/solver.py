@@ -75,9 +75,9 @@ def table_bytes(n: int, widths: tuple[int, int], pairs: int, friction: bool) -> 
 
 
 PAIR_ROOM = 8
-"""The pair tables grow to the pairs listed plus 1/PAIR_ROOM of them (see
-``CollisionSolver.build``): room for the lists to grow a little before the tables are allocated
-again, while a pour lands."""
+"""Pair tables that the lists outgrow are made for the pairs listed plus 1/PAIR_ROOM of them (see
+``CollisionSolver._fit_pair_tables``): room for the lists to grow a little before the tables are
+allocated again, while a pour lands."""
 
 
 LONG_LOWER = 16
@@ -323,11 +323,12 @@ class CollisionSolver:
 
     def _fit_pair_tables(self, state: State, pairs: int, room: int) -> None:
         """Make room for ``pairs`` pairs in the tables of the pairs' resting impulses and (Gauss–Seidel)
-        friction impulses: when they hold fewer, new tables for ``pairs`` plus 1/``room`` of them
-        (none with ``room`` 0), the old ones freed first (their values are in the stash)."""
+        friction impulses: when they hold fewer, new tables, the old ones freed first (their values
+        are in the stash): for ``pairs`` at the first build, and when they outgrew tables built
+        before, for ``pairs`` plus 1/``room`` of them (none with ``room`` 0)."""
         if pairs <= self.pair_capacity:
             return
-        capacity = max(1, pairs + (pairs // room if room else 0))
+        capacity = max(1, pairs + (pairs // room if room and self.rebuilds > 0 else 0))
         self._check_table_memory(state, self.capacity, capacity)
         self._packs.clear()  # (their references would keep the old tables in memory)
         self.lam = self.friction = None
