@@ -1045,7 +1045,7 @@ def test_a_fast_ball_dropped_onto_a_plastic_pile_does_not_bounce_back():
 
 
 def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypatch):
-    # The pair tables are as wide as the longest neighbour list. A ball at 2,000 m/s (2 m per 1 ms
+    # The neighbour tables are as wide as the longest neighbour list. A ball at 2,000 m/s (2 m per 1 ms
     # step) above a pile has every ball of it within reach, so every ball's tables would widen to
     # hundreds of entries: with a million balls that is hundreds of gigabytes. The solver must stop
     # with a SimulationError that names the ball and its speed before it allocates tables larger

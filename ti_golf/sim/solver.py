@@ -386,7 +386,7 @@ class CollisionSolver:
         ball, farthest = self._farthest_reaching(state)
         raise SimulationError(
             f"the neighbour lists would take {byte_size(need)}, more than half the {byte_size(avail)} of memory "
-            f"available: a ball has {max(widths):,} balls within reach of one step, and the pair tables are as "
+            f"available: a ball has {max(widths):,} balls within reach of one step, and the neighbour tables are as "
             f"wide as the longest list. {farthest}; lower world.dt, or that ball's speed or radius",
             [ball],
         )
