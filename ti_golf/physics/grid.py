@@ -139,9 +139,10 @@ def list_neighbours(
     are listed apart: see :func:`list_ball`): row i of ``upper`` holds the neighbours whose pairs
     ball i owns (:func:`owns`), and ``first[i + 1]`` their number (``links.pair_starts`` turns
     the numbers into the lists' starts in the pair tables), column i of ``lower`` the others (to
-    be turned into slots by :func:`link_lower` or :func:`link_and_carry`). ``lower`` is stored transposed, (width, n), so
-    that the few first entries of consecutive balls lie side by side however wide one ball's list
-    makes it (a boulder's hundreds), and the sweeps' gathers read few cache lines. The sort and
+    be turned into slots by :func:`link_lower` or :func:`link_and_carry`). ``lower`` is stored
+    transposed, (width, n), so that the few first entries of consecutive balls lie side by side
+    however wide one ball's list makes it (a boulder's hundreds), and the sweeps' gathers read few
+    cache lines. The sort and
     the lists are built in one launch. The counting sort: each ball's rank among the balls of its
     bucket (an integer atomic add, counting in ``start``), the buckets' starts
     (:func:`bucket_starts`; ``start`` has one entry more than there are buckets, ``chunk_start`` is

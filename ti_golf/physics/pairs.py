@@ -72,9 +72,10 @@ def owned_pairs(
 ):
     """One Jacobi sweep over the pairs that ball i owns, with its neighbours j = upper[i, k]: the
     impulse P on i (−P acts on j) from the current velocities (which updates the resting impulse
-    ``lam``), stored in the pair's entry p = first[i] + k as J[p] = (P, 1/|x_i − x_j|, gap). The inverse distance [1/m], which gives
-    the unit normal n̂ from j to i (:func:`pair_normal`), and the surface gap [m] were stored there
-    by :func:`warm_start` (positions do not change during the sweeps).
+    ``lam``), stored in the pair's entry p = first[i] + k as J[p] = (P, 1/|x_i − x_j|, gap). The
+    inverse distance [1/m], which gives the unit normal n̂ from j to i (:func:`pair_normal`), and
+    the surface gap [m] were stored there by :func:`warm_start` (positions do not change during
+    the sweeps).
     An impact (see :func:`.contact.pair_impulse`) is marked by the inverse distance's sign, negative
     (:func:`impact_mark`; and ``flag[1]`` is set, so that :func:`impact_keys` looks for the balls'
     first impacts; :func:`gather` takes one impact per ball, see :func:`matched`).

@@ -254,13 +254,14 @@ FlightRecord = Deferred(
 NeighbourLists = Deferred(
     lambda: ti.types.argpack(
         upper=int_table,  # the neighbours whose pairs each ball owns (grid.owns), sorted by index, (N, K)
-        first=int_array,  # ball i's pairs: upper[i, :first[i + 1] − first[i]]; in lam, friction, J, entries first[i]…, (N + 1,)
+        # ball i's pairs: upper[i, :first[i + 1] − first[i]], and in lam, friction, J the entries from first[i]
+        first=int_array,  # (N + 1,)
         lower=int_table,  # each ball's lower neighbours, as slots of the pairs in their upper lists, (N, K')
         n_lower=int_array,  # how many, (N,)
         x_at_build=vec3f_array,  # positions when the lists were built [m], f32, (N,)
         lam=float_array.get(),  # each pair's accumulated resting impulse [N·s], (pairs,) (see first)
         lam_plane=f32_table,  # each ball's accumulated impulse on each plane and the terrain [N·s], (N, P + 1)
-        friction=vec3f_array,  # each pair's friction impulse on its owner [N·s], f32, as lam (Gauss–Seidel; else (1,))
+        friction=vec3f_array,  # each pair's friction impulse on its owner [N·s], f32, as lam (Gauss–Seidel)
         friction_plane=vec3f_table,  # each ball's friction impulse per unit mass [m/s] on each surface, as lam_plane
     ),
     "NeighbourLists",
