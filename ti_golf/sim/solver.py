@@ -31,6 +31,7 @@ from ti_golf.sim.model import Model
 from ti_golf.sim.packs import Packs
 from ti_golf.sim.signals import whole_steps
 from ti_golf.sim.state import State
+from ti_golf.sim.storage_order import store_in_grid_order
 
 SERIAL_MAX_BALLS = 256
 """Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
@@ -223,7 +224,7 @@ class CollisionSolver:
         bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
         self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, self.mask + 1))
         if self.reorder:
-            self._store_in_grid_order(state)
+            store_in_grid_order(self, state)
             if scan_apart:  # their new indices
                 apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
         self._ids = state.ids
@@ -419,39 +420,6 @@ class CollisionSolver:
             f"Ball {ball} reaches farthest (radius {radius[k]:.4g} m, speed {speed[k]:.4g} m/s: "
             f"{h * speed[k]:.4g} m per step of {h:g} s)"
         )
-
-    def _store_in_grid_order(self, state: State) -> None:
-        """Gather every per-ball array of ``state`` and the model into the grid's order (see
-        ``reorder``): ball p of the new order is ball ``sorted_ids[p]`` of the old one, and the
-        grid's bucket starts stay valid for :func:`grid.list_neighbours` (``stored_sorted``).
-        Scratch arrays of the same type take the gathered values and the old arrays become scratch,
-        so no array is allocated but, on the first reorder, the state's ``ids``: the storage order
-        stays in Taichi's memory, where each reorder gathers it as it gathers the balls, rather than
-        being composed in numpy (at 8,192 balls that left 16 bytes per ball of freed heap in the
-        process)."""
-        sort.storage_order(
-            state.x, 1.0 / self.cell, self.mask, *self._hash, self.rank, self.start, self.chunk_start, self.sorted_ids
-        )
-        order = self.sorted_ids
-        spares = [self.v_free, self.calm, self.rank]  # scratch between steps: a vec3, a float and an int array
-        model = self._model
-        per_ball = [(state, name) for name in state.per_ball()] + [(model, name) for name in model.per_ball()]
-        for owner, name in per_ball:
-            values = getattr(owner, name)
-            k = next(
-                k for k, a in enumerate(spares) if (a.dtype, a.element_shape) == (values.dtype, values.element_shape)
-            )
-            sort.gather(values, order, spares[k])
-            setattr(owner, name, spares[k])
-            spares[k] = values
-        self.v_free, self.calm, self.rank = spares
-        for column in range(self.lam_plane.shape[1]):
-            sort.gather_column(self.lam_plane, column, order, self.clear)  # (f32 scratch between steps)
-            if self.gauss_seidel:  # (the positions at the last build: vec3f scratch until this one ends)
-                sort.gather_column(self.friction_plane, column, order, self.x_at_build)
-        if state.ids is None:  # the first reorder: the ids are this build's order (gathered above from then on)
-            state.ids = ti.ndarray(ti.i32, state.n)
-            state.ids.copy_from(order)
 
     def ensure_lists(self, state: State) -> None:
         """Build the neighbour lists for the current positions unless they still hold every pair in
