@@ -1103,22 +1103,28 @@ def test_balls_all_alike_share_one_radius_and_one_mass():
     np.testing.assert_array_equal(mixed.model.radius.to_numpy(), r)
 
 
-def test_the_memory_guard_counts_the_bytes_the_pair_tables_take():
+@pytest.mark.parametrize("method", ["jacobi", "gauss_seidel"])
+def test_the_memory_guard_counts_the_bytes_the_pair_tables_take(method):
     # table_bytes is the memory guard's estimate (above) and the performance page's byte count: it must
     # match the tables the solver allocates, whatever they keep (per list entry a neighbour or a
-    # link; per pair its resting impulse, the sweep's impulse, inverse distance and gap, and under
-    # Gauss–Seidel its friction impulse).
+    # link; per pair its resting impulse and its row of the sweep's table, the inverse distance and
+    # gap, and under Jacobi the impulse too; under Gauss–Seidel its friction impulse, in two tables
+    # once a rebuild has carried it from one into the other).
     import ti_golf.sim.solver as solver_module
 
-    pile, x = pile_scene(400)
-    sim = tg.Simulation(pile, x=x, track=False)
+    x, _ = _random_sets()["clustered"]
+    sc = scene("world.gravity=[0,-9.81,0]", "world.ground=true", "contact.mu=0.3", f"contact.solver={method}")
+    sim = tg.Simulation(sc, x=x[:400] * 0.3 + [0, 0.2, 0], radius=np.full(400, 0.02), track=False)
     sim.solver = CollisionSolver(sim.model, serial=False)
     sim.step(1)
+    sim.solver.invalidate()
+    sim.step(1)  # a rebuild
     s = sim.solver
-    tables = (s.upper, s.lower, s.lam, s.impulse) + ((s.friction,) if s.gauss_seidel else ())
+    assert s.rebuilds == 2 and s.impulse.shape[1] == (2 if method == "gauss_seidel" else 5)
+    tables = (s.upper, s.lower, s.lam, s.impulse) + ((s.friction, s.friction_back) if s.gauss_seidel else ())
     allocated = sum(a.to_numpy().nbytes for a in tables)
-    assert s.capacity[0] >= 3 and s.pair_capacity >= len(x)
-    assert allocated == solver_module.table_bytes(len(x), s.capacity, s.pair_capacity, s.gauss_seidel)
+    assert s.capacity[0] >= 3 and s.pair_capacity >= len(x[:400])
+    assert allocated == solver_module.table_bytes(400, s.capacity, s.pair_capacity, s.gauss_seidel)
 
 
 def test_a_build_past_the_vulkan_loop_cap_stops_the_run_and_names_the_ball():

@@ -92,8 +92,9 @@ def test_a_pile_saved_asleep_wakes_as_if_it_never_stopped(serial, tmp_path):
 
 def _pairs_in_rows(path) -> None:
     """Rewrite the solver's arrays of the saved run at ``path`` as solvers saved them until
-    2026-11-26: the pair tables with a row per ball as wide as the longest list, and each list's
-    length in ``n_upper`` (now the pairs lie ball after ball, from ``first``)."""
+    2026-11-26: the pair tables with a row per ball as wide as the longest list, each list's
+    length in ``n_upper`` (now the pairs lie ball after ball, from ``first``), the sweep's table
+    a 5-vector per pair (now a row of 2 or 5 columns) and one table of friction impulses."""
     with np.load(path) as d:
         data = dict(d)
     meta = json.loads(str(data["run"]))
@@ -115,7 +116,9 @@ def _pairs_in_rows(path) -> None:
     )
     solver["elements"]["n_upper"] = solver["elements"].pop("first")
     del solver["values"]["pair_capacity"], solver["scratch"]["stash_first"], solver["scratch"]["pair_chunk"]
-    solver["scratch"]["impulse"][0] = [len(n_upper), width]
+    solver["scratch"]["impulse"][:2] = [len(n_upper), width], [5]  # a 5-vector per pair, Jacobi or Gauss–Seidel
+    solver["scratch"].pop("friction_back", None)
+    solver["values"].pop("friction_back", None)
     data["run"] = np.array(json.dumps(meta))
     np.savez(path, **data)
 

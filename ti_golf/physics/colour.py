@@ -41,6 +41,8 @@ from ti_golf.physics.pairs import QUIET, pair_normal, skip_pair
 from ti_golf.physics.sort import bucket_in_turn, cell_of, counting_sort, sort_buckets
 from ti_golf.physics.surfaces import surface_impulses
 from ti_golf.physics.types import (
+    GAP,
+    INV,
     BallState,
     BlockOrder,
     ContactParams,
@@ -346,8 +348,7 @@ def sweep_ball(
                 if state.status[j] == OUT_OF_BOUNDS:
                     lists.lam[p] = 0.0  # a frozen ball no longer supports anything
                 elif not skip_pair(state.status, i, j):
-                    Jk = scratch.J[p]
-                    n = pair_normal(xi, state.x[j], ti.abs(Jk[3]))
+                    n = pair_normal(xi, state.x[j], scratch.J[p, INV])
                     if n.norm_sqr() > 0.0:
                         rj, inv_mj = of_ball(model.radius, j), 1.0 / of_ball(model.mass, j)
                         if stands_firm(contact, state.status[j]):
@@ -371,7 +372,7 @@ def sweep_ball(
                             P, lists.lam[p], F = pair_step(
                                 phase,
                                 n,
-                                Jk[4],
+                                scratch.J[p, GAP],
                                 v_n0,
                                 vi,
                                 wi,

@@ -14,13 +14,15 @@ from ti_golf.physics.apart import APART_MAX, is_apart
 from ti_golf.physics.grid import owns, pair_reach
 from ti_golf.physics.sort import bucket_starts
 from ti_golf.physics.types import (
+    ID,
+    LAM,
     float_array,
     int_array,
     int_table,
     is_f64,
     kernel,
     of_ball,
-    pair_array,
+    pair_table,
     vec3f_array,
 )
 
@@ -90,18 +92,11 @@ def pair_starts(first: int_array, chunk_start: int_array) -> ti.i32:
 
 
 @kernel
-def stash(
-    upper: int_table,
-    first: int_array,
-    lam: float_array,
-    scratch: pair_array,
-    with_friction: ti.template(),
-    friction: vec3f_array,
-):
-    """Keep every pair's (accumulated impulse, neighbour id, friction impulse) in ``scratch``, laid
-    out as the pair tables (see :func:`stash_ball`)."""
+def stash(upper: int_table, first: int_array, lam: float_array, scratch: pair_table):
+    """Keep every pair's (accumulated impulse, neighbour id) in ``scratch``, laid out as the pair
+    tables (see :func:`stash_ball`)."""
     for i in range(first.shape[0] - 1):
-        stash_ball(i, upper, first, lam, scratch, 0, with_friction, friction)
+        stash_ball(i, upper, first, lam, scratch, 0)
 
 
 @ti.func
@@ -112,26 +107,22 @@ def stash_ball(
     lam: ti.template(),
     scratch: ti.template(),
     width,
-    with_friction: ti.template(),
-    friction: ti.template(),
 ):
-    """Keep the (accumulated impulse, neighbour id, friction impulse) of every pair that ball i owns
-    in ``scratch`` (the sweep's table, free between steps) so the lists and the pair tables can be
-    rebuilt in place: in the pair tables' entries of ball i, or with ``width`` > 0 in entries
-    i · width onwards, followed by the id −1 when the list is shorter (the serial rebuild, which
-    overwrites ``first`` before it carries the impulses over). The friction impulse (of the
-    Gauss–Seidel sweeps) only ``with_friction``, else zero. The id is exact in f32 as well below
-    2^24 (``ID_EXACT_F32``)."""
+    """Keep the (accumulated impulse, neighbour id) of every pair that ball i owns in the columns
+    ``LAM`` and ``ID`` of ``scratch`` (the sweep's table, free between steps) so that the lists
+    and the pair tables can be rebuilt in place: in the pair tables' rows of ball i, or with
+    ``width`` > 0 in rows i · width onwards, followed by the id −1 when the list is shorter (the
+    serial rebuild, which overwrites ``first`` before it carries the impulses over). The pairs'
+    friction impulses (of the Gauss–Seidel sweeps) stay in the old friction table, in the same
+    rows (see :func:`carry_ball`). The id is exact in f32 as well below 2^24
+    (``ID_EXACT_F32``)."""
     p0, count = first[i], listed(first, i)
     if width > 0:
         p0 = i * width
         if count < width:
-            scratch[p0 + count] = ti.Vector([0.0, -1.0, 0.0, 0.0, 0.0], dt=float)
+            scratch[p0 + count, ID] = -1.0
     for k in range(count):
-        F = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
-        if ti.static(with_friction):
-            F = friction[first[i] + k]
-        scratch[p0 + k] = ti.Vector([lam[first[i] + k], upper[i, k], F[0], F[1], F[2]], dt=float)
+        scratch[p0 + k, LAM], scratch[p0 + k, ID] = lam[first[i] + k], ti.cast(upper[i, k], float)
 
 
 @kernel
@@ -140,24 +131,25 @@ def link_and_carry(
     first: int_array,
     lower: int_table,
     n_lower: int_array,
-    stashed: pair_array,
+    stashed: pair_table,
     stash_first: int_array,
     lam: float_array,
     moved: ti.template(),
     old_id: int_array,
     with_friction: ti.template(),
+    old_friction: vec3f_array,
     friction: vec3f_array,
 ):
     """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
     :func:`stash` and :func:`carry_ball`; ``stash_first``: their layout) to the new ones, in one
     launch (neither writes what the other reads). With ``moved`` the balls were stored in a new
     order since the stash: ball i was ball ``old_id[i]`` of the stashed lists. With
-    ``with_friction`` the pairs' stashed friction impulses (of the Gauss–Seidel sweeps) are
-    carried into ``friction`` too."""
+    ``with_friction`` the pairs' friction impulses (of the Gauss–Seidel sweeps) are carried from
+    the old lists' table ``old_friction`` into ``friction``, a table of its own."""
     bits = slot_bits(upper.shape[1])
     for i in range(lower.shape[1]):
         link_ball(i, bits, upper, first, lower, n_lower)
-        carry_ball(i, stashed, stash_first, 0, upper, first, lam, old_id, moved, with_friction, friction)
+        carry_ball(i, stashed, stash_first, 0, upper, first, lam, old_id, moved, with_friction, old_friction, friction)
 
 
 @ti.func
@@ -172,11 +164,13 @@ def carry_ball(
     old_id: ti.template(),
     moved: ti.template(),
     with_friction: ti.template(),
+    old_friction: ti.template(),
     friction: ti.template(),
 ):
     """Carry the accumulated impulse of each pair ball i owns in the new lists from the stashed old
     ones (see :func:`stash_ball`: laid out by ``stash_first``, or ``width`` a ball), and with
-    ``with_friction`` its friction impulse into ``friction``; new pairs start at zero. The pair
+    ``with_friction`` its friction impulse from the old lists' row in ``old_friction`` into
+    ``friction``; new pairs start at zero. The pair
     of balls a and b (their old ids: ``old_id`` of i and j when ``moved``) is looked up in the
     entries of its old owner, which is a's, or b's when the pair changed hands (a pair's owner
     is the ball behind the other along their main axis, see :func:`owns`, and that axis can
@@ -190,12 +184,12 @@ def carry_ball(
         F = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
         if found:
             if ti.static(with_friction):
-                F = stashed_friction(stashed, entry)
+                F = old_friction[entry]
         else:
             found, value, entry = stashed_impulse(stashed, stash_first, width, b, a)
             if ti.static(with_friction):
                 if found:
-                    F = -stashed_friction(stashed, entry)  # (the friction on the other ball of the pair)
+                    F = -old_friction[entry]  # (the friction on the other ball of the pair)
         lam[p + k] = value
         if ti.static(with_friction):
             friction[p + k] = F
@@ -211,19 +205,12 @@ def stashed_impulse(stashed: ti.template(), stash_first: ti.template(), width, a
     if width == 0:
         lo, hi = stash_first[a], stash_first[a + 1]
     for p in range(lo, hi):
-        j = ti.cast(stashed[p][1], ti.i32)  # the neighbour id kept by stash_ball (−1: the list's end)
+        j = ti.cast(stashed[p, ID], ti.i32)  # the neighbour id kept by stash_ball (−1: the list's end)
         if j < 0 or j > b:
             break
         if j == b:
-            found, value, entry = 1, stashed[p][0], p
+            found, value, entry = 1, stashed[p, LAM], p
     return found, value, entry
-
-
-@ti.func
-def stashed_friction(stashed: ti.template(), p):
-    """The friction impulse [N·s] kept by :func:`stash_ball` in entry p (exact: it was f32)."""
-    s = stashed[p]
-    return ti.Vector([s[2], s[3], s[4]], dt=ti.f32)
 
 
 @ti.func
@@ -257,7 +244,7 @@ def relist_all_pairs(
     width = upper.shape[1]
     n_apart = 0
     for i in range(x.shape[0]):
-        stash_ball(i, upper, first, lam, scratch, width, False, friction)
+        stash_ball(i, upper, first, lam, scratch, width)
         if is_apart(v, radius, i, v_cut, r_cut, 1):  # as apart_balls counts them
             n_apart += 1
     if n_apart > APART_MAX:
@@ -282,7 +269,7 @@ def relist_all_pairs(
     for i in range(x.shape[0]):
         link_ball(i, bits, upper, first, lower, n_lower)
     for i in range(x.shape[0]):
-        carry_ball(i, scratch, first, width, upper, first, lam, first, False, False, friction)  # ids unchanged
+        carry_ball(i, scratch, first, width, upper, first, lam, first, False, False, friction, friction)  # ids kept
         if clear_friction:  # (not carried: the pairs' friction impulses start again from zero)
             for k in range(listed(first, i)):
                 friction[first[i] + k] = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)

@@ -16,6 +16,11 @@ from ti_golf.physics.contact import (
 )
 from ti_golf.physics.links import listed, owner_slot
 from ti_golf.physics.types import (
+    GAP,
+    INV,
+    P_X,
+    P_Y,
+    P_Z,
     of_ball,
     zero3,
 )
@@ -72,24 +77,23 @@ def owned_pairs(
 ):
     """One Jacobi sweep over the pairs that ball i owns, with its neighbours j = upper[i, k]: the
     impulse P on i (−P acts on j) from the current velocities (which updates the resting impulse
-    ``lam``), stored in the pair's entry p = first[i] + k as J[p] = (P, 1/|x_i − x_j|, gap). The
-    inverse distance [1/m], which gives the unit normal n̂ from j to i (:func:`pair_normal`), and
-    the surface gap [m] were stored there by :func:`warm_start` (positions do not change during
-    the sweeps).
+    ``lam``), stored in the pair's row p = first[i] + k of J (columns ``P_X`` to ``P_Z``). The
+    inverse distance [1/m] (``INV``), which gives the unit normal n̂ from j to i
+    (:func:`pair_normal`), and the surface gap [m] (``GAP``) were stored there by
+    :func:`warm_start` (positions do not change during the sweeps).
     An impact (see :func:`.contact.pair_impulse`) is marked by the inverse distance's sign, negative
     (:func:`impact_mark`; and ``flag[1]`` is set, so that :func:`impact_keys` looks for the balls'
     first impacts; :func:`gather` takes one impact per ball, see :func:`matched`).
 
-    With ``final`` (the last sweep) the gap's place, J[p][4], takes, for an overlapping pair,
+    With ``final`` (the last sweep) the gap's place, J[p, GAP], takes, for an overlapping pair,
     q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position projection (B.18: ball i moves by
     q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the other way); for a pair apart,
     −gap ≤ 0 (the surface gap [m]: the balls touch while it is below 1 % of a radius)."""
     inv_mi, xi, p0 = 1.0 / of_ball(mass, i), x[i], first[i]
     for k in range(listed(first, i)):
         j, p = upper[i, k], p0 + k
-        Jk = J[p]
-        inv = ti.abs(Jk[3])  # (the mark of an impact in the last sweep, see impact_mark)
-        n, gap = pair_normal(xi, x[j], inv), Jk[4]
+        inv = ti.abs(J[p, INV])  # (the mark of an impact in the last sweep, see impact_mark)
+        n, gap = pair_normal(xi, x[j], inv), J[p, GAP]
         ok = n.norm_sqr() > 0.0
         inv_mj = 1.0 / of_ball(mass, j)
         P = zero3()
@@ -126,16 +130,22 @@ def owned_pairs(
                     g = -contact.k_p * gap / (inv_mi + inv_mj)
         if kick != 0:
             inv = -inv
-        J[p] = ti.Vector([P[0], P[1], P[2], inv, g])
+        J[p, INV], J[p, GAP], J[p, P_X], J[p, P_Y], J[p, P_Z] = inv, g, P[0], P[1], P[2]
 
 
 @ti.func
-def impact_mark(Jk):
-    """Whether the pair whose sweep entry (:func:`owned_pairs`) is ``Jk`` met as an impact in the
+def impulse_of(J: ti.template(), p):
+    """The impulse P [N·s] on the owner of the pair in row p of the Jacobi sweeps' table."""
+    return ti.Vector([J[p, P_X], J[p, P_Y], J[p, P_Z]])
+
+
+@ti.func
+def impact_mark(J: ti.template(), p):
+    """Whether the pair in row p of the sweep's table (:func:`owned_pairs`) met as an impact in the
     sweep: its stored inverse distance is then negative. The sign is the mark, so that no table
     of marks is kept (the inverse distance is positive for every pair that gets an impact: the
     centres of the pair's balls are apart)."""
-    return Jk[3] < 0.0
+    return J[p, INV] < 0.0
 
 
 @ti.func
@@ -164,8 +174,9 @@ def warm_start(
     Gauss–Seidel sweeps), where each pair's friction impulse F from the last step is applied too,
     in the pair's tangent plane and at most μ·λ (:func:`.contact.clamp_friction`: the same on both
     balls, bit for bit). Also stores the geometry of the pairs
-    ball i owns for the sweeps: J[first[i] + k] = (0, 1/|x_i − x_j|, the surface gap [m]), which marks
-    no impact (:func:`impact_mark`). Reads only
+    ball i owns for the sweeps in their rows first[i] + k of J: 1/|x_i − x_j| (``INV``, positive:
+    no impact, see :func:`impact_mark`), the surface gap [m] (``GAP``) and, in a table with the
+    Jacobi sweeps' columns, no impulse yet. Reads only
     what the free-flight loop does not write (start-of-step positions, status, λ, rest timers),
     so it runs inside that loop. Returns (Δv, the calm time [s] of ball i: the least of its rest
     timer and the rest timers of the balls it touches, each plus ``hop`` [s] (:func:`island_calm`),
@@ -192,7 +203,9 @@ def warm_start(
     for k in range(listed(first, i)):
         j, p = upper[i, k], p0 + k
         inv, gap = pair_geometry(x, radius, i, j)
-        J[p] = ti.Vector([0.0, 0.0, 0.0, inv, gap])
+        J[p, INV], J[p, GAP] = inv, gap
+        if J.shape[1] > P_X:  # (a quiet ball's pairs keep no impulse: the Jacobi sweeps skip them)
+            J[p, P_X], J[p, P_Y], J[p, P_Z] = 0.0, 0.0, 0.0
         n = pair_normal(xi, x[j], inv)
         P += resting_impulse(status, i, j, n, lam[p])
         if carried:
@@ -276,10 +289,10 @@ def impact_keys(
     for m in range(n_lower[i]):
         slot = lower[m, i]
         j, k = owner_slot(slot, bits)
-        if impact_mark(J[first[j] + k]):
+        if impact_mark(J, first[j] + k):
             key = ti.max(key, slot + 1)
     for k in range(listed(first, i)):
-        if impact_mark(J[first[i] + k]):
+        if impact_mark(J, first[i] + k):
             key = ti.max(key, (i << bits) + k + 1)
     impact[i] = key
 
@@ -303,7 +316,7 @@ def matched(impact: ti.template(), a, b, key):
 @ti.func
 def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p, pressed):
     """0, 1 or ``PRESSED`` (see :func:`gather`) for the pair of ball i (radius ``r``, 1/m_i
-    ``inv_m_i``) with ball j whose last-sweep J[·][4] is ``g`` (the projection q ≥ 0 of an
+    ``inv_m_i``) with ball j whose last-sweep J[·, GAP] is ``g`` (the projection q ≥ 0 of an
     overlap, or minus the gap: see :func:`owned_pairs`): pressed when they overlap by more than
     ``pressed`` of ``r``. Ball j's mass is read only for an overlap (this runs for every pair of
     the step's last sweep)."""
@@ -329,16 +342,16 @@ def touching_by_gaps(
     pressed,
 ):
     """Whether ball i (radius ``r`` [m]) touches a ball, as :func:`gather` tells it with ``final``
-    (0, 1 or ``PRESSED``), from the surface gaps [m] its pairs keep in J[·][4] through the
+    (0, 1 or ``PRESSED``), from the surface gaps [m] its pairs keep in J[·, GAP] through the
     Gauss–Seidel sweeps (:func:`warm_start` stores them; the sweeps apply their impulses at once
     and leave nothing else in J): touching below 1 % of ``r``, pressed when overlapping by more
     than ``pressed`` of ``r`` (with a projection, ``k_p`` > 0, as :func:`contact_state`)."""
     touching = 0
     for m in range(n_lower[i]):
         j, k = owner_slot(lower[m, i], bits)
-        touching = ti.max(touching, gap_state(J[first[j] + k][4], r, k_p, pressed))
+        touching = ti.max(touching, gap_state(J[first[j] + k, GAP], r, k_p, pressed))
     for k in range(listed(first, i)):
-        touching = ti.max(touching, gap_state(J[first[i] + k][4], r, k_p, pressed))
+        touching = ti.max(touching, gap_state(J[first[i] + k, GAP], r, k_p, pressed))
     return touching
 
 
@@ -387,25 +400,25 @@ def gather(
     for m in range(n_lower[i]):
         slot = lower[m, i]
         j, k = owner_slot(slot, bits)  # the pair's owner j stores it
-        Jk = J[first[j] + k]
-        P_k, n_k = Jk.xyz, pair_normal(x[j], xi, ti.abs(Jk[3]))
+        p = first[j] + k
+        P_k, n_k = impulse_of(J, p), pair_normal(x[j], xi, ti.abs(J[p, INV]))
         if any_impact != 0:  # (the marks are read only in a sweep that has impacts)
-            if impact_mark(Jk) and not matched(impact, i, j, slot + 1):
+            if impact_mark(J, p) and not matched(impact, i, j, slot + 1):
                 P_k = zero3()
         P -= P_k
         T += n_k.cross(P_k)
         if ti.static(final):
-            q_n -= ti.max(Jk[4], 0.0) * n_k
-            touching = ti.max(touching, contact_state(Jk[4], r, inv_m, mass, j, k_p, pressed))
+            q_n -= ti.max(J[p, GAP], 0.0) * n_k
+            touching = ti.max(touching, contact_state(J[p, GAP], r, inv_m, mass, j, k_p, pressed))
     for k in range(listed(first, i)):
-        Jk = J[first[i] + k]
-        P_k, n_k = Jk.xyz, pair_normal(xi, x[upper[i, k]], ti.abs(Jk[3]))
+        p = first[i] + k
+        P_k, n_k = impulse_of(J, p), pair_normal(xi, x[upper[i, k]], ti.abs(J[p, INV]))
         if any_impact != 0:
-            if impact_mark(Jk) and not matched(impact, i, upper[i, k], (i << bits) + k + 1):
+            if impact_mark(J, p) and not matched(impact, i, upper[i, k], (i << bits) + k + 1):
                 P_k = zero3()
         P += P_k
         T += n_k.cross(P_k)
         if ti.static(final):
-            q_n += ti.max(Jk[4], 0.0) * n_k
-            touching = ti.max(touching, contact_state(Jk[4], r, inv_m, mass, upper[i, k], k_p, pressed))
+            q_n += ti.max(J[p, GAP], 0.0) * n_k
+            touching = ti.max(touching, contact_state(J[p, GAP], r, inv_m, mass, upper[i, k], k_p, pressed))
     return P * inv_m, T * (-2.5 * inv_m / r), q_n * inv_m, touching

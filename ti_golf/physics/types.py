@@ -170,10 +170,25 @@ float_array = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=1), "floa
 vec3_table = Deferred(lambda: ti.types.ndarray(dtype=vec3.get(), ndim=2), "vec3_table")
 float_grid = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=2), "float_grid")
 """2-D float array (terrain heights, tables)."""
-pair_entry = Deferred(lambda: ti.types.vector(5, float), "pair_entry")
-"""A pair's entry in a sweep: its impulse [N·s], inverse distance [1/m] and gap [m] (see pairs.owned_pairs)."""
-pair_array = Deferred(lambda: ti.types.ndarray(dtype=pair_entry.get(), ndim=1), "pair_array")
-"""The pairs' sweep entries, one per listed pair (see ``NeighbourLists.first``)."""
+pair_table = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=2), "pair_table")
+"""The pairs' sweep entries, a row per listed pair (see ``NeighbourLists.first``), ``INV`` to
+``P_Z`` or ``INV`` and ``GAP`` alone (see :func:`pair_columns`)."""
+
+INV, GAP, P_X, P_Y, P_Z = 0, 1, 2, 3, 4
+"""Columns of a pair's row in the sweep's table (``StepScratch.J``): its inverse distance [1/m] and
+surface gap [m] (the Gauss–Seidel sweeps read no more), then with the Jacobi sweeps the impulse P
+[N·s] that the pair's owner takes in the sweep (see ``pairs.owned_pairs``). Between steps a
+rebuild of the lists keeps each pair's resting impulse and neighbour id in the first two (see
+``links.stash``)."""
+LAM, ID = 0, 1
+"""Columns of a stashed pair in the sweep's table during a rebuild (see ``links.stash``)."""
+
+
+def pair_columns(gauss_seidel: bool) -> int:
+    """Columns of the sweep's table (see ``INV``): 2 with the Gauss–Seidel sweeps, which apply each
+    pair's impulse at once, 5 with the Jacobi sweeps, whose balls gather the impulses after."""
+    return 2 if gauss_seidel else 5
+
 
 # Types that do not depend on the precision.
 int_array = ti.types.ndarray(dtype=ti.i32, ndim=1)
@@ -284,7 +299,7 @@ StepScratch = Deferred(
         v_free=vec3_array.get(),  # free-flight velocities [m/s], (N,)
         calm=float_array.get(),  # least rest timer of the balls touching each ball [s], (N,)
         clear=f32_array,  # clearance to the nearest plane or terrain [m], (N,)
-        J=pair_array.get(),  # each pair's impulse, inverse distance and gap in a sweep, as lam
+        J=pair_table.get(),  # each pair's inverse distance, gap and (Jacobi) impulse in a sweep, (pairs, 2 or 5)
         impact=int_array,  # Jacobi: each ball's first impact key; Gauss–Seidel: 1 for a ball to bounce, (N,)
         flag=int_array,  # [0]: rebuild the lists; [1]: the sweep marked impacts, (2,)
     ),

@@ -13,7 +13,7 @@ from ti_golf.physics.types import (
     GridParams,
     GridScratch,
     StepParams,
-    pair_entry,
+    pair_columns,
     vec3,
     vec3f,
 )
@@ -66,13 +66,15 @@ def sweep_launches(iterations: int) -> list[tuple[bool, int, bool]]:
     return launches
 
 
-def table_bytes(n: int, widths: tuple[int, int], pairs: int, friction: bool) -> int:
+def table_bytes(n: int, widths: tuple[int, int], pairs: int, gauss_seidel: bool) -> int:
     """Bytes of the neighbour and pair tables of ``n`` balls with lists ``widths`` (upper, lower)
     wide and room for ``pairs`` pairs: per list entry a neighbour or a slot (4 bytes); per pair
-    its resting impulse, the sweep's 5-vector (impulse, inverse distance, gap) and, with
-    ``friction`` (Gauss–Seidel), its friction impulse (3 f32)."""
+    its resting impulse and its row of the sweep's table (:func:`.types.pair_columns` floats),
+    and with the Gauss–Seidel sweeps its friction impulse (3 f32) twice, as a rebuild carries it
+    from the old table to a new one."""
     f = np.dtype(np_float()).itemsize
-    return n * (widths[0] + widths[1]) * 4 + pairs * (6 * f + (12 if friction else 0))
+    per_pair = (1 + pair_columns(gauss_seidel)) * f + (24 if gauss_seidel else 0)
+    return n * (widths[0] + widths[1]) * 4 + pairs * per_pair
 
 
 PAIR_ROOM = 8
@@ -187,8 +189,9 @@ class CollisionSolver:
         if self.gauss_seidel and not self.serial:  # the balls by grid column (colour.column_order)
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
         self.col_start = self.col_chunk = None
-        # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only)
-        self.friction = ti.ndarray(vec3f, 1)
+        # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only), and
+        # the table a rebuild carries it into (links.link_and_carry reads the old rows while it writes the new)
+        self.friction, self.friction_back = ti.ndarray(vec3f, 1), None
         # each ball's friction impulse per unit mass on each plane and the terrain (Gauss–Seidel only)
         self.friction_plane = ti.ndarray(vec3f, self.lam_plane.shape if self.gauss_seidel else (1, 1))
         self.friction_plane.fill(0.0)
@@ -205,10 +208,10 @@ class CollisionSolver:
         n = state.n
         if n >= REORDER_MIN_BALLS:  # 0.2 ms, against the build's tens of milliseconds
             release_freed_memory()  # before the tables: numpy copies freed since (balls set up, storage order)
-        stashed = None
-        if self._valid:  # the pair impulses are scratch between steps: they keep the old lists' λ and friction
+        stashed = old_friction = None
+        if self._valid:  # the sweep's table is scratch between steps: it keeps the old lists' λ and ids
             stashed = self.impulse
-            links.stash(self.upper, self.first, self.lam, stashed, self.gauss_seidel, self.friction)
+            links.stash(self.upper, self.first, self.lam, stashed)
             self.stash_first.copy_from(self.first)
         h = self._model.dt
         v_max, v_rest, n_apart = (
@@ -287,6 +290,8 @@ class CollisionSolver:
                 f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)"
             )
         pairs = int(links.pair_starts(self.first, self.pair_chunk))
+        if stashed is not None and self.gauss_seidel:  # carried from the old lists' rows into the other table
+            old_friction, self.friction, self.friction_back = self.friction, self.friction_back, None
         if self.serial:  # the kernel rebuilds the lists in place: room for every list to grow to n − 1
             self._fit_pair_tables(state, n * self.capacity[0], 0)  # (and the stash, links.relist_all_pairs)
         else:
@@ -304,19 +309,22 @@ class CollisionSolver:
                 self.reorder,
                 self.sorted_ids,
                 self.gauss_seidel,
+                self.friction if old_friction is None else old_friction,
                 self.friction,
             )
-            stashed = None
+            if old_friction is not None and old_friction.shape == self.friction.shape:
+                self.friction_back = old_friction  # (else the tables grew: a new one at the next build)
+            stashed = old_friction = None
         else:
             links.link_lower(self.upper, self.first, self.lower, self.n_lower)
             self.lam.fill(0.0)
             if self.gauss_seidel:  # none yet
                 self.friction.fill(0.0)
-        if self.impulse is None or self.impulse.shape != self.lam.shape:
+        if self.impulse is None or self.impulse.shape[0] != self.lam.shape[0]:
             self.impulse = None  # free the old table (the stash) before allocating
             free_dropped_arrays()
-            # each pair's impulse, inverse distance, and gap or projection in a sweep (pairs.owned_pairs)
-            self.impulse = ti.ndarray(pair_entry.get(), self.lam.shape)
+            # each pair's inverse distance, gap or projection, and (Jacobi) impulse in a sweep (pairs.owned_pairs)
+            self.impulse = ti.ndarray(float, (self.lam.shape[0], pair_columns(self.gauss_seidel)))
         self.rebuilds += 1
         self._valid = True
         if self.gauss_seidel and not self.serial:
@@ -326,17 +334,23 @@ class CollisionSolver:
         """Make room for ``pairs`` pairs in the tables of the pairs' resting impulses and (Gauss–Seidel)
         friction impulses: when they hold fewer, new tables, the old ones freed first (their values
         are in the stash): for ``pairs`` at the first build, and when they outgrew tables built
-        before, for ``pairs`` plus 1/``room`` of them (none with ``room`` 0)."""
-        if pairs <= self.pair_capacity:
-            return
-        capacity = max(1, pairs + (pairs // room if room and self.rebuilds > 0 else 0))
-        self._check_table_memory(state, self.capacity, capacity)
-        self._packs.clear()  # (their references would keep the old tables in memory)
-        self.lam = self.friction = None
-        free_dropped_arrays()
-        self.pair_capacity = capacity
-        self.lam = ti.ndarray(float, capacity)
-        self.friction = ti.ndarray(vec3f, capacity if self.gauss_seidel else 1)
+        before, for ``pairs`` plus 1/``room`` of them (none with ``room`` 0). The Gauss–Seidel sweeps'
+        friction impulses are carried from one of two tables into the other at each rebuild (see
+        :meth:`build`): a new table when the one to carry into is missing or of another length."""
+        if pairs > self.pair_capacity:
+            capacity = max(1, pairs + (pairs // room if room and self.rebuilds > 0 else 0))
+            self._check_table_memory(state, self.capacity, capacity)
+            self._packs.clear()  # (their references would keep the old tables in memory)
+            self.lam = None
+            free_dropped_arrays()
+            self.pair_capacity = capacity
+            self.lam = ti.ndarray(float, capacity)
+        rows = self.pair_capacity if self.gauss_seidel else 1
+        if self.friction is None or self.friction.shape[0] != rows:  # (the first build, or the tables grew)
+            self._packs.clear()
+            self.friction = None
+            free_dropped_arrays()
+            self.friction = ti.ndarray(vec3f, rows)
 
     def _order_columns(self, state: State) -> None:
         """Group the balls by block of grid columns for the Gauss–Seidel sweeps
@@ -466,6 +480,7 @@ class CollisionSolver:
         "impact",
         "stash_first",
         "pair_chunk",
+        "friction_back",
     )
     """Arrays that each step or list build writes before it reads them: :func:`.solver_state.solver_arrays`
     keeps only their shapes."""

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 import taichi as ti
 
+from ti_golf.physics.types import pair_columns
 from ti_golf.sim.packs import Packs
 from ti_golf.sim.solver import CollisionSolver
 from ti_golf.sim.state import State
@@ -55,6 +56,12 @@ def restore_solver(solver: CollisionSolver, state: State, arrays: dict[str, np.n
     storage order included): the next step is then the one that the saved solver would have made."""
     if "n_upper" in arrays:
         arrays, meta = _pairs_ball_after_ball(solver, arrays, meta)
+    shape, element, dtype = meta["scratch"].get("impulse", [[0], [], ""])
+    if element:  # saved before the sweep's table had a row per pair (until 2026-11-26: a 5-vector per pair)
+        meta = {
+            **meta,
+            "scratch": {**meta["scratch"], "impulse": [[shape[0], pair_columns(solver.gauss_seidel)], [], dtype]},
+        }
     for name, value in meta["values"].items():
         if name == "_hash":
             value = None if value is None else tuple(ti.Vector(v, dt=ti.i32) for v in value)
