@@ -170,7 +170,7 @@ float_array = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=1), "floa
 vec3_table = Deferred(lambda: ti.types.ndarray(dtype=vec3.get(), ndim=2), "vec3_table")
 float_grid = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=2), "float_grid")
 """2-D float array (terrain heights, tables)."""
-pair_table = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=2), "pair_table")
+pair_table = float_grid
 """The pairs' sweep entries, a row per listed pair (see ``NeighbourLists.first``), ``INV`` to
 ``P_Z`` or ``INV`` and ``GAP`` alone (see :func:`pair_columns`)."""
 

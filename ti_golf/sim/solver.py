@@ -31,7 +31,7 @@ from ti_golf.sim.model import Model
 from ti_golf.sim.packs import Packs
 from ti_golf.sim.signals import whole_steps
 from ti_golf.sim.state import State
-from ti_golf.sim.storage_order import store_in_grid_order
+from ti_golf.sim.storage_order import order_columns, store_in_grid_order
 
 SERIAL_MAX_BALLS = 256
 """Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
@@ -328,7 +328,7 @@ class CollisionSolver:
         self.rebuilds += 1
         self._valid = True
         if self.gauss_seidel and not self.serial:
-            self._order_columns(state)
+            order_columns(self, state)
 
     def _fit_pair_tables(self, state: State, pairs: int, room: int) -> None:
         """Make room for ``pairs`` pairs in the tables of the pairs' resting impulses and (Gauss–Seidel)
@@ -351,41 +351,6 @@ class CollisionSolver:
             self.friction = None
             free_dropped_arrays()
             self.friction = ti.ndarray(vec3f, rows)
-
-    def _order_columns(self, state: State) -> None:
-        """Group the balls by block of grid columns for the Gauss–Seidel sweeps
-        (``colour.column_order``): the blocks of the box around the balls numbered one after
-        another when there are no more of them than there are balls, else hashed; and count the
-        balls with pairs that the colours leave to ``colour.far_pairs``."""
-        bounds = grid.cell_bounds(state.x, 0.5 / self.cell)  # in blocks of 2 x 2 columns
-        lo, hi = [int(b) for b in bounds[:3]], [int(b) for b in bounds[3:]]
-        ext_x, ext_z = hi[0] - lo[0] + 3, hi[2] - lo[2] + 3
-        n = self._model.n
-        dense = ext_x * ext_z <= max(n, 16)
-        columns = ext_x * ext_z if dense else n
-        buckets = 1 << max(4, int(np.ceil(np.log2(columns))))
-        if self.col_start is None or self.col_start.shape[0] != buckets + 1:
-            self.col_start = ti.ndarray(ti.i32, buckets + 1)
-            self.col_chunk = ti.ndarray(ti.i32, sort.scan_chunks(buckets))
-        if dense:
-            origin, stride = (lo[0] - 1, 0, lo[2] - 1), (1, 0, ext_x)
-        else:
-            origin, stride = (0, 0, 0), (grid.SCATTERED_HASH[0], 0, grid.SCATTERED_HASH[2])
-        inv_cell = 1.0 / self.cell
-        far_owners = colour.column_order(
-            self.x_at_build,
-            inv_cell,
-            buckets - 1,
-            ti.Vector(origin, dt=ti.i32),
-            ti.Vector(stride, dt=ti.i32),
-            self.rank,
-            self.col_start,
-            self.col_chunk,
-            self.col_ids,
-            self.col_colour,
-            self._packs.lists(self),
-        )
-        self.far_owners = int(far_owners)
 
     def _check_table_memory(self, state: State, widths: tuple[int, int], pairs: int) -> None:
         """Raise :class:`SimulationError` before neighbour tables of ``widths`` (upper, lower) and
