@@ -1194,6 +1194,61 @@ def test_a_fast_ball_meets_a_wall_it_reaches_within_the_step(serial):
 
 
 @SERIAL_OR_PARALLEL
+def test_a_ball_knocked_into_a_wall_from_beyond_the_lists_reach_still_meets_it(serial):
+    # The lists' build gives a row of surface impulses only to the balls that may reach a plane
+    # before the next build (surfaces.list_surfaces: within the skin, 2 mm here, or 2h·|v|); the
+    # serial solver gives every ball one. Ball 1 rests 2.5 mm from the wall: no row; ball 0, 46 mm
+    # from it at 30 m/s (2h·|v| = 30 mm): none either. Ball 0 hits ball 1 (e = 1, μ = 0, equal
+    # masses: B.9 passes on all of it); in the same 0.5 ms step ball 1 would fly 15 mm, far into
+    # the wall, which sends it back at 30 m/s (B.11), and the next sweep passes that back to ball
+    # 0. The wall must act within the step without a row, exactly as with one: ball 0 leaves at
+    # −30 m/s, ball 1 stays 2.5 mm from the wall.
+    sc = dataclasses.replace(
+        scene("contact.e=1", "contact.mu=0", "contact.mu_roll=0", "contact.v_bounce=0"),
+        planes=(Plane((0.5, 0, 0), (-1, 0, 0)), Plane((0, -5, 0), (0, 1, 0)), Plane((0, 0, -5), (0, 0, 1))),
+    )
+    r = sc.ball.radius
+    wall = 0.5 - r  # where a centre touches the wall
+    sim = tg.Simulation(
+        sc, x=[[wall - 0.0035 - 2 * r, 1.0, 0.0], [wall - 0.0025, 1.0, 0.0]], v=[[30.0, 0, 0], [0, 0, 0]]
+    )
+    sim.solver = CollisionSolver(sim.model, serial=serial)
+    sim.step(1)
+    assert sim.model.dt == 0.0005 and sim.solver.skin == pytest.approx(0.002)
+    rows = np.diff(sim.solver.surface_start.to_numpy())
+    assert rows.tolist() == ([1, 1] if serial else [0, 0])
+    np.testing.assert_allclose(sim.v, [[-30.0, 0, 0], [0, 0, 0]], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(sim.x[1, 0] - wall, -0.0025, rtol=0, atol=1e-12)
+
+
+def test_only_the_balls_within_reach_of_a_surface_keep_a_row_of_surface_impulses():
+    # A lattice pile at rest in a bin: the balls of its outer layers touch the floor or a wall,
+    # every other ball is at least a diameter from all five planes. Only the first have a row of
+    # surface impulses (surfaces.list_surfaces: a plane within the skin; at rest 2h·|v| is 0), and
+    # the tables hold those rows (a quarter more room at most, see surface_rows.ROW_ROOM) rather
+    # than one per ball; a rebuild gives the same rows, with the resting impulses carried over.
+    sc, x = pile_scene(2000)
+    sim = tg.Simulation(sc, x=x, track=False)
+    sim.solver = CollisionSolver(sim.model, serial=False, reorder=False)
+    sim.step(5)
+    s = sim.solver
+    gaps = np.stack([(x - p.point) @ np.asarray(p.normal) for p in sc.planes], axis=1) - 0.02
+    near = gaps.min(axis=1) < s.skin
+    assert 600 < near.sum() < 800
+    start = s.surface_start.to_numpy()
+    np.testing.assert_array_equal(np.diff(start) > 0, near)
+    assert near.sum() <= s.surface_impulse.shape[0] <= near.sum() * 5 // 4 + 1 and s.surface_impulse.shape[1] == 5
+    bottom = gaps[:, 0] < 1e-9  # the bottom layer, on the floor (plane 0), which holds it up
+    floor = s.surface_impulse.to_numpy()[start[:-1][near], 0, 0]  # λ on the floor (the rows of the balls near a plane)
+    assert np.all(floor[bottom[near]] > 0) and np.all(floor[~bottom[near]] == 0)
+    s.invalidate()
+    sim.step(1)
+    start = s.surface_start.to_numpy()
+    np.testing.assert_array_equal(np.diff(start) > 0, near)
+    assert np.all(s.surface_impulse.to_numpy()[start[:-1][bottom], 0, 0] > 0)  # (every bottom ball has a row)
+
+
+@SERIAL_OR_PARALLEL
 def test_deepest_overlap_names_the_pair_on_the_current_positions(serial):
     # overlap Δx = r_a + r_b − |x_a − x_b| (B.18), also as a fraction of the smaller radius. Balls 0
     # and 1 (r = 2 and 3 cm, 4.5 cm apart) overlap by 5 mm, 25 % of 2 cm; balls 2 and 3 by 0.5 mm,

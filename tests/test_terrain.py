@@ -77,7 +77,7 @@ def test_flat_terrain_equals_ground_plane_single_ball(case):
 
 def test_flat_terrain_equals_ground_plane_colliding_balls():
     # reference: the ground plane (the `collision_step` kernel): a break shot, and a small pile that
-    # exercises the warm-started resting impulses (the terrain's own column of lam_plane)
+    # exercises the warm-started resting impulses (the terrain's own column of surface_impulse)
     break_shot = tg.load_scene("break_shot")
     on_terrain = tg.load_scene(
         "break_shot", ["terrain.amplitude=0", "terrain.origin=[-50,0,-50]", "terrain.resolution=[11,11]"]

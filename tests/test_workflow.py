@@ -94,7 +94,9 @@ def _pairs_in_rows(path) -> None:
     """Rewrite the solver's arrays of the saved run at ``path`` as solvers saved them until
     2026-11-26: the pair tables with a row per ball as wide as the longest list, each list's
     length in ``n_upper`` (now the pairs lie ball after ball, from ``first``), the sweep's table
-    a 5-vector per pair (now a row of 2 or 5 columns) and one table of friction impulses."""
+    a 5-vector per pair (now a row of 2 or 5 columns), one table of friction impulses, and a row
+    of surface impulses for every ball (now only for the balls near a surface, from
+    ``surface_start``)."""
     with np.load(path) as d:
         data = dict(d)
     meta = json.loads(str(data["run"]))
@@ -119,6 +121,18 @@ def _pairs_in_rows(path) -> None:
     solver["scratch"]["impulse"][:2] = [len(n_upper), width], [5]  # a 5-vector per pair, Jacobi or Gauss–Seidel
     solver["scratch"].pop("friction_back", None)
     solver["values"].pop("friction_back", None)
+    start, impulse = data.pop("solver.surface_start"), data.pop("solver.surface_impulse")
+    has = np.diff(start) > 0
+    every = np.zeros((len(has), *impulse.shape[1:]), impulse.dtype)
+    every[has] = impulse[start[:-1][has]]
+    data["solver.lam_plane"] = every[..., 0]
+    friction = every[..., 1:]
+    data["solver.friction_plane"] = friction if friction.any() else np.zeros((1, 1, 3), np.float32)  # (Jacobi)
+    for name in ("surface_start", "surface_impulse"):
+        del solver["elements"][name]
+    solver["elements"].update(lam_plane=[], friction_plane=[3])
+    solver["scratch"].pop("surface_impulse_back", None)
+    solver["values"].pop("surface_impulse_back", None)
     data["run"] = np.array(json.dumps(meta))
     np.savez(path, **data)
 

@@ -149,7 +149,7 @@ def collision_step(
     after every step. Returns how many times the lists were rebuilt.
 
     With a terrain (``terrain.on``; ``model.heights`` its grid, else any 2×2 array;
-    ``lists.lam_plane`` then has a column more than there are planes) a ball that leaves the grid's
+    ``lists.surface_impulse`` then has a column more than there are planes) a ball that leaves the grid's
     extent or falls below ``terrain.kill`` is put out of bounds (velocities zeroed)."""
     h = params.h
     result = 0

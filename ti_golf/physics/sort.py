@@ -126,16 +126,6 @@ def gather(src: ti.types.ndarray(), order: int_array, dst: ti.types.ndarray()):
         dst[p] = src[order[p]]
 
 
-@kernel
-def gather_column(table: ti.types.ndarray(), column: ti.i32, order: int_array, dst: ti.types.ndarray()):
-    """Column ``column`` of a per-ball table into the storage order ``order``, in place, through the
-    per-ball scratch ``dst`` (two loops: every entry is read before any is written)."""
-    for p in range(dst.shape[0]):
-        dst[p] = table[order[p], column]
-    for p in range(dst.shape[0]):
-        table[p, column] = dst[p]
-
-
 SCAN_CHUNKS = 4096
 """Most chunks the buckets' scan (:func:`bucket_starts`) splits the buckets into: the length of its
 one serial loop, far below the 65,535 iterations after which Taichi's Vulkan backend silently

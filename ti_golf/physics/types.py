@@ -199,8 +199,9 @@ vec3f = ti.types.vector(3, ti.f32)
 ``collide.moved_past``)."""
 vec3f_array = ti.types.ndarray(dtype=vec3f, ndim=1)
 f32_array = ti.types.ndarray(dtype=ti.f32, ndim=1)
-f32_table = ti.types.ndarray(dtype=ti.f32, ndim=2)
-vec3f_table = ti.types.ndarray(dtype=vec3f, ndim=2)
+vec4f = ti.types.vector(4, ti.f32)
+"""A contact's (λ, F_x, F_y, F_z) in f32 (see ``NeighbourLists.surface_impulse``)."""
+vec4f_table = ti.types.ndarray(dtype=vec4f, ndim=2)
 int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
 """2-D int array (neighbour lists: a row per ball)."""
 
@@ -275,9 +276,11 @@ NeighbourLists = Deferred(
         n_lower=int_array,  # how many, (N,)
         x_at_build=vec3f_array,  # positions when the lists were built [m], f32, (N,)
         lam=float_array.get(),  # each pair's accumulated resting impulse [N·s], (pairs,) (see first)
-        lam_plane=f32_table,  # each ball's accumulated impulse on each plane and the terrain [N·s], (N, P + 1)
+        # ball i has a row of surface impulses, surface_start[i], when surface_start[i + 1] > surface_start[i]
+        surface_start=int_array,  # (N + 1,) (see surfaces.list_surfaces)
+        # each row's accumulated resting impulse λ and (Gauss–Seidel) friction impulse F per unit mass [m/s]
+        surface_impulse=vec4f_table,  # on each plane and the terrain, (λ, F_x, F_y, F_z) in f32, (rows, P + 1)
         friction=vec3f_array,  # each pair's friction impulse on its owner [N·s], f32, as lam (Gauss–Seidel)
-        friction_plane=vec3f_table,  # each ball's friction impulse per unit mass [m/s] on each surface, as lam_plane
     ),
     "NeighbourLists",
 )

@@ -84,9 +84,9 @@ class Packs:
             n_lower=c.n_lower,
             x_at_build=c.x_at_build,
             lam=c.lam,
-            lam_plane=c.lam_plane,
+            surface_start=c.surface_start,
+            surface_impulse=c.surface_impulse,
             friction=c.friction,
-            friction_plane=c.friction_plane,
         )
 
     def scratch(self, c: Any) -> Any:

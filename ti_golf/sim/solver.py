@@ -32,6 +32,7 @@ from ti_golf.sim.packs import Packs
 from ti_golf.sim.signals import whole_steps
 from ti_golf.sim.state import State
 from ti_golf.sim.storage_order import order_columns, store_in_grid_order
+from ti_golf.sim.surface_rows import every_ball_a_row, list_surface_rows, surface_columns, surface_table
 
 SERIAL_MAX_BALLS = 256
 """Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
@@ -177,9 +178,12 @@ class CollisionSolver:
         self.pair_capacity = 1
         self.lam = ti.ndarray(float, self.pair_capacity)
         self.impact = ti.ndarray(ti.i32, n)  # each ball's first impact in a sweep (pairs.impact_keys)
-        # resting impulses per unit mass [m/s] of the planes and (one column more) the terrain, in f32 (see
-        # collide.surface_impulses): 20 bytes per ball less for a bin of five planes in f64
-        self.lam_plane = ti.ndarray(ti.f32, (n, max(1, len(model.plane_p) + (model.terrain is not None))))
+        # resting impulses per unit mass [m/s] of the planes and (one column more) the terrain, in f32, and
+        # (Gauss–Seidel) friction impulses, in a row per ball within reach of one (surfaces.list_surfaces),
+        # and the tables a rebuild carries them into (surface_rows.list_surface_rows)
+        self.surface_start = ti.ndarray(ti.i32, n + 1)
+        self.surface_start.fill(0)
+        self.surface_impulse, self.surface_impulse_back = surface_table(1, surface_columns(model)), None
         self.flag = ti.ndarray(ti.i32, 2)
         self.apart_ids = ti.ndarray(ti.i32, apart.APART_MAX + 1)  # the balls listed apart (apart.apart_balls), count
         self.n_apart = 0
@@ -192,9 +196,8 @@ class CollisionSolver:
         # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only), and
         # the table a rebuild carries it into (links.link_and_carry reads the old rows while it writes the new)
         self.friction, self.friction_back = ti.ndarray(vec3f, 1), None
-        # each ball's friction impulse per unit mass on each plane and the terrain (Gauss–Seidel only)
-        self.friction_plane = ti.ndarray(vec3f, self.lam_plane.shape if self.gauss_seidel else (1, 1))
-        self.friction_plane.fill(0.0)
+        if self.serial:
+            every_ball_a_row(self, model)
         self.far_owners = 0
         self._valid = False
         self._rebuild = True
@@ -296,7 +299,8 @@ class CollisionSolver:
             self._fit_pair_tables(state, n * self.capacity[0], 0)  # (and the stash, links.relist_all_pairs)
         else:
             self._fit_pair_tables(state, pairs, PAIR_ROOM)
-        if stashed is not None:
+        carried = stashed is not None
+        if carried:
             # after a reorder, sorted_ids still maps each ball to its index in the stashed lists
             links.link_and_carry(
                 self.upper,
@@ -320,6 +324,8 @@ class CollisionSolver:
             self.lam.fill(0.0)
             if self.gauss_seidel:  # none yet
                 self.friction.fill(0.0)
+        if not self.serial:  # (serial: a row for every ball, see surface_rows.every_ball_a_row)
+            list_surface_rows(self, state, carried)
         if self.impulse is None or self.impulse.shape[0] != self.lam.shape[0]:
             self.impulse = None  # free the old table (the stash) before allocating
             free_dropped_arrays()
@@ -418,19 +424,19 @@ class CollisionSolver:
         """Take the model's parameters as changed between steps (``Model.set_parameters``): a new
         skin (``contact.skin``) or time step changes which pairs the lists must hold, so they are
         rebuilt before the next step (each pair that stays listed keeps its impulse); a new number of
-        planes (``world.ground``) starts every ball's plane impulses again from zero. The kind of
-        solver (``contact.solver``) is fixed: a change of it needs a new solver."""
+        planes (``world.ground``) starts every ball's plane impulses again from zero, and the lists are
+        rebuilt (they list the balls within reach of a plane). The kind of solver (``contact.solver``)
+        is fixed: a change of it needs a new solver."""
         skin = model.scene.contact.skin * self.r_ref
         if (skin, model.dt) != (self.skin, self.h):
             self.skin, self.h = skin, model.dt
             self.v_cut = apart.fast_speed(self.r_ref, self.skin, model.dt)
             self.invalidate()
-        columns = max(1, len(model.plane_p) + (model.terrain is not None))
-        if self.lam_plane.shape[1] != columns:
-            self.lam_plane = ti.ndarray(ti.f32, (model.n, columns))
-            self.lam_plane.fill(0.0)
-            self.friction_plane = ti.ndarray(vec3f, self.lam_plane.shape if self.gauss_seidel else (1, 1))
-            self.friction_plane.fill(0.0)
+        if self.surface_impulse.shape[1] != surface_columns(model):
+            if self.serial:
+                every_ball_a_row(self, model)
+            else:
+                self.invalidate()  # (the build makes the tables for the new planes)
 
     SCRATCH = (
         "x_free",
@@ -446,6 +452,7 @@ class CollisionSolver:
         "stash_first",
         "pair_chunk",
         "friction_back",
+        "surface_impulse_back",
     )
     """Arrays that each step or list build writes before it reads them: :func:`.solver_state.solver_arrays`
     keeps only their shapes."""

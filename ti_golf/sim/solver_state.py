@@ -56,6 +56,8 @@ def restore_solver(solver: CollisionSolver, state: State, arrays: dict[str, np.n
     storage order included): the next step is then the one that the saved solver would have made."""
     if "n_upper" in arrays:
         arrays, meta = _pairs_ball_after_ball(solver, arrays, meta)
+    if "surface_start" not in arrays:
+        arrays, meta = _surface_rows(state, arrays, meta)
     shape, element, dtype = meta["scratch"].get("impulse", [[0], [], ""])
     if element:  # saved before the sweep's table had a row per pair (until 2026-11-26: a 5-vector per pair)
         meta = {
@@ -123,4 +125,24 @@ def _pairs_ball_after_ball(
     meta["values"]["pair_capacity"] = capacity
     shape, element, dtype = meta["scratch"]["impulse"]
     meta["scratch"]["impulse"] = [[capacity], element, dtype]
+    return arrays, meta
+
+
+def _surface_rows(state: State, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> tuple[dict, dict]:
+    """The arrays and description of a solver saved before the surface impulses were kept in rows
+    for the balls near a surface (until 2026-11-26: λ in ``lam_plane`` and the friction impulses
+    in ``friction_plane``, a row per ball, or one placeholder under Jacobi), as the solver keeps
+    them now: every ball its own row of (λ, F), which the next rebuild carries into the rows of
+    the balls near a surface."""
+    arrays, meta = dict(arrays), {key: dict(value) if isinstance(value, dict) else value for key, value in meta.items()}
+    lam, friction = arrays.pop("lam_plane"), arrays.pop("friction_plane")
+    impulse = np.zeros((*lam.shape, 4), np.float32)
+    impulse[..., 0] = lam
+    if friction.shape[:2] == lam.shape:  # (Gauss–Seidel)
+        impulse[..., 1:] = friction
+    arrays["surface_impulse"] = impulse
+    arrays["surface_start"] = np.arange(state.n + 1, dtype=np.int32)
+    for name in ("lam_plane", "friction_plane"):
+        meta["elements"].pop(name, None)
+    meta["elements"].update(surface_impulse=[4], surface_start=[])
     return arrays, meta

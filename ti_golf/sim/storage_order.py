@@ -46,10 +46,6 @@ def store_in_grid_order(solver: CollisionSolver, state: State) -> None:
         setattr(owner, name, spares[k])
         spares[k] = values
     solver.v_free, solver.calm, solver.rank = spares
-    for column in range(solver.lam_plane.shape[1]):
-        sort.gather_column(solver.lam_plane, column, order, solver.clear)  # (f32 scratch between steps)
-        if solver.gauss_seidel:  # (the positions at the last build: vec3f scratch until this one ends)
-            sort.gather_column(solver.friction_plane, column, order, solver.x_at_build)
     if state.ids is None:  # the first reorder: the ids are this build's order (gathered above from then on)
         state.ids = ti.ndarray(ti.i32, state.n)
         state.ids.copy_from(order)
