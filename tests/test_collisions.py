@@ -1194,15 +1194,21 @@ def test_a_fast_ball_meets_a_wall_it_reaches_within_the_step(serial):
 
 
 @SERIAL_OR_PARALLEL
-def test_a_ball_knocked_into_a_wall_from_beyond_the_lists_reach_still_meets_it(serial):
+def test_a_ball_knocked_into_a_wall_from_beyond_the_lists_reach_still_meets_it(serial, monkeypatch):
     # The lists' build gives a row of surface impulses only to the balls that may reach a plane
-    # before the next build (surfaces.list_surfaces: within the skin, 2 mm here, or 2h·|v|); the
-    # serial solver gives every ball one. Ball 1 rests 2.5 mm from the wall: no row; ball 0, 46 mm
-    # from it at 30 m/s (2h·|v| = 30 mm): none either. Ball 0 hits ball 1 (e = 1, μ = 0, equal
-    # masses: B.9 passes on all of it); in the same 0.5 ms step ball 1 would fly 15 mm, far into
-    # the wall, which sends it back at 30 m/s (B.11), and the next sweep passes that back to ball
-    # 0. The wall must act within the step without a row, exactly as with one: ball 0 leaves at
-    # −30 m/s, ball 1 stays 2.5 mm from the wall.
+    # before the next build (surfaces.list_surfaces: within the skin, 2 mm here, or 2h·v_max, the
+    # farthest the fastest ball, or one it knocks on, flies in a step); the serial solver gives
+    # every ball one. Here the build is made to foresee the skin alone, as if no ball were moving
+    # (v_max = 0): ball 1 rests 2.5 mm from the wall and ball 0 is 46 mm from it, no row for
+    # either. Ball 0 hits ball 1 at 30 m/s (e = 1, μ = 0, equal masses: B.9 passes on all of it);
+    # in the same 0.5 ms step ball 1 would fly 15 mm, far into the wall, which sends it back at
+    # 30 m/s (B.11), and the next sweep passes that back to ball 0. The wall must act within the
+    # step without a row, exactly as with one: ball 0 leaves at −30 m/s, ball 1 stays 2.5 mm from
+    # the wall.
+    import ti_golf.sim.solver as solver_module
+
+    real = solver_module.list_surface_rows
+    monkeypatch.setattr(solver_module, "list_surface_rows", lambda s, state, carry, v_max: real(s, state, carry, 0.0))
     sc = dataclasses.replace(
         scene("contact.e=1", "contact.mu=0", "contact.mu_roll=0", "contact.v_bounce=0"),
         planes=(Plane((0.5, 0, 0), (-1, 0, 0)), Plane((0, -5, 0), (0, 1, 0)), Plane((0, 0, -5), (0, 0, 1))),

@@ -234,17 +234,14 @@ def surface_row(start: ti.template(), i):
 
 
 @ti.func
-def near_a_surface(i, xi, vi, skin, h, terrain: ti.template(), model: ti.template()):
-    """Whether ball i at ``xi`` [m] with velocity ``vi`` [m/s] may touch a plane or the terrain
-    before the neighbour lists are rebuilt: until then it moves no farther than half the ``skin``
-    [m] from here (``collide.moved_past``), or in the step right after the build about h·|v|
-    (``h`` [s]), so within the reach D = max(skin, 2h·|v|), twice either (as ball pairs are listed
-    within the skin, see ``grid.pair_reach``). A plane is within reach when its surface gap is
-    below D; the terrain when its clearance (:func:`.terrain.terrain_clearance`, at least the gap
-    to any patch of the cell under the ball) is below 2D, since a patch taken under a moved point
-    is nearer by up to twice the move, or when a move of D can take the ball over another cell."""
+def near_a_surface(i, xi, reach, terrain: ti.template(), model: ti.template()):
+    """Whether ball i at ``xi`` [m] may touch a plane or the terrain before the neighbour lists are
+    rebuilt, when it moves no farther than ``reach`` [m] until then (see :func:`list_surfaces`). A
+    plane is within reach when its surface gap is below it; the terrain when its clearance
+    (:func:`.terrain.terrain_clearance`, at least the gap to any patch of the cell under the ball)
+    is below twice the reach, since a patch taken under a moved point is nearer by up to twice the
+    move, or when a move of the reach can take the ball over another cell."""
     r = of_ball(model.radius, i)
-    reach = ti.max(skin, 2.0 * h * vi.norm())
     near = False
     for p in range(model.plane_n.shape[0]):
         if (xi - model.plane_p[p]).dot(model.plane_n[p]) - r < reach:
@@ -276,9 +273,7 @@ def list_surfaces(
     terrain: TerrainParams,
     model: ModelArrays,
     x: vec3_array,
-    v: vec3_array,
-    skin: float,
-    h: float,
+    reach: float,
     carry: ti.i32,
     old_start: int_array,
     old_impulse: vec4f_table,
@@ -287,16 +282,23 @@ def list_surfaces(
     start: int_array,
     chunk_start: int_array,
 ) -> ti.i32:
-    """Give a row of surface impulses to each ball at ``x`` [m] with velocity ``v`` [m/s] that may
-    touch a plane or the terrain before the next rebuild of the lists (:func:`near_a_surface`, with
-    the lists' ``skin`` [m] and the step ``h`` [s]) or, with ``carry``, still holds a resting
+    """Give a row of surface impulses to each ball at ``x`` [m] that may touch a plane or the
+    terrain before the next rebuild of the lists (:func:`near_a_surface`) or, with ``carry``, still
+    holds a resting
     impulse in its old row (see :func:`carry_surfaces`: a Jacobi sweep gives an impulse back only
     as the ball moves away, and the warm start applies it again); ball i's row is ``start[i]``
     when ``start[i + 1] > start[i]`` (see :func:`surface_row`), the rows numbered in ball order by
     the grid's chunked scan (``chunk_start``: its scratch, see ``links.pair_starts``). Returns the
-    rows in all."""
+    rows in all.
+
+    ``reach`` [m] bounds how far a ball moves before the next rebuild: half the skin between
+    rebuilds (``collide.moved_past``), or in the step right after the build h·|v|, where |v| may
+    be up to the fastest ball's speed for a ball that it knocks on; the caller passes twice the
+    larger, max(skin, 2h·v_max), as ball pairs are listed within the skin (``grid.pair_reach``). A
+    ball knocked farther within one step still meets the surface (see
+    :func:`surface_contact_step`)."""
     for i in range(x.shape[0]):
-        listed = near_a_surface(i, x[i], v[i], skin, h, terrain, model)
+        listed = near_a_surface(i, x[i], reach, terrain, model)
         old = old_row(i, carry, old_start, reorder, old_index)
         if old >= 0 and not listed:
             for c in range(old_impulse.shape[1]):

@@ -325,7 +325,7 @@ class CollisionSolver:
             if self.gauss_seidel:  # none yet
                 self.friction.fill(0.0)
         if not self.serial:  # (serial: a row for every ball, see surface_rows.every_ball_a_row)
-            list_surface_rows(self, state, carried)
+            list_surface_rows(self, state, carried, v_max)
         if self.impulse is None or self.impulse.shape[0] != self.lam.shape[0]:
             self.impulse = None  # free the old table (the stash) before allocating
             free_dropped_arrays()

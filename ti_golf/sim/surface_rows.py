@@ -43,9 +43,10 @@ def every_ball_a_row(solver: CollisionSolver, model: Model) -> None:
     solver.surface_impulse_back = None
 
 
-def list_surface_rows(solver: CollisionSolver, state: State, carry: bool) -> None:
+def list_surface_rows(solver: CollisionSolver, state: State, carry: bool, v_max: float) -> None:
     """Give a row of surface impulses to each ball that may touch a plane or the terrain before the
-    next rebuild (``surfaces.list_surfaces``, with the lists' skin and step) or holds a resting
+    next rebuild (``surfaces.list_surfaces``, with the lists' skin and step and the fastest ball's
+    speed ``v_max`` [m/s]) or holds a resting
     impulse, in the second of two tables, then swap them: each ball that had a row keeps its
     impulses when ``carry`` (the same surfaces; after a reorder, ``solver.sorted_ids`` maps each
     ball to its old index, as for the pairs), the others start from zero. Uses
@@ -61,9 +62,7 @@ def list_surface_rows(solver: CollisionSolver, state: State, carry: bool) -> Non
             model.terrain_params,
             solver._packs.model(model),
             state.x,
-            state.v,
-            solver.skin,
-            model.dt,
+            max(solver.skin, 2.0 * model.dt * v_max),
             *old,
             solver.surface_start,
             solver.pair_chunk,
