@@ -187,6 +187,18 @@ def test_init_refuses_to_change_a_started_runtime():
         tg.init(precision="f32" if info.precision == "f64" else "f64")
 
 
+def test_cuda_runs_with_matrices_scalarised_and_the_cpu_as_it_always_has():
+    # Taichi 1.7.4's CUDA code for the flight's lane matrices stopped the first flight kernel with
+    # CUDA_ERROR_MISALIGNED_ADDRESS on an H200; scalarised, it ran and gave the CPU's carries
+    # (docs/performance.md, "On a GPU"). No GPU here: the options are what the runtime asks for.
+    from ti_golf.runtime import init_options
+
+    assert init_options("cuda", "f64")["force_scalarize_matrix"]
+    assert init_options("gpu", "f32")["force_scalarize_matrix"]
+    assert not init_options("cpu", "f64")["force_scalarize_matrix"]
+    assert init_options("cpu", "f64", debug=True)["debug"]
+
+
 def test_outputs_are_written_whole_or_not_at_all(tmp_path, monkeypatch):
     # a run's NPZ and a sweep's CSV go to a temporary file renamed into place: a failure while
     # writing leaves the previous file as it was and no partial or temporary file behind

@@ -59,6 +59,25 @@ def _resolve(arch: str | None, precision: str | None) -> tuple[str, str]:
     return arch, precision
 
 
+def init_options(arch: str, precision: str, debug: bool = False) -> dict:
+    """The keyword arguments of ``ti.init`` for a backend (one of :data:`ARCHES`) and precision.
+
+    On CUDA (and ``gpu``, which picks CUDA where it can) matrices are scalarised
+    (``force_scalarize_matrix``): without it, Taichi 1.7.4's CUDA code for the flight's lane
+    matrices stops the first kernel that integrates a flight with
+    ``CUDA_ERROR_MISALIGNED_ADDRESS``; scalarised, the same kernels give the CPU's results (see
+    docs/performance.md, "On a GPU")."""
+    return dict(
+        arch=getattr(ti, arch),
+        default_fp=ti.f64 if precision == "f64" else ti.f32,
+        default_ip=ti.i32,
+        debug=debug,
+        offline_cache=True,
+        fast_math=False,
+        force_scalarize_matrix=arch in ("cuda", "gpu"),
+    )
+
+
 def init(arch: str | None = None, precision: str | None = None, *, debug: bool = False) -> RuntimeInfo:
     """Initialise Taichi once per process.
 
@@ -82,14 +101,7 @@ def init(arch: str | None = None, precision: str | None = None, *, debug: bool =
         return _info
     banner = io.StringIO()
     with contextlib.redirect_stdout(banner):  # Taichi prints "Starting on arch=..." on stdout
-        ti.init(
-            arch=getattr(ti, want_arch),
-            default_fp=ti.f64 if want_prec == "f64" else ti.f32,
-            default_ip=ti.i32,
-            debug=debug,
-            offline_cache=True,
-            fast_math=False,
-        )
+        ti.init(**init_options(want_arch, want_prec, debug))
     for line in banner.getvalue().splitlines():  # keep stdout clean for JSON; pass on anything unusual
         if not line.startswith("[Taichi] Starting on arch"):
             print(line, file=sys.stderr)
