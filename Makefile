@@ -6,7 +6,7 @@ TIGOLF := $(VENV)/bin/ti-golf
 STAMP  := $(VENV)/.installed
 OUT    ?= out
 
-.PHONY: setup demo test bench lint docs wheel-check system-deps clean
+.PHONY: setup demo test bench gpu-check lint docs wheel-check system-deps clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -63,6 +63,13 @@ wheel-check: setup
 
 bench: setup
 	$(TIGOLF) bench sweep --json
+
+# On a machine with an NVIDIA GPU: the CUDA figures of docs/performance.md ("On a GPU") and the
+# flight-physics tests on CUDA, in one go.
+gpu-check: setup
+	$(TIGOLF) bench sweep --n 1000000 --arch cuda --json
+	$(TIGOLF) bench pit --t 0.5 --arch cuda --json
+	TI_GOLF_TEST_ARCH=cuda $(PY) -m pytest -q -x tests/test_physics_verification.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache site
