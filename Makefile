@@ -39,7 +39,7 @@ demo: setup system-deps
 	$(TIGOLF) run lab_spin_decay --until rest --out $(OUT)/spin_decay.npz --plot $(OUT)/spin_decay.png
 	$(TIGOLF) run break_shot --until rest --out $(OUT)/break_shot.npz --plot $(OUT)/break_shot.png
 	$(TIGOLF) render break_shot --steps 400 --camera iso --trails --out $(OUT)/break_shot_3d.png
-	$(TIGOLF) run ball_pit --t 0.5 --frames-every 25 --gif $(OUT)/ball_pit.gif --out $(OUT)/ball_pit.npz
+	$(TIGOLF) run ball_pit --t 0.4 --frames-every 20 --gif $(OUT)/ball_pit.gif --out $(OUT)/ball_pit.npz
 	$(TIGOLF) render --resume $(OUT)/ball_pit.npz --out $(OUT)/ball_pit.png
 	$(TIGOLF) play golf_hole --seed 3 --shots scenes/golf_hole_round.txt --out $(OUT)/golf_round.csv --plot $(OUT)/golf_round.png
 
