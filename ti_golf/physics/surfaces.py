@@ -284,12 +284,11 @@ def list_surfaces(
 ) -> ti.i32:
     """Give a row of surface impulses to each ball at ``x`` [m] that may touch a plane or the
     terrain before the next rebuild of the lists (:func:`near_a_surface`) or, with ``carry``, still
-    holds a resting
-    impulse in its old row (see :func:`carry_surfaces`: a Jacobi sweep gives an impulse back only
-    as the ball moves away, and the warm start applies it again); ball i's row is ``start[i]``
-    when ``start[i + 1] > start[i]`` (see :func:`surface_row`), the rows numbered in ball order by
-    the grid's chunked scan (``chunk_start``: its scratch, see ``links.pair_starts``). Returns the
-    rows in all.
+    holds a resting impulse in its old row (see :func:`carry_surfaces`: a Jacobi sweep gives an
+    impulse back only as the ball moves away, and the warm start applies it again); ball i's row is
+    ``start[i]`` when ``start[i + 1] > start[i]`` (see :func:`surface_row`), the rows numbered in
+    ball order by the grid's chunked scan (``chunk_start``: its scratch, see
+    ``links.pair_starts``). Returns the rows in all.
 
     ``reach`` [m] bounds how far a ball moves before the next rebuild: half the skin between
     rebuilds (``collide.moved_past``), or in the step right after the build h·|v|, where |v| may

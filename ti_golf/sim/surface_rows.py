@@ -46,10 +46,10 @@ def every_ball_a_row(solver: CollisionSolver, model: Model) -> None:
 def list_surface_rows(solver: CollisionSolver, state: State, carry: bool, v_max: float) -> None:
     """Give a row of surface impulses to each ball that may touch a plane or the terrain before the
     next rebuild (``surfaces.list_surfaces``, with the lists' skin and step and the fastest ball's
-    speed ``v_max`` [m/s]) or holds a resting
-    impulse, in the second of two tables, then swap them: each ball that had a row keeps its
-    impulses when ``carry`` (the same surfaces; after a reorder, ``solver.sorted_ids`` maps each
-    ball to its old index, as for the pairs), the others start from zero. Uses
+    speed ``v_max`` [m/s]) or holds a resting impulse, in the second of two tables, then swap
+    them: each ball that had a row keeps its impulses when ``carry`` (the same surfaces; after a
+    reorder, ``solver.sorted_ids`` maps each ball to its old index, as for the pairs), the others
+    start from zero. Uses
     ``solver.stash_first`` (free once the pairs were carried over) to keep the old rows' starts."""
     model = solver._model
     columns = surface_columns(model)
