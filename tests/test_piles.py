@@ -86,8 +86,8 @@ def test_pit_with_restitution_settles(settled_pit):
     _assert_settled(sim, quality, energy)
     # once the last ball has landed the contacts only take energy out: the total mechanical
     # energy never rises, sampled every 0.05 s (a collapse turns potential energy into kinetic,
-    # so the kinetic energy alone may; the projection of overlaps lifts balls, by less than this
-    # pile settles)
+    # so the kinetic energy alone may; the projection of overlaps lifts balls, in this pour by less
+    # than the pile settles, not in every pour: see the docs' solver page, "Deep piles")
     mechanical = energy.sum(axis=1)
     assert np.all(np.diff(mechanical) <= 0.0), np.diff(mechanical)
     r = float(np.max(sim.model.radius_np))
