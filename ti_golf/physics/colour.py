@@ -63,6 +63,12 @@ PROJECT = 2
 """The phase of the position projection after a step (:func:`project_ball`), after the sweeps'
 ``SOLVE`` and ``BOUNCE`` (:func:`.contact.pair_step`)."""
 
+PROJECTIONS = 3
+"""Passes of the position projection (B.18, :func:`project_sweep`) at the end of a Gauss–Seidel
+step. A pass moves each overlapping pair apart by k_p of its overlap; a ball wedged between
+neighbours is pushed back in by the pairs handled after its own, so a pile needs more than one
+pass to shed such overlaps (docs/solvers.md, "Deep piles")."""
+
 COLOURS = 4
 """Colours of the blocks of 2 × 2 grid columns: the parities of the block's coordinates."""
 
@@ -439,10 +445,11 @@ def project_sweep(
 def serial_projection(
     params: ti.template(), k_p, model: ti.template(), lists: ti.template(), state: ti.template(), scratch: ti.template()
 ):
-    """The position projection of :func:`project_sweep`, every ball in storage order, in the
-    calling (serial) loop's thread."""
-    for i in range(state.x.shape[0]):
-        project_ball(i, False, 0, 1.0, k_p, model, lists, state, scratch)
+    """The position projection of :func:`project_sweep`, ``PROJECTIONS`` passes of every ball in
+    storage order, in the calling (serial) loop's thread."""
+    for _ in range(PROJECTIONS):
+        for i in range(state.x.shape[0]):
+            project_ball(i, False, 0, 1.0, k_p, model, lists, state, scratch)
     for i in range(state.x.shape[0]):
         if moved_past(scratch.x_free[i], lists.x_at_build[i], 2.0 * params.h * state.v[i].norm(), params.half_skin):
             scratch.flag[0] = 1

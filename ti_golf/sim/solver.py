@@ -525,8 +525,9 @@ class CollisionSolver:
 
     def _gauss_seidel_step(self, iterations: int, arguments: tuple) -> int:
         """One parallel step with Gauss–Seidel sweeps (see ``physics.colour``): the free flight and
-        warm start, ``iterations`` coloured sweeps and the restitution pass, then the last
-        sweep, which only finishes the step. Returns whether the lists must be rebuilt."""
+        warm start, ``iterations`` coloured sweeps and the restitution pass, the last sweep, which
+        only finishes the step, then ``colour.PROJECTIONS`` passes of the position projection.
+        Returns whether the lists must be rebuilt."""
         collide.collision_step(*arguments, False, True, 0, False)
         air, contact, terrain, params, _, model, lists, state, _, scratch = arguments
         inv_cell = 1.0 / self.cell
@@ -541,9 +542,12 @@ class CollisionSolver:
             if any_far:
                 colour.far_pairs(phase, inv_cell, contact, terrain, params, model, lists, state, scratch)
         collide.collision_step(*arguments, False, False, 0, True)
-        if any_far:
-            colour.far_pairs(colour.PROJECT, inv_cell, contact, terrain, params, model, lists, state, scratch)
-        return colour.project_sweep(any_far, inv_cell, contact, params, model, lists, state, scratch, blocks)
+        rebuild = 0
+        for _ in range(colour.PROJECTIONS):
+            if any_far:
+                colour.far_pairs(colour.PROJECT, inv_cell, contact, terrain, params, model, lists, state, scratch)
+            rebuild = colour.project_sweep(any_far, inv_cell, contact, params, model, lists, state, scratch, blocks)
+        return rebuild
 
     def _arguments(self, m: Model, s: State, steps: int) -> tuple:
         """The arguments of ``collide.collision_step`` before ``serial``: the model, the lists, the
