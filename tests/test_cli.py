@@ -473,8 +473,17 @@ def test_bench_pit_pours_the_scene_and_reports_the_piles_quality():
     assert 0 < lo[0] < hi[0] < small_side and lo[1] == full.blocks[0].box_min[1]  # as high, narrower
     assert pit_scene(1000, ["contact.e=0.8"])[0].contact.e == 0.8 != small.contact.e  # --set reaches the scene
     lines = []
-    result = bench_pit(n=1000, t=0.05, overrides=["contact.mu=0.5"], log=lines.append)
+    result = bench_pit(n=1000, t=0.05, overrides=["contact.mu=0.5"], log=lines.append, every=0.02)
     assert result["n"] == 1000 and result["steps"] == 50 and result["t_s"] == pytest.approx(0.05)
+    # --every: stretches of 20, 20 and 10 steps, whose wall times make up the pour's
+    timeline = result["timeline"]
+    assert [row["t_s"] for row in timeline] == pytest.approx([0.02, 0.04, 0.05])
+    assert sum(row["wall_s"] for row in timeline) == pytest.approx(result["wall_s"], rel=1e-12)
+    # falling balls: the lists are rebuilt at every step (the first stretch also builds them once more)
+    assert [row["rebuilds"] for row in timeline][1:] == [20, 10] and 20 <= timeline[0]["rebuilds"] <= 21
+    assert {k: timeline[-1][k] for k in ("deepest_overlap", "p99_speed_mps", "asleep_fraction")} == {
+        k: result[k] for k in ("deepest_overlap", "p99_speed_mps", "asleep_fraction")
+    }
     assert result["set"] == ["contact.mu=0.5"]
     for key in ("wall_s", "compile_s", "sim_s_per_wall_s", "ball_steps_per_s", "peak_rss_bytes"):
         assert result[key] > 0, key

@@ -73,7 +73,7 @@ OPTIONS = {
     "dispersion": ["--n", "--seed", "--speed", "--sd-speed", "--sd-axis", "--units", "--flight-dt", "--set"],
     "render": ["--t", "--steps", "--until", "--camera", "--size", "--color-by", "--fov", "--backend", "--set"],
     "bench collide": ["--n", "--steps", "--iterations", "--boulder"],
-    "bench pit": ["--n", "--t", "--set"],
+    "bench pit": ["--n", "--t", "--every", "--set"],
     "bench sweep": ["--n", "--dt", "--repeats"],
     "bench render": ["--n", "--frames"],
     "lab": ["--out", "--speed", "--size", "--set"],

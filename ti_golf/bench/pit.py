@@ -7,6 +7,9 @@ balls compiles the same kernels first), simulated seconds per wall second, ball-
 the peak memory above the runtime's baseline, and the quality of the pile at the end: its deepest
 overlap, its 99th-percentile speed, the balls outside the bin and the share asleep. A bare gather
 over the final pile is timed in the same run as the yardstick (``step_cost_in_bare_gathers``).
+With ``every``, the pour runs in stretches of that many simulated seconds, and the benchmark also
+reports each stretch: its wall time, the rebuilds of the neighbour lists in it, and the pile's
+figures at its end (``timeline``), so that where the pour's time goes can be read off one run.
 """
 
 from __future__ import annotations
@@ -79,11 +82,16 @@ def pile_quality(sim: Simulation, side: float) -> dict[str, Any]:
 
 
 def bench_pit(
-    n: int | None = None, t: float = 4.0, overrides: Sequence[str] = (), log: Callable[[str], None] = print
+    n: int | None = None,
+    t: float = 4.0,
+    overrides: Sequence[str] = (),
+    log: Callable[[str], None] = print,
+    every: float | None = None,
 ) -> dict[str, Any]:
     """Pour the ball pit (``n`` balls, default the scene's 100,000) for ``t`` simulated seconds,
-    with the scene's keys changed by ``overrides`` (``--set`` syntax), and measure it (see the
-    module's docstring); returns the figures as a dict."""
+    with the scene's keys changed by ``overrides`` (``--set`` syntax), in stretches of ``every``
+    simulated seconds when given, and measure it (see the module's docstring); returns the figures
+    as a dict."""
     info = ensure_init()
     scene, side = pit_scene(n, overrides)
     n_balls = scene.blocks[0].number
@@ -100,10 +108,7 @@ def bench_pit(
     t1 = time.perf_counter()
     sim = Simulation(scene)
     setup_s = time.perf_counter() - t1
-    t2 = time.perf_counter()
-    sim.run(t=t)
-    wall_s = time.perf_counter() - t2
-    peak = _peak_rss_bytes()
+    wall_s, timeline, peak = _pour(sim, t, every, side, log)
     steps = round(sim.t / sim.dt)
     quality = pile_quality(sim, side)
     gather_rate = bare_gather_rate(sim.x)
@@ -128,6 +133,8 @@ def bench_pit(
         "baselines": {"bare_gather_balls_per_s": gather_rate},
         "step_cost_in_bare_gathers": gather_rate / ball_steps_per_s,
     }
+    if every is not None:
+        result["timeline"] = timeline
     log(
         f"{wall_s:.1f} s after {compile_s:.1f} s of compiling ({result['sim_s_per_wall_s']:.3g} simulated s per "
         f"wall s, {ball_steps_per_s:.3g} ball-steps/s, {result['bytes_per_ball_above_baseline']:.0f} bytes/ball)"
@@ -139,3 +146,40 @@ def bench_pit(
     )
     log(f"baseline bare_gather: {gather_rate:.3g} balls/s -> a step costs {result['step_cost_in_bare_gathers']:.1f}")
     return result
+
+
+def _pour(
+    sim: Simulation, t: float, every: float | None, side: float, log: Callable[[str], None]
+) -> tuple[float, list[dict[str, Any]], int]:
+    """Run ``sim`` for ``t`` simulated seconds, in stretches of ``every`` [s] when given (each
+    stretch's wall time, rebuilds of the lists and the pile's figures at its end, logged and
+    listed); returns the wall time of the steps alone [s], the stretches, and the peak resident
+    memory of the steps [bytes] (the numpy copies that measure a stretch's pile are left out)."""
+    steps = int(math.ceil(t / sim.dt - 1e-9))  # (as Simulation.run counts them)
+    stretch = steps if every is None else max(1, int(math.ceil(every / sim.dt - 1e-9)))
+    wall_s, timeline, done, peak = 0.0, [], 0, 0
+    while done < steps:
+        k = min(stretch, steps - done)
+        rebuilds = sim.solver.rebuilds if sim.solver is not None else 0
+        t0 = time.perf_counter()
+        sim.run(steps=k)
+        wall = time.perf_counter() - t0
+        wall_s, done, peak = wall_s + wall, done + k, max(peak, _peak_rss_bytes())
+        if every is None:
+            continue
+        q = pile_quality(sim, side)
+        release_freed_memory()
+        _restart_peak_rss()
+        row = {
+            "t_s": sim.t,
+            "wall_s": wall,
+            "rebuilds": (sim.solver.rebuilds if sim.solver is not None else 0) - rebuilds,
+            **{key: q[key] for key in ("deepest_overlap", "p99_speed_mps", "asleep_fraction", "kinetic_energy_J")},
+        }
+        timeline.append(row)
+        log(
+            f"  t = {sim.t:.3g} s: {wall:.1f} s of wall time, {row['rebuilds']} rebuilds in {k} steps, deepest "
+            f"overlap {100 * q['deepest_overlap']:.3g} % of a radius, p99 speed {1e3 * q['p99_speed_mps']:.3g} mm/s, "
+            f"{100 * q['asleep_fraction']:.3g} % asleep"
+        )
+    return wall_s, timeline, peak

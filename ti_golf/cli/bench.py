@@ -66,6 +66,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     bp.add_argument("--t", type=float, default=4.0, help="simulated time [s] (default 4)")
     set_option(bp, "override a key of the pit's scene with a TOML value, e.g. --set contact.e=0.8 (repeatable)")
+    bp.add_argument(
+        "--every",
+        type=float,
+        default=None,
+        help="also report each stretch of this many simulated seconds: wall time, rebuilds, the pile's figures",
+    )
     bp.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(bp)
     bd = bsub.add_parser(
@@ -101,7 +107,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
             raise ConfigError("--t", None, f"must be in (0, 60] s (got {args.t})")
         if args.n < 16:
             raise ConfigError("--n", None, f"must be >= 16 balls (got {args.n})")
-        result = bench_pit(n=args.n, t=args.t, overrides=args.overrides)
+        if args.every is not None and not 0.0 < args.every <= args.t:  # (also false for NaN)
+            raise ConfigError("--every", None, f"must be in (0, --t] s (got {args.every})")
+        result = bench_pit(n=args.n, t=args.t, overrides=args.overrides, every=args.every)
     elif args.bench == "collide":
         if args.n < 2 or args.steps <= 0:
             raise ConfigError("--n" if args.n < 2 else "--steps", None, "must be >= 2 balls and > 0 steps")

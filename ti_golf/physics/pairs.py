@@ -149,6 +149,29 @@ def impact_mark(J: ti.template(), p):
 
 
 @ti.func
+def quiet_ball(
+    i,
+    status: ti.template(),
+    upper: ti.template(),
+    first: ti.template(),
+    lower: ti.template(),
+    n_lower: ti.template(),
+    bits,
+):
+    """Whether ball i is *quiet*: at rest, and every listed neighbour at rest or out of bounds
+    (see :func:`warm_start`)."""
+    quiet = status[i] == AT_REST
+    if quiet:
+        for m in range(n_lower[i]):
+            j, _ = owner_slot(lower[m, i], bits)
+            quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
+        for k in range(listed(first, i)):
+            j = upper[i, k]
+            quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
+    return quiet
+
+
+@ti.func
 def warm_start(
     i,
     x: ti.template(),
@@ -185,35 +208,35 @@ def warm_start(
     the step leaves it exactly as it is and the sweeps skip it)."""
     P, T = zero3(), zero3()
     calm, xi = rest_time[i], x[i]
-    quiet = status[i] == AT_REST
-    for m in range(n_lower[i]):
-        slot = lower[m, i]
-        j, k = owner_slot(slot, bits)  # the pair's owner j keeps its λ
-        p = first[j] + k
-        inv, gap = pair_geometry(x, radius, i, j)
-        n = pair_normal(xi, x[j], inv)
-        P += resting_impulse(status, i, j, n, lam[p])
-        if carried:
-            F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
-            P -= F
-            T += n.cross(F)
-        calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop)
-        quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
+    quiet = quiet_ball(i, status, upper, first, lower, n_lower, bits)
+    if not quiet:  # (a quiet ball's impulses and calm time would not be used: see the caller)
+        for m in range(n_lower[i]):
+            slot = lower[m, i]
+            j, k = owner_slot(slot, bits)  # the pair's owner j keeps its λ
+            p = first[j] + k
+            inv, gap = pair_geometry(x, radius, i, j)
+            n = pair_normal(xi, x[j], inv)
+            P += resting_impulse(status, i, j, n, lam[p])
+            if carried:
+                F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
+                P -= F
+                T += n.cross(F)
+            calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop)
     p0 = first[i]
-    for k in range(listed(first, i)):
+    for k in range(listed(first, i)):  # (a quiet ball's too: the gaps of its neighbours' lower pairs)
         j, p = upper[i, k], p0 + k
         inv, gap = pair_geometry(x, radius, i, j)
         J[p, INV], J[p, GAP] = inv, gap
         if J.shape[1] > P_X:  # (a quiet ball's pairs keep no impulse: the Jacobi sweeps skip them)
             J[p, P_X], J[p, P_Y], J[p, P_Z] = 0.0, 0.0, 0.0
-        n = pair_normal(xi, x[j], inv)
-        P += resting_impulse(status, i, j, n, lam[p])
-        if carried:
-            F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
-            P += F
-            T -= n.cross(F)
-        calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop)
-        quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
+        if not quiet:
+            n = pair_normal(xi, x[j], inv)
+            P += resting_impulse(status, i, j, n, lam[p])
+            if carried:
+                F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
+                P += F
+                T -= n.cross(F)
+            calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop)
     if quiet:
         calm = QUIET
     m = of_ball(mass, i)
