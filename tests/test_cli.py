@@ -591,6 +591,21 @@ def test_bench_collide_bad_option_exits_2(option, value, fragment):
     assert option in proc.stderr and fragment in proc.stderr and "Traceback" not in proc.stderr
 
 
+@pytest.mark.parametrize(
+    "args, option, fragment",
+    [
+        (("--every", "0"), "--every", "(0, --t]"),
+        (("--every", "5"), "--every", "(0, --t]"),  # longer than the pour (--t 4)
+        (("--every", "nan"), "--every", "(0, --t]"),
+        (("--t", "0"), "--t", "(0, 60]"),
+    ],
+)
+def test_bench_pit_bad_option_exits_2(args, option, fragment):
+    proc = run_cli("bench", "pit", *args)
+    assert proc.returncode == 2, (proc.stdout, proc.stderr)
+    assert option in proc.stderr and fragment in proc.stderr and "Traceback" not in proc.stderr
+
+
 # ----------------------------------------------------------------------------------------------
 # backend selection through the environment
 # ----------------------------------------------------------------------------------------------
