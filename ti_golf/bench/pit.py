@@ -154,7 +154,8 @@ def _pour(
     """Run ``sim`` for ``t`` simulated seconds, in stretches of ``every`` [s] when given (each
     stretch's wall time, rebuilds of the lists and the pile's figures at its end, logged and
     listed); returns the wall time of the steps alone [s], the stretches, and the peak resident
-    memory of the steps [bytes] (the numpy copies that measure a stretch's pile are left out)."""
+    memory of the steps [bytes] (the count restarts after each stretch's pile is measured, but
+    what the measuring's numpy copies leave in the process still counts)."""
     steps = int(math.ceil(t / sim.dt - 1e-9))  # (as Simulation.run counts them)
     stretch = steps if every is None else max(1, int(math.ceil(every / sim.dt - 1e-9)))
     wall_s, timeline, done, peak = 0.0, [], 0, 0
