@@ -3,7 +3,7 @@
 Most of the suite's time goes to compiling kernels, one process at a time on one core. A few
 tests run a whole process of their own, which compiles its own kernels for up to two minutes:
 the Vulkan pile, the bounds-checked (debug) kernels, the collide benches, the f32 sweep, a terrain
-run through the CLI. Their processes do not depend on the tests before them, so they can start as
+run through the CLI, three of the narrow pit's pours (tests/pile_pours.py), which run on one core. Their processes do not depend on the tests before them, so they can start as
 soon as the session does and run one after another beside the main process, on the CI machine's
 second core; the test then only waits for its run's result and checks it. Measured on the 2-core
 CI machine from an empty kernel cache (2026-11-23): six of those runs took 387 of the suite's 922

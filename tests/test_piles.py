@@ -11,55 +11,47 @@ resting contact never gains energy: restitution acts only on approaches faster t
 v_bounce + 2|g|h, see ``contact.pair_step``).
 """
 
-import dataclasses
+from collections.abc import Callable
+from pathlib import Path
 
+import background
 import numpy as np
 import pytest
+from pile_pours import LANDED, NARROW_PIT, SAMPLE, load_variant, pour, total_mass
 
 import ti_golf as tg
 from ti_golf.bench.pit import pile_quality, pit_scene
 from ti_golf.scene.schema import AT_REST
 
-NARROW_PIT = 2250
-"""Balls of a pit as deep as the bundled one in a 0.3 m bin."""
-
-LANDED = 1.5
-"""Time [s] by which every ball of the pour has landed: the highest starts 4.3 m up at −1 m/s and
-meets the pile's top (1.45 m) after 0.7 s."""
-
-
-def _with(scene, section: str, **values):
-    return dataclasses.replace(scene, **{section: dataclasses.replace(getattr(scene, section), **values)})
-
-
-def _kinetic(sim) -> float:
-    """Translational and rotational kinetic energy [J] (solid spheres)."""
-    m, r = np.asarray(sim.model.mass_np), np.asarray(sim.model.radius_np)
-    return float(0.5 * np.sum(m * (sim.v**2).sum(axis=1)) + 0.5 * np.sum(0.4 * m * r**2 * (sim.w**2).sum(axis=1)))
-
-
-def _potential(sim) -> float:
-    """Gravitational potential energy [J] above y = 0."""
-    m = np.broadcast_to(np.asarray(sim.model.mass_np), sim.n)
-    return float(np.sum(m * -sim.scene.world.gravity[1] * sim.x[:, 1]))
-
-
-def _pour(scene, side: float, t: float = 4.0):
-    """Run a pour to ``t`` and return it, its pile figures and its kinetic and potential energy
-    [J] every 0.05 s from ``LANDED`` on, shape (samples, 2)."""
-    sim = tg.Simulation(scene)
-    sim.run(t=LANDED)
-    energy = [(_kinetic(sim), _potential(sim))]
-    while sim.t < t - 1e-9:
-        sim.run(t=0.05)
-        energy.append((_kinetic(sim), _potential(sim)))
-    return sim, pile_quality(sim, side), np.array(energy)
+SNAPSHOT = 0.9
+"""Time [s] at which the pour is landing, every kind of contact at once (the determinism check)."""
 
 
 @pytest.fixture(scope="module")
 def settled_pit():
     scene, side = pit_scene(NARROW_PIT)
-    return (*_pour(scene, side), side)
+    sim, quality, energy, taken = pour(scene, side, snapshot=SNAPSHOT)
+    return sim, quality, energy, side, taken
+
+
+def _pour_on_its_own(variant: str) -> Callable[[Path], background.Command]:
+    """The background run of the pour ``variant`` (tests/pile_pours.py): three pours of two
+    minutes each, one process at a time, run beside the other tests on the second core."""
+    return lambda workdir: (
+        background.python(str(Path(__file__).with_name("pile_pours.py")), variant, str(workdir / "pour.npz")),
+        {},
+    )
+
+
+for _variant in ("sleeping_off", "lively", "no_projection_once_landed"):
+    background.declare(f"pour-{_variant}", _pour_on_its_own(_variant))
+
+
+def _poured(background_runs, variant: str) -> tuple[dict, np.ndarray, float]:
+    """(pile figures, energy samples, total mass) of the background pour ``variant``."""
+    done, workdir = background_runs.result(f"pour-{variant}")
+    assert done.returncode == 0, done.stderr[-3000:]
+    return load_variant(workdir / "pour.npz")
 
 
 def test_bundled_pit_needs_no_solver_calming_keys():
@@ -70,8 +62,7 @@ def test_bundled_pit_needs_no_solver_calming_keys():
         assert getattr(pit.contact, key) == getattr(defaults, key), key
 
 
-def _assert_settled(sim, quality, energy):
-    total_mass = float(np.broadcast_to(sim.model.mass_np, sim.n).sum())
+def _assert_settled(quality: dict, energy: np.ndarray, total_mass: float) -> None:
     assert quality["deepest_overlap"] <= 0.01, quality
     assert quality["p99_speed_mps"] <= 0.005, quality
     assert quality["outside_bin"] == 0, quality
@@ -80,19 +71,20 @@ def _assert_settled(sim, quality, energy):
     # stays above that; a settled one has only small local collapses (a ball wedged above the
     # floor slipping down at up to 0.4 m/s for some 50 ms, waking the balls around it), physical
     # events whose peaks a single sample may catch
-    kinetic = energy[20:, 0]  # every 0.05 s from t = 2.5 s
+    kinetic = energy[round(1.0 / SAMPLE) :, 0]  # every 0.05 s from t = 2.5 s
     assert np.mean(kinetic) <= 0.5 * total_mass * 0.005**2, kinetic
 
 
 def test_pit_with_restitution_settles(settled_pit):
-    sim, quality, energy, side = settled_pit
-    _assert_settled(sim, quality, energy)
+    sim, quality, energy, _, _ = settled_pit
+    _assert_settled(quality, energy, total_mass(sim))
     r = float(np.max(sim.model.radius_np))
     assert 1.3 < np.percentile(sim.x[:, 1], 99) < 1.6  # 34 layers, no ball left bouncing above them
     assert sim.x[:, 1].min() > r * 0.99
 
 
-def test_once_landed_the_contacts_only_take_energy_out_of_the_pit():
+@pytest.mark.background("pour-no_projection_once_landed")
+def test_once_landed_the_contacts_only_take_energy_out_of_the_pit(background_runs):
     # after the last ball has landed, the contacts' impulses (restitution below 1 above the
     # inelastic speed, resting contacts that never bounce, Coulomb friction) and sleeping only take
     # energy out: the total mechanical energy never rises, sampled every 0.05 s (a collapse turns
@@ -100,43 +92,35 @@ def test_once_landed_the_contacts_only_take_energy_out_of_the_pit():
     # (B.18) is turned off once the pour has landed: it moves balls without an impulse, and lifting
     # one out of an overlap adds potential energy that no contact took from the pile (docs'
     # solver page, "Energy")
-    scene, _ = pit_scene(NARROW_PIT)
-    sim = tg.Simulation(scene)
-    sim.run(t=LANDED)
-    sim.set("contact.k_p", 0.0)
-    mechanical = [_kinetic(sim) + _potential(sim)]
-    while sim.t < 4.0 - 1e-9:
-        sim.run(t=0.05)
-        mechanical.append(_kinetic(sim) + _potential(sim))
+    _, energy, _ = _poured(background_runs, "no_projection_once_landed")
+    mechanical = energy.sum(axis=1)
+    assert len(mechanical) == round((4.0 - LANDED) / SAMPLE) + 1
     assert np.all(np.diff(mechanical) <= 0.0), np.diff(mechanical)
 
 
-def test_pit_settles_with_sleeping_off():
+@pytest.mark.background("pour-sleeping_off")
+def test_pit_settles_with_sleeping_off(background_runs):
     # sleeping (world.v_rest, t_rest) is an optimisation, not what holds the pile: with no ball
     # ever put to rest the same pour settles the same way
-    scene, side = pit_scene(NARROW_PIT)
-    sim, quality, energy = _pour(_with(scene, "world", v_rest=0.0), side)
+    quality, energy, mass = _poured(background_runs, "sleeping_off")
     assert quality["asleep_fraction"] == 0.0
-    _assert_settled(sim, quality, energy)
+    _assert_settled(quality, energy, mass)
 
 
-def test_pit_of_lively_balls_settles():
+@pytest.mark.background("pour-lively")
+def test_pit_of_lively_balls_settles(background_runs):
     # real golf balls bounce (e ≈ 0.8, golf_data.md): the pour still settles
-    scene, side = pit_scene(NARROW_PIT)
-    sim, quality, energy = _pour(_with(scene, "contact", e=0.8), side)
-    _assert_settled(sim, quality, energy)
+    _assert_settled(*_poured(background_runs, "lively"))
 
 
-def test_pour_is_deterministic():
+def test_pour_is_deterministic(settled_pit):
     # Gauss–Seidel in parallel: each block of columns in one thread, the colours in turn, so
-    # the run does not depend on thread scheduling
+    # the run does not depend on thread scheduling (nor on what ran before it in the process)
+    *_, taken = settled_pit
     scene, _ = pit_scene(NARROW_PIT)
-    runs = []
-    for _ in range(2):
-        sim = tg.Simulation(scene)
-        sim.run(t=0.9)  # the pour is landing: every kind of contact at once
-        runs.append((sim.x, sim.v, sim.w))
-    for a, b in zip(*runs):
+    sim = tg.Simulation(scene)
+    sim.run(t=SNAPSHOT)
+    for a, b in zip((sim.x, sim.v, sim.w), taken):
         np.testing.assert_array_equal(a, b)
 
 
@@ -165,7 +149,7 @@ def test_heavy_ball_on_a_column_is_held():
 
 def test_heavy_ball_dropped_on_the_pit_stays_near_the_top(settled_pit):
     # the same heavy ball dropped from 0.5 m onto the settled pit ends in the top quarter of it
-    pit, _, _, side = settled_pit
+    pit, _, _, side, _ = settled_pit
     r, m = float(np.max(pit.model.radius_np)), float(np.max(pit.model.mass_np))
     top = float(np.percentile(pit.x[:, 1], 99))
     x = np.vstack([pit.x, [[side / 2, top + 0.5, side / 2]]])
@@ -183,7 +167,7 @@ def test_the_settled_pit_sleeps_by_regions_and_a_landing_ball_wakes_its_own(sett
     # with the Gauss–Seidel sweeps a ball sleeps once every ball within colour.REGION_HOPS contacts
     # of it is calm: the pit, one island, never slept as a whole (0 % asleep at 4 s), but its
     # regions do
-    pit, quality, _, side = settled_pit
+    pit, quality, _, side, _ = settled_pit
     assert quality["asleep_fraction"] > 0.3, quality
     pit.save(tmp_path / "pit.npz")  # (the fixture's run stays as it is for the other tests)
     sim = tg.Simulation.load(tmp_path / "pit.npz")
