@@ -575,35 +575,25 @@ def test_bench_collide_with_a_boulder_times_the_pile_alone_too(background_runs):
     )
 
 
-@pytest.mark.parametrize(
-    "option, value, fragment",
-    [
-        ("--iterations", "0", "[1, 100]"),
-        ("--steps", "0", "> 0 steps"),
-        ("--n", "1", ">= 2 balls"),
-        ("--boulder", "-0.1", "[0, 10] m"),
-        ("--boulder", "nan", "[0, 10] m"),
-    ],
-)
-def test_bench_collide_bad_option_exits_2(option, value, fragment):
-    proc = run_cli("bench", "collide", option, value)
-    assert proc.returncode == 2, (proc.stdout, proc.stderr)
-    assert option in proc.stderr and fragment in proc.stderr and "Traceback" not in proc.stderr
+BAD_BENCH_OPTIONS = [
+    (("collide", "--iterations", "0"), "[1, 100]"),
+    (("collide", "--steps", "0"), "> 0 steps"),
+    (("collide", "--n", "1"), ">= 2 balls"),
+    (("collide", "--boulder", "-0.1"), "[0, 10] m"),
+    (("collide", "--boulder", "nan"), "[0, 10] m"),
+    (("pit", "--every", "0"), "(0, --t]"),
+    (("pit", "--every", "5"), "(0, --t]"),  # longer than the pour (--t 4)
+    (("pit", "--every", "nan"), "(0, --t]"),
+    (("pit", "--t", "0"), "(0, 60]"),
+]
+"""(bench and one bad option, a fragment of the allowed range the error must name)."""
 
 
-@pytest.mark.parametrize(
-    "args, option, fragment",
-    [
-        (("--every", "0"), "--every", "(0, --t]"),
-        (("--every", "5"), "--every", "(0, --t]"),  # longer than the pour (--t 4)
-        (("--every", "nan"), "--every", "(0, --t]"),
-        (("--t", "0"), "--t", "(0, 60]"),
-    ],
-)
-def test_bench_pit_bad_option_exits_2(args, option, fragment):
-    proc = run_cli("bench", "pit", *args)
+@pytest.mark.parametrize("args, fragment", BAD_BENCH_OPTIONS, ids=[" ".join(a) for a, _ in BAD_BENCH_OPTIONS])
+def test_bench_bad_option_exits_2(args, fragment):
+    proc = run_cli("bench", *args)
     assert proc.returncode == 2, (proc.stdout, proc.stderr)
-    assert option in proc.stderr and fragment in proc.stderr and "Traceback" not in proc.stderr
+    assert args[1] in proc.stderr and fragment in proc.stderr and "Traceback" not in proc.stderr
 
 
 # ----------------------------------------------------------------------------------------------
