@@ -2,12 +2,13 @@
 
 Most of the suite's time goes to compiling kernels, one process at a time on one core. A few
 tests run a whole process of their own, which compiles its own kernels for up to two minutes:
-the Vulkan pile, the bounds-checked (debug) kernels, the collide benches, the f32 sweep, a terrain
-run through the CLI, three of the narrow pit's pours (tests/pile_pours.py), which run on one core. Their processes do not depend on the tests before them, so they can start as
+the Vulkan pile, the bounds-checked (debug) kernels, the collide benches, the f32 sweep, a
+terrain run through the CLI; and three of the narrow pit's pours (tests/pile_pours.py) take as
+long on one core. Their processes do not depend on the tests before them, so they can start as
 soon as the session does and run one after another beside the main process, on the CI machine's
 second core; the test then only waits for its run's result and checks it. Measured on the 2-core
-CI machine from an empty kernel cache (2026-11-23): six of those runs took 387 of the suite's 922
-seconds (the boulder bench 8.5: it loaded the kernels another had compiled), and the suite
+CI machine from an empty kernel cache (2026-11-23): six of those runs took 387 of the suite's
+922 seconds (the boulder bench 8.5: it loaded the kernels another had compiled), and the suite
 572 seconds with seven in the background and their tests last (the terrain run, 45 s in the main
 process then, went to the background after that).
 

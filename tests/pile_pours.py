@@ -9,7 +9,6 @@ energy samples and the balls' total mass to ``OUT.npz`` (written whole or not at
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -31,11 +30,6 @@ END = 4.0
 
 SAMPLE = 0.05
 """Time [s] between two energy samples from ``LANDED`` on."""
-
-
-def with_values(scene, section: str, **values):
-    """``scene`` with the keys ``values`` of its section ``section`` changed."""
-    return dataclasses.replace(scene, **{section: dataclasses.replace(getattr(scene, section), **values)})
 
 
 def kinetic(sim) -> float:
@@ -80,20 +74,18 @@ def _no_projection(sim) -> None:
 
 
 VARIANTS = {
-    "sleeping_off": (("world", {"v_rest": 0.0}), None),
-    "lively": (("contact", {"e": 0.8}), None),
-    "no_projection_once_landed": (None, _no_projection),
+    "sleeping_off": (("world.v_rest=0.0",), None),
+    "lively": (("contact.e=0.8",), None),
+    "no_projection_once_landed": ((), _no_projection),
 }
-"""The pours run on their own: the bundled pit's keys they change (section and values) and what
+"""The pours run on their own: the keys of the bundled pit they change (``--set`` syntax) and what
 they do once every ball has landed."""
 
 
 def run_variant(variant: str) -> dict:
     """Pour the narrow pit as ``variant`` says; returns its figures as arrays."""
-    change, landed = VARIANTS[variant]
-    scene, side = pit_scene(NARROW_PIT)
-    if change is not None:
-        scene = with_values(scene, change[0], **change[1])
+    overrides, landed = VARIANTS[variant]
+    scene, side = pit_scene(NARROW_PIT, overrides)
     sim, quality, energy, _ = pour(scene, side, landed=landed)
     return {"quality": np.array(json.dumps(quality)), "energy": energy, "total_mass": np.array(total_mass(sim))}
 
