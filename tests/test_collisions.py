@@ -15,7 +15,7 @@ from conftest import ON_CPU, SERIAL_OR_PARALLEL
 import ti_golf as tg
 from ti_golf.bench.collide import pile_scene
 from ti_golf.bench.pit import pit_scene
-from ti_golf.physics import apart, grid
+from ti_golf.physics import apart, grid, sort
 from ti_golf.scene.schema import AT_REST, Plane
 from ti_golf.sim.solver import CollisionSolver
 
@@ -204,6 +204,34 @@ def test_a_ball_that_moved_past_half_the_skin_is_seen_wherever_it_is():
         else:  # within half the skin: not seen where the margin is small (within 100 m of the origin)
             near = np.linalg.norm(p, axis=1) < 100.0
             assert not seen[near].any() and near.sum() > 1000
+
+
+@pytest.mark.parametrize("buckets", [1, 16, 256, 1024])
+def test_a_spread_loop_takes_every_bucket_once(buckets):
+    # sort.spread_turns cuts a loop over buckets into tasks, each a run of CPU_TASK_ITEMS
+    # iterations of its own on the CPU, so that the threads share a loop of a few hundred blocks;
+    # every bucket must still be taken by exactly one iteration (each block swept once, by one
+    # thread), whatever the number of tasks
+    import taichi as ti
+
+    from ti_golf.physics.types import kernel
+
+    def visit(tasks, buckets, seen):
+        for t in range(tasks * ti.static(sort.task_stride())):
+            turn0, turns = sort.spread_turns(t, tasks, buckets)
+            for k in range(turns):
+                ti.atomic_add(seen[sort.bucket_in_turn(turn0 + k * tasks, buckets)], 1)  # (integers)
+
+    visit.__annotations__ = {"tasks": ti.i32, "buckets": ti.i32, "seen": ti.types.ndarray(ti.i32, ndim=1)}
+    visit = kernel(visit)  # (this module's annotations are strings: from __future__ import annotations)
+    seen = ti.ndarray(ti.i32, buckets)
+    for tasks in sorted({1, 3, 16, buckets, sort.bucket_tasks(buckets)}):
+        if tasks > buckets:
+            continue
+        seen.fill(0)
+        visit(tasks, buckets, seen)
+        np.testing.assert_array_equal(seen.to_numpy(), np.ones(buckets, np.int32), err_msg=f"{tasks} tasks")
+    assert 1 <= sort.bucket_tasks(buckets) <= buckets
 
 
 def test_a_boulder_owns_none_of_its_pairs_so_the_impulse_table_stays_narrow():

@@ -209,6 +209,12 @@ def on_cpu() -> bool:
     return ensure_init().arch in ("x64", "arm64")
 
 
+def cpu_threads() -> int:
+    """Threads of Taichi's CPU thread pool (``ti.init``'s ``cpu_max_num_threads``: the cores)."""
+    ensure_init()
+    return int(ti.lang.impl.current_cfg().cpu_max_num_threads)
+
+
 def info() -> RuntimeInfo | None:
     """The current runtime, or ``None`` before :func:`init`."""
     return _info

@@ -38,7 +38,7 @@ from ti_golf.physics.contact import (
 )
 from ti_golf.physics.links import listed, moved_past
 from ti_golf.physics.pairs import QUIET, pair_normal, skip_pair
-from ti_golf.physics.sort import bucket_in_turn, cell_of, counting_sort, sort_buckets
+from ti_golf.physics.sort import bucket_in_turn, cell_of, counting_sort, sort_bucket, spread_turns, task_stride
 from ti_golf.physics.surfaces import surface_impulses
 from ti_golf.physics.types import (
     GAP,
@@ -153,6 +153,7 @@ def column_order(
     chunk_start: int_array,
     ids: int_array,
     colour: int_array,
+    tasks: ti.i32,
     lists: NeighbourLists,
 ) -> ti.i32:
     """Group the balls by block for the sweeps: ``ids[start[b] : start[b + 1]]`` are the balls of
@@ -163,7 +164,11 @@ def column_order(
     other ball was not in their grid column or one beside it (:func:`far_pairs` takes those)."""
     inv_block = 0.5 * inv_cell
     counting_sort(x_at_build, inv_block, mask, origin, stride, rank, start, chunk_start, ids)
-    sort_buckets(x_at_build, start, ids)
+    buckets = start.shape[0] - 1
+    for t in range(tasks * ti.static(task_stride())):  # (the blocks spread over the threads: see spread_turns)
+        turn0, turns = spread_turns(t, tasks, buckets)
+        for k in range(turns):
+            sort_bucket(bucket_in_turn(turn0 + k * tasks, buckets), x_at_build, start, ids)
     for s in range(ids.shape[0]):
         colour[s] = colour_of(block_of(x_at_build[ids[s]], inv_cell))
     far_owners = 0  # the balls that own a pair with a ball not in their grid column or one beside it
@@ -182,6 +187,7 @@ def gauss_seidel_sweep(
     phase: ti.i32,
     any_far: ti.i32,
     inv_cell: float,
+    tasks: ti.i32,
     contact: ContactParams,
     terrain: TerrainParams,
     params: StepParams,
@@ -195,25 +201,28 @@ def gauss_seidel_sweep(
     every block of a colour, each block bottom-up in one thread (see the module's docstring;
     ``blocks`` from :func:`column_order`), meet the pairs they own (but, when ``any_far``, those
     whose other ball was not beside them at the build), then their planes and the terrain."""
+    buckets = blocks.start.shape[0] - 1
     for c in ti.static(range(COLOURS)):  # a top-level loop per colour: the colours in turn
-        for turn in range(blocks.start.shape[0] - 1):  # (blocks spread over the threads: see bucket_in_turn)
-            b = bucket_in_turn(turn, blocks.start.shape[0] - 1)
-            for s in range(blocks.start[b], blocks.start[b + 1]):
-                if blocks.colour[s] == c:
-                    sweep_ball(
-                        blocks.ids[s],
-                        phase,
-                        False,
-                        any_far,
-                        inv_cell,
-                        contact,
-                        terrain,
-                        params,
-                        model,
-                        lists,
-                        state,
-                        scratch,
-                    )
+        for t in range(tasks * ti.static(task_stride())):  # (the blocks spread over the threads: see spread_turns)
+            turn0, turns = spread_turns(t, tasks, buckets)
+            for k in range(turns):
+                b = bucket_in_turn(turn0 + k * tasks, buckets)
+                for s in range(blocks.start[b], blocks.start[b + 1]):
+                    if blocks.colour[s] == c:
+                        sweep_ball(
+                            blocks.ids[s],
+                            phase,
+                            False,
+                            any_far,
+                            inv_cell,
+                            contact,
+                            terrain,
+                            params,
+                            model,
+                            lists,
+                            state,
+                            scratch,
+                        )
 
 
 @kernel
@@ -417,6 +426,7 @@ def sweep_ball(
 def project_sweep(
     any_far: ti.i32,
     inv_cell: float,
+    tasks: ti.i32,
     contact: ContactParams,
     params: StepParams,
     model: ModelArrays,
@@ -429,12 +439,15 @@ def project_sweep(
     :func:`gauss_seidel_sweep`, on the step's new positions ``scratch.x_free``
     (:func:`project_ball`). Returns 1 (and sets ``scratch.flag[0]``) when the lists must be
     rebuilt before the next step, as the step's end does (:func:`.collide.finish`)."""
+    buckets = blocks.start.shape[0] - 1
     for c in ti.static(range(COLOURS)):
-        for turn in range(blocks.start.shape[0] - 1):  # (blocks spread over the threads: see bucket_in_turn)
-            b = bucket_in_turn(turn, blocks.start.shape[0] - 1)
-            for s in range(blocks.start[b], blocks.start[b + 1]):
-                if blocks.colour[s] == c:
-                    project_ball(blocks.ids[s], False, any_far, inv_cell, contact.k_p, model, lists, state, scratch)
+        for t in range(tasks * ti.static(task_stride())):  # (the blocks spread over the threads: see spread_turns)
+            turn0, turns = spread_turns(t, tasks, buckets)
+            for k in range(turns):
+                b = bucket_in_turn(turn0 + k * tasks, buckets)
+                for s in range(blocks.start[b], blocks.start[b + 1]):
+                    if blocks.colour[s] == c:
+                        project_ball(blocks.ids[s], False, any_far, inv_cell, contact.k_p, model, lists, state, scratch)
     for i in range(state.x.shape[0]):
         if moved_past(scratch.x_free[i], lists.x_at_build[i], 2.0 * params.h * state.v[i].norm(), params.half_skin):
             scratch.flag[0] = 1

@@ -9,12 +9,53 @@ from ti_golf.physics.types import (
     kernel,
     vec3_array,
 )
+from ti_golf.runtime import cpu_threads, on_cpu
 
 
 @ti.func
 def cell_of(x, inv_cell):
     """Integer cell coordinates of a point [m]."""
     return ti.cast(ti.floor(x * inv_cell), ti.i32)
+
+
+CPU_TASK_ITEMS = 512
+"""Iterations in one task of a parallel loop on Taichi's CPU backend (1.7.4) whose bounds are
+known only at run time: the backend's adaptive block size, which neither
+``ti.loop_config(block_dim=...)`` nor ``ti.init(cpu_block_dim_adaptive=False)`` changes
+(measured). A loop of up to 512 iterations therefore runs on one thread, however much each
+iteration does: a loop over a few hundred blocks of a pile must be spread (:func:`spread_turns`)."""
+
+TASKS_PER_THREAD = 8
+"""Tasks per CPU thread of a loop over buckets spread by :func:`spread_turns`: the threads take
+tasks as they finish the last, so a thread that drew the busier buckets takes fewer tasks."""
+
+
+def task_stride() -> int:
+    """Iterations of a spread loop per task (:func:`spread_turns`): ``CPU_TASK_ITEMS`` on the CPU,
+    1 elsewhere (where a loop's iterations spread over the threads one by one)."""
+    return CPU_TASK_ITEMS if on_cpu() else 1
+
+
+def bucket_tasks(buckets: int) -> int:
+    """Tasks of a loop over ``buckets`` buckets spread by :func:`spread_turns`: ``TASKS_PER_THREAD``
+    per CPU thread (at most one per bucket), or one per bucket elsewhere."""
+    return min(buckets, TASKS_PER_THREAD * cpu_threads()) if on_cpu() else buckets
+
+
+@ti.func
+def spread_turns(t, tasks, buckets):
+    """(first, count): the turns (see :func:`bucket_in_turn`) that iteration t of a parallel loop
+    over ``tasks`` × :func:`task_stride` iterations takes: ``count`` turns, first, first + tasks,
+    first + 2·tasks, ..., when t begins a task (a multiple of the stride), else none. Every turn
+    of ``buckets`` is taken once, by one task: on the CPU each task falls in a block of iterations
+    of its own (``CPU_TASK_ITEMS``), which the thread pool hands to whichever thread is free, so
+    the buckets of a loop of a few hundred spread over the threads."""
+    stride = ti.static(task_stride())
+    first, count = 0, 0
+    if t % stride == 0:
+        first = t // stride
+        count = (buckets - first + tasks - 1) // tasks
+    return first, count
 
 
 @ti.func
@@ -36,14 +77,13 @@ def bucket_in_turn(k, buckets):
     """The bucket that iteration k of a parallel loop over ``buckets`` buckets (a power of two)
     takes: k times an odd constant (Knuth's 2654435761), modulo ``buckets``, a one-to-one shuffle.
 
-    Taichi's CPU backend cuts a parallel loop into one contiguous range of iterations per thread.
-    Shuffled, each thread's range takes buckets from all over the table, so the threads share the
+    Taichi's CPU backend hands a parallel loop to its threads in contiguous runs of iterations
+    (``CPU_TASK_ITEMS``; a spread loop's tasks, :func:`spread_turns`, take every ``tasks``-th
+    turn). Shuffled, each run takes buckets from all over the table, so the threads share the
     balls evenly even where the buckets in use are only the first part of it (a dense hash fills
     ext_x·ext_z blocks of a power of two) or the balls crowd one part of the bin; and k's lowest
     bit stays the bucket's, so the blocks of one colour (by the parities of their column) are
-    not gathered into one thread's range as reversing k's bits would gather them. (In the ball pit
-    the Gauss–Seidel sweep kept 1.2 of 2 cores busy when each thread took a contiguous half of
-    the buckets.)"""
+    not gathered into one run as reversing k's bits would gather them."""
     return ti.cast((ti.cast(k, ti.u32) * ti.u32(2654435761)) & ti.cast(buckets - 1, ti.u32), ti.i32)
 
 
@@ -96,17 +136,23 @@ def storage_order(
 def sort_buckets(x: ti.template(), start: ti.template(), sorted_ids: ti.template()):
     """Sort the ball ids of every bucket of a counting sort by position, y then z then x (then
     id): :func:`stored_after`."""
-    for turn in range(start.shape[0] - 1):  # a bucket holds a few balls: an insertion sort
-        b = bucket_in_turn(turn, start.shape[0] - 1)
-        for k in range(start[b] + 1, start[b + 1]):
-            j = sorted_ids[k]
-            m = k
-            while m > start[b]:  # not `m > start[b] and ...`: Taichi evaluates both sides of an `and`
-                if not stored_after(x, sorted_ids[m - 1], j):  # (sorted_ids[-1] would be read)
-                    break
-                sorted_ids[m] = sorted_ids[m - 1]
-                m -= 1
-            sorted_ids[m] = j
+    for turn in range(start.shape[0] - 1):
+        sort_bucket(bucket_in_turn(turn, start.shape[0] - 1), x, start, sorted_ids)
+
+
+@ti.func
+def sort_bucket(b, x: ti.template(), start: ti.template(), sorted_ids: ti.template()):
+    """Sort the ball ids of bucket b (:func:`sort_buckets`): a bucket holds a few balls, an
+    insertion sort."""
+    for k in range(start[b] + 1, start[b + 1]):
+        j = sorted_ids[k]
+        m = k
+        while m > start[b]:  # not `m > start[b] and ...`: Taichi evaluates both sides of an `and`
+            if not stored_after(x, sorted_ids[m - 1], j):  # (sorted_ids[-1] would be read)
+                break
+            sorted_ids[m] = sorted_ids[m - 1]
+            m -= 1
+        sorted_ids[m] = j
 
 
 @ti.func

@@ -533,11 +533,12 @@ class CollisionSolver:
         inv_cell = 1.0 / self.cell
         any_far = int(self.far_owners > 0)
         phases = colour.step_phases(iterations)
+        tasks = sort.bucket_tasks(self.col_start.shape[0] - 1)
         blocks = self._packs.get(BlockOrder, start=self.col_start, ids=self.col_ids, colour=self.col_colour)
         for phase in phases:
             with plain_compile():  # see runtime.plain_compile
                 colour.gauss_seidel_sweep(
-                    phase, any_far, inv_cell, contact, terrain, params, model, lists, state, scratch, blocks
+                    phase, any_far, inv_cell, tasks, contact, terrain, params, model, lists, state, scratch, blocks
                 )
             if any_far:
                 colour.far_pairs(phase, inv_cell, contact, terrain, params, model, lists, state, scratch)
@@ -546,7 +547,9 @@ class CollisionSolver:
         for _ in range(colour.PROJECTIONS):
             if any_far:
                 colour.far_pairs(colour.PROJECT, inv_cell, contact, terrain, params, model, lists, state, scratch)
-            rebuild = colour.project_sweep(any_far, inv_cell, contact, params, model, lists, state, scratch, blocks)
+            rebuild = colour.project_sweep(
+                any_far, inv_cell, tasks, contact, params, model, lists, state, scratch, blocks
+            )
         return rebuild
 
     def _arguments(self, m: Model, s: State, steps: int) -> tuple:

@@ -82,6 +82,7 @@ def order_columns(solver: CollisionSolver, state: State) -> None:
         solver.col_chunk,
         solver.col_ids,
         solver.col_colour,
+        sort.bucket_tasks(buckets),
         solver._packs.lists(solver),
     )
     solver.far_owners = int(far_owners)
