@@ -405,11 +405,12 @@ def sweep_ball(
                                 h,
                             )
                             lists.friction[p] = ti.cast(F, ti.f32)
-                            vi += P * inv_a
-                            wi += spin_jolt(P, n, ri, inv_a)
-                            if scratch.calm[j] != QUIET:
-                                state.v[j] -= P * inv_b
-                                state.w[j] += spin_jolt(-P, -n, rj, inv_b)
+                            if P.norm_sqr() > 0.0:  # (a pair apart or at rest changes nothing: ball j left unread)
+                                vi += P * inv_a
+                                wi += spin_jolt(P, n, ri, inv_a)
+                                if scratch.calm[j] != QUIET:
+                                    state.v[j] -= P * inv_b
+                                    state.w[j] += spin_jolt(-P, -n, rj, inv_b)
         if phase == FIRST:  # the restitution pass visits the pairs of the balls marked here
             if ti.static(far_only):
                 scratch.impact[i] = ti.max(scratch.impact[i], approached)  # (after the colours)

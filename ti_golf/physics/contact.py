@@ -130,11 +130,13 @@ def pair_step(
     P = (lam_new - lam) * n
     F_new = F
     if phase != BOUNCE:
-        if friction == CENTRE_FRICTION:
-            F_new = F + centre_friction(n, v_a - v_b, m_eff, 1e30)
-        else:
-            F_new = F + friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff, 1e30)
-        F_new = clamp_friction(F_new, n, mu * lam_new)
+        F_new = zero3()  # |F| ≤ μ·λ: a contact that presses no more holds no friction
+        if lam_new > 0.0:
+            if friction == CENTRE_FRICTION:
+                F_new = F + centre_friction(n, v_a - v_b, m_eff, 1e30)
+            else:
+                F_new = F + friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff, 1e30)
+            F_new = clamp_friction(F_new, n, mu * lam_new)
         P += F_new - F
     return P, lam_new, F_new
 
