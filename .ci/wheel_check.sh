@@ -8,7 +8,10 @@ trap 'rm -rf "$work"' EXIT
 rm -rf "$repo/build"  # setuptools would put stale files of an earlier build into the wheel
 "$python" -m pip wheel --quiet --no-deps --wheel-dir "$work/dist" "$repo"
 wheel="$(ls "$work"/dist/ti_golf-*.whl)"
-"$python" -m zipfile -l "$wheel" | grep -q "ti_golf/scene/data/ball_pit.toml" || { echo "wheel-check: no scenes in $wheel"; exit 1; }
+# The listing goes to a file first: `grep -q` stops reading at the first match, and under pipefail the
+# writer's broken pipe would fail the check on a wheel that is fine.
+"$python" -m zipfile -l "$wheel" > "$work/wheel.txt"
+grep -q "ti_golf/scene/data/ball_pit.toml" "$work/wheel.txt" || { echo "wheel-check: no scenes in $wheel"; exit 1; }
 "$python" -m venv "$work/venv"
 "$work/venv/bin/pip" install --quiet "$wheel"
 cd "$work"  # outside the checkout: nothing of it is importable from here
