@@ -49,9 +49,9 @@ def total_mass(sim) -> float:
     return float(np.broadcast_to(np.asarray(sim.model.mass_np), sim.n).sum())
 
 
-def pour(scene, side: float, snapshot: float | None = None, landed=None):
+def pour(scene, side: float, snapshot: float | None = None, landed=None, sample: float = SAMPLE):
     """Run a pour to ``END`` and return it, its pile figures, its kinetic and potential energy [J]
-    every ``SAMPLE`` s from ``LANDED`` on, shape (samples, 2), and (with ``snapshot``, a time
+    every ``sample`` s from ``LANDED`` on, shape (samples, 2), and (with ``snapshot``, a time
     before ``LANDED``) the balls' (x, v, w) at that time. ``landed(sim)``, when given, is called
     once every ball has landed, before the first sample."""
     sim = tg.Simulation(scene)
@@ -64,7 +64,7 @@ def pour(scene, side: float, snapshot: float | None = None, landed=None):
         landed(sim)
     energy = [(kinetic(sim), potential(sim))]
     while sim.t < END - 1e-9:
-        sim.run(t=SAMPLE)
+        sim.run(t=sample)
         energy.append((kinetic(sim), potential(sim)))
     return sim, pile_quality(sim, side), np.array(energy), taken
 
@@ -73,20 +73,24 @@ def _no_projection(sim) -> None:
     sim.set("contact.k_p", 0.0)
 
 
+STEP = 0.001
+"""The pit's time step [s] (``world.dt`` of the bundled ``ball_pit``)."""
+
 VARIANTS = {
-    "sleeping_off": (("world.v_rest=0.0",), None),
-    "lively": (("contact.e=0.8",), None),
-    "no_projection_once_landed": ((), _no_projection),
+    "sleeping_off": (("world.v_rest=0.0",), None, SAMPLE),
+    "lively": (("contact.e=0.8",), None, SAMPLE),
+    "no_projection_once_landed": ((), _no_projection, STEP),
 }
-"""The pours run on their own: the keys of the bundled pit they change (``--set`` syntax) and what
-they do once every ball has landed."""
+"""The pours run on their own: the keys of the bundled pit they change (``--set`` syntax), what
+they do once every ball has landed, and how often [s] they sample the energy."""
 
 
 def run_variant(variant: str) -> dict:
     """Pour the narrow pit as ``variant`` says; returns its figures as arrays."""
-    overrides, landed = VARIANTS[variant]
+    overrides, landed, sample = VARIANTS[variant]
     scene, side = pit_scene(NARROW_PIT, overrides)
-    sim, quality, energy, _ = pour(scene, side, landed=landed)
+    assert scene.world.dt == STEP
+    sim, quality, energy, _ = pour(scene, side, landed=landed, sample=sample)
     return {"quality": np.array(json.dumps(quality)), "energy": energy, "total_mass": np.array(total_mass(sim))}
 
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import background
 import numpy as np
 import pytest
-from pile_pours import LANDED, NARROW_PIT, SAMPLE, load_variant, pour, total_mass
+from pile_pours import LANDED, NARROW_PIT, SAMPLE, STEP, load_variant, pour, total_mass
 
 import ti_golf as tg
 from ti_golf.bench.pit import pile_quality, pit_scene
@@ -86,16 +86,24 @@ def test_pit_with_restitution_settles(settled_pit):
 @pytest.mark.background("pour-no_projection_once_landed")
 def test_once_landed_the_contacts_only_take_energy_out_of_the_pit(background_runs):
     # after the last ball has landed, the contacts' impulses (restitution below 1 above the
-    # inelastic speed, resting contacts that never bounce, Coulomb friction) and sleeping only take
-    # energy out: the total mechanical energy never rises, sampled every 0.05 s (a collapse turns
-    # potential energy into kinetic, so the kinetic energy alone may). The position projection
-    # (B.18) is turned off once the pour has landed: it moves balls without an impulse, and lifting
-    # one out of an overlap adds potential energy that no contact took from the pile (docs'
-    # solver page, "Energy")
-    _, energy, _ = _poured(background_runs, "no_projection_once_landed")
+    # inelastic speed, resting contacts that never bounce, Coulomb friction, the resistance to
+    # pivoting) and sleeping only take energy out: the total mechanical energy never rises over
+    # 0.05 s (a collapse turns potential energy into kinetic, so the kinetic energy alone may). The
+    # position projection (B.18) is turned off once the pour has landed: it moves balls without an
+    # impulse, and lifting one out of an overlap adds potential energy that no contact took from the
+    # pile (docs' solver page, "Energy").
+    # Step by step, the sweeps stop short of convergence: a warm-started impulse not yet taken back
+    # can leave a ball rising a little, so the energy may rise within a step by noise below what
+    # the scene counts as at rest, one ball's ½·m·v_rest² (the last sweep's shock propagation, the
+    # lower ball standing firm, added up to 0.01 J of kinetic energy in one sweep before it fell
+    # back to both balls' masses where it would add energy, contact.kinetic_change)
+    _, energy, mass = _poured(background_runs, "no_projection_once_landed")
     mechanical = energy.sum(axis=1)
-    assert len(mechanical) == round((4.0 - LANDED) / SAMPLE) + 1
-    assert np.all(np.diff(mechanical) <= 0.0), np.diff(mechanical)
+    assert len(mechanical) == round((4.0 - LANDED) / STEP) + 1
+    assert np.all(np.diff(mechanical[:: round(SAMPLE / STEP)]) <= 0.0), np.diff(mechanical[:: round(SAMPLE / STEP)])
+    scene, _ = pit_scene(NARROW_PIT)
+    at_rest = 0.5 * (mass / NARROW_PIT) * scene.world.v_rest**2
+    assert np.max(np.diff(mechanical)) < at_rest, np.max(np.diff(mechanical))
 
 
 @pytest.mark.background("pour-sleeping_off")

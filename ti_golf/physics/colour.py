@@ -33,6 +33,7 @@ from ti_golf.physics.contact import (
     SHOCK,
     SOLVE,
     clamp_friction,
+    kinetic_change,
     pair_step,
     spin_jolt,
 )
@@ -56,6 +57,7 @@ from ti_golf.physics.types import (
     kernel,
     of_ball,
     vec3f_array,
+    zero3,
 )
 from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
 
@@ -384,26 +386,39 @@ def sweep_ball(
                                 v_n0 = (scratch.v_free[i] - scratch.v_free[j]).dot(n)
                                 if v_n0 < -v_inelastic:
                                     approached = 1
-                            P, lists.lam[p], F = pair_step(
-                                phase,
-                                n,
-                                scratch.J[p, GAP],
-                                v_n0,
-                                vi,
-                                wi,
-                                ri,
-                                inv_a,
-                                state.v[j],
-                                state.w[j],
-                                rj,
-                                inv_b,
-                                lam,
-                                F,
-                                contact.e,
-                                contact.mu,
-                                v_inelastic,
-                                h,
-                            )
+                            vj, wj = state.v[j], state.w[j]
+                            P, lam_new, F_new = zero3(), lam, F
+                            for attempt in range(2):
+                                P, lam_new, F_new = pair_step(
+                                    phase,
+                                    n,
+                                    scratch.J[p, GAP],
+                                    v_n0,
+                                    vi,
+                                    wi,
+                                    ri,
+                                    inv_a,
+                                    vj,
+                                    wj,
+                                    rj,
+                                    inv_b,
+                                    lam,
+                                    F,
+                                    contact.e,
+                                    contact.mu,
+                                    v_inelastic,
+                                    h,
+                                )
+                                if attempt == 1 or inv_a + inv_b == inv_mi + inv_mj:
+                                    break
+                                if (
+                                    kinetic_change(vi, wi, ri, inv_a, P, n) + kinetic_change(vj, wj, rj, inv_b, -P, -n)
+                                    <= 0.0
+                                ):
+                                    break
+                                inv_a, inv_b = inv_mi, inv_mj  # the lower ball standing firm would add energy
+                            lists.lam[p] = lam_new
+                            F = F_new
                             lists.friction[p] = ti.cast(F, ti.f32)
                             if P.norm_sqr() > 0.0:  # (a pair apart or at rest changes nothing: ball j left unread)
                                 vi += P * inv_a

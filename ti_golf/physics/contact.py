@@ -241,6 +241,20 @@ def spin_jolt(P, n, radius, inv_mass):
 
 
 @ti.func
+def kinetic_change(v, w, radius, inv_mass, P, n):
+    """ΔKE [J] of a solid sphere of ``radius`` at velocity v [m/s] and spin ω [rad/s] receiving
+    impulse P [N·s] at the point −radius·n̂ (0 for a body that stands firm, ``inv_mass`` = 0):
+    m(v·Δv + |Δv|²/2) + I(ω·Δω + |Δω|²/2) with I = 2/5·mR²."""
+    change = 0.0
+    if inv_mass > 0.0:
+        dv, dw = P * inv_mass, spin_jolt(P, n, radius, inv_mass)
+        change = (
+            v.dot(dv) + 0.5 * dv.norm_sqr() + 0.4 * radius * radius * (w.dot(dw) + 0.5 * dw.norm_sqr())
+        ) / inv_mass
+    return change
+
+
+@ti.func
 def rolling_resistance(v, radius, mu_roll, j_n, n):
     """(Δv, Δω) that slow a rolling ball by at most μ_roll·j_n [m/s], keeping the slip unchanged."""
     v_t = v - v.dot(n) * n
