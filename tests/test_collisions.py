@@ -1327,3 +1327,34 @@ def test_runs_are_deterministic():
     a, b = run(), run()
     for u, v in zip(a, b):
         np.testing.assert_array_equal(u, v)
+
+
+@SERIAL_OR_PARALLEL
+def test_a_ball_spinning_on_a_ball_slows_at_five_halves_mu_roll_g_over_r(serial):
+    # reference: two touching balls resist pivoting on each other as a ball on the ground does, with
+    # the torque μ_roll·N·R (N = mg, the top ball's weight): the top ball of a column of two, spun
+    # about the vertical, slows at dω_y/dt = −(5/2)·μ_roll·g/R until it stops. The contact's
+    # resting impulse is m·g·h every step, so the semi-implicit steps follow the line to round-off;
+    # the bottom ball, held by the ground's larger resistance (μ_roll·2mg·R), does not turn, and
+    # neither ball moves.
+    mu_r, w0, h, R = 0.05, 30.0, 0.001, 0.02
+    sc = tg.load_scene(
+        data={
+            "air": {"rho": 0.0},
+            "world": {"integrator": "semi_implicit", "dt": h},
+            "contact": {"mu": 0.4, "mu_roll": mu_r, "solver": "gauss_seidel"},
+        }
+    )
+    x0 = np.array([[0.0, R, 0.0], [0.0, 3.0 * R, 0.0]])
+    sim = tg.Simulation(sc, x=x0, w=[[0.0, 0.0, 0.0], [0.0, w0, 0.0]], radius=R)
+    sim.solver = CollisionSolver(sim.model, serial=serial)
+    rate = 2.5 * mu_r * 9.81 / R
+    sim.step(1)  # the first step meets the ground (the resting impulses start then)
+    for _ in range(3):
+        sim.step(100)
+        np.testing.assert_allclose(sim.w[1, 1], w0 - rate * sim.t, rtol=1e-12)
+        np.testing.assert_array_equal(sim.w[0], 0.0)
+    np.testing.assert_array_equal(sim.x, x0)
+    sim.run(t=w0 / rate)
+    np.testing.assert_array_equal(sim.w, 0.0)
+    assert sim.counts()["at_rest"] == 2

@@ -35,6 +35,8 @@ from ti_golf.physics.contact import (
     clamp_friction,
     kinetic_change,
     pair_step,
+    pivot_impulse,
+    pivot_inertia,
     spin_jolt,
 )
 from ti_golf.physics.links import listed, moved_past
@@ -426,6 +428,16 @@ def sweep_ball(
                                 if scratch.calm[j] != QUIET:
                                     state.v[j] -= P * inv_b
                                     state.w[j] += spin_jolt(-P, -n, rj, inv_b)
+                            if phase == SHOCK and lam_new > 0.0:  # once a step, with the pair's support
+                                inv_Ia, inv_Ib = pivot_inertia(ri, inv_mi), pivot_inertia(rj, inv_mj)
+                                if scratch.calm[j] == QUIET:
+                                    inv_Ib = 0.0
+                                L = pivot_impulse(
+                                    (wi - state.w[j]).dot(n), inv_Ia, inv_Ib, contact.mu_roll * lam_new * ti.min(ri, rj)
+                                )
+                                if L != 0.0:
+                                    wi += L * inv_Ia * n
+                                    state.w[j] -= L * inv_Ib * n
         if phase == FIRST:  # the restitution pass visits the pairs of the balls marked here
             if ti.static(far_only):
                 scratch.impact[i] = ti.max(scratch.impact[i], approached)  # (after the colours)

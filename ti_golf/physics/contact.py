@@ -15,7 +15,9 @@ along the unit normal n̂ (from b to a):
 4. (planes) rolling resistance while in resting contact, |Δv_t| ≤ μ_roll·j_n with Δω = n̂ × Δv/R,
    which leaves the contact-point slip unchanged (a rolling ball decelerates at μ_roll·g), and the
    like resistance to spin about the normal, |Δω_n| ≤ (5/2)·μ_roll·j_n/R (a ball spinning on the
-   spot stops, its spin falling at (5/2)·μ_roll·g/R);
+   spot stops, its spin falling at (5/2)·μ_roll·g/R); two touching balls resist pivoting on each
+   other in the same way, with the torque μ_roll·N·min(R_a, R_b) about their normal
+   (:func:`pivot_impulse`, Gauss–Seidel sweeps only);
 5. (planes) the step is split at the time of impact, so a bounce starts on the surface;
 6. position projection of what still overlaps, k_p·m_red·Δx·n̂ (B.18).
 
@@ -273,6 +275,26 @@ def pivot_resistance(w, radius, mu_roll, j_n, n):
     w_n = w.dot(n)
     stop = ti.min(ti.abs(w_n), 2.5 * mu_roll * ti.max(j_n, 0.0) / radius)
     return -ti.math.sign(w_n) * stop * n
+
+
+@ti.func
+def pivot_inertia(radius, inv_mass):
+    """1/I [1/(kg·m²)] of a solid sphere (I = 2/5·mR²); 0 for a body that stands firm."""
+    return 2.5 * inv_mass / (radius * radius)
+
+
+@ti.func
+def pivot_impulse(w_n, inv_I_a, inv_I_b, bound):
+    """Angular impulse L [N·m·s] about the contact normal n̂ on body a (−L on b) that resists two
+    touching balls pivoting on each other at the relative spin ``w_n`` = (ω_a − ω_b)·n̂ [rad/s]: at
+    most ``bound`` (μ_roll·λ·min(R_a, R_b), the torque with which a contact patch resists turning
+    on the spot, as the turf does in :func:`pivot_resistance`), and at most what stops the
+    relative spin, so it only takes kinetic energy out."""
+    L = 0.0
+    inv_I = inv_I_a + inv_I_b
+    if inv_I > 0.0:
+        L = -ti.math.sign(w_n) * ti.min(ti.abs(w_n) / inv_I, bound)
+    return L
 
 
 TURF_TILT, TURF_SPEED, TURF_ANGLE = math.radians(15.4), 18.6, math.radians(44.4)

@@ -152,7 +152,8 @@ class Contact:
         "float",
         0.05,
         "-",
-        "rolling-resistance coefficient: a rolling ball decelerates at μ_roll·g",
+        "rolling-resistance coefficient: a rolling ball decelerates at μ_roll·g; it also resists spin about a "
+        "contact's normal (a ball pivoting on the ground, and with the gauss_seidel solver two touching balls)",
         NON_NEGATIVE,
     )
     solver: str = key(
