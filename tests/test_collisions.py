@@ -1358,3 +1358,32 @@ def test_a_ball_spinning_on_a_ball_slows_at_five_halves_mu_roll_g_over_r(serial)
     sim.run(t=w0 / rate)
     np.testing.assert_array_equal(sim.w, 0.0)
     assert sim.counts()["at_rest"] == 2
+
+
+@SERIAL_OR_PARALLEL
+def test_two_balls_meeting_head_on_lose_relative_spin_and_keep_their_total_spin(serial):
+    # reference: two equal balls (no gravity) meet head-on at v, plastically (e = 0), each spinning
+    # about the line of their centres. Their contact takes the normal impulse λ = m_red·v with
+    # m_red = m/2, and resists pivoting with opposite angular impulses ±μ_roll·λ·R about the normal
+    # (the relative spin is never stopped here), so with I = ⅖mR² the relative spin falls by
+    # 2·μ_roll·(m/2)·v·R/I = (5/2)·μ_roll·v/R and the total spin, their angular momentum about the
+    # line, is kept to round-off
+    mu_r, R, v, h = 0.05, 0.02, 0.05, 0.001
+    sc = tg.load_scene(
+        data={
+            "air": {"rho": 0.0},
+            "world": {"integrator": "semi_implicit", "dt": h, "gravity": [0.0, 0.0, 0.0]},
+            "contact": {"e": 0.0, "mu": 0.4, "mu_roll": mu_r, "solver": "gauss_seidel"},
+        }
+    )
+    w0 = np.array([[10.0, 0.0, 0.0], [-4.0, 0.0, 0.0]])
+    sim = tg.Simulation(
+        sc, x=[[0.0, 1.0, 0.0], [2.0 * R + 0.5 * v * h, 1.0, 0.0]], v=[[v, 0, 0], [0, 0, 0]], w=w0, radius=R
+    )
+    sim.solver = CollisionSolver(sim.model, serial=serial)
+    sim.step(10)
+    np.testing.assert_allclose(sim.v[:, 0], 0.5 * v, rtol=1e-12)  # B.9 with e = 0
+    relative = sim.w[0, 0] - sim.w[1, 0]
+    assert relative == pytest.approx((w0[0, 0] - w0[1, 0]) - 2.5 * mu_r * v / R, rel=1e-12)
+    assert sim.w[:, 0].sum() == pytest.approx(w0[:, 0].sum(), abs=1e-12)
+    np.testing.assert_array_equal(sim.w[:, 1:], 0.0)
