@@ -1329,6 +1329,13 @@ def test_runs_are_deterministic():
         np.testing.assert_array_equal(u, v)
 
 
+def _pivot_scene(mu_roll: float, h: float, gravity: list[float] | None = None, e: float | None = None):
+    """A scene in vacuum for the Gauss–Seidel sweeps' resistance to pivoting, semi-implicit at step ``h``."""
+    world = {"integrator": "semi_implicit", "dt": h} | ({} if gravity is None else {"gravity": gravity})
+    contact = {"mu": 0.4, "mu_roll": mu_roll, "solver": "gauss_seidel"} | ({} if e is None else {"e": e})
+    return tg.load_scene(data={"air": {"rho": 0.0}, "world": world, "contact": contact})
+
+
 @SERIAL_OR_PARALLEL
 def test_a_ball_spinning_on_a_ball_slows_at_five_halves_mu_roll_g_over_r(serial):
     # reference: two touching balls resist pivoting on each other as a ball on the ground does, with
@@ -1338,13 +1345,7 @@ def test_a_ball_spinning_on_a_ball_slows_at_five_halves_mu_roll_g_over_r(serial)
     # the bottom ball, held by the ground's larger resistance (μ_roll·2mg·R), does not turn, and
     # neither ball moves.
     mu_r, w0, h, R = 0.05, 30.0, 0.001, 0.02
-    sc = tg.load_scene(
-        data={
-            "air": {"rho": 0.0},
-            "world": {"integrator": "semi_implicit", "dt": h},
-            "contact": {"mu": 0.4, "mu_roll": mu_r, "solver": "gauss_seidel"},
-        }
-    )
+    sc = _pivot_scene(mu_r, h)
     x0 = np.array([[0.0, R, 0.0], [0.0, 3.0 * R, 0.0]])
     sim = tg.Simulation(sc, x=x0, w=[[0.0, 0.0, 0.0], [0.0, w0, 0.0]], radius=R)
     sim.solver = CollisionSolver(sim.model, serial=serial)
@@ -1369,13 +1370,7 @@ def test_two_balls_meeting_head_on_lose_relative_spin_and_keep_their_total_spin(
     # 2·μ_roll·(m/2)·v·R/I = (5/2)·μ_roll·v/R and the total spin, their angular momentum about the
     # line, is kept to round-off
     mu_r, R, v, h = 0.05, 0.02, 0.05, 0.001
-    sc = tg.load_scene(
-        data={
-            "air": {"rho": 0.0},
-            "world": {"integrator": "semi_implicit", "dt": h, "gravity": [0.0, 0.0, 0.0]},
-            "contact": {"e": 0.0, "mu": 0.4, "mu_roll": mu_r, "solver": "gauss_seidel"},
-        }
-    )
+    sc = _pivot_scene(mu_r, h, gravity=[0.0, 0.0, 0.0], e=0.0)
     w0 = np.array([[10.0, 0.0, 0.0], [-4.0, 0.0, 0.0]])
     sim = tg.Simulation(
         sc, x=[[0.0, 1.0, 0.0], [2.0 * R + 0.5 * v * h, 1.0, 0.0]], v=[[v, 0, 0], [0, 0, 0]], w=w0, radius=R
