@@ -33,10 +33,10 @@ from ti_golf.physics.contact import (
     SHOCK,
     SOLVE,
     clamp_friction,
+    inverse_inertia,
     kinetic_change,
     pair_step,
     pivot_impulse,
-    pivot_inertia,
     spin_jolt,
 )
 from ti_golf.physics.links import listed, moved_past
@@ -389,6 +389,7 @@ def sweep_ball(
                                 if v_n0 < -v_inelastic:
                                     approached = 1
                             vj, wj = state.v[j], state.w[j]
+                            shocked = inv_a + inv_b != inv_mi + inv_mj  # (the lower ball made to stand firm)
                             P, lam_new, F_new = zero3(), lam, F
                             for attempt in range(2):
                                 P, lam_new, F_new = pair_step(
@@ -411,7 +412,7 @@ def sweep_ball(
                                     v_inelastic,
                                     h,
                                 )
-                                if attempt == 1 or inv_a + inv_b == inv_mi + inv_mj:
+                                if attempt == 1 or not shocked or P.norm_sqr() == 0.0:
                                     break
                                 if (
                                     kinetic_change(vi, wi, ri, inv_a, P, n) + kinetic_change(vj, wj, rj, inv_b, -P, -n)
@@ -429,7 +430,7 @@ def sweep_ball(
                                     state.v[j] -= P * inv_b
                                     state.w[j] += spin_jolt(-P, -n, rj, inv_b)
                             if phase == SHOCK and lam_new > 0.0:  # once a step, with the pair's support
-                                inv_Ia, inv_Ib = pivot_inertia(ri, inv_mi), pivot_inertia(rj, inv_mj)
+                                inv_Ia, inv_Ib = inverse_inertia(ri, inv_mi), inverse_inertia(rj, inv_mj)
                                 if scratch.calm[j] == QUIET:
                                     inv_Ib = 0.0
                                 L = pivot_impulse(

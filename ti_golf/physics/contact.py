@@ -237,9 +237,15 @@ def warm_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff, lam, mu):
 
 
 @ti.func
+def inverse_inertia(radius, inv_mass):
+    """1/I [1/(kg·m²)] of a solid sphere (I = 2/5·mR²); 0 for a body that stands firm."""
+    return 2.5 * inv_mass / (radius * radius)
+
+
+@ti.func
 def spin_jolt(P, n, radius, inv_mass):
     """Δω [rad/s] of a solid sphere of ``radius`` receiving impulse P at the point −radius·n̂."""
-    return (-radius * n).cross(P) * (2.5 * inv_mass / (radius * radius))
+    return (-radius * n).cross(P) * inverse_inertia(radius, inv_mass)
 
 
 @ti.func
@@ -275,12 +281,6 @@ def pivot_resistance(w, radius, mu_roll, j_n, n):
     w_n = w.dot(n)
     stop = ti.min(ti.abs(w_n), 2.5 * mu_roll * ti.max(j_n, 0.0) / radius)
     return -ti.math.sign(w_n) * stop * n
-
-
-@ti.func
-def pivot_inertia(radius, inv_mass):
-    """1/I [1/(kg·m²)] of a solid sphere (I = 2/5·mR²); 0 for a body that stands firm."""
-    return 2.5 * inv_mass / (radius * radius)
 
 
 @ti.func
