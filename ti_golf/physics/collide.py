@@ -81,17 +81,15 @@ from ti_golf.physics.terrain import (
     terrain_position,
 )
 from ti_golf.physics.types import (
-    AirParams,
     BallState,
-    ContactParams,
     FlightRecord,
     ModelArrays,
     NeighbourLists,
-    StepParams,
     StepScratch,
-    TerrainParams,
+    float_array,
     kernel,
     of_ball,
+    scalars_of,
     zero3,
 )
 from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING
@@ -100,10 +98,10 @@ from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING
 @kernel
 def collision_step(
     # Model:
-    air: AirParams,
-    contact: ContactParams,
-    terrain: TerrainParams,
-    params: StepParams,
+    scalars: float_array,
+    t0: ti.f64,
+    dt: ti.f64,
+    steps: ti.i32,
     integrator: ti.template(),
     model: ModelArrays,
     # Neighbour lists and carried impulses in/out:
@@ -119,28 +117,30 @@ def collision_step(
     sweeps: ti.template(),
     last: ti.template(),
 ) -> ti.i32:
-    """Advance all balls by ``params.steps`` steps of ``params.h`` [s]: the free flight and warm
+    """Advance all balls by ``steps`` steps of ``params.h`` [s]: the free flight and warm
     start (with ``warm``), ``sweeps`` Jacobi sweeps, then (with ``last``) the last sweep, which
     finishes the step. A whole step of ``iterations`` sweeps is ``(True, iterations − 1, True)``.
 
-    Arguments: the air, contact and terrain parameters; the step's scalars ``params``
-    (:data:`~ti_golf.physics.types.StepParams`); the integrator code; the model's arrays
+    Arguments: the air, contact and terrain parameters and the step's scalars ``params``
+    (:data:`~ti_golf.physics.types.StepParams`) in one array, ``scalars`` (see
+    :func:`~ti_golf.physics.types.scalars_of`); the time at the start of the launch ``t0`` [s];
+    the time step ``dt`` [s] in f64; the steps to take, ``steps``; the integrator code; the model's arrays
     ``model``; the neighbour lists with the impulses they carry, ``lists``; the balls' ``state``
     and ``flight`` records; the step's ``scratch`` (:mod:`ti_golf.physics.types` documents each
     array's shape and units); and which part of a step this launch takes.
 
     In parallel (``serial`` False) the kernel takes exactly one step, or the part of one that
     ``warm``, ``sweeps`` and ``last`` name, so that a step of many sweeps can be split into
-    launches (see ``solver.sweep_launches``; ``params.steps``, ``skin``, ``dt``, ``v_cut`` and
+    launches (see ``solver.sweep_launches``; ``steps``, ``dt``, ``params.skin``, ``v_cut`` and
     ``r_cut`` are not read). It returns 1 (also left in ``scratch.flag[0]``) when some ball may
     come within reach of a ball missing from its neighbour lists next step: rebuild the lists
     (read it after the ``last`` part; the ``warm`` part clears it). The new positions are left in
     ``scratch.x_free`` (swap it with ``state.x``).
 
-    With ``serial`` the balls are stepped one after another, ``params.steps`` steps in one launch:
+    With ``serial`` the balls are stepped one after another, ``steps`` steps in one launch:
     for scenes so small that launches and rebuilding the lists through the grid's kernels cost far
     more than the step itself. Each step is the parallel one on the same data, the time [s]
-    advanced by ``params.dt`` from ``params.t0`` in f64, as the caller advances it between
+    advanced by ``dt`` from ``t0`` in f64, as the caller advances it between
     parallel steps; the neighbour lists are rebuilt in the kernel by testing every pair
     (:func:`~ti_golf.physics.links.relist_all_pairs`, with the skin [m]; the balls faster than
     ``v_cut`` [m/s] or bigger than ``r_cut`` [m] own no pair with the others, as in the grid's
@@ -151,6 +151,7 @@ def collision_step(
     With a terrain (``terrain.on``; ``model.heights`` its grid, else any 2×2 array;
     ``lists.surface_impulse`` then has a column more than there are planes) a ball that leaves the grid's
     extent or falls below ``terrain.kill`` is put out of bounds (velocities zeroed)."""
+    air, contact, terrain, params = scalars_of(scalars)
     h = params.h
     result = 0
     if ti.static(not serial):
@@ -165,7 +166,7 @@ def collision_step(
             contact,
             terrain,
             params,
-            ti.cast(params.t0, float),
+            ti.cast(t0, float),
             integrator,
             model,
             lists,
@@ -175,9 +176,9 @@ def collision_step(
         )
         result = scratch.flag[0]
     else:
-        t = params.t0
+        t = t0
         ti.loop_config(serialize=True)
-        for _ in range(params.steps):
+        for _ in range(steps):
             if scratch.flag[0] != 0:
                 relist_all_pairs(
                     state.x,
@@ -220,7 +221,7 @@ def collision_step(
                 serial_projection(params, contact.k_p, model, lists, state, scratch)
             for i in range(state.x.shape[0]):
                 state.x[i] = scratch.x_free[i]
-            t += params.dt
+            t += dt
     return result
 
 

@@ -48,16 +48,15 @@ from ti_golf.physics.types import (
     INV,
     BallState,
     BlockOrder,
-    ContactParams,
     ModelArrays,
     NeighbourLists,
-    StepParams,
     StepScratch,
-    TerrainParams,
+    float_array,
     int_array,
     ivec3,
     kernel,
     of_ball,
+    scalars_of,
     vec3f_array,
     zero3,
 )
@@ -192,9 +191,7 @@ def gauss_seidel_sweep(
     any_far: ti.i32,
     inv_cell: float,
     tasks: ti.i32,
-    contact: ContactParams,
-    terrain: TerrainParams,
-    params: StepParams,
+    scalars: float_array,
     model: ModelArrays,
     lists: NeighbourLists,
     state: BallState,
@@ -204,7 +201,9 @@ def gauss_seidel_sweep(
     """One Gauss–Seidel sweep of ``phase`` (:func:`pair_step`), colour after colour: the balls of
     every block of a colour, each block bottom-up in one thread (see the module's docstring;
     ``blocks`` from :func:`column_order`), meet the pairs they own (but, when ``any_far``, those
-    whose other ball was not beside them at the build), then their planes and the terrain."""
+    whose other ball was not beside them at the build), then their planes and the terrain, with the
+    parameters in ``scalars`` (:func:`.types.scalars_of`)."""
+    _, contact, terrain, params = scalars_of(scalars)
     buckets = blocks.start.shape[0] - 1
     for c in ti.static(range(COLOURS)):  # a top-level loop per colour: the colours in turn
         for t in range(tasks * ti.static(task_stride())):  # (the blocks spread over the threads: see spread_turns)
@@ -233,9 +232,7 @@ def gauss_seidel_sweep(
 def far_pairs(
     phase: ti.i32,
     inv_cell: float,
-    contact: ContactParams,
-    terrain: TerrainParams,
-    params: StepParams,
+    scalars: float_array,
     model: ModelArrays,
     lists: NeighbourLists,
     state: BallState,
@@ -243,6 +240,7 @@ def far_pairs(
 ):
     """The pairs the colours left out (their balls were farther apart than beside each other at the
     build), one ball after another in storage order."""
+    _, contact, terrain, params = scalars_of(scalars)
     ti.loop_config(serialize=True)
     for i in range(state.x.shape[0]):
         if phase == PROJECT:
@@ -456,8 +454,7 @@ def project_sweep(
     any_far: ti.i32,
     inv_cell: float,
     tasks: ti.i32,
-    contact: ContactParams,
-    params: StepParams,
+    scalars: float_array,
     model: ModelArrays,
     lists: NeighbourLists,
     state: BallState,
@@ -468,6 +465,7 @@ def project_sweep(
     :func:`gauss_seidel_sweep`, on the step's new positions ``scratch.x_free``
     (:func:`project_ball`). Returns 1 (and sets ``scratch.flag[0]``) when the lists must be
     rebuilt before the next step, as the step's end does (:func:`.collide.finish`)."""
+    _air, contact, _terrain, params = scalars_of(scalars)
     buckets = blocks.start.shape[0] - 1
     for c in ti.static(range(COLOURS)):
         for t in range(tasks * ti.static(task_stride())):  # (the blocks spread over the threads: see spread_turns)

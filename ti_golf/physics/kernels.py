@@ -21,15 +21,13 @@ from ti_golf.physics.terrain import outside, surface, surface_contact, terrain_p
 from ti_golf.physics.types import (
     AirParams,
     BallState,
-    ContactParams,
     FlightRecord,
     ModelArrays,
-    StepParams,
-    TerrainParams,
     float_array,
     int_array,
     kernel,
     of_ball,
+    scalars_of,
     vec,
     vec3,
     vec3_array,
@@ -153,18 +151,18 @@ def fly_to_landing(
 @kernel
 def advance(
     # Model:
-    air: AirParams,
-    contact: ContactParams,
-    terrain: TerrainParams,
-    params: StepParams,
+    scalars: float_array,
+    t0: ti.f64,
+    steps: ti.i32,
     integrator: ti.template(),
     model: ModelArrays,
     # State in/out:
     state: BallState,
     flight: FlightRecord,
 ):
-    """Advance every active ball by ``params.steps`` steps of ``params.h`` [s] from ``params.t0``; balls do not meet
-    each other, only the planes and the terrain (one thread per ball runs all the steps).
+    """Advance every active ball by ``steps`` steps of ``params.h`` [s] from ``t0`` [s]; balls do not meet
+    each other, only the planes and the terrain (one thread per ball runs all the steps). The air,
+    contact, terrain and step parameters come in one array, ``scalars`` (:func:`.types.scalars_of`).
 
     A ball that stays touching with speed and R|ω| below ``v_rest`` for ``t_rest`` is put at rest
     (velocities zeroed, no longer integrated). With a terrain (``terrain.on``; ``heights`` is its
@@ -172,7 +170,8 @@ def advance(
     ``terrain.kill`` is put out of bounds (velocities zeroed). Balls at rest or out of bounds are
     not touched.
     """
-    h, t0 = params.h, ti.cast(params.t0, float)
+    air, contact, terrain, params = scalars_of(scalars)
+    h, t_start = params.h, ti.cast(t0, float)
     v_inelastic = contact.v_bounce + 2.0 * params.gravity.norm() * h
     tracking = flight.landed.shape[0] == state.x.shape[0]  # else no ball is tracked: one-entry flight records, not read
     for i in range(state.x.shape[0]):
@@ -192,10 +191,12 @@ def advance(
                     flight.land_v[i],
                     model.launch_height[i],
                 )
-            for k in range(params.steps):
+            for k in range(steps):
                 S1 = step_free(lane_state(xi, vi, wi), h, integrator, coef, air, params.gravity)
                 x_free, v_free, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
-                fl, top, tl, lx, lv = track_flight(xi, vi, x_free, v_free, h, t0 + k * h, level, fl, top, tl, lx, lv)
+                fl, top, tl, lx, lv = track_flight(
+                    xi, vi, x_free, v_free, h, t_start + k * h, level, fl, top, tl, lx, lv
+                )
                 v1 = v_free
                 touching = 0
                 for p in range(model.plane_p.shape[0]):

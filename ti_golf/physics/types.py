@@ -214,9 +214,6 @@ StepParams = Deferred(
     lambda: ti.types.struct(
         gravity=vec3.get(),  # g [m/s²]
         h=float,  # time step [s]
-        t0=ti.f64,  # time at the start of the launch [s]
-        dt=ti.f64,  # the time step h in f64 [s], by which t advances
-        steps=ti.i32,  # steps to take in one launch (serial stepping)
         half_skin=float,  # half the neighbour lists' skin [m]
         skin=float,  # the neighbour lists' skin [m]
         v_rest=float,  # speed and R|ω| below which a touching ball counts as still [m/s]
@@ -226,7 +223,86 @@ StepParams = Deferred(
     ),
     "StepParams",
 )
-"""Scalars of a step of the collision solver, passed by value."""
+"""Scalars of a step of the collision solver (the launch's start time and step count are kernel
+arguments of their own: they change from launch to launch)."""
+
+SCALAR_STRUCTS = (AirParams, ContactParams, TerrainParams, StepParams)
+"""The structs whose members a kernel reads from one array of scalars (:func:`scalars_of`), in
+the array's order."""
+
+
+def scalar_slots(struct_type: Any) -> list[tuple[str, int, int, bool]]:
+    """Each member of ``struct_type`` (a Taichi struct type of floats, integers and vectors) as
+    (name, offset in the struct's run of the scalar array, width: 0 for a scalar, whether an
+    integer)."""
+    slots, k = [], 0
+    for name, dtype in struct_type.members.items():
+        width = dtype.get_shape()[0] if isinstance(dtype, ti.lang.matrix.MatrixType) else 0
+        slots.append((name, k, width, dtype in (ti.i32, ti.i64)))
+        k += max(width, 1)
+    return slots
+
+
+def scalar_count(struct_type: Any) -> int:
+    """How many scalars of the array a struct of ``struct_type`` takes."""
+    return sum(max(width, 1) for _, _, width, _ in scalar_slots(struct_type))
+
+
+def scalar_values(*structs: Any) -> list[float]:
+    """The members of ``structs`` (Python-scope struct values of :data:`SCALAR_STRUCTS`, in order),
+    one scalar after another, integers as floats: what :func:`scalars_of` reads back."""
+    values: list[float] = []
+    for kind, struct in zip(SCALAR_STRUCTS, structs, strict=True):
+        for name, _, width, _ in scalar_slots(kind.get()):
+            v = struct[name]
+            if width:
+                values.extend(float(v[c]) for c in range(width))
+            else:
+                values.append(float(v))
+    return values
+
+
+def scalar_runs() -> list[tuple[Any, int]]:
+    """Each struct type of :data:`SCALAR_STRUCTS` with the offset of its run in the scalar array."""
+    runs, base = [], 0
+    for kind in SCALAR_STRUCTS:
+        runs.append((kind.get(), base))
+        base += scalar_count(kind.get())
+    return runs
+
+
+@ti.func
+def scalar_member(s: ti.template(), k: ti.template(), width: ti.template(), integer: ti.template()):
+    """The struct member at offset ``k`` of the scalar array ``s``: a vector of ``width`` floats, an
+    integer or a float."""
+    if ti.static(width > 0):
+        return ti.Vector([s[k + c] for c in ti.static(range(width))], dt=float)
+    elif ti.static(integer):
+        return ti.cast(s[k], ti.i32)
+    else:
+        return s[k]
+
+
+@ti.func
+def struct_at(kind: ti.template(), s: ti.template(), base: ti.template()):
+    """The struct of type ``kind`` whose members start at offset ``base`` of the scalar array ``s``."""
+    return kind(*[scalar_member(s, base + k, w, i) for _, k, w, i in ti.static(scalar_slots(kind))])
+
+
+@ti.func
+def scalars_of(s: ti.template()):
+    """The air, contact, terrain and step parameters (:data:`SCALAR_STRUCTS`) from the scalar array
+    ``s`` that :func:`scalar_values` filled. The kernels of a step take them as one array rather
+    than as four struct arguments, which Taichi would set up member by member from Python at
+    every launch (the docs' performance page gives the cost)."""
+    runs = ti.static(scalar_runs())
+    return (
+        struct_at(runs[0][0], s, runs[0][1]),
+        struct_at(runs[1][0], s, runs[1][1]),
+        struct_at(runs[2][0], s, runs[2][1]),
+        struct_at(runs[3][0], s, runs[3][1]),
+    )
+
 
 ModelArrays = Deferred(
     lambda: ti.types.argpack(

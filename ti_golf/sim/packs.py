@@ -3,11 +3,16 @@
 A Taichi argument pack holds references to arrays; making one costs tens of microseconds, so
 :class:`Packs` keeps each pack until one of its arrays is replaced (the solver swaps the state's
 positions with its scratch every step, and reorders per-ball arrays when it sorts the balls).
+It also keeps the array of the kernels' scalar parameters (:meth:`Packs.scalars`), filled again
+only when they change.
 """
 
 from __future__ import annotations
 
 from typing import Any
+
+import numpy as np
+import taichi as ti
 
 from ti_golf.physics.types import (
     BallState,
@@ -15,7 +20,9 @@ from ti_golf.physics.types import (
     ModelArrays,
     NeighbourLists,
     StepScratch,
+    scalar_values,
 )
+from ti_golf.runtime import np_float
 
 
 class Packs:
@@ -26,6 +33,7 @@ class Packs:
 
     def __init__(self) -> None:
         self._kept: dict[tuple[Any, ...], tuple[tuple[Any, ...], Any]] = {}
+        self._scalars: tuple[tuple[Any, ...], Any] | None = None  # (the structs, their array)
 
     def get(self, kind: Any, **members: Any) -> Any:
         """The pack of type ``kind`` holding ``members`` (made now if these arrays have none yet).
@@ -47,6 +55,19 @@ class Packs:
         pack = kind(**members)
         self._kept[key] = (shapes, pack)
         return pack
+
+    def scalars(self, air: Any, contact: Any, terrain: Any, params: Any) -> Any:
+        """The array of scalars (:func:`~ti_golf.physics.types.scalars_of`) of these air, contact,
+        terrain and step parameters (Python-scope structs), filled again only when one of them is
+        another object than at the last call: a struct's members do not change once it is made."""
+        structs = (air, contact, terrain, params)
+        kept = self._scalars
+        if kept is None or any(a is not b for a, b in zip(kept[0], structs, strict=True)):
+            values = np.asarray(scalar_values(*structs), dtype=np_float())
+            array = kept[1] if kept is not None else ti.ndarray(float, values.size)
+            array.from_numpy(values)
+            self._scalars = (structs, array)
+        return self._scalars[1]
 
     def clear(self) -> None:
         """Drop every kept pack, and with them their references to arrays about to be replaced."""

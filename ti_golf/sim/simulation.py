@@ -414,9 +414,6 @@ class Simulation:
             params = StepParams(
                 gravity=m.gravity,
                 h=m.dt,
-                t0=s.t,
-                dt=m.dt,
-                steps=int(n),
                 half_skin=0.0,
                 skin=0.0,
                 v_rest=w.v_rest,
@@ -425,10 +422,9 @@ class Simulation:
                 r_cut=0.0,
             )
             kernels.advance(
-                m.air,
-                m.contact,
-                m.terrain_params,
-                params,
+                self._packs.scalars(m.air, m.contact, m.terrain_params, params),
+                s.t,
+                int(n),
                 m.integrator,
                 self._packs.model(m),
                 self._packs.state(s),

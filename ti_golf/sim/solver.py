@@ -3,6 +3,8 @@ sweeps and the end-of-step position update, in that fixed order (see physics/col
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import taichi as ti
 
@@ -203,6 +205,7 @@ class CollisionSolver:
         self._rebuild = True
         self._ids: ti.Ndarray | None = None  # the state's storage order at the last build (see pairs)
         self._hash = None  # the grid hash's (origin, stride) at the last build (grid.hash_strides)
+        self._params: tuple[Any, Any] | None = None  # (the scene, its StepParams) (see _step_params)
 
     def build(self, state: State) -> None:
         """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
@@ -529,7 +532,7 @@ class CollisionSolver:
         only finishes the step, then ``colour.PROJECTIONS`` passes of the position projection.
         Returns whether the lists must be rebuilt."""
         collide.collision_step(*arguments, False, True, 0, False)
-        air, contact, terrain, params, _, model, lists, state, _, scratch = arguments
+        scalars, _, _, _, _, model, lists, state, _, scratch = arguments
         inv_cell = 1.0 / self.cell
         any_far = int(self.far_owners > 0)
         phases = colour.step_phases(iterations)
@@ -538,43 +541,29 @@ class CollisionSolver:
         for phase in phases:
             with plain_compile():  # see runtime.plain_compile
                 colour.gauss_seidel_sweep(
-                    phase, any_far, inv_cell, tasks, contact, terrain, params, model, lists, state, scratch, blocks
+                    phase, any_far, inv_cell, tasks, scalars, model, lists, state, scratch, blocks
                 )
             if any_far:
-                colour.far_pairs(phase, inv_cell, contact, terrain, params, model, lists, state, scratch)
+                colour.far_pairs(phase, inv_cell, scalars, model, lists, state, scratch)
         collide.collision_step(*arguments, False, False, 0, True)
         rebuild = 0
         for _ in range(colour.PROJECTIONS):
             if any_far:
-                colour.far_pairs(colour.PROJECT, inv_cell, contact, terrain, params, model, lists, state, scratch)
-            rebuild = colour.project_sweep(
-                any_far, inv_cell, tasks, contact, params, model, lists, state, scratch, blocks
-            )
+                colour.far_pairs(colour.PROJECT, inv_cell, scalars, model, lists, state, scratch)
+            rebuild = colour.project_sweep(any_far, inv_cell, tasks, scalars, model, lists, state, scratch, blocks)
         return rebuild
 
     def _arguments(self, m: Model, s: State, steps: int) -> tuple:
-        """The arguments of ``collide.collision_step`` before ``serial``: the model, the lists, the
-        state, the flight record and the scratch."""
-        w = m.scene.world
-        p = StepParams(
-            gravity=m.gravity,
-            h=m.dt,
-            t0=s.t,
-            dt=m.dt,
-            steps=steps,
-            half_skin=0.5 * self.skin,
-            skin=self.skin,
-            v_rest=w.v_rest,
-            t_rest=w.t_rest,
-            v_cut=self.v_cut,
-            r_cut=self.r_cut,
-        )
+        """The arguments of ``collide.collision_step`` before ``serial``: the array of the air,
+        contact, terrain and step parameters, the launch's start time [s], the time step [s] and
+        the steps to take, the integrator, the model, the lists, the state, the flight record and
+        the scratch."""
         packs = self._packs
         return (
-            m.air,
-            m.contact,
-            m.terrain_params,
-            p,
+            packs.scalars(m.air, m.contact, m.terrain_params, self._step_params(m)),
+            s.t,
+            m.dt,
+            steps,
             m.integrator,
             packs.model(m),
             packs.lists(self),
@@ -582,3 +571,21 @@ class CollisionSolver:
             packs.flight(s),
             packs.scratch(self),
         )
+
+    def _step_params(self, m: Model) -> Any:
+        """The step's :data:`~ti_golf.physics.types.StepParams` for the model's scene, made again
+        only when the model takes another scene (see ``Model.set_parameters``)."""
+        if self._params is None or self._params[0] is not m.scene:
+            w = m.scene.world
+            params = StepParams(
+                gravity=m.gravity,
+                h=m.dt,
+                half_skin=0.5 * self.skin,
+                skin=self.skin,
+                v_rest=w.v_rest,
+                t_rest=w.t_rest,
+                v_cut=self.v_cut,
+                r_cut=self.r_cut,
+            )
+            self._params = (m.scene, params)
+        return self._params[1]
