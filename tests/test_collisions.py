@@ -1362,6 +1362,25 @@ def test_a_ball_spinning_on_a_ball_slows_at_five_halves_mu_roll_g_over_r(serial)
 
 
 @SERIAL_OR_PARALLEL
+@pytest.mark.parametrize("closed", [0.5, 0.999])
+def test_a_plastic_pair_closing_its_gap_within_a_step_ends_touching(serial, closed):
+    # reference: a perfectly plastic impact (B.9 with e = 0) of two equal balls leaves them
+    # touching, both at the mean of their velocities. Here they start apart by a fraction
+    # ``closed`` of what they close in one step, so the contact is met within the first step: the
+    # sweeps close the gap exactly, and the next step stops the approach. The gap left is round-off
+    # of positions near 1 m (1e-12 m); it was up to h·|v_a − v_b| (0.3–0.6 mm here) while the
+    # restitution pass stopped such a pair before it touched.
+    R, h, v_a, v_b = 0.02, 0.001, 0.5, -0.1
+    gap = closed * (v_a - v_b) * h
+    sc = _pivot_scene(0.0, h, gravity=[0.0, 0.0, 0.0], e=0.0)
+    sim = tg.Simulation(sc, x=[[0.0, 1.0, 0.0], [2.0 * R + gap, 1.0, 0.0]], v=[[v_a, 0, 0], [v_b, 0, 0]], radius=R)
+    sim.solver = CollisionSolver(sim.model, serial=serial)
+    sim.step(10)
+    np.testing.assert_allclose(sim.v[:, 0], 0.5 * (v_a + v_b), rtol=1e-12)
+    assert sim.x[1, 0] - sim.x[0, 0] - 2.0 * R == pytest.approx(0.0, abs=1e-12)
+
+
+@SERIAL_OR_PARALLEL
 def test_two_balls_meeting_head_on_lose_relative_spin_and_keep_their_total_spin(serial):
     # reference: two equal balls (no gravity) meet head-on at v, plastically (e = 0), each spinning
     # about the line of their centres. Their contact takes the normal impulse λ = m_red·v with

@@ -119,14 +119,18 @@ def pair_step(
     ``BOUNCE``: restitution, once per step after the sweeps, for a contact that approached faster
     than ``v_inelastic`` and is pressed (λ > 0): toward v_n = −e·v_n0 (B.9), again through the
     clamped λ. Slower approaches are resting contacts and never bounce: a resting contact gains no
-    energy. ``friction`` = :data:`CENTRE_FRICTION`: the friction stops the centres' tangential
+    energy. A plastic pair (e = 0) still apart at the step's start is left as the sweeps made it,
+    closing its gap exactly within the step (the next step stops it, touching): v_n = 0 would stop
+    it short, up to h·|v_n0| apart. With e > 0 such a pair bounces from where it is, up to
+    h·|v_n0| before touching, as with the speculative contacts of other engines: moving it to the
+    contact first would take speed from the bounce. ``friction`` = :data:`CENTRE_FRICTION`: the friction stops the centres' tangential
     velocity instead (:func:`centre_friction`)."""
     m_eff = 1.0 / (inv_m_a + inv_m_b)
     v_n = (v_a - v_b).dot(n)
     target = -ti.max(gap, 0.0) / h
     if phase == BOUNCE:
         target = v_n  # no change
-        if v_n0 < -v_inelastic and lam > 0.0:
+        if v_n0 < -v_inelastic and lam > 0.0 and (e > 0.0 or gap <= 0.0):
             target = -e * v_n0
     lam_new = ti.max(lam + m_eff * (target - v_n), 0.0)
     P = (lam_new - lam) * n
