@@ -1362,12 +1362,12 @@ def test_a_ball_spinning_on_a_ball_slows_at_five_halves_mu_roll_g_over_r(serial)
 
 
 @SERIAL_OR_PARALLEL
-@pytest.mark.parametrize("closed", [0.5, 0.999])
+@pytest.mark.parametrize("closed", [0.5, 0.999, 1.001])
 def test_a_plastic_pair_closing_its_gap_within_a_step_ends_touching(serial, closed):
     # reference: a perfectly plastic impact (B.9 with e = 0) of two equal balls leaves them
     # touching, both at the mean of their velocities. Here they start apart by a fraction
-    # ``closed`` of what they close in one step, so the contact is met within the first step: the
-    # sweeps close the gap exactly, and the next step stops the approach. The gap left is round-off
+    # ``closed`` of what they close in one step, so the contact is met within the first step (the
+    # second for 1.001): the sweeps close the gap exactly, and the next step stops the approach. The gap left is round-off
     # of positions near 1 m (1e-12 m); it was up to h·|v_a − v_b| (0.3–0.6 mm here) while the
     # restitution pass stopped such a pair before it touched.
     R, h, v_a, v_b = 0.02, 0.001, 0.5, -0.1
