@@ -3,8 +3,8 @@
 A Taichi argument pack holds references to arrays; making one costs tens of microseconds, so
 :class:`Packs` keeps each pack until one of its arrays is replaced (the solver swaps the state's
 positions with its scratch every step, and reorders per-ball arrays when it sorts the balls).
-It also keeps the array of the kernels' scalar parameters (:meth:`Packs.scalars`), filled again
-only when they change.
+It also keeps the array of the kernels' scalar parameters (:meth:`Packs.step_scalars`), filled
+again only when they change.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from ti_golf.physics.types import (
     FlightRecord,
     ModelArrays,
     NeighbourLists,
+    StepParams,
     StepScratch,
     scalar_values,
 )
@@ -34,6 +35,7 @@ class Packs:
     def __init__(self) -> None:
         self._kept: dict[tuple[Any, ...], tuple[tuple[Any, ...], Any]] = {}
         self._scalars: tuple[tuple[Any, ...], Any] | None = None  # (the structs, their array)
+        self._step: tuple[tuple[Any, ...], Any] | None = None  # ((scene, skin, v_cut, r_cut), StepParams)
 
     def get(self, kind: Any, **members: Any) -> Any:
         """The pack of type ``kind`` holding ``members`` (made now if these arrays have none yet).
@@ -68,6 +70,27 @@ class Packs:
             array.from_numpy(values)
             self._scalars = (structs, array)
         return self._scalars[1]
+
+    def step_scalars(self, m: Any, skin: float = 0.0, v_cut: float = 0.0, r_cut: float = 0.0) -> Any:
+        """:meth:`scalars` of a :class:`~ti_golf.sim.model.Model`'s air, contact and terrain and of
+        a step's :data:`~ti_golf.physics.types.StepParams` with the neighbour lists' ``skin`` [m],
+        ``v_cut`` [m/s] and ``r_cut`` [m] (0 without lists); the step's struct is made again only
+        when the model takes another scene (``Model.set_parameters``) or these change."""
+        kept = self._step
+        if kept is None or kept[0][0] is not m.scene or kept[0][1:] != (skin, v_cut, r_cut):
+            w = m.scene.world
+            params = StepParams(
+                gravity=m.gravity,
+                h=m.dt,
+                half_skin=0.5 * skin,
+                skin=skin,
+                v_rest=w.v_rest,
+                t_rest=w.t_rest,
+                v_cut=v_cut,
+                r_cut=r_cut,
+            )
+            self._step = kept = ((m.scene, skin, v_cut, r_cut), params)
+        return self.scalars(m.air, m.contact, m.terrain_params, kept[1])
 
     def clear(self) -> None:
         """Drop every kept pack, and with them their references to arrays about to be replaced."""

@@ -17,7 +17,6 @@ import taichi as ti
 
 from ti_golf.errors import ConfigError, SimulationError
 from ti_golf.physics import kernels
-from ti_golf.physics.types import StepParams
 from ti_golf.runtime import available_memory, ensure_init, np_float
 from ti_golf.scene.balls import ball_count, block_size, build_balls
 from ti_golf.scene.document import with_changes
@@ -405,24 +404,14 @@ class Simulation:
     # -- stepping ---------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
         """Advance ``n`` time steps; raises SimulationError naming the balls that went non-finite."""
-        m, s, w = self.model, self.state, self.scene.world
+        m, s = self.model, self.state
         if self.solver is not None:
             self.solver.advance(m, s, int(n))
             self.check_finite()
             return
         with whole_steps():  # the kernel, then t and the step count, or none of them
-            params = StepParams(
-                gravity=m.gravity,
-                h=m.dt,
-                half_skin=0.0,
-                skin=0.0,
-                v_rest=w.v_rest,
-                t_rest=w.t_rest,
-                v_cut=0.0,
-                r_cut=0.0,
-            )
             kernels.advance(
-                self._packs.scalars(m.air, m.contact, m.terrain_params, params),
+                self._packs.step_scalars(m),
                 s.t,
                 int(n),
                 m.integrator,

@@ -3,8 +3,6 @@ sweeps and the end-of-step position update, in that fixed order (see physics/col
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 import taichi as ti
 
@@ -14,7 +12,6 @@ from ti_golf.physics.types import (
     BlockOrder,
     GridParams,
     GridScratch,
-    StepParams,
     pair_columns,
     vec3,
     vec3f,
@@ -205,7 +202,6 @@ class CollisionSolver:
         self._rebuild = True
         self._ids: ti.Ndarray | None = None  # the state's storage order at the last build (see pairs)
         self._hash = None  # the grid hash's (origin, stride) at the last build (grid.hash_strides)
-        self._params: tuple[Any, Any] | None = None  # (the scene, its StepParams) (see _step_params)
 
     def build(self, state: State) -> None:
         """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
@@ -560,7 +556,7 @@ class CollisionSolver:
         the scratch."""
         packs = self._packs
         return (
-            packs.scalars(m.air, m.contact, m.terrain_params, self._step_params(m)),
+            packs.step_scalars(m, self.skin, self.v_cut, self.r_cut),
             s.t,
             m.dt,
             steps,
@@ -571,21 +567,3 @@ class CollisionSolver:
             packs.flight(s),
             packs.scratch(self),
         )
-
-    def _step_params(self, m: Model) -> Any:
-        """The step's :data:`~ti_golf.physics.types.StepParams` for the model's scene, made again
-        only when the model takes another scene (see ``Model.set_parameters``)."""
-        if self._params is None or self._params[0] is not m.scene:
-            w = m.scene.world
-            params = StepParams(
-                gravity=m.gravity,
-                h=m.dt,
-                half_skin=0.5 * self.skin,
-                skin=self.skin,
-                v_rest=w.v_rest,
-                t_rest=w.t_rest,
-                v_cut=self.v_cut,
-                r_cut=self.r_cut,
-            )
-            self._params = (m.scene, params)
-        return self._params[1]

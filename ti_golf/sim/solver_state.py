@@ -14,9 +14,9 @@ from ti_golf.sim.packs import Packs
 from ti_golf.sim.solver import CollisionSolver
 from ti_golf.sim.state import State
 
-NOT_SAVED = ("_model", "_packs", "_ids", "_params", "serial", "reorder", "loop_cap", "gauss_seidel")
+NOT_SAVED = ("_model", "_packs", "_ids", "serial", "reorder", "loop_cap", "gauss_seidel")
 """Attributes of a :class:`CollisionSolver` that its constructor sets from its arguments, the
-model and the backend, and the step's parameters, made from the model when first needed."""
+model and the backend."""
 
 
 def solver_arrays(solver: CollisionSolver) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
