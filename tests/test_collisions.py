@@ -15,7 +15,7 @@ from conftest import ON_CPU, SERIAL_OR_PARALLEL
 import ti_golf as tg
 from ti_golf.bench.collide import pile_scene
 from ti_golf.bench.pit import pit_scene
-from ti_golf.physics import apart, grid, sort
+from ti_golf.physics import apart, grid, links, sort
 from ti_golf.scene.schema import AT_REST, Plane
 from ti_golf.sim.solver import CollisionSolver
 
@@ -574,7 +574,10 @@ def test_a_pile_that_tracks_no_flight_keeps_no_flight_record_and_steps_the_same(
 def test_rebuild_keeps_each_pairs_resting_impulse(method):
     # the warm start needs each pair's accumulated impulse λ to survive a rebuild of the lists
     # (rebuilt in place, widened when a list overflows): the same pair keeps the same λ, and under
-    # Gauss–Seidel the same friction impulse (on the ball of the lower id: a pair can change owner)
+    # Gauss–Seidel the friction impulse F (on the ball of the lower id: a pair can change owner)
+    # that the next step uses of it, F in the tangent plane of the pair's normal n and at most μ·λ
+    # long (contact.clamp_friction), kept in the stash to 1/links.FRICTION_STEPS of μ·λ in each of
+    # two tangent components
     x, r = _random_sets()["clustered"]
     sc = scene("world.gravity=[0,-9.81,0]", "world.ground=true", "contact.mu=0.3", f"contact.solver={method}")
     sim = tg.Simulation(sc, x=x[:400] * 0.3 + [0, 0.2, 0], radius=np.full(400, 0.02))
@@ -593,6 +596,16 @@ def test_rebuild_keeps_each_pairs_resting_impulse(method):
                 pairs[(min(i, j), max(i, j))] = (lam[p], *(F[p] if i < j else -F[p]))
         return pairs
 
+    x, mu = sim.state.x.to_numpy(), 0.3  # (storage order, as the lists)
+
+    def used(pair, values):  # what the next step uses of a pair's (λ, F): F clamped as clamp_friction does
+        lam, F = values[0], np.asarray(values[1:], float)
+        n = x[pair[0]] - x[pair[1]]
+        n /= np.linalg.norm(n)
+        F_t = F - F.dot(n) * n
+        size = np.linalg.norm(F_t)
+        return lam, F_t * min(1.0, mu * lam / size) if size > 0.0 else F_t
+
     before = by_pair()
     assert sum(v[0] > 0 for v in before.values()) > 20
     if with_friction:
@@ -602,10 +615,35 @@ def test_rebuild_keeps_each_pairs_resting_impulse(method):
         solver.capacity, solver.pair_capacity = capacity or solver.capacity, pair_capacity
         solver.build(sim.state)
         after = by_pair()
-        assert all(after[p] == before.get(p, (0.0, 0.0, 0.0, 0.0)) for p in after)  # new pairs start at 0
+        for p in after:  # new pairs start at 0
+            lam, F = after[p][0], np.asarray(after[p][1:])
+            lam0, F0 = used(p, before.get(p, (0.0, 0.0, 0.0, 0.0)))
+            assert lam == lam0
+            # f32 storage (2^-24 of |F|) and the stash's steps of μ·λ/FRICTION_STEPS in each of two components
+            tol = 1e-7 * np.linalg.norm(F0) + 0.71 * np.sqrt(2) * mu * lam / links.FRICTION_STEPS
+            assert np.linalg.norm(F - F0) <= tol
         assert sum(after[p][0] > 0 for p in after) == sum(before[p][0] > 0 for p in before)  # no pressing pair lost
         assert sum(any(after[p][1:]) for p in after) == sum(any(before[p][1:]) for p in before)
         before = after
+    if not with_friction:
+        return
+    # the heap turned a quarter turn about the vertical: the pairs keep their distances, but many
+    # change owner (the ball behind the other along their main axis), and their friction is
+    # carried from the other ball's stash, in its own tangent basis and with the opposite sign
+    owners = {(i, int(j)) for i in range(len(x)) for j in solver.upper.to_numpy()[i, : _n_upper(solver)[i]]}
+    c = x.mean(axis=0)
+    x = np.stack([x[:, 2] - c[2] + c[0], x[:, 1], c[0] - x[:, 0] + c[2]], axis=1)
+    sim.state.x.from_numpy(x)
+    solver.build(sim.state)
+    after = by_pair()
+    turned = {(i, int(j)) for i in range(len(x)) for j in solver.upper.to_numpy()[i, : _n_upper(solver)[i]]}
+    changed = [p for p in after if (p[1], p[0]) in owners and p in turned or p in owners and (p[1], p[0]) in turned]
+    assert sum(any(after[p][1:]) for p in changed) > 20
+    for p in after:
+        lam0, F0 = used(p, before.get(p, (0.0, 0.0, 0.0, 0.0)))
+        assert after[p][0] == lam0
+        tol = 1e-7 * np.linalg.norm(F0) + 0.71 * np.sqrt(2) * mu * lam0 / links.FRICTION_STEPS
+        assert np.linalg.norm(np.asarray(after[p][1:]) - F0) <= tol
 
 
 def test_widening_the_pair_tables_never_holds_the_old_and_the_new_together(monkeypatch):
@@ -1136,8 +1174,8 @@ def test_the_memory_guard_counts_the_bytes_the_pair_tables_take(method):
     # table_bytes is the memory guard's estimate (above) and the performance page's byte count: it must
     # match the tables the solver allocates, whatever they keep (per list entry a neighbour or a
     # link; per pair its resting impulse and its row of the sweep's table, the inverse distance and
-    # gap, and under Jacobi the impulse too; under Gauss–Seidel its friction impulse, in two tables
-    # once a rebuild has carried it from one into the other).
+    # gap, and under Jacobi the impulse too; under Gauss–Seidel its friction impulse, one table that
+    # a rebuild carries it into from the stash).
     import ti_golf.sim.solver as solver_module
 
     x, _ = _random_sets()["clustered"]
@@ -1149,7 +1187,7 @@ def test_the_memory_guard_counts_the_bytes_the_pair_tables_take(method):
     sim.step(1)  # a rebuild
     s = sim.solver
     assert s.rebuilds == 2 and s.impulse.shape[1] == (2 if method == "gauss_seidel" else 5)
-    tables = (s.upper, s.lower, s.lam, s.impulse) + ((s.friction, s.friction_back) if s.gauss_seidel else ())
+    tables = (s.upper, s.lower, s.lam, s.impulse) + ((s.friction,) if s.gauss_seidel else ())
     allocated = sum(a.to_numpy().nbytes for a in tables)
     assert s.capacity[0] >= 3 and s.pair_capacity >= len(x[:400])
     assert allocated == solver_module.table_bytes(400, s.capacity, s.pair_capacity, s.gauss_seidel)

@@ -14,6 +14,7 @@ from ti_golf.physics.apart import APART_MAX, is_apart
 from ti_golf.physics.grid import owns, pair_reach
 from ti_golf.physics.sort import bucket_starts
 from ti_golf.physics.types import (
+    FRIC,
     ID,
     LAM,
     float_array,
@@ -23,6 +24,7 @@ from ti_golf.physics.types import (
     kernel,
     of_ball,
     pair_table,
+    vec3_array,
     vec3f_array,
 )
 
@@ -92,11 +94,20 @@ def pair_starts(first: int_array, chunk_start: int_array) -> ti.i32:
 
 
 @kernel
-def stash(upper: int_table, first: int_array, lam: float_array, scratch: pair_table):
+def stash(
+    upper: int_table,
+    first: int_array,
+    lam: float_array,
+    scratch: pair_table,
+    with_friction: ti.template(),
+    x: vec3_array,
+    friction: vec3f_array,
+    mu: float,
+):
     """Keep every pair's (accumulated impulse, neighbour id) in ``scratch``, laid out as the pair
-    tables (see :func:`stash_ball`)."""
+    tables, and ``with_friction`` its friction impulse (see :func:`stash_ball`)."""
     for i in range(first.shape[0] - 1):
-        stash_ball(i, upper, first, lam, scratch, 0)
+        stash_ball(i, upper, first, lam, scratch, 0, with_friction, x, friction, mu)
 
 
 @ti.func
@@ -107,22 +118,116 @@ def stash_ball(
     lam: ti.template(),
     scratch: ti.template(),
     width,
+    with_friction: ti.template(),
+    x: ti.template(),
+    friction: ti.template(),
+    mu,
 ):
     """Keep the (accumulated impulse, neighbour id) of every pair that ball i owns in the columns
     ``LAM`` and ``ID`` of ``scratch`` (the sweep's table, free between steps) so that the lists
     and the pair tables can be rebuilt in place: in the pair tables' rows of ball i, or with
     ``width`` > 0 in rows i · width onwards, followed by the id −1 when the list is shorter (the
-    serial rebuild, which overwrites ``first`` before it carries the impulses over). The pairs'
-    friction impulses (of the Gauss–Seidel sweeps) stay in the old friction table, in the same
-    rows (see :func:`carry_ball`). The id is exact in f32 as well below 2^24
-    (``ID_EXACT_F32``)."""
+    serial rebuild, which overwrites ``first`` before it carries the impulses over). The id is
+    exact in f32 as well below 2^24 (``ID_EXACT_F32``). With ``with_friction`` (the Gauss–Seidel
+    sweeps, ``width`` 0) each pair's friction impulse from ``friction`` is kept beside them, in
+    32 bits (:func:`friction_bits`, from the positions ``x`` and friction coefficient ``mu``), so
+    that a rebuild needs no second friction table to carry it into."""
     p0, count = first[i], listed(first, i)
     if width > 0:
         p0 = i * width
         if count < width:
             scratch[p0 + count, ID] = -1.0
     for k in range(count):
-        scratch[p0 + k, LAM], scratch[p0 + k, ID] = lam[first[i] + k], ti.cast(upper[i, k], float)
+        j, p = upper[i, k], first[i] + k
+        bits = 0
+        if ti.static(with_friction):
+            bits = friction_bits(friction[p], x[i] - x[j], mu * lam[p])
+        put_stashed(scratch, p0 + k, lam[p], j, bits, with_friction)
+
+
+@ti.func
+def put_stashed(scratch: ti.template(), p, lam, j, bits, with_friction: ti.template()):
+    """Write a stashed pair into row p of ``scratch``: its resting impulse ``lam`` into ``LAM``, its
+    neighbour's id j into ``ID`` and, ``with_friction``, the 32 ``bits`` of its friction impulse:
+    in f64 into ``ID`` too, the id in the upper 32 bits of the float's 64 (never read as a
+    number), in f32 into ``FRIC``."""
+    scratch[p, LAM] = lam
+    if ti.static(with_friction and is_f64()):
+        scratch[p, ID] = ti.bit_cast((ti.cast(j, ti.i64) << 32) | ti.cast(ti.cast(bits, ti.u32), ti.i64), ti.f64)
+    else:
+        scratch[p, ID] = ti.cast(j, float)
+        if ti.static(with_friction):
+            scratch[p, FRIC] = ti.bit_cast(bits, ti.f32)
+
+
+@ti.func
+def stashed_id_bits(scratch: ti.template(), p, with_friction: ti.template()):
+    """(neighbour id, friction bits) of the stashed pair in row p of ``scratch`` (see
+    :func:`put_stashed`; the bits are 0 without ``with_friction``)."""
+    j, bits = 0, 0
+    if ti.static(with_friction and is_f64()):
+        word = ti.bit_cast(scratch[p, ID], ti.i64)
+        j, bits = ti.cast(word >> 32, ti.i32), ti.cast(word, ti.i32)  # (the cast keeps the low 32 bits)
+    else:
+        j = ti.cast(scratch[p, ID], ti.i32)
+        if ti.static(with_friction):
+            bits = ti.bit_cast(scratch[p, FRIC], ti.i32)
+    return j, bits
+
+
+FRICTION_STEPS = 32767
+"""Steps of each tangent component of a stashed friction impulse from 0 to its bound μ·λ (a signed
+16-bit integer each, :func:`friction_bits`)."""
+
+
+@ti.func
+def tangent_basis(n):
+    """Two unit vectors that make a right-handed orthonormal basis with the unit vector n (Duff et
+    al. 2017, "Building an orthonormal basis, revisited"): a function of n alone, so that the
+    stash and the carry of a rebuild, which see the same positions, use the same basis."""
+    s = 1.0 if n[2] >= 0.0 else -1.0
+    a = -1.0 / (s + n[2])
+    b = n[0] * n[1] * a
+    t1 = ti.Vector([1.0 + s * n[0] * n[0] * a, s * b, -s * n[0]])
+    t2 = ti.Vector([b, s + n[1] * n[1] * a, -n[1]])
+    return t1, t2
+
+
+@ti.func
+def friction_bits(F, d, bound):
+    """A pair's friction impulse F [N·s] (f32) in 32 bits, for a pair whose centres are ``d`` [m]
+    apart (owner minus neighbour) and whose friction is at most ``bound`` = μ·λ [N·s]: its
+    components along :func:`tangent_basis` of the normal d/|d|, as shares of ``bound`` in
+    steps of 1/``FRICTION_STEPS`` (a signed 16-bit integer each, the first in the low bits).
+    What the next step uses of F is kept whole but for those steps: the warm start and the first
+    sweep take F in the tangent plane of the same normal and at most ``bound`` long
+    (:func:`.contact.clamp_friction`), so the normal part and the part beyond ``bound`` are
+    dropped here. 0 when ``bound`` or d is 0 (F is then not used)."""
+    bits = 0
+    dd = d.norm_sqr()
+    if bound > 0.0 and dd > 0.0:
+        t1, t2 = tangent_basis(d / ti.sqrt(dd))
+        Fv = ti.cast(F, float)
+        u, w = Fv.dot(t1) / bound, Fv.dot(t2) / bound
+        size = ti.sqrt(u * u + w * w)
+        if size > 1.0:
+            u, w = u / size, w / size
+        qu, qw = ti.cast(ti.round(u * FRICTION_STEPS), ti.i32), ti.cast(ti.round(w * FRICTION_STEPS), ti.i32)
+        bits = (qu & 0xFFFF) | (qw << 16)
+    return bits
+
+
+@ti.func
+def friction_from_bits(bits, d, bound):
+    """The friction impulse [N·s] (f32) that :func:`friction_bits` kept in ``bits`` for the same
+    ``d`` and ``bound``."""
+    F = ti.Vector([0.0, 0.0, 0.0])
+    dd = d.norm_sqr()
+    if bound > 0.0 and dd > 0.0:
+        t1, t2 = tangent_basis(d / ti.sqrt(dd))
+        qu, qw = (bits << 16) >> 16, bits >> 16  # (arithmetic shifts: the signs come back)
+        F = (bound / FRICTION_STEPS) * (ti.cast(qu, float) * t1 + ti.cast(qw, float) * t2)
+    return ti.cast(F, ti.f32)
 
 
 @kernel
@@ -137,19 +242,21 @@ def link_and_carry(
     moved: ti.template(),
     old_id: int_array,
     with_friction: ti.template(),
-    old_friction: vec3f_array,
+    x: vec3_array,
     friction: vec3f_array,
+    mu: float,
 ):
     """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
     :func:`stash` and :func:`carry_ball`; ``stash_first``: their layout) to the new ones, in one
     launch (neither writes what the other reads). With ``moved`` the balls were stored in a new
     order since the stash: ball i was ball ``old_id[i]`` of the stashed lists. With
     ``with_friction`` the pairs' friction impulses (of the Gauss–Seidel sweeps) are carried from
-    the old lists' table ``old_friction`` into ``friction``, a table of its own."""
+    the stash into ``friction`` too (``x``: the positions, ``mu``: the friction coefficient, as
+    at the stash)."""
     bits = slot_bits(upper.shape[1])
     for i in range(lower.shape[1]):
         link_ball(i, bits, upper, first, lower, n_lower)
-        carry_ball(i, stashed, stash_first, 0, upper, first, lam, old_id, moved, with_friction, old_friction, friction)
+        carry_ball(i, stashed, stash_first, 0, upper, first, lam, old_id, moved, with_friction, x, friction, mu)
 
 
 @ti.func
@@ -164,53 +271,50 @@ def carry_ball(
     old_id: ti.template(),
     moved: ti.template(),
     with_friction: ti.template(),
-    old_friction: ti.template(),
+    x: ti.template(),
     friction: ti.template(),
+    mu,
 ):
     """Carry the accumulated impulse of each pair ball i owns in the new lists from the stashed old
     ones (see :func:`stash_ball`: laid out by ``stash_first``, or ``width`` a ball), and with
-    ``with_friction`` its friction impulse from the old lists' row in ``old_friction`` into
-    ``friction``; new pairs start at zero. The pair
+    ``with_friction`` its friction impulse into ``friction``; new pairs start at zero. The pair
     of balls a and b (their old ids: ``old_id`` of i and j when ``moved``) is looked up in the
     entries of its old owner, which is a's, or b's when the pair changed hands (a pair's owner
     is the ball behind the other along their main axis, see :func:`owns`, and that axis can
     change as the balls move)."""
     p = first[i]
     for k in range(listed(first, i)):
-        a, b = i, upper[i, k]
+        j = upper[i, k]
+        a, b = i, j
         if ti.static(moved):
             a, b = old_id[a], old_id[b]
-        found, value, entry = stashed_impulse(stashed, stash_first, width, a, b)
-        F = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
-        if found:
-            if ti.static(with_friction):
-                F = old_friction[entry]
-        else:
-            found, value, entry = stashed_impulse(stashed, stash_first, width, b, a)
-            if ti.static(with_friction):
-                if found:
-                    F = -old_friction[entry]  # (the friction on the other ball of the pair)
+        found, value, word = stashed_impulse(stashed, stash_first, width, a, b, with_friction)
+        sign = 1.0
+        if not found:
+            found, value, word = stashed_impulse(stashed, stash_first, width, b, a, with_friction)
+            sign = -1.0  # (stashed by b: the friction on b, with b's normal)
         lam[p + k] = value
         if ti.static(with_friction):
-            friction[p + k] = F
+            F = friction_from_bits(word, sign * (x[i] - x[j]), mu * value)
+            friction[p + k] = ti.cast(sign, ti.f32) * F
 
 
 @ti.func
-def stashed_impulse(stashed: ti.template(), stash_first: ti.template(), width, a, b):
-    """(whether, with which accumulated impulse, and in which entry) the stashed pairs of ball a hold
-    its pair with ball b (see :func:`stash_ball` for the layouts): a search of entries sorted by
-    id, stopping at the first id past b."""
-    found, value, entry = 0, 0.0, 0
+def stashed_impulse(stashed: ti.template(), stash_first: ti.template(), width, a, b, with_friction: ti.template()):
+    """(whether, with which accumulated impulse, and with which friction bits) the stashed pairs of
+    ball a hold its pair with ball b (see :func:`stash_ball` for the layouts): a search of entries
+    sorted by id, stopping at the first id past b."""
+    found, value, word = 0, 0.0, 0
     lo, hi = a * width, a * width + width
     if width == 0:
         lo, hi = stash_first[a], stash_first[a + 1]
     for p in range(lo, hi):
-        j = ti.cast(stashed[p, ID], ti.i32)  # the neighbour id kept by stash_ball (−1: the list's end)
+        j, bits = stashed_id_bits(stashed, p, with_friction)  # (−1: the list's end)
         if j < 0 or j > b:
             break
         if j == b:
-            found, value, entry = 1, stashed[p, LAM], p
-    return found, value, entry
+            found, value, word = 1, stashed[p, LAM], bits
+    return found, value, word
 
 
 @ti.func
@@ -244,7 +348,7 @@ def relist_all_pairs(
     width = upper.shape[1]
     n_apart = 0
     for i in range(x.shape[0]):
-        stash_ball(i, upper, first, lam, scratch, width)
+        stash_ball(i, upper, first, lam, scratch, width, False, x, friction, 0.0)
         if is_apart(v, radius, i, v_cut, r_cut, 1):  # as apart_balls counts them
             n_apart += 1
     if n_apart > APART_MAX:
@@ -269,7 +373,7 @@ def relist_all_pairs(
     for i in range(x.shape[0]):
         link_ball(i, bits, upper, first, lower, n_lower)
     for i in range(x.shape[0]):
-        carry_ball(i, scratch, first, width, upper, first, lam, first, False, False, friction, friction)  # ids kept
+        carry_ball(i, scratch, first, width, upper, first, lam, first, False, False, x, friction, 0.0)  # ids kept
         if clear_friction:  # (not carried: the pairs' friction impulses start again from zero)
             for k in range(listed(first, i)):
                 friction[first[i] + k] = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)

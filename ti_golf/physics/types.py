@@ -180,14 +180,19 @@ surface gap [m] (the Gauss–Seidel sweeps read no more), then with the Jacobi s
 [N·s] that the pair's owner takes in the sweep (see ``pairs.owned_pairs``). Between steps a
 rebuild of the lists keeps each pair's resting impulse and neighbour id in the first two (see
 ``links.stash``)."""
-LAM, ID = 0, 1
-"""Columns of a stashed pair in the sweep's table during a rebuild (see ``links.stash``)."""
+LAM, ID, FRIC = 0, 1, 2
+"""Columns of a stashed pair in the sweep's table during a rebuild (see ``links.stash``): its
+resting impulse, its neighbour's id and, with the Gauss–Seidel sweeps in f32, its friction
+impulse in 32 bits (in f64 those bits share ``ID`` with the id: see ``links.put_stashed``)."""
 
 
 def pair_columns(gauss_seidel: bool) -> int:
     """Columns of the sweep's table (see ``INV``): 2 with the Gauss–Seidel sweeps, which apply each
-    pair's impulse at once, 5 with the Jacobi sweeps, whose balls gather the impulses after."""
-    return 2 if gauss_seidel else 5
+    pair's impulse at once (3 in f32, for the friction impulse a rebuild stashes: see ``FRIC``),
+    5 with the Jacobi sweeps, whose balls gather the impulses after."""
+    if not gauss_seidel:
+        return 5
+    return 2 if is_f64() else 3
 
 
 # Types that do not depend on the precision.

@@ -70,10 +70,9 @@ def table_bytes(n: int, widths: tuple[int, int], pairs: int, gauss_seidel: bool)
     """Bytes of the neighbour and pair tables of ``n`` balls with lists ``widths`` (upper, lower)
     wide and room for ``pairs`` pairs: per list entry a neighbour or a slot (4 bytes); per pair
     its resting impulse and its row of the sweep's table (:func:`.types.pair_columns` floats),
-    and with the Gauss–Seidel sweeps its friction impulse (3 f32) twice, as a rebuild carries it
-    from the old table to a new one."""
+    and with the Gauss–Seidel sweeps its friction impulse (3 f32)."""
     f = np.dtype(np_float()).itemsize
-    per_pair = (1 + pair_columns(gauss_seidel)) * f + (24 if gauss_seidel else 0)
+    per_pair = (1 + pair_columns(gauss_seidel)) * f + (12 if gauss_seidel else 0)
     return n * (widths[0] + widths[1]) * 4 + pairs * per_pair
 
 
@@ -192,9 +191,9 @@ class CollisionSolver:
         if self.gauss_seidel and not self.serial:  # the balls by grid column (colour.column_order)
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
         self.col_start = self.col_chunk = None
-        # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only), and
-        # the table a rebuild carries it into (links.link_and_carry reads the old rows while it writes the new)
-        self.friction, self.friction_back = ti.ndarray(vec3f, 1), None
+        # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only: a
+        # rebuild stashes it beside the resting impulse, links.stash)
+        self.friction = ti.ndarray(vec3f, 1)
         if self.serial:
             every_ball_a_row(self, model)
         self.far_owners = 0
@@ -210,10 +209,11 @@ class CollisionSolver:
         n = state.n
         if n >= REORDER_MIN_BALLS:  # 0.2 ms, against the build's tens of milliseconds
             release_freed_memory()  # before the tables: numpy copies freed since (balls set up, storage order)
-        stashed = old_friction = None
-        if self._valid:  # the sweep's table is scratch between steps: it keeps the old lists' λ and ids
+        stashed = None
+        mu = float(self._model.scene.contact.mu)
+        if self._valid:  # the sweep's table is scratch between steps: it keeps the old lists' λ, ids and friction
             stashed = self.impulse
-            links.stash(self.upper, self.first, self.lam, stashed)
+            links.stash(self.upper, self.first, self.lam, stashed, self.gauss_seidel, state.x, self.friction, mu)
             self.stash_first.copy_from(self.first)
         h = self._model.dt
         v_max, v_rest, n_apart = (
@@ -292,8 +292,6 @@ class CollisionSolver:
                 f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)"
             )
         pairs = int(links.pair_starts(self.first, self.pair_chunk))
-        if stashed is not None and self.gauss_seidel:  # carried from the old lists' rows into the other table
-            old_friction, self.friction, self.friction_back = self.friction, self.friction_back, None
         if self.serial:  # the kernel rebuilds the lists in place: room for every list to grow to n − 1
             self._fit_pair_tables(state, n * self.capacity[0], 0)  # (and the stash, links.relist_all_pairs)
         else:
@@ -312,12 +310,11 @@ class CollisionSolver:
                 self.reorder,
                 self.sorted_ids,
                 self.gauss_seidel,
-                self.friction if old_friction is None else old_friction,
+                state.x,
                 self.friction,
+                mu,
             )
-            if old_friction is not None and old_friction.shape == self.friction.shape:
-                self.friction_back = old_friction  # (else the tables grew: a new one at the next build)
-            stashed = old_friction = None
+            stashed = None
         else:
             links.link_lower(self.upper, self.first, self.lower, self.n_lower)
             self.lam.fill(0.0)
@@ -339,23 +336,25 @@ class CollisionSolver:
         """Make room for ``pairs`` pairs in the tables of the pairs' resting impulses and (Gauss–Seidel)
         friction impulses: when they hold fewer, new tables, the old ones freed first (their values
         are in the stash): for ``pairs`` at the first build, and when they outgrew tables built
-        before, for ``pairs`` plus 1/``room`` of them (none with ``room`` 0). The Gauss–Seidel sweeps'
-        friction impulses are carried from one of two tables into the other at each rebuild (see
-        :meth:`build`): a new table when the one to carry into is missing or of another length."""
-        if pairs > self.pair_capacity:
+        before, for ``pairs`` plus 1/``room`` of them (none with ``room`` 0)."""
+        grow = pairs > self.pair_capacity
+        if grow:
             capacity = max(1, pairs + (pairs // room if room and self.rebuilds > 0 else 0))
             self._check_table_memory(state, self.capacity, capacity)
-            self._packs.clear()  # (their references would keep the old tables in memory)
-            self.lam = None
-            free_dropped_arrays()
             self.pair_capacity = capacity
-            self.lam = ti.ndarray(float, capacity)
         rows = self.pair_capacity if self.gauss_seidel else 1
-        if self.friction is None or self.friction.shape[0] != rows:  # (the first build, or the tables grew)
-            self._packs.clear()
-            self.friction = None
+        new_friction = self.friction is None or self.friction.shape[0] != rows  # (the first build, or grown)
+        if grow or new_friction:
+            self._packs.clear()  # (their references would keep the old tables in memory)
+            if grow:
+                self.lam = None
+            if new_friction:
+                self.friction = None
             free_dropped_arrays()
-            self.friction = ti.ndarray(vec3f, rows)
+            if grow:
+                self.lam = ti.ndarray(float, self.pair_capacity)
+            if new_friction:
+                self.friction = ti.ndarray(vec3f, rows)
 
     def _check_table_memory(self, state: State, widths: tuple[int, int], pairs: int) -> None:
         """Raise :class:`SimulationError` before neighbour tables of ``widths`` (upper, lower) and
@@ -450,7 +449,6 @@ class CollisionSolver:
         "impact",
         "stash_first",
         "pair_chunk",
-        "friction_back",
         "surface_impulse_back",
     )
     """Arrays that each step or list build writes before it reads them: :func:`.solver_state.solver_arrays`
