@@ -130,7 +130,7 @@ def test_grid_neighbours_equal_brute_force(name, fast):
         assert len(expected) > len(_brute_force_pairs(x, r, solver.skin))
     xs = sim.state.x.to_numpy()  # the positions the kernels saw (float type of the run)
     upper, n_upper = solver.upper.to_numpy(), _n_upper(solver)
-    lower, n_lower = solver.lower.to_numpy(), solver.n_lower.to_numpy()
+    lower, lower_first = solver.lower.to_numpy(), solver.lower_first.to_numpy()
     assert upper.shape[1] <= 1 << solver.slot_bits
     within = [set() for _ in range(len(x))]  # each ball's expected neighbours
     for a, j in expected:
@@ -138,7 +138,7 @@ def test_grid_neighbours_equal_brute_force(name, fast):
     for i in range(len(x)):  # lists are sorted by id: sums over them do not depend on threads
         assert np.all(np.diff(upper[i, : n_upper[i]]) > 0)
         assert set(upper[i, : n_upper[i]].tolist()) == {j for j in within[i] if _owns(xs, i, j, set_apart)}
-        slots = lower[: n_lower[i], i]  # where each lower pair is stored: owner · 2^bits + column
+        slots = lower[lower_first[i] : lower_first[i + 1]]  # where each lower pair is stored: owner · 2^bits + column
         owners, entries = slots >> solver.slot_bits, slots & ((1 << solver.slot_bits) - 1)
         assert np.all(np.diff(owners) > 0)
         assert set(owners.tolist()) == {j for j in within[i] if _owns(xs, j, i, set_apart)}
@@ -253,11 +253,11 @@ def test_a_boulder_owns_none_of_its_pairs_so_the_impulse_table_stays_narrow():
     reach = r[-1] + r[:-1] + solver.skin
     within = set(np.flatnonzero(np.linalg.norm(x[:-1] - centre, axis=1) < reach).tolist())
     assert len(within) > 80
-    n_upper, n_lower = _n_upper(solver), solver.n_lower.to_numpy()
-    assert n_upper[-1] == 0 and n_lower[-1] == len(within)
-    owners = solver.lower.to_numpy()[: n_lower[-1], len(x) - 1] >> solver.slot_bits
+    n_upper, lower_first = _n_upper(solver), solver.lower_first.to_numpy()
+    assert n_upper[-1] == 0 and lower_first[-1] - lower_first[-2] == len(within)
+    owners = solver.lower.to_numpy()[lower_first[-2] : lower_first[-1]] >> solver.slot_bits
     assert set(owners.tolist()) == within
-    assert solver.capacity[0] <= 4  # a lattice ball's three pairs and the boulder's
+    assert solver.capacity <= 4  # a lattice ball's three pairs and the boulder's
     ahead = sum(_owns(x, len(x) - 1, j, np.zeros(len(x), bool)) for j in within)
     assert ahead > 30  # what the boulder would own by the axis rule
 
@@ -272,7 +272,7 @@ def test_each_ball_of_a_jostled_lattice_owns_three_pairs():
         sim = tg.Simulation(sc, x=x[np.random.default_rng(9).permutation(len(x))])
         solver = _grid_ordered(sim) if reorder else sim.solver
         solver.build(sim.state)
-        assert solver.capacity == (3, 3)
+        assert solver.capacity == 3
         n_upper = sim.state.to_ids(_n_upper(solver))
         top, right, back = (np.isclose(sim.x[:, k], x[:, k].max(), atol=0.003) for k in (1, 0, 2))
         np.testing.assert_array_equal(n_upper, 3 - top - right - back)
@@ -611,7 +611,7 @@ def test_rebuild_keeps_each_pairs_resting_impulse(method):
     if with_friction:
         assert sum(any(v[1:]) for v in before.values()) > 20  # pairs with a friction impulse
     # in place, then from width 1 (widened again), then into new pair tables
-    for capacity, pair_capacity in ((solver.capacity, solver.pair_capacity), ((1, 1), solver.pair_capacity), (None, 1)):
+    for capacity, pair_capacity in ((solver.capacity, solver.pair_capacity), (1, solver.pair_capacity), (None, 1)):
         solver.capacity, solver.pair_capacity = capacity or solver.capacity, pair_capacity
         solver.build(sim.state)
         after = by_pair()
@@ -688,7 +688,7 @@ def test_widening_the_pair_tables_never_holds_the_old_and_the_new_together(monke
     first = s.first.to_numpy()
     assert first[0] == 0 and np.all(np.diff(first) >= 0)  # each ball's pairs after the last one's
     assert first[-1] <= s.pair_capacity == len(s.lam.to_numpy()) == len(s.friction.to_numpy())
-    assert s.pair_capacity < 0.75 * n * s.capacity[0]  # the longest list is well above the mean
+    assert s.pair_capacity < 0.75 * n * s.capacity  # the longest list is well above the mean
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1111,19 +1111,23 @@ def test_a_fast_ball_dropped_onto_a_plastic_pile_does_not_bounce_back():
 
 
 def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypatch):
-    # The neighbour tables are as wide as the longest neighbour list. A ball at 2,000 m/s (2 m per 1 ms
-    # step) above a pile has every ball of it within reach, so every ball's tables would widen to
-    # hundreds of entries: with a million balls that is hundreds of gigabytes. The solver must stop
-    # with a SimulationError that names the ball and its speed before it allocates tables larger
-    # than half the memory available; here "available" is made small, and the same run without
-    # that limit steps on.
+    # The neighbour table is as wide as the longest upper list. Balls at 2,000 m/s (2 m per 1 ms
+    # step) above a pile have every ball of it within reach: more of them than apart.APART_MAX (a few
+    # are listed apart, and own none of their pairs), so every ball's row would widen to as many
+    # entries as there are such balls, and every pair be kept: with a million balls that is hundreds
+    # of gigabytes. The solver must stop with a SimulationError that names a ball and its speed
+    # before it allocates tables larger than half the memory available; here "available" is made
+    # small, and the same run without that limit steps on.
     import ti_golf.sim.solver as solver_module
 
     pile, x = pile_scene(400)
-    x = np.vstack([x, [[x[:, 0].mean(), x[:, 1].max() + 0.1, x[:, 2].mean()]]])
+    fast = apart.APART_MAX + 8
+    top = [x[:, 0].mean(), x[:, 1].max() + 0.1, x[:, 2].mean()]
+    layer = top + 0.05 * np.stack([np.arange(fast) % 8 - 3.5, np.zeros(fast), np.arange(fast) // 8 - 2.0], axis=1)
+    x = np.vstack([x, layer])
     v = np.zeros_like(x)
-    v[-1] = [0.0, -2000.0, 0.0]
-    narrow = solver_module.table_bytes(len(x), (8, 8), 8 * len(x), True)  # lists of eight, not the 400 in reach
+    v[400:] = [0.0, -2000.0, 0.0]
+    narrow = solver_module.table_bytes(len(x), 8, 8 * len(x), True)  # lists of eight, not the 400 in reach
     monkeypatch.setattr(solver_module, "available_memory", lambda: 2 * narrow)
     sim = tg.Simulation(pile, x=x, v=v, track=False)
     sim.solver = CollisionSolver(sim.model, serial=False)
@@ -1132,7 +1136,7 @@ def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypa
     assert err.value.balls == [400]
     monkeypatch.setattr(solver_module, "available_memory", lambda: None)  # memory unknown: no limit
     sim.step(1)
-    assert max(sim.solver.capacity) >= 400
+    assert sim.solver.capacity >= fast
 
 
 def test_an_f32_run_refuses_more_balls_than_its_floats_can_number(monkeypatch):
@@ -1172,10 +1176,10 @@ def test_balls_all_alike_share_one_radius_and_one_mass():
 @pytest.mark.parametrize("method", ["jacobi", "gauss_seidel"])
 def test_the_memory_guard_counts_the_bytes_the_pair_tables_take(method):
     # table_bytes is the memory guard's estimate (above) and the performance page's byte count: it must
-    # match the tables the solver allocates, whatever they keep (per list entry a neighbour or a
-    # link; per pair its resting impulse and its row of the sweep's table, the inverse distance and
-    # gap, and under Jacobi the impulse too; under Gauss–Seidel its friction impulse, one table that
-    # a rebuild carries it into from the stash).
+    # match the tables the solver allocates, whatever they keep (per upper-list entry a neighbour;
+    # per pair its link in the other ball's lower list, its resting impulse and its row of the
+    # sweep's table, the inverse distance and gap, and under Jacobi the impulse too; under
+    # Gauss–Seidel its friction impulse, one table that a rebuild carries it into from the stash).
     import ti_golf.sim.solver as solver_module
 
     x, _ = _random_sets()["clustered"]
@@ -1189,7 +1193,7 @@ def test_the_memory_guard_counts_the_bytes_the_pair_tables_take(method):
     assert s.rebuilds == 2 and s.impulse.shape[1] == (2 if method == "gauss_seidel" else 5)
     tables = (s.upper, s.lower, s.lam, s.impulse) + ((s.friction,) if s.gauss_seidel else ())
     allocated = sum(a.to_numpy().nbytes for a in tables)
-    assert s.capacity[0] >= 3 and s.pair_capacity >= len(x[:400])
+    assert s.capacity >= 3 and s.pair_capacity >= len(x[:400])
     assert allocated == solver_module.table_bytes(400, s.capacity, s.pair_capacity, s.gauss_seidel)
 
 

@@ -96,7 +96,9 @@ def _pairs_in_rows(path) -> None:
     length in ``n_upper`` (now the pairs lie ball after ball, from ``first``), the sweep's table
     a 5-vector per pair (now a row of 2 or 5 columns), one table of friction impulses, and a row
     of surface impulses for every ball (now only for the balls near a surface, from
-    ``surface_start``)."""
+    ``surface_start``); and, until 2026-11-27, the lower lists in a table stored by column, as
+    wide as the longest, each list's length in ``n_lower`` (now the links lie ball after ball,
+    from ``lower_first``), the two tables' widths in ``capacity``."""
     with np.load(path) as d:
         data = dict(d)
     meta = json.loads(str(data["run"]))
@@ -133,6 +135,15 @@ def _pairs_in_rows(path) -> None:
     solver["elements"].update(lam_plane=[], friction_plane=[3])
     solver["scratch"].pop("surface_impulse_back", None)
     solver["values"].pop("surface_impulse_back", None)
+    lower_first, links = data.pop("solver.lower_first"), data.pop("solver.lower")
+    n_lower = np.diff(lower_first).astype(np.int32)
+    table = np.zeros((max(1, int(n_lower.max())), len(n_lower)), np.int32)
+    table[
+        np.arange(lower_first[-1]) - np.repeat(lower_first[:-1], n_lower), np.repeat(np.arange(len(n_lower)), n_lower)
+    ] = links[: lower_first[-1]]
+    data["solver.lower"], data["solver.n_lower"] = table, n_lower
+    solver["elements"]["n_lower"] = solver["elements"].pop("lower_first")
+    solver["values"]["capacity"] = [width, table.shape[0]]
     data["run"] = np.array(json.dumps(meta))
     np.savez(path, **data)
 

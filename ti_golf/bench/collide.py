@@ -317,7 +317,7 @@ def one_pass_contacts(sim: Any) -> tuple[Callable[[], None], Any, Any]:
             solver.upper,
             solver.first,
             solver.lower,
-            solver.n_lower,
+            solver.lower_first,
             dv,
             dw,
         )

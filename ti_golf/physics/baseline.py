@@ -39,8 +39,8 @@ def one_pass_contacts(
     mass: float_array,
     upper: int_table,
     first: int_array,
-    lower: int_table,
-    n_lower: int_array,
+    lower: int_array,
+    lower_first: int_array,
     dv: vec3_array,
     dw: vec3_array,
 ):
@@ -60,12 +60,13 @@ def one_pass_contacts(
         r_i, inv_m_i, xi = of_ball(radius, i), 1.0 / of_ball(mass, i), x[i]
         vi = v[i] + h * gravity
         P, T = zero3(), zero3()
-        for q in range(n_lower[i] + listed(first, i)):
+        n_low = lower_first[i + 1] - lower_first[i]
+        for q in range(n_low + listed(first, i)):
             j = 0
-            if q < n_lower[i]:
-                j = owner_slot(lower[q, i], bits)[0]
+            if q < n_low:
+                j = owner_slot(lower[lower_first[i] + q], bits)[0]
             else:
-                j = upper[i, q - n_lower[i]]
+                j = upper[i, q - n_low]
             inv, gap = pair_geometry(x, radius, i, j)
             n = pair_normal(xi, x[j], inv)
             P_q, _, _, _ = pair_impulse(

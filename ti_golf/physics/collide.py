@@ -191,12 +191,13 @@ def collision_step(
                     lists.upper,
                     lists.first,
                     lists.lower,
-                    lists.n_lower,
+                    lists.lower_first,
                     lists.x_at_build,
                     lists.lam,
                     scratch.J,
                     lists.friction,
                     contact.solver == GAUSS_SEIDEL,
+                    scratch.impact,
                 )
                 result += 1
                 scratch.flag[0] = 0
@@ -327,7 +328,7 @@ def start_step(
             lists.upper,
             lists.first,
             lists.lower,
-            lists.n_lower,
+            lists.lower_first,
             bits,
             lists.lam,
             scratch.J,
@@ -387,7 +388,7 @@ def sweep(
                 )
     for i in range(state.x.shape[0]):
         if scratch.flag[1] != 0:  # (a loop inside the test would not run in parallel)
-            impact_keys(i, lists.first, lists.lower, lists.n_lower, bits, scratch.J, scratch.impact)
+            impact_keys(i, lists.first, lists.lower, lists.lower_first, bits, scratch.J, scratch.impact)
     pressed = 0.01  # the overlap [share of a radius] that keeps a ball awake
     if contact.solver == GAUSS_SEIDEL:
         pressed = ASLEEP_OVERLAP
@@ -403,7 +404,7 @@ def sweep(
                     of_ball(model.radius, i),
                     lists.first,
                     lists.lower,
-                    lists.n_lower,
+                    lists.lower_first,
                     bits,
                     scratch.J,
                     contact.k_p,
@@ -419,7 +420,7 @@ def sweep(
                     lists.upper,
                     lists.first,
                     lists.lower,
-                    lists.n_lower,
+                    lists.lower_first,
                     bits,
                     scratch.J,
                     scratch.impact,

@@ -6,9 +6,10 @@ unbounded: far-apart balls simply land in other buckets. ``list_neighbours`` bui
 then lists, for every ball, the balls within r_a + r_b + skin in its own and the 26 adjacent
 cells, sorted by id (so sums over neighbours do not depend on thread order), in two halves: the
 *upper* list (the pairs the ball owns, each evaluated once per sweep: see :func:`owns`) and the
-*lower* list (the pairs its neighbours own), which ``link_lower`` (or ``link_and_carry``, which
-also carries each pair's accumulated impulse over from the old lists) turns into the slots where
-the owners store the pairs' impulses, so each ball gathers its impulses without float atomics.
+*lower* list (the pairs its neighbours own), which ``links.link_lower`` (or ``link_and_carry``,
+which also carries each pair's accumulated impulse over from the old lists) makes from the upper
+lists: the slots where the owners store the pairs' impulses, so each ball gathers its impulses
+without float atomics.
 A neighbour list stays valid until some ball has moved, or could move within a step, more than
 half the skin since the build. A build also lists the pairs that can meet within the step that
 follows it: a pair is listed when its surface gap is below the larger of the skin and
@@ -138,18 +139,15 @@ def list_neighbours(
     :func:`apart_balls`, own none of their pairs with the others, and with ``scan_apart`` they
     are listed apart: see :func:`list_ball`): row i of ``upper`` holds the neighbours whose pairs
     ball i owns (:func:`owns`), and ``first[i + 1]`` their number (``links.pair_starts`` turns
-    the numbers into the lists' starts in the pair tables), column i of ``lower`` the others (to
-    be turned into slots by :func:`link_lower` or :func:`link_and_carry`). ``lower`` is stored
-    transposed, (width, n), so that the few first entries of consecutive balls lie side by side
-    however wide one ball's list makes it (a boulder's hundreds), and the sweeps' gathers read few
-    cache lines. The sort and
+    the numbers into the lists' starts in the pair tables); the pairs the others own are only
+    counted (``links.link_lower`` lists them from the upper lists). The sort and
     the lists are built in one launch. The counting sort: each ball's rank among the balls of its
     bucket (an integer atomic add, counting in ``start``), the buckets' starts
     (:func:`bucket_starts`; ``start`` has one entry more than there are buckets, ``chunk_start`` is
     its scratch), then the ball ids grouped by bucket (each ball's bucket hashed again, rather
     than kept: 4 bytes per ball less): ``sorted_ids[start[b] : start[b + 1]]`` are
     the balls of bucket b. Returns the longest upper and lower lists found, also left in
-    ``longest[0:2]`` (they may exceed the tables' widths: the caller then rebuilds wider), and a
+    ``longest[0:2]`` (the upper may exceed the table's width: the caller then rebuilds wider), and a
     bound on the most loop iterations a ball's thread ran (see ``LOOP_CAP``).
 
     With ``stored_sorted`` the balls are stored in bucket order already (:func:`storage_order`,
@@ -193,11 +191,9 @@ def list_neighbours(
             scratch.start,
             scratch.sorted_ids,
             lists.upper,
-            lists.lower,
             stored_sorted,
         )
         lists.first[i + 1] = ti.min(n_up, lists.upper.shape[1])  # its length, until links.pair_starts
-        lists.n_lower[i] = ti.min(n_low, lists.lower.shape[0])
         lists.x_at_build[i] = ti.cast(x[i], ti.f32)
         ti.atomic_max(longest[0], n_up)
         ti.atomic_max(longest[1], n_low)
@@ -226,12 +222,12 @@ def list_ball(
     start: ti.template(),
     sorted_ids: ti.template(),
     upper: ti.template(),
-    lower: ti.template(),
     stored_sorted: ti.template(),
 ):
-    """Ball i's neighbours into its row of ``upper`` and its column of ``lower`` in id order (as
-    many as fit; ``stored_sorted``: see :func:`list_neighbours`). Returns how many there are
-    (upper, lower) and a bound on the iterations of the thread's loops (see ``LOOP_CAP``).
+    """The neighbours whose pairs ball i owns into its row of ``upper`` in id order (as many as
+    fit; ``stored_sorted``: see :func:`list_neighbours`). Returns how many neighbours it has
+    (whose pairs it owns, whose pairs the others own) and a bound on the iterations of the
+    thread's loops (see ``LOOP_CAP``).
 
     The balls in its own and the 26 adjacent cells, but, with ``scan_apart``, for the balls
     listed apart (:func:`is_apart`): those are tested by every ball, and a ball listed apart tests
@@ -262,7 +258,6 @@ def list_ball(
                     True,
                     is_apart(v, radius, j, v_cut, r_cut, n_apart),
                     upper,
-                    lower,
                     n_up,
                     n_low,
                 )
@@ -311,17 +306,16 @@ def list_ball(
                                 apart_i,
                                 apart_j,
                                 upper,
-                                lower,
                                 n_up,
                                 n_low,
                             )
         for f in range(n_apart * scan_apart):
             j = apart_ids[f]
             n_up, n_low = list_pair(
-                i, j, xi, x[j], ri + of_ball(radius, j), skin, v, h, 1, False, True, upper, lower, n_up, n_low
+                i, j, xi, x[j], ri + of_ball(radius, j), skin, v, h, 1, False, True, upper, n_up, n_low
             )
         tested += 18 + n_apart * scan_apart
-    # the insertions' shifts: at most n(n − 1)/2 for a list of n
+    # the insertions' shifts: at most n(n − 1)/2 for a list of n (and the lower list's in links.link_lower_lists)
     return n_up, n_low, tested + (n_up * n_up + n_low * n_low) // 2
 
 
@@ -339,24 +333,23 @@ def list_pair(
     apart_i,
     apart_j,
     upper: ti.template(),
-    lower: ti.template(),
     n_up,
     n_low,
 ):
-    """Ball j into ball i's ``upper`` or ``lower`` row (by :func:`owns`; ``apart_i``, ``apart_j``:
-    whether they are listed apart) when their surface gap is below :func:`pair_reach` (the skin
-    when ``fast`` is 0; ``r_sum``: r_i + r_j [m]). Returns the rows' new lengths (n_up, n_low); an
-    entry beyond a row's width is counted, not stored."""
+    """Ball j into ball i's ``upper`` row when ball i owns their pair (:func:`owns`; ``apart_i``,
+    ``apart_j``: whether they are listed apart), or counted in ``n_low`` when j owns it, when
+    their surface gap is below :func:`pair_reach` (the skin when ``fast`` is 0; ``r_sum``:
+    r_i + r_j [m]). Returns the new counts (n_up, n_low); an entry beyond the row's width is
+    counted, not stored."""
     gap_reach = skin
     if fast != 0:  # (else pair_reach is the skin for every pair: v not read)
         gap_reach = pair_reach(skin, h, v[i], v[j])
     reach = r_sum + gap_reach
     if (xj - xi).norm_sqr() < reach * reach:
         if owns(xi, xj, i, j, apart_i, apart_j):
-            insert_sorted(upper, i, n_up, upper.shape[1], j, False)
+            insert_sorted(upper, i, n_up, upper.shape[1], j)
             n_up += 1
         else:
-            insert_sorted(lower, i, n_low, lower.shape[0], j, True)
             n_low += 1
     return n_up, n_low
 
@@ -376,7 +369,7 @@ def owns(xi, xj, i, j, apart_i, apart_j):
     that is not (``apart_i`` false): a boulder sunk into a pile touches hundreds of balls, and
     owned by them its pairs are taken one by each of their threads rather than all by the
     boulder's, while the upper table, as wide as the longest upper list for every ball, stays
-    narrow; the boulder's lower list is long instead (see ``solver.LONG_LOWER``)."""
+    narrow; the boulder's lower list is long instead (4 bytes a link, see ``links.link_lower``)."""
     owner = False
     if apart_i != apart_j:
         owner = apart_j
@@ -392,22 +385,13 @@ def owns(xi, xj, i, j, apart_i, apart_j):
 
 
 @ti.func
-def insert_sorted(table: ti.template(), i, n, capacity, j, transposed: ti.template()):
-    """Insert id j into row i of ``table`` (column i when ``transposed``) holding n ids in ascending
-    order (dropped when full)."""
+def insert_sorted(table: ti.template(), i, n, capacity, j):
+    """Insert id j into row i of ``table`` holding n ids in ascending order (dropped when full)."""
     if n < capacity:
         m = n
         while m > 0:  # the test apart: Taichi evaluates both sides of an `and` (no table[i, -1])
-            if ti.static(transposed):
-                if table[m - 1, i] <= j:
-                    break
-                table[m, i] = table[m - 1, i]
-            else:
-                if table[i, m - 1] <= j:
-                    break
-                table[i, m] = table[i, m - 1]
+            if table[i, m - 1] <= j:
+                break
+            table[i, m] = table[i, m - 1]
             m -= 1
-        if ti.static(transposed):
-            table[m, i] = j
-        else:
-            table[i, m] = j
+        table[i, m] = j

@@ -58,26 +58,64 @@ def listed(first: ti.template(), i):
 
 
 @kernel
-def link_lower(upper: int_table, first: int_array, lower: int_table, n_lower: int_array):
-    """Replace each lower neighbour j of every ball by the slot of the pair in j's upper list
-    (see :func:`link_ball`)."""
-    bits = slot_bits(upper.shape[1])
-    for i in range(lower.shape[1]):
-        link_ball(i, bits, upper, first, lower, n_lower)
+def link_lower(
+    upper: int_table, first: int_array, lower: int_array, lower_first: int_array, count: int_array, chunk: int_array
+):
+    """Every ball's lower list from the upper lists (see :func:`link_lower_lists`)."""
+    link_lower_lists(upper, first, lower, lower_first, count, chunk, False)
 
 
 @ti.func
-def link_ball(i, bits, upper: ti.template(), first: ti.template(), lower: ti.template(), n_lower: ti.template()):
-    """Replace each lower neighbour j of ball i by the slot of the pair in j's upper list,
-    ``j · 2^bits + k`` with ``upper[j, k] = i`` (see :func:`slot_bits`): the ball that owns a
-    pair stores its impulse there, and the other ball gathers it from there."""
-    for m in range(n_lower[i]):
-        j = lower[m, i]
-        slot = -1
-        for k in range(listed(first, j)):
-            if upper[j, k] == i:
-                slot = (j << bits) | k
-        lower[m, i] = slot
+def link_lower_lists(
+    upper: ti.template(),
+    first: ti.template(),
+    lower: ti.template(),
+    lower_first: ti.template(),
+    count: ti.template(),
+    chunk: ti.template(),
+    serial: ti.template(),
+):
+    """Every ball's lower list from the upper lists: ball j's list, ``lower[lower_first[j] :
+    lower_first[j + 1]]``, holds the slot ``i · 2^bits + k`` (:func:`slot_bits`) of each pair
+    that another ball i owns with it, ``upper[i, k] = j``, in the order of the owners' ids: the
+    ball that owns a pair stores its impulse there, and the other ball gathers it from there. The
+    lists lie ball after ball, as the pair tables do (``lower`` holds as many entries as they
+    do), rather than in a table as wide as the longest list: 4 bytes a pair, not 4 times the
+    longest list a ball. Each ball's links are counted (an integer atomic add, in ``count``),
+    their starts scanned (:func:`.sort.bucket_starts`, ``chunk``: its scratch), the slots
+    written, each at the next free place of its ball's list (an atomic add again), then each
+    list sorted: the lists are the same whatever order the threads ran in. ``serial``: in a
+    serial loop (the lists then come out sorted, and the scan runs serially too)."""
+    bits = slot_bits(upper.shape[1])
+    n = first.shape[0] - 1
+    for i in range(n):
+        count[i] = 0
+    for i in range(n):
+        for k in range(listed(first, i)):
+            ti.atomic_add(count[upper[i, k]], 1)
+    for i in range(n):
+        lower_first[i + 1] = count[i]
+        count[i] = 0
+    if ti.static(serial):
+        lower_first[0] = 0
+        for i in range(n):
+            lower_first[i + 1] += lower_first[i]
+    else:
+        bucket_starts(lower_first, chunk)
+    for i in range(n):
+        for k in range(listed(first, i)):
+            j = upper[i, k]
+            lower[lower_first[j] + ti.atomic_add(count[j], 1)] = (i << bits) | k
+    for j in range(n):
+        lo, hi = lower_first[j], lower_first[j + 1]
+        for m in range(lo + 1, hi):  # an insertion sort: a few links a ball
+            slot, q = lower[m], m
+            while q > lo:  # the test apart: Taichi evaluates both sides of an `and` (no lower[−1])
+                if lower[q - 1] <= slot:
+                    break
+                lower[q] = lower[q - 1]
+                q -= 1
+            lower[q] = slot
 
 
 @kernel
@@ -234,8 +272,10 @@ def friction_from_bits(bits, d, bound):
 def link_and_carry(
     upper: int_table,
     first: int_array,
-    lower: int_table,
-    n_lower: int_array,
+    lower: int_array,
+    lower_first: int_array,
+    count: int_array,
+    chunk: int_array,
     stashed: pair_table,
     stash_first: int_array,
     lam: float_array,
@@ -246,16 +286,15 @@ def link_and_carry(
     friction: vec3f_array,
     mu: float,
 ):
-    """:func:`link_lower`, and each pair's accumulated impulse carried from the stashed old lists (see
-    :func:`stash` and :func:`carry_ball`; ``stash_first``: their layout) to the new ones, in one
-    launch (neither writes what the other reads). With ``moved`` the balls were stored in a new
-    order since the stash: ball i was ball ``old_id[i]`` of the stashed lists. With
-    ``with_friction`` the pairs' friction impulses (of the Gauss–Seidel sweeps) are carried from
-    the stash into ``friction`` too (``x``: the positions, ``mu``: the friction coefficient, as
-    at the stash)."""
-    bits = slot_bits(upper.shape[1])
-    for i in range(lower.shape[1]):
-        link_ball(i, bits, upper, first, lower, n_lower)
+    """:func:`link_lower` (``count``, ``chunk``: its scratch), and each pair's accumulated impulse
+    carried from the stashed old lists (see :func:`stash` and :func:`carry_ball`; ``stash_first``:
+    their layout) to the new ones, in one launch (neither writes what the other reads). With
+    ``moved`` the balls were stored in a new order since the stash: ball i was ball ``old_id[i]``
+    of the stashed lists. With ``with_friction`` the pairs' friction impulses (of the
+    Gauss–Seidel sweeps) are carried from the stash into ``friction`` too (``x``: the positions,
+    ``mu``: the friction coefficient, as at the stash)."""
+    link_lower_lists(upper, first, lower, lower_first, count, chunk, False)
+    for i in range(first.shape[0] - 1):
         carry_ball(i, stashed, stash_first, 0, upper, first, lam, old_id, moved, with_friction, x, friction, mu)
 
 
@@ -329,12 +368,13 @@ def relist_all_pairs(
     upper: ti.template(),
     first: ti.template(),
     lower: ti.template(),
-    n_lower: ti.template(),
+    lower_first: ti.template(),
     x_at_build: ti.template(),
     lam: ti.template(),
     scratch: ti.template(),
     friction: ti.template(),
     clear_friction,
+    count: ti.template(),
 ):
     """Rebuild the neighbour lists of a few balls in place without a grid, by testing every pair:
     the lists, slots and carried-over impulses that ``list_neighbours`` and ``link_and_carry``
@@ -342,7 +382,8 @@ def relist_all_pairs(
     ``r_cut`` are listed apart unless there are more than ``APART_MAX``), in O(n²) work. The
     tables must be n − 1 wide (no list can overflow), and ``scratch`` hold n (n − 1) entries:
     the old impulses are stashed n − 1 a ball (:func:`stash_ball`), as ``first`` is rewritten.
-    Meant for a serial loop (the ``serial`` variant of ``collide.collision_step``). With
+    Meant for a serial loop (the ``serial`` variant of ``collide.collision_step``; ``count``: a
+    scratch entry per ball, see :func:`link_lower_lists`). With
     ``clear_friction`` the pairs' friction impulses (of the Gauss–Seidel sweeps) are set to zero:
     they are not carried over in place."""
     width = upper.shape[1]
@@ -357,21 +398,16 @@ def relist_all_pairs(
     for i in range(x.shape[0]):
         xi, ri = x[i], of_ball(radius, i)
         apart_i = is_apart(v, radius, i, v_cut, r_cut, n_apart)
-        n_up, n_low = 0, 0
+        n_up = 0
         for j in range(x.shape[0]):  # in id order: the lists come out sorted
             reach = ri + of_ball(radius, j) + pair_reach(skin, h, v[i], v[j])
             if j != i and (x[j] - xi).norm_sqr() < reach * reach:  # the test of list_ball
                 if owns(xi, x[j], i, j, apart_i, is_apart(v, radius, j, v_cut, r_cut, n_apart)):
                     upper[i, n_up] = j
                     n_up += 1
-                else:
-                    lower[n_low, i] = j
-                    n_low += 1
-        first[i + 1], n_lower[i] = first[i] + n_up, n_low
+        first[i + 1] = first[i] + n_up
         x_at_build[i] = ti.cast(xi, ti.f32)
-    bits = slot_bits(width)
-    for i in range(x.shape[0]):
-        link_ball(i, bits, upper, first, lower, n_lower)
+    link_lower_lists(upper, first, lower, lower_first, count, count, True)
     for i in range(x.shape[0]):
         carry_ball(i, scratch, first, width, upper, first, lam, first, False, False, x, friction, 0.0)  # ids kept
         if clear_friction:  # (not carried: the pairs' friction impulses start again from zero)

@@ -155,15 +155,15 @@ def quiet_ball(
     upper: ti.template(),
     first: ti.template(),
     lower: ti.template(),
-    n_lower: ti.template(),
+    lower_first: ti.template(),
     bits,
 ):
     """Whether ball i is *quiet*: at rest, and every listed neighbour at rest or out of bounds
     (see :func:`warm_start`)."""
     quiet = status[i] == AT_REST
     if quiet:
-        for m in range(n_lower[i]):
-            j, _ = owner_slot(lower[m, i], bits)
+        for m in range(lower_first[i], lower_first[i + 1]):
+            j, _ = owner_slot(lower[m], bits)
             quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
         for k in range(listed(first, i)):
             j = upper[i, k]
@@ -182,7 +182,7 @@ def warm_start(
     upper: ti.template(),
     first: ti.template(),
     lower: ti.template(),
-    n_lower: ti.template(),
+    lower_first: ti.template(),
     bits,
     lam: ti.template(),
     J: ti.template(),
@@ -208,10 +208,10 @@ def warm_start(
     the step leaves it exactly as it is and the sweeps skip it)."""
     P, T = zero3(), zero3()
     calm, xi = rest_time[i], x[i]
-    quiet = quiet_ball(i, status, upper, first, lower, n_lower, bits)
+    quiet = quiet_ball(i, status, upper, first, lower, lower_first, bits)
     if not quiet:  # (a quiet ball's impulses and calm time would not be used: see the caller)
-        for m in range(n_lower[i]):
-            slot = lower[m, i]
+        for m in range(lower_first[i], lower_first[i + 1]):
+            slot = lower[m]
             j, k = owner_slot(slot, bits)  # the pair's owner j keeps its λ
             p = first[j] + k
             inv, gap = pair_geometry(x, radius, i, j)
@@ -276,8 +276,8 @@ def touched_by_moving(i, status: ti.template(), rest_time: ti.template(), lists:
     wakes then (the first loop of ``collide.start_step``). Reads only rest timers and the
     out-of-bounds status, which waking does not change."""
     moving = False
-    for m in range(lists.n_lower[i]):
-        j, _ = owner_slot(lists.lower[m, i], bits)
+    for m in range(lists.lower_first[i], lists.lower_first[i + 1]):
+        j, _ = owner_slot(lists.lower[m], bits)
         moving |= rest_time[j] == 0.0 and status[j] != OUT_OF_BOUNDS
     for k in range(listed(lists.first, i)):
         j = lists.upper[i, k]
@@ -299,7 +299,7 @@ def impact_keys(
     i,
     first: ti.template(),
     lower: ti.template(),
-    n_lower: ti.template(),
+    lower_first: ti.template(),
     bits,
     J: ti.template(),
     impact: ti.template(),
@@ -309,8 +309,8 @@ def impact_keys(
     lower lists, see :func:`.grid.owner_slot`), plus one. Gathered from the pairs' marks
     (:func:`impact_mark`), as the impulses are: no atomics."""
     key = 0
-    for m in range(n_lower[i]):
-        slot = lower[m, i]
+    for m in range(lower_first[i], lower_first[i + 1]):
+        slot = lower[m]
         j, k = owner_slot(slot, bits)
         if impact_mark(J, first[j] + k):
             key = ti.max(key, slot + 1)
@@ -358,7 +358,7 @@ def touching_by_gaps(
     r,
     first: ti.template(),
     lower: ti.template(),
-    n_lower: ti.template(),
+    lower_first: ti.template(),
     bits,
     J: ti.template(),
     k_p,
@@ -370,8 +370,8 @@ def touching_by_gaps(
     and leave nothing else in J): touching below 1 % of ``r``, pressed when overlapping by more
     than ``pressed`` of ``r`` (with a projection, ``k_p`` > 0, as :func:`contact_state`)."""
     touching = 0
-    for m in range(n_lower[i]):
-        j, k = owner_slot(lower[m, i], bits)
+    for m in range(lower_first[i], lower_first[i + 1]):
+        j, k = owner_slot(lower[m], bits)
         touching = ti.max(touching, gap_state(J[first[j] + k, GAP], r, k_p, pressed))
     for k in range(listed(first, i)):
         touching = ti.max(touching, gap_state(J[first[i] + k, GAP], r, k_p, pressed))
@@ -399,7 +399,7 @@ def gather(
     upper: ti.template(),
     first: ti.template(),
     lower: ti.template(),
-    n_lower: ti.template(),
+    lower_first: ti.template(),
     bits,
     J: ti.template(),
     impact: ti.template(),
@@ -420,8 +420,8 @@ def gather(
     touching = 0
     r = of_ball(radius, i)
     inv_m, xi = 1.0 / of_ball(mass, i), x[i]
-    for m in range(n_lower[i]):
-        slot = lower[m, i]
+    for m in range(lower_first[i], lower_first[i + 1]):
+        slot = lower[m]
         j, k = owner_slot(slot, bits)  # the pair's owner j stores it
         p = first[j] + k
         P_k, n_k = impulse_of(J, p), pair_normal(x[j], xi, ti.abs(J[p, INV]))

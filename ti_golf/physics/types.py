@@ -353,8 +353,8 @@ NeighbourLists = Deferred(
         upper=int_table,  # the neighbours whose pairs each ball owns (grid.owns), sorted by index, (N, K)
         # ball i's pairs: upper[i, :first[i + 1] − first[i]], and in lam, friction, J the entries from first[i]
         first=int_array,  # (N + 1,)
-        lower=int_table,  # each ball's lower neighbours, as slots of the pairs in their upper lists, (N, K')
-        n_lower=int_array,  # how many, (N,)
+        lower=int_array,  # each ball's lower neighbours, as slots of the pairs in their upper lists, ball after ball
+        lower_first=int_array,  # where each ball's lower list starts in lower, (N + 1,) (links.link_lower_lists)
         x_at_build=vec3f_array,  # positions when the lists were built [m], f32, (N,)
         lam=float_array.get(),  # each pair's accumulated resting impulse [N·s], (pairs,) (see first)
         # ball i has a row of surface impulses, surface_start[i], when surface_start[i + 1] > surface_start[i]

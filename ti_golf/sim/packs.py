@@ -125,7 +125,7 @@ class Packs:
             upper=c.upper,
             first=c.first,
             lower=c.lower,
-            n_lower=c.n_lower,
+            lower_first=c.lower_first,
             x_at_build=c.x_at_build,
             lam=c.lam,
             surface_start=c.surface_start,

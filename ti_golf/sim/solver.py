@@ -66,25 +66,21 @@ def sweep_launches(iterations: int) -> list[tuple[bool, int, bool]]:
     return launches
 
 
-def table_bytes(n: int, widths: tuple[int, int], pairs: int, gauss_seidel: bool) -> int:
-    """Bytes of the neighbour and pair tables of ``n`` balls with lists ``widths`` (upper, lower)
-    wide and room for ``pairs`` pairs: per list entry a neighbour or a slot (4 bytes); per pair
-    its resting impulse and its row of the sweep's table (:func:`.types.pair_columns` floats),
-    and with the Gauss–Seidel sweeps its friction impulse (3 f32)."""
+def table_bytes(n: int, width: int, pairs: int, gauss_seidel: bool) -> int:
+    """Bytes of the neighbour and pair tables of ``n`` balls with upper lists ``width`` wide and
+    room for ``pairs`` pairs: per upper-list entry a neighbour (4 bytes); per pair its link in the
+    other ball's lower list (4 bytes), its resting impulse and its row of the sweep's table
+    (:func:`.types.pair_columns` floats), and with the Gauss–Seidel sweeps its friction impulse
+    (3 f32)."""
     f = np.dtype(np_float()).itemsize
-    per_pair = (1 + pair_columns(gauss_seidel)) * f + (12 if gauss_seidel else 0)
-    return n * (widths[0] + widths[1]) * 4 + pairs * per_pair
+    per_pair = 4 + (1 + pair_columns(gauss_seidel)) * f + (12 if gauss_seidel else 0)
+    return n * width * 4 + pairs * per_pair
 
 
 PAIR_ROOM = 8
 """Pair tables that the lists outgrow are made for the pairs listed plus 1/PAIR_ROOM of them (see
 ``CollisionSolver._fit_pair_tables``): room for the lists to grow a little before the tables are
 allocated again, while a pour lands."""
-
-
-LONG_LOWER = 16
-"""Longest lower list (see ``CollisionSolver.build``) that widens the lower table exactly; a
-longer one, a ball set apart (``apart.APART_MAX``) touching many, widens it with room to grow."""
 
 
 def steps_serially(n: int) -> bool:
@@ -110,7 +106,7 @@ class CollisionSolver:
             backends they are listed apart.
         loop_cap: on Taichi's Vulkan backend, the loop iterations after which a thread stops (see
             ``grid.LOOP_CAP``): a build that needs more stops the run; ``None`` elsewhere.
-        capacity: widths of the (upper, lower) neighbour tables (they grow when a list overflows).
+        capacity: width of the neighbour table, the upper lists' (it grows when a list overflows).
         pair_capacity: entries of the pair tables (resting and friction impulses, the sweep's
             entries): the pairs listed, laid out ball after ball (``first``), plus room to grow.
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
@@ -153,9 +149,9 @@ class CollisionSolver:
         self.reorder = (n >= REORDER_MIN_BALLS and not self.serial) if reorder is None else bool(reorder)
         if self.reorder and self.serial:
             raise ValueError("serial stepping keeps the balls in id order (reorder=False)")
-        if self.serial:  # tables wide enough for every other ball: the kernel's lists cannot overflow
+        if self.serial:  # a table wide enough for every other ball: the kernel's lists cannot overflow
             capacity = max(capacity, n - 1, 1)
-        self.capacity = (capacity, capacity)
+        self.capacity = capacity
         self.rebuilds = 0
         self.rank = ti.ndarray(ti.i32, n)
         self.sorted_ids = ti.ndarray(ti.i32, n)
@@ -166,8 +162,7 @@ class CollisionSolver:
         self.v_free = ti.ndarray(vec3.get(), n)
         self.calm = ti.ndarray(float, n)  # least rest timer of each ball and the balls it touches [s]
         self.clear = ti.ndarray(ti.f32, n)  # least gap of each ball to the planes [m] (collide.surface_clearance)
-        self.n_lower = ti.ndarray(ti.i32, n)
-        self.upper = self.lower = self.impulse = None
+        self.upper = self.impulse = None
         # ball i's upper list's length, first[i + 1] − first[i], and its pairs' entries in the pair tables
         # from first[i] on (links.pair_starts); and the layout of the stashed pairs during a rebuild
         self.first, self.stash_first = ti.ndarray(ti.i32, n + 1), ti.ndarray(ti.i32, n + 1)
@@ -175,6 +170,9 @@ class CollisionSolver:
         self.pair_chunk = ti.ndarray(ti.i32, sort.scan_chunks(n))
         self.pair_capacity = 1
         self.lam = ti.ndarray(float, self.pair_capacity)
+        # ball i's lower list: lower[lower_first[i] : lower_first[i + 1]], as long as the pair tables (links.link_lower)
+        self.lower, self.lower_first = ti.ndarray(ti.i32, self.pair_capacity), ti.ndarray(ti.i32, n + 1)
+        self.lower_first.fill(0)
         self.impact = ti.ndarray(ti.i32, n)  # each ball's first impact in a sweep (pairs.impact_keys)
         # resting impulses per unit mass [m/s] of the planes and (one column more) the terrain, in f32, and
         # (Gauss–Seidel) friction impulses, in a row per ball within reach of one (surfaces.list_surfaces),
@@ -234,19 +232,11 @@ class CollisionSolver:
                 apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
         self._ids = state.ids
         while True:
-            new_upper = self.upper is None or self.upper.shape[1] != self.capacity[0]
-            new_lower = self.lower is None or self.lower.shape[0] != self.capacity[1]
-            if new_upper or new_lower:
-                self._packs.clear()  # (their references would keep the narrower tables in memory)
-                if new_upper:
-                    self.upper = None
-                if new_lower:
-                    self.lower = None
+            if self.upper is None or self.upper.shape[1] != self.capacity:
+                self._packs.clear()  # (their references would keep the narrower table in memory)
+                self.upper = None
                 free_dropped_arrays()
-            if new_upper:
-                self.upper = ti.ndarray(ti.i32, (n, self.capacity[0]))
-            if new_lower:
-                self.lower = ti.ndarray(ti.i32, (self.capacity[1], n))  # column i: ball i's list (see grid)
+                self.upper = ti.ndarray(ti.i32, (n, self.capacity))
             params = GridParams(
                 inv_cell=1.0 / self.cell,
                 mask=self.mask,
@@ -274,26 +264,21 @@ class CollisionSolver:
                 self.flag,
                 self.reorder,
             )
-            if longest[0] <= self.capacity[0] and longest[1] <= self.capacity[1]:
+            if longest[0] <= self.capacity:
                 break
-            # widen to the longest list found (no power-of-two padding: memory follows the pile), but
-            # for a lower list of more than LONG_LOWER links (4 bytes each): a boulder's, which grows
-            # as it sinks into a pile, with a quarter more room, so that it does not list and
-            # allocate twice every step
-            low = int(longest[1])
-            low += low // 4 if low > LONG_LOWER else 0
-            wider = (max(self.capacity[0], int(longest[0])), max(self.capacity[1], low))
+            # widen to the longest list found (no power-of-two padding: memory follows the pile)
+            wider = int(longest[0])
             self._check_table_memory(state, wider, self.pair_capacity)
             self.capacity = wider
         self._check_loop_cap(state, int(longest[2]))
         if n << self.slot_bits > 2**31:  # the largest slot, (n − 1)·2^bits + 2^bits − 1, must fit an i32
             raise SimulationError(
-                f"{n} balls with up to {self.capacity[0]} neighbours each are more than the "
+                f"{n} balls with up to {self.capacity} neighbours each are more than the "
                 f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)"
             )
         pairs = int(links.pair_starts(self.first, self.pair_chunk))
         if self.serial:  # the kernel rebuilds the lists in place: room for every list to grow to n − 1
-            self._fit_pair_tables(state, n * self.capacity[0], 0)  # (and the stash, links.relist_all_pairs)
+            self._fit_pair_tables(state, n * self.capacity, 0)  # (and the stash, links.relist_all_pairs)
         else:
             self._fit_pair_tables(state, pairs, PAIR_ROOM)
         carried = stashed is not None
@@ -303,7 +288,9 @@ class CollisionSolver:
                 self.upper,
                 self.first,
                 self.lower,
-                self.n_lower,
+                self.lower_first,
+                self.impact,
+                self.pair_chunk,
                 stashed,
                 self.stash_first,
                 self.lam,
@@ -316,7 +303,7 @@ class CollisionSolver:
             )
             stashed = None
         else:
-            links.link_lower(self.upper, self.first, self.lower, self.n_lower)
+            links.link_lower(self.upper, self.first, self.lower, self.lower_first, self.impact, self.pair_chunk)
             self.lam.fill(0.0)
             if self.gauss_seidel:  # none yet
                 self.friction.fill(0.0)
@@ -333,8 +320,8 @@ class CollisionSolver:
             order_columns(self, state)
 
     def _fit_pair_tables(self, state: State, pairs: int, room: int) -> None:
-        """Make room for ``pairs`` pairs in the tables of the pairs' resting impulses and (Gauss–Seidel)
-        friction impulses: when they hold fewer, new tables, the old ones freed first (their values
+        """Make room for ``pairs`` pairs in the tables of the pairs' resting impulses, lower-list links
+        and (Gauss–Seidel) friction impulses: when they hold fewer, new tables, the old ones freed first (their values
         are in the stash): for ``pairs`` at the first build, and when they outgrew tables built
         before, for ``pairs`` plus 1/``room`` of them (none with ``room`` 0)."""
         grow = pairs > self.pair_capacity
@@ -347,31 +334,32 @@ class CollisionSolver:
         if grow or new_friction:
             self._packs.clear()  # (their references would keep the old tables in memory)
             if grow:
-                self.lam = None
+                self.lam = self.lower = None
             if new_friction:
                 self.friction = None
             free_dropped_arrays()
             if grow:
                 self.lam = ti.ndarray(float, self.pair_capacity)
+                self.lower = ti.ndarray(ti.i32, self.pair_capacity)
             if new_friction:
                 self.friction = ti.ndarray(vec3f, rows)
 
-    def _check_table_memory(self, state: State, widths: tuple[int, int], pairs: int) -> None:
-        """Raise :class:`SimulationError` before neighbour tables of ``widths`` (upper, lower) and
-        pair tables of ``pairs`` entries take more than half the memory available
-        (:func:`available_memory`), naming the ball that reaches farthest within a step (r + h·|v|):
-        the neighbour tables are as wide as the longest list, so one ball shot at 1,000 m/s into a
-        pile of 20,000 (3,100 balls within its reach of one 1 ms step) would make them take
+    def _check_table_memory(self, state: State, width: int, pairs: int) -> None:
+        """Raise :class:`SimulationError` before a neighbour table ``width`` wide and pair tables of
+        ``pairs`` entries take more than half the memory available (:func:`available_memory`),
+        naming the ball that reaches farthest within a step (r + h·|v|): the neighbour table is as
+        wide as the longest list, so many balls shot fast into a pile (3,100 balls within the reach
+        of one ball at 1,000 m/s in a pile of 20,000, in one 1 ms step) would make the tables take
         gigabytes, and then swap or be killed, losing the run."""
-        need = table_bytes(state.n, widths, pairs, self.gauss_seidel)
+        need = table_bytes(state.n, width, pairs, self.gauss_seidel)
         avail = available_memory()
         if avail is None or need <= 0.5 * avail:
             return
         ball, farthest = self._farthest_reaching(state)
         raise SimulationError(
             f"the neighbour lists would take {byte_size(need)}, more than half the {byte_size(avail)} of memory "
-            f"available: a ball has {max(widths):,} balls within reach of one step, and the neighbour tables are as "
-            f"wide as the longest list. {farthest}; lower world.dt, or that ball's speed or radius",
+            f"available: {pairs:,} pairs within reach of one step, and a ball with {width:,}, the neighbour table "
+            f"as wide as the longest list. {farthest}; lower world.dt, or that ball's speed or radius",
             [ball],
         )
 
@@ -413,7 +401,7 @@ class CollisionSolver:
         if not stale:
             return
         if self.serial:
-            self.capacity = (max(self.capacity[0], state.n - 1, 1),) * 2
+            self.capacity = max(self.capacity, state.n - 1, 1)
         self.build(state)
         grid.clear(self.flag)  # build() left the longest lists there
         self._rebuild = False
@@ -464,7 +452,7 @@ class CollisionSolver:
     def slot_bits(self) -> int:
         """Low bits of a lower-list entry that hold the pair's column in its owner's upper list (the
         owner's id is in the bits above; see ``grid.slot_bits``)."""
-        return max(0, int(self.capacity[0] - 1).bit_length())
+        return max(0, int(self.capacity - 1).bit_length())
 
     def pairs(self) -> np.ndarray:
         """The listed neighbour pairs (i, j) by ball id, each once, sorted: int array of shape (n_pairs, 2)
@@ -495,7 +483,7 @@ class CollisionSolver:
     def _advance_serially(self, model: Model, state: State, steps: int) -> None:
         width = max(1, state.n - 1)
         if not self._valid or self.upper.shape[1] < width:  # first step, or lists built narrower since
-            self.capacity = (width, width)
+            self.capacity = width
             self.build(state)
             grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
         with plain_compile():  # see runtime.plain_compile

@@ -58,6 +58,8 @@ def restore_solver(solver: CollisionSolver, state: State, arrays: dict[str, np.n
         arrays, meta = _pairs_ball_after_ball(solver, arrays, meta)
     if "surface_start" not in arrays:
         arrays, meta = _surface_rows(state, arrays, meta)
+    if "n_lower" in arrays:
+        arrays, meta = _lower_links(arrays, meta)
     shape, element, dtype = meta["scratch"].get("impulse", [[0], [], ""])
     if element:  # saved before the sweep's table had a row per pair (until 2026-11-26: a 5-vector per pair)
         meta = {
@@ -125,6 +127,31 @@ def _pairs_ball_after_ball(
     meta["values"]["pair_capacity"] = capacity
     shape, element, dtype = meta["scratch"]["impulse"]
     meta["scratch"]["impulse"] = [[capacity], element, dtype]
+    return arrays, meta
+
+
+def _lower_links(arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> tuple[dict, dict]:
+    """The arrays and description of a solver saved before its lower lists lay ball after ball
+    (until 2026-11-27: a table as wide as the longest lower list, stored by column, each list's
+    length in ``n_lower``, and the tables' two widths in ``capacity``), as the solver keeps them
+    now: made again from the upper lists, as ``links.link_lower`` makes them (each ball's links
+    to the pairs others own with it, in the order of the owners' ids)."""
+    arrays, meta = dict(arrays), {key: dict(value) if isinstance(value, dict) else value for key, value in meta.items()}
+    del arrays["n_lower"], arrays["lower"]
+    upper, first = arrays["upper"], arrays["first"].astype(np.int64)
+    n, count = len(first) - 1, np.diff(first)
+    owner = np.repeat(np.arange(n), count)
+    column = np.arange(int(first[-1])) - first[owner]
+    other = upper[owner, column]
+    bits = max(0, int(upper.shape[1] - 1).bit_length())  # (CollisionSolver.slot_bits)
+    slot = (owner << bits) | column
+    lower = np.zeros(int(meta["values"]["pair_capacity"]), np.int32)
+    lower[: len(slot)] = slot[np.lexsort((slot, other))]
+    arrays["lower"] = lower
+    arrays["lower_first"] = np.concatenate([[0], np.cumsum(np.bincount(other, minlength=n))]).astype(np.int32)
+    meta["elements"].pop("n_lower", None)
+    meta["elements"]["lower"] = meta["elements"]["lower_first"] = []
+    meta["values"]["capacity"] = int(upper.shape[1])
     return arrays, meta
 
 
