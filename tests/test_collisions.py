@@ -646,6 +646,87 @@ def test_rebuild_keeps_each_pairs_resting_impulse(method):
         assert np.linalg.norm(np.asarray(after[p][1:]) - F0) <= tol
 
 
+# A Gauss–Seidel heap in f32 (its own process: the test session runs in f64), whose friction
+# impulses a rebuild stashes in a third column of the sweep's table (types.FRIC): each pair's
+# resting and friction impulses before and after a rebuild in place, then after the heap is
+# turned a quarter turn about the vertical (pairs change owner).
+_F32_CARRY = textwrap.dedent("""
+    import sys
+    import numpy as np
+    import ti_golf as tg
+    from ti_golf.sim.solver import CollisionSolver
+
+    tg.init(precision="f32")
+    free = ["world.ground=true", "air.rho=0", "world.gravity=[0,-9.81,0]", "world.integrator=semi_implicit"]
+    sc = tg.load_scene("lab_vacuum", [*free, "world.dt=0.0005", "contact.mu=0.3", "contact.solver=gauss_seidel"])
+    x = np.random.default_rng(3).normal(0.0, 0.08, (400, 3)) * 0.3 + [0.0, 0.2, 0.0]
+    sim = tg.Simulation(sc, x=x, radius=np.full(400, 0.02), track=False)
+    s = sim.solver = CollisionSolver(sim.model, serial=False, reorder=False)
+    sim.run(t=0.3)
+
+    def by_pair():
+        upper, first = s.upper.to_numpy(), s.first.to_numpy()
+        lam, F = s.lam.to_numpy(), s.friction.to_numpy()
+        out = {}
+        for i in range(len(first) - 1):
+            for k in range(first[i + 1] - first[i]):
+                j, p = int(upper[i, k]), first[i] + k
+                out[(min(i, j), max(i, j))] = (lam[p], *(F[p] if i < j else -F[p]))
+        return out
+
+    out = {"columns": s.impulse.shape[1]}
+    for name in ("in_place", "turned"):
+        if name == "turned":
+            x = sim.state.x.to_numpy().astype(float)
+            c = x.mean(axis=0)
+            sim.state.x.from_numpy(np.stack([x[:, 2] - c[2] + c[0], x[:, 1], c[0] - x[:, 0] + c[2]], 1).astype(np.float32))
+        before = by_pair()
+        s.build(sim.state)
+        after = by_pair()
+        keys = sorted(after)
+        out[name + "_pairs"] = np.array(keys)
+        out[name + "_before"] = np.array([before.get(p, (0.0, 0.0, 0.0, 0.0)) for p in keys], float)
+        out[name + "_after"] = np.array([after[p] for p in keys], float)
+        out[name + "_x"] = sim.state.x.to_numpy().astype(float)
+    np.savez(sys.argv[1], **out)
+""")
+
+
+def _f32_carry(workdir: Path) -> background.Command:
+    (workdir / "f32_carry.py").write_text(_F32_CARRY)
+    return background.python(str(workdir / "f32_carry.py"), str(workdir / "carry.npz")), {}
+
+
+background.declare("f32-carry", _f32_carry)
+
+
+@pytest.mark.background("f32-carry")
+def test_an_f32_rebuild_carries_the_friction_impulses_in_a_column_of_their_own(background_runs):
+    # In f32 the stash's id and resting impulse fill its two columns, so the friction impulse
+    # gets a third (in f64 it shares the id's 64 bits). A rebuild must carry what the next step
+    # uses of each pair's friction impulse F, F in the tangent plane of its normal and at most
+    # mu·lambda long (contact.clamp_friction), to one step of mu·lambda/links.FRICTION_STEPS (half a
+    # step in each of two components, and the f32 normal's round-off), and lambda exactly; in
+    # place, and after a quarter turn that makes pairs change owner.
+    done, workdir = background_runs.result("f32-carry")
+    assert done.returncode == 0, done.stderr[-2000:]
+    run = np.load(workdir / "carry.npz")
+    assert int(run["columns"]) == 3
+    for name in ("in_place", "turned"):
+        pairs, before, after, x = (run[name + k] for k in ("_pairs", "_before", "_after", "_x"))
+        n = x[pairs[:, 0]] - x[pairs[:, 1]]
+        n /= np.linalg.norm(n, axis=1)[:, None]
+        F = before[:, 1:] - np.sum(before[:, 1:] * n, axis=1)[:, None] * n
+        bound = 0.3 * before[:, 0]
+        size = np.linalg.norm(F, axis=1)
+        F *= np.minimum(1.0, bound / np.maximum(size, 1e-30))[:, None]
+        np.testing.assert_array_equal(after[:, 0], before[:, 0])
+        carried = (bound > 0) & (size > 0)
+        assert carried.sum() > 100
+        steps = np.linalg.norm(after[:, 1:] - F, axis=1)[carried] / (bound[carried] / links.FRICTION_STEPS)
+        assert steps.max() < 1.0, steps.max()
+
+
 def test_widening_the_pair_tables_never_holds_the_old_and_the_new_together(monkeypatch):
     # the peak memory of a pour is reached while its lists widen and its pairs grow in number: the
     # narrower or shorter tables must be freed before the new ones are allocated (the stash of the
