@@ -30,31 +30,48 @@ class Packs:
     """Argument packs by their members' identity: ``packs.get(BallState, x=..., v=..., ...)``."""
 
     MAX_KEPT = 16
-    """Packs kept before the oldest are dropped (a solver alternates between two per kind)."""
+    """Packs kept before the least recently used are dropped."""
+
+    PER_SHAPE = 2
+    """Packs kept of one kind whose arrays have the same shapes: a solver alternates between two
+    (it swaps the state's positions with its scratch every step). Past them, the least recently
+    used takes the new arrays as its members: none is made. Taichi 1.7.4 keeps about a hundred
+    bytes of every pack it ever made (the docs' performance page, "Design measurements"), and a
+    reorder of the balls at each rebuild of the lists would otherwise make new ones."""
 
     def __init__(self) -> None:
-        self._kept: dict[tuple[Any, ...], tuple[tuple[Any, ...], Any]] = {}
+        self._kept: dict[tuple[Any, ...], tuple[tuple[Any, ...], Any]] = {}  # least recently used first
         self._scalars: tuple[tuple[Any, ...], Any] | None = None  # (the structs, their array)
         self._step: tuple[tuple[Any, ...], Any] | None = None  # ((scene, skin, v_cut, r_cut), StepParams)
 
     def get(self, kind: Any, **members: Any) -> Any:
-        """The pack of type ``kind`` holding ``members`` (made now if these arrays have none yet).
+        """The pack of type ``kind`` holding ``members`` (made now, or taken over, if these arrays have
+        none yet).
 
         A new pack drops the kept packs of its kind whose arrays have other shapes than these: arrays
         that were replaced by bigger ones (the solver's pair tables, widened), which the old packs
         would otherwise keep in memory beside the new ones."""
         key = (id(kind), *(id(a) for a in members.values()))
-        kept = self._kept.get(key)
+        kept = self._kept.pop(key, None)
         if kept is not None:
+            self._kept[key] = kept
             return kept[1]
         shapes = (id(kind), *(getattr(a, "shape", None) for a in members.values()))
-        for old in [
-            k for k, (old_shapes, _) in self._kept.items() if old_shapes[0] == id(kind) and old_shapes != shapes
-        ]:
-            del self._kept[old]
-        if len(self._kept) >= self.MAX_KEPT:
-            self._kept.pop(next(iter(self._kept)))
-        pack = kind(**members)
+        alike = []
+        for old, (old_shapes, _) in list(self._kept.items()):
+            if old_shapes[0] == id(kind) and old_shapes != shapes:
+                del self._kept[old]
+            elif old_shapes == shapes:
+                alike.append(old)
+        if len(alike) >= self.PER_SHAPE:
+            pack = self._kept.pop(alike[0])[1]
+            for name, a in members.items():
+                if pack[name] is not a:
+                    pack[name] = a
+        else:
+            if len(self._kept) >= self.MAX_KEPT:
+                self._kept.pop(next(iter(self._kept)))
+            pack = kind(**members)
         self._kept[key] = (shapes, pack)
         return pack
 
