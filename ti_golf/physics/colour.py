@@ -363,7 +363,7 @@ def sweep_ball(
             j, p = lists.upper[i, k], p0 + k
             if in_this_pass(col, j, far_only, any_far, inv_cell, lists):
                 if state.status[j] == OUT_OF_BOUNDS:
-                    lists.lam[p] = 0.0  # a frozen ball no longer supports anything
+                    lists.lam[p] = ti.f32(0.0)  # a frozen ball no longer supports anything
                 elif not skip_pair(state.status, i, j):
                     n = pair_normal(xi, state.x[j], scratch.J[p, INV])
                     if n.norm_sqr() > 0.0:
@@ -371,7 +371,7 @@ def sweep_ball(
                         if stands_firm(contact, state.status[j]):
                             inv_mj = 0.0
                         F = ti.cast(lists.friction[p], float)
-                        lam = lists.lam[p]
+                        lam = ti.cast(lists.lam[p], float)
                         if phase == FIRST:  # what the warm start applied (pairs.carried_friction)
                             F = clamp_friction(F, n, contact.mu * lam)
                         inv_a, inv_b = inv_mi, inv_mj
@@ -418,7 +418,7 @@ def sweep_ball(
                                 ):
                                     break
                                 inv_a, inv_b = inv_mi, inv_mj  # the lower ball standing firm would add energy
-                            lists.lam[p] = lam_new
+                            lists.lam[p] = ti.cast(lam_new, ti.f32)
                             F = F_new
                             lists.friction[p] = ti.cast(F, ti.f32)
                             if P.norm_sqr() > 0.0:  # (a pair apart or at rest changes nothing: ball j left unread)

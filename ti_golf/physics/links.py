@@ -17,7 +17,7 @@ from ti_golf.physics.types import (
     FRIC,
     ID,
     LAM,
-    float_array,
+    f32_array,
     int_array,
     int_table,
     is_f64,
@@ -135,7 +135,7 @@ def pair_starts(first: int_array, chunk_start: int_array) -> ti.i32:
 def stash(
     upper: int_table,
     first: int_array,
-    lam: float_array,
+    lam: f32_array,
     scratch: pair_table,
     with_friction: ti.template(),
     x: vec3_array,
@@ -278,7 +278,7 @@ def link_and_carry(
     chunk: int_array,
     stashed: pair_table,
     stash_first: int_array,
-    lam: float_array,
+    lam: f32_array,
     moved: ti.template(),
     old_id: int_array,
     with_friction: ti.template(),
@@ -332,7 +332,7 @@ def carry_ball(
         if not found:
             found, value, word = stashed_impulse(stashed, stash_first, width, b, a, with_friction)
             sign = -1.0  # (stashed by b: the friction on b, with b's normal)
-        lam[p + k] = value
+        lam[p + k] = ti.cast(value, ti.f32)
         if ti.static(with_friction):
             F = friction_from_bits(word, sign * (x[i] - x[j]), mu * value)
             friction[p + k] = ti.cast(sign, ti.f32) * F

@@ -99,9 +99,9 @@ def owned_pairs(
         P = zero3()
         kick = 0
         if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
-            lam[p] = 0.0  # a frozen ball no longer supports anything (no warm start from it)
+            lam[p] = ti.f32(0.0)  # a frozen ball no longer supports anything (no warm start from it)
         elif ok and not skip_pair(status, i, j):  # (Jacobi only: the Gauss–Seidel step's end reads the gaps alone)
-            P, lam[p], _, kick = pair_impulse(
+            P, lam_p, _, kick = pair_impulse(
                 n,
                 gap,
                 v[i],
@@ -112,13 +112,14 @@ def owned_pairs(
                 w[j],
                 of_ball(radius, j),
                 inv_mj,
-                lam[p],
+                ti.cast(lam[p], float),
                 contact.e,
                 contact.mu,
                 v_inelastic,
                 h,
                 contact.relax,
             )
+            lam[p] = ti.cast(lam_p, ti.f32)
             if kick != 0:
                 flag[1] = 1  # every thread that writes, writes 1
         g = gap

@@ -356,7 +356,7 @@ NeighbourLists = Deferred(
         lower=int_array,  # each ball's lower neighbours, as slots of the pairs in their upper lists, ball after ball
         lower_first=int_array,  # where each ball's lower list starts in lower, (N + 1,) (links.link_lower_lists)
         x_at_build=vec3f_array,  # positions when the lists were built [m], f32, (N,)
-        lam=float_array.get(),  # each pair's accumulated resting impulse [N·s], (pairs,) (see first)
+        lam=f32_array,  # each pair's accumulated resting impulse [N·s], f32, (pairs,) (see first)
         # ball i has a row of surface impulses, surface_start[i], when surface_start[i + 1] > surface_start[i]
         surface_start=int_array,  # (N + 1,) (see surfaces.list_surfaces)
         # each row's accumulated resting impulse λ and (Gauss–Seidel) friction impulse F per unit mass [m/s]

@@ -69,15 +69,15 @@ def sweep_launches(iterations: int) -> list[tuple[bool, int, bool]]:
 def table_bytes(n: int, width: int, pairs: int, gauss_seidel: bool) -> int:
     """Bytes of the neighbour and pair tables of ``n`` balls with upper lists ``width`` wide and
     room for ``pairs`` pairs: per upper-list entry a neighbour (4 bytes); per pair its link in the
-    other ball's lower list (4 bytes), its resting impulse and its row of the sweep's table
+    other ball's lower list (4 bytes), its resting impulse (f32), its row of the sweep's table
     (:func:`.types.pair_columns` floats), and with the Gauss–Seidel sweeps its friction impulse
     (3 f32)."""
     f = np.dtype(np_float()).itemsize
-    per_pair = 4 + (1 + pair_columns(gauss_seidel)) * f + (12 if gauss_seidel else 0)
+    per_pair = 4 + 4 + pair_columns(gauss_seidel) * f + (12 if gauss_seidel else 0)
     return n * width * 4 + pairs * per_pair
 
 
-PAIR_ROOM = 8
+PAIR_ROOM = 16
 """Pair tables that the lists outgrow are made for the pairs listed plus 1/PAIR_ROOM of them (see
 ``CollisionSolver._fit_pair_tables``): room for the lists to grow a little before the tables are
 allocated again, while a pour lands."""
@@ -169,7 +169,7 @@ class CollisionSolver:
         self.first.fill(0)
         self.pair_chunk = ti.ndarray(ti.i32, sort.scan_chunks(n))
         self.pair_capacity = 1
-        self.lam = ti.ndarray(float, self.pair_capacity)
+        self.lam = ti.ndarray(ti.f32, self.pair_capacity)
         # ball i's lower list: lower[lower_first[i] : lower_first[i + 1]], as long as the pair tables (links.link_lower)
         self.lower, self.lower_first = ti.ndarray(ti.i32, self.pair_capacity), ti.ndarray(ti.i32, n + 1)
         self.lower_first.fill(0)
@@ -339,7 +339,7 @@ class CollisionSolver:
                 self.friction = None
             free_dropped_arrays()
             if grow:
-                self.lam = ti.ndarray(float, self.pair_capacity)
+                self.lam = ti.ndarray(ti.f32, self.pair_capacity)
                 self.lower = ti.ndarray(ti.i32, self.pair_capacity)
             if new_friction:
                 self.friction = ti.ndarray(vec3f, rows)

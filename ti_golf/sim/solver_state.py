@@ -60,6 +60,8 @@ def restore_solver(solver: CollisionSolver, state: State, arrays: dict[str, np.n
         arrays, meta = _surface_rows(state, arrays, meta)
     if "n_lower" in arrays:
         arrays, meta = _lower_links(arrays, meta)
+    if arrays["lam"].dtype != np.float32:  # saved before the pairs' resting impulses were kept in f32 (2026-11-27)
+        arrays = {**arrays, "lam": arrays["lam"].astype(np.float32)}
     shape, element, dtype = meta["scratch"].get("impulse", [[0], [], ""])
     if element:  # saved before the sweep's table had a row per pair (until 2026-11-26: a 5-vector per pair)
         meta = {
