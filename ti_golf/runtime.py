@@ -139,7 +139,8 @@ def free_dropped_arrays() -> None:
     """Free the Taichi arrays that Python dropped since the last call, before larger ones are
     allocated, so that the old and the new are never in memory together: an array that a kernel
     was compiled with sits in a reference cycle (see :func:`free_every_ndarray`) that only the
-    cycle collector breaks. Costs a full collection: for when tables change shape, not per step."""
+    cycle collector breaks. Costs a full collection: for when tables change shape, and now and then
+    while a big pile's lists are rebuilt, not per step."""
     gc.collect()
 
 

@@ -83,6 +83,14 @@ PAIR_ROOM = 16
 allocated again, while a pour lands."""
 
 
+COLLECT_EVERY = 64
+"""Rebuilds of the lists between two full collections of Python's garbage, in piles of
+``REORDER_MIN_BALLS`` or more: Taichi's kernel launches leave reference cycles that only a full
+collection frees, and while a pour lands the lists are rebuilt at every step (the docs'
+performance page, "Design measurements"). A collection costs tens of milliseconds, against
+seconds of rebuilds and steps in between."""
+
+
 def steps_serially(n: int) -> bool:
     """Whether :class:`CollisionSolver` steps ``n`` balls serially by default: few balls, on the CPU
     (a GPU would run the serial loop on one slow thread)."""
@@ -315,6 +323,8 @@ class CollisionSolver:
             # each pair's inverse distance, gap or projection, and (Jacobi) impulse in a sweep (pairs.owned_pairs)
             self.impulse = ti.ndarray(float, (self.lam.shape[0], pair_columns(self.gauss_seidel)))
         self.rebuilds += 1
+        if n >= REORDER_MIN_BALLS and self.rebuilds % COLLECT_EVERY == 0:
+            free_dropped_arrays()  # (the cycles that Taichi's launches leave: see COLLECT_EVERY)
         self._valid = True
         if self.gauss_seidel and not self.serial:
             order_columns(self, state)
