@@ -1464,9 +1464,10 @@ def test_a_ball_spinning_on_a_ball_slows_at_five_halves_mu_roll_g_over_r(serial)
     # reference: two touching balls resist pivoting on each other as a ball on the ground does, with
     # the torque μ_roll·N·R (N = mg, the top ball's weight): the top ball of a column of two, spun
     # about the vertical, slows at dω_y/dt = −(5/2)·μ_roll·g/R until it stops. The contact's
-    # resting impulse is m·g·h every step, so the semi-implicit steps follow the line to round-off;
-    # the bottom ball, held by the ground's larger resistance (μ_roll·2mg·R), does not turn, and
-    # neither ball moves.
+    # resting impulse is m·g·h every step, so the semi-implicit steps follow the line to round-off
+    # and to the rounding of that impulse, kept in f32 between steps (2^-24 of each step's torque,
+    # so of the spin lost); the bottom ball, held by the ground's larger resistance
+    # (μ_roll·2mg·R), does not turn, and neither ball moves.
     mu_r, w0, h, R = 0.05, 30.0, 0.001, 0.02
     sc = _pivot_scene(mu_r, h)
     x0 = np.array([[0.0, R, 0.0], [0.0, 3.0 * R, 0.0]])
@@ -1476,7 +1477,8 @@ def test_a_ball_spinning_on_a_ball_slows_at_five_halves_mu_roll_g_over_r(serial)
     sim.step(1)  # the first step meets the ground (the resting impulses start then)
     for _ in range(3):
         sim.step(100)
-        np.testing.assert_allclose(sim.w[1, 1], w0 - rate * sim.t, rtol=1e-12)
+        lost = rate * sim.t
+        np.testing.assert_allclose(sim.w[1, 1], w0 - lost, rtol=1e-12, atol=2.0**-24 * lost)
         np.testing.assert_array_equal(sim.w[0], 0.0)
     np.testing.assert_array_equal(sim.x, x0)
     sim.run(t=w0 / rate)
@@ -1509,8 +1511,8 @@ def test_two_balls_meeting_head_on_lose_relative_spin_and_keep_their_total_spin(
     # about the line of their centres. Their contact takes the normal impulse λ = m_red·v with
     # m_red = m/2, and resists pivoting with opposite angular impulses ±μ_roll·λ·R about the normal
     # (the relative spin is never stopped here), so with I = ⅖mR² the relative spin falls by
-    # 2·μ_roll·(m/2)·v·R/I = (5/2)·μ_roll·v/R and the total spin, their angular momentum about the
-    # line, is kept to round-off
+    # 2·μ_roll·(m/2)·v·R/I = (5/2)·μ_roll·v/R, to the rounding of λ kept in f32 between steps (2^-24
+    # of it), and the total spin, their angular momentum about the line, is kept to round-off
     mu_r, R, v, h = 0.05, 0.02, 0.05, 0.001
     sc = _pivot_scene(mu_r, h, gravity=[0.0, 0.0, 0.0], e=0.0)
     w0 = np.array([[10.0, 0.0, 0.0], [-4.0, 0.0, 0.0]])
@@ -1521,6 +1523,7 @@ def test_two_balls_meeting_head_on_lose_relative_spin_and_keep_their_total_spin(
     sim.step(10)
     np.testing.assert_allclose(sim.v[:, 0], 0.5 * v, rtol=1e-12)  # B.9 with e = 0
     relative = sim.w[0, 0] - sim.w[1, 0]
-    assert relative == pytest.approx((w0[0, 0] - w0[1, 0]) - 2.5 * mu_r * v / R, rel=1e-12)
+    lost = 2.5 * mu_r * v / R
+    assert relative == pytest.approx((w0[0, 0] - w0[1, 0]) - lost, rel=1e-12, abs=2.0**-24 * lost)
     assert sim.w[:, 0].sum() == pytest.approx(w0[:, 0].sum(), abs=1e-12)
     np.testing.assert_array_equal(sim.w[:, 1:], 0.0)
