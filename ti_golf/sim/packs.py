@@ -35,9 +35,9 @@ class Packs:
     PER_SHAPE = 2
     """Packs kept of one kind whose arrays have the same shapes: a solver alternates between two
     (it swaps the state's positions with its scratch every step). Past them, the least recently
-    used takes the new arrays as its members: none is made. Taichi 1.7.4 keeps about a hundred
-    bytes of every pack it ever made (the docs' performance page, "Design measurements"), and a
-    reorder of the balls at each rebuild of the lists would otherwise make new ones."""
+    used takes the new arrays as its members: none is made. Taichi 1.7.4 keeps memory of every
+    pack it ever made (the docs' performance page, "Design measurements"), and a reorder of the
+    balls at each rebuild of the lists would otherwise make new ones."""
 
     def __init__(self) -> None:
         self._kept: dict[tuple[Any, ...], tuple[tuple[Any, ...], Any]] = {}  # least recently used first

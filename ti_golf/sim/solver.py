@@ -86,9 +86,8 @@ allocated again, while a pour lands."""
 COLLECT_EVERY = 64
 """Rebuilds of the lists between two full collections of Python's garbage, in piles of
 ``REORDER_MIN_BALLS`` or more: Taichi's kernel launches leave reference cycles that only a full
-collection frees, and while a pour lands the lists are rebuilt at every step (the docs'
-performance page, "Design measurements"). A collection costs tens of milliseconds, against
-seconds of rebuilds and steps in between."""
+collection frees, and while a pour lands the lists are rebuilt at every step (what they hold and
+what a collection costs: the docs' performance page, "Design measurements")."""
 
 
 def steps_serially(n: int) -> bool:
