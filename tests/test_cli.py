@@ -481,6 +481,7 @@ def test_bench_pit_pours_the_scene_and_reports_the_piles_quality():
     assert sum(row["wall_s"] for row in timeline) == pytest.approx(result["wall_s"], rel=1e-12)
     # falling balls: the lists are rebuilt at every step (the first stretch also builds them once more)
     assert [row["rebuilds"] for row in timeline][1:] == [20, 10] and 20 <= timeline[0]["rebuilds"] <= 21
+    assert result["steps_asleep"] == 0 and [row["steps_asleep"] for row in timeline] == [0, 0, 0]  # none skipped
     assert {k: timeline[-1][k] for k in ("deepest_overlap", "p99_speed_mps", "asleep_fraction")} == {
         k: result[k] for k in ("deepest_overlap", "p99_speed_mps", "asleep_fraction")
     }

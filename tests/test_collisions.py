@@ -977,6 +977,56 @@ def test_a_sleeping_column_stays_put_until_a_ball_lands_on_it():
     assert np.all(np.diff(sim.x[:, 1]) > 0.04 - 0.01 * 0.02)  # ... and no pair overlaps by 1 % of a radius
 
 
+def test_a_step_with_every_ball_asleep_is_skipped_and_changes_nothing():
+    # with the Gauss–Seidel sweeps a ball asleep takes no impulse and does not move
+    # (colour.stands_firm), and only a moving ball wakes it: a step in which no ball is awake
+    # changes nothing, and the parallel step skips it (CollisionSolver.skip_still). A column
+    # stepped with and without the skip must be the same bit for bit: while it falls asleep (by
+    # t = 0.2 s), asleep (the steps skipped), and after its top ball, tossed up between steps
+    # (set_ball), lands back on it, wakes the balls below and sleeps with them again: those steps
+    # must find every impulse and list as the skipped steps left them
+    sc = tg.load_scene(
+        "lab_vacuum",
+        ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3", 'contact.solver="gauss_seidel"'],
+    )
+    x = np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)])
+    runs, skipped, woken = [], [], []
+    for skip in (True, False):
+        sim = tg.Simulation(sc, x=x)
+        sim.solver = solver = CollisionSolver(sim.model, serial=False)
+        solver.skip_still = skip
+        sim.step(300)
+        asleep, before = sim.counts()["at_rest"], solver.still_steps
+        sim.set_ball(9, v=[0.0, 0.3, 0.0])  # it rises 4.6 mm and falls back within 0.07 s
+        most_awake = 0
+        for _ in range(50):  # 0.5 s
+            sim.step(10)
+            most_awake = max(most_awake, 10 - sim.counts()["at_rest"])
+        st = sim.state
+        runs.append(
+            (
+                asleep,
+                sim.x,
+                sim.v,
+                sim.w,
+                st.status.to_numpy(),
+                st.rest_time.to_numpy(),
+                solver.lam.to_numpy(),
+                solver.friction.to_numpy(),
+                solver.surface_impulse.to_numpy(),
+                np.float64(sim.t),
+                np.float64(solver.rebuilds),
+            )
+        )
+        skipped.append((before, solver.still_steps - before))
+        woken.append(most_awake)
+    for a, b in zip(*runs):
+        np.testing.assert_array_equal(a, b)
+    assert runs[0][0] == 10 and woken[0] >= 2  # the column slept, and the tossed ball woke the one below
+    assert np.all(runs[0][4] == AT_REST)  # ... and slept again
+    assert skipped[0][0] > 50 and skipped[0][1] > 50 and skipped[1] == (0, 0)  # the steps asleep, skipped
+
+
 @pytest.mark.parametrize(
     "name, steps",
     [

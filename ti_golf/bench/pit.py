@@ -4,7 +4,8 @@ The pour of ``scenes/ball_pit.toml`` (N balls dropped into a square bin), scaled
 widening the bin so the pile stays as deep, is run to ``t`` simulated seconds. The benchmark
 reports the wall time after compilation and the compile time on its own (a warm-up pour of a few
 balls compiles the same kernels first), simulated seconds per wall second, ball-steps per second,
-the peak memory above the runtime's baseline, and the quality of the pile at the end: its deepest
+the peak memory above the runtime's baseline, the steps in which every ball was asleep (skipped:
+``CollisionSolver.skip_still``), and the quality of the pile at the end: its deepest
 overlap, its 99th-percentile speed, the balls outside the bin and the share asleep. A bare gather
 over the final pile is timed in the same run as the yardstick (``step_cost_in_bare_gathers``).
 With ``every``, the pour runs in stretches of that many simulated seconds, and the benchmark also
@@ -120,6 +121,7 @@ def bench_pit(
         "t_s": sim.t,
         "dt_s": sim.dt,
         "steps": steps,
+        "steps_asleep": sim.solver.still_steps if sim.solver is not None else 0,
         "arch": info.arch,
         "precision": info.precision,
         "wall_s": wall_s,
@@ -162,6 +164,7 @@ def _pour(
     while done < steps:
         k = min(stretch, steps - done)
         rebuilds = sim.solver.rebuilds if sim.solver is not None else 0
+        asleep = sim.solver.still_steps if sim.solver is not None else 0
         t0 = time.perf_counter()
         sim.run(steps=k)
         wall = time.perf_counter() - t0
@@ -175,11 +178,13 @@ def _pour(
             "t_s": sim.t,
             "wall_s": wall,
             "rebuilds": (sim.solver.rebuilds if sim.solver is not None else 0) - rebuilds,
+            "steps_asleep": (sim.solver.still_steps if sim.solver is not None else 0) - asleep,
             **{key: q[key] for key in ("deepest_overlap", "p99_speed_mps", "asleep_fraction", "kinetic_energy_J")},
         }
         timeline.append(row)
         log(
-            f"  t = {sim.t:.3g} s: {wall:.1f} s of wall time, {row['rebuilds']} rebuilds in {k} steps, deepest "
+            f"  t = {sim.t:.3g} s: {wall:.1f} s of wall time, {row['rebuilds']} rebuilds in {k} steps "
+            f"({row['steps_asleep']} with every ball asleep), deepest "
             f"overlap {100 * q['deepest_overlap']:.3g} % of a radius, p99 speed {1e3 * q['p99_speed_mps']:.3g} mm/s, "
             f"{100 * q['asleep_fraction']:.3g} % asleep"
         )

@@ -87,6 +87,18 @@ overlaps with other balls asleep, so it falls asleep only with half the overlap 
 have."""
 
 
+@kernel
+def moving_balls(status: int_array) -> ti.i32:
+    """How many balls are awake and in play: neither asleep (``AT_REST``) nor out of bounds. With
+    the Gauss–Seidel sweeps, a step in which none is changes nothing (:func:`stands_firm`: a ball
+    asleep takes no impulse and does not move, and only a moving ball wakes it)."""
+    moving = 0
+    for i in range(status.shape[0]):
+        if status[i] != AT_REST and status[i] != OUT_OF_BOUNDS:
+            moving += 1  # (an integer sum: the same on every thread order)
+    return moving
+
+
 @ti.func
 def region_hop(contact: ti.template(), params: ti.template()):
     """What each contact nearer a moving ball takes off how long a ball counts as calm [s]

@@ -117,6 +117,11 @@ class CollisionSolver:
         pair_capacity: entries of the pair tables (resting and friction impulses, the sweep's
             entries): the pairs listed, laid out ball after ball (``first``), plus room to grow.
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
+        skip_still: whether a parallel step in which no ball is awake and in play is skipped, the
+            time advanced alone (default: with the Gauss–Seidel sweeps, under which such a step
+            changes nothing, see ``colour.moving_balls``): a pile asleep then costs one pass over
+            the balls' status a step, not the step's dozen kernel launches.
+        still_steps: how many steps were so skipped (for benchmarks and tests).
         serial: whether steps run serially, many per launch, with the lists rebuilt in the kernel
             by testing every pair (default: :func:`steps_serially`; CPU backends only); else one
             parallel launch per step, with the hash grid. Both give the same lists and
@@ -160,6 +165,7 @@ class CollisionSolver:
             capacity = max(capacity, n - 1, 1)
         self.capacity = capacity
         self.rebuilds = 0
+        self.still_steps = 0
         self.rank = ti.ndarray(ti.i32, n)
         self.sorted_ids = ti.ndarray(ti.i32, n)
         self.start = ti.ndarray(ti.i32, self.mask + 2)
@@ -193,6 +199,7 @@ class CollisionSolver:
         # the loop iterations after which a thread stops its loops without a word (grid.LOOP_CAP)
         self.loop_cap = grid.LOOP_CAP if ensure_init().arch == "vulkan" else None
         self.gauss_seidel = model.scene.contact.solver == "gauss_seidel"
+        self.skip_still = self.gauss_seidel
         if self.gauss_seidel and not self.serial:  # the balls by grid column (colour.column_order)
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
         self.col_start = self.col_chunk = None
@@ -506,6 +513,11 @@ class CollisionSolver:
     def _step_in_parallel(self, model: Model, state: State) -> None:
         if not self._valid or self._rebuild:
             self.build(state)
+        elif self.skip_still and colour.moving_balls(state.status) == 0:  # the step would change nothing
+            self.still_steps += 1
+            state.t += model.dt
+            state.steps += 1
+            return
         arguments = self._arguments(model, state, 1)
         if self.gauss_seidel:
             rebuild = self._gauss_seidel_step(model.scene.contact.iterations, arguments)
