@@ -140,18 +140,42 @@ def sort_buckets(x: ti.template(), start: ti.template(), sorted_ids: ti.template
         sort_bucket(bucket_in_turn(turn, start.shape[0] - 1), x, start, sorted_ids)
 
 
+SHELL_MIN = 24
+"""Buckets of more balls than this are Shell-sorted (:func:`sort_bucket`)."""
+
+
 @ti.func
 def sort_bucket(b, x: ti.template(), start: ti.template(), sorted_ids: ti.template()):
-    """Sort the ball ids of bucket b (:func:`sort_buckets`): a bucket holds a few balls, an
-    insertion sort."""
-    for k in range(start[b] + 1, start[b + 1]):
+    """Sort the ball ids of bucket b (:func:`sort_buckets`) by :func:`stored_after`. A grid cell
+    holds a few balls: one insertion sort. A bucket of more than ``SHELL_MIN`` balls, as a block of
+    grid columns holds hundreds (``colour.column_order``) in no order, is first sorted by the ids
+    g apart for the gaps g = …, 40, 13, 4 (Knuth's, (3^k − 1)/2, the largest below a third of its
+    balls first: a Shell sort), so that the last insertion sort moves each id a few places, not
+    past a quarter of the others. ``stored_after`` is a strict total order (ties broken by id), so
+    either way the order is the same."""
+    lo, hi = start[b], start[b + 1]
+    if hi - lo > SHELL_MIN:
+        gap = 1
+        while gap < (hi - lo) // 3:
+            gap = 3 * gap + 1
+        while gap > 1:
+            insertion_pass(lo, hi, gap, x, sorted_ids)
+            gap //= 3
+    insertion_pass(lo, hi, 1, x, sorted_ids)
+
+
+@ti.func
+def insertion_pass(lo, hi, gap, x: ti.template(), sorted_ids: ti.template()):
+    """Sort each chain of ids ``gap`` apart in ``sorted_ids[lo:hi]`` by :func:`stored_after`: an
+    insertion sort of each."""
+    for k in range(lo + gap, hi):
         j = sorted_ids[k]
         m = k
-        while m > start[b]:  # not `m > start[b] and ...`: Taichi evaluates both sides of an `and`
-            if not stored_after(x, sorted_ids[m - 1], j):  # (sorted_ids[-1] would be read)
+        while m >= lo + gap:  # not `m >= lo + gap and ...`: Taichi evaluates both sides of an `and`
+            if not stored_after(x, sorted_ids[m - gap], j):  # (sorted_ids[m − gap] below lo would be read)
                 break
-            sorted_ids[m] = sorted_ids[m - 1]
-            m -= 1
+            sorted_ids[m] = sorted_ids[m - gap]
+            m -= gap
         sorted_ids[m] = j
 
 

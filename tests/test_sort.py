@@ -1,0 +1,44 @@
+"""The grid's storage order (``physics.sort.storage_order``): the balls bucket by bucket, and within
+a bucket by position, y then z then x, then id (``sort.stored_after``), whatever order the counting
+sort's atomic ranks left them in and however many balls a bucket holds (``sort.sort_bucket``)."""
+
+import numpy as np
+import pytest
+import taichi as ti
+
+from ti_golf.physics import grid, sort
+from ti_golf.physics.types import vec3
+from ti_golf.runtime import ensure_init
+
+
+def stored(x: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """(the ids in storage order, the buckets' starts) of balls at ``x`` (n, 3) [m] in cells of side
+    ``cell`` [m], by the solver's kernels."""
+    ensure_init()
+    n, buckets = len(x), 1 << 12
+    xs = ti.ndarray(vec3.get(), n)
+    xs.from_numpy(x)
+    bounds = grid.cell_bounds(xs, 1.0 / cell)
+    origin, stride = (ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, buckets))
+    rank, ids = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
+    start, chunks = ti.ndarray(ti.i32, buckets + 1), ti.ndarray(ti.i32, sort.scan_chunks(buckets))
+    sort.storage_order(xs, 1.0 / cell, buckets - 1, origin, stride, rank, start, chunks, ids)
+    return ids.to_numpy(), start.to_numpy()
+
+
+@pytest.mark.parametrize("cell", [0.05, 0.5], ids=["a_few_balls_a_bucket", "hundreds_a_bucket"])
+def test_each_bucket_is_sorted_by_y_then_z_then_x_then_id(cell):
+    rng = np.random.default_rng(11)
+    x = rng.uniform(0.0, 1.0, (3000, 3))
+    x[::7, 1] = x[1::7, 1][: len(x[::7])]  # equal heights: z decides
+    x[::11, 1:] = 0.5  # equal heights and depths: x decides
+    x[::13] = x[0]  # the same point: the id decides
+    ids, start = stored(x, cell)
+    assert np.array_equal(np.sort(ids), np.arange(len(x)))  # every ball once
+    sizes = np.diff(start)
+    assert sizes.max() > (200 if cell == 0.5 else 1)
+    for b in np.nonzero(sizes > 1)[0]:
+        bucket = ids[start[b] : start[b + 1]]
+        # the expected order: numpy's lexsort, last key most significant
+        expected = bucket[np.lexsort((bucket, x[bucket, 0], x[bucket, 2], x[bucket, 1]))]
+        np.testing.assert_array_equal(bucket, expected)
