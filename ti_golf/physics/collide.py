@@ -457,7 +457,9 @@ def finish(
     """End of the step for ball i (not out of bounds) with its final velocities, the position
     projection ``dx`` of its ball overlaps and whether it ``touching`` a ball: new position in
     ``x_free`` (split at a plane's time of impact, overlaps projected out), status, rest timer,
-    out-of-bounds; sets ``flag[0]`` when the neighbour lists must be rebuilt before the next step."""
+    out-of-bounds; with the Jacobi sweeps, sets ``flag[0]`` when the neighbour lists must be rebuilt
+    before the next step (:func:`.links.moved_past`; the Gauss–Seidel steps test after their
+    projection, :func:`.stale.flag_stale_lists`)."""
     h = params.h
     st = state.status[i]
     xi, ri = state.x[i], of_ball(model.radius, i)
@@ -514,5 +516,6 @@ def finish(
     state.status[i] = st
     scratch.x_free[i] = x1
     state.v[i], state.w[i] = v_final, w_final
-    if moved_past(x1, lists.x_at_build[i], 2.0 * h * v_final.norm(), params.half_skin):
-        scratch.flag[0] = 1
+    if contact.solver != GAUSS_SEIDEL:  # (the Gauss–Seidel steps test the pairs after the projection: see stale)
+        if moved_past(x1, lists.x_at_build[i], 2.0 * h * v_final.norm(), params.half_skin):
+            scratch.flag[0] = 1

@@ -39,9 +39,10 @@ from ti_golf.physics.contact import (
     pivot_impulse,
     spin_jolt,
 )
-from ti_golf.physics.links import listed, moved_past
+from ti_golf.physics.links import listed
 from ti_golf.physics.pairs import QUIET, pair_normal, skip_pair
 from ti_golf.physics.sort import bucket_in_turn, cell_of, counting_sort, sort_bucket, spread_turns, task_stride
+from ti_golf.physics.stale import flag_stale_lists
 from ti_golf.physics.surfaces import surface_impulses
 from ti_golf.physics.types import (
     GAP,
@@ -472,12 +473,12 @@ def project_sweep(
     state: BallState,
     scratch: StepScratch,
     blocks: BlockOrder,
-) -> ti.i32:
-    """The position projection (B.18) of a Gauss–Seidel step, colour after colour as in
+):
+    """A pass of the position projection (B.18) of a Gauss–Seidel step, colour after colour as in
     :func:`gauss_seidel_sweep`, on the step's new positions ``scratch.x_free``
-    (:func:`project_ball`). Returns 1 (and sets ``scratch.flag[0]``) when the lists must be
-    rebuilt before the next step, as the step's end does (:func:`.collide.finish`)."""
-    _air, contact, _terrain, params = scalars_of(scalars)
+    (:func:`project_ball`); after the last, :func:`.stale.lists_stale` tells whether the lists
+    must be rebuilt before the next step."""
+    _air, contact, _terrain, _params = scalars_of(scalars)
     buckets = blocks.start.shape[0] - 1
     for c in ti.static(range(COLOURS)):
         for t in range(tasks * ti.static(task_stride())):  # (the blocks spread over the threads: see spread_turns)
@@ -487,10 +488,6 @@ def project_sweep(
                 for s in range(blocks.start[b], blocks.start[b + 1]):
                     if blocks.colour[s] == c:
                         project_ball(blocks.ids[s], False, any_far, inv_cell, contact.k_p, model, lists, state, scratch)
-    for i in range(state.x.shape[0]):
-        if moved_past(scratch.x_free[i], lists.x_at_build[i], 2.0 * params.h * state.v[i].norm(), params.half_skin):
-            scratch.flag[0] = 1
-    return scratch.flag[0]
 
 
 @ti.func
@@ -498,13 +495,12 @@ def serial_projection(
     params: ti.template(), k_p, model: ti.template(), lists: ti.template(), state: ti.template(), scratch: ti.template()
 ):
     """The position projection of :func:`project_sweep`, ``PROJECTIONS`` passes of every ball in
-    storage order, in the calling (serial) loop's thread."""
+    storage order, then whether the lists must be rebuilt (:func:`.stale.flag_stale_lists`, every
+    ball tested), in the calling (serial) loop's thread."""
     for _ in range(PROJECTIONS):
         for i in range(state.x.shape[0]):
             project_ball(i, False, 0, 1.0, k_p, model, lists, state, scratch)
-    for i in range(state.x.shape[0]):
-        if moved_past(scratch.x_free[i], lists.x_at_build[i], 2.0 * params.h * state.v[i].norm(), params.half_skin):
-            scratch.flag[0] = 1
+    flag_stale_lists(True, params, model.radius, lists, state, scratch, 0, 0, 0, False)
 
 
 @ti.func

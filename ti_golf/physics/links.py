@@ -416,17 +416,25 @@ def relist_all_pairs(
 
 
 @ti.func
-def moved_past(x1, x_build, reach, half_skin):
-    """Whether a ball now at ``x1`` [m], which may move ``reach`` [m] more before the next step's
-    test, can be farther than ``half_skin`` [m] from where it was when the lists were built.
+def distance_from_build(x1, x_build):
+    """How far [m] a ball now at ``x1`` [m] may be from where it was when the lists were built.
 
     The position at the build, ``x_build``, is kept in f32 (12 bytes per ball less in f64): it
-    only serves this test. Rounding moved it by at most 2^-24·|x| (round to nearest), so the test
-    adds twice that, |x_build|·2^-23 (in f64; nothing in f32, where nothing was rounded): a ball
-    never moves past half the skin unseen, and the lists are rebuilt a little early, by 2 % of
-    half the skin of a golf ball (1.07 mm) for a ball 170 m from the origin, by 11 % at 1 km."""
+    only serves the tests of whether the lists still hold. Rounding moved it by at most
+    2^-24·|x| (round to nearest), so the distance adds twice that, |x_build|·2^-23 (in f64;
+    nothing in f32, where nothing was rounded): a ball never moves past the skin unseen, and the
+    lists are rebuilt a little early, by 2 % of half the skin of a golf ball (1.07 mm) for a ball
+    170 m from the origin, by 11 % at 1 km."""
     xb = ti.cast(x_build, float)
     margin = 0.0
     if ti.static(is_f64()):
         margin = xb.norm() * 2.0**-23
-    return (x1 - xb).norm() + margin + reach > half_skin
+    return (x1 - xb).norm() + margin
+
+
+@ti.func
+def moved_past(x1, x_build, reach, half_skin):
+    """Whether a ball now at ``x1`` [m], which may move ``reach`` [m] more before the next step's
+    test, can be farther than ``half_skin`` [m] from where it was when the lists were built
+    (:func:`distance_from_build`)."""
+    return distance_from_build(x1, x_build) + reach > half_skin

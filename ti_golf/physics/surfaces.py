@@ -290,12 +290,13 @@ def list_surfaces(
     ball order by the grid's chunked scan (``chunk_start``: its scratch, see
     ``links.pair_starts``). Returns the rows in all.
 
-    ``reach`` [m] bounds how far a ball moves before the next rebuild: half the skin between
-    rebuilds (``collide.moved_past``), or in the step right after the build h·|v|, where |v| may
-    be up to the fastest ball's speed for a ball that it knocks on; the caller passes twice the
-    larger, max(skin, 2h·v_max), as ball pairs are listed within the skin (``grid.pair_reach``). A
-    ball knocked farther within one step still meets the surface (see
-    :func:`surface_contact_step`)."""
+    ``reach`` [m] bounds how far a ball moves before the next rebuild: the skin between rebuilds
+    with the Gauss–Seidel sweeps (``stale.flag_stale_lists``), half of it with the Jacobi sweeps
+    (``links.moved_past``), or in the step right after the build h·|v|, where |v| may be up to the
+    fastest ball's speed for a ball that it knocks on; the caller passes max(skin, 2h·v_max), as
+    ball pairs are listed within the skin (``grid.pair_reach``). A ball knocked farther within one
+    step still meets the surface (see :func:`surface_contact_step`), and has then used more than
+    the skin: the lists are rebuilt before the next step."""
     for i in range(x.shape[0]):
         listed = near_a_surface(i, x[i], reach, terrain, model)
         old = old_row(i, carry, old_start, reorder, old_index)

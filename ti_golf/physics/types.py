@@ -201,7 +201,7 @@ int_grid = ti.types.ndarray(dtype=ti.i32, ndim=2)
 """2-D int array (terrain cell surface types)."""
 vec3f = ti.types.vector(3, ti.f32)
 """3-vector of f32 whatever the precision (positions kept only to test how far balls moved, see
-``collide.moved_past``)."""
+``links.distance_from_build``)."""
 vec3f_array = ti.types.ndarray(dtype=vec3f, ndim=1)
 f32_array = ti.types.ndarray(dtype=ti.f32, ndim=1)
 vec4f = ti.types.vector(4, ti.f32)

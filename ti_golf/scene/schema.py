@@ -186,7 +186,8 @@ class Contact:
         0.1,
         "-",
         "neighbour-list skin as a fraction of the largest radius, bar a few much bigger balls "
-        "(lists are rebuilt when a ball moves skin/2)",
+        "(lists are rebuilt when a ball moves skin/2; under gauss_seidel, when a pair they miss may "
+        "touch, a ball moving up to the skin)",
         Interval(0.0, 2.0, lo_open=True),
         read_when=("world.collisions", (True,)),
     )

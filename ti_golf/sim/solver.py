@@ -3,11 +3,13 @@ sweeps and the end-of-step position update, in that fixed order (see physics/col
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import taichi as ti
 
 from ti_golf.errors import SimulationError
-from ti_golf.physics import apart, collide, colour, grid, links, sort
+from ti_golf.physics import apart, collide, colour, grid, links, sort, stale
 from ti_golf.physics.types import (
     BlockOrder,
     GridParams,
@@ -170,7 +172,7 @@ class CollisionSolver:
         self.sorted_ids = ti.ndarray(ti.i32, n)
         self.start = ti.ndarray(ti.i32, self.mask + 2)
         self.chunk_start = ti.ndarray(ti.i32, sort.scan_chunks(self.mask + 1))
-        self.x_at_build = ti.ndarray(vec3f, n)  # f32: only tested against half the skin (collide.moved_past)
+        self.x_at_build = ti.ndarray(vec3f, n)  # f32: only tested against the skin (links.distance_from_build)
         self.x_free = ti.ndarray(vec3.get(), n)
         self.v_free = ti.ndarray(vec3.get(), n)
         self.calm = ti.ndarray(float, n)  # least rest timer of each ball and the balls it touches [s]
@@ -213,12 +215,14 @@ class CollisionSolver:
         self._rebuild = True
         self._ids: ti.Ndarray | None = None  # the state's storage order at the last build (see pairs)
         self._hash = None  # the grid hash's (origin, stride) at the last build (grid.hash_strides)
+        self._last_grid = None  # (a cache of last_grid())
 
     def build(self, state: State) -> None:
         """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
         pair's accumulated impulse over (the neighbour tables widen to the longest list when one
         overflows; the pair tables grow with the pairs listed in all)."""
         n = state.n
+        self._last_grid = None
         if n >= REORDER_MIN_BALLS:  # 0.2 ms, against the build's tens of milliseconds
             release_freed_memory()  # before the tables: numpy copies freed since (balls set up, storage order)
         stashed = None
@@ -251,22 +255,7 @@ class CollisionSolver:
                 self.upper = None
                 free_dropped_arrays()
                 self.upper = ti.ndarray(ti.i32, (n, self.capacity))
-            params = GridParams(
-                inv_cell=1.0 / self.cell,
-                mask=self.mask,
-                origin=self._hash[0],
-                stride=self._hash[1],
-                skin=self.skin,
-                h=h,
-                fast=int(fast),
-                v_cut=self.v_cut,
-                r_cut=self.r_cut,
-                n_apart=self.n_apart,
-                scan_apart=int(scan_apart),
-            )
-            scratch = self._packs.get(
-                GridScratch, rank=self.rank, start=self.start, chunk_start=self.chunk_start, sorted_ids=self.sorted_ids
-            )
+            params, scratch = self._grid_params(fast), self._grid_scratch()
             longest = grid.list_neighbours(
                 params,
                 state.x,
@@ -334,6 +323,41 @@ class CollisionSolver:
         self._valid = True
         if self.gauss_seidel and not self.serial:
             order_columns(self, state)
+
+    def _grid_params(self, fast: bool) -> Any:
+        """The :data:`~ti_golf.physics.types.GridParams` of the grid as the last build made it (its
+        cells, hash, skin, step and the balls set apart), ``fast`` when pairs are listed by their
+        closing speed too (``grid.cell_size``)."""
+        return GridParams(
+            inv_cell=1.0 / self.cell,
+            mask=self.mask,
+            origin=self._hash[0],
+            stride=self._hash[1],
+            skin=self.skin,
+            h=self._model.dt,
+            fast=int(fast),
+            v_cut=self.v_cut,
+            r_cut=self.r_cut,
+            n_apart=self.n_apart,
+            scan_apart=int(self.n_apart > 0 and on_cpu()),
+        )
+
+    def _grid_scratch(self) -> Any:
+        """The grid's :data:`~ti_golf.physics.types.GridScratch`: its buckets' starts and the balls
+        sorted by bucket, which the last build left and the steps read until the next."""
+        return self._packs.get(
+            GridScratch, rank=self.rank, start=self.start, chunk_start=self.chunk_start, sorted_ids=self.sorted_ids
+        )
+
+    def last_grid(self) -> tuple:
+        """The grid of the last build as ``stale.lists_stale`` reads it, after the step it builds
+        the lists for: its :data:`~ti_golf.physics.types.GridParams` and
+        :data:`~ti_golf.physics.types.GridScratch`, the balls it set apart and whether the balls
+        are stored in its order (``stored_sorted`` of ``grid.list_neighbours``). Made from what the
+        build kept, and so also for a solver restored from a saved run."""
+        if self._last_grid is None:
+            self._last_grid = (self._grid_params(False), self._grid_scratch(), self.apart_ids, self.reorder)
+        return self._last_grid
 
     def _fit_pair_tables(self, state: State, pairs: int, room: int) -> None:
         """Make room for ``pairs`` pairs in the tables of the pairs' resting impulses, lower-list links
@@ -446,9 +470,7 @@ class CollisionSolver:
         "calm",
         "clear",
         "rank",
-        "start",
         "chunk_start",
-        "sorted_ids",
         "impulse",
         "impact",
         "stash_first",
@@ -533,7 +555,7 @@ class CollisionSolver:
         """One parallel step with Gauss–Seidel sweeps (see ``physics.colour``): the free flight and
         warm start, ``iterations`` coloured sweeps and the restitution pass, the last sweep, which
         only finishes the step, then ``colour.PROJECTIONS`` passes of the position projection.
-        Returns whether the lists must be rebuilt."""
+        Returns whether the lists must be rebuilt (``stale.lists_stale``)."""
         collide.collision_step(*arguments, False, True, 0, False)
         scalars, _, _, _, _, model, lists, state, _, scratch = arguments
         inv_cell = 1.0 / self.cell
@@ -549,12 +571,11 @@ class CollisionSolver:
             if any_far:
                 colour.far_pairs(phase, inv_cell, scalars, model, lists, state, scratch)
         collide.collision_step(*arguments, False, False, 0, True)
-        rebuild = 0
         for _ in range(colour.PROJECTIONS):
             if any_far:
                 colour.far_pairs(colour.PROJECT, inv_cell, scalars, model, lists, state, scratch)
-            rebuild = colour.project_sweep(any_far, inv_cell, tasks, scalars, model, lists, state, scratch, blocks)
-        return rebuild
+            colour.project_sweep(any_far, inv_cell, tasks, scalars, model, lists, state, scratch, blocks)
+        return stale.lists_stale(scalars, *self.last_grid(), model, lists, state, scratch)
 
     def _arguments(self, m: Model, s: State, steps: int) -> tuple:
         """The arguments of ``collide.collision_step`` before ``serial``: the array of the air,

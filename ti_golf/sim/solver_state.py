@@ -14,9 +14,9 @@ from ti_golf.sim.packs import Packs
 from ti_golf.sim.solver import CollisionSolver
 from ti_golf.sim.state import State
 
-NOT_SAVED = ("_model", "_packs", "_ids", "serial", "reorder", "loop_cap", "gauss_seidel")
+NOT_SAVED = ("_model", "_packs", "_ids", "serial", "reorder", "loop_cap", "gauss_seidel", "_last_grid")
 """Attributes of a :class:`CollisionSolver` that its constructor sets from its arguments, the
-model and the backend."""
+model and the backend, and what it caches of the others (``_last_grid``)."""
 
 
 def solver_arrays(solver: CollisionSolver) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
@@ -82,6 +82,8 @@ def restore_solver(solver: CollisionSolver, state: State, arrays: dict[str, np.n
         setattr(solver, name, _ndarray(tuple(shape), element, np.zeros(0, dtype)))
     for name, other in meta["same"].items():
         setattr(solver, name, getattr(solver, other))
+    if solver.gauss_seidel and "start" not in arrays:  # saved before its steps read the last build's grid
+        solver._rebuild = True  # (stale.lists_stale): build it again
     solver._ids = state.ids
     solver._packs = Packs()
 

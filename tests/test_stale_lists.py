@@ -1,0 +1,152 @@
+"""When the Gauss–Seidel steps rebuild the neighbour lists (``physics.stale``): only when a pair
+the lists miss may touch in the next step, or a ball has used the whole skin.
+
+A pair out of the lists was at least its surface gap apart at the build; it can touch in the next
+step only when its two balls together have used that gap (their distance from the build plus
+2h·|v| each). The Jacobi steps rebuild as soon as any ball has used half the skin, which bounds
+every pair; the Gauss–Seidel steps look for such pairs around each ball past half the skin."""
+
+import numpy as np
+import pytest
+import taichi as ti
+
+import ti_golf as tg
+from ti_golf.physics import stale
+from ti_golf.physics.types import (
+    GridParams,
+    GridScratch,
+    NeighbourLists,
+    float_array,
+    int_array,
+    kernel,
+    vec3,
+    vec3_array,
+)
+from ti_golf.runtime import on_cpu
+from ti_golf.sim.solver import CollisionSolver
+
+
+@kernel
+def _stale_both_ways(
+    g: GridParams,
+    grid: GridScratch,
+    apart_ids: int_array,
+    stored_sorted: ti.template(),
+    radius: float_array,
+    lists: NeighbourLists,
+    x1: vec3_array,
+    v: vec3_array,
+    out: int_array,
+):
+    """For every ball: 1 when the grid finds a pair the lists miss within its reach
+    (``stale.stale_near``), plus 2 when testing every ball does (``stale.stale_by_every_ball``)."""
+    for i in range(x1.shape[0]):
+        used = stale.skin_used(x1[i], lists.x_at_build[i], v[i], g.h)
+        near = stale.stale_near(i, used, g, grid.start, grid.sorted_ids, apart_ids, stored_sorted, radius, lists, x1, v)
+        every = stale.stale_by_every_ball(i, used, g.h, radius, lists, x1, v)
+        out[i] = ti.cast(near, ti.i32) + 2 * ti.cast(every, ti.i32)
+
+
+@pytest.mark.skipif(not on_cpu(), reason="the balls listed apart are looked for apart on the CPU only")
+@pytest.mark.parametrize("reorder", [False, True], ids=["stored_as_given", "stored_in_grid_order"])
+@pytest.mark.parametrize("boulder", [False, True], ids=["equal_balls", "a_boulder_listed_apart"])
+def test_the_grid_finds_the_same_missing_pairs_as_testing_every_ball(reorder, boulder):
+    # the grid's search (125 cells around the ball's cell at the build, and the balls listed apart)
+    # must find exactly the pairs that testing every ball finds, for every ball, whenever no ball
+    # has used more than the skin: a heap of balls, each then moved by up to 0.6 of the skin with
+    # up to 0.4 of it in 2h·|v|, so that many balls come within reach of a ball the lists miss and
+    # many do not
+    rng = np.random.default_rng(5)
+    r = 0.02
+    x = rng.uniform(0.0, 1.0, (800, 3)) * [0.5, 0.3, 0.5]  # a quarter of the volume in balls
+    radius, mass = np.full(len(x), r), None
+    if boulder:  # five times the others' size, listed apart (apart.size_cut), in the middle of them
+        centre = np.array([0.25, 0.15, 0.25])
+        x = np.vstack([centre, x[np.linalg.norm(x - centre, axis=1) > 0.1 + r + 1e-3]])
+        radius = np.full(len(x), r)
+        radius[0] = 0.1
+        mass = 0.046 * (radius / r) ** 3
+    n = len(x)
+    sc = tg.load_scene("lab_vacuum", ["air.rho=0", "world.gravity=[0,0,0]", "contact.solver=gauss_seidel"])
+    sim = tg.Simulation(sc, x=x, radius=radius, mass=mass)
+    sim.solver = s = CollisionSolver(sim.model, serial=False, reorder=reorder)
+    s.build(sim.state)
+    if boulder:
+        assert s.n_apart == 1
+    x_build = s.x_at_build.to_numpy().astype(float)
+    h, skin = sim.dt, s.skin
+    direction = rng.normal(size=(n, 3))
+    direction /= np.linalg.norm(direction, axis=1)[:, None]
+    moved = x_build + direction * rng.uniform(0.0, 0.6 * skin, (n, 1))
+    v = rng.normal(size=(n, 3))
+    v *= (rng.uniform(0.0, 0.4 * skin, n) / (2.0 * h * np.linalg.norm(v, axis=1)))[:, None]
+    x1, v1, out = ti.ndarray(vec3.get(), n), ti.ndarray(vec3.get(), n), ti.ndarray(ti.i32, n)
+    x1.from_numpy(moved)
+    v1.from_numpy(v)
+    g, grid, apart_ids, stored_sorted = s._grid
+    _stale_both_ways(g, grid, apart_ids, stored_sorted, s._model.radius, s._packs.lists(s), x1, v1, out)
+    found = out.to_numpy()
+    assert np.all((found == 0) | (found == 3))  # each ball: found both ways or neither
+    assert 20 < np.sum(found == 3) < n - 20  # both kinds, many of each
+
+
+def _rebuild_steps(speed: float, h: float, allowance: float, steps: int) -> list[int]:
+    """The steps (from 1) that begin with a rebuild of the lists, for a ball at a constant
+    ``speed`` [m/s] with time step ``h`` [s], when the lists are rebuilt once it has used more than
+    ``allowance`` [m]: its distance from the build plus 2h·|v| (a model of the rule, stepped)."""
+    rebuilt, moved, stale = [1], 0.0, False
+    for k in range(1, steps + 1):
+        if stale and k > 1:
+            rebuilt.append(k)
+            moved = 0.0
+        moved += speed * h
+        stale = moved + 2.0 * h * speed > allowance
+    return rebuilt
+
+
+@pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])
+@pytest.mark.parametrize("solver", ["jacobi", "gauss_seidel"])
+def test_a_lone_ball_uses_the_whole_skin_under_gauss_seidel_and_half_of_it_under_jacobi(solver, serial):
+    # a ball gliding at 0.13 m/s (0.13 mm a 1 ms step) with no other ball near: under Gauss–Seidel
+    # no pair can be missing from its lists, so they are rebuilt only once it has used the whole
+    # skin (2 mm), every 14 steps; the Jacobi steps rebuild once it has used half of it, every 6
+    sc = tg.load_scene(
+        "lab_vacuum", ["air.rho=0", "world.gravity=[0,0,0]", "world.dt=0.001", f"contact.solver={solver}"]
+    )
+    sim = tg.Simulation(sc, x=[[0.1, 0.5, 0.1], [1.1, 0.5, 0.1]], v=[[0.13, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    sim.solver = s = CollisionSolver(sim.model, serial=serial)
+    rebuilt = []
+    for k in range(1, 141):
+        before = s.rebuilds
+        sim.step(1)
+        if s.rebuilds > before:
+            rebuilt.append(k)
+    allowance = s.skin if solver == "gauss_seidel" else 0.5 * s.skin
+    assert rebuilt == _rebuild_steps(0.13, sim.dt, allowance, 140)
+    every = np.diff(rebuilt)
+    assert np.all(every == (14 if solver == "gauss_seidel" else 6))  # 0.13 mm a step: 2 mm, or 1 mm, less 0.26
+
+
+@pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])
+def test_two_balls_closing_in_are_listed_before_they_touch(serial):
+    # two balls 2.5 mm apart (beyond the 2 mm skin: not listed) close in at 0.13 m/s each. Each
+    # has used more than half the skin after 3 steps, yet their pair can touch only once the two
+    # together have used its 2.5 mm gap: the lists are rebuilt at step 9 (the model of the rule
+    # above, with the pair's gap for the allowance of each ball, half of it), the pair listed, and
+    # the balls then meet as B.9 has it: with e = 1 and equal masses they exchange velocities
+    sc = tg.load_scene(
+        "lab_vacuum",
+        ["air.rho=0", "world.gravity=[0,0,0]", "world.dt=0.001", "contact.e=1", "contact.solver=gauss_seidel"],
+    )
+    r = sc.ball.radius
+    x = [[0.1, 0.5, 0.1], [0.1 + 2.0 * r + 0.0025, 0.5, 0.1]]
+    sim = tg.Simulation(sc, x=x, v=[[0.13, 0.0, 0.0], [-0.13, 0.0, 0.0]])
+    sim.solver = s = CollisionSolver(sim.model, serial=serial)
+    rebuilt = []
+    for k in range(1, 31):
+        before = s.rebuilds
+        sim.step(1)
+        if s.rebuilds > before:
+            rebuilt.append(k)
+    assert rebuilt[:2] == _rebuild_steps(0.13, sim.dt, 0.5 * 0.0025, 30)[:2] == [1, 9]
+    np.testing.assert_allclose(sim.v, [[-0.13, 0.0, 0.0], [0.13, 0.0, 0.0]], atol=1e-12)
