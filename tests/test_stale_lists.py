@@ -83,7 +83,7 @@ def test_the_grid_finds_the_same_missing_pairs_as_testing_every_ball(reorder, bo
     x1, v1, out = ti.ndarray(vec3.get(), n), ti.ndarray(vec3.get(), n), ti.ndarray(ti.i32, n)
     x1.from_numpy(moved)
     v1.from_numpy(v)
-    g, grid, apart_ids, stored_sorted = s._grid
+    g, grid, apart_ids, stored_sorted = s.last_grid()
     _stale_both_ways(g, grid, apart_ids, stored_sorted, s._model.radius, s._packs.lists(s), x1, v1, out)
     found = out.to_numpy()
     assert np.all((found == 0) | (found == 3))  # each ball: found both ways or neither

@@ -161,15 +161,17 @@ def flag_stale_lists(
     """Set ``scratch.flag[0]`` when the lists must be rebuilt before the next step of balls now at
     ``scratch.x_free`` [m] with velocities ``state.v`` [m/s]: a ball has used the whole skin
     (``params``: the step's scalars, h and the skin), or a pair out of the lists is within reach
-    of a ball that has used more than half of it (see the module's docstring), looked for with the
+    of a ball that has used more than half of it (see the module's docstring), looked for only
+    when no ball has used the whole skin (as while a pour lands, when most steps rebuild), with the
     grid of the last build (``g``, ``grid``: its :data:`.types.GridParams` and
     :data:`.types.GridScratch`; ``apart_ids``, ``stored_sorted``: see :func:`stale_near`) or,
     ``serial``, among every ball (the four are not read). Both find the same pairs."""
     for i in range(scratch.x_free.shape[0]):
-        used = skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h)
-        if used > params.skin:
+        if skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h) > params.skin:
             scratch.flag[0] = 1
-        elif used > params.half_skin:
+    for i in range(scratch.x_free.shape[0]):  # (a second loop: no ball searched when one used the skin)
+        used = skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h)
+        if used > params.half_skin and used <= params.skin:
             if scratch.flag[0] == 0:  # (once the lists must be rebuilt, no other ball need be tested)
                 stale = False
                 if ti.static(serial):
