@@ -37,7 +37,7 @@ from ti_golf.physics.types import (
 )
 
 REACH_CELLS = 2
-"""Cells on each side of a ball's cell (at the build) in which :func:`lists_stale` looks for the
+"""Cells on each side of a ball's cell (at the build) in which :func:`stale_near` looks for the
 balls it may have come within reach of: a pair within 2·r + 2·skin lies within two cells, which
 are at least 2·r + skin wide."""
 
