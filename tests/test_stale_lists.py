@@ -104,6 +104,17 @@ def _rebuild_steps(speed: float, h: float, allowance: float, steps: int) -> list
     return rebuilt
 
 
+def _steps_that_rebuild(sim: tg.Simulation, steps: int) -> list[int]:
+    """The steps (from 1) of ``steps`` one-step launches of ``sim`` that began with a rebuild."""
+    rebuilt = []
+    for k in range(1, steps + 1):
+        before = sim.solver.rebuilds
+        sim.step(1)
+        if sim.solver.rebuilds > before:
+            rebuilt.append(k)
+    return rebuilt
+
+
 @pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])
 @pytest.mark.parametrize("solver", ["jacobi", "gauss_seidel"])
 def test_a_lone_ball_uses_the_whole_skin_under_gauss_seidel_and_half_of_it_under_jacobi(solver, serial):
@@ -115,12 +126,7 @@ def test_a_lone_ball_uses_the_whole_skin_under_gauss_seidel_and_half_of_it_under
     )
     sim = tg.Simulation(sc, x=[[0.1, 0.5, 0.1], [1.1, 0.5, 0.1]], v=[[0.13, 0.0, 0.0], [0.0, 0.0, 0.0]])
     sim.solver = s = CollisionSolver(sim.model, serial=serial)
-    rebuilt = []
-    for k in range(1, 141):
-        before = s.rebuilds
-        sim.step(1)
-        if s.rebuilds > before:
-            rebuilt.append(k)
+    rebuilt = _steps_that_rebuild(sim, 140)
     allowance = s.skin if solver == "gauss_seidel" else 0.5 * s.skin
     assert rebuilt == _rebuild_steps(0.13, sim.dt, allowance, 140)
     every = np.diff(rebuilt)
@@ -130,7 +136,7 @@ def test_a_lone_ball_uses_the_whole_skin_under_gauss_seidel_and_half_of_it_under
 @pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])
 def test_two_balls_closing_in_are_listed_before_they_touch(serial):
     # two balls 2.5 mm apart (beyond the 2 mm skin: not listed) close in at 0.13 m/s each. Each
-    # has used more than half the skin after 3 steps, yet their pair can touch only once the two
+    # has used more than half the skin after 6 steps, yet their pair can touch only once the two
     # together have used its 2.5 mm gap: the lists are rebuilt at step 9 (the model of the rule
     # above, with the pair's gap for the allowance of each ball, half of it), the pair listed, and
     # the balls then meet as B.9 has it: with e = 1 and equal masses they exchange velocities
@@ -141,12 +147,7 @@ def test_two_balls_closing_in_are_listed_before_they_touch(serial):
     r = sc.ball.radius
     x = [[0.1, 0.5, 0.1], [0.1 + 2.0 * r + 0.0025, 0.5, 0.1]]
     sim = tg.Simulation(sc, x=x, v=[[0.13, 0.0, 0.0], [-0.13, 0.0, 0.0]])
-    sim.solver = s = CollisionSolver(sim.model, serial=serial)
-    rebuilt = []
-    for k in range(1, 31):
-        before = s.rebuilds
-        sim.step(1)
-        if s.rebuilds > before:
-            rebuilt.append(k)
+    sim.solver = CollisionSolver(sim.model, serial=serial)
+    rebuilt = _steps_that_rebuild(sim, 30)
     assert rebuilt[:2] == _rebuild_steps(0.13, sim.dt, 0.5 * 0.0025, 30)[:2] == [1, 9]
     np.testing.assert_allclose(sim.v, [[-0.13, 0.0, 0.0], [0.13, 0.0, 0.0]], atol=1e-12)
