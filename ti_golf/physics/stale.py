@@ -170,9 +170,9 @@ def flag_stale_lists(
         if skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h) > params.skin:
             scratch.flag[0] = 1
     for i in range(scratch.x_free.shape[0]):  # (a second loop: no ball searched when one used the skin)
-        used = skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h)
-        if used > params.half_skin and used <= params.skin:
-            if scratch.flag[0] == 0:  # (once the lists must be rebuilt, no other ball need be tested)
+        if scratch.flag[0] == 0:  # (once the lists must be rebuilt, no other ball need be tested)
+            used = skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h)
+            if used > params.half_skin and used <= params.skin:
                 stale = False
                 if ti.static(serial):
                     stale = stale_by_every_ball(i, used, params.h, radius, lists, scratch.x_free, state.v)
