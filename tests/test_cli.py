@@ -497,6 +497,42 @@ def test_bench_pit_pours_the_scene_and_reports_the_piles_quality():
     json.loads(json.dumps(result))
 
 
+background.declare(
+    "bench-pit-profile",
+    lambda _: (cli("bench", "pit", "--n", "300", "--t", "0.005", "--every", "0.003", "--profile", "--json"), {}),
+)
+
+
+@pytest.mark.background("bench-pit-profile")
+def test_bench_pit_profile_counts_every_launch_of_the_step(background_runs):
+    # Taichi's kernel profiler on: each kernel's seconds and launches, in all and per stretch. The
+    # step's launches are the solver's: per step 2 of collision_step (the free flight with the
+    # warm start, and the last part), one Gauss–Seidel sweep per phase of colour.step_phases and
+    # colour.PROJECTIONS projection passes; one list build per rebuild the steps made.
+    from ti_golf.physics.colour import PROJECTIONS, step_phases
+
+    proc = ok(background_runs.result("bench-pit-profile")[0])
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    steps, kernels = result["steps"], result["kernels"]
+    assert result["n"] == 300 and steps == 5
+    assert kernels["collision_step"]["launches"] == 2 * steps
+    assert kernels["gauss_seidel_sweep"]["launches"] == len(step_phases(4)) * steps
+    assert kernels["project_sweep"]["launches"] == PROJECTIONS * steps
+    assert 1 <= kernels["list_neighbours"]["launches"] <= sum(row["rebuilds"] for row in result["timeline"])
+    total = result["kernel_profiler"]["kernel_s"]
+    assert total == pytest.approx(sum(k["s"] for k in kernels.values()), rel=1e-4)
+    assert 0.0 < total < result["wall_s"] and result["kernel_profiler"]["host_s"] == pytest.approx(
+        result["wall_s"] - total, rel=1e-4, abs=1e-6
+    )
+    # the stretches (3 steps, then 2) add up to the whole
+    assert [round(row["t_s"], 6) for row in result["timeline"]] == [0.003, 0.005]
+    assert sum(row["kernel_s"] for row in result["timeline"]) == pytest.approx(total, rel=1e-4)
+    for name in ("gauss_seidel_sweep", "list_neighbours"):
+        by_stretch = sum(row["kernels"].get(name, 0.0) for row in result["timeline"])
+        assert by_stretch == pytest.approx(kernels[name]["s"], rel=1e-4), name
+    assert "s in kernels" in proc.stdout and "the host" in proc.stdout
+
+
 _BENCH_COLLIDE = {"awake": (512, ()), "asleep-8-sweeps": (512, ("--asleep", "--iterations", "8")), "serial": (64, ())}
 for _name, (_n, _flags) in _BENCH_COLLIDE.items():
     background.declare(

@@ -59,8 +59,10 @@ def _resolve(arch: str | None, precision: str | None) -> tuple[str, str]:
     return arch, precision
 
 
-def init_options(arch: str, precision: str, debug: bool = False) -> dict:
-    """The keyword arguments of ``ti.init`` for a backend (one of :data:`ARCHES`) and precision.
+def init_options(arch: str, precision: str, debug: bool = False, profile: bool = False) -> dict:
+    """The keyword arguments of ``ti.init`` for a backend (one of :data:`ARCHES`) and precision;
+    ``profile`` turns on Taichi's kernel profiler, which times every kernel launch (and waits
+    for each to finish: see :mod:`ti_golf.bench.kernel_times`).
 
     On CUDA (and ``gpu``, which picks CUDA where it can) matrices are scalarised
     (``force_scalarize_matrix``): without it, Taichi 1.7.4's CUDA code for the flight's lane
@@ -75,10 +77,13 @@ def init_options(arch: str, precision: str, debug: bool = False) -> dict:
         offline_cache=True,
         fast_math=False,
         force_scalarize_matrix=arch in ("cuda", "gpu"),
+        kernel_profiler=profile,
     )
 
 
-def init(arch: str | None = None, precision: str | None = None, *, debug: bool = False) -> RuntimeInfo:
+def init(
+    arch: str | None = None, precision: str | None = None, *, debug: bool = False, profile: bool = False
+) -> RuntimeInfo:
     """Initialise Taichi once per process.
 
     A second call with the same (or no) request returns the existing runtime; a second call that
@@ -92,16 +97,19 @@ def init(arch: str | None = None, precision: str | None = None, *, debug: bool =
             (arch and want_arch != _info.requested_arch)
             or (precision and want_prec != _info.precision)
             or (debug and not ti.lang.impl.current_cfg().debug)
+            or (profile and not ti.lang.impl.current_cfg().kernel_profiler)
         ):
             raise RuntimeError(
                 f"ti_golf is already initialised with arch={_info.requested_arch}, precision={_info.precision}"
-                f"{'' if ti.lang.impl.current_cfg().debug else ', debug off'}; start a new process to change them "
+                f"{'' if ti.lang.impl.current_cfg().debug else ', debug off'}"
+                f"{'' if ti.lang.impl.current_cfg().kernel_profiler else ', kernel profiler off'}; "
+                "start a new process to change them "
                 "(importing ti_golf.sim.solver or ti_golf.physics initialises with the defaults: call init first)"
             )
         return _info
     banner = io.StringIO()
     with contextlib.redirect_stdout(banner):  # Taichi prints "Starting on arch=..." on stdout
-        ti.init(**init_options(want_arch, want_prec, debug))
+        ti.init(**init_options(want_arch, want_prec, debug, profile))
     for line in banner.getvalue().splitlines():  # keep stdout clean for JSON; pass on anything unusual
         if not line.startswith("[Taichi] Starting on arch"):
             print(line, file=sys.stderr)

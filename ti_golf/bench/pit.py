@@ -11,6 +11,10 @@ over the final pile is timed in the same run as the yardstick (``step_cost_in_ba
 With ``every``, the pour runs in stretches of that many simulated seconds, and the benchmark also
 reports each stretch: its wall time, the rebuilds of the neighbour lists in it, and the pile's
 figures at its end (``timeline``), so that where the pour's time goes can be read off one run.
+With Taichi's kernel profiler on (``--profile``), the benchmark also reports the seconds and
+launches of each kernel, in all and in each stretch, and the host's part of the wall time (see
+:mod:`ti_golf.bench.kernel_times`); the profiler waits for every launch to end, so the wall time
+is then a little longer than without it.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import numpy as np
 
 from ti_golf.bench.collide import bare_gather_rate
 from ti_golf.bench.common import _peak_rss_bytes, _restart_peak_rss, _rss_bytes
+from ti_golf.bench.kernel_times import FOLD_EVERY, KernelTimes, profiling
 from ti_golf.physics.colour import moving_balls
 from ti_golf.runtime import ensure_init, release_freed_memory
 from ti_golf.scene.loader import load_scene
@@ -112,7 +117,8 @@ def bench_pit(
     t1 = time.perf_counter()
     sim = Simulation(scene)
     setup_s = time.perf_counter() - t1
-    wall_s, timeline, peak = _pour(sim, t, every, side, log)
+    times = KernelTimes() if profiling() else None
+    wall_s, timeline, peak = _pour(sim, t, every, side, log, times)
     steps = round(sim.t / sim.dt)
     quality = pile_quality(sim, side)
     gather_rate = bare_gather_rate(sim.x)
@@ -140,6 +146,9 @@ def bench_pit(
     }
     if every is not None:
         result["timeline"] = timeline
+    if times is not None:
+        result["kernel_profiler"] = {"kernel_s": times.total_s(), "host_s": wall_s - times.total_s()}
+        result["kernels"] = times.as_dict()
     log(
         f"{wall_s:.1f} s after {compile_s:.1f} s of compiling ({result['sim_s_per_wall_s']:.3g} simulated s per "
         f"wall s, {ball_steps_per_s:.3g} ball-steps/s, {result['bytes_per_ball_above_baseline']:.0f} bytes/ball)"
@@ -150,17 +159,29 @@ def bench_pit(
         f"{100 * quality['asleep_fraction']:.3g} % asleep"
     )
     log(f"baseline bare_gather: {gather_rate:.3g} balls/s -> a step costs {result['step_cost_in_bare_gathers']:.1f}")
+    if times is not None:
+        dearest = ", ".join(f"{name} {s:.1f} s" for name, s in times.seconds.most_common(6))
+        log(
+            f"kernels {times.total_s():.1f} s of the {wall_s:.1f} s (dearest: {dearest}); the host {wall_s - times.total_s():.1f} s"
+        )
     return result
 
 
 def _pour(
-    sim: Simulation, t: float, every: float | None, side: float, log: Callable[[str], None]
+    sim: Simulation,
+    t: float,
+    every: float | None,
+    side: float,
+    log: Callable[[str], None],
+    times: KernelTimes | None = None,
 ) -> tuple[float, list[dict[str, Any]], int]:
     """Run ``sim`` for ``t`` simulated seconds, in stretches of ``every`` [s] when given (each
     stretch's wall time, rebuilds of the lists and the pile's figures at its end, logged and
     listed); returns the wall time of the steps alone [s], the stretches, and the peak resident
     memory of the steps [bytes] (the count restarts after each stretch's pile is measured, but
-    what the measuring's numpy copies leave in the process still counts)."""
+    what the measuring's numpy copies leave in the process still counts). With ``times``, the
+    kernels' seconds are summed into it (every ``FOLD_EVERY`` steps, outside the wall time), and
+    each stretch also lists its own."""
     steps = int(math.ceil(t / sim.dt - 1e-9))  # (as Simulation.run counts them)
     stretch = steps if every is None else max(1, int(math.ceil(every / sim.dt - 1e-9)))
     wall_s, timeline, done, peak = 0.0, [], 0, 0
@@ -168,9 +189,18 @@ def _pour(
         k = min(stretch, steps - done)
         rebuilds = sim.solver.rebuilds if sim.solver is not None else 0
         asleep = sim.solver.still_steps if sim.solver is not None else 0
-        t0 = time.perf_counter()
-        sim.run(steps=k)
-        wall = time.perf_counter() - t0
+        kernel_s, kernels = 0.0, {}
+        if times is not None:
+            times.drop()
+            kernel_s, kernels = times.total_s(), dict(times.seconds)
+        wall, left = 0.0, k
+        while left > 0:
+            m = left if times is None else min(left, FOLD_EVERY)
+            t0 = time.perf_counter()
+            sim.run(steps=m)
+            wall, left = wall + time.perf_counter() - t0, left - m
+            if times is not None:
+                times.fold()
         wall_s, done, peak = wall_s + wall, done + k, max(peak, _peak_rss_bytes())
         if every is None:
             continue
@@ -184,9 +214,13 @@ def _pour(
             "steps_asleep": (sim.solver.still_steps if sim.solver is not None else 0) - asleep,
             **{key: q[key] for key in ("deepest_overlap", "p99_speed_mps", "asleep_fraction", "kinetic_energy_J")},
         }
+        if times is not None:
+            row["kernel_s"] = times.total_s() - kernel_s
+            row["kernels"] = {name: s - kernels.get(name, 0.0) for name, s in times.seconds.most_common()}
         timeline.append(row)
+        in_kernels = "" if times is None else f" ({row['kernel_s']:.1f} s in kernels)"
         log(
-            f"  t = {sim.t:.3g} s: {wall:.1f} s of wall time, {row['rebuilds']} rebuilds in {k} steps "
+            f"  t = {sim.t:.3g} s: {wall:.1f} s of wall time{in_kernels}, {row['rebuilds']} rebuilds in {k} steps "
             f"({row['steps_asleep']} with every ball asleep), deepest "
             f"overlap {100 * q['deepest_overlap']:.3g} % of a radius, p99 speed {1e3 * q['p99_speed_mps']:.3g} mm/s, "
             f"{100 * q['asleep_fraction']:.3g} % asleep"

@@ -72,6 +72,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default=None,
         help="also report each stretch of this many simulated seconds: wall time, rebuilds, the pile's figures",
     )
+    bp.add_argument(
+        "--profile",
+        action="store_true",
+        help="also report the seconds and launches of each kernel, with Taichi's kernel profiler (which waits "
+        "for every launch to end: the wall time is a little longer)",
+    )
     bp.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(bp)
     bd = bsub.add_parser(

@@ -77,7 +77,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     runtime.announce_first_compile = True
     try:
         if args.command not in NO_RUNTIME:  # before any output: a first run's notice comes first
-            runtime.init(getattr(args, "arch", None), getattr(args, "precision", None))
+            runtime.init(
+                getattr(args, "arch", None), getattr(args, "precision", None), profile=getattr(args, "profile", False)
+            )
         return COMMANDS[args.command](args)
     except ConfigError as exc:
         print(f"ti-golf: error: {exc}", file=sys.stderr)
