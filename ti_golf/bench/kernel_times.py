@@ -45,7 +45,7 @@ class KernelTimes:
     def __init__(self) -> None:
         self.seconds: Counter[str] = Counter()
         self.launches: Counter[str] = Counter()
-        ti.profiler.clear_kernel_profiler_info()
+        self.drop()
 
     def fold(self) -> None:
         """Add the profiler's records since the last fold to the sums, and drop them. A kernel's
@@ -59,10 +59,11 @@ class KernelTimes:
             by_loop[record.name] += 1
         most: Counter[tuple[str, str]] = Counter()  # by (kernel, instance)
         for loop, count in by_loop.items():
-            most[kernel_of(loop)] = max(most[kernel_of(loop)], count)
+            key = kernel_of(loop)
+            most[key] = max(most[key], count)
         for (kernel, _), count in most.items():
             self.launches[kernel] += count
-        ti.profiler.clear_kernel_profiler_info()
+        self.drop()
 
     def drop(self) -> None:
         """Drop the profiler's records since the last fold, unsummed (kernels run between the timed

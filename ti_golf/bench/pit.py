@@ -193,12 +193,11 @@ def _pour(
         if times is not None:
             times.drop()
             kernel_s, kernels = times.total_s(), dict(times.seconds)
-        wall, left = 0.0, k
-        while left > 0:
-            m = left if times is None else min(left, FOLD_EVERY)
+        wall, chunk = 0.0, k if times is None else FOLD_EVERY
+        for first in range(0, k, chunk):
             t0 = time.perf_counter()
-            sim.run(steps=m)
-            wall, left = wall + time.perf_counter() - t0, left - m
+            sim.run(steps=min(chunk, k - first))
+            wall += time.perf_counter() - t0
             if times is not None:
                 times.fold()
         wall_s, done, peak = wall_s + wall, done + k, max(peak, _peak_rss_bytes())
