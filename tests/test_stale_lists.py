@@ -9,6 +9,7 @@ every pair; the Gauss–Seidel steps look for such pairs around each ball past h
 import numpy as np
 import pytest
 import taichi as ti
+from conftest import SERIAL_OR_PARALLEL
 
 import ti_golf as tg
 from ti_golf.physics import stale
@@ -115,7 +116,7 @@ def _steps_that_rebuild(sim: tg.Simulation, steps: int) -> list[int]:
     return rebuilt
 
 
-@pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])
+@SERIAL_OR_PARALLEL
 @pytest.mark.parametrize("solver", ["jacobi", "gauss_seidel"])
 def test_a_lone_ball_uses_the_whole_skin_under_gauss_seidel_and_half_of_it_under_jacobi(solver, serial):
     # a ball gliding at 0.13 m/s (0.13 mm a 1 ms step) with no other ball near: under Gauss–Seidel
@@ -133,7 +134,7 @@ def test_a_lone_ball_uses_the_whole_skin_under_gauss_seidel_and_half_of_it_under
     assert np.all(every == (14 if solver == "gauss_seidel" else 6))  # 0.13 mm a step: 2 mm, or 1 mm, less 0.26
 
 
-@pytest.mark.parametrize("serial", [True, False], ids=["serial", "parallel"])
+@SERIAL_OR_PARALLEL
 def test_two_balls_closing_in_are_listed_before_they_touch(serial):
     # two balls 2.5 mm apart (beyond the 2 mm skin: not listed) close in at 0.13 m/s each. Each
     # has used more than half the skin after 6 steps, yet their pair can touch only once the two
