@@ -497,6 +497,37 @@ def test_bench_pit_pours_the_scene_and_reports_the_piles_quality():
     json.loads(json.dumps(result))
 
 
+def test_an_interrupted_bench_pit_reports_the_pour_so_far(monkeypatch, capsys):
+    # Ctrl-C or SIGTERM 30 steps into a 50-step pour: Simulation.run ends after the whole step it
+    # reached and raises KeyboardInterrupt (stood in for here); the benchmark still prints its
+    # figures for those 30 steps, its last stretch ending there, and the command exits with 130
+    from ti_golf.bench import pit
+
+    class InterruptedAfter30Steps(pit.Simulation):
+        def run(self, *, steps: int, **kwargs) -> None:
+            if self.n != 300:  # the warm-up pour
+                return super().run(steps=steps, **kwargs)
+            left = 30 - self.state.steps
+            super().run(steps=min(steps, left), **kwargs)
+            if steps > left:
+                raise KeyboardInterrupt
+
+    monkeypatch.setattr(pit, "Simulation", InterruptedAfter30Steps)
+    assert main(["bench", "pit", "--n", "300", "--t", "0.05", "--every", "0.02", "--json"]) == 130
+    out, err = capsys.readouterr()
+    result = json.loads(out.strip().splitlines()[-1])
+    assert result["interrupted"] is True and result["steps"] == 30 and result["t_s"] == pytest.approx(0.03)
+    assert [row["t_s"] for row in result["timeline"]] == pytest.approx([0.02, 0.03])
+    assert sum(row["wall_s"] for row in result["timeline"]) == pytest.approx(
+        result["wall_s"], rel=1e-5
+    )  # (JSON: 6 digits)
+    assert result["ball_steps_per_s"] == pytest.approx(300 * 30 / result["wall_s"], rel=1e-5)
+    assert "interrupted at t = 0.03 s" in out
+    assert err.strip().splitlines()[-1] == (
+        "ti-golf: interrupted at t = 0.03 s; the figures of the pour so far are printed above"
+    )
+
+
 background.declare(
     "bench-pit-profile",
     lambda _: (cli("bench", "pit", "--n", "300", "--t", "0.005", "--every", "0.003", "--profile", "--json"), {}),

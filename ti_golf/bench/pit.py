@@ -14,7 +14,8 @@ figures at its end (``timeline``), so that where the pour's time goes can be rea
 With Taichi's kernel profiler on (``--profile``), the benchmark also reports the seconds and
 launches of each kernel, in all and in each stretch, and the host's part of the wall time (see
 :mod:`ti_golf.bench.kernel_times`); the profiler waits for every launch to end, so the wall time
-is then a little longer than without it.
+is then a little longer than without it. Ctrl-C or SIGTERM ends the pour at the step it reached,
+and the benchmark reports that much of it (``interrupted``).
 """
 
 from __future__ import annotations
@@ -118,7 +119,11 @@ def bench_pit(
     sim = Simulation(scene)
     setup_s = time.perf_counter() - t1
     times = KernelTimes() if profiling() else None
-    wall_s, timeline, peak = _pour(sim, t, every, side, log, times)
+    wall_s, timeline, peak, interrupted = _pour(sim, t, every, side, log, times)
+    if interrupted and sim.t == 0.0:
+        raise KeyboardInterrupt("before the pour's first step")
+    if interrupted:
+        log(f"interrupted at t = {sim.t:.4g} s: the figures below are of the pour so far")
     steps = round(sim.t / sim.dt)
     quality = pile_quality(sim, side)
     gather_rate = bare_gather_rate(sim.x)
@@ -126,6 +131,7 @@ def bench_pit(
     result: dict[str, Any] = {
         "benchmark": "pit",
         "n": n_balls,
+        "interrupted": interrupted,
         "set": list(overrides),
         "t_s": sim.t,
         "dt_s": sim.dt,
@@ -174,18 +180,20 @@ def _pour(
     side: float,
     log: Callable[[str], None],
     times: KernelTimes | None = None,
-) -> tuple[float, list[dict[str, Any]], int]:
+) -> tuple[float, list[dict[str, Any]], int, bool]:
     """Run ``sim`` for ``t`` simulated seconds, in stretches of ``every`` [s] when given (each
     stretch's wall time, rebuilds of the lists and the pile's figures at its end, logged and
-    listed); returns the wall time of the steps alone [s], the stretches, and the peak resident
+    listed); returns the wall time of the steps alone [s], the stretches, the peak resident
     memory of the steps [bytes] (the count restarts after each stretch's pile is measured, but
-    what the measuring's numpy copies leave in the process still counts). With ``times``, the
-    kernels' seconds are summed into it (every ``FOLD_EVERY`` steps, outside the wall time), and
-    each stretch also lists its own."""
+    what the measuring's numpy copies leave in the process still counts) and whether the pour was
+    interrupted: Ctrl-C or SIGTERM ends it after the whole step it reached, which closes the last
+    stretch. With ``times``, the kernels' seconds are summed into it (every ``FOLD_EVERY`` steps,
+    outside the wall time), and each stretch also lists its own."""
     steps = int(math.ceil(t / sim.dt - 1e-9))  # (as Simulation.run counts them)
     stretch = steps if every is None else max(1, int(math.ceil(every / sim.dt - 1e-9)))
-    wall_s, timeline, done, peak = 0.0, [], 0, 0
-    while done < steps:
+    start = round(sim.t / sim.dt)
+    wall_s, timeline, done, peak, interrupted = 0.0, [], 0, 0, False
+    while done < steps and not interrupted:
         k = min(stretch, steps - done)
         rebuilds = sim.solver.rebuilds if sim.solver is not None else 0
         asleep = sim.solver.still_steps if sim.solver is not None else 0
@@ -194,14 +202,20 @@ def _pour(
             times.drop()
             kernel_s, kernels = times.total_s(), dict(times.seconds)
         wall, chunk = 0.0, k if times is None else FOLD_EVERY
-        for first in range(0, k, chunk):
-            t0 = time.perf_counter()
-            sim.run(steps=min(chunk, k - first))
-            wall += time.perf_counter() - t0
-            if times is not None:
-                times.fold()
+        try:
+            for first in range(0, k, chunk):
+                t0 = time.perf_counter()
+                try:
+                    sim.run(steps=min(chunk, k - first))
+                finally:  # (Simulation.run ends an interrupted launch after a whole step)
+                    wall += time.perf_counter() - t0
+                    if times is not None:
+                        times.fold()
+        except KeyboardInterrupt:
+            interrupted = True
+        k = round(sim.t / sim.dt) - start - done  # (the steps taken: fewer when interrupted)
         wall_s, done, peak = wall_s + wall, done + k, max(peak, _peak_rss_bytes())
-        if every is None:
+        if every is None or k == 0:
             continue
         q = pile_quality(sim, side)
         release_freed_memory()
@@ -224,4 +238,4 @@ def _pour(
             f"overlap {100 * q['deepest_overlap']:.3g} % of a radius, p99 speed {1e3 * q['p99_speed_mps']:.3g} mm/s, "
             f"{100 * q['asleep_fraction']:.3g} % asleep"
         )
-    return wall_s, timeline, peak
+    return wall_s, timeline, peak, interrupted

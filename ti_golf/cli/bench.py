@@ -138,4 +138,6 @@ def cmd_bench(args: argparse.Namespace) -> int:
         result = bench_sweep(n=args.n, dt=args.dt, repeats=max(1, args.repeats))
     if args.json:
         print(to_json(result))
+    if result.get("interrupted"):
+        raise KeyboardInterrupt(f"at t = {result['t_s']:.4g} s; the figures of the pour so far are printed above")
     return 0
