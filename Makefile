@@ -68,7 +68,7 @@ bench: setup
 # flight-physics tests on CUDA, in one go.
 gpu-check: setup
 	$(TIGOLF) bench sweep --n 1000000 --arch cuda --json
-	$(TIGOLF) bench pit --t 0.5 --arch cuda --json
+	$(TIGOLF) bench pit --every 0.5 --arch cuda --json
 	TI_GOLF_TEST_ARCH=cuda $(PY) -m pytest -q -x tests/test_physics_verification.py
 
 clean:
