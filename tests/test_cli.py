@@ -518,9 +518,8 @@ def test_an_interrupted_bench_pit_reports_the_pour_so_far(monkeypatch, capsys):
     result = json.loads(out.strip().splitlines()[-1])
     assert result["interrupted"] is True and result["steps"] == 30 and result["t_s"] == pytest.approx(0.03)
     assert [row["t_s"] for row in result["timeline"]] == pytest.approx([0.02, 0.03])
-    assert sum(row["wall_s"] for row in result["timeline"]) == pytest.approx(
-        result["wall_s"], rel=1e-5
-    )  # (JSON: 6 digits)
+    # (the JSON's figures carry 6 digits)
+    assert sum(row["wall_s"] for row in result["timeline"]) == pytest.approx(result["wall_s"], rel=1e-5)
     assert result["ball_steps_per_s"] == pytest.approx(300 * 30 / result["wall_s"], rel=1e-5)
     assert "interrupted at t = 0.03 s" in out
     assert err.strip().splitlines()[-1] == (
