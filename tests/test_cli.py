@@ -527,6 +527,28 @@ def test_an_interrupted_bench_pit_reports_the_pour_so_far(monkeypatch, capsys):
     )
 
 
+def test_bench_pit_interrupted_while_it_measures_the_pile_keeps_that_stretch(monkeypatch, capsys):
+    # SIGTERM while the pile is measured at the end of the first stretch (t = 0.02 s): the signal
+    # waits for the stretch's row, then the pour ends there, with its figures printed, code 130
+    from ti_golf.bench import pit
+
+    measure, calls = pit.pile_quality, []
+
+    def signalled_measure(*args, **kwargs):
+        if not calls:
+            os.kill(os.getpid(), signal.SIGTERM)  # arrives while the pile is first measured
+        calls.append(1)
+        return measure(*args, **kwargs)
+
+    monkeypatch.setattr(pit, "pile_quality", signalled_measure)
+    assert main(["bench", "pit", "--n", "300", "--t", "0.05", "--every", "0.02", "--json"]) == 130
+    out, err = capsys.readouterr()
+    result = json.loads(out.strip().splitlines()[-1])
+    assert result["interrupted"] is True and result["steps"] == 20
+    assert [row["t_s"] for row in result["timeline"]] == pytest.approx([0.02])
+    assert err.strip().splitlines()[-1].startswith("ti-golf: interrupted at t = 0.02 s;")
+
+
 background.declare(
     "bench-pit-profile",
     lambda _: (cli("bench", "pit", "--n", "300", "--t", "0.005", "--every", "0.003", "--profile", "--json"), {}),

@@ -35,6 +35,7 @@ from ti_golf.physics.colour import moving_balls
 from ti_golf.runtime import ensure_init, release_freed_memory
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import AT_REST, Plane, Scene
+from ti_golf.sim.signals import whole_steps
 from ti_golf.sim.simulation import Simulation
 
 PIT_SCENE = "ball_pit"
@@ -120,13 +121,17 @@ def bench_pit(
     setup_s = time.perf_counter() - t1
     times = KernelTimes() if profiling() else None
     wall_s, timeline, peak, interrupted = _pour(sim, t, every, side, log, times)
-    if interrupted and sim.t == 0.0:
+    steps = round(sim.t / sim.dt)
+    if interrupted and steps == 0:
         raise KeyboardInterrupt("before the pour's first step")
     if interrupted:
         log(f"interrupted at t = {sim.t:.4g} s: the figures below are of the pour so far")
-    steps = round(sim.t / sim.dt)
-    quality = pile_quality(sim, side)
-    gather_rate = bare_gather_rate(sim.x)
+    try:
+        with whole_steps():  # Ctrl-C now still gets the figures printed (and then ends the command)
+            quality = pile_quality(sim, side)
+            gather_rate = bare_gather_rate(sim.x)
+    except KeyboardInterrupt:
+        interrupted = True
     ball_steps_per_s = n_balls * steps / wall_s
     result: dict[str, Any] = {
         "benchmark": "pit",
@@ -187,55 +192,66 @@ def _pour(
     memory of the steps [bytes] (the count restarts after each stretch's pile is measured, but
     what the measuring's numpy copies leave in the process still counts) and whether the pour was
     interrupted: Ctrl-C or SIGTERM ends it after the whole step it reached, which closes the last
-    stretch. With ``times``, the kernels' seconds are summed into it (every ``FOLD_EVERY`` steps,
+    stretch (or, while a stretch's pile is measured, once that stretch is listed). With ``times``, the kernels' seconds are summed into it (every ``FOLD_EVERY`` steps,
     outside the wall time), and each stretch also lists its own."""
     steps = int(math.ceil(t / sim.dt - 1e-9))  # (as Simulation.run counts them)
     stretch = steps if every is None else max(1, int(math.ceil(every / sim.dt - 1e-9)))
     start = round(sim.t / sim.dt)
     wall_s, timeline, done, peak, interrupted = 0.0, [], 0, 0, False
     while done < steps and not interrupted:
-        k = min(stretch, steps - done)
         rebuilds = sim.solver.rebuilds if sim.solver is not None else 0
         asleep = sim.solver.still_steps if sim.solver is not None else 0
         kernel_s, kernels = 0.0, {}
         if times is not None:
             times.drop()
             kernel_s, kernels = times.total_s(), dict(times.seconds)
-        wall, chunk = 0.0, k if times is None else FOLD_EVERY
+        wall, interrupted = _timed_steps(sim, min(stretch, steps - done), times)
+        taken = round(sim.t / sim.dt) - start - done  # (fewer than asked for when interrupted)
+        wall_s, done, peak = wall_s + wall, done + taken, max(peak, _peak_rss_bytes())
+        if every is None or taken == 0:
+            continue
         try:
-            for first in range(0, k, chunk):
-                t0 = time.perf_counter()
-                try:
-                    sim.run(steps=min(chunk, k - first))
-                finally:  # (Simulation.run ends an interrupted launch after a whole step)
-                    wall += time.perf_counter() - t0
-                    if times is not None:
-                        times.fold()
+            with whole_steps():  # Ctrl-C while the pile is measured ends the pour once its row is kept
+                q = pile_quality(sim, side)
+                release_freed_memory()
+                _restart_peak_rss()
+                row = {
+                    "t_s": sim.t,
+                    "wall_s": wall,
+                    "rebuilds": (sim.solver.rebuilds if sim.solver is not None else 0) - rebuilds,
+                    "steps_asleep": (sim.solver.still_steps if sim.solver is not None else 0) - asleep,
+                    **{k: q[k] for k in ("deepest_overlap", "p99_speed_mps", "asleep_fraction", "kinetic_energy_J")},
+                }
+                if times is not None:
+                    row["kernel_s"] = times.total_s() - kernel_s
+                    row["kernels"] = {name: s - kernels.get(name, 0.0) for name, s in times.seconds.most_common()}
+                timeline.append(row)
         except KeyboardInterrupt:
             interrupted = True
-        k = round(sim.t / sim.dt) - start - done  # (the steps taken: fewer when interrupted)
-        wall_s, done, peak = wall_s + wall, done + k, max(peak, _peak_rss_bytes())
-        if every is None or k == 0:
-            continue
-        q = pile_quality(sim, side)
-        release_freed_memory()
-        _restart_peak_rss()
-        row = {
-            "t_s": sim.t,
-            "wall_s": wall,
-            "rebuilds": (sim.solver.rebuilds if sim.solver is not None else 0) - rebuilds,
-            "steps_asleep": (sim.solver.still_steps if sim.solver is not None else 0) - asleep,
-            **{key: q[key] for key in ("deepest_overlap", "p99_speed_mps", "asleep_fraction", "kinetic_energy_J")},
-        }
-        if times is not None:
-            row["kernel_s"] = times.total_s() - kernel_s
-            row["kernels"] = {name: s - kernels.get(name, 0.0) for name, s in times.seconds.most_common()}
-        timeline.append(row)
         in_kernels = "" if times is None else f" ({row['kernel_s']:.1f} s in kernels)"
         log(
-            f"  t = {sim.t:.3g} s: {wall:.1f} s of wall time{in_kernels}, {row['rebuilds']} rebuilds in {k} steps "
+            f"  t = {sim.t:.3g} s: {wall:.1f} s of wall time{in_kernels}, {row['rebuilds']} rebuilds in {taken} steps "
             f"({row['steps_asleep']} with every ball asleep), deepest "
             f"overlap {100 * q['deepest_overlap']:.3g} % of a radius, p99 speed {1e3 * q['p99_speed_mps']:.3g} mm/s, "
             f"{100 * q['asleep_fraction']:.3g} % asleep"
         )
     return wall_s, timeline, peak, interrupted
+
+
+def _timed_steps(sim: Simulation, k: int, times: KernelTimes | None) -> tuple[float, bool]:
+    """Run ``k`` steps of ``sim`` (with ``times``, in runs of ``FOLD_EVERY`` steps, the kernels'
+    seconds folded into it after each); returns their wall time [s] and whether Ctrl-C or SIGTERM
+    ended them early (``Simulation.run`` stops after the whole step it reached)."""
+    wall, chunk = 0.0, k if times is None else FOLD_EVERY
+    try:
+        for first in range(0, k, chunk):
+            t0 = time.perf_counter()
+            try:
+                sim.run(steps=min(chunk, k - first))
+            finally:
+                wall += time.perf_counter() - t0
+                if times is not None:
+                    times.fold()
+    except KeyboardInterrupt:
+        return wall, True
+    return wall, False
