@@ -57,7 +57,7 @@ def main() -> None:
     lam0 = solver.lam.to_numpy()[:pairs].astype(np.float64)
 
     def array(values, dtype):
-        a = ti.ndarray(dtype, values.shape[0] if values.ndim == 1 or dtype == ti.math.vec3 else values.shape)
+        a = ti.ndarray(dtype, values.shape[:1] if dtype == ti.math.vec3 else values.shape)  # (vec3: one per row)
         a.from_numpy(values)
         return a
 

@@ -24,7 +24,7 @@ import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -37,6 +37,8 @@ from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import AT_REST, Plane, Scene
 from ti_golf.sim.signals import whole_steps
 from ti_golf.sim.simulation import Simulation
+
+T = TypeVar("T")
 
 PIT_SCENE = "ball_pit"
 """The bundled scene the benchmark pours."""
@@ -126,12 +128,9 @@ def bench_pit(
         raise KeyboardInterrupt("before the pour's first step")
     if interrupted:
         log(f"interrupted at t = {sim.t:.4g} s: the figures below are of the pour so far")
-    try:
-        with whole_steps():  # Ctrl-C now still gets the figures printed (and then ends the command)
-            quality = pile_quality(sim, side)
-            gather_rate = bare_gather_rate(sim.x)
-    except KeyboardInterrupt:
-        interrupted = True
+    # (Ctrl-C now still gets the figures printed, and then ends the command)
+    (quality, gather_rate), signalled = _held(lambda: (pile_quality(sim, side), bare_gather_rate(sim.x)))
+    interrupted = interrupted or signalled
     ball_steps_per_s = n_balls * steps / wall_s
     result: dict[str, Any] = {
         "benchmark": "pit",
@@ -192,8 +191,9 @@ def _pour(
     memory of the steps [bytes] (the count restarts after each stretch's pile is measured, but
     what the measuring's numpy copies leave in the process still counts) and whether the pour was
     interrupted: Ctrl-C or SIGTERM ends it after the whole step it reached, which closes the last
-    stretch (or, while a stretch's pile is measured, once that stretch is listed). With ``times``, the kernels' seconds are summed into it (every ``FOLD_EVERY`` steps,
-    outside the wall time), and each stretch also lists its own."""
+    stretch (or, while a stretch's pile is measured, once that stretch is listed). With
+    ``times``, the kernels' seconds are summed into it (every ``FOLD_EVERY`` steps, outside the
+    wall time), and each stretch also lists its own."""
     steps = int(math.ceil(t / sim.dt - 1e-9))  # (as Simulation.run counts them)
     stretch = steps if every is None else max(1, int(math.ceil(every / sim.dt - 1e-9)))
     start = round(sim.t / sim.dt)
@@ -210,24 +210,18 @@ def _pour(
         wall_s, done, peak = wall_s + wall, done + taken, max(peak, _peak_rss_bytes())
         if every is None or taken == 0:
             continue
-        try:
-            with whole_steps():  # Ctrl-C while the pile is measured ends the pour once its row is kept
-                q = pile_quality(sim, side)
-                release_freed_memory()
-                _restart_peak_rss()
-                row = {
-                    "t_s": sim.t,
-                    "wall_s": wall,
-                    "rebuilds": (sim.solver.rebuilds if sim.solver is not None else 0) - rebuilds,
-                    "steps_asleep": (sim.solver.still_steps if sim.solver is not None else 0) - asleep,
-                    **{k: q[k] for k in ("deepest_overlap", "p99_speed_mps", "asleep_fraction", "kinetic_energy_J")},
-                }
-                if times is not None:
-                    row["kernel_s"] = times.total_s() - kernel_s
-                    row["kernels"] = {name: s - kernels.get(name, 0.0) for name, s in times.seconds.most_common()}
-                timeline.append(row)
-        except KeyboardInterrupt:
-            interrupted = True
+        q, interrupted = _held(lambda: _measure_stretch(sim, side))  # (a signal ends the pour after this row)
+        row = {
+            "t_s": sim.t,
+            "wall_s": wall,
+            "rebuilds": (sim.solver.rebuilds if sim.solver is not None else 0) - rebuilds,
+            "steps_asleep": (sim.solver.still_steps if sim.solver is not None else 0) - asleep,
+            **{k: q[k] for k in ("deepest_overlap", "p99_speed_mps", "asleep_fraction", "kinetic_energy_J")},
+        }
+        if times is not None:
+            row["kernel_s"] = times.total_s() - kernel_s
+            row["kernels"] = {name: s - kernels.get(name, 0.0) for name, s in times.seconds.most_common()}
+        timeline.append(row)
         in_kernels = "" if times is None else f" ({row['kernel_s']:.1f} s in kernels)"
         log(
             f"  t = {sim.t:.3g} s: {wall:.1f} s of wall time{in_kernels}, {row['rebuilds']} rebuilds in {taken} steps "
@@ -236,6 +230,26 @@ def _pour(
             f"{100 * q['asleep_fraction']:.3g} % asleep"
         )
     return wall_s, timeline, peak, interrupted
+
+
+def _measure_stretch(sim: Simulation, side: float) -> dict[str, Any]:
+    """The pile's figures at the end of a stretch (:func:`pile_quality`); then the numpy copies
+    freed and the count of the peak memory restarted for the next stretch."""
+    q = pile_quality(sim, side)
+    release_freed_memory()
+    _restart_peak_rss()
+    return q
+
+
+def _held(measure: Callable[[], T]) -> tuple[T, bool]:
+    """``measure()`` with Ctrl-C and SIGTERM held until it returns (``whole_steps``): its result, and
+    whether a signal came meanwhile (so that what was measured is kept and reported)."""
+    try:
+        with whole_steps():
+            value = measure()
+    except KeyboardInterrupt:  # (raised as the block ends, once value is set)
+        return value, True
+    return value, False
 
 
 def _timed_steps(sim: Simulation, k: int, times: KernelTimes | None) -> tuple[float, bool]:
