@@ -15,14 +15,46 @@ Quick start::
 Taichi is initialised on first use (CPU, f64) or explicitly with :func:`init`.
 """
 
+from __future__ import annotations
+
+import os
+from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
+from typing import TYPE_CHECKING, Any
 
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
-from ti_golf.runtime import init
-from ti_golf.scene.loader import load_scene
-from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING, Scene
-from ti_golf.sim.simulation import Overlap, Recording, Simulation
-from ti_golf.sim.sweep import SweepResult, sweep
+
+# Taichi reads these when it is imported, by whichever module imports it first: its banner would
+# spoil standard output (JSON), and its notes below warnings would be noise
+os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")
+os.environ.setdefault("TI_LOG_LEVEL", "warn")
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ti_golf.runtime import init
+    from ti_golf.scene.loader import load_scene
+    from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING, Scene
+    from ti_golf.sim.simulation import Overlap, Recording, Simulation
+    from ti_golf.sim.sweep import SweepResult, sweep
+
+_LAZY = {
+    "init": "ti_golf.runtime",
+    "load_scene": "ti_golf.scene.loader",
+    **dict.fromkeys(("AT_REST", "FLYING", "OUT_OF_BOUNDS", "ROLLING", "Scene"), "ti_golf.scene.schema"),
+    **dict.fromkeys(("Overlap", "Recording", "Simulation"), "ti_golf.sim.simulation"),
+    **dict.fromkeys(("SweepResult", "sweep"), "ti_golf.sim.sweep"),
+}
+"""The public names imported on first use, each from its module: ``import ti_golf`` (and every
+``ti-golf`` command, which imports the package first) then costs no Taichi, numpy or matplotlib
+import until one is used (``ti-golf keys`` starts in a fraction of a second)."""
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        value = getattr(import_module(_LAZY[name]), name)
+        globals()[name] = value  # (found directly from now on)
+        return value
+    raise AttributeError(f"module 'ti_golf' has no attribute {name!r}")
+
 
 __all__ = [
     "AT_REST",

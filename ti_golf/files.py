@@ -1,4 +1,4 @@
-"""Writing output files whole or not at all."""
+"""Writing output files whole or not at all; the formats a plot is written in."""
 
 from __future__ import annotations
 
@@ -7,6 +7,8 @@ import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+
+from ti_golf.errors import ConfigError
 
 
 @contextlib.contextmanager
@@ -37,3 +39,21 @@ def _umask() -> int:
     mask = os.umask(0o022)
     os.umask(mask)
     return mask
+
+
+PLOT_FORMATS = ("png", "svg", "pdf", "eps")
+"""The formats a plot is written in, chosen by the file's suffix (the report's figures are EPS)."""
+
+PLOT_FORMATS_HELP = "PNG, SVG, PDF or EPS by the file's extension (.png, .svg, .pdf, .eps)"
+"""How the ``--plot`` options' help names the formats."""
+
+
+def plot_format(path: str | os.PathLike[str], option: str = "plot") -> str:
+    """The format of a plot written to ``path``: its suffix, lower case (``png`` without one);
+    a :class:`ConfigError` naming ``option`` and the allowed extensions for any other suffix."""
+    suffix = Path(path).suffix.lower()
+    fmt = suffix[1:] if suffix else "png"
+    if fmt not in PLOT_FORMATS:
+        allowed = ", ".join(f".{f}" for f in PLOT_FORMATS)
+        raise ConfigError(option, None, f"cannot write a plot as {suffix!r} ({str(path)!r}): use {allowed}")
+    return fmt

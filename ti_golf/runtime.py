@@ -19,13 +19,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NoReturn
 
-os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")  # keep stdout clean (JSON output)
-os.environ.setdefault("TI_LOG_LEVEL", "warn")
+import numpy as np
+import taichi as ti
 
-import numpy as np  # noqa: E402
-import taichi as ti  # noqa: E402
-
-from ti_golf.errors import ConfigError  # noqa: E402
+from ti_golf.errors import ConfigError
 
 ARCHES = ("cpu", "cuda", "vulkan", "gpu")
 PRECISIONS = ("f32", "f64")

@@ -15,8 +15,7 @@ import rich.console
 import rich.progress
 
 from ti_golf.errors import ConfigError
-from ti_golf.render.plots import PLOT_FORMATS_HELP, plot_format
-from ti_golf.runtime import ARCHES, PRECISIONS
+from ti_golf.files import PLOT_FORMATS_HELP, plot_format
 
 if TYPE_CHECKING:
     from ti_golf.sim.simulation import Simulation
@@ -32,6 +31,8 @@ class Parser(argparse.ArgumentParser):
 
 def runtime_options(p: argparse.ArgumentParser) -> None:
     """``--arch`` and ``--precision``: the Taichi backend and float type of a command that simulates."""
+    from ti_golf.runtime import ARCHES, PRECISIONS  # (imports Taichi: not for the commands without these options)
+
     p.add_argument("--arch", choices=ARCHES, default=None, help="Taichi backend (default: $TI_GOLF_ARCH or cpu)")
     p.add_argument(
         "--precision", choices=PRECISIONS, default=None, help="float precision (default: $TI_GOLF_PRECISION or f64)"

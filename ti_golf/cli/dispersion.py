@@ -11,7 +11,6 @@ from pathlib import Path
 from ti_golf.cli._common import Progress, check_plot, check_writable, plot_help, runtime_options, scene_options
 from ti_golf.cli.shot import LAUNCH_OPTIONS, launch_line, launch_options, read_launch, units_option
 from ti_golf.errors import ConfigError
-from ti_golf.render.dispersion import plot_dispersion
 from ti_golf.scene.launch_monitor import UNITS, MonitorLaunch, Units, check_launch
 from ti_golf.scene.loader import load_scene
 from ti_golf.sim.dispersion import MAX_SHOTS, PLAYER_SPREAD, dispersion
@@ -119,6 +118,8 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
         d.save(args.out, units)
         print(f"wrote {args.out}")
     if args.plot and landed > 2:
+        from ti_golf.render.dispersion import plot_dispersion  # (matplotlib: imported only to plot)
+
         plot_dispersion(d, units, args.plot, title=f"{scene.name}: {args.n:,} shots, seed {args.seed}")
         print(f"wrote {args.plot}")
     if args.json:

@@ -7,48 +7,62 @@ simulation that goes non-finite exits with code 3.
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import signal
 import sys
 import threading
 from collections.abc import Callable, Sequence
+from types import ModuleType
 
-import ti_golf
-from ti_golf import runtime
-from ti_golf.cli import bench, dispersion, figure, lab, play, render, run, scenes, schema, shot, sweep, table, tour
 from ti_golf.cli._common import Parser
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
 
-COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
-    "scenes": scenes.cmd_scenes,
-    "keys": scenes.cmd_keys,
-    "schema": schema.cmd_schema,
-    "sweep": sweep.cmd_sweep,
-    "shot": shot.cmd_shot,
-    "dispersion": dispersion.cmd_dispersion,
-    "run": run.cmd_run,
-    "table": table.cmd_table,
-    "figure": figure.cmd_figure,
-    "tour": tour.cmd_tour,
-    "fit-aero": tour.cmd_fit_aero,
-    "bench": bench.cmd_bench,
-    "render": render.cmd_render,
-    "play": play.cmd_play,
-    "lab": lab.cmd_lab,
+COMMANDS: dict[str, tuple[str, str]] = {
+    "scenes": ("scenes", "cmd_scenes"),
+    "keys": ("scenes", "cmd_keys"),
+    "schema": ("schema", "cmd_schema"),
+    "sweep": ("sweep", "cmd_sweep"),
+    "shot": ("shot", "cmd_shot"),
+    "dispersion": ("dispersion", "cmd_dispersion"),
+    "run": ("run", "cmd_run"),
+    "table": ("table", "cmd_table"),
+    "tour": ("tour", "cmd_tour"),
+    "fit-aero": ("tour", "cmd_fit_aero"),
+    "figure": ("figure", "cmd_figure"),
+    "bench": ("bench", "cmd_bench"),
+    "render": ("render", "cmd_render"),
+    "play": ("play", "cmd_play"),
+    "lab": ("lab", "cmd_lab"),
 }
-"""Each subcommand's function: parsed arguments -> exit code."""
+"""Each subcommand's module in ``ti_golf.cli`` and the function there that runs it (parsed
+arguments -> exit code), in the order ``ti-golf --help`` lists them."""
 
 NO_RUNTIME = ("scenes", "keys", "schema")
-"""Commands that simulate nothing and so start no Taichi runtime."""
+"""Commands that simulate nothing and so start no Taichi runtime (nor import Taichi)."""
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of ``ti-golf``."""
+def _module(command: str) -> ModuleType:
+    return importlib.import_module(f"ti_golf.cli.{COMMANDS[command][0]}")
+
+
+def _command(command: str) -> Callable[[argparse.Namespace], int]:
+    return getattr(_module(command), COMMANDS[command][1])
+
+
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The argument parser of ``ti-golf``: with ``argv`` that names a command, that command's parser
+    alone (only its module is imported: ``ti-golf keys`` imports neither Taichi nor the plotting
+    libraries); else every command's."""
+    from ti_golf import __version__
+
     p = Parser(prog="ti-golf", description="Golf-ball physics on Taichi: flights, sweeps, collisions.")
-    p.add_argument("--version", action="version", version=f"ti-golf {ti_golf.__version__}")
+    p.add_argument("--version", action="version", version=f"ti-golf {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (scenes, schema, sweep, shot, dispersion, run, table, tour, figure, bench, render, play, lab):
-        module.add_parser(sub)
+    named = argv[0] if argv and argv[0] in COMMANDS else None
+    modules = [COMMANDS[named][0]] if named else list(dict.fromkeys(m for m, _ in COMMANDS.values()))
+    for name in modules:
+        importlib.import_module(f"ti_golf.cli.{name}").add_parser(sub)
     return p
 
 
@@ -57,10 +71,23 @@ def run_cli() -> None:
     exits with (see ``runtime.exit_process``: Taichi's runtime can crash the normal exit)."""
     try:
         code = main()
-    except BrokenPipeError:  # the reader of stdout left (``ti-golf scenes | head``): no traceback
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        code = 1
-    runtime.exit_process(code)
+    except BrokenPipeError:  # the reader of stdout left (``ti-golf keys | head``): end quietly
+        code = _reader_gone()
+    try:
+        sys.stdout.flush()  # (what is still buffered, while the exit can still be chosen)
+    except BrokenPipeError:
+        code = _reader_gone()
+    if "ti_golf.runtime" in sys.modules:  # Taichi was started (a command that simulates)
+        sys.modules["ti_golf.runtime"].exit_process(code)
+    sys.exit(code)
+
+
+def _reader_gone() -> int:
+    """Exit code of a command whose standard output was closed by its reader (``ti-golf keys |
+    head``): output goes nowhere from now on, so that no error follows, and the code is the one
+    a shell gives a command stopped by SIGPIPE (128 + 13), which shells and ``head`` pass over."""
+    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    return 128 + signal.SIGPIPE
 
 
 def _interrupt(signum: int, frame: object) -> None:
@@ -70,17 +97,22 @@ def _interrupt(signum: int, frame: object) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``ti-golf`` and ``python -m ti_golf``; returns the exit code."""
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser(argv).parse_args(argv)
     on_main_thread = threading.current_thread() is threading.main_thread()
     if on_main_thread:  # a kill stops as Ctrl-C does, keeping what was done (signals reach the main thread only)
         previous = signal.signal(signal.SIGTERM, _interrupt)
-    runtime.announce_first_compile = True
     try:
         if args.command not in NO_RUNTIME:  # before any output: a first run's notice comes first
+            from ti_golf import runtime
+
+            runtime.announce_first_compile = True
             runtime.init(
                 getattr(args, "arch", None), getattr(args, "precision", None), profile=getattr(args, "profile", False)
             )
-        return COMMANDS[args.command](args)
+        return _command(args.command)(args)
+    except BrokenPipeError:  # (an OSError) the reader of standard output left: see run_cli
+        raise
     except ConfigError as exc:
         print(f"ti-golf: error: {exc}", file=sys.stderr)
         return 2

@@ -7,7 +7,6 @@ import time
 
 from ti_golf.cli._common import HeldInterrupt, check_plot, check_writable, plot_help, runtime_options, scene_options
 from ti_golf.cli.shot import golfer_table
-from ti_golf.render.plots import plot_sweep
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import UNITS
 from ti_golf.scene.loader import load_scene
@@ -80,6 +79,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         res.to_csv(args.out)
         print(f"wrote {args.out}")
     if args.plot:
+        from ti_golf.render.plots import plot_sweep  # (matplotlib: imported only to plot)
+
         plot_sweep(res, args.plot)
         print(f"wrote {args.plot}")
     if interrupt.requested:

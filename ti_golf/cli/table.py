@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 
 from ti_golf.cli._common import check_plot, plot_help, runtime_options
-from ti_golf.render.plots import plot_table
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import parse_range
 from ti_golf.sim.sweep import sweep
@@ -42,6 +41,8 @@ def cmd_table(args: argparse.Namespace) -> int:
         print(f"{label:<36} {angle:6.1f}° {dist:7.0f} m {res.angle_deg[b]:9.2f}° {res.carry[b]:10.3f} m")
     print("(report: 0.5° spacing; ti_golf: RK4 h = 0.01 s, the [sweep] angles of each scene)")
     if args.plot:
+        from ti_golf.render.plots import plot_table  # (matplotlib: imported only to plot)
+
         plot_table(results, args.plot)
         print(f"wrote {args.plot}")
     return 0

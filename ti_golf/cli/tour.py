@@ -8,7 +8,6 @@ import time
 
 from ti_golf.cli._common import check_plot, plot_help, runtime_options, scene_options
 from ti_golf.errors import ConfigError
-from ti_golf.render.plots import plot_tour
 from ti_golf.scene.loader import load_scene
 from ti_golf.sim.aero_fit import FIT_PARAMETERS, START, bounds, fit
 from ti_golf.sim.tour import fly_tour, within_tolerance_text
@@ -55,6 +54,8 @@ def cmd_tour(args: argparse.Namespace) -> int:
     )
     print(flight.table())
     if args.plot:
+        from ti_golf.render.plots import plot_tour  # (matplotlib: imported only to plot)
+
         plot_tour(
             flight, args.plot, title=f"TrackMan 2023 tour averages and {scene.name} (air.model = {scene.air.model})"
         )

@@ -13,8 +13,7 @@ import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
-from ti_golf.errors import ConfigError
-from ti_golf.files import atomic_path
+from ti_golf.files import atomic_path, plot_format
 from ti_golf.scene.balls import launch_position
 
 TERRAIN_FILL = (0.62, 0.74, 0.50)
@@ -26,24 +25,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from ti_golf.sim.tour import TourFlight
 
 
-PLOT_FORMATS = ("png", "svg", "pdf", "eps")
-"""The formats a plot is written in, chosen by the file's suffix (the report's figures are EPS)."""
-
-PLOT_FORMATS_HELP = "PNG, SVG, PDF or EPS by the file's extension (.png, .svg, .pdf, .eps)"
-"""How the ``--plot`` options' help names the formats."""
-
-
-def plot_format(path: str | os.PathLike[str], option: str = "plot") -> str:
-    """The format of a plot written to ``path``: its suffix, lower case (``png`` without one);
-    a :class:`ConfigError` naming ``option`` and the allowed extensions for any other suffix."""
-    suffix = Path(path).suffix.lower()
-    fmt = suffix[1:] if suffix else "png"
-    if fmt not in PLOT_FORMATS:
-        allowed = ", ".join(f".{f}" for f in PLOT_FORMATS)
-        raise ConfigError(option, None, f"cannot write a plot as {suffix!r} ({str(path)!r}): use {allowed}")
-    return fmt
-
-
 class _NoTransparencyNotice(logging.Filter):
     """Drops the PostScript backend's notice that EPS has no transparency (said in the help)."""
 
@@ -52,7 +33,7 @@ class _NoTransparencyNotice(logging.Filter):
 
 
 def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int) -> None:
-    """Write ``fig`` to ``path`` whole or not at all, in the format of its suffix (:data:`PLOT_FORMATS`;
+    """Write ``fig`` to ``path`` whole or not at all, in the format of its suffix (:data:`ti_golf.files.PLOT_FORMATS`;
     ``.png`` is added to a path without one, as matplotlib does). In EPS, which has no
     transparency, see-through parts come out opaque."""
     fmt = plot_format(path)
