@@ -182,13 +182,18 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
 
 
 def resolve_scene_path(name: str | os.PathLike[str]) -> Path:
-    """A scene path as given, or a bare name looked up in the bundled ``scenes/`` folder."""
+    """A scene path as given, or a bare name looked up in the bundled ``scenes/`` folder (a
+    :class:`ConfigError` suggesting the closest bundled name when there is none)."""
     p = Path(name)
     if p.exists() or p.suffix == ".toml" and p.parent != Path("."):
         return p
     for cand in (scenes_dir() / p, scenes_dir() / f"{p}.toml"):
         if cand.exists():
             return cand
+    if p.parent == Path(".") and p.suffix in ("", ".toml"):  # a bare name: a bundled scene's, misspelled?
+        close = difflib.get_close_matches(p.stem, [f.stem for f in scenes_dir().glob("*.toml")], n=1)
+        hint = f"did you mean '{close[0]}'? " if close else ""
+        raise ConfigError(str(name), None, f"file not found, nor a bundled scene ({hint}`ti-golf scenes` lists them)")
     return p
 
 
