@@ -32,6 +32,8 @@ from ti_golf.physics.types import (
     vec3,
     vec3_array,
     vec3_table,
+    vec3f_array,
+    vec4f_table,
     zero3,
 )
 from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
@@ -255,3 +257,19 @@ def first_nonfinite(x: vec3_array, v: vec3_array, w: vec3_array, out: int_array)
         s = x[i].sum() + v[i].sum() + w[i].sum()
         if ti.math.isnan(s) or ti.math.isinf(s):
             ti.atomic_min(out[0], i)
+
+
+@kernel
+def zero_f32_vectors(a: vec3f_array):
+    """Set every vector of an f32 array to zero. (``Ndarray.fill`` compiles a kernel that holds its
+    value in the run's float type: in an f64 run Taichi warns "Assign may lose precision" while it
+    compiles it.)"""
+    for i in a:
+        a[i] = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
+
+
+@kernel
+def zero_f32_table(a: vec4f_table):
+    """Set every entry of a table of f32 4-vectors to zero (see :func:`zero_f32_vectors`)."""
+    for i, j in a:
+        a[i, j] = ti.Vector([0.0, 0.0, 0.0, 0.0], dt=ti.f32)

@@ -10,6 +10,7 @@ import taichi as ti
 
 from ti_golf.errors import SimulationError
 from ti_golf.physics import apart, collide, colour, grid, links, sort, stale
+from ti_golf.physics.kernels import zero_f32_vectors
 from ti_golf.physics.types import (
     BlockOrder,
     GridParams,
@@ -309,7 +310,7 @@ class CollisionSolver:
             links.link_lower(self.upper, self.first, self.lower, self.lower_first, self.impact, self.pair_chunk)
             self.lam.fill(0.0)
             if self.gauss_seidel:  # none yet
-                self.friction.fill(0.0)
+                zero_f32_vectors(self.friction)  # (not fill: see zero_f32_vectors)
         if not self.serial:  # (serial: a row for every ball, see surface_rows.every_ball_a_row)
             list_surface_rows(self, state, carried, v_max)
         if self.impulse is None or self.impulse.shape[0] != self.lam.shape[0]:

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import taichi as ti
 
 from ti_golf.physics import surfaces
+from ti_golf.physics.kernels import zero_f32_table
 from ti_golf.physics.types import vec4f
 from ti_golf.runtime import free_dropped_arrays
 from ti_golf.sim.model import Model
@@ -32,7 +33,7 @@ def surface_columns(model: Model) -> int:
 def surface_table(rows: int, columns: int) -> ti.Ndarray:
     """A new zeroed table of ``rows`` rows of (λ, F) for ``columns`` surfaces (f32)."""
     table = ti.ndarray(vec4f, (max(1, rows), columns))
-    table.fill(0.0)
+    zero_f32_table(table)  # (not table.fill: see zero_f32_table)
     return table
 
 
