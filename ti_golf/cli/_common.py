@@ -141,41 +141,49 @@ class Progress:
     """Progress of a run longer than a few seconds: a rich progress bar on a terminal, a plain line
     every few seconds otherwise (logs and CI read standard error).
 
-    Called as ``progress(done, total)`` with simulated times [s]; :meth:`close` ends the bar.
+    Called as ``progress(done, total)`` with simulated times [s] (``unit="s"``) or counts of
+    ``unit`` (``"frames"``), and, for a run that stops early once every ball is finished (``--until``),
+    ``finished=(k, n, what)``: k of n balls are ``what``. The fraction shown is then the larger of
+    the time's and the balls', so that a run that ends long before its time limit is not shown
+    stuck at a few per cent. :meth:`close` ends the bar.
     """
 
-    def __init__(self, after_s: float = 3.0, every_s: float = 5.0) -> None:
+    def __init__(self, after_s: float = 3.0, every_s: float = 5.0, unit: str = "s") -> None:
         self.start = time.perf_counter()
         self.after_s, self.every_s = after_s, every_s
+        self.unit = unit
         self.last = 0.0
         self.tty = sys.stderr.isatty()
         self._bar: rich.progress.Progress | None = None
         self._task: rich.progress.TaskID | None = None
 
-    def __call__(self, done: float, total: float) -> None:
+    def __call__(self, done: float, total: float, finished: tuple[int, int, str] | None = None) -> None:
         now = time.perf_counter() - self.start
         if now < self.after_s:
             return
+        frac = done / total if total else 1.0
+        text = f"t = {done:.3g} of {total:.3g} s" if self.unit == "s" else f"{done:g} of {total:g} {self.unit}"
+        if finished is not None:
+            k, n, what = finished
+            frac = max(frac, k / n if n else 1.0)
+            text += f"; {k:,} of {n:,} balls {what}"
         if self.tty:
             if self._bar is None:
                 self._bar = rich.progress.Progress(
                     rich.progress.BarColumn(),
                     rich.progress.TaskProgressColumn(),
-                    rich.progress.TextColumn("t = {task.completed:.3g} of {task.total:.3g} s"),
+                    rich.progress.TextColumn("{task.description}"),
                     rich.progress.TimeElapsedColumn(),
                     console=rich.console.Console(stderr=True),
                     transient=True,
                 )
-                self._task = self._bar.add_task("run", total=total)
+                self._task = self._bar.add_task(text, total=1.0)
                 self._bar.start()
             assert self._task is not None
-            self._bar.update(self._task, completed=done, total=total)
+            self._bar.update(self._task, completed=frac, description=text)
         elif now - self.last >= self.every_s:
             self.last = now
-            frac = done / total if total else 1.0
-            print(
-                f"progress: {100 * frac:5.1f}% (t = {done:.3g} of {total:.3g} s, {now:.0f} s elapsed)", file=sys.stderr
-            )
+            print(f"progress: {100 * frac:5.1f}% ({text}, {now:.0f} s elapsed)", file=sys.stderr)
 
     def close(self) -> None:
         if self._bar is not None:

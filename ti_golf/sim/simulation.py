@@ -451,8 +451,10 @@ class Simulation:
 
         ``until="rest"`` stops early once every ball is at rest or out of bounds; ``until="landed"``
         once every tracked ball has landed. ``record_every=K`` samples x and ω every K steps.
-        ``progress(t_done, t_total)`` is called between chunks; ``on_every(sim)`` every ``every``
-        steps (e.g. to render a frame).
+        ``progress(t_done, t_total)`` is called between chunks, and with ``until`` also given
+        ``finished=(k, n, what)``: k of the n balls are finished (``what``: "at rest or out of
+        bounds", "landed"), since such a run ends when all are, often long before ``t_total``.
+        ``on_every(sim)`` is called every ``every`` steps (e.g. to render a frame).
         """
         if until not in (None, "rest", "landed"):
             raise ValueError(f"until must be None, 'rest' or 'landed' (got {until!r})")
@@ -479,18 +481,22 @@ class Simulation:
                 rec.w.append(self.w)
             if every and on_every is not None and done % every == 0:
                 on_every(self)
-            if progress is not None:
+            left = self.unfinished(until).size if until is not None else 0
+            if progress is not None and until is not None:
+                progress(done * self.dt, steps * self.dt, finished=(self.n - left, self.n, UNTIL_DONE[until]))
+            elif progress is not None:
                 progress(done * self.dt, steps * self.dt)
-            if until is not None and self._finished(until):
+            if until is not None and left == 0:
                 break
         return rec
 
-    def _finished(self, until: str) -> bool:
+    def unfinished(self, until: str) -> np.ndarray:
+        """Ids of the balls a run with ``until`` waits for, shape (K,): with ``"rest"`` those
+        neither at rest nor out of bounds, with ``"landed"`` the tracked balls still in flight."""
         if until == "rest":
             s = self.status
-            return bool(np.all((s == AT_REST) | (s == OUT_OF_BOUNDS)))
-        landed = self.state.landed.to_numpy()  # storage order: only all() is asked
-        return bool(np.all(landed != 0))
+            return np.flatnonzero((s != AT_REST) & (s != OUT_OF_BOUNDS))
+        return np.flatnonzero(self.state.read("landed") == 0)
 
     def save(self, path: str | os.PathLike[str], recording: Recording | None = None, partial: bool = False) -> None:
         """Write the run to an ``.npz``, whole or not at all (a temporary file renamed into place;
@@ -504,6 +510,10 @@ class Simulation:
         from ti_golf.sim.saved_run import write_run
 
         write_run(self, path, recording, partial)
+
+
+UNTIL_DONE = {"rest": "at rest or out of bounds", "landed": "landed"}
+"""What a ball is once a run with ``until`` no longer waits for it."""
 
 
 BYTES_PER_BALL = 2048
