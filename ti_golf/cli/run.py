@@ -6,9 +6,9 @@ import argparse
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
-from PIL import Image
 
 from ti_golf.cli._common import (
     Progress,
@@ -23,9 +23,8 @@ from ti_golf.cli._common import (
 )
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
-from ti_golf.render import render
-from ti_golf.render.plots import plot_run
 from ti_golf.scene.schema import STATUS_NAMES
+from ti_golf.sim.simulation import UNTIL_DONE, Simulation
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -54,7 +53,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     r.add_argument("--frames-every", type=int, default=0, metavar="K", help="render a frame every K steps")
     r.add_argument("--frames", metavar="DIR", help="write the frames as DIR/frame_00000.png, …")
     r.add_argument("--gif", help="write the frames as an animated GIF (Pillow)")
-    r.add_argument("--camera", choices=("side", "top", "iso", "follow"), default="iso", help="camera of the frames")
+    r.add_argument(
+        "--camera",
+        choices=("side", "top", "iso", "follow"),
+        default="iso",
+        help="camera of the frames (default iso); side, top and iso hold still, framing all that the run shows; "
+        "follow chases ball 0",
+    )
+    r.add_argument(
+        "--follow",
+        action="store_true",
+        help="the side, top or iso camera follows the balls instead: framed anew on them at every frame",
+    )
     r.add_argument("--size", type=parse_size, default=(640, 360), metavar="WxH", help="frame size (default 640x360)")
     runtime_options(r)
 
@@ -111,6 +121,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         f"{sim.scene.name}: {sim.n} ball(s), t = {sim.t:.4g} s{resumed} in {elapsed:.2f} s; "
         + ", ".join(f"{counts[name]} {name.replace('_', ' ')}" for name in STATUS_NAMES.values())
     )
+    if args.until:
+        say_unfinished(sim, args)
     if sim.solver is not None:
         deepest = sim.deepest_overlap()
         if deepest is None:
@@ -145,15 +157,40 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.out:
         print(f"wrote {args.out}")
     if args.plot and rec is not None:
+        from ti_golf.render.plots import plot_run  # (matplotlib: imported only to plot)
+
         plot_run(rec, args.plot, title=sim.scene.description or sim.scene.name)
         print(f"wrote {args.plot}")
     return 0
 
 
-class _Frames:
-    """Renders a frame every K steps to numbered PNGs (``--frames DIR``) and/or an animated GIF."""
+def say_unfinished(sim: Simulation, args: argparse.Namespace) -> None:
+    """For a run with ``--until`` that reached its time limit first: one line saying so, which
+    limit, and which balls still move (or fly), by id."""
+    left = sim.unfinished(args.until)
+    if not left.size:
+        return
+    if args.t is not None or args.steps is not None:
+        limit = "--t" if args.t is not None else "--steps"
+    else:
+        limit = f"world.t_end = {sim.scene.world.t_end:g} s"
+    ids = ", ".join(str(i) for i in left[:10]) + (f" and {left.size - 10:,} more" if left.size > 10 else "")
+    moving = "still moving" if args.until == "rest" else "still in flight"
+    print(
+        f"stopped at the time limit ({limit}) before every ball was {UNTIL_DONE[args.until]}: "
+        f"{left.size:,} {moving} (ball{'s' if left.size > 1 else ''} {ids}); a longer --t runs on"
+    )
 
-    def __init__(self, args: argparse.Namespace, sim) -> None:
+
+class _Frames:
+    """Renders a frame every K steps to numbered PNGs (``--frames DIR``) and/or an animated GIF.
+
+    The ``side``, ``top`` and ``iso`` cameras hold still (unless ``--follow``): the balls'
+    positions and status are kept at every frame (13 bytes per ball and frame) and the frames
+    drawn once the run ends, through one camera that frames everything the run showed. With
+    ``--follow`` or the ``follow`` camera, each frame is drawn as the run reaches it."""
+
+    def __init__(self, args: argparse.Namespace, sim: Simulation) -> None:
         if args.frames_every < 0:
             raise ConfigError("--frames-every", None, f"must be >= 0 (got {args.frames_every})")
         check_writable(args.gif, "--gif")
@@ -161,8 +198,13 @@ class _Frames:
         self.every = args.frames_every or max(1, int(round(duration / sim.dt / 100)))  # ~100 frames
         self.size = args.size
         self.camera = args.camera
+        self.still = args.camera != "follow" and not args.follow
         self.gif = args.gif
         self.fps = max(1.0, min(50.0, 1.0 / (self.every * sim.dt)))
+        self._sim = sim
+        self._kept: list[tuple[np.ndarray, np.ndarray]] = []
+        self._lo = np.full(3, np.inf)
+        self._hi = np.full(3, -np.inf)
         self._tmp = None
         if args.frames:
             self.folder = Path(args.frames)
@@ -172,20 +214,86 @@ class _Frames:
             self.folder = Path(self._tmp.name)
         self.paths: list[Path] = []
 
-    def __call__(self, sim) -> None:
+    def __call__(self, sim: Simulation) -> None:
+        if not self.still:
+            self._draw(sim, self.camera)
+            return
+        x = sim.x
+        seen = x[np.all(np.isfinite(x), axis=1)]
+        if len(seen):
+            self._lo, self._hi = np.minimum(self._lo, seen.min(axis=0)), np.maximum(self._hi, seen.max(axis=0))
+        self._kept.append((x.astype(np.float32), sim.status.astype(np.int8)))
+
+    def _draw(self, sim: Any, camera: Any, extent: np.ndarray | None = None) -> None:
+        from ti_golf.render import render  # (imports matplotlib: only when frames are drawn)
+
         path = self.folder / f"frame_{len(self.paths):05d}.png"
-        render(sim, path, camera=self.camera, size=self.size)
+        render(sim, path, camera=camera, size=self.size, extent=extent)
         self.paths.append(path)
 
+    def _draw_kept(self) -> None:
+        """Draw the frames kept, through one camera that frames all of them."""
+        from ti_golf.render import camera_view
+
+        if not self._kept:
+            return
+        extent = np.array([self._lo, self._hi]) if np.all(np.isfinite(self._lo)) else None
+        view = camera_view(self._sim, self.camera, self.size, extent=extent)
+        progress = Progress(unit="frames")
+        try:
+            for k, (x, status) in enumerate(self._kept):
+                self._draw(_Kept(self._sim, x, status), view, extent)
+                progress(k + 1, len(self._kept))
+        finally:
+            progress.close()
+        self._kept.clear()
+
     def close(self) -> None:
+        self._draw_kept()
         if self.gif and self.paths:
+            from PIL import Image  # (Pillow: imported only to write a GIF)
+
             images = [Image.open(p).convert("P", palette=Image.Palette.ADAPTIVE) for p in self.paths]
             with atomic_path(self.gif) as tmp:
                 images[0].save(
                     tmp, format="GIF", save_all=True, append_images=images[1:], duration=int(1000 / self.fps), loop=0
                 )
-            print(f"wrote {self.gif} ({len(images)} frames)")
+            with Image.open(self.gif) as gif:  # what the file holds: Pillow merges identical neighbours
+                frames = getattr(gif, "n_frames", 1)
+            merged = (
+                f"; {len(images) - frames} unchanged frames merged into the one before" if frames < len(images) else ""
+            )
+            print(
+                f"wrote {self.gif}: {frames} frames, {len(images) * int(1000 / self.fps) / 1000:.3g} s "
+                f"at {1000 / int(1000 / self.fps):.3g} frames/s{merged}"
+            )
         if self._tmp is None and self.paths:
             print(f"wrote {len(self.paths)} frames to {self.folder}")
         if self._tmp is not None:
             self._tmp.cleanup()
+
+
+class _Kept:
+    """A simulation as it was at a frame kept for drawing (its balls' positions and status); the
+    balls' sizes, the ground and the scene are those of the simulation itself."""
+
+    def __init__(self, sim: Simulation, x: np.ndarray, status: np.ndarray) -> None:
+        self._sim = sim
+        self.x = x.astype(np.float64)
+        self.status = status.astype(np.int32)
+
+    @property
+    def model(self) -> Any:
+        return self._sim.model
+
+    @property
+    def scene(self) -> Any:
+        return self._sim.scene
+
+    @property
+    def n(self) -> int:
+        return self._sim.n
+
+    @property
+    def launch_x(self) -> Any:
+        return self._sim.launch_x

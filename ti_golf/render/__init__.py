@@ -14,7 +14,7 @@ from ti_golf.render.ggui import (
     ggui_problem,
     write_png,
 )
-from ti_golf.render.offscreen import non_cpu_arch, render
+from ti_golf.render.offscreen import NO_DISPLAY, non_cpu_arch, render, window_problem
 from ti_golf.render.style import (
     AT_REST_COLOR,
     BACKENDS,
@@ -36,6 +36,7 @@ from ti_golf.render.style import (
 
 __all__ = [
     "AT_REST_COLOR",
+    "NO_DISPLAY",
     "BACKENDS",
     "BACKGROUND_COLOR",
     "CAMERAS",
@@ -62,5 +63,6 @@ __all__ = [
     "non_cpu_arch",
     "orbit_view",
     "render",
+    "window_problem",
     "write_png",
 ]

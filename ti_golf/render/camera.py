@@ -203,10 +203,15 @@ def _hole_parts(
     return tiles, np.array(normals), np.array(colors), seg, seg_c
 
 
-def _bounds(sim: "Simulation", trail: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    """The box a camera is fitted to: balls, trails, and the ground (planes or terrain) under them."""
+def _bounds(
+    sim: "Simulation", trail: np.ndarray | None, extent: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """The box a camera is fitted to: balls, trails, the points of ``extent`` (M, 3), and the
+    ground (planes or terrain) under them."""
     x = sim.x
     pts = x if trail is None else np.concatenate([x, trail.reshape(-1, 3)])
+    if extent is not None:
+        pts = np.concatenate([pts, np.asarray(extent, float).reshape(-1, 3)])
     hole = _hole(sim)
     if hole is not None:  # the cup and the top of its flagstick are in view too
         pts = np.concatenate([pts, [hole[0], hole[0] + [0.0, hole[3], 0.0]]])
@@ -229,8 +234,10 @@ def camera_view(
     size: tuple[int, int] = (1280, 720),
     fov: float = 45.0,
     trails: Any = None,
+    extent: np.ndarray | None = None,
 ) -> View:
-    """The :class:`View` :func:`render` uses for ``camera`` (a preset name, or a View returned as is)."""
+    """The :class:`View` :func:`render` uses for ``camera`` (a preset name, or a View returned as
+    is); a preset also takes in the points of ``extent`` (M, 3) [m]."""
     if isinstance(camera, View):
         return camera
     if camera not in CAMERAS:
@@ -240,7 +247,7 @@ def camera_view(
         raise ValueError(f"fov must be in [1, 170] degrees (got {fov})")
     x = sim.x
     radius = sim.model.radius_np
-    lo, hi = _bounds(sim, _trail_array(trails, sim.n))
+    lo, hi = _bounds(sim, _trail_array(trails, sim.n), extent)
     if camera != "follow":
         forward, up = _preset_direction(camera)
         return _fit(lo, hi, forward, up, size, fov)

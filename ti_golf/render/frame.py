@@ -275,6 +275,7 @@ def build_frame(
     min_px: float,
     value_range: tuple[float, float] | None,
     follow: bool = False,
+    extent: np.ndarray | None = None,
 ) -> _Frame:
     """What :func:`render` draws of ``sim`` seen through ``view`` (arguments as there; ``follow``
     for the follow camera's reach): balls, planes, terrain, cup and flag, trails, wind arrow, light."""
@@ -282,7 +283,7 @@ def build_frame(
     radius = sim.model.radius_np.astype(float)
     colors = ball_colors(sim, color_by, value_range)
     trail = _trail_array(trails, sim.n)
-    lo, hi = _bounds(sim, trail)
+    lo, hi = _bounds(sim, trail, extent)
     r_max = float(radius.max())
     reach = _FOLLOW_REACH * float(np.linalg.norm(np.subtract(view.lookat, view.position))) if follow else 0.0
     tiles, tile_n, tile_c = _plane_tiles(view, sim.model.plane_p, sim.model.plane_n, lo, hi, r_max, reach)

@@ -44,7 +44,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ti_golf.sim.simulation import Simulation
 from ti_golf.render.camera import View, _check_size, camera_view
 from ti_golf.render.frame import _clip_poly, _Frame, build_frame
-from ti_golf.render.ggui import _draw_ggui, _ggui, _GGUIUnavailable
+from ti_golf.render.ggui import _draw_ggui, _ggui, _GGUIUnavailable, ggui_problem
 from ti_golf.render.style import (
     _FALLBACK_NOTE,
     AMBIENT,
@@ -166,6 +166,7 @@ def render(
     backend: str = "auto",
     min_px: float | None = None,
     value_range: tuple[float, float] | None = None,
+    extent: np.ndarray | None = None,
 ) -> str:
     """Draw the simulation's balls to a PNG at ``path``; returns the renderer used, ``"ggui"`` or ``"matplotlib"``.
 
@@ -184,6 +185,9 @@ def render(
         min_px: smallest drawn ball radius in pixels, so that far-away balls stay visible
             (default: 1.5, or height/300 on larger pictures).
         value_range: colormap range of ``"speed"`` / ``"spin"`` (default 0 to the largest value).
+        extent: points [m], shape (M, 3), that the preset camera and the ground drawn take in
+            besides the balls: the frames of a run drawn with the same ``extent`` (and a
+            :class:`View` from :func:`camera_view` with it) show one still stage.
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {', '.join(BACKENDS)} (got {backend!r})")
@@ -192,10 +196,10 @@ def render(
         min_px = max(1.5, size[1] / 300.0)
     if not float(min_px) >= 0:
         raise ValueError(f"min_px must be >= 0 (got {min_px})")
-    view = camera_view(sim, camera, size, fov, trails)
+    view = camera_view(sim, camera, size, fov, trails, extent)
     if isinstance(camera, View) and tuple(view.size) != size:
         view = View(view.position, view.lookat, view.up, view.fov, size, view.z_near, view.z_far)
-    frame = build_frame(sim, view, color_by, trails, min_px, value_range, follow=camera == "follow")
+    frame = build_frame(sim, view, color_by, trails, min_px, value_range, follow=camera == "follow", extent=extent)
     target = Path(path)
     if not target.parent.is_dir():
         raise ValueError(f"cannot write {str(target)!r}: folder {str(target.parent)!r} does not exist")
@@ -232,6 +236,25 @@ def non_cpu_arch() -> str | None:
     """
     rt = info()
     return rt.arch if rt is not None and rt.arch not in ("x64", "arm64", "cpu") else None
+
+
+NO_DISPLAY = "needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set)"
+"""Why no window can be shown on screen here (see :func:`window_problem`)."""
+
+
+def window_problem(on_screen: bool = True) -> str | None:
+    """Why a GGUI window cannot be opened in this process (one line: what is wrong and what to
+    do), or ``None`` when it can; ``on_screen=False`` asks for a hidden window, which needs no
+    display. GGUI draws on the CPU backend only (see :func:`non_cpu_arch`) and needs Vulkan."""
+    arch = non_cpu_arch()
+    if arch:
+        return f"draws with the CPU backend only (this process runs on {arch}); leave out --arch"
+    if on_screen and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        return NO_DISPLAY
+    problem = ggui_problem()
+    if problem:
+        return f"cannot open a window: {problem} (Debian: apt-get install mesa-vulkan-drivers)"
+    return None
 
 
 def _note(reason: str) -> None:
