@@ -205,7 +205,8 @@ def test_both_game_modes_start_at_the_same_random_point_of_the_seed(green_file, 
     console = ["play", str(green_file), "--set", "game.start=", "--shots", str(shots)]
     assert cli.main([*console, "--seed", "4"]) == 0
     seeded = capsys.readouterr().out
-    assert "The ball starts at a random point of the course (seed 4): " in seeded
+    assert "Round seed 4: --seed 4 plays this start and these winds again." in seeded
+    assert "The ball starts at a random point of the course: " in seeded
     assert cli.main([*console, "--seed", "5"]) == 0
     assert _first_lie(capsys.readouterr().out) != _first_lie(seeded)
     assert cli.main(console) == 0
@@ -223,10 +224,10 @@ def test_both_game_modes_start_at_the_same_random_point_of_the_seed(green_file, 
         def run(self):
             pass
 
-    monkeypatch.setattr("ti_golf.cli.play.check_display", lambda: None)
-    monkeypatch.setattr("ti_golf.cli.play.GolfWindow", Window)
+    monkeypatch.setattr("ti_golf.game.window.check_display", lambda: None)
+    monkeypatch.setattr("ti_golf.game.window.GolfWindow", Window)
     assert cli.main(["play", str(green_file), "--set", "game.start=", "--gui", "--seed", "4"]) == 0
-    assert "The ball starts at a random point of the course (seed 4): " in capsys.readouterr().out
+    assert "Round seed 4: --seed 4 plays this start and these winds again." in capsys.readouterr().out
     x, z = windows[0].ball[[0, 2]]
     assert _first_lie(seeded) == f"x = {x:.2f} m, z = {z:.2f} m"
 
@@ -308,20 +309,53 @@ def test_play_asks_again_after_bad_answers_and_stops_at_the_end_of_input(green_f
     monkeypatch.setattr("sys.stdin", io.StringIO(answers))
     assert cli.main(["play", str(green_file)]) == 0
     text = capsys.readouterr().out
-    assert "direction must be a number (got 'north'); try again" in text
-    assert "key 'speed' must be a number in [0, 350] km/h (got 500.0); try again" in text
-    assert "loft must be a number (got 'abc'); try again" in text
-    assert "key 'spin' must be a number" not in text  # Enter: no spin
+    # a word and a number out of range are the same mistake: the same words, with the range
+    assert "direction must be a number in [-360, 360] deg (got 'north'); try again" in text
+    assert "speed must be a number in [0, 350] km/h (got '500'); try again" in text
+    assert "loft must be a number in [-10, 90] deg (got 'abc'); try again" in text
+    assert "spin must be a number" not in text  # Enter: no spin
     assert "Stroke 2:" in text  # the first stroke (4 km/h at the hole) was played
     assert "The round ends unfinished (no more input) after 1 stroke" in text
+
+
+def test_every_round_says_its_seed_and_the_seed_plays_its_winds_again(green_file, tmp_path, capsys):
+    # a course with a fixed start still draws its winds from the seed: the seed is said for every
+    # round, and the round it names blows the same winds again
+    shots = tmp_path / "shots.txt"
+    shots.write_text("0 2 0 0\n90 2 0 0\n")
+    console = ["play", str(green_file), "--set", "game.wind_max=4", "--shots", str(shots)]
+    assert cli.main(console) == 0
+    drawn = capsys.readouterr().out
+    seed = re.search(r"^Round seed (\d+): --seed \1 plays these winds again\.$", drawn, re.M).group(1)
+    assert cli.main([*console, "--seed", seed]) == 0
+    again = capsys.readouterr().out
+    lie_winds = r"^Stroke \d: the ball lies .*; (wind .*)$"
+    winds = re.findall(lie_winds, drawn, re.M)
+    assert len(set(winds)) >= 2 and re.findall(lie_winds, again, re.M) == winds
+
+
+def test_the_first_prompt_offers_the_clubs_and_a_club_name_gives_its_stroke(green_file, capsys, monkeypatch):
+    from ti_golf.game.rules import CLUBS
+
+    monkeypatch.setattr("sys.stdin", io.StringIO("hole\nputter\n"))
+    assert cli.main(["play", str(green_file), "--seed", "1"]) == 0
+    text = capsys.readouterr().out
+    before = text[: text.index("Stroke 1:")]
+    for name, (speed, loft, spin) in CLUBS.items():
+        assert re.search(rf"^  {re.escape(name)} +{speed:g} km/h, loft +{loft:g} deg, +{spin:g} rpm", before, re.M)
+    assert "carries about 161 m on tour" in before  # a 7-iron (TrackMan: 176 yd)
+    assert "speed [km/h, 0 to 350, or a club]: " in text
+    assert "loft [" not in text  # the putter gave loft and spin
+    assert "Stroke 2:" in text  # the putt was played
 
 
 @pytest.mark.parametrize(
     "content, needle",
     [
-        ("0 5 95 0\n", "shots.txt:1: key 'loft' must be a number in [-10, 90] deg (got 95.0)"),
-        ("0 5\n", "shots.txt:1: a stroke is 'direction speed loft [spin]'"),
-        ("\n0 fast 0\n", "shots.txt:2: key 'speed' must be a number (got 'fast')"),
+        ("0 5 95 0\n", "shots.txt:1: key 'loft' must be a number in [-10, 90] deg (got '95')"),
+        ("0 5\n", "shots.txt:1: a stroke is 'direction speed loft [spin]' or 'direction club'"),
+        ("0 spoon\n", "shots.txt:1: a stroke is 'direction speed loft [spin]' or 'direction club'"),
+        ("\n0 fast 0\n", "shots.txt:2: key 'speed' must be a number in [0, 350] km/h (got 'fast')"),
         (b"0 5 \xff\n", "shots.txt' is not UTF-8 text (byte 4)"),
     ],
 )
@@ -362,7 +396,7 @@ def test_play_in_a_window_needs_a_display(green_file, capsys, monkeypatch):
 
 
 def test_play_in_a_window_needs_the_cpu_backend(green_file, capsys, monkeypatch):
-    monkeypatch.setattr("ti_golf.game.window.non_cpu_arch", lambda: "vulkan")  # as with --arch vulkan
+    monkeypatch.setattr("ti_golf.render.offscreen.non_cpu_arch", lambda: "vulkan")  # as with --arch vulkan
     assert cli.main(["play", str(green_file), "--gui"]) == 2
     assert "--gui: draws with the CPU backend only (this process runs on vulkan)" in capsys.readouterr().err
 

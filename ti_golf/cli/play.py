@@ -20,17 +20,18 @@ from pathlib import Path
 from ti_golf.cli._common import check_plot, check_writable, plot_help, runtime_options, scene_options
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
-from ti_golf.game.course_map import plot_round
 from ti_golf.game.rules import (
     SHOT_FIELDS,
+    Field,
     GolfGame,
     Shot,
     Stroke,
+    club,
+    club_list,
     describe_round,
     describe_stroke,
     describe_wind,
 )
-from ti_golf.game.window import GolfWindow, check_display
 from ti_golf.scene.loader import load_scene
 
 DEFAULT_SCENE = "golf_hole"
@@ -89,7 +90,7 @@ def cmd_play(args: argparse.Namespace) -> int:
     seed = args.seed if args.seed is not None else secrets.randbelow(2**31)  # (said, so a round can be played again)
     game = GolfGame(load_scene(args.scene, args.overrides), seed=seed)
     if args.gui:
-        _say_random_start(game, seed, args.seed is None)
+        _say_seed(game, seed)
         return _play_in_window(game, args)
     shots = file_shots(args.shots, game) if args.shots else _asked_shots(game, input, sys.stdin.isatty())
     hole = game.hole.position
@@ -97,7 +98,10 @@ def cmd_play(args: argparse.Namespace) -> int:
         f"{game.scene.name}: a cup {2000 * game.hole.radius:.0f} mm across at x = {hole[0]:g} m, "
         f"z = {hole[1]:g} m; directions are degrees from +x toward +z"
     )
-    _say_random_start(game, seed, args.seed is None)
+    _say_seed(game, seed)
+    if not args.shots:
+        print("Clubs: type a club's name at the speed prompt for its speed, loft and spin:")
+        print("\n".join(club_list()))
     ended = "no more input"
     try:
         while not game.over:
@@ -116,19 +120,19 @@ def cmd_play(args: argparse.Namespace) -> int:
     return 130 if ended == "interrupted" and not game.over else 0
 
 
-def _say_random_start(game: GolfGame, seed: int, drawn: bool) -> None:
-    """Where a course without ``game.start`` put the ball, and the seed that puts it there again
-    (``drawn``: no ``--seed`` was given, so one was drawn)."""
+def _say_seed(game: GolfGame, seed: int) -> None:
+    """The round's seed, which plays its winds (and, on a course without ``game.start``, its
+    random start) again, and where such a course put the ball."""
+    what = "this start and these winds" if game.scene.game.start is None else "these winds"
+    print(f"Round seed {seed}: --seed {seed} plays {what} again.")
     if game.scene.game.start is None:
-        again = f"; --seed {seed} plays this start and these winds again" if drawn else ""
-        print(
-            f"The ball starts at a random point of the course (seed {seed}{again}): "
-            f"x = {game.ball[0]:.2f} m, z = {game.ball[2]:.2f} m."
-        )
+        print(f"The ball starts at a random point of the course: x = {game.ball[0]:.2f} m, z = {game.ball[2]:.2f} m.")
 
 
 def _play_in_window(game: GolfGame, args: argparse.Namespace) -> int:
     """The round in a window (:mod:`.game_gui`), then the same summary and files as in the console."""
+    from ti_golf.game.window import GolfWindow, check_display  # (GGUI and matplotlib: only for a window)
+
     check_display()
     ended = "window closed"
     try:
@@ -148,6 +152,8 @@ def _finish(game: GolfGame, ended: str, args: argparse.Namespace) -> None:
         write_csv(game.strokes, args.out)
         print(f"wrote {args.out}")
     if args.plot:
+        from ti_golf.game.course_map import plot_round  # (matplotlib: imported only to plot)
+
         plot_round(game, args.plot, title=f"{game.scene.name}: {describe_round(game, ended)}")
         print(f"wrote {args.plot}")
 
@@ -162,28 +168,34 @@ def _lie(game: GolfGame) -> str:
 
 
 def _asked_shots(game: GolfGame, ask: Callable[[str], str], interactive: bool) -> Iterator[Shot]:
-    """Shots entered at the prompts, field by field; a bad value is explained and asked again.
-    Ends at the end of the input. Without a terminal (piped input) the answers are echoed."""
+    """Shots entered at the prompts, field by field (a club's name at the speed prompt gives its
+    speed, loft and spin); a bad value is explained and asked again. Ends at the end of the
+    input. Without a terminal (piped input) the answers are echoed."""
     last: dict[str, float] = {}
     while True:
-        values = []
+        values: list[float] = []
         for f in SHOT_FIELDS:
+            if len(values) == len(SHOT_FIELDS):
+                break  # (a club gave the rest)
             default = _default(f.name, game, last)
             hint = f", Enter: {default:g}" if default is not None else ""
+            words = ", or a club" if f.name == "speed" else ", or 'hole'" if f.name == "direction" else ""
             while True:
                 try:
-                    text = ask(f"  {f.name} [{f.unit}, {f.low:g} to {f.high:g}{hint}]: ").strip()
+                    text = ask(f"  {f.name} [{f.unit}, {f.low:g} to {f.high:g}{words}{hint}]: ").strip()
                 except EOFError:
                     print()  # (the prompt's line)
                     return
                 if not interactive:
                     print(text)
-                try:
-                    value = default if text == "" and default is not None else _number(text, f.name, game)
-                    values.append(f.check(value, "input"))
+                if f.name == "speed" and club(text) is not None:
+                    values.extend(club(text) or ())
                     break
-                except (ConfigError, ValueError) as exc:
-                    print(f"  {exc}; try again")
+                try:
+                    values.append(_field_value(f, text, default, game, "input"))
+                    break
+                except ConfigError as exc:
+                    print(f"  {f.name} {exc.reason}; try again")
         last = dict(zip((f.name for f in SHOT_FIELDS), values))
         yield Shot(*values)
 
@@ -195,14 +207,14 @@ def _default(name: str, game: GolfGame, last: dict[str, float]) -> float | None:
     return last.get(name, PROMPT_DEFAULTS.get(name))
 
 
-def _number(text: str, name: str, game: GolfGame) -> float:
-    """A field's value from its text: a number, or ``hole`` for the direction at the hole."""
-    if name == "direction" and text.lower() == "hole":
+def _field_value(f: Field, text: str, default: float | None, game: GolfGame, source: str) -> float:
+    """A field's value from its text, checked: Enter for its ``default``, ``hole`` for the direction
+    at the hole, else a number in the field's range (the same error for any other text)."""
+    if text == "" and default is not None:
+        return default
+    if f.name == "direction" and text.lower() == "hole":
         return game.to_hole()[1]
-    try:
-        return float(text)
-    except ValueError:
-        raise ValueError(f"{name} must be a number (got {text!r})") from None
+    return f.parse(text, source)
 
 
 def file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
@@ -219,20 +231,21 @@ def file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
         if not text:
             continue
         source = f"{path}:{number}"
+        clubbed = club(text[1]) if len(text) == 2 else None
+        if clubbed is not None:
+            text = [text[0], *(f"{v:g}" for v in clubbed)]
         if len(text) not in (3, 4):
-            raise ConfigError(source, None, f"a stroke is 'direction speed loft [spin]' (got {line.strip()!r})")
+            raise ConfigError(
+                source, None, f"a stroke is 'direction speed loft [spin]' or 'direction club' (got {line.strip()!r})"
+            )
         for f, word in zip(SHOT_FIELDS, text):
-            if not (f.name == "direction" and word.lower() == "hole"):
-                try:
-                    f.check(float(word), source)
-                except ValueError:
-                    raise ConfigError(source, f.name, f"must be a number (got {word!r})") from None
+            _field_value(f, word, None, game, source)  # (checked now: 'hole' is taken when the stroke is played)
         parsed.append(text + ["0"] * (4 - len(text)))
 
     def shots() -> Iterator[Shot]:  # (a direction 'hole' is taken from where the ball lies by then)
         for text in parsed:
             print("  " + " ".join(text))
-            yield Shot(*(_number(word, f.name, game) for f, word in zip(SHOT_FIELDS, text)))
+            yield Shot(*(_field_value(f, word, None, game, path) for f, word in zip(SHOT_FIELDS, text)))
 
     return shots()
 

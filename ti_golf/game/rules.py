@@ -50,14 +50,27 @@ class Field:
     high: float
     doc: str
 
-    def check(self, value: float, source: str) -> float:
+    def check(self, value: float, source: str, got: str | None = None) -> float:
         """``value`` when it is a finite number in range, else a :class:`ConfigError` naming
-        ``source`` (the file and line, or the option), the field and the range."""
+        ``source`` (the file and line, or the option), the field and the range, and quoting
+        ``got`` (the text the value was read from; default: the value)."""
         if not (math.isfinite(value) and self.low <= value <= self.high):
-            raise ConfigError(
-                source, self.name, f"must be a number in [{self.low:g}, {self.high:g}] {self.unit} (got {value!r})"
-            )
+            raise ConfigError(source, self.name, self.refusal(repr(value) if got is None else got))
         return float(value)
+
+    def parse(self, text: str, source: str) -> float:
+        """The value ``text`` spells, checked (:meth:`check`): a word that is no number gets the
+        same error as a number out of range, so a mistake reads the same at a prompt, in a
+        ``--shots`` file and in a window."""
+        try:
+            value = float(text)
+        except ValueError:
+            raise ConfigError(source, self.name, self.refusal(repr(text))) from None
+        return self.check(value, source, repr(text))
+
+    def refusal(self, got: str) -> str:
+        """What a wrong value of this field is told: the allowed range and unit, and what was ``got``."""
+        return f"must be a number in [{self.low:g}, {self.high:g}] {self.unit} (got {got})"
 
 
 SHOT_FIELDS = (
@@ -67,6 +80,34 @@ SHOT_FIELDS = (
     Field("spin", "rpm", -12000.0, 12000.0, "backspin (negative: topspin)"),
 )
 """The four numbers the player enters for a stroke, in order (report §2.5)."""
+
+CLUBS = {
+    "Driver": (275.0, 10.4, 2545.0),
+    "7-iron": (198.0, 16.1, 7124.0),
+    "Wedge": (167.0, 23.7, 9316.0),
+    "Chip": (40.0, 30.0, 2000.0),
+    "Putter": (8.0, 0.0, 0.0),
+}
+"""Club presets: ball speed [km/h], launch angle [deg], backspin [rpm]; driver, 7-iron and pitching
+wedge are PGA Tour averages (TrackMan 2023, golf_data.md: 171, 123 and 104 mph)."""
+
+TOUR_CARRY_M = {"Driver": 257.9, "7-iron": 160.9, "Wedge": 129.8}
+"""What the tour clubs of :data:`CLUBS` carry on tour [m] (TrackMan 2023: 282, 176 and 142 yd),
+to give a player a sense of scale; the course's air and wind make the game's carries differ."""
+
+
+def club(name: str) -> tuple[float, float, float] | None:
+    """The (speed, loft, spin) of the club called ``name`` (any case), or ``None``."""
+    return {k.lower(): v for k, v in CLUBS.items()}.get(name.strip().lower())
+
+
+def club_list() -> list[str]:
+    """One line per club of :data:`CLUBS`: its name, speed, loft and spin, and the tour carry."""
+    lines = []
+    for name, (speed, loft, spin) in CLUBS.items():
+        carry = f" (carries about {TOUR_CARRY_M[name]:.0f} m on tour)" if name in TOUR_CARRY_M else ""
+        lines.append(f"  {name:<7} {speed:5g} km/h, loft {loft:4g} deg, {spin:5g} rpm{carry}")
+    return lines
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,6 @@ it until it is closed (or Escape is pressed).
 from __future__ import annotations
 
 import math
-import os
 import time
 from collections.abc import Callable
 from typing import Any
@@ -25,6 +24,7 @@ import taichi as ti
 
 from ti_golf.errors import ConfigError
 from ti_golf.game.rules import (
+    CLUBS,
     SHOT_FIELDS,
     GolfGame,
     Shot,
@@ -39,21 +39,10 @@ from ti_golf.render import (
     build_frame,
     destroy_window,
     draw_scene,
-    ggui_problem,
-    non_cpu_arch,
+    window_problem,
     write_png,
 )
 from ti_golf.sim.simulation import Simulation
-
-CLUBS = {
-    "Driver": (275.0, 10.4, 2545.0),
-    "7-iron": (198.0, 16.1, 7124.0),
-    "Wedge": (167.0, 23.7, 9316.0),
-    "Chip": (40.0, 30.0, 2000.0),
-    "Putter": (8.0, 0.0, 0.0),
-}
-"""Club presets: ball speed [km/h], launch angle [deg], backspin [rpm]; driver, 7-iron and pitching
-wedge are PGA Tour averages (TrackMan 2023, golf_data.md: 171, 123 and 104 mph)."""
 
 REPLAY_SPEED = 2.0
 """Simulated seconds per second of a stroke's replay."""
@@ -61,25 +50,9 @@ REPLAY_SPEED = 2.0
 
 def check_display() -> None:
     """Raise :class:`ConfigError` (exit 2 from the CLI) when no window can be shown here."""
-    arch = non_cpu_arch()
-    if arch:  # (see render.non_cpu_arch: GGUI garbles the balls there)
-        raise ConfigError(
-            "--gui", None, f"draws with the CPU backend only (this process runs on {arch}); leave out --arch"
-        )
-    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        raise ConfigError(
-            "--gui",
-            None,
-            "needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set); play in the console without --gui",
-        )
-    problem = ggui_problem()
+    problem = window_problem()
     if problem:
-        raise ConfigError(
-            "--gui",
-            None,
-            f"cannot open a window: {problem} (Debian: apt-get install "
-            "mesa-vulkan-drivers); play in the console without --gui",
-        )
+        raise ConfigError("--gui", None, f"{problem}; play in the console without --gui")
 
 
 class GolfWindow:
