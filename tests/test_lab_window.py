@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import background
 import pytest
+from conftest import ROOT, run_cli
 from test_render import compare_with_baseline, matches, read_png
 
 from ti_golf import cli
@@ -35,11 +36,45 @@ def test_lab_refuses_bad_input_before_opening_a_window(args, needle, capsys):
     assert needle in capsys.readouterr().err
 
 
-def test_lab_needs_a_display(capsys, monkeypatch):
+def test_lab_needs_a_display_and_says_how_to_get_a_picture_without_one(capsys, monkeypatch):
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     assert cli.main(["lab"]) == 2
-    assert "ti-golf lab: needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set)" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert err.startswith("ti-golf: error: lab: needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set)"), err
+    assert "ti-golf lab --screenshot lab.png" in err and err.count("ti-golf:") == 1
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--t", "1"], "--t: goes with --screenshot"),
+        (["--screenshot", "lab.png", "--t", "-1"], "--t: must be a number of seconds >= 0"),
+        (["--screenshot", "no/such/folder/lab.png"], "--screenshot: cannot write 'no/such/folder/lab.png'"),
+    ],
+)
+def test_lab_refuses_a_bad_screenshot_request(args, needle, capsys):
+    assert cli.main(["lab", *args]) == 2
+    assert needle in capsys.readouterr().err
+
+
+def test_lab_screenshot_draws_the_window_off_screen_without_a_display(tmp_path):
+    # the picture a new user without a display can get: the window drawn hidden after --t
+    # simulated seconds, the panels with it (a process of its own: one GGUI window per process)
+    from ti_golf.render import ggui_problem
+
+    if ggui_problem():
+        pytest.skip(f"GGUI cannot draw here: {ggui_problem()}")
+    png = tmp_path / "lab.png"
+    proc = run_cli(
+        "lab", "lab_magnus", "--screenshot", str(png), "--t", "0.5", "--size", "480x270", env={"DISPLAY": ""}
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == f"wrote {png}: the lab window, 480x270, at t = 0.5 s"
+    img = read_png(png)
+    assert img.shape == (270, 480, 3)
+    assert matches(img, STATUS_COLORS[0]).sum() > 0  # the ball, flying
+    assert not (ROOT / "imgui.ini").exists()
 
 
 WINDOW_SCRIPT = """

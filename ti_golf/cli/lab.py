@@ -1,6 +1,7 @@
 """``ti-golf lab [SCENE]``: the lab application in a window (report §2.4, "lab3"; see
 :mod:`ti_golf.lab.window`): pick a scene, change its parameters, Start, Stop, Continue, Step,
-Reset t0, and Save the run, its plots and a screenshot."""
+Reset t0, and Save the run, its plots and a screenshot. ``--screenshot PNG`` draws the window off
+screen instead (no display needed), after ``--t`` simulated seconds, and writes its picture."""
 
 from __future__ import annotations
 
@@ -42,6 +43,19 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         help="simulated seconds per second of a running simulation (default 1: real time; 0: as fast as it goes)",
     )
     p.add_argument("--size", type=parse_size, default=(1280, 720), help="window size WIDTHxHEIGHT (default 1280x720)")
+    p.add_argument(
+        "--screenshot",
+        metavar="PNG",
+        help="draw the window off screen (no display needed: Vulkan's software driver will do) and write its "
+        "picture, the panels with it, instead of opening it",
+    )
+    p.add_argument(
+        "--t",
+        type=float,
+        default=0.0,
+        metavar="SECONDS",
+        help="with --screenshot: simulated seconds the scene runs before the picture (default 0: at t0)",
+    )
     runtime_options(p)
     return p
 
@@ -56,11 +70,37 @@ def cmd_lab(args: argparse.Namespace) -> int:
     check_writable(str(out / "lab.npz"), "--out")
     if not (math.isfinite(args.speed) and args.speed >= 0):
         raise ConfigError("--speed", None, f"must be a number >= 0 (got {args.speed!r})")
+    if not (math.isfinite(args.t) and args.t >= 0):
+        raise ConfigError("--t", None, f"must be a number of seconds >= 0 (got {args.t!r})")
+    if args.t and not args.screenshot:
+        raise ConfigError("--t", None, "goes with --screenshot (the window runs the scene with Start)")
+    check_writable(args.screenshot, "--screenshot")
     load_scene(args.scene, args.overrides)  # a bad scene is refused before any window opens
-    check_display()
+    check_display(on_screen=not args.screenshot)
     lab = Lab(args.scene, args.overrides, speed=args.speed or None)
+    if args.screenshot:
+        return _screenshot(lab, args.size, args.t, args.screenshot)
     try:
         LabWindow(lab, args.size, out_dir=out).run()
     except KeyboardInterrupt:
         return 130
+    return 0
+
+
+def _screenshot(lab: Lab, size: tuple[int, int], t: float, path: str) -> int:
+    """Draw the lab's window off screen after ``t`` simulated seconds of its scene and write its
+    picture to ``path`` (as the window's Save writes its screenshot); 0."""
+    window = LabWindow(lab, size, show_window=False, rates=False)
+    try:
+        window.frame(max_steps=0)
+        steps = math.ceil(t / lab.sim.dt - 1e-9)
+        if steps:
+            lab.start()
+            window.frame(max_steps=steps)
+            lab.stop()
+            window.frame(max_steps=0)
+        window.screenshot(path)
+    finally:
+        window.close()
+    print(f"wrote {path}: the lab window, {size[0]}x{size[1]}, at t = {lab.sim.t:.4g} s")
     return 0

@@ -24,7 +24,6 @@ it until it is closed.
 
 from __future__ import annotations
 
-import os
 import textwrap
 import time
 from pathlib import Path
@@ -39,11 +38,11 @@ from ti_golf.lab.controls import LEFT, RIGHT, Controls
 from ti_golf.lab.params import Parameter, panel_text, slider_value
 from ti_golf.render import (
     BACKGROUND_COLOR,
+    NO_DISPLAY,
     build_frame,
     destroy_window,
     draw_scene,
-    ggui_problem,
-    non_cpu_arch,
+    window_problem,
     write_png,
 )
 
@@ -66,20 +65,18 @@ KEYS_HELP = (
 )
 
 
-def check_display() -> None:
-    """Raise :class:`ConfigError` (exit 2 from the CLI) when no window can be shown here."""
-    arch = non_cpu_arch()
-    if arch:  # (see render.non_cpu_arch: GGUI garbles the balls there)
-        raise ConfigError(
-            "ti-golf lab", None, f"draws with the CPU backend only (this process runs on {arch}); leave out --arch"
-        )
-    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        raise ConfigError("ti-golf lab", None, "needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set)")
-    problem = ggui_problem()
+SCREENSHOT_HINT = "for a picture of the window without one: ti-golf lab --screenshot lab.png [--t SECONDS]"
+"""What ``ti-golf lab`` says where no window can be shown on screen."""
+
+
+def check_display(on_screen: bool = True) -> None:
+    """Raise :class:`ConfigError` (exit 2 from the CLI) when no window can be shown here
+    (``on_screen=False``: a hidden one, for ``--screenshot``)."""
+    problem = window_problem(on_screen)
+    if problem == NO_DISPLAY:
+        problem = f"{problem}; {SCREENSHOT_HINT}"
     if problem:
-        raise ConfigError(
-            "ti-golf lab", None, f"cannot open a window: {problem} (Debian: apt-get install mesa-vulkan-drivers)"
-        )
+        raise ConfigError("lab", None, problem)
 
 
 class LabWindow:
