@@ -52,7 +52,7 @@ def test_sweep_returns_arrays_in_grid_order():
     np.testing.assert_array_equal(res.angle_deg[:3], [8, 10, 12])  # angle varies fastest
     assert set(res.speed_mps) == {60.0, 80.0} and set(res.spin_radps) == {0.0, 10.0}
     cols = res.columns()
-    assert {"carry_m", "apex_m", "landing_angle_deg"} <= set(cols)
+    assert {"carry_m", "apex_height_m", "landing_angle_deg"} <= set(cols)
     # more backspin (Magnus lift) carries farther at these low angles
     i0 = np.flatnonzero((res.speed_mps == 80) & (res.spin_radps == 0) & (res.angle_deg == 10))[0]
     i1 = np.flatnonzero((res.speed_mps == 80) & (res.spin_radps == 10) & (res.angle_deg == 10))[0]

@@ -7,10 +7,12 @@ import time
 
 from ti_golf.cli._common import HeldInterrupt, check_plot, check_writable, plot_help, runtime_options, scene_options
 from ti_golf.cli.shot import golfer_table
+from ti_golf.errors import ConfigError
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import UNITS
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import parse_range
+from ti_golf.sim.rollout import has_ground
 from ti_golf.sim.sweep import sweep
 
 
@@ -47,6 +49,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     check_writable(args.out, "--out")
     check_plot(args.plot)
     scene = load_scene(args.scene, args.overrides)
+    if args.to_rest and not has_ground(scene):
+        raise ConfigError(
+            "--to-rest", None, f"{scene.name} has no ground to come to rest on (world.ground, [terrain] or planes)"
+        )
     angles = _parse_opt_range(args.angles, "--angles")
     speeds = _parse_opt_range(args.speeds, "--speeds")
     spins = _parse_opt_range(args.spins, "--spins")
@@ -71,6 +77,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             f"best: angle {res.angle_deg[b]:.4f} deg, speed {res.speed_mps[b]:g} m/s, spin {res.spin_radps[b]:g} rad/s"
             f" -> carry {f.carry[b]:.4f} m (apex {f.apex[b] - launch_position(scene)[1]:.2f} m, "
             f"flight {f.flight_time[b]:.3f} s, lands at {f.landing_angle[b]:.1f} deg, {f.landing_speed[b]:.2f} m/s)"
+        )
+    if args.to_rest and res.shots is not None and int(res.shots.at_rest.sum()) < landed:
+        print(
+            f"{landed - int(res.shots.at_rest.sum())} of the {landed} balls landed were still moving at "
+            f"world.t_max = {scene.world.t_max:g} s: no total or roll for them (NaN)"
         )
     if args.units and res.shots is not None:
         first = {"angle [deg]": res.angle_deg, "speed [m/s]": res.speed_mps, "spin [rad/s]": res.spin_radps}

@@ -137,13 +137,16 @@ class Dispersion:
         """One column per quantity, shape (N,) each, in ``units``, keyed ``name_unit``: the launch
         (``speed_mph``, ``vla_deg``, ``hla_deg``, ``spin_rpm``, ``axis_deg``), the golfer columns
         (:meth:`Shots.columns`) and the landing and rest points (``along``, ``rest_along``,
-        ``rest_offline``)."""
+        ``rest_offline``); total, roll and the rest points only when the shots were rolled out."""
         out = {}
         for name, value in self.launches.in_units(units).items():
             unit = {"speed": units.speed_label, "spin": units.spin_label}.get(name)
             out[f"{name}_{unit.replace('/', 'p')}" if unit else name] = np.asarray(value)
-        out.update(self.shots.columns(units))
-        for name in ("along", "rest_along", "rest_offline"):
+        rolled = self.shots.rolled_out  # (else total, roll and the rest points are NaN throughout: left out)
+        out.update(
+            {k: v for k, v in self.shots.columns(units).items() if rolled or not k.startswith(("total", "roll"))}
+        )
+        for name in ("along", "rest_along", "rest_offline") if rolled else ("along",):
             out[f"{name}_{units.distance_label}"] = getattr(self.shots, name) / units.distance
         return out
 

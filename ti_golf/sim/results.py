@@ -8,7 +8,6 @@ import numpy as np
 
 from ti_golf.scene.launch_monitor import Units, along, right_of
 
-#: CSV columns of a sweep, in order (units in the names).
 CSV_COLUMNS = (
     "angle_deg",
     "speed_mps",
@@ -16,15 +15,20 @@ CSV_COLUMNS = (
     "carry_m",
     "landing_x_m",
     "landing_z_m",
-    "apex_m",
+    "apex_height_m",
     "flight_time_s",
     "landing_angle_deg",
     "landing_speed_mps",
+    "offline_m",
+    "landing_spin_radps",
 )
+"""The columns of a sweep's CSV, in order, one per quantity, each with its unit in its name (the
+docs' shots page describes each): the launch condition, then the flight to landing. The apex is
+the height of the ball's centre above its launch point."""
 
-GOLFER_CSV_COLUMNS = ("offline_m", "apex_height_m", "landing_spin_radps", "total_m", "roll_m")
-"""The numbers golfers read that :data:`CSV_COLUMNS` lacks, appended to a sweep's CSV (SI; carry,
-hang time, land angle and land speed are there already; total and roll are NaN unless rolled out)."""
+ROLLED_CSV_COLUMNS = ("total_m", "roll_m")
+"""Columns after :data:`CSV_COLUMNS` when the sweep rolled every ball out to rest (``--to-rest``);
+NaN in the row of a ball that did not come to rest."""
 
 
 @dataclass(frozen=True)
@@ -117,6 +121,7 @@ class Shots:
         land_angle: descent angle below the horizontal at landing [deg].
         land_speed: speed at landing [m/s].
         land_spin: |ω| at landing [rad/s].
+        rolled_out: whether the balls were rolled out to rest (else total and roll are NaN throughout).
     """
 
     landed: np.ndarray
@@ -133,6 +138,7 @@ class Shots:
     land_angle: np.ndarray
     land_speed: np.ndarray
     land_spin: np.ndarray
+    rolled_out: bool = False
 
     @classmethod
     def from_flight(
@@ -173,6 +179,7 @@ class Shots:
             land_angle=flight.landing_angle,
             land_speed=flight.landing_speed,
             land_spin=np.where(flight.landed, np.linalg.norm(land_w, axis=1), np.nan),
+            rolled_out=rest_x is not None,
         )
 
     def __len__(self) -> int:

@@ -21,7 +21,7 @@ from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene, backspin_axis
-from ti_golf.sim.results import CSV_COLUMNS, GOLFER_CSV_COLUMNS, Flight, Shots
+from ti_golf.sim.results import CSV_COLUMNS, ROLLED_CSV_COLUMNS, Flight, Shots
 from ti_golf.sim.rollout import shots_from_landing
 
 
@@ -62,9 +62,11 @@ class SweepResult:
         return int(np.argmax(c))
 
     def columns(self) -> dict[str, np.ndarray]:
-        """The CSV columns (see :data:`ti_golf.sim.results.CSV_COLUMNS`), then, with :attr:`shots`,
-        :data:`~ti_golf.sim.results.GOLFER_CSV_COLUMNS`, as arrays (SI)."""
-        f = self.flight
+        """The CSV columns (see :data:`ti_golf.sim.results.CSV_COLUMNS`), then, when the balls
+        were rolled out, :data:`~ti_golf.sim.results.ROLLED_CSV_COLUMNS`, as arrays (SI)."""
+        f, s = self.flight, self.shots
+        if s is None:
+            raise ValueError("the CSV columns need the sweep's shots (SweepResult.shots)")
         cols = dict(
             zip(
                 CSV_COLUMNS,
@@ -75,16 +77,17 @@ class SweepResult:
                     f.carry,
                     f.landing_x,
                     f.landing_z,
-                    f.apex,
+                    s.apex,
                     f.flight_time,
                     f.landing_angle,
                     f.landing_speed,
+                    s.offline,
+                    s.land_spin,
                 ),
             )
         )
-        if self.shots is not None:
-            s = self.shots
-            cols.update(zip(GOLFER_CSV_COLUMNS, (s.offline, s.apex, s.land_spin, s.total, s.roll)))
+        if s.rolled_out:
+            cols.update(zip(ROLLED_CSV_COLUMNS, (s.total, s.roll)))
         return cols
 
     def to_csv(self, path: str | os.PathLike[str]) -> None:
