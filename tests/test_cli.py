@@ -15,6 +15,7 @@ import os
 import re
 import signal
 import subprocess
+import sys
 import textwrap
 from pathlib import Path
 
@@ -169,7 +170,7 @@ SWEEP_COLUMNS = [
     "carry_m",
     "landing_x_m",
     "landing_z_m",
-    "apex_m",
+    "apex_height_m",
     "flight_time_s",
     "landing_angle_deg",
     "landing_speed_mps",
@@ -199,9 +200,37 @@ def test_sweep_csv_columns_and_rows(turbulent_sweep):
         assert r["speed_mps"] == 80.0  # the scene's launch speed
         assert r["landing_z_m"] == pytest.approx(0.0, abs=1e-9)  # no wind, no spin: stays in the x-y plane
         assert r["carry_m"] == pytest.approx(r["landing_x_m"], rel=1e-9)
-        assert r["apex_m"] > 0 and r["flight_time_s"] > 0
+        assert r["apex_height_m"] > 0 and r["flight_time_s"] > 0
         # turbulent drag: the ball comes down steeper and slower than it went up
         assert r["landing_angle_deg"] > r["angle_deg"] and r["landing_speed_mps"] < r["speed_mps"]
+
+
+def test_sweep_csv_has_one_column_per_quantity_each_with_its_unit(turbulent_sweep):
+    # one apex (above the launch point), no total or roll without --to-rest (they would be NaN
+    # throughout), every column named with its unit, and every column described on the docs' page
+    from ti_golf.sim.results import CSV_COLUMNS
+
+    _, header, rows, _ = turbulent_sweep
+    assert header == list(CSV_COLUMNS)
+    units = ("_deg", "_mps", "_radps", "_m", "_s")
+    assert all(name.endswith(units) for name in header), header
+    for name in header:
+        assert any(math.isfinite(r[name]) for r in rows), f"{name} is NaN throughout"
+    page = (ROOT / "docs" / "results.md").read_text(encoding="utf-8")
+    for name in (*header, "total_m", "roll_m"):
+        assert f"| `{name}` |" in page, f"{name} is not in the table of docs/results.md"
+
+
+def test_a_sweep_to_rest_says_which_balls_have_no_total(tmp_path, capsys):
+    # in vacuo a ball bounces on without end: rolled out, it has no point of rest by world.t_max,
+    # and the command says why its total_m and roll_m are NaN; a scene without ground is refused
+    out = tmp_path / "s.csv"
+    assert main(["sweep", "lab_vacuum", "--angles", "45", "--to-rest", "--out", str(out)]) == 0
+    assert "1 of the 1 balls landed were still moving at world.t_max = 60 s: no total or roll" in capsys.readouterr().out
+    header, rows = read_csv(out)
+    assert header[-2:] == ["total_m", "roll_m"] and math.isnan(rows[0]["total_m"])
+    assert main(["sweep", "lab_vacuum", "--to-rest", "--set", "world.ground=false"]) == 2
+    assert "--to-rest: lab_vacuum has no ground to come to rest on" in capsys.readouterr().err
 
 
 def test_sweep_best_carry_matches_report(turbulent_sweep):
@@ -789,3 +818,165 @@ def test_an_interrupted_render_draws_the_state_it_reached(tmp_path):
     last = rest.strip().splitlines()[-1]
     assert last.startswith("ti-golf: interrupted at t = ") and "picture of that state is saved" in last, rest
     assert out.read_bytes().startswith(PNG_SIGNATURE)
+
+
+# ----------------------------------------------------------------------------------------------
+# a first hour without rough edges
+# ----------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("command", ["keys", "scenes"])
+def test_a_reader_that_leaves_early_ends_the_output_quietly(command):
+    # `ti-golf keys | head`: the reader closes the pipe before the command writes; no error, no
+    # traceback, and the exit code a shell gives a command stopped by SIGPIPE (which it passes over)
+    proc = subprocess.Popen(cli(command), stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=ROOT, text=True)
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()
+    err = proc.stderr.read()
+    assert proc.wait(timeout=120) == 128 + signal.SIGPIPE and err == ""
+
+
+def test_a_misspelled_bundled_scene_gets_a_did_you_mean(capsys):
+    assert main(["run", "newtons_cradel", "--steps", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == (
+        "ti-golf: error: newtons_cradel: file not found, nor a bundled scene "
+        "(did you mean 'newtons_cradle'? `ti-golf scenes` lists them)"
+    )
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["lab"],
+        ["play", "--gui"],
+        ["run", "no_such_scene"],
+        ["run", "lab_vacuum", "--set", "air.C_D=-1"],
+        ["run", "lab_vacuum", "--t", "-1"],
+        ["sweep", "lab_vacuum", "--angles", "a:b:c"],
+        ["bench", "pit", "--t", "-1"],
+        ["run", "lab_vacuum", "--size", "1x1"],
+        ["frobnicate"],
+    ],
+)
+def test_no_error_message_says_ti_golf_twice(args, capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    try:
+        code = main(args)
+    except SystemExit as exc:  # argparse's usage errors
+        code = exc.code
+    assert code == 2
+    err = capsys.readouterr().err
+    assert err.count("ti-golf:") == 1 and "ti-golf: error: " in err, err
+
+
+IMPORTS_SCRIPT = """
+import sys
+from ti_golf.cli import main
+heavy = ("matplotlib", "PIL", "scipy")
+main(["keys"])
+main(["scenes"])
+print("keys, scenes:", sorted(m for m in ("taichi", *heavy) if m in sys.modules))
+main(["run", "lab_vacuum", "--steps", "1"])
+print("run:", sorted(m for m in heavy if m in sys.modules))
+"""
+
+
+def test_keys_scenes_and_a_run_without_plots_import_no_plotting_library():
+    # the start of a command is paid by every test, study and lab scene: `keys` and `scenes` start
+    # no Taichi, and a run that draws nothing imports neither matplotlib, Pillow nor scipy
+    proc = subprocess.run([sys.executable, "-c", IMPORTS_SCRIPT], capture_output=True, text=True, cwd=ROOT, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert "keys, scenes: []" in lines and "run: []" in lines, proc.stdout
+
+
+def test_a_run_until_rest_that_reaches_its_time_limit_says_so_and_names_the_balls(capsys):
+    # lab_vacuum flies for 11.5 s (80 m/s at 45 degrees, no air)
+    assert main(["run", "lab_vacuum", "--t", "1", "--until", "landed"]) == 0
+    out = capsys.readouterr().out
+    assert (
+        "stopped at the time limit (--t) before every ball was landed: 1 still in flight (ball 0); "
+        "a longer --t runs on" in out
+    )
+    assert main(["run", "lab_vacuum", "--t", "1", "--until", "rest"]) == 0
+    assert "before every ball was at rest or out of bounds: 1 still moving (ball 0)" in capsys.readouterr().out
+    assert main(["run", "lab_vacuum", "--t", "12", "--until", "landed"]) == 0
+    assert "time limit" not in capsys.readouterr().out  # landed before it
+
+
+def test_the_progress_of_a_run_until_rest_follows_the_balls_not_the_time_limit():
+    # a roll-out runs until every ball rests, with world.t_max as a limit it seldom reaches: its
+    # progress counts the balls at rest, so it ends at 100 %, not at a few per cent of t_max
+    from ti_golf.sim.rollout import roll_out
+
+    scene = ti_golf.load_scene("tour_shot")
+    calls = []
+    x = np.array([[0.0, 0.0214, 0.0], [0.0, 0.0214, 1.0], [0.0, 0.0214, 2.0]])
+    v = np.array([[3.0, -1.0, 0.0], [1.0, -1.0, 0.0], [6.0, -2.0, 0.0]])
+    roll_out(scene, x, v, np.zeros((3, 3)), progress=lambda *a, **k: calls.append((a, k)))
+    (t_done, t_max), last = calls[-1]
+    assert t_done < 0.5 * t_max  # the balls came to rest long before the limit
+    assert last["finished"] == (3, 3, "at rest or out of bounds")
+    done = [k["finished"][0] for _, k in calls]
+    assert done == sorted(done) and done[0] < 3
+
+
+def test_progress_shows_the_larger_of_the_time_and_the_balls_finished(capsys):
+    from ti_golf.cli._common import Progress
+
+    progress = Progress(after_s=0.0, every_s=0.0)
+    progress.tty = False
+    progress(1.5, 60.0, finished=(30, 50, "at rest or out of bounds"))
+    progress(2.0, 4.0)
+    frames = Progress(after_s=0.0, every_s=0.0, unit="frames")
+    frames.tty = False
+    frames(25, 100)
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0].startswith("progress:  60.0% (t = 1.5 of 60 s; 30 of 50 balls at rest or out of bounds, ")
+    assert lines[1].startswith("progress:  50.0% (t = 2 of 4 s, ")
+    assert lines[2].startswith("progress:  25.0% (25 of 100 frames, ")
+
+
+RESTING_BALL = """description = "one ball at rest on the ground"
+[[balls]]
+position = [0.0, 0.02134, 0.0]
+velocity = [0.0, 0.0, 0.0]
+"""
+
+
+def _gif_frames(path: Path) -> list[np.ndarray]:
+    from PIL import Image
+
+    with Image.open(path) as gif:
+        frames = []
+        for k in range(gif.n_frames):
+            gif.seek(k)
+            frames.append(np.asarray(gif.convert("RGB"), dtype=float))
+    return frames
+
+
+def test_the_gif_report_matches_the_file_and_the_camera_holds_still(tmp_path):
+    # break_shot spreads its balls: a camera that refits every frame (--follow) zooms out and
+    # every frame's ground moves; the still camera draws the same ground in every frame, and the
+    # command reports the frames the GIF file holds
+    common = ["run", "break_shot", "--steps", "1500", "--frames-every", "500", "--size", "160x90", "--camera", "top"]
+    still, follow = tmp_path / "still.gif", tmp_path / "follow.gif"
+    proc = ok(run_cli(*common, "--gif", str(still)))
+    frames = _gif_frames(still)
+    assert f"wrote {still}: {len(frames)} frames, " in proc.stdout and len(frames) == 4
+    moved = [np.abs(f - frames[0]).max(axis=2) > 8 for f in frames[1:]]
+    assert max(m.mean() for m in moved) < 0.02  # only the balls changed
+    ok(run_cli(*common, "--gif", str(follow), "--follow"))
+    refit = _gif_frames(follow)
+    assert np.mean(np.abs(refit[-1] - refit[0]).max(axis=2) > 8) > 0.1  # the ground moved
+
+
+def test_a_gif_of_frames_that_do_not_change_reports_the_frames_it_holds(tmp_path):
+    # Pillow merges identical neighbouring frames: the report counts what the file holds
+    scene = tmp_path / "resting.toml"
+    scene.write_text(RESTING_BALL)
+    gif = tmp_path / "a.gif"
+    proc = ok(run_cli("run", str(scene), "--steps", "30", "--frames-every", "10", "--size", "80x60", "--gif", str(gif)))
+    n = len(_gif_frames(gif))
+    merged = f"wrote {gif}: {n} frames, 0.08 s at 50 frames/s; {4 - n} unchanged frames merged into the one before"
+    assert n < 4 and merged in proc.stdout, proc.stdout
