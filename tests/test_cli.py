@@ -226,7 +226,8 @@ def test_a_sweep_to_rest_says_which_balls_have_no_total(tmp_path, capsys):
     # and the command says why its total_m and roll_m are NaN; a scene without ground is refused
     out = tmp_path / "s.csv"
     assert main(["sweep", "lab_vacuum", "--angles", "45", "--to-rest", "--out", str(out)]) == 0
-    assert "1 of the 1 balls landed were still moving at world.t_max = 60 s: no total or roll" in capsys.readouterr().out
+    said = capsys.readouterr().out
+    assert "1 of the 1 balls landed were still moving at world.t_max = 60 s: no total or roll" in said
     header, rows = read_csv(out)
     assert header[-2:] == ["total_m", "roll_m"] and math.isnan(rows[0]["total_m"])
     assert main(["sweep", "lab_vacuum", "--to-rest", "--set", "world.ground=false"]) == 2

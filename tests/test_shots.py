@@ -318,7 +318,8 @@ def test_dispersion_command_writes_its_shots_and_plot(tmp_path):
     with np.load(npz_path) as z:
         np.testing.assert_allclose(z["carry_yd"], table[:, header.index("carry_yd")], rtol=1e-8)
         assert int(z["seed"]) == 2 and str(z["units"]) == "imperial"
-        assert not {"total_yd", "roll_yd", "rest_along_yd", "rest_offline_yd"} & set(z.files)  # NaN throughout: left out
+        # without a roll-out, total, roll and the rest points would be NaN throughout: left out
+        assert not {"total_yd", "roll_yd", "rest_along_yd", "rest_offline_yd"} & set(z.files)
     assert UNITS["imperial"].distance == YARD
 
 
