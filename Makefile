@@ -6,7 +6,7 @@ TIGOLF := $(VENV)/bin/ti-golf
 STAMP  := $(VENV)/.installed
 OUT    ?= out
 
-.PHONY: setup demo test bench gpu-check lint docs wheel-check system-deps clean
+.PHONY: setup demo test bench gpu-check lint docs docs-keys wheel-check system-deps clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -56,6 +56,10 @@ lint: $(DEVSTAMP)
 # The documentation site, warnings as errors, into site/.
 docs: $(DEVSTAMP)
 	$(VENV)/bin/mkdocs build --strict --site-dir site
+
+# The scene key reference of docs/scenes.md, made anew from the key declarations (a test checks it).
+docs-keys: setup
+	$(PY) docs/_hooks/generate.py
 
 # The wheel, installed into a fresh venv outside the checkout, runs its commands and bundled scenes.
 wheel-check: setup

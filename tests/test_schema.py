@@ -15,7 +15,7 @@ from ti_golf.scene import schema as S
 from ti_golf.scene.checks import Interval
 from ti_golf.scene.jsonschema import json_schema
 from ti_golf.scene.loader import load_scene, scenes_dir
-from ti_golf.scene.reference import keys_markdown
+from ti_golf.scene.reference import KEYS_BEGIN, KEYS_END, keys_markdown, with_keys
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -171,6 +171,15 @@ def test_allowed_values_are_stated_once_by_the_check():
     for keys in (*S.SCHEMA.values(), *S.ARRAY_SCHEMA.values()):
         for name, k in keys.items():
             assert (k.check is None) == (k.allowed == ""), name
+
+
+def test_the_key_reference_of_the_docs_page_is_up_to_date():
+    # docs/scenes.md holds the key table, to be read in the repository as on the site: a key
+    # declared, changed or dropped without `make docs-keys` leaves the page stale
+    page = (Path(__file__).resolve().parent.parent / "docs" / "scenes.md").read_text(encoding="utf-8")
+    block = page[page.index(KEYS_BEGIN) + len(KEYS_BEGIN) : page.index(KEYS_END)]
+    assert block.strip() == keys_markdown(), "docs/scenes.md's key table is out of date: run `make docs-keys`"
+    assert with_keys(page) == page
 
 
 def test_keys_markdown_lists_every_key_with_section_type_unit_default_allowed_and_help():

@@ -1,6 +1,6 @@
 """The scene key reference for people, as Markdown tables made from the key declarations
 (:mod:`ti_golf.scene.schema`): :func:`describe_keys` is what ``ti-golf keys`` prints,
-:func:`keys_markdown` the docs' key reference."""
+:func:`keys_markdown` the docs' key reference, which :func:`with_keys` writes into a page."""
 
 from __future__ import annotations
 
@@ -43,6 +43,20 @@ def keys_markdown() -> str:
                 f"{_cell(allowed)} | {_cell(help_text(k))} |"
             )
     return "\n".join(rows)
+
+
+KEYS_BEGIN = "<!-- keys: generated from the key declarations (ti_golf.scene.schema); `make docs-keys` rewrites it -->"
+KEYS_END = "<!-- keys: end -->"
+"""The lines around the key reference in a docs page (docs/scenes.md)."""
+
+
+def with_keys(page: str) -> str:
+    """The Markdown ``page`` with the key reference between :data:`KEYS_BEGIN` and
+    :data:`KEYS_END` made anew (:func:`keys_markdown`): the page as it should be in the repository,
+    where it is read too, and on the site."""
+    start = page.index(KEYS_BEGIN) + len(KEYS_BEGIN)
+    end = page.index(KEYS_END, start)
+    return f"{page[:start]}\n\n{keys_markdown()}\n\n{page[end:]}"
 
 
 def describe_keys() -> str:
