@@ -981,3 +981,94 @@ def test_a_gif_of_frames_that_do_not_change_reports_the_frames_it_holds(tmp_path
     n = len(_gif_frames(gif))
     merged = f"wrote {gif}: {n} frames, 0.08 s at 50 frames/s; {4 - n} unchanged frames merged into the one before"
     assert n < 4 and merged in proc.stdout, proc.stdout
+
+
+# ----------------------------------------------------------------------------------------------
+# start-up: the benchmark, the per-kernel report, the status of a long start
+# ----------------------------------------------------------------------------------------------
+def test_the_kernel_log_times_each_instances_front_end_and_compilation():
+    import taichi as ti
+    from taichi.lang.kernel_impl import Kernel
+
+    from ti_golf.kernel_log import KernelLog, cache_hits
+
+    def scaled(a, k):
+        for i in a:
+            a[i] = k * i
+
+    scaled.__annotations__ = {"a": ti.types.ndarray(), "k": ti.template()}  # (this module's are strings)
+    scaled = ti.kernel(scaled)
+
+    a = ti.ndarray(ti.f64, 4)
+    before = Kernel.materialize
+    log = KernelLog()
+    with log.installed():
+        scaled(a, 2)
+        scaled(a, 2)  # the same instance: prepared once
+        scaled(a, 3)  # a new template argument: a second instance
+    assert Kernel.materialize is before  # put back
+    (entry,) = [k for k in log.table() if k.name.endswith(".scaled")]
+    assert entry.instances == 2 and len(set(entry.instance_names)) == 2
+    assert all(name.startswith("scaled_c") for name in entry.instance_names)
+    assert entry.front_end_s > 0 and entry.compile_s > 0 and log.busy is None
+    np.testing.assert_array_equal(a.to_numpy(), [0, 3, 6, 9])
+    line = "[D 11/28/26 14:49:03.602 23182] [kernel_compilation_manager.cpp:try_load_cached_kernel@224] "
+    assert cache_hits(line + "Create kernel 'scaled_c80_0' from cache (key='T2a43')") == {"scaled_c80_0"}
+
+
+def test_a_long_start_says_what_taichi_is_doing():
+    from ti_golf.cli._common import StartupStatus
+
+    class Log:  # a KernelLog in the middle of a long front end
+        busy: tuple[str, str, float] | None = ("front end", "ti_golf.physics.collide.collision_step", 0.0)
+
+        def totals(self):
+            return 14, 3.0, 0.5
+
+    log = Log()
+    status = StartupStatus(log, after_s=0.0, every_s=5.0)
+    log.busy = ("front end", "ti_golf.physics.collide.collision_step", status.start - 1.0)
+    line = status.line()
+    assert line is not None and line.startswith(
+        "ti-golf: Taichi is reading the kernel collision_step (its front end runs in every new process, "
+        "even for cached kernels); 14 kernels ready, "
+    )
+    assert status.line() is None  # not again before every_s
+    status._said = -math.inf
+    log.busy = ("compile", "ti_golf.physics.kernels.advance", status.start - 1.0)
+    assert "compiling the kernel advance (or loading it from its cache)" in (status.line() or "")
+    log.busy = None
+    status._said = -math.inf
+    assert status.line() is None  # nothing prepared now: nothing to say
+
+
+def test_bench_startup_times_commands_in_fresh_processes_against_the_targets():
+    proc = ok(run_cli("bench", "startup", "--cache", "warm", "--scenes", "lab_vacuum", "--json"))
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    rows = {r["command"]: r for r in result["commands"]}
+    assert list(rows) == ["ti-golf run lab_vacuum --steps 1", "ti-golf scenes", "ti-golf keys"]
+    assert rows["ti-golf run lab_vacuum --steps 1"]["warm_target_s"] == 1.2  # one ball
+    assert rows["ti-golf keys"]["warm_target_s"] == rows["ti-golf scenes"]["warm_target_s"] == 0.5
+    for row in rows.values():
+        assert row["warm_error"] is None and 0 < row["warm_s"] < 600
+        assert row["warm_pass"] == (row["warm_s"] <= row["warm_target_s"])
+        assert "cold_s" not in row
+    assert result["passed"] + result["failed"] == 3
+    assert "ti-golf keys" in proc.stdout.splitlines()[2] and "target 0.5 s" in proc.stdout
+
+
+def test_bench_startup_kernels_reports_each_kernels_front_end_and_what_was_compiled():
+    # from an empty cache every instance is compiled; once the cache holds them, none is
+    cold = ok(run_cli("bench", "startup", "--kernels", "lab_vacuum", "--cache", "cold", "--json"))
+    report = json.loads(cold.stdout.strip().splitlines()[-1])
+    assert report["instances"] > 0 and report["compiled"] == report["instances"]
+    names = [k["kernel"] for k in report["kernels"]]
+    assert "ti_golf.physics.kernels.advance" in names or "ti_golf.physics.kernels.fly_to_landing" in names, names
+    front = [k["front_end_s"] for k in report["kernels"]]
+    assert front == sorted(front, reverse=True) and sum(front) == pytest.approx(report["front_end_s"], rel=1e-3)
+    assert set(report["stages"]) == {"import_s", "init_s", "setup_s", "first_step_s", "total_s"}
+    ok(run_cli("run", "lab_vacuum", "--steps", "1"))  # the default cache now holds them
+    warm = json.loads(
+        ok(run_cli("bench", "startup", "--kernels", "lab_vacuum", "--cache", "warm", "--json")).stdout.splitlines()[-1]
+    )
+    assert warm["compiled"] == 0 and warm["instances"] == report["instances"]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import signal
 import sys
 import tempfile
@@ -189,6 +190,55 @@ class Progress:
         if self._bar is not None:
             self._bar.stop()
             self._bar = None
+
+
+class StartupStatus:
+    """Says on standard error what Taichi is doing while a command waits for its kernels: from
+    ``after_s`` seconds into the command, whenever a kernel has been in Taichi's front end or its
+    compiler for half a second, a line naming it, the kernels ready so far and the seconds since
+    the start (again every ``every_s`` seconds while it lasts). ``log`` is a
+    :class:`ti_golf.kernel_log.KernelLog` (its ``busy`` and ``totals()``), read from a thread of
+    its own."""
+
+    STEPS = {
+        "front end": "reading the kernel {name} (its front end runs in every new process, even for cached kernels)",
+        "compile": "compiling the kernel {name} (or loading it from its cache)",
+    }
+
+    def __init__(self, log: Any, after_s: float = 1.0, every_s: float = 5.0, poll_s: float = 0.25) -> None:
+        self.log = log
+        self.after_s, self.every_s, self.poll_s = after_s, every_s, poll_s
+        self.start = time.perf_counter()
+        self._said = -math.inf
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._watch, name="ti-golf startup status", daemon=True)
+
+    def __enter__(self) -> StartupStatus:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join()
+
+    def line(self) -> str | None:
+        """The status line due now, or ``None``."""
+        busy, now = self.log.busy, time.perf_counter()
+        if busy is None or now - self.start < self.after_s or now - busy[2] < 0.5 or now - self._said < self.every_s:
+            return None
+        self._said = now
+        what, name, _ = busy
+        ready = self.log.totals()[0]
+        return (
+            f"ti-golf: Taichi is {self.STEPS[what].format(name=name.rsplit('.', 1)[-1])}; "
+            f"{ready} kernel{'s' if ready != 1 else ''} ready, {now - self.start:.0f} s"
+        )
+
+    def _watch(self) -> None:
+        while not self._stop.wait(self.poll_s):
+            text = self.line()
+            if text:
+                print(text, file=sys.stderr, flush=True)
 
 
 class HeldInterrupt:

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import os
 
 from ti_golf.bench.collide import bench_collide
 from ti_golf.bench.common import to_json
 from ti_golf.bench.dispersion import bench_dispersion
 from ti_golf.bench.pit import PIT_BALLS, bench_pit
 from ti_golf.bench.render import bench_render
+from ti_golf.bench.startup import bench_startup, profile_lines, scene_names, start_profile
 from ti_golf.bench.sweep import bench_sweep
 from ti_golf.cli._common import Parser, runtime_options, set_option
 from ti_golf.errors import ConfigError
@@ -95,9 +97,67 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     br.add_argument("--frames", type=int, default=3, help="timed frames (default 3)")
     br.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(br)
+    bu = bsub.add_parser(
+        "startup",
+        help="seconds to start and end commands in fresh processes (warm and cold kernel cache) against the "
+        "targets; --kernels SCENE: where one run's start goes, kernel by kernel",
+    )
+    bu.add_argument(
+        "--cache",
+        choices=("warm", "cold", "both"),
+        default="both",
+        help="warm: Taichi's kernel cache holds the kernels; cold: an empty temporary one (default both)",
+    )
+    bu.add_argument(
+        "--scenes", metavar="A,B,...", help="the bundled scenes whose `run --steps 1` is timed (default: all)"
+    )
+    bu.add_argument("--repeats", type=int, default=1, help="warm timings per command; the best is reported")
+    bu.add_argument(
+        "--kernels",
+        metavar="SCENE",
+        help="instead: one `run SCENE --steps 1` in a fresh process, its stages and each kernel's front end "
+        "(Python AST transform) and compile (or cache load) seconds; with --cache cold from an empty cache",
+    )
+    bu.add_argument("--top", type=int, default=None, help="with --kernels: the N kernels of longest front end")
+    bu.add_argument("--json", action="store_true", help="end with one line of JSON")
+    runtime_options(bu)
+    bu.set_defaults(no_runtime=True)  # (the commands timed run in processes of their own)
+
+
+def cmd_startup(args: argparse.Namespace) -> int:
+    """``ti-golf bench startup``: see :mod:`ti_golf.bench.startup`."""
+    arch = args.arch or os.environ.get("TI_GOLF_ARCH") or "cpu"
+    precision = args.precision or os.environ.get("TI_GOLF_PRECISION") or "f64"
+    if args.kernels:
+        if args.cache == "both":
+            raise ConfigError("--cache", None, "with --kernels: warm or cold (one profiled run)")
+        result = start_profile(args.kernels, cold=args.cache == "cold", arch=arch, precision=precision)
+        print("\n".join(profile_lines(result, args.top)))
+    else:
+        if args.repeats < 1:
+            raise ConfigError("--repeats", None, f"must be >= 1 (got {args.repeats})")
+        scenes = [s.strip() for s in args.scenes.split(",") if s.strip()] if args.scenes else None
+        unknown = sorted(set(scenes or ()) - set(scene_names()))
+        if unknown:
+            raise ConfigError(
+                "--scenes", None, f"not bundled scenes: {', '.join(unknown)} (`ti-golf scenes` lists them)"
+            )
+        caches = ("warm", "cold") if args.cache == "both" else (args.cache,)
+        result = bench_startup(scenes, caches, args.repeats, arch, precision, say=print)
+        load = (
+            f"; load average {result['load_average']:.1f} on {result['cpu_count']} cores"
+            if result["load_average"]
+            else ""
+        )
+        print(f"{result['passed']} of {result['passed'] + result['failed']} targets met ({arch}, {precision}{load})")
+    if args.json:
+        print(to_json(result))
+    return 0
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
+    if args.bench == "startup":
+        return cmd_startup(args)
     if args.n <= 0:
         raise ConfigError("--n", None, f"must be > 0 (got {args.n})")
     if args.bench == "dispersion":

@@ -15,7 +15,7 @@ import threading
 from collections.abc import Callable, Sequence
 from types import ModuleType
 
-from ti_golf.cli._common import Parser
+from ti_golf.cli._common import Parser, StartupStatus
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
 
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -70,7 +70,7 @@ def run_cli() -> None:
     """The ``ti-golf`` command and ``python -m ti_golf``: :func:`main`, whose code the process then
     exits with (see ``runtime.exit_process``: Taichi's runtime can crash the normal exit)."""
     try:
-        code = main()
+        code = main(status=True)
     except BrokenPipeError:  # the reader of stdout left (``ti-golf keys | head``): end quietly
         code = _reader_gone()
     try:
@@ -95,21 +95,28 @@ def _interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``ti-golf`` and ``python -m ti_golf``; returns the exit code."""
+def main(argv: Sequence[str] | None = None, status: bool = False) -> int:
+    """Entry point of ``ti-golf`` and ``python -m ti_golf``; returns the exit code. With ``status``
+    (the console command) a start that waits on Taichi's kernels says what it is doing
+    (:class:`~ti_golf.cli._common.StartupStatus`)."""
     argv = sys.argv[1:] if argv is None else list(argv)
     args = build_parser(argv).parse_args(argv)
     on_main_thread = threading.current_thread() is threading.main_thread()
     if on_main_thread:  # a kill stops as Ctrl-C does, keeping what was done (signals reach the main thread only)
         previous = signal.signal(signal.SIGTERM, _interrupt)
     try:
-        if args.command not in NO_RUNTIME:  # before any output: a first run's notice comes first
+        if args.command not in NO_RUNTIME and not getattr(args, "no_runtime", False):  # notice before output
             from ti_golf import runtime
 
             runtime.announce_first_compile = True
             runtime.init(
                 getattr(args, "arch", None), getattr(args, "precision", None), profile=getattr(args, "profile", False)
             )
+            if status:
+                from ti_golf.kernel_log import KernelLog
+
+                with KernelLog().installed() as log, StartupStatus(log):
+                    return _command(args.command)(args)
         return _command(args.command)(args)
     except BrokenPipeError:  # (an OSError) the reader of standard output left: see run_cli
         raise
