@@ -76,6 +76,7 @@ OPTIONS = {
     "bench pit": ["--n", "--t", "--every", "--set"],
     "bench sweep": ["--n", "--dt", "--repeats"],
     "bench render": ["--n", "--frames"],
+    "bench startup": ["--cache", "--scenes", "--repeats", "--kernels", "--top"],
     "lab": ["--out", "--speed", "--size", "--set"],
 }
 SCENES = {
@@ -127,13 +128,18 @@ def run_cli(argv: list[str]) -> tuple[int, str]:
         stack.enter_context(mock.patch.object(Simulation, "run", short_run))
         stack.enter_context(mock.patch("ti_golf.cli.sweep.sweep", short_sweep))
         stack.enter_context(mock.patch("ti_golf.cli.dispersion.dispersion", short_dispersion))
-        stack.enter_context(mock.patch("ti_golf.cli.run.render", fake_render))
+        stack.enter_context(mock.patch("ti_golf.render.render", fake_render))  # (run imports it to draw)
         stack.enter_context(mock.patch("ti_golf.cli.render.render", lambda *a, **k: "ggui"))
-        stack.enter_context(mock.patch("ti_golf.cli.lab.check_display", lambda: None))  # no window opens:
+        stack.enter_context(mock.patch("ti_golf.cli.lab.check_display", lambda **k: None))  # no window opens:
         stack.enter_context(mock.patch("ti_golf.cli.lab.LabWindow.run", lambda self: None))  # it closes at once
         stack.enter_context(mock.patch("ti_golf.cli.lab.LabWindow.__init__", lambda self, *a, **k: None))
         for name in ("bench_collide", "bench_pit", "bench_sweep", "bench_render"):
             stack.enter_context(mock.patch(f"ti_golf.cli.bench.{name}", lambda **k: {"benchmark": "fuzz"}))
+        stack.enter_context(  # (no processes started: the options are what is fuzzed)
+            mock.patch("ti_golf.cli.bench.bench_startup", lambda *a, **k: {"passed": 0, "failed": 0, "load_average": 0})
+        )
+        stack.enter_context(mock.patch("ti_golf.cli.bench.start_profile", lambda *a, **k: {}))
+        stack.enter_context(mock.patch("ti_golf.cli.bench.profile_lines", lambda *a, **k: []))
         try:
             code = main(argv)
         except SystemExit as exc:  # argparse's usage errors

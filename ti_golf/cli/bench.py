@@ -14,6 +14,7 @@ from ti_golf.bench.startup import bench_startup, profile_lines, scene_names, sta
 from ti_golf.bench.sweep import bench_sweep
 from ti_golf.cli._common import Parser, runtime_options, set_option
 from ti_golf.errors import ConfigError
+from ti_golf.scene.loader import load_scene
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -128,9 +129,12 @@ def cmd_startup(args: argparse.Namespace) -> int:
     """``ti-golf bench startup``: see :mod:`ti_golf.bench.startup`."""
     arch = args.arch or os.environ.get("TI_GOLF_ARCH") or "cpu"
     precision = args.precision or os.environ.get("TI_GOLF_PRECISION") or "f64"
+    if args.top is not None and args.top < 1:
+        raise ConfigError("--top", None, f"must be >= 1 kernels (got {args.top})")
     if args.kernels:
         if args.cache == "both":
             raise ConfigError("--cache", None, "with --kernels: warm or cold (one profiled run)")
+        load_scene(args.kernels)  # a bad scene is refused here, in one line, not in the profiled process
         result = start_profile(args.kernels, cold=args.cache == "cold", arch=arch, precision=precision)
         print("\n".join(profile_lines(result, args.top)))
     else:
