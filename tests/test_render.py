@@ -397,6 +397,7 @@ def test_run_writes_numbered_frames_and_a_gif(tmp_path):
         "160x120",
         "--camera",
         "top",
+        "--follow",  # (framed on the balls of each frame, as render frames them: see the last check)
         "--out",
         str(tmp_path / "run.npz"),
     )
