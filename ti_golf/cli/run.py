@@ -275,25 +275,16 @@ class _Frames:
 
 class _Kept:
     """A simulation as it was at a frame kept for drawing (its balls' positions and status); the
-    balls' sizes, the ground and the scene are those of the simulation itself."""
+    balls' sizes, the ground and the scene (:attr:`SAME`) are those of the simulation itself."""
+
+    SAME = ("model", "scene", "n", "launch_x")
 
     def __init__(self, sim: Simulation, x: np.ndarray, status: np.ndarray) -> None:
         self._sim = sim
         self.x = x.astype(np.float64)
         self.status = status.astype(np.int32)
 
-    @property
-    def model(self) -> Any:
-        return self._sim.model
-
-    @property
-    def scene(self) -> Any:
-        return self._sim.scene
-
-    @property
-    def n(self) -> int:
-        return self._sim.n
-
-    @property
-    def launch_x(self) -> Any:
-        return self._sim.launch_x
+    def __getattr__(self, name: str) -> Any:
+        if name in self.SAME:
+            return getattr(self._sim, name)
+        raise AttributeError(f"a kept frame has no {name!r} (only x, status and {', '.join(self.SAME)})")
