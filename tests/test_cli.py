@@ -905,6 +905,17 @@ def test_a_run_until_rest_that_reaches_its_time_limit_says_so_and_names_the_ball
     assert "time limit" not in capsys.readouterr().out  # landed before it
 
 
+def test_a_render_until_rest_that_reaches_its_time_limit_says_so(tmp_path, capsys):
+    png = tmp_path / "p.png"
+    args = ["render", "lab_vacuum", "--until", "rest", "--out", str(png), "--size", "64x48", "--backend", "matplotlib"]
+    assert main([*args, "--t", "1"]) == 0
+    assert (
+        "stopped at the time limit (--t) before every ball was at rest or out of bounds: 1 still moving (ball 0)"
+        in (capsys.readouterr().out)
+    )
+    assert png.read_bytes().startswith(PNG_SIGNATURE)
+
+
 def test_the_progress_of_a_run_until_rest_follows_the_balls_not_the_time_limit():
     # a roll-out runs until every ball rests, with world.t_max as a limit it seldom reaches: its
     # progress counts the balls at rest, so it ends at 100 %, not at a few per cent of t_max

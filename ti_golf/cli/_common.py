@@ -138,6 +138,26 @@ def parse_size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def say_unfinished(sim: Simulation, args: argparse.Namespace) -> None:
+    """For a run with ``--until`` that reached its time limit first: one line saying so, which
+    limit, and which balls still move (or fly), by id."""
+    from ti_golf.sim.simulation import UNTIL_DONE
+
+    left = sim.unfinished(args.until)
+    if not left.size:
+        return
+    if args.t is not None or args.steps is not None:
+        limit = "--t" if args.t is not None else "--steps"
+    else:
+        limit = f"world.t_end = {sim.scene.world.t_end:g} s"
+    ids = ", ".join(str(i) for i in left[:10]) + (f" and {left.size - 10:,} more" if left.size > 10 else "")
+    moving = "still moving" if args.until == "rest" else "still in flight"
+    print(
+        f"stopped at the time limit ({limit}) before every ball was {UNTIL_DONE[args.until]}: "
+        f"{left.size:,} {moving} (ball{'s' if left.size > 1 else ''} {ids}); a longer --t runs on"
+    )
+
+
 class Progress:
     """Progress of a run longer than a few seconds: a rich progress bar on a terminal, a plain line
     every few seconds otherwise (logs and CI read standard error).

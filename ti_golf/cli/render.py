@@ -12,6 +12,7 @@ from ti_golf.cli._common import (
     parse_size,
     resume_option,
     runtime_options,
+    say_unfinished,
     scene_options,
     scene_or_saved_run,
 )
@@ -98,6 +99,8 @@ def cmd_render(args: argparse.Namespace) -> int:
         backend=args.backend,
     )
     print(f"wrote {args.out} ({used}, {sim.n} ball(s) at t = {sim.t:.4g} s, {time.perf_counter() - t0:.2f} s)")
+    if args.until and steps > 0 and not interrupted:
+        say_unfinished(sim, args)
     if interrupted:
         raise KeyboardInterrupt(f"at t = {sim.t:.4g} s; the picture of that state is saved in {args.out}")
     return 0

@@ -18,13 +18,14 @@ from ti_golf.cli._common import (
     plot_help,
     resume_option,
     runtime_options,
+    say_unfinished,
     scene_options,
     scene_or_saved_run,
 )
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.scene.schema import STATUS_NAMES
-from ti_golf.sim.simulation import UNTIL_DONE, Simulation
+from ti_golf.sim.simulation import Simulation
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -162,24 +163,6 @@ def cmd_run(args: argparse.Namespace) -> int:
         plot_run(rec, args.plot, title=sim.scene.description or sim.scene.name)
         print(f"wrote {args.plot}")
     return 0
-
-
-def say_unfinished(sim: Simulation, args: argparse.Namespace) -> None:
-    """For a run with ``--until`` that reached its time limit first: one line saying so, which
-    limit, and which balls still move (or fly), by id."""
-    left = sim.unfinished(args.until)
-    if not left.size:
-        return
-    if args.t is not None or args.steps is not None:
-        limit = "--t" if args.t is not None else "--steps"
-    else:
-        limit = f"world.t_end = {sim.scene.world.t_end:g} s"
-    ids = ", ".join(str(i) for i in left[:10]) + (f" and {left.size - 10:,} more" if left.size > 10 else "")
-    moving = "still moving" if args.until == "rest" else "still in flight"
-    print(
-        f"stopped at the time limit ({limit}) before every ball was {UNTIL_DONE[args.until]}: "
-        f"{left.size:,} {moving} (ball{'s' if left.size > 1 else ''} {ids}); a longer --t runs on"
-    )
 
 
 class _Frames:
