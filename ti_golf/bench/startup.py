@@ -274,9 +274,9 @@ def profile_lines(result: dict[str, Any], top: int | None = None) -> list[str]:
         f"{s['total_s']:.2f} s to the end of the first step: imports {s['import_s']:.2f} s, ti.init "
         f"{s['init_s']:.2f} s, set-up {s['setup_s']:.2f} s, first step {s['first_step_s']:.2f} s"
         + (f" (load average {result['load_average']:.1f})" if result.get("load_average") is not None else ""),
-        f"kernels: {result['instances']} instances prepared, {result['compiled']} compiled, the others loaded "
-        f"from the cache; Taichi's front end {result['front_end_s']:.2f} s, compile or load "
-        f"{result['compile_s']:.2f} s",
+        f"kernels: {result['instances']} instances prepared, {result['compiled']} compiled and "
+        f"{result['instances'] - result['compiled']} loaded from the cache; Taichi's front end "
+        f"{result['front_end_s']:.2f} s, compile or load {result['compile_s']:.2f} s",
         f"{'front end [s]':>13}  {'compile [s]':>11}  {'instances':>9}  {'compiled':>8}  kernel",
     ]
     for k in result["kernels"][:top]:
