@@ -38,7 +38,7 @@ from ti_golf.scene.checks import POSITIVE, Interval, OneOf, parse_range, raise_c
 from ti_golf.scene.document import scene_document
 from ti_golf.scene.jsonschema import DIALECT, key_schema
 from ti_golf.scene.keys import Key, key, keys_of, read_when_text
-from ti_golf.scene.loader import check_value, load_scene, read_toml, resolve_scene_path, scenes_dir
+from ti_golf.scene.loader import check_value, load_scene, parse_override, read_toml, resolve_scene_path, scenes_dir
 from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
 from ti_golf.study.figures import FIGURES, KINDS, default_figures
 
@@ -133,7 +133,13 @@ class Task:
         "str", "PGA", "-", "the rows of the TrackMan table flown", OneOf(("PGA", "LPGA", "all")), read_when=("kind", ("tour",))
     )
     balls: int | None = key(
-        "int", None, "-", "balls poured (default: the scene's)", Interval(16, 50_000_000), read_when=("kind", ("pit",))
+        "int",
+        None,
+        "-",
+        "balls of the scene's random block (run; its box widened or narrowed so that it is as tall) or of the "
+        "pit (default: the scene's)",
+        Interval(16, 50_000_000),
+        read_when=("kind", ("run", "pit")),
     )
     gpu: bool = key("bool", False, "-", "run on a worker with a GPU (Dask resource GPU = 1), on CUDA")
     precision: str = key("str", "f64", "-", "float precision of the task's kernels", OneOf(("f32", "f64")))
@@ -219,7 +225,8 @@ def bundled_studies_dir() -> Path:
 
 def load_study(path: str | Path, overrides: Sequence[str] = ()) -> StudySpec:
     """Read and check a study file (a path or a bundled study's name), with ``overrides``
-    (``--set``-style texts added to the study's ``set``), and expand it into its tasks.
+    (``--set``-style texts: ``task.KEY=VALUE`` changes the ``[task]`` table, any other is added to
+    the study's ``set``), and expand it into its tasks.
 
     Raises:
         ConfigError: naming the file, the key and what is allowed.
@@ -235,12 +242,22 @@ def load_study(path: str | Path, overrides: Sequence[str] = ()) -> StudySpec:
     task_doc = doc.get("task", {})
     if not isinstance(task_doc, dict):
         raise_config(source, "task", "must be a table [task]")
+    task_doc = dict(task_doc)
+    scene_overrides = []
+    for text in overrides:
+        dotted, value = parse_override(text)
+        if dotted.startswith("task."):
+            if dotted[5:] not in TASK_KEYS:
+                raise_config("--set", dotted, f"is not a task key; allowed: {', '.join(TASK_KEYS)}")
+            task_doc[dotted[5:]] = value
+        else:
+            scene_overrides.append(text)
     task = _task(task_doc, source)
     given = [name for name in VARY_TABLES if name in doc]
     if len(given) > 1:
         raise_config(source, given[1], f"give one of [grid], [[points]] and [random], not {given[0]} and {given[1]}")
     base = _base_scene(study, task, p)
-    fixed = tuple(study.set) + tuple(overrides)
+    fixed = tuple(study.set) + tuple(scene_overrides)
     points = _points(doc, given[0] if given else None, source)
     seeds = _seeds(study, task, source)
     n = len(points) * len(seeds)
