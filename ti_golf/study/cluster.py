@@ -64,12 +64,17 @@ def local_gpus() -> int:
 
 @contextlib.contextmanager
 def study_client(
-    address: str | None = None, workers: int | None = None, gpus: int | None = None, need_gpu: bool = False
+    address: str | None = None,
+    workers: int | None = None,
+    gpus: int | None = None,
+    need_gpu: bool = False,
+    task_threads: int | None = None,
 ) -> Iterator[Any]:
     """A ``distributed.Client``: joined to ``address`` (or :data:`ADDRESS_ENV`), else of a local
     cluster of ``workers`` processes (default: one per core) and ``gpus`` more with the resource
-    ``GPU = 1`` (default: one per GPU here when ``need_gpu``). Closed (the local cluster stopped)
-    when the block ends."""
+    ``GPU = 1`` (default: one per GPU here when ``need_gpu``), each task's Taichi given
+    ``task_threads`` CPU threads (default: the cores shared among the workers). Closed (the local
+    cluster stopped) when the block ends."""
     require_dask()
     from distributed import Client
 
@@ -108,7 +113,7 @@ def study_client(
             "the study's tasks ask for a GPU and this machine has none (nvidia-smi lists none): join a cluster with "
             "GPU workers (--address)",
         )
-    cluster = _local_cluster(n, gpus)
+    cluster = _local_cluster(n, gpus, task_threads)
     try:
         client = Client(cluster)
         try:
@@ -119,14 +124,14 @@ def study_client(
         cluster.close()
 
 
-def _local_cluster(n: int, gpus: int) -> Any:
+def _local_cluster(n: int, gpus: int, task_threads: int | None = None) -> Any:
     """``n`` single-threaded CPU workers (Taichi given ``cores / n`` threads each) and ``gpus``
     GPU workers, every process listening on 127.0.0.1, no dashboard."""
     from distributed import LocalCluster, Nanny
 
     from ti_golf.study.worker import THREADS_ENV
 
-    threads = max(1, cores() // max(n, 1))
+    threads = task_threads or max(1, cores() // max(n, 1))
     options = {
         "host": LOOPBACK,
         "dashboard_address": None,

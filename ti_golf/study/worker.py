@@ -111,12 +111,14 @@ def _in_fresh_process(task: dict[str, Any], run_dir: str | None) -> dict[str, An
 
 
 def main() -> None:
-    """``python -m ti_golf.study.worker``: one task from standard input, its row on standard output."""
+    """``python -m ti_golf.study.worker``: a task (``{"task": ..., "run_dir": ...}``) or several
+    (``"tasks"``, run one after another, as the benchmark's baseline without Dask) from standard
+    input; a row per task on standard output, one JSON line each."""
     from ti_golf import runtime
 
     request = json.loads(sys.stdin.read())
-    row = run_task(request["task"], request["run_dir"])
-    print(json.dumps(row))
+    for task in request.get("tasks", [request.get("task")]):
+        print(json.dumps(run_task(task, request["run_dir"])), flush=True)
     runtime.exit_process(0)
 
 
