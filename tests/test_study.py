@@ -101,12 +101,20 @@ BAD = [
     ('scene = "lab_turbulent"\n[task]\nkind = "run"\nshots = 10\n', "task.shots", "read only when task.kind"),
     ('scene = "lab_turbulent"\n[grid]\n"air.CD" = [0.1]\n', "grid.air.CD", "is not a scene key"),
     ('scene = "lab_turbulent"\n[grid]\n"contact.e" = [0.5, 2.0]\n', "grid.contact.e", "must be in [0, 1]"),
-    ('scene = "lab_turbulent"\n[grid]\n"air.C_D" = [0.1]\n[random.uniform]\n"air.C_D" = [0, 1]\n', "random", "give one of"),
+    (
+        'scene = "lab_turbulent"\n[grid]\n"air.C_D" = [0.1]\n[random.uniform]\n"air.C_D" = [0, 1]\n',
+        "random",
+        "give one of",
+    ),
     ('scene = "lab_turbulent"\n[task]\nkind = "tour"\nfigures = ["pile_height"]\n', "task.figures", "not a figure of"),
     ('scene = "lab_turbulent"\n[task]\nfigures = ["carri"]\n', "task.figures", "names no figure"),
     ('scene = "lab_turbulent"\nseeds = [1]\n[task]\nkind = "sweep"\n', "seeds", "draws nothing at random"),
     ('scene = "no_such_scene"\n', "scene", "no scene file"),
-    ('scene = "lab_turbulent"\n[random]\nsamples = 0\n[random.uniform]\n"air.C_D" = [0, 1]\n', "random.samples", "must be in"),
+    (
+        'scene = "lab_turbulent"\n[random]\nsamples = 0\n[random.uniform]\n"air.C_D" = [0, 1]\n',
+        "random.samples",
+        "must be in",
+    ),
     ('scene = "lab_turbulent"\n[random.uniform]\n"air.C_D" = [1, 0]\n', "random.uniform.air.C_D", "low <= high"),
     ('scene = "lab_turbulent"\n[[points]]\n"air.model" = "magic"\n', "points[0].air.model", "must be one of"),
 ]
@@ -251,8 +259,12 @@ def test_a_pile_study_with_seeds_equals_its_runs_alone(tmp_path):
     figures = run_figures(Simulation.load(alone))
     row = plain.rows[1]
     assert row["contact.mu"] == 0.6
-    for name, column in (("pile_height", "pile_height_m"), ("repose_angle", "repose_angle_deg"),
-                         ("deepest_overlap", "deepest_overlap"), ("p99_speed", "p99_speed_mps")):
+    for name, column in (
+        ("pile_height", "pile_height_m"),
+        ("repose_angle", "repose_angle_deg"),
+        ("deepest_overlap", "deepest_overlap"),
+        ("p99_speed", "p99_speed_mps"),
+    ):
         assert figures[name] == row[column] or (math.isnan(figures[name]) and math.isnan(row[column])), name
 
 
@@ -307,7 +319,9 @@ def test_a_resumed_study_runs_only_the_tasks_not_finished(flight_study, tmp_path
     assert any(r["task_id"] == dropped for r in again.rows)
 
 
-def test_a_worker_killed_mid_task_is_replaced_and_the_row_equals_an_undisturbed_one(flight_study, tmp_path, monkeypatch):
+def test_a_worker_killed_mid_task_is_replaced_and_the_row_equals_an_undisturbed_one(
+    flight_study, tmp_path, monkeypatch
+):
     from ti_golf.study import run_study
     from ti_golf.study.tasks import KILL_ONCE_ENV
 
@@ -333,9 +347,19 @@ def test_a_scheduler_and_two_workers_started_by_hand_share_the_tasks(flight_stud
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     procs = [
         subprocess.Popen(
-            dask_command("scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                         "--scheduler-file", str(scheduler_file)),
-            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            dask_command(
+                "scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--no-dashboard",
+                "--scheduler-file",
+                str(scheduler_file),
+            ),
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
         )
     ]
     try:
@@ -345,9 +369,21 @@ def test_a_scheduler_and_two_workers_started_by_hand_share_the_tasks(flight_stud
         for name in ("node-a", "node-b"):
             procs.append(
                 subprocess.Popen(
-                    dask_command("worker", "--scheduler-file", str(scheduler_file), "--host", "127.0.0.1",
-                                 "--nthreads", "1", "--no-dashboard", "--name", name),
-                    env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                    dask_command(
+                        "worker",
+                        "--scheduler-file",
+                        str(scheduler_file),
+                        "--host",
+                        "127.0.0.1",
+                        "--nthreads",
+                        "1",
+                        "--no-dashboard",
+                        "--name",
+                        name,
+                    ),
+                    env=env,
+                    stdout=subprocess.DEVNULL,
+                    stderr=subprocess.DEVNULL,
                 )
             )
         from distributed import Client
@@ -373,7 +409,11 @@ def test_ctrl_c_keeps_the_finished_rows_and_a_rerun_completes_the_study(tmp_path
     out = tmp_path / "out"
     proc = subprocess.Popen(
         cli("study", str(path), "--out", str(out), "--workers", "1"),
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=sigint_as_in_a_terminal,
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=sigint_as_in_a_terminal,
     )
     manifest = out / "manifest.jsonl"
     deadline = time.monotonic() + 240

@@ -26,7 +26,16 @@ BENCH_SCENE = "lab_turbulent"
 
 def bench_tasks(n: int, steps: int) -> list[dict[str, Any]]:
     """``n`` equal tasks: the scene run for ``steps`` steps (ids differ so Dask runs each)."""
-    task = {"kind": "run", "t": None, "steps": steps, "until": "", "save": False, "balls": None, "gpu": False, "precision": "f64"}
+    task = {
+        "kind": "run",
+        "t": None,
+        "steps": steps,
+        "until": "",
+        "save": False,
+        "balls": None,
+        "gpu": False,
+        "precision": "f64",
+    }
     return [
         {
             "id": f"bench-{i}",

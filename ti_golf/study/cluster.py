@@ -90,7 +90,9 @@ def study_client(
         else:
             client = Client(address, timeout="30s")
         try:
-            if need_gpu and not any(w.get("resources", {}).get("GPU") for w in client.scheduler_info()["workers"].values()):
+            if need_gpu and not any(
+                w.get("resources", {}).get("GPU") for w in client.scheduler_info()["workers"].values()
+            ):
                 raise ConfigError(
                     "--address",
                     None,

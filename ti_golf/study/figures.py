@@ -47,7 +47,9 @@ FIGURES: dict[str, Figure] = {
     ),
     "deepest_overlap": Figure("deepest_overlap", _PILE, "deepest overlap of two balls, a fraction of a radius"),
     "p99_speed": Figure("p99_speed_mps", _PILE, "99th percentile of the balls' speeds at the end"),
-    "wall_time": Figure("sim_wall_s", KINDS, "wall time of the simulation proper (the row's wall_s is the whole task's)"),
+    "wall_time": Figure(
+        "sim_wall_s", KINDS, "wall time of the simulation proper (the row's wall_s is the whole task's)"
+    ),
 }
 """Every figure by name."""
 

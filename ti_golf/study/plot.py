@@ -32,9 +32,13 @@ def plot_study(
 ) -> None:
     """Plot ``column`` of a study's ``table`` against its varied ``keys`` (one or two) to ``path``."""
     if column not in table:
-        raise ConfigError("--figure", None, f"the table has no column {column!r}; it has: {', '.join(figure_columns(table, keys))}")
+        raise ConfigError(
+            "--figure", None, f"the table has no column {column!r}; it has: {', '.join(figure_columns(table, keys))}"
+        )
     if not 1 <= len(keys) <= 2:
-        raise ConfigError("--plot", None, f"draws a figure against one or two varied keys (the study varies {len(keys)})")
+        raise ConfigError(
+            "--plot", None, f"draws a figure against one or two varied keys (the study varies {len(keys)})"
+        )
     ok = [s == "ok" for s in table["status"]]
     means: dict[tuple[Any, ...], list[float]] = {}
     for i, good in enumerate(ok):

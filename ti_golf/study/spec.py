@@ -124,13 +124,22 @@ class Task:
         read_when=("kind", ("run",)),
     )
     save: bool = key(
-        "bool", True, "-", "save each task's final state in the study folder (runs/ID.npz)", read_when=("kind", ("run",))
+        "bool",
+        True,
+        "-",
+        "save each task's final state in the study folder (runs/ID.npz)",
+        read_when=("kind", ("run",)),
     )
     shots: int = key(
         "int", 1000, "-", "shots of the player's spread", Interval(2, 10_000_000), read_when=("kind", ("dispersion",))
     )
     tour: str = key(
-        "str", "PGA", "-", "the rows of the TrackMan table flown", OneOf(("PGA", "LPGA", "all")), read_when=("kind", ("tour",))
+        "str",
+        "PGA",
+        "-",
+        "the rows of the TrackMan table flown",
+        OneOf(("PGA", "LPGA", "all")),
+        read_when=("kind", ("tour",)),
     )
     balls: int | None = key(
         "int",
@@ -258,6 +267,7 @@ def load_study(path: str | Path, overrides: Sequence[str] = ()) -> StudySpec:
         raise_config(source, given[1], f"give one of [grid], [[points]] and [random], not {given[0]} and {given[1]}")
     base = _base_scene(study, task, p)
     fixed = tuple(study.set) + tuple(scene_overrides)
+    file_keys = frozenset(parse_override(text)[0] for text in study.set)
     points = _points(doc, given[0] if given else None, source)
     seeds = _seeds(study, task, source)
     n = len(points) * len(seeds)
@@ -267,7 +277,9 @@ def load_study(path: str | Path, overrides: Sequence[str] = ()) -> StudySpec:
     for name in figures:
         if task.kind not in FIGURES[name].kinds:
             kinds = ", ".join(FIGURES[name].kinds)
-            raise_config(source, "task.figures", f"{name!r} is not a figure of task.kind = {task.kind!r} (it is of {kinds})")
+            raise_config(
+                source, "task.figures", f"{name!r} is not a figure of task.kind = {task.kind!r} (it is of {kinds})"
+            )
     task_dict = {k: getattr(task, k) for k in TASK_KEYS if k != "figures"}
     tasks = []
     keys: list[str] = []
@@ -276,7 +288,7 @@ def load_study(path: str | Path, overrides: Sequence[str] = ()) -> StudySpec:
             if dotted not in keys:
                 keys.append(dotted)
         changes = fixed + tuple(f"{k}={_toml(v)}" for k, v in point.items())
-        scene_doc = _check_scene(base, changes, source, point, given[0] if given else "set", task)
+        scene_doc = _check_scene(base, changes, source, point, given[0] if given else "set", task, file_keys)
         for seed in seeds:
             ident = _task_id(scene_doc, seed, task_dict, figures)
             tasks.append(TaskSpec(ident, dict(point), seed, base, changes, task_dict, tuple(figures)))
@@ -327,7 +339,9 @@ def _base_scene(study: Study, task: Task, path: Path) -> str:
         return str(beside.resolve())
     found = resolve_scene_path(study.scene)
     if not found.is_file():
-        raise_config(str(path), "scene", f"no scene file {study.scene!r} beside the study, nor a bundled scene of that name")
+        raise_config(
+            str(path), "scene", f"no scene file {study.scene!r} beside the study, nor a bundled scene of that name"
+        )
     return str(found.resolve())
 
 
@@ -338,7 +352,9 @@ def _points(doc: Mapping[str, Any], how: str | None, source: str) -> list[dict[s
     table = doc[how]
     if how == "grid":
         if not isinstance(table, dict) or not table:
-            raise_config(source, "grid", "must be a table of scene keys, each with its values (a list or START:STOP:STEP)")
+            raise_config(
+                source, "grid", "must be a table of scene keys, each with its values (a list or START:STOP:STEP)"
+            )
         axes = {name: _values(name, value, source) for name, value in table.items()}
         return [dict(zip(axes, combo)) for combo in itertools.product(*axes.values())]
     if how == "points":
@@ -355,7 +371,9 @@ def _points(doc: Mapping[str, Any], how: str | None, source: str) -> list[dict[s
     uniform = table.get("uniform")
     for name in table:
         if name != "uniform" and name not in RANDOM_KEYS:
-            raise_config(source, f"random.{name}", f"is not a key of [random]; allowed: {', '.join(RANDOM_KEYS)}, uniform")
+            raise_config(
+                source, f"random.{name}", f"is not a key of [random]; allowed: {', '.join(RANDOM_KEYS)}, uniform"
+            )
     settings = Random(**_checked({k: v for k, v in table.items() if k != "uniform"}, RANDOM_KEYS, source, "random"))
     if not isinstance(uniform, dict) or not uniform:
         raise_config(source, "random.uniform", "must be a table of scene keys, each with its range [low, high]")
@@ -368,7 +386,9 @@ def _points(doc: Mapping[str, Any], how: str | None, source: str) -> list[dict[s
             or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)
             or value[0] > value[1]
         ):
-            raise_config(source, f"random.uniform.{name}", f"must be [low, high], two numbers with low <= high (got {value!r})")
+            raise_config(
+                source, f"random.uniform.{name}", f"must be [low, high], two numbers with low <= high (got {value!r})"
+            )
         ranges[name] = (float(value[0]), float(value[1]))
     rng = random.Random(settings.seed)
     return [{name: rng.uniform(lo, hi) for name, (lo, hi) in ranges.items()} for _ in range(settings.samples)]
@@ -407,7 +427,9 @@ def _seeds(study: Study, task: Task, source: str) -> list[int | None]:
     if study.seeds is None:
         return [None]
     if task.kind not in ("run", "dispersion", "pit"):
-        raise_config(source, "seeds", f"task.kind = {task.kind!r} draws nothing at random; seeds are for run, dispersion, pit")
+        raise_config(
+            source, "seeds", f"task.kind = {task.kind!r} draws nothing at random; seeds are for run, dispersion, pit"
+        )
     out = []
     for s in study.seeds:
         if not (s.is_integer() and 0 <= s < 2**31):
@@ -418,16 +440,30 @@ def _seeds(study: Study, task: Task, source: str) -> list[int | None]:
     return out
 
 
-def _check_scene(base: str, changes: tuple[str, ...], source: str, point: Mapping[str, Any], how: str, task: Task):
+def _check_scene(
+    base: str,
+    changes: tuple[str, ...],
+    source: str,
+    point: Mapping[str, Any],
+    how: str,
+    task: Task,
+    file_keys: frozenset[str] = frozenset(),
+):
     """The task's scene as a document (for its id), built now so that a bad value fails before
-    anything runs; the scene loader's error is given again naming the study file."""
+    anything runs; the scene loader's error is given again naming the study file and its table
+    (a point's key), or ``--set`` (a change given on the command line)."""
     try:
         scene = load_scene(base, changes)
     except ConfigError as exc:
-        where = exc.key if exc.key in point else None
-        table = {"grid": "grid", "points": "points", "random": "random.uniform"}.get(how, "set")
-        name = f"{table}.{where}" if where else ("set" if exc.source == "--set" else exc.key or "scene")
-        raise ConfigError(source, name, f"{exc.reason} (at {_point_text(point)})" if point else exc.reason) from None
+        if exc.key in point:
+            table = {"grid": "grid", "points": "points", "random": "random.uniform"}[how]
+            raise ConfigError(source, f"{table}.{exc.key}", f"{exc.reason} (at {_point_text(point)})") from None
+        if exc.source == "--set":
+            in_file = exc.key in file_keys
+            raise ConfigError(
+                source if in_file else "--set", f"set: {exc.key}" if in_file else exc.key, exc.reason
+            ) from None
+        raise ConfigError(source, "scene", str(exc)) from None
     if task.kind in ("shot", "dispersion") and scene.launch is None:
         raise_config(source, "scene", f"task.kind = {task.kind!r} flies the scene's [launch]: {scene.name!r} has none")
     return scene_document(scene)
@@ -453,7 +489,9 @@ def _toml(value: Any) -> str:
 def _task_id(scene_doc: Mapping[str, Any], seed: int | None, task: Mapping[str, Any], figures: Sequence[str]) -> str:
     """A task's identity: a hash of its scene (every key read), seed, task settings and figures, so
     that a study run again, or grown by more points, finds the tasks it has already finished."""
-    text = json.dumps({"scene": scene_doc, "seed": seed, "task": task, "figures": list(figures)}, sort_keys=True, default=str)
+    text = json.dumps(
+        {"scene": scene_doc, "seed": seed, "task": task, "figures": list(figures)}, sort_keys=True, default=str
+    )
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
@@ -486,7 +524,12 @@ def study_json_schema() -> dict[str, Any]:
         "description": "scene key -> [low, high]: drawn uniformly",
         "additionalProperties": {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
     }
-    props["random"] = {"type": "object", "additionalProperties": False, "required": ["uniform"], "properties": random_props}
+    props["random"] = {
+        "type": "object",
+        "additionalProperties": False,
+        "required": ["uniform"],
+        "properties": random_props,
+    }
     return {
         "$schema": DIALECT,
         "$id": "https://ti-golf.invalid/study.schema.json",
@@ -494,7 +537,12 @@ def study_json_schema() -> dict[str, Any]:
         "description": "A ti_golf study file (TOML): a base scene, the keys to vary, the task and its figures.",
         "type": "object",
         "additionalProperties": False,
-        "not": {"anyOf": [{"required": ["grid", "points"]}, {"required": ["grid", "random"]}, {"required": ["points", "random"]}]},
+        "not": {
+            "anyOf": [
+                {"required": ["grid", "points"]},
+                {"required": ["grid", "random"]},
+                {"required": ["points", "random"]},
+            ]
+        },
         "properties": props,
     }
-

@@ -61,7 +61,9 @@ def scaled_block(scene: Scene, n: int) -> Scene:
     (x and z about its centre) so that the balls are as densely packed and the column as tall."""
     random_blocks = [i for i, b in enumerate(scene.blocks) if b.kind == "random"]
     if len(random_blocks) != 1:
-        raise ConfigError("task.balls", None, f"scales a scene's one random block; {scene.name!r} has {len(random_blocks)}")
+        raise ConfigError(
+            "task.balls", None, f"scales a scene's one random block; {scene.name!r} has {len(random_blocks)}"
+        )
     i = random_blocks[0]
     b = scene.blocks[i]
     scale = math.sqrt(n / b.number) if b.number else 1.0
@@ -98,7 +100,9 @@ def execute(task: dict[str, Any], run_dir: str | None) -> dict[str, Any]:
         figures = _shot_figures(shots(scene, scene_launch(scene), to_rest=has_ground(scene)))
     elif kind == "dispersion":
         seed = 0 if task["seed"] is None else task["seed"]
-        d = dispersion(scene, scene_launch(scene), PLAYER_SPREAD, task["task"]["shots"], seed, to_rest=has_ground(scene))
+        d = dispersion(
+            scene, scene_launch(scene), PLAYER_SPREAD, task["task"]["shots"], seed, to_rest=has_ground(scene)
+        )
         figures = _shot_figures(d.shots)
     elif kind == "tour":
         flight = fly_tour(scene, TOUR_ROWS[task["task"]["tour"]])
