@@ -192,12 +192,14 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise ConfigError(str(p), None, f"is not valid TOML: {exc}") from None
 
 
-def resolve_scene_path(name: str | os.PathLike[str]) -> Path:
-    """A scene path as given, or a bare name looked up in the bundled ``scenes/`` folder."""
+def resolve_scene_path(name: str | os.PathLike[str], folder: Path | None = None) -> Path:
+    """A scene path as given, or a bare name looked up in the bundled ``scenes/`` folder (or in
+    ``folder``: the bundled studies')."""
     p = Path(name)
     if p.exists() or p.suffix == ".toml" and p.parent != Path("."):
         return p
-    for cand in (scenes_dir() / p, scenes_dir() / f"{p}.toml"):
+    folder = scenes_dir() if folder is None else folder
+    for cand in (folder / p, folder / f"{p}.toml"):
         if cand.exists():
             return cand
     return p

@@ -218,13 +218,7 @@ class StudySpec:
 
 def resolve_study_path(name: str | Path) -> Path:
     """A study file as given, or a bundled study's name (``scenes/studies/NAME.toml``)."""
-    p = Path(name)
-    if p.exists() or p.suffix == ".toml" and p.parent != Path("."):
-        return p
-    for cand in (bundled_studies_dir() / p, bundled_studies_dir() / f"{p}.toml"):
-        if cand.exists():
-            return cand
-    return p
+    return resolve_scene_path(name, bundled_studies_dir())
 
 
 def bundled_studies_dir() -> Path:
