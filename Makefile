@@ -11,7 +11,7 @@ OUT    ?= out
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[test,bench]"
+	$(PY) -m pip install --quiet -e ".[test,bench,cluster]"
 	touch $(STAMP)
 
 setup: $(STAMP)
@@ -19,7 +19,7 @@ setup: $(STAMP)
 # Linters, type checker and docs tools, installed on first use of lint or docs.
 DEVSTAMP := $(VENV)/.installed-dev
 $(DEVSTAMP): $(STAMP)
-	$(PY) -m pip install --quiet -e ".[test,bench,dev,docs]"
+	$(PY) -m pip install --quiet -e ".[test,bench,cluster,dev,docs]"
 	touch $(DEVSTAMP)
 
 # The software Vulkan driver for off-screen GGUI rendering (needs root and apt-get; skipped otherwise).

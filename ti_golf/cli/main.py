@@ -15,7 +15,22 @@ from collections.abc import Callable, Sequence
 
 import ti_golf
 from ti_golf import runtime
-from ti_golf.cli import bench, dispersion, figure, lab, play, render, run, scenes, schema, shot, sweep, table, tour
+from ti_golf.cli import (
+    bench,
+    dispersion,
+    figure,
+    lab,
+    play,
+    render,
+    run,
+    scenes,
+    schema,
+    shot,
+    study,
+    sweep,
+    table,
+    tour,
+)
 from ti_golf.cli._common import Parser
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
 
@@ -35,11 +50,13 @@ COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {
     "render": render.cmd_render,
     "play": play.cmd_play,
     "lab": lab.cmd_lab,
+    "study": study.cmd_study,
 }
 """Each subcommand's function: parsed arguments -> exit code."""
 
-NO_RUNTIME = ("scenes", "keys", "schema")
-"""Commands that simulate nothing and so start no Taichi runtime."""
+NO_RUNTIME = ("scenes", "keys", "schema", "study")
+"""Commands that start no Taichi runtime: they simulate nothing, or (a study) leave it to their
+worker processes, each of which starts its own."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -47,7 +64,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = Parser(prog="ti-golf", description="Golf-ball physics on Taichi: flights, sweeps, collisions.")
     p.add_argument("--version", action="version", version=f"ti-golf {ti_golf.__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for module in (scenes, schema, sweep, shot, dispersion, run, table, tour, figure, bench, render, play, lab):
+    for module in (scenes, schema, sweep, shot, dispersion, run, table, tour, figure, bench, render, play, lab, study):
         module.add_parser(sub)
     return p
 

@@ -83,6 +83,10 @@ def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
     elif kind in ("str", "text"):
         if not isinstance(value, str):
             raise_config(source, dotted, f"must be a string (got {value!r})")
+    elif kind == "strs":
+        if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+            raise_config(source, dotted, f"must be a list of strings (got {value!r})")
+        value = tuple(value)
     elif kind in _LISTS:
         count, shape = _LISTS[kind]
         if (
@@ -101,6 +105,13 @@ def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
         if problem:
             raise_config(source, dotted, f"{problem} (got {value!r})")
     return value
+
+
+def check_value(value: Any, key: Key, source: str, dotted: str) -> Any:
+    """``value`` of the key ``key`` (named ``dotted`` in ``source``) checked and normalised as a
+    scene file's value is (the same one-line errors): for other files declared with the same keys,
+    such as study files (:mod:`ti_golf.study.spec`)."""
+    return _coerce(value, key, source, dotted)
 
 
 def _unit(key: Key) -> str:
@@ -181,12 +192,14 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise ConfigError(str(p), None, f"is not valid TOML: {exc}") from None
 
 
-def resolve_scene_path(name: str | os.PathLike[str]) -> Path:
-    """A scene path as given, or a bare name looked up in the bundled ``scenes/`` folder."""
+def resolve_scene_path(name: str | os.PathLike[str], folder: Path | None = None) -> Path:
+    """A scene path as given, or a bare name looked up in the bundled ``scenes/`` folder (or in
+    ``folder``: the bundled studies')."""
     p = Path(name)
     if p.exists() or p.suffix == ".toml" and p.parent != Path("."):
         return p
-    for cand in (scenes_dir() / p, scenes_dir() / f"{p}.toml"):
+    folder = scenes_dir() if folder is None else folder
+    for cand in (folder / p, folder / f"{p}.toml"):
         if cand.exists():
             return cand
     return p
