@@ -28,7 +28,7 @@ from ti_golf.physics.integrate import NOT_TRACKED
 from ti_golf.runtime import ensure_init, np_float, on_cpu
 from ti_golf.scene.document import scene_document
 from ti_golf.scene.loader import load_scene
-from ti_golf.sim.solver_state import restore_solver, solver_arrays
+from ti_golf.solvers import record
 
 if TYPE_CHECKING:
     from ti_golf.sim.simulation import Recording, Simulation
@@ -76,7 +76,7 @@ def write_run(sim: Simulation, path: str | os.PathLike[str], recording: Recordin
         data["order"] = state.order
     solver_meta = None
     if sim.solver is not None:
-        arrays, solver_meta = solver_arrays(sim.solver)
+        arrays, solver_meta = record.to_file(sim.solver.record())
         solver_meta["serial"], solver_meta["reorder"] = sim.solver.serial, sim.solver.reorder
         data.update({f"solver.{name}": a for name, a in arrays.items()})
     if sim.initial is not None:
@@ -150,7 +150,8 @@ def read_run(cls: type[Simulation], path: str | os.PathLike[str]) -> Simulation:
     state.steps = int(meta["steps"])
     if solver is not None and sim.solver is not None:
         arrays = {name[len("solver.") :]: a for name, a in data.items() if name.startswith("solver.")}
-        restore_solver(sim.solver, state, arrays, solver)
+        saved = record.from_file(arrays, solver, state.n, sim.solver.serial, sim.solver.gauss_seidel)
+        sim.solver.restore(saved, state)
         if bool(solver["serial"]) != sim.solver.serial:  # saved on a CPU, stepped in parallel now
             sim.solver.invalidate()
     return sim
@@ -183,6 +184,9 @@ def _read(source: str) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         raise ConfigError(source, None, "is not a run saved by ti-golf (its 'run' entry is not readable)") from None
     if fmt != FORMAT:
         raise ConfigError(source, None, f"is a saved run of format {fmt}; this ti-golf reads format {FORMAT}")
+    reason = None if meta.get("solver") is None else record.unreadable(meta["solver"])
+    if reason is not None:
+        raise ConfigError(source, None, reason)
     return data, meta
 
 

@@ -17,11 +17,15 @@ import taichi as ti
 
 from ti_golf.errors import ConfigError, SimulationError
 from ti_golf.physics import kernels
+from ti_golf.physics.model import Model
+from ti_golf.physics.packs import Packs
+from ti_golf.physics.state import State
 from ti_golf.runtime import available_memory, ensure_init, np_float
 from ti_golf.scene.balls import ball_count, block_size, build_balls
 from ti_golf.scene.document import with_changes
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, STATUS_NAMES, Scene
+from ti_golf.signals import whole_steps
 from ti_golf.sim.changes import (
     _UNSET,
     MOVES_T0_BALLS,
@@ -31,12 +35,8 @@ from ti_golf.sim.changes import (
     refuse_for_given_balls,
     refuse_unread,
 )
-from ti_golf.sim.model import Model
-from ti_golf.sim.packs import Packs
 from ti_golf.sim.results import Flight
-from ti_golf.sim.signals import whole_steps
-from ti_golf.sim.solver import CollisionSolver
-from ti_golf.sim.state import State
+from ti_golf.solvers import CollisionSolver
 
 
 @dataclass
