@@ -221,7 +221,7 @@ def test_outputs_are_written_whole_or_not_at_all(tmp_path, monkeypatch):
     res = tg.sweep("lab_vacuum", angles_deg=[30.0, 45.0])
     res.to_csv(tmp_path / "s.csv")
     text = (tmp_path / "s.csv").read_text()
-    monkeypatch.setattr("ti_golf.sim.sweep.csv.writer", broken)
+    monkeypatch.setattr("ti_golf.golf.sweep.csv.writer", broken)
     with pytest.raises(OSError):
         res.to_csv(tmp_path / "s.csv")
     assert (tmp_path / "s.csv").read_text() == text

@@ -395,8 +395,8 @@ def test_tour_prints_the_23_rows_beside_the_table_and_plots_them(tmp_path, capsy
     png = tmp_path / "tour.png"
     proc = ok(run_cli("tour", "--plot", str(png)))
     rows = [m for m in (TOUR_ROW.match(ln) for ln in proc.stdout.splitlines()) if m]
-    from ti_golf.sim.tour import fly_tour
-    from ti_golf.sim.trackman import TOUR
+    from ti_golf.golf.tour import fly_tour
+    from ti_golf.golf.trackman import TOUR
 
     assert [m["name"] for m in rows] == [r.name for r in TOUR], proc.stdout
     # the table's columns are the data module's, and the model's are what the API flies

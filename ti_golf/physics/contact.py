@@ -43,6 +43,7 @@ GAUSS_SEIDEL = 1
 CENTRE_FRICTION = FRICTION_MODELS.index("report")
 """``ContactParams.friction`` of the report's friction from the centre's velocity (0: at the contact point)."""
 
+
 @ti.func
 def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e, mu, v_inelastic, h, relax=1.0):
     """One sweep's impulse P [N·s] on body a from body b (−P acts on b).
