@@ -33,7 +33,7 @@ from ti_golf.bench.collide import pile_scene
 from ti_golf.cli import main
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
-from ti_golf.sim.solver import SERIAL_MAX_BALLS
+from ti_golf.solvers.solver import SERIAL_MAX_BALLS
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -395,8 +395,8 @@ def test_tour_prints_the_23_rows_beside_the_table_and_plots_them(tmp_path, capsy
     png = tmp_path / "tour.png"
     proc = ok(run_cli("tour", "--plot", str(png)))
     rows = [m for m in (TOUR_ROW.match(ln) for ln in proc.stdout.splitlines()) if m]
-    from ti_golf.sim.tour import fly_tour
-    from ti_golf.sim.trackman import TOUR
+    from ti_golf.golf.tour import fly_tour
+    from ti_golf.golf.trackman import TOUR
 
     assert [m["name"] for m in rows] == [r.name for r in TOUR], proc.stdout
     # the table's columns are the data module's, and the model's are what the API flies
@@ -561,7 +561,7 @@ def test_bench_pit_profile_counts_every_launch_of_the_step(background_runs):
     # step's launches are the solver's: per step 2 of collision_step (the free flight with the
     # warm start, and the last part), one Gauss–Seidel sweep per phase of colour.step_phases and
     # colour.PROJECTIONS projection passes; one list build per rebuild the steps made.
-    from ti_golf.physics.colour import PROJECTIONS, step_phases
+    from ti_golf.solvers.colour import PROJECTIONS, step_phases
 
     proc = ok(background_runs.result("bench-pit-profile")[0])
     result = json.loads(proc.stdout.strip().splitlines()[-1])

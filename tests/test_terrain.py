@@ -19,7 +19,7 @@ import ti_golf as tg
 from ti_golf import ConfigError
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.terrain import Terrain, build_terrain, generate_heights
-from ti_golf.sim.solver import CollisionSolver
+from ti_golf.solvers import CollisionSolver
 
 G = 9.81
 R = 0.02
@@ -619,7 +619,7 @@ def test_surface_types_have_their_own_restitution(tmp_path, collide):
 
 
 def test_surface_defaults_come_from_contact_and_levels_are_checked(tmp_path):
-    from ti_golf.sim.model import Model
+    from ti_golf.physics.model import Model
 
     sc = scene(
         contact={"e": 0.4, "mu": 0.3, "mu_roll": 0.07, "turf": True},

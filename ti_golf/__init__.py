@@ -18,11 +18,11 @@ Taichi is initialised on first use (CPU, f64) or explicitly with :func:`init`.
 from importlib.metadata import PackageNotFoundError, version
 
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
+from ti_golf.golf.sweep import SweepResult, sweep
 from ti_golf.runtime import init
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING, Scene
 from ti_golf.sim.simulation import Overlap, Recording, Simulation
-from ti_golf.sim.sweep import SweepResult, sweep
 
 __all__ = [
     "AT_REST",

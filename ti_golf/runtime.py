@@ -117,7 +117,7 @@ def init(
                 f"{'' if ti.lang.impl.current_cfg().debug else ', debug off'}"
                 f"{'' if ti.lang.impl.current_cfg().kernel_profiler else ', kernel profiler off'}; "
                 "start a new process to change them "
-                "(importing ti_golf.sim.solver or ti_golf.physics initialises with the defaults: call init first)"
+                "(importing ti_golf.solvers.solver or ti_golf.physics initialises with the defaults: call init first)"
             )
         return _info
     banner = io.StringIO()
@@ -254,7 +254,7 @@ def plain_compile() -> Iterator[None]:
     For kernels whose bodies are long straight-line code: the lane-unrolled sweep kernel
     (``physics.kernels.fly_to_landing``, every lane of every RK4 stage spelled out), the
     ``serial`` collision step of small scenes, and the Gauss–Seidel sweep
-    (``physics.colour.gauss_seidel_sweep``, its contact laws spelled out once per colour).
+    (``solvers.colour.gauss_seidel_sweep``, its contact laws spelled out once per colour).
     Taichi's own IR passes grow much faster than linearly with such a body, while LLVM still
     optimises the code, so the kernels compile many times faster and run little or no slower
     (figures on the docs' performance page, "Design measurements").

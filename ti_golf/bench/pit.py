@@ -31,12 +31,12 @@ import numpy as np
 from ti_golf.bench.collide import bare_gather_rate
 from ti_golf.bench.common import _peak_rss_bytes, _restart_peak_rss, _rss_bytes
 from ti_golf.bench.kernel_times import FOLD_EVERY, KernelTimes, profiling
-from ti_golf.physics.colour import moving_balls
 from ti_golf.runtime import ensure_init, release_freed_memory
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import AT_REST, Plane, Scene
-from ti_golf.sim.signals import whole_steps
+from ti_golf.signals import whole_steps
 from ti_golf.sim.simulation import Simulation
+from ti_golf.solvers.colour import moving_balls
 
 T = TypeVar("T")
 

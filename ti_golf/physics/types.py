@@ -322,7 +322,7 @@ ModelArrays = Deferred(
     ),
     "ModelArrays",
 )
-"""The model's arrays (see :class:`ti_golf.sim.model.Model`)."""
+"""The model's arrays (see :class:`ti_golf.physics.model.Model`)."""
 
 BallState = Deferred(
     lambda: ti.types.argpack(
@@ -334,7 +334,7 @@ BallState = Deferred(
     ),
     "BallState",
 )
-"""The balls' state (see :class:`ti_golf.sim.state.State`)."""
+"""The balls' state (see :class:`ti_golf.physics.state.State`)."""
 
 FlightRecord = Deferred(
     lambda: ti.types.argpack(
@@ -346,7 +346,7 @@ FlightRecord = Deferred(
     ),
     "FlightRecord",
 )
-"""Each tracked ball's flight: landing and apex (see :class:`ti_golf.sim.state.State`)."""
+"""Each tracked ball's flight: landing and apex (see :class:`ti_golf.physics.state.State`)."""
 
 NeighbourLists = Deferred(
     lambda: ti.types.argpack(
@@ -375,7 +375,7 @@ BlockOrder = Deferred(
     ),
     "BlockOrder",
 )
-"""The balls grouped by block of grid columns for the Gauss–Seidel sweeps (:mod:`.colour`)."""
+"""The balls grouped by block of grid columns for the Gauss–Seidel sweeps (:mod:`ti_golf.solvers.colour`)."""
 
 StepScratch = Deferred(
     lambda: ti.types.argpack(
@@ -415,7 +415,7 @@ GridParams = Deferred(
     ),
     "GridParams",
 )
-"""Scalars of a neighbour-list build (see :func:`ti_golf.physics.grid.list_neighbours`)."""
+"""Scalars of a neighbour-list build (see :func:`ti_golf.solvers.grid.list_neighbours`)."""
 
 GridScratch = ti.types.argpack(
     rank=int_array,  # each ball's rank within its bucket, (N,)

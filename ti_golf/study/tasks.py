@@ -20,17 +20,17 @@ import numpy as np
 
 from ti_golf.bench.pit import bench_pit, pile_quality
 from ti_golf.errors import ConfigError
+from ti_golf.golf.dispersion import PLAYER_SPREAD, dispersion
+from ti_golf.golf.rollout import has_ground
+from ti_golf.golf.shots import shots, target_direction
+from ti_golf.golf.sweep import sweep
+from ti_golf.golf.tour import fly_tour
+from ti_golf.golf.trackman import LPGA_TOUR, PGA_TOUR, TOUR, YD
 from ti_golf.scene.launch_monitor import right_of, scene_launch
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import OUT_OF_BOUNDS, Scene
-from ti_golf.sim.dispersion import PLAYER_SPREAD, dispersion
 from ti_golf.sim.results import Flight, Shots
-from ti_golf.sim.rollout import has_ground
-from ti_golf.sim.shots import shots, target_direction
 from ti_golf.sim.simulation import Simulation
-from ti_golf.sim.sweep import sweep
-from ti_golf.sim.tour import fly_tour
-from ti_golf.sim.trackman import LPGA_TOUR, PGA_TOUR, TOUR, YD
 from ti_golf.study.figures import FIGURES, landed_mean, pile_height, repose_angle
 
 TOUR_ROWS = {"PGA": PGA_TOUR, "LPGA": LPGA_TOUR, "all": TOUR}

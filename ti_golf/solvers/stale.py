@@ -15,13 +15,11 @@ whole skin before it forces a rebuild, not half of it.
 
 Rebuilt earlier or later, the lists hold every pair that can touch in the step; the steps between
 differ only in which pairs are listed but still apart, which change nothing (see
-:func:`.contact.pair_step`), and in the order of the balls that the build stores.
+:func:`.sequential.pair_step`), and in the order of the balls that the build stores.
 """
 
 import taichi as ti
 
-from ti_golf.physics.links import distance_from_build, listed
-from ti_golf.physics.sort import bucket_of, cell_of
 from ti_golf.physics.types import (
     BallState,
     GridParams,
@@ -35,6 +33,8 @@ from ti_golf.physics.types import (
     of_ball,
     scalars_of,
 )
+from ti_golf.solvers.links import distance_from_build, listed
+from ti_golf.solvers.sort import bucket_of, cell_of
 
 REACH_CELLS = 2
 """Cells on each side of a ball's cell (at the build) in which :func:`stale_near` looks for the
@@ -116,7 +116,7 @@ def stale_near(
     v: ti.template(),
 ):
     """:func:`stale_by_every_ball`, with the grid of the last build (``g``: its
-    :data:`.types.GridParams`; ``start``, ``sorted_ids``: its buckets, see
+    :data:`ti_golf.physics.types.GridParams`; ``start``, ``sorted_ids``: its buckets, see
     :func:`.grid.list_neighbours` for ``stored_sorted``): the balls of the ``REACH_CELLS`` cells
     around ball i's at the build, and the balls listed apart (every ball, for a ball listed apart),
     as the build tested them."""
@@ -163,8 +163,8 @@ def flag_stale_lists(
     (``params``: the step's scalars, h and the skin), or a pair out of the lists is within reach
     of a ball that has used more than half of it (see the module's docstring), looked for only
     when no ball has used the whole skin (as while a pour lands, when most steps rebuild), with the
-    grid of the last build (``g``, ``grid``: its :data:`.types.GridParams` and
-    :data:`.types.GridScratch`; ``apart_ids``, ``stored_sorted``: see :func:`stale_near`) or,
+    grid of the last build (``g``, ``grid``: its :data:`ti_golf.physics.types.GridParams` and
+    :data:`ti_golf.physics.types.GridScratch`; ``apart_ids``, ``stored_sorted``: see :func:`stale_near`) or,
     ``serial``, among every ball (the four are not read). Both find the same pairs."""
     for i in range(scratch.x_free.shape[0]):
         if skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h) > params.skin:
@@ -209,7 +209,7 @@ def lists_stale(
     """Whether the lists must be rebuilt after a parallel Gauss–Seidel step (its projection done):
     :func:`flag_stale_lists` with the grid of the last build (``g``, ``grid``, ``apart_ids`` and
     ``stored_sorted`` as :func:`.grid.list_neighbours` had them) and the step's scalars
-    (:func:`.types.scalars_of`). Returns ``scratch.flag[0]``."""
+    (:func:`ti_golf.physics.types.scalars_of`). Returns ``scratch.flag[0]``."""
     _air, _contact, _terrain, params = scalars_of(scalars)
     flag_stale_lists(False, params, model.radius, lists, state, scratch, g, grid, apart_ids, stored_sorted)
     return scratch.flag[0]

@@ -25,7 +25,7 @@ The kernel's top-level loops run one after another, each over all balls in paral
    skip them for a ball that cannot reach one within the step);
 2. ``iterations`` Jacobi sweeps, each a pair loop (impulses from the velocities of the previous
    sweep, with the normals and gaps that the first loop stored) and a ball loop (gather, then the
-   planes and the terrain: the plane of the patch under the ball, see :mod:`.terrain`, applied
+   planes and the terrain: the plane of the patch under the ball, see :mod:`ti_golf.physics.terrain`, applied
    in turn); between the two, in a sweep where pairs met as impacts, each ball finds its first
    impact, so that a ball takes one impact per sweep (:func:`matched`);
 3. finish (fused with the last sweep's ball loop): positions from the final velocities (split at
@@ -48,14 +48,6 @@ needs must come with one less, or go to a loop of its own.
 import taichi as ti
 
 from ti_golf.physics.aero import V, W, X, coefficients, column
-from ti_golf.physics.colour import (
-    ASLEEP_OVERLAP,
-    inelastic_speed,
-    region_hop,
-    serial_projection,
-    serial_sweeps,
-    stands_firm,
-)
 from ti_golf.physics.contact import (
     GAUSS_SEIDEL,
     plane_position,
@@ -63,17 +55,6 @@ from ti_golf.physics.contact import (
 )
 from ti_golf.physics.integrate import IN_FLIGHT, step_free, track_flight
 from ti_golf.physics.kernels import lane_state
-from ti_golf.physics.links import moved_past, relist_all_pairs, slot_bits
-from ti_golf.physics.pairs import (
-    QUIET,
-    gather,
-    impact_keys,
-    owned_pairs,
-    touched_by_moving,
-    touching_by_gaps,
-    warm_start,
-)
-from ti_golf.physics.surfaces import beyond_reach, rounded_down, surface_clearance, surface_impulses
 from ti_golf.physics.terrain import (
     outside,
     same_cell,
@@ -93,6 +74,25 @@ from ti_golf.physics.types import (
     zero3,
 )
 from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING
+from ti_golf.solvers.colour import (
+    ASLEEP_OVERLAP,
+    inelastic_speed,
+    region_hop,
+    serial_projection,
+    serial_sweeps,
+    stands_firm,
+)
+from ti_golf.solvers.links import moved_past, relist_all_pairs, slot_bits
+from ti_golf.solvers.pairs import (
+    QUIET,
+    gather,
+    impact_keys,
+    owned_pairs,
+    touched_by_moving,
+    touching_by_gaps,
+    warm_start,
+)
+from ti_golf.solvers.surfaces import beyond_reach, rounded_down, surface_clearance, surface_impulses
 
 
 @kernel
@@ -142,9 +142,9 @@ def collision_step(
     more than the step itself. Each step is the parallel one on the same data, the time [s]
     advanced by ``dt`` from ``t0`` in f64, as the caller advances it between
     parallel steps; the neighbour lists are rebuilt in the kernel by testing every pair
-    (:func:`~ti_golf.physics.links.relist_all_pairs`, with the skin [m]; the balls faster than
+    (:func:`~ti_golf.solvers.links.relist_all_pairs`, with the skin [m]; the balls faster than
     ``v_cut`` [m/s] or bigger than ``r_cut`` [m] own no pair with the others, as in the grid's
-    lists: see :func:`~ti_golf.physics.grid.owns`) whenever ``scratch.flag[0]`` asks for it at the
+    lists: see :func:`~ti_golf.solvers.grid.owns`) whenever ``scratch.flag[0]`` asks for it at the
     start of a step, so the tables must be n − 1 wide; new positions are copied to ``state.x``
     after every step. Returns how many times the lists were rebuilt.
 
@@ -224,6 +224,13 @@ def collision_step(
                 state.x[i] = scratch.x_free[i]
             t += dt
     return result
+
+
+def launch(arguments: tuple, *, serial: bool, warm: bool, sweeps: int, last: bool) -> int:
+    """:func:`collision_step` with its flags by name: ``arguments``, the ten before them
+    (``CollisionSolver._arguments``), then ``serial``, ``warm``, ``sweeps`` and ``last``.
+    Returns what it returns."""
+    return collision_step(*arguments, serial, warm, sweeps, last)
 
 
 @ti.func

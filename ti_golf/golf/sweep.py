@@ -13,6 +13,7 @@ import numpy as np
 
 from ti_golf.errors import ConfigError, SimulationError
 from ti_golf.files import atomic_path
+from ti_golf.golf.rollout import shots_from_landing
 from ti_golf.physics import kernels
 from ti_golf.physics.aero import air_params
 from ti_golf.physics.integrate import INTEGRATOR_CODES
@@ -22,7 +23,6 @@ from ti_golf.scene.balls import launch_position
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene, backspin_axis
 from ti_golf.sim.results import CSV_COLUMNS, GOLFER_CSV_COLUMNS, Flight, Shots
-from ti_golf.sim.rollout import shots_from_landing
 
 
 @dataclass(frozen=True)
@@ -237,7 +237,7 @@ def sweep(
         overrides: scene overrides (``{"air.wind": [-5, 0, 0]}`` or ``["air.wind=[-5,0,0]"]``).
         trajectories: also record the trajectories of up to this many evenly spaced conditions.
         to_rest: also bounce and roll every ball from its landing to rest on the scene's ground
-            (:func:`ti_golf.sim.rollout.roll_out`), for total and roll.
+            (:func:`ti_golf.golf.rollout.roll_out`), for total and roll.
 
     Example:
         >>> res = sweep("lab_turbulent", angles_deg=np.arange(36, 37.41, 0.02))   # doctest: +SKIP

@@ -1,5 +1,5 @@
 """Balls set apart: the few much faster or bigger than the rest, listed by every ball instead of
-widening every cell for them (see :mod:`ti_golf.physics.grid`)."""
+widening every cell for them (see :mod:`ti_golf.solvers.grid`)."""
 
 import math
 

@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 
 from ti_golf.files import atomic_path
+from ti_golf.golf.shots import shots
 from ti_golf.scene.launch_monitor import MPH, RPM, MonitorLaunch, Units
 from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import Shots
-from ti_golf.sim.shots import shots
 
 MAX_SHOTS = 1_000_000
 """The most shots one dispersion flies."""
@@ -184,7 +184,7 @@ def dispersion(
     progress: Callable[[float, float], None] | None = None,
 ) -> Dispersion:
     """Fly ``n`` shots drawn from a player's spread (:func:`draw_launches`) all at once, to landing
-    and, with ``to_rest``, to rest on the scene's ground (see :func:`ti_golf.sim.shots.shots`).
+    and, with ``to_rest``, to rest on the scene's ground (see :func:`ti_golf.golf.shots.shots`).
 
     Example:
         >>> from ti_golf.scene.launch_monitor import MonitorLaunch, MPH, RPM           # doctest: +SKIP

@@ -5,7 +5,7 @@ project's reference notes (``golf_data.md``). Carry, apex ("max height") and lan
 measured to the launch height; weather and altitude are not normalised. Units as published (mph,
 degrees, rpm, yards); the ``*_si`` properties give SI.
 
-The air model's fit (:mod:`ti_golf.sim.aero_fit`) sees :data:`PGA_TOUR` only; :data:`LPGA_TOUR`
+The air model's fit (:mod:`ti_golf.golf.aero_fit`) sees :data:`PGA_TOUR` only; :data:`LPGA_TOUR`
 is the check on data the fit never saw.
 """
 

@@ -1,23 +1,22 @@
-"""A step with ball–ball collisions: free flight, hash-grid neighbour lists, Jacobi contact
-sweeps and the end-of-step position update, in that fixed order (see physics/collide.py)."""
+"""The collision solvers' shared driver: the hash-grid neighbour lists, the pair and surface
+tables with their carried impulses, the storage order, serial and parallel stepping, and the
+saved record. A step is free flight, the contact sweeps and the end-of-step position update, in
+that fixed order (see :mod:`.collide`); the sweeps are each kind's own: :class:`.jacobi.JacobiSolver`
+and :class:`.gauss_seidel.GaussSeidelSolver`, which ``CollisionSolver(model)`` picks by
+``contact.solver``."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import taichi as ti
 
 from ti_golf.errors import SimulationError
-from ti_golf.physics import apart, collide, colour, grid, links, sort, stale
-from ti_golf.physics.types import (
-    BlockOrder,
-    GridParams,
-    GridScratch,
-    pair_columns,
-    vec3,
-    vec3f,
-)
+from ti_golf.physics.model import Model
+from ti_golf.physics.packs import Packs
+from ti_golf.physics.state import State
+from ti_golf.physics.types import GridParams, GridScratch, pair_columns, vec3, vec3f
 from ti_golf.runtime import (
     available_memory,
     byte_size,
@@ -28,12 +27,18 @@ from ti_golf.runtime import (
     plain_compile,
     release_freed_memory,
 )
-from ti_golf.sim.model import Model
-from ti_golf.sim.packs import Packs
-from ti_golf.sim.signals import whole_steps
-from ti_golf.sim.state import State
-from ti_golf.sim.storage_order import order_columns, store_in_grid_order
-from ti_golf.sim.surface_rows import every_ball_a_row, list_surface_rows, surface_columns, surface_table
+from ti_golf.signals import whole_steps
+from ti_golf.solvers import apart, collide, grid, links, sort, surfaces
+from ti_golf.solvers.record import SolverRecord
+from ti_golf.solvers.storage_order import store_in_grid_order
+from ti_golf.solvers.surface_rows import (
+    every_ball_a_row,
+    list_surface_rows,
+    surface_columns,
+    surface_table,
+    table_fits,
+    table_for,
+)
 
 SERIAL_MAX_BALLS = 256
 """Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
@@ -46,33 +51,11 @@ REORDER_MIN_BALLS = 8192
 :attr:`CollisionSolver.reorder`): smaller piles stay in the CPU's caches whatever their order."""
 
 
-UNROLL_MAX_SWEEPS = 4
-"""Most Jacobi sweeps in one kernel launch of a parallel step: a step of more
-(``contact.iterations``) is split into launches of at most this many sweeps each
-(:func:`sweep_launches`): compiling a kernel grows faster than the sweeps unrolled in it, while
-each launch costs a fraction of a millisecond (see the docs' performance page, "Design
-measurements")."""
-
-
-def sweep_launches(iterations: int) -> list[tuple[bool, int, bool]]:
-    """The launches of one parallel step of ``iterations`` Jacobi sweeps, as the ``(warm, sweeps,
-    last)`` arguments of ``collide.collision_step``: the sweeps in order, at most
-    ``UNROLL_MAX_SWEEPS`` per launch; the first launch also takes the free flight and the warm start,
-    and the one with the last sweep finishes the step. Any split gives the same step, bit for bit."""
-    launches, first = [], 1
-    while first <= iterations:
-        end = min(first + UNROLL_MAX_SWEEPS - 1, iterations)
-        last = end == iterations
-        launches.append((first == 1, end - first + 1 - int(last), last))
-        first = end + 1
-    return launches
-
-
 def table_bytes(n: int, width: int, pairs: int, gauss_seidel: bool) -> int:
     """Bytes of the neighbour and pair tables of ``n`` balls with upper lists ``width`` wide and
     room for ``pairs`` pairs: per upper-list entry a neighbour (4 bytes); per pair its link in the
     other ball's lower list (4 bytes), its resting impulse (f32), its row of the sweep's table
-    (:func:`.types.pair_columns` floats), and with the Gauss–Seidel sweeps its friction impulse
+    (:func:`ti_golf.physics.types.pair_columns` floats), and with the Gauss–Seidel sweeps its friction impulse
     (3 f32)."""
     f = np.dtype(np_float()).itemsize
     per_pair = 4 + 4 + pair_columns(gauss_seidel) * f + (12 if gauss_seidel else 0)
@@ -99,7 +82,9 @@ def steps_serially(n: int) -> bool:
 
 
 class CollisionSolver:
-    """Buffers and neighbour lists for stepping N colliding balls.
+    """Buffers and neighbour lists for stepping N colliding balls: the driver both kinds of
+    sweeps share. ``CollisionSolver(model, ...)`` makes the kind that ``contact.solver`` names
+    (:attr:`KINDS`); each kind steps with its own sweeps (:meth:`_sweep`).
 
     Attributes:
         cell: grid cell size [m] at the last build: the largest diameter plus the skin, or plus
@@ -124,6 +109,8 @@ class CollisionSolver:
             changes nothing, see ``colour.moving_balls``): a pile asleep then costs one pass over
             the balls' status a step, not the step's dozen kernel launches.
         still_steps: how many steps were so skipped (for benchmarks and tests).
+        far_owners: how many balls own pairs that the Gauss–Seidel colours leave to
+            ``colour.far_pairs`` (0 with the Jacobi sweeps).
         serial: whether steps run serially, many per launch, with the lists rebuilt in the kernel
             by testing every pair (default: :func:`steps_serially`; CPU backends only); else one
             parallel launch per step, with the hash grid. Both give the same lists and
@@ -138,6 +125,78 @@ class CollisionSolver:
             sums over a ball's neighbours run in another order: results differ from a run
             without reordering by round-off, and two runs of a scene still agree bit for bit.
     """
+
+    KINDS: ClassVar[dict[str, type[CollisionSolver]]] = {}
+    """The kinds of solver by their ``contact.solver`` name (each subclass adds itself)."""
+
+    gauss_seidel: ClassVar[bool] = False
+    """Whether the sweeps are Gauss–Seidel's: the kernels' flag for the pairs' friction impulses."""
+
+    SAVED_VALUES: ClassVar[dict[str, str]] = {
+        "r_max": "_r_max",
+        "r_cut": "r_cut",
+        "r_ref": "r_ref",
+        "skin": "skin",
+        "v_cut": "v_cut",
+        "h": "h",
+        "cell": "cell",
+        "mask": "mask",
+        "capacity": "capacity",
+        "rebuilds": "rebuilds",
+        "still_steps": "still_steps",
+        "pair_capacity": "pair_capacity",
+        "n_apart": "n_apart",
+        "skip_still": "skip_still",
+        "far_owners": "far_owners",
+        "valid": "_valid",
+        "rebuild": "_rebuild",
+    }
+    """The numbers a saved run keeps (:meth:`record`), by their name in the record: the
+    attributes that hold them. (The grid hash, a pair of vectors, is kept as ``hash``.)"""
+
+    SAVED_ARRAYS: ClassVar[tuple[str, ...]] = (
+        "sorted_ids",
+        "start",
+        "x_at_build",
+        "upper",
+        "first",
+        "lam",
+        "lower",
+        "lower_first",
+        "surface_start",
+        "surface_impulse",
+        "flag",
+        "apart_ids",
+        "friction",
+    )
+    """The arrays a saved run keeps whole (:meth:`record`): the lists, the carried impulses and the
+    grid of the last build."""
+
+    SCRATCH: ClassVar[tuple[str, ...]] = (
+        "x_free",
+        "v_free",
+        "calm",
+        "clear",
+        "rank",
+        "chunk_start",
+        "impulse",
+        "impact",
+        "stash_first",
+        "pair_chunk",
+        "surface_impulse_back",
+    )
+    """Arrays that each step or list build writes before it reads them: a saved run keeps only
+    their shapes and types."""
+
+    def __init_subclass__(cls, kind: str = "", **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if kind:
+            CollisionSolver.KINDS[kind] = cls
+
+    def __new__(cls, model: Model, *args: Any, **kwargs: Any) -> CollisionSolver:
+        if cls is CollisionSolver:  # the kind the scene names
+            cls = CollisionSolver.KINDS[model.scene.contact.solver]
+        return super().__new__(cls)
 
     def __init__(
         self, model: Model, capacity: int = 1, serial: bool | None = None, reorder: bool | None = None
@@ -200,22 +259,68 @@ class CollisionSolver:
         self.n_apart = 0
         # the loop iterations after which a thread stops its loops without a word (grid.LOOP_CAP)
         self.loop_cap = grid.LOOP_CAP if ensure_init().arch == "vulkan" else None
-        self.gauss_seidel = model.scene.contact.solver == "gauss_seidel"
         self.skip_still = self.gauss_seidel
-        if self.gauss_seidel and not self.serial:  # the balls by grid column (colour.column_order)
-            self.col_ids, self.col_colour = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
-        self.col_start = self.col_chunk = None
         # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only: a
         # rebuild stashes it beside the resting impulse, links.stash)
         self.friction = ti.ndarray(vec3f, 1)
         if self.serial:
-            every_ball_a_row(self, model)
+            self.surface_impulse = every_ball_a_row(self.surface_start, model)
         self.far_owners = 0
         self._valid = False
         self._rebuild = True
         self._ids: ti.Ndarray | None = None  # the state's storage order at the last build (see pairs)
         self._hash = None  # the grid hash's (origin, stride) at the last build (grid.hash_strides)
         self._last_grid = None  # (a cache of last_grid())
+
+    @property
+    def model(self) -> Model:
+        """The model the solver was made for (its balls' radii, the planes, the terrain)."""
+        return self._model
+
+    @property
+    def packs(self) -> Packs:
+        """The kernels' argument packs of the solver's arrays (see :class:`~ti_golf.physics.packs.Packs`)."""
+        return self._packs
+
+    def record(self) -> SolverRecord:
+        """What the next steps read, to continue bit for bit after :meth:`restore`: the numbers of
+        ``SAVED_VALUES`` and the grid hash, the arrays of ``SAVED_ARRAYS`` (those made), and the
+        shapes and types of the ``SCRATCH`` arrays."""
+        values: dict[str, Any] = {name: getattr(self, attr) for name, attr in self.SAVED_VALUES.items()}
+        values["hash"] = None if self._hash is None else [[int(c) for c in v.to_list()] for v in self._hash]
+        arrays, elements, scratch = {}, {}, {}
+        for name in self.SAVED_ARRAYS:
+            a = getattr(self, name, None)  # (a serial Gauss–Seidel solver has no column order)
+            if a is not None:
+                arrays[name] = a.to_numpy()
+                elements[name] = list(getattr(a, "element_shape", ()))
+        for name in self.SCRATCH:
+            a = getattr(self, name)
+            if a is not None:
+                scratch[name] = [list(a.shape), list(getattr(a, "element_shape", ())), str(a.to_numpy().dtype)]
+        return SolverRecord(values, arrays, elements, scratch)
+
+    def restore(self, record: SolverRecord, state: State) -> None:
+        """Take back what :meth:`record` returned, for ``state`` restored to the same moment (its
+        storage order included): the next step is then the one that the recorded solver would
+        have made. What the record lacks keeps the value this solver was made with."""
+        for name, attribute in self.SAVED_VALUES.items():
+            if name in record.values:
+                setattr(self, attribute, record.values[name])
+        if "hash" in record.values:
+            hashed = record.values["hash"]
+            self._hash = None if hashed is None else tuple(ti.Vector(v, dt=ti.i32) for v in hashed)
+        for name in self.SAVED_ARRAYS:
+            if name in record.arrays:
+                setattr(self, name, record.ndarray(name))
+        for name in self.SCRATCH:
+            if name in record.scratch:
+                setattr(self, name, record.scratch_array(name))
+        if record.rebuild:
+            self._rebuild = True
+        self._ids = state.ids
+        self._packs = Packs()
+        self._last_grid = None
 
     def build(self, state: State) -> None:
         """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
@@ -245,7 +350,10 @@ class CollisionSolver:
         bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
         self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, self.mask + 1))
         if self.reorder:
-            store_in_grid_order(self, state)
+            grid_order = (1.0 / self.cell, self.mask, *self._hash, self.rank, self.start, self.chunk_start)
+            self.v_free, self.calm, self.rank = store_in_grid_order(
+                state, self._model, (*grid_order, self.sorted_ids), [self.v_free, self.calm, self.rank]
+            )
             if scan_apart:  # their new indices
                 apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
         self._ids = state.ids
@@ -311,7 +419,7 @@ class CollisionSolver:
             if self.gauss_seidel:  # none yet
                 self.friction.fill(0.0)
         if not self.serial:  # (serial: a row for every ball, see surface_rows.every_ball_a_row)
-            list_surface_rows(self, state, carried, v_max)
+            self._list_surface_rows(state, carried, v_max)
         if self.impulse is None or self.impulse.shape[0] != self.lam.shape[0]:
             self.impulse = None  # free the old table (the stash) before allocating
             free_dropped_arrays()
@@ -321,8 +429,22 @@ class CollisionSolver:
         if n >= REORDER_MIN_BALLS and self.rebuilds % COLLECT_EVERY == 0:
             free_dropped_arrays()  # (the cycles that Taichi's launches leave: see COLLECT_EVERY)
         self._valid = True
-        if self.gauss_seidel and not self.serial:
-            order_columns(self, state)
+
+    def _list_surface_rows(self, state: State, carry: bool, v_max: float) -> None:
+        """Give a row of surface impulses to each ball that may touch a plane or the terrain before
+        the next rebuild (:func:`.surface_rows.list_surface_rows`), in the second of two tables,
+        then swap them: each ball that had a row keeps its impulses when ``carry``, the others
+        start from zero."""
+        rows, old = list_surface_rows(self, state, carry, v_max)
+        columns = surface_columns(self._model)
+        back = self.surface_impulse_back
+        if not table_fits(back, rows, columns):
+            self._packs.clear()  # (their references would keep the old table in memory)
+            self.surface_impulse_back = back = None
+            free_dropped_arrays()
+            back = table_for(rows, columns)
+        surfaces.carry_surfaces(*old, self.surface_start, back)
+        self.surface_impulse, self.surface_impulse_back = back, self.surface_impulse
 
     def _grid_params(self, fast: bool) -> Any:
         """The :data:`~ti_golf.physics.types.GridParams` of the grid as the last build made it (its
@@ -369,7 +491,7 @@ class CollisionSolver:
             capacity = max(1, pairs + (pairs // room if room and self.rebuilds > 0 else 0))
             self._check_table_memory(state, self.capacity, capacity)
             self.pair_capacity = capacity
-        rows = self.pair_capacity if self.gauss_seidel else 1
+        rows = self._friction_rows()
         new_friction = self.friction is None or self.friction.shape[0] != rows  # (the first build, or grown)
         if grow or new_friction:
             self._packs.clear()  # (their references would keep the old tables in memory)
@@ -460,25 +582,9 @@ class CollisionSolver:
             self.invalidate()
         if self.surface_impulse.shape[1] != surface_columns(model):
             if self.serial:
-                every_ball_a_row(self, model)
+                self.surface_impulse, self.surface_impulse_back = every_ball_a_row(self.surface_start, model), None
             else:
                 self.invalidate()  # (the build makes the tables for the new planes)
-
-    SCRATCH = (
-        "x_free",
-        "v_free",
-        "calm",
-        "clear",
-        "rank",
-        "chunk_start",
-        "impulse",
-        "impact",
-        "stash_first",
-        "pair_chunk",
-        "surface_impulse_back",
-    )
-    """Arrays that each step or list build writes before it reads them: :func:`.solver_state.solver_arrays`
-    keeps only their shapes."""
 
     def invalidate(self) -> None:
         """Rebuild the neighbour lists before the next step (balls were moved between steps), each
@@ -507,7 +613,7 @@ class CollisionSolver:
     def advance(self, model: Model, state: State, steps: int) -> None:
         """Advance all balls by ``steps`` steps of ``model.dt``: serially in one launch, or one
         parallel launch per step (see ``serial``); Ctrl-C and SIGTERM wait for whole steps
-        (:func:`~ti_golf.sim.signals.whole_steps`)."""
+        (:func:`~ti_golf.signals.whole_steps`)."""
         if self.serial:
             with whole_steps():
                 self._advance_serially(model, state, int(steps))
@@ -525,8 +631,12 @@ class CollisionSolver:
             self.build(state)
             grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
         with plain_compile():  # see runtime.plain_compile
-            self.rebuilds += collide.collision_step(
-                *self._arguments(model, state, steps), True, True, model.scene.contact.iterations - 1, True
+            self.rebuilds += collide.launch(
+                self._arguments(model, state, steps),
+                serial=True,
+                warm=True,
+                sweeps=model.scene.contact.iterations - 1,
+                last=True,
             )
         for _ in range(steps):
             state.t += model.dt  # as one step at a time adds it, to the same round-off
@@ -535,47 +645,31 @@ class CollisionSolver:
     def _step_in_parallel(self, model: Model, state: State) -> None:
         if not self._valid or self._rebuild:
             self.build(state)
-        elif self.skip_still and colour.moving_balls(state.status) == 0:  # the step would change nothing
+        elif self.skip_still and self._all_still(state):  # the step would change nothing
             self.still_steps += 1
             state.t += model.dt
             state.steps += 1
             return
-        arguments = self._arguments(model, state, 1)
-        if self.gauss_seidel:
-            rebuild = self._gauss_seidel_step(model.scene.contact.iterations, arguments)
-        else:
-            for warm, sweeps, last in sweep_launches(model.scene.contact.iterations):
-                rebuild = collide.collision_step(*arguments, False, warm, sweeps, last)
+        rebuild = self._sweep(model.scene.contact.iterations, self._arguments(model, state, 1))
         state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
         state.t += model.dt
         state.steps += 1
         self._rebuild = bool(rebuild)
 
-    def _gauss_seidel_step(self, iterations: int, arguments: tuple) -> int:
-        """One parallel step with Gauss–Seidel sweeps (see ``physics.colour``): the free flight and
-        warm start, ``iterations`` coloured sweeps and the restitution pass, the last sweep, which
-        only finishes the step, then ``colour.PROJECTIONS`` passes of the position projection.
-        Returns whether the lists must be rebuilt (``stale.lists_stale``)."""
-        collide.collision_step(*arguments, False, True, 0, False)
-        scalars, _, _, _, _, model, lists, state, _, scratch = arguments
-        inv_cell = 1.0 / self.cell
-        any_far = int(self.far_owners > 0)
-        phases = colour.step_phases(iterations)
-        tasks = sort.bucket_tasks(self.col_start.shape[0] - 1)
-        blocks = self._packs.get(BlockOrder, start=self.col_start, ids=self.col_ids, colour=self.col_colour)
-        for phase in phases:
-            with plain_compile():  # see runtime.plain_compile
-                colour.gauss_seidel_sweep(
-                    phase, any_far, inv_cell, tasks, scalars, model, lists, state, scratch, blocks
-                )
-            if any_far:
-                colour.far_pairs(phase, inv_cell, scalars, model, lists, state, scratch)
-        collide.collision_step(*arguments, False, False, 0, True)
-        for _ in range(colour.PROJECTIONS):
-            if any_far:
-                colour.far_pairs(colour.PROJECT, inv_cell, scalars, model, lists, state, scratch)
-            colour.project_sweep(any_far, inv_cell, tasks, scalars, model, lists, state, scratch, blocks)
-        return stale.lists_stale(scalars, *self.last_grid(), model, lists, state, scratch)
+    def _all_still(self, state: State) -> bool:
+        """Whether no ball is awake and in play, so that a step would change nothing (only the
+        kinds whose sweeps leave such a step unchanged say so)."""
+        return False
+
+    def _sweep(self, iterations: int, arguments: tuple) -> int:
+        """One parallel step's launches, from the free flight to the new positions in ``x_free``,
+        with ``iterations`` sweeps; ``arguments``: :meth:`_arguments`. Returns whether the lists
+        must be rebuilt before the next step."""
+        raise NotImplementedError
+
+    def _friction_rows(self) -> int:
+        """Rows of the pairs' friction impulses: one placeholder, unless the sweeps carry them."""
+        return 1
 
     def _arguments(self, m: Model, s: State, steps: int) -> tuple:
         """The arguments of ``collide.collision_step`` before ``serial``: the array of the air,

@@ -18,17 +18,14 @@ import taichi as ti
 
 from ti_golf.physics.contact import (
     CENTRE_FRICTION,
-    FIRST,
     GAUSS_SEIDEL,
     centre_friction,
     clamp_friction,
     plane_jolt,
     spin_jolt,
     surface_impulse,
-    surface_step,
     warm_impulse,
 )
-from ti_golf.physics.sort import bucket_starts
 from ti_golf.physics.terrain import (
     same_cell,
     surface,
@@ -47,6 +44,9 @@ from ti_golf.physics.types import (
     vec4f_table,
     zero3,
 )
+from ti_golf.solvers.phases import Phase
+from ti_golf.solvers.sequential import surface_step
+from ti_golf.solvers.sort import bucket_starts
 
 LAMBDA = 0
 """The component of a contact's (λ, F) in ``NeighbourLists.surface_impulse`` that holds λ."""
@@ -116,15 +116,15 @@ def surface_impulses(
     lists: ti.template(),
     state: ti.template(),
     scratch: ti.template(),
-    phase=-1,
+    phase=Phase.JACOBI,
 ):
     """Ball i's contacts with the planes, then the terrain (the plane of the patch under its
     free-flight end point; its resting impulse is kept in the column after the planes' in
     the ball's row of ``surface_impulse``, in f32: only the ball reads and writes its own λ, so nothing
     can disagree about it, and the next sweep or step corrects what the rounding left, 2^-24 of
     the impulse; a ball without a row touches none: see :func:`list_surfaces`), applied in turn to
-    (vi, wi): the warm start (``warm``) or a sweep, Jacobi (``phase`` −1, :func:`.contact.surface_impulse`)
-    or Gauss–Seidel (``phase``: that of :func:`.contact.surface_step`). A sweep skips
+    (vi, wi): the warm start (``warm``) or a sweep, Jacobi (``Phase.JACOBI``, :func:`ti_golf.physics.contact.surface_impulse`)
+    or Gauss–Seidel (``phase``: that of :func:`.sequential.surface_step`). A sweep skips
     them when the ball is too far from all of them (``clear[i]``, see :func:`surface_clearance`)
     to touch one within the step at its speed, and marks the ball ``NEAR`` once it rests on one
     (that resting impulse must be visited in later sweeps, to be given back). Returns (v, ω)."""
@@ -204,9 +204,9 @@ def surface_contact_step(
         lam_p = 0.0
         if row < 0:  # an impulse the lists did not foresee (see list_surfaces): rebuild them
             scratch.flag[0] = 1
-        if phase >= 0:
+        if phase != Phase.JACOBI:
             F = F0
-            if phase == FIRST:  # what the warm start applied
+            if phase == Phase.FIRST:  # what the warm start applied
                 F = clamp_friction(F, n, contact.mu * lam0)
             vi, wi, lam_p, F = surface_step(
                 phase, n, gap, scratch.v_free[i], vi, wi, r, lam0, F, contact, v_inelastic, h
@@ -238,7 +238,7 @@ def near_a_surface(i, xi, reach, terrain: ti.template(), model: ti.template()):
     """Whether ball i at ``xi`` [m] may touch a plane or the terrain before the neighbour lists are
     rebuilt, when it moves no farther than ``reach`` [m] until then (see :func:`list_surfaces`). A
     plane is within reach when its surface gap is below it; the terrain when its clearance
-    (:func:`.terrain.terrain_clearance`, at least the gap to any patch of the cell under the ball)
+    (:func:`ti_golf.physics.terrain.terrain_clearance`, at least the gap to any patch of the cell under the ball)
     is below twice the reach, since a patch taken under a moved point is nearer by up to twice the
     move, or when a move of the reach can take the ball over another cell."""
     r = of_ball(model.radius, i)

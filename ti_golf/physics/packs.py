@@ -89,7 +89,7 @@ class Packs:
         return self._scalars[1]
 
     def step_scalars(self, m: Any, skin: float = 0.0, v_cut: float = 0.0, r_cut: float = 0.0) -> Any:
-        """:meth:`scalars` of a :class:`~ti_golf.sim.model.Model`'s air, contact and terrain and of
+        """:meth:`scalars` of a :class:`~ti_golf.physics.model.Model`'s air, contact and terrain and of
         a step's :data:`~ti_golf.physics.types.StepParams` with the neighbour lists' ``skin`` [m],
         ``v_cut`` [m/s] and ``r_cut`` [m] (0 without lists); the step's struct is made again only
         when the model takes another scene (``Model.set_parameters``) or these change."""
@@ -114,7 +114,7 @@ class Packs:
         self._kept.clear()
 
     def model(self, m: Any) -> Any:
-        """:data:`~ti_golf.physics.types.ModelArrays` of a :class:`~ti_golf.sim.model.Model`."""
+        """:data:`~ti_golf.physics.types.ModelArrays` of a :class:`~ti_golf.physics.model.Model`."""
         return self.get(
             ModelArrays,
             radius=m.radius,
@@ -128,11 +128,11 @@ class Packs:
         )
 
     def state(self, s: Any) -> Any:
-        """:data:`~ti_golf.physics.types.BallState` of a :class:`~ti_golf.sim.state.State`."""
+        """:data:`~ti_golf.physics.types.BallState` of a :class:`~ti_golf.physics.state.State`."""
         return self.get(BallState, x=s.x, v=s.v, w=s.w, status=s.status, rest_time=s.rest_time)
 
     def flight(self, s: Any) -> Any:
-        """:data:`~ti_golf.physics.types.FlightRecord` of a :class:`~ti_golf.sim.state.State`."""
+        """:data:`~ti_golf.physics.types.FlightRecord` of a :class:`~ti_golf.physics.state.State`."""
         return self.get(FlightRecord, landed=s.landed, apex=s.apex, t_land=s.t_land, land_x=s.land_x, land_v=s.land_v)
 
     def lists(self, c: Any) -> Any:

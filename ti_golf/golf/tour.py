@@ -12,12 +12,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ti_golf.golf.sweep import fly
+from ti_golf.golf.trackman import TOUR, YD, TourShot
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import launch_vectors
 from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import Flight
-from ti_golf.sim.sweep import fly
-from ti_golf.sim.trackman import TOUR, YD, TourShot
 
 CARRY_TOL, APEX_TOL, LAND_TOL = 3.0, 2.0, 2.0
 """How close the model must come to the table: carry within 3 % [%], apex within 2 yd [yd], land

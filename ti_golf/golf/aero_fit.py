@@ -3,7 +3,7 @@
 Six coefficients are fitted, each bounded by the range that the published laws span
 (:data:`FIT_PARAMETERS`); C_D0 and C_L0 (the zero-spin ends of Ferguson, McNally & McPhee's fit),
 the spin decay λ and the air stay as the scene has them. The residuals are each PGA row's carry,
-apex and land-angle errors divided by their tolerances (3 %, 2 yd, 2°: :mod:`ti_golf.sim.tour`),
+apex and land-angle errors divided by their tolerances (3 %, 2 yd, 2°: :mod:`ti_golf.golf.tour`),
 so the fit minimises Σ (error/tolerance)² over the 12 rows with the engine's own flights. The
 LPGA rows are never flown here. The fit starts from :data:`START` whatever the scene holds, so it
 finds the same coefficients every time.
@@ -20,9 +20,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ti_golf.errors import TiGolfError
+from ti_golf.golf.tour import TourFlight, fly_tour
+from ti_golf.golf.trackman import PGA_TOUR
 from ti_golf.scene.schema import Air, Scene
-from ti_golf.sim.tour import TourFlight, fly_tour
-from ti_golf.sim.trackman import PGA_TOUR
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Ball pairs in a collision step: their impulses from the owner's side, gathered by each ball.
 
-A pair (a, b) is owned by one ball, a (see :func:`ti_golf.physics.grid.owns`); the owner
+A pair (a, b) is owned by one ball, a (see :func:`ti_golf.solvers.grid.owns`); the owner
 evaluates the pair's impulse P once per sweep (:func:`owned_pairs`), −P acting on b, and each
 ball then sums the impulses of its pairs in id order (:func:`gather`): no float atomics, and
 momentum is conserved to round-off. Resting impulses carry from step to step (:func:`warm_start`),
@@ -14,7 +14,6 @@ from ti_golf.physics.contact import (
     clamp_friction,
     pair_impulse,
 )
-from ti_golf.physics.links import listed, owner_slot
 from ti_golf.physics.types import (
     GAP,
     INV,
@@ -25,6 +24,7 @@ from ti_golf.physics.types import (
     zero3,
 )
 from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
+from ti_golf.solvers.links import listed, owner_slot
 
 QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
 
@@ -81,7 +81,7 @@ def owned_pairs(
     inverse distance [1/m] (``INV``), which gives the unit normal n̂ from j to i
     (:func:`pair_normal`), and the surface gap [m] (``GAP``) were stored there by
     :func:`warm_start` (positions do not change during the sweeps).
-    An impact (see :func:`.contact.pair_impulse`) is marked by the inverse distance's sign, negative
+    An impact (see :func:`ti_golf.physics.contact.pair_impulse`) is marked by the inverse distance's sign, negative
     (:func:`impact_mark`; and ``flag[1]`` is set, so that :func:`impact_keys` looks for the balls'
     first impacts; :func:`gather` takes one impact per ball, see :func:`matched`).
 
@@ -196,7 +196,7 @@ def warm_start(
     along the pair's normal at the start of the step, summed in id order (lower then upper). A
     normal impulse gives no spin; friction is left to the sweeps, but with ``carried`` (the
     Gauss–Seidel sweeps), where each pair's friction impulse F from the last step is applied too,
-    in the pair's tangent plane and at most μ·λ (:func:`.contact.clamp_friction`: the same on both
+    in the pair's tangent plane and at most μ·λ (:func:`ti_golf.physics.contact.clamp_friction`: the same on both
     balls, bit for bit). Also stores the geometry of the pairs
     ball i owns for the sweeps in their rows first[i] + k of J: 1/|x_i − x_j| (``INV``, positive:
     no impact, see :func:`impact_mark`), the surface gap [m] (``GAP``) and, in a table with the

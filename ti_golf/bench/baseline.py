@@ -2,8 +2,6 @@
 what the memory system allows, and what the report's pair impulse costs at the least."""
 
 from ti_golf.physics.contact import pair_impulse
-from ti_golf.physics.links import listed, owner_slot, slot_bits
-from ti_golf.physics.pairs import pair_geometry, pair_normal
 from ti_golf.physics.types import (
     ContactParams,
     float_array,
@@ -15,6 +13,8 @@ from ti_golf.physics.types import (
     vec3_array,
     zero3,
 )
+from ti_golf.solvers.links import listed, owner_slot, slot_bits
+from ti_golf.solvers.pairs import pair_geometry, pair_normal
 
 
 @kernel

@@ -1,91 +1,105 @@
-"""A collision solver's state saved with a run and given back to a new solver (:mod:`.saved_run`):
-the neighbour lists, the carried impulses and the numbers they were built with, so that a run
-loaded again continues bit for bit."""
+"""A collision solver's state saved with a run (:mod:`ti_golf.sim.saved_run`) and given back to a
+new solver: the neighbour lists, the carried impulses and the numbers they were built with, so
+that a run loaded again continues bit for bit.
+
+The record is versioned (:data:`VERSION`). In a saved run it is the ``solver`` entry of the run's
+description, ``{"version", "values", "elements", "scratch"}`` (the numbers by name; each kept
+array's element shape; each scratch array's shape, element shape and type), beside the arrays
+``solver.NAME``. Version 1, without ``version``, is what the solver's attributes were, saved
+whole (``_r_max``, ``_valid``, ``_rebuild``, ``_hash`` among its numbers); earlier layouts of its
+tables are laid out anew as they are read (:func:`from_file`).
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import taichi as ti
 
 from ti_golf.physics.types import pair_columns
-from ti_golf.sim.packs import Packs
-from ti_golf.sim.solver import CollisionSolver
-from ti_golf.sim.state import State
 
-NOT_SAVED = ("_model", "_packs", "_ids", "serial", "reorder", "loop_cap", "gauss_seidel", "_last_grid")
-"""Attributes of a :class:`CollisionSolver` that its constructor sets from its arguments, the
-model and the backend, and what it caches of the others (``_last_grid``)."""
+VERSION = 2
+"""The version of the record that :func:`to_file` writes."""
 
-
-def solver_arrays(solver: CollisionSolver) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-    """What the next steps read of ``solver``, to continue bit for bit after :func:`restore_solver`:
-    the neighbour lists, each pair's and each ball's carried impulses, the Gauss–Seidel column
-    order and the numbers they were built with. Returns (arrays by attribute name, in storage
-    order; a JSON-ready description: the scalars, each array's element shape, the scratch
-    arrays' shapes and types, and which attributes hold the same array)."""
-    arrays: dict[str, np.ndarray] = {}
-    meta: dict[str, Any] = {"values": {}, "elements": {}, "scratch": {}, "same": {}}
-    seen: dict[int, str] = {}
-    for name, value in vars(solver).items():
-        if name in NOT_SAVED:
-            continue
-        if isinstance(value, ti.Ndarray):
-            if id(value) in seen:
-                meta["same"][name] = seen[id(value)]
-                continue
-            seen[id(value)] = name
-            element = list(getattr(value, "element_shape", ()))
-            if name in solver.SCRATCH:
-                meta["scratch"][name] = [list(value.shape), element, str(value.to_numpy().dtype)]
-            else:
-                arrays[name] = value.to_numpy()
-                meta["elements"][name] = element
-        elif name == "_hash":
-            meta["values"][name] = None if value is None else [[int(c) for c in v.to_list()] for v in value]
-        elif value is None or isinstance(value, (bool, int, float, tuple)):
-            meta["values"][name] = [int(c) for c in value] if isinstance(value, tuple) else value
-        else:
-            raise TypeError(f"CollisionSolver.{name} ({type(value).__name__}) cannot be saved")
-    return arrays, meta
+READS = (1, 2)
+"""The versions that :func:`from_file` reads."""
 
 
-def restore_solver(solver: CollisionSolver, state: State, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> None:
-    """Give ``solver`` back what :func:`solver_arrays` returned, for ``state`` restored to the same moment (its
-    storage order included): the next step is then the one that the saved solver would have made."""
+@dataclass
+class SolverRecord:
+    """What the next steps read of a solver (:meth:`.solver.CollisionSolver.record`): the numbers,
+    the arrays kept whole (in storage order) and the scratch arrays' shapes."""
+
+    values: dict[str, Any]
+    """Numbers by name (``CollisionSolver.SAVED_VALUES``), and ``hash``: the grid hash's (origin,
+    stride) as two lists of ints, or ``None``."""
+    arrays: dict[str, np.ndarray]
+    """The arrays kept whole, by name (``CollisionSolver.SAVED_ARRAYS``)."""
+    elements: dict[str, list[int]]
+    """Each array's element shape ([] for scalars, [3] for 3-vectors)."""
+    scratch: dict[str, list[Any]] = field(default_factory=dict)
+    """Each scratch array's [shape, element shape, numpy type]."""
+    rebuild: bool = False
+    """Whether the lists must be built again before the next step (a record too old to hold what
+    the steps read of the last build)."""
+
+    def ndarray(self, name: str) -> ti.Ndarray:
+        """A Taichi array holding the kept array ``name``."""
+        a, element = self.arrays[name], self.elements[name]
+        return _ndarray(a.shape[: a.ndim - len(element)], element, a)
+
+    def scratch_array(self, name: str) -> ti.Ndarray:
+        """A Taichi array of the shape and type of the scratch array ``name`` (not filled)."""
+        shape, element, dtype = self.scratch[name]
+        return _ndarray(tuple(shape), element, np.zeros(0, dtype))
+
+
+def to_file(record: SolverRecord) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """The arrays (by name, without the ``solver.`` prefix) and the JSON-ready description that a
+    saved run holds of ``record``."""
+    meta = {"version": VERSION, "values": record.values, "elements": record.elements, "scratch": record.scratch}
+    return dict(record.arrays), meta
+
+
+def unreadable(meta: dict[str, Any]) -> str | None:
+    """Why a saved solver described by ``meta`` cannot be read (a version this code does not know),
+    or ``None``."""
+    version = meta.get("version", 1)
+    if version in READS:
+        return None
+    return f"holds a collision solver saved in record version {version!r}; this ti-golf reads versions {READS[0]} to {READS[-1]}"
+
+
+def from_file(
+    arrays: dict[str, np.ndarray], meta: dict[str, Any], n: int, serial: bool, gauss_seidel: bool
+) -> SolverRecord:
+    """The record that :func:`to_file` wrote (any version of :data:`READS`; see
+    :func:`unreadable`) for ``n`` balls, given back to a solver that steps ``serial`` or not with
+    the ``gauss_seidel`` sweeps or not: older layouts of the tables laid out as the solver keeps
+    them now, the same pairs with the same impulses."""
     if "n_upper" in arrays:
-        arrays, meta = _pairs_ball_after_ball(solver, arrays, meta)
+        arrays, meta = _pairs_ball_after_ball(serial, arrays, meta)
     if "surface_start" not in arrays:
-        arrays, meta = _surface_rows(state, arrays, meta)
+        arrays, meta = _surface_rows(n, arrays, meta)
     if "n_lower" in arrays:
         arrays, meta = _lower_links(arrays, meta)
     if arrays["lam"].dtype != np.float32:  # saved before the pairs' resting impulses were kept in f32 (2026-11-27)
         arrays = {**arrays, "lam": arrays["lam"].astype(np.float32)}
-    shape, element, dtype = meta["scratch"].get("impulse", [[0], [], ""])
+    scratch = dict(meta["scratch"])
+    shape, element, dtype = scratch.get("impulse", [[0], [], ""])
     if element:  # saved before the sweep's table had a row per pair (until 2026-11-26: a 5-vector per pair)
-        meta = {
-            **meta,
-            "scratch": {**meta["scratch"], "impulse": [[shape[0], pair_columns(solver.gauss_seidel)], [], dtype]},
-        }
-    for name, value in meta["values"].items():
-        if name == "_hash":
-            value = None if value is None else tuple(ti.Vector(v, dt=ti.i32) for v in value)
-        elif isinstance(getattr(solver, name, None), tuple):
-            value = tuple(value)
-        setattr(solver, name, value)
-    for name, a in arrays.items():
-        setattr(solver, name, _ndarray(a.shape[: a.ndim - len(meta["elements"][name])], meta["elements"][name], a))
-    for name, (shape, element, dtype) in meta["scratch"].items():
-        if name not in solver.SCRATCH:  # (a table an earlier version kept)
-            continue
-        setattr(solver, name, _ndarray(tuple(shape), element, np.zeros(0, dtype)))
-    for name, other in meta["same"].items():
-        setattr(solver, name, getattr(solver, other))
-    if solver.gauss_seidel and "start" not in arrays:  # saved before its steps read the last build's grid
-        solver._rebuild = True  # (stale.lists_stale): build it again
-    solver._ids = state.ids
-    solver._packs = Packs()
+        scratch["impulse"] = [[shape[0], pair_columns(gauss_seidel)], [], dtype]
+    values = dict(meta["values"])
+    elements = dict(meta["elements"])
+    if meta.get("version", 1) == 1:  # the attributes' names, and arrays that were one another
+        values = {name.lstrip("_"): value for name, value in values.items()}
+        for name, other in meta.get("same", {}).items():
+            arrays = {**arrays, name: arrays[other]}
+            elements[name] = elements[other]
+    rebuild = gauss_seidel and "start" not in arrays  # saved before its steps read the last build's grid
+    return SolverRecord(values, arrays, elements, scratch, rebuild)
 
 
 _TAICHI_TYPES = {"float64": ti.f64, "float32": ti.f32, "int32": ti.i32}
@@ -102,7 +116,7 @@ def _ndarray(shape: tuple[int, ...], element: list[int], values: np.ndarray) -> 
 
 
 def _pairs_ball_after_ball(
-    solver: CollisionSolver, arrays: dict[str, np.ndarray], meta: dict[str, Any]
+    serial: bool, arrays: dict[str, np.ndarray], meta: dict[str, Any]
 ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """The arrays and description of a solver saved before its pair tables were laid out ball
     after ball (until 2026-11-26: a row per ball as wide as the longest list, and each list's
@@ -114,7 +128,7 @@ def _pairs_ball_after_ball(
     width = arrays["lam"].shape[1]
     listed = np.arange(width)[None, :] < n_upper[:, None]
     pairs = int(n_upper.sum())
-    capacity = len(n_upper) * width if solver.serial else max(1, pairs)  # (see CollisionSolver.build)
+    capacity = len(n_upper) * width if serial else max(1, pairs)  # (see CollisionSolver.build)
 
     def ball_after_ball(table: np.ndarray) -> np.ndarray:
         out = np.zeros((capacity, *table.shape[2:]), table.dtype)
@@ -159,7 +173,7 @@ def _lower_links(arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> tuple[d
     return arrays, meta
 
 
-def _surface_rows(state: State, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> tuple[dict, dict]:
+def _surface_rows(n: int, arrays: dict[str, np.ndarray], meta: dict[str, Any]) -> tuple[dict, dict]:
     """The arrays and description of a solver saved before the surface impulses were kept in rows
     for the balls near a surface (until 2026-11-26: λ in ``lam_plane`` and the friction impulses
     in ``friction_plane``, a row per ball, or one placeholder under Jacobi), as the solver keeps
@@ -172,7 +186,7 @@ def _surface_rows(state: State, arrays: dict[str, np.ndarray], meta: dict[str, A
     if friction.shape[:2] == lam.shape:  # (Gauss–Seidel)
         impulse[..., 1:] = friction
     arrays["surface_impulse"] = impulse
-    arrays["surface_start"] = np.arange(state.n + 1, dtype=np.int32)
+    arrays["surface_start"] = np.arange(n + 1, dtype=np.int32)
     for name in ("lam_plane", "friction_plane"):
         meta["elements"].pop(name, None)
     meta["elements"].update(surface_impulse=[4], surface_start=[])

@@ -2,10 +2,10 @@
 
 Two phases, each the fastest the engine has for it:
 
-1. the flight to landing (at launch height) in SIMD lanes (:func:`ti_golf.sim.sweep.fly`, the
+1. the flight to landing (at launch height) in SIMD lanes (:func:`ti_golf.golf.sweep.fly`, the
    scene's integrator, step ``world.dt`` or a chosen flight step);
 2. from the landing state (x, v, ω), bounce and roll on the scene's ground, turf included, with
-   ball–ball collisions off (:func:`ti_golf.sim.rollout.roll_out`, step ``world.dt``).
+   ball–ball collisions off (:func:`ti_golf.golf.rollout.roll_out`, step ``world.dt``).
 """
 
 from __future__ import annotations
@@ -15,12 +15,12 @@ from dataclasses import replace
 
 import numpy as np
 
+from ti_golf.golf.rollout import shots_from_landing
+from ti_golf.golf.sweep import fly
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import MonitorLaunch
 from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import Shots
-from ti_golf.sim.rollout import shots_from_landing
-from ti_golf.sim.sweep import fly
 
 
 def target_direction(scene: Scene) -> float:

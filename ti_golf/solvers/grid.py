@@ -27,8 +27,6 @@ for the rest.
 
 import taichi as ti
 
-from ti_golf.physics.apart import is_apart
-from ti_golf.physics.sort import bucket_of, cell_of, counting_sort
 from ti_golf.physics.types import (
     GridParams,
     GridScratch,
@@ -40,6 +38,8 @@ from ti_golf.physics.types import (
     of_ball,
     vec3_array,
 )
+from ti_golf.solvers.apart import is_apart
+from ti_golf.solvers.sort import bucket_of, cell_of, counting_sort
 
 SCATTERED_HASH = (19349663, 1, 83492791)
 
@@ -61,7 +61,7 @@ def cell_size(r_max: float, skin: float, h: float, v_max: float) -> tuple[float,
 def pair_reach(skin, h, v_a, v_b):
     """The surface gap [m] below which a pair is listed: the skin, or h·|v_a − v_b| when larger, so
     that a build lists every pair the speculative contact test (gap + h·v_n < 0, see
-    :func:`.contact.pair_impulse`) can take up in the step after it at the velocities of the build
+    :func:`ti_golf.physics.contact.pair_impulse`) can take up in the step after it at the velocities of the build
     (|v_n| ≤ |v_a − v_b|). Symmetric in a and b.
 
     Twice that reach, a margin for what the sweeps add to the velocities, listed so many pairs

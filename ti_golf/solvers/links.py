@@ -1,6 +1,6 @@
 """Links between the neighbour lists, and the impulses they carry across rebuilds.
 
-Each pair is listed once, in its owner's upper list (:mod:`ti_golf.physics.grid`); the other ball
+Each pair is listed once, in its owner's upper list (:mod:`ti_golf.solvers.grid`); the other ball
 finds it through a *slot* in its lower list: the owner's index times 2^bits plus the column
 (:func:`slot_bits`, :func:`owner_slot`). When the lists are rebuilt, each pair's accumulated
 resting impulse is stashed by (owner, neighbour) and carried into the new lists
@@ -10,9 +10,6 @@ scene inside a serial kernel by testing every pair.
 
 import taichi as ti
 
-from ti_golf.physics.apart import APART_MAX, is_apart
-from ti_golf.physics.grid import owns, pair_reach
-from ti_golf.physics.sort import bucket_starts
 from ti_golf.physics.types import (
     FRIC,
     ID,
@@ -27,6 +24,9 @@ from ti_golf.physics.types import (
     vec3_array,
     vec3f_array,
 )
+from ti_golf.solvers.apart import APART_MAX, is_apart
+from ti_golf.solvers.grid import owns, pair_reach
+from ti_golf.solvers.sort import bucket_starts
 
 ID_EXACT_F32 = 2**24
 """Balls an f32 run can hold: :func:`stash_ball` keeps the neighbours' ids in the float type, exact
@@ -239,7 +239,7 @@ def friction_bits(F, d, bound):
     steps of 1/``FRICTION_STEPS`` (a signed 16-bit integer each, the first in the low bits).
     What the next step uses of F is kept whole but for those steps: the warm start and the first
     sweep take F in the tangent plane of the same normal and at most ``bound`` long
-    (:func:`.contact.clamp_friction`), so the normal part and the part beyond ``bound`` are
+    (:func:`ti_golf.physics.contact.clamp_friction`), so the normal part and the part beyond ``bound`` are
     dropped here. 0 when ``bound`` or d is 0 (F is then not used)."""
     bits = 0
     dd = d.norm_sqr()

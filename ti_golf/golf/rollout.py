@@ -55,7 +55,7 @@ def shots_from_landing(
     progress: Callable[[float, float], None] | None = None,
 ) -> Shots:
     """The :class:`Shots` of balls launched from ``x0`` (N, 3) whose flight to landing is ``raw``
-    (:func:`ti_golf.sim.sweep.fly`'s record), rolled out to rest with ``to_rest``; the target line
+    (:func:`ti_golf.golf.sweep.fly`'s record), rolled out to rest with ``to_rest``; the target line
     is the scene's launch azimuth."""
     flight = Flight.from_arrays(x0, raw["landed"], raw["apex"], raw["t_land"], raw["land_x"], raw["land_v"])
     rest_x = at_rest = None

@@ -19,7 +19,7 @@ column, without two threads ever writing one ball. The nine colours follow one a
 set apart as much bigger or faster than the rest, see :mod:`.apart`) are swept after the colours,
 one after another (:func:`far_pairs`).
 
-Each pair's impulse is the report's impulse (:func:`.contact.pair_impulse`), with its accumulated
+Each pair's impulse is the report's impulse (:func:`ti_golf.physics.contact.pair_impulse`), with its accumulated
 resting impulse carried from step to step as in the Jacobi sweeps; each ball meets its planes and
 the terrain right after its pairs.
 """
@@ -27,23 +27,13 @@ the terrain right after its pairs.
 import taichi as ti
 
 from ti_golf.physics.contact import (
-    BOUNCE,
-    FIRST,
     GAUSS_SEIDEL,
-    SHOCK,
-    SOLVE,
     clamp_friction,
     inverse_inertia,
     kinetic_change,
-    pair_step,
     pivot_impulse,
     spin_jolt,
 )
-from ti_golf.physics.links import listed
-from ti_golf.physics.pairs import QUIET, pair_normal, skip_pair
-from ti_golf.physics.sort import bucket_in_turn, cell_of, counting_sort, sort_bucket, spread_turns, task_stride
-from ti_golf.physics.stale import flag_stale_lists
-from ti_golf.physics.surfaces import surface_impulses
 from ti_golf.physics.types import (
     GAP,
     INV,
@@ -62,10 +52,13 @@ from ti_golf.physics.types import (
     zero3,
 )
 from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
-
-PROJECT = 2
-"""The phase of the position projection after a step (:func:`project_ball`), after the sweeps'
-``SOLVE`` and ``BOUNCE`` (:func:`.contact.pair_step`)."""
+from ti_golf.solvers.links import listed
+from ti_golf.solvers.pairs import QUIET, pair_normal, skip_pair
+from ti_golf.solvers.phases import Phase
+from ti_golf.solvers.sequential import pair_step
+from ti_golf.solvers.sort import bucket_in_turn, cell_of, counting_sort, sort_bucket, spread_turns, task_stride
+from ti_golf.solvers.stale import flag_stale_lists
+from ti_golf.solvers.surfaces import surface_impulses
 
 PROJECTIONS = 3
 """Passes of the position projection (B.18, :func:`project_sweep`) at the end of a Gauss–Seidel
@@ -215,7 +208,7 @@ def gauss_seidel_sweep(
     every block of a colour, each block bottom-up in one thread (see the module's docstring;
     ``blocks`` from :func:`column_order`), meet the pairs they own (but, when ``any_far``, those
     whose other ball was not beside them at the build), then their planes and the terrain, with the
-    parameters in ``scalars`` (:func:`.types.scalars_of`)."""
+    parameters in ``scalars`` (:func:`ti_golf.physics.types.scalars_of`)."""
     _, contact, terrain, params = scalars_of(scalars)
     buckets = blocks.start.shape[0] - 1
     for c in ti.static(range(COLOURS)):  # a top-level loop per colour: the colours in turn
@@ -256,7 +249,7 @@ def far_pairs(
     _, contact, terrain, params = scalars_of(scalars)
     ti.loop_config(serialize=True)
     for i in range(state.x.shape[0]):
-        if phase == PROJECT:
+        if phase == Phase.PROJECT:
             project_ball(i, True, 1, inv_cell, contact.k_p, model, lists, state, scratch)
         else:
             sweep_ball(
@@ -288,12 +281,12 @@ def serial_sweeps(
 ):
     """A step's ``sweeps`` Gauss–Seidel sweeps (:func:`step_phases`) and the restitution pass,
     every ball in storage order, in the calling (serial) loop's thread."""
-    serial_sweep(FIRST, contact, terrain, params, model, lists, state, scratch)
+    serial_sweep(Phase.FIRST, contact, terrain, params, model, lists, state, scratch)
     for _ in range(sweeps - 2):
-        serial_sweep(SOLVE, contact, terrain, params, model, lists, state, scratch)
+        serial_sweep(Phase.SOLVE, contact, terrain, params, model, lists, state, scratch)
     if sweeps > 1:
-        serial_sweep(SHOCK, contact, terrain, params, model, lists, state, scratch)
-    serial_sweep(BOUNCE, contact, terrain, params, model, lists, state, scratch)
+        serial_sweep(Phase.SHOCK, contact, terrain, params, model, lists, state, scratch)
+    serial_sweep(Phase.BOUNCE, contact, terrain, params, model, lists, state, scratch)
 
 
 @ti.func
@@ -315,8 +308,8 @@ def serial_sweep(
 def step_phases(iterations: int) -> list[int]:
     """The phases of a step's ``iterations`` sweeps and its restitution pass: ``FIRST``, then
     ``SOLVE``, the last sweep ``SHOCK`` (with two or more), then ``BOUNCE``."""
-    sweeps = [FIRST] + [SOLVE] * max(iterations - 2, 0) + [SHOCK] * (iterations > 1)
-    return sweeps + [BOUNCE]
+    sweeps = [Phase.FIRST] + [Phase.SOLVE] * max(iterations - 2, 0) + [Phase.SHOCK] * (iterations > 1)
+    return sweeps + [Phase.BOUNCE]
 
 
 @ti.func
@@ -368,7 +361,7 @@ def sweep_ball(
             inv_mi = 0.0
         col = column_of(lists.x_at_build[i], inv_cell)
         owned = listed(lists.first, i)
-        if phase == BOUNCE and scratch.impact[i] == 0:
+        if phase == Phase.BOUNCE and scratch.impact[i] == 0:
             owned = 0  # none of its pairs approached fast enough to bounce: the pass changes none
         approached = 0
         p0 = lists.first[i]
@@ -385,17 +378,17 @@ def sweep_ball(
                             inv_mj = 0.0
                         F = ti.cast(lists.friction[p], float)
                         lam = ti.cast(lists.lam[p], float)
-                        if phase == FIRST:  # what the warm start applied (pairs.carried_friction)
+                        if phase == Phase.FIRST:  # what the warm start applied (pairs.carried_friction)
                             F = clamp_friction(F, n, contact.mu * lam)
                         inv_a, inv_b = inv_mi, inv_mj
-                        if phase == SHOCK and up.norm_sqr() > 0.0:  # the lower ball stands firm
+                        if phase == Phase.SHOCK and up.norm_sqr() > 0.0:  # the lower ball stands firm
                             if n.dot(up) > 0.0:
                                 inv_b = 0.0
                             else:
                                 inv_a = 0.0
                         if inv_a + inv_b > 0.0:  # (not both standing firm: a ball asleep, and the shock sweep)
                             v_n0 = 0.0  # the approach before the contacts: read where it is used
-                            if phase == FIRST or phase == BOUNCE:
+                            if phase == Phase.FIRST or phase == Phase.BOUNCE:
                                 v_n0 = (scratch.v_free[i] - scratch.v_free[j]).dot(n)
                                 if v_n0 < -v_inelastic:
                                     approached = 1
@@ -440,7 +433,7 @@ def sweep_ball(
                                 if scratch.calm[j] != QUIET:
                                     state.v[j] -= P * inv_b
                                     state.w[j] += spin_jolt(-P, -n, rj, inv_b)
-                            if phase == SHOCK and lam_new > 0.0:  # once a step, with the pair's support
+                            if phase == Phase.SHOCK and lam_new > 0.0:  # once a step, with the pair's support
                                 inv_Ia, inv_Ib = inverse_inertia(ri, inv_mi), inverse_inertia(rj, inv_mj)
                                 if scratch.calm[j] == QUIET:
                                     inv_Ib = 0.0
@@ -450,7 +443,7 @@ def sweep_ball(
                                 if L != 0.0:
                                     wi += L * inv_Ia * n
                                     state.w[j] -= L * inv_Ib * n
-        if phase == FIRST:  # the restitution pass visits the pairs of the balls marked here
+        if phase == Phase.FIRST:  # the restitution pass visits the pairs of the balls marked here
             if ti.static(far_only):
                 scratch.impact[i] = ti.max(scratch.impact[i], approached)  # (after the colours)
             else:
