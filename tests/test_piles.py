@@ -17,6 +17,7 @@ from pathlib import Path
 import background
 import numpy as np
 import pytest
+from conftest import SCENES
 from pile_pours import LANDED, NARROW_PIT, SAMPLE, STEP, load_variant, pour, total_mass
 
 import ti_golf as tg
@@ -57,6 +58,7 @@ def _poured(background_runs, variant: str) -> tuple[dict, np.ndarray, float]:
 def test_bundled_pit_needs_no_solver_calming_keys():
     pit = tg.load_scene("ball_pit")
     assert pit.contact.solver == "gauss_seidel" and pit.contact.e >= 0.5
+    assert "solver" not in (SCENES / "ball_pit.toml").read_text()  # the default's, as a user's own scene gets
     defaults = tg.load_scene(None, data={"description": "defaults"}).contact
     for key in ("iterations", "v_bounce", "k_p", "skin"):  # left at their defaults, the same in every scene
         assert getattr(pit.contact, key) == getattr(defaults, key), key
@@ -133,10 +135,8 @@ def test_pour_is_deterministic(settled_pit):
 
 
 def _column_scene():
-    return tg.load_scene(
-        "lab_vacuum",
-        ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.5", "contact.solver=gauss_seidel"],
-    )
+    # (no contact.solver: the default must hold it)
+    return tg.load_scene("lab_vacuum", ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.5"])
 
 
 def test_heavy_ball_on_a_column_is_held():

@@ -158,10 +158,11 @@ class Contact:
     )
     solver: str = key(
         "str",
-        "jacobi",
+        "gauss_seidel",
         "-",
-        "jacobi (the report's B.5-B.18: every pair at once from the last sweep's velocities) or "
-        "gauss_seidel (each pair at once after the last, columns of balls bottom-up: for piles)",
+        "gauss_seidel (each pair at once after the last, columns of balls bottom-up: holds piles, heavy "
+        "balls on light ones and bouncing balls) or jacobi (the report's B.5-B.18: every pair at once "
+        "from the last sweep's velocities, as the lab scenes use)",
         OneOf(SOLVERS),
         read_when=("world.collisions", (True,)),
     )
