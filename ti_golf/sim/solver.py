@@ -9,7 +9,7 @@ import numpy as np
 import taichi as ti
 
 from ti_golf.errors import SimulationError
-from ti_golf.physics import apart, collide, colour, grid, links, sort, stale
+from ti_golf.physics import apart, collide, colour, contact_colour, grid, links, sort, stale
 from ti_golf.physics.types import (
     BlockOrder,
     GridParams,
@@ -157,7 +157,15 @@ class CollisionSolver:
         self.h = model.dt  # the time step the lists are built for [s]
         self.cell = grid.cell_size(self._r_max, self.skin, model.dt, 0.0)[0]
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
-        self.serial = steps_serially(n) if serial is None else bool(serial)
+        self.gauss_seidel = model.scene.contact.solver == "gauss_seidel"
+        layout = contact_colour.resolve_layout(model.scene.contact.layout) if self.gauss_seidel else "columns"
+        if serial is None:  # (the contact colours, when asked for, are what the steps take, however few balls)
+            serial = steps_serially(n) and layout != "contacts"
+        self.serial = bool(serial)
+        # the pairs' colours when the Gauss–Seidel sweeps take them (contact_colour), else None: by grid columns
+        self.colours = None
+        if layout == "contacts" and not self.serial:
+            self.colours = contact_colour.ContactColours(band=2.0 * self.r_ref * contact_colour.BAND_DIAMETERS)
         if self.serial and not on_cpu():
             raise ValueError("serial stepping runs on the CPU backend only (on a GPU it would run on one thread)")
         self.reorder = (n >= REORDER_MIN_BALLS and not self.serial) if reorder is None else bool(reorder)
@@ -200,9 +208,8 @@ class CollisionSolver:
         self.n_apart = 0
         # the loop iterations after which a thread stops its loops without a word (grid.LOOP_CAP)
         self.loop_cap = grid.LOOP_CAP if ensure_init().arch == "vulkan" else None
-        self.gauss_seidel = model.scene.contact.solver == "gauss_seidel"
         self.skip_still = self.gauss_seidel
-        if self.gauss_seidel and not self.serial:  # the balls by grid column (colour.column_order)
+        if self.gauss_seidel and not self.serial and self.colours is None:  # the balls by grid column (colour.column_order)
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
         self.col_start = self.col_chunk = None
         # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only: a
@@ -321,7 +328,9 @@ class CollisionSolver:
         if n >= REORDER_MIN_BALLS and self.rebuilds % COLLECT_EVERY == 0:
             free_dropped_arrays()  # (the cycles that Taichi's launches leave: see COLLECT_EVERY)
         self._valid = True
-        if self.gauss_seidel and not self.serial:
+        if self.colours is not None:
+            self.colours.build(self._packs.lists(self), n, self.pair_capacity, self._model.gravity)
+        elif self.gauss_seidel and not self.serial:
             order_columns(self, state)
 
     def _grid_params(self, fast: bool) -> Any:
@@ -558,6 +567,11 @@ class CollisionSolver:
         Returns whether the lists must be rebuilt (``stale.lists_stale``)."""
         collide.collision_step(*arguments, False, True, 0, False)
         scalars, _, _, _, _, model, lists, state, _, scratch = arguments
+        if self.colours is not None:  # the contacts layout (contact_colour)
+            contact_colour.gauss_seidel_step(self.colours, iterations, scalars, model, lists, state, scratch)
+            collide.collision_step(*arguments, False, False, 0, True)
+            contact_colour.project(self.colours, scalars, model, lists, state, scratch)
+            return stale.lists_stale(scalars, *self.last_grid(), model, lists, state, scratch)
         inv_cell = 1.0 / self.cell
         any_far = int(self.far_owners > 0)
         phases = colour.step_phases(iterations)
