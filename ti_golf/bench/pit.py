@@ -31,7 +31,8 @@ import numpy as np
 from ti_golf.bench.collide import bare_gather_rate
 from ti_golf.bench.common import _peak_rss_bytes, _restart_peak_rss, _rss_bytes
 from ti_golf.bench.kernel_times import FOLD_EVERY, KernelTimes, profiling
-from ti_golf.physics.colour import moving_balls
+from ti_golf.physics.colour import COLOURS as COLUMN_COLOURS
+from ti_golf.physics.colour import PROJECTIONS, moving_balls, step_phases
 from ti_golf.runtime import ensure_init, release_freed_memory
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import AT_REST, Plane, Scene
@@ -154,6 +155,7 @@ def bench_pit(
         "baselines": {"bare_gather_balls_per_s": gather_rate},
         "step_cost_in_bare_gathers": gather_rate / ball_steps_per_s,
     }
+    result.update(solver_launches(sim))
     if every is not None:
         result["timeline"] = timeline
     if times is not None:
@@ -168,6 +170,11 @@ def bench_pit(
         f"p99 speed {1e3 * quality['p99_speed_mps']:.3g} mm/s, {quality['outside_bin']} outside the bin, "
         f"{100 * quality['asleep_fraction']:.3g} % asleep"
     )
+    if "launches_per_step" in result:
+        log(
+            f"{result['layout']} layout: {result['launches_per_step']} parallel loops a step in the sweeps and "
+            f"projections, a median of {result['median_items_per_launch']:.0f} work items each"
+        )
     log(f"baseline bare_gather: {gather_rate:.3g} balls/s -> a step costs {result['step_cost_in_bare_gathers']:.1f}")
     if times is not None:
         dearest = ", ".join(f"{name} {s:.1f} s" for name, s in times.seconds.most_common(6))
@@ -269,3 +276,35 @@ def _timed_steps(sim: Simulation, k: int, times: KernelTimes | None) -> tuple[fl
     except KeyboardInterrupt:
         return wall, True
     return wall, False
+
+
+def solver_launches(sim: Simulation) -> dict[str, Any]:
+    """The parallel loops of a step's Gauss–Seidel sweeps and position projections with the lists
+    of the last build, and the independent work items of each (threads that share no ball): the
+    blocks of grid columns of each colour (``contact.layout = columns``), or the pairs of each
+    colour and the balls (``contacts``); a serial loop (the pairs left to ``colour.far_pairs`` or
+    to the overflow set) counts one. Returns the layout, the loops a step, the median items a loop
+    and (contacts) the colours in use and the colouring rounds of the last build; nothing without
+    the parallel Gauss–Seidel sweeps."""
+    solver = sim.solver
+    if solver is None or not solver.gauss_seidel or solver.serial:
+        return {}
+    iterations = sim.scene.contact.iterations
+    if solver.colours is not None:
+        items = solver.colours.launches(sim.n, iterations)
+        extra = {"colours": solver.colours.colours, "overflow_pairs": solver.colours.overflow}
+        extra["colouring_rounds"] = solver.colours.rounds
+        layout = "contacts"
+    else:
+        start, colour = solver.col_start.to_numpy(), solver.col_colour.to_numpy()
+        filled = np.nonzero(np.diff(start))[0]
+        blocks = np.bincount(colour[start[filled]], minlength=COLUMN_COLOURS).tolist()
+        far = [1] if solver.far_owners else []
+        items = (blocks + far) * (len(step_phases(iterations)) + PROJECTIONS)
+        extra, layout = {}, "columns"
+    return {
+        "layout": layout,
+        "launches_per_step": len(items),
+        "median_items_per_launch": float(np.median(items)),
+        **extra,
+    }
