@@ -330,6 +330,7 @@ def pair_sweep(
     phase: ti.i32,
     c0: ti.i32,
     serial: ti.template(),
+    project: ti.template(),
     scalars: float_array,
     model: ModelArrays,
     lists: NeighbourLists,
@@ -338,17 +339,39 @@ def pair_sweep(
     tables: ColourTables,
 ):
     """The pairs of colours ``c0`` to ``c0 + COLOURS_PER_LAUNCH − 1`` in a sweep of ``phase``, a
-    parallel loop per colour, a thread per pair (:func:`colour_pair`); with ``serial``, the
-    overflow set instead, one pair after another (``c0`` unused)."""
+    parallel loop per colour, a thread per pair (:func:`colour_pair`), or with ``project`` in a
+    pass of the position projection (:func:`project_colour_pair`); with ``serial``, the overflow
+    set instead, one pair after another (``c0`` unused)."""
     _, contact, _terrain, params = scalars_of(scalars)
     if ti.static(serial):
         ti.loop_config(serialize=True)
         for s in range(tables.start[OVERFLOW], tables.start[OVERFLOW + 1]):
-            colour_pair(tables.pairs[s], phase, contact, params, model, lists, state, scratch, tables)
+            pair_pass(tables.pairs[s], phase, project, contact, params, model, lists, state, scratch, tables)
     else:
         for c in ti.static(range(COLOURS_PER_LAUNCH)):
             for s in range(tables.start[c0 + c], tables.start[c0 + c + 1]):
-                colour_pair(tables.pairs[s], phase, contact, params, model, lists, state, scratch, tables)
+                pair_pass(tables.pairs[s], phase, project, contact, params, model, lists, state, scratch, tables)
+
+
+@ti.func
+def pair_pass(
+    p,
+    phase,
+    project: ti.template(),
+    contact: ti.template(),
+    params: ti.template(),
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    scratch: ti.template(),
+    tables: ti.template(),
+):
+    """Pair p's update in a sweep of ``phase`` (:func:`colour_pair`) or, with ``project``, its
+    position projection (:func:`project_colour_pair`)."""
+    if ti.static(project):
+        project_colour_pair(p, contact.k_p, model, lists, state, scratch, tables)
+    else:
+        colour_pair(p, phase, contact, params, model, lists, state, scratch, tables)
 
 
 @ti.func
@@ -364,30 +387,6 @@ def project_colour_pair(
             inv_mi = 1.0 / of_ball(model.mass, i)
         j = lists.upper[i, p - lists.first[i]]
         scratch.x_free[i] = project_pair(j, scratch.x_free[i], of_ball(model.radius, i), inv_mi, k_p, model, state, scratch)
-
-
-@kernel
-def project_pairs(
-    c0: ti.i32,
-    serial: ti.template(),
-    scalars: float_array,
-    model: ModelArrays,
-    lists: NeighbourLists,
-    state: BallState,
-    scratch: StepScratch,
-    tables: ColourTables,
-):
-    """A pass of the position projection over the pairs of colours ``c0`` onward, as
-    :func:`pair_sweep` sweeps them (with ``serial``, the overflow set)."""
-    _, contact, _terrain, _params = scalars_of(scalars)
-    if ti.static(serial):
-        ti.loop_config(serialize=True)
-        for s in range(tables.start[OVERFLOW], tables.start[OVERFLOW + 1]):
-            project_colour_pair(tables.pairs[s], contact.k_p, model, lists, state, scratch, tables)
-    else:
-        for c in ti.static(range(COLOURS_PER_LAUNCH)):
-            for s in range(tables.start[c0 + c], tables.start[c0 + c + 1]):
-                project_colour_pair(tables.pairs[s], contact.k_p, model, lists, state, scratch, tables)
 
 
 @kernel
@@ -481,9 +480,9 @@ def gauss_seidel_step(
         for phase in step_phases(iterations):
             surface_sweep(phase, scalars, model, lists, state, scratch)
             for c0 in range(0, colours.colours, COLOURS_PER_LAUNCH):
-                pair_sweep(phase, c0, False, scalars, model, lists, state, scratch, t)
+                pair_sweep(phase, c0, False, False, scalars, model, lists, state, scratch, t)
             if colours.overflow:
-                pair_sweep(phase, 0, True, scalars, model, lists, state, scratch, t)
+                pair_sweep(phase, 0, True, False, scalars, model, lists, state, scratch, t)
 
 
 def project(colours: ContactColours, scalars: Any, model: Any, lists: Any, state: Any, scratch: Any) -> None:
@@ -493,7 +492,7 @@ def project(colours: ContactColours, scalars: Any, model: Any, lists: Any, state
     with plain_compile():
         for _ in range(PROJECTIONS):
             for c0 in range(0, colours.colours, COLOURS_PER_LAUNCH):
-                project_pairs(c0, False, scalars, model, lists, state, scratch, t)
+                pair_sweep(FIRST, c0, False, True, scalars, model, lists, state, scratch, t)
             if colours.overflow:
-                project_pairs(0, True, scalars, model, lists, state, scratch, t)
+                pair_sweep(FIRST, 0, True, True, scalars, model, lists, state, scratch, t)
             project_surfaces(scalars, model, state, scratch)
