@@ -291,9 +291,15 @@ def solver_launches(sim: Simulation) -> dict[str, Any]:
         return {}
     iterations = sim.scene.contact.iterations
     if solver.colours is not None:
-        items = solver.colours.launches(sim.n, iterations)
-        extra = {"colours": solver.colours.colours, "overflow_pairs": solver.colours.overflow}
-        extra["colouring_rounds"] = solver.colours.rounds
+        cc = solver.colours
+        items = cc.launches(sim.n, iterations)
+        colours, _, overflow = cc.sizes()
+        extra = {"colours": colours, "overflow_pairs": overflow}
+        extra["colouring_rounds_mean"] = cc.rounds / max(cc.builds, 1)
+        extra["colouring_rounds_max"] = cc.rounds_max
+        if cc.fresh:
+            extra["fresh_pairs_mean"] = float(np.mean(cc.fresh))
+            extra["fresh_pairs_max"] = int(np.max(cc.fresh))
         layout = "contacts"
     else:
         start, colour = solver.col_start.to_numpy(), solver.col_colour.to_numpy()

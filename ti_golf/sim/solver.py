@@ -311,12 +311,15 @@ class CollisionSolver:
                 self.friction,
                 mu,
             )
-            stashed = None
         else:
             links.link_lower(self.upper, self.first, self.lower, self.lower_first, self.impact, self.pair_chunk)
             self.lam.fill(0.0)
             if self.gauss_seidel:  # none yet
                 self.friction.fill(0.0)
+        if self.colours is not None:  # the pairs listed before keep their colours (while the stash is kept)
+            stash = (stashed, self.stash_first, self.reorder, self.sorted_ids) if carried else None
+            self.colours.carry(self._packs.lists(self), n, self.pair_capacity, self._model.gravity, stash)
+        stashed = None
         if not self.serial:  # (serial: a row for every ball, see surface_rows.every_ball_a_row)
             list_surface_rows(self, state, carried, v_max)
         if self.impulse is None or self.impulse.shape[0] != self.lam.shape[0]:
@@ -329,7 +332,7 @@ class CollisionSolver:
             free_dropped_arrays()  # (the cycles that Taichi's launches leave: see COLLECT_EVERY)
         self._valid = True
         if self.colours is not None:
-            self.colours.build(self._packs.lists(self), n, self.pair_capacity, self._model.gravity)
+            self.colours.build(self._packs.lists(self))
         elif self.gauss_seidel and not self.serial:
             order_columns(self, state)
 
