@@ -295,10 +295,30 @@ def colour_rounds(
     for r in ti.static(range(rounds)):
         if ti.static(r % 2 == 0):
             for s in range(tables.count[0]):
-                colour_round(tables.fresh[s], climb, up, lists, tables, tables.colour, tables.colour_b, tables.propose, tables.propose_b)
+                colour_round(
+                    tables.fresh[s],
+                    climb,
+                    up,
+                    lists,
+                    tables,
+                    tables.colour,
+                    tables.colour_b,
+                    tables.propose,
+                    tables.propose_b,
+                )
         else:
             for s in range(tables.count[0]):
-                colour_round(tables.fresh[s], climb, up, lists, tables, tables.colour_b, tables.colour, tables.propose_b, tables.propose)
+                colour_round(
+                    tables.fresh[s],
+                    climb,
+                    up,
+                    lists,
+                    tables,
+                    tables.colour_b,
+                    tables.colour,
+                    tables.propose_b,
+                    tables.propose,
+                )
     left = 0
     for s in range(tables.count[0]):
         p = tables.fresh[s]
@@ -491,7 +511,13 @@ def pair_pass(
 
 @ti.func
 def project_colour_pair(
-    p, k_p, model: ti.template(), lists: ti.template(), state: ti.template(), scratch: ti.template(), tables: ti.template()
+    p,
+    k_p,
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    scratch: ti.template(),
+    tables: ti.template(),
 ):
     """Pair p's position projection (:func:`.colour.project_pair`), as :func:`.colour.project_ball`
     makes it for the pairs its ball owns."""
@@ -501,7 +527,9 @@ def project_colour_pair(
         if state.status[i] != AT_REST:
             inv_mi = 1.0 / of_ball(model.mass, i)
         j = lists.upper[i, p - lists.first[i]]
-        scratch.x_free[i] = project_pair(j, scratch.x_free[i], of_ball(model.radius, i), inv_mi, k_p, model, state, scratch)
+        scratch.x_free[i] = project_pair(
+            j, scratch.x_free[i], of_ball(model.radius, i), inv_mi, k_p, model, state, scratch
+        )
 
 
 @dataclass

@@ -209,7 +209,9 @@ class CollisionSolver:
         # the loop iterations after which a thread stops its loops without a word (grid.LOOP_CAP)
         self.loop_cap = grid.LOOP_CAP if ensure_init().arch == "vulkan" else None
         self.skip_still = self.gauss_seidel
-        if self.gauss_seidel and not self.serial and self.colours is None:  # the balls by grid column (colour.column_order)
+        if (
+            self.gauss_seidel and not self.serial and self.colours is None
+        ):  # the balls by grid column (colour.column_order)
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
         self.col_start = self.col_chunk = None
         # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only: a
