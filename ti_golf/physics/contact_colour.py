@@ -34,8 +34,9 @@ pass of their own.
 
 **A sweep** (:func:`colour_pass`): each ball meets its planes and the terrain (a thread per ball),
 then the colours follow one another (a parallel loop per colour, a thread per pair, its bounds
-read from ``start`` on the device), then the overflow set, all in one launch on GPU backends, and
-``CPU_SPAN`` colours a launch on CPU backends (:func:`colours_per_launch`). A sweep's parallel
+read from ``start`` on the device), then the overflow set, all in one launch on GPU backends; on
+CPU backends ``CPU_SPAN`` colours a launch (the first with the surfaces), the overflow set a
+launch of its own (:meth:`ContactColours.spans`). A sweep's parallel
 loops therefore each hold a ball per thread, or a pair per thread: work in proportion to the
 balls. The position projection (B.18) is laid out the same way, its planes last.
 """
@@ -88,8 +89,10 @@ UNCOLOURED = -1
 
 CPU_SPAN = 4
 """Colours a launch of :func:`colour_pass` takes on CPU backends, one parallel loop each: the
-pair update is compiled once per colour of a launch, and the CPU's few threads gain nothing from
-fewer host calls. On GPU backends a launch takes all ``COLOURS`` (one host call a pass)."""
+pair update is compiled once per colour of a launch, and all ``COLOURS`` in one kernel took 2.6
+times as long to compile on the CPU as four (a fresh cache's first step, with every other
+kernel: 251 s against 97 s on a loaded 2-core machine), for fewer host calls. On GPU backends a
+launch takes all ``COLOURS`` (one host call a pass)."""
 
 ROUNDS_PER_LAUNCH = 4
 """Colouring rounds a launch of :func:`colour_rounds` makes before it says how many pairs are
@@ -613,23 +616,32 @@ class ContactColours:
         colours = int(used[-1]) + 1 if used.size else 0
         return colours, tuple(int(s) for s in sizes[:colours]), int(sizes[OVERFLOW])
 
-    def spans(self) -> list[tuple[int, bool, bool]]:
-        """(first colour, head, tail) of each launch of :func:`colour_pass` in a pass."""
+    def spans(self, project: bool) -> list[tuple[int, bool, int, bool]]:
+        """(first colour, head, colours, tail) of each launch of :func:`colour_pass` in a pass (with
+        ``project``, of the projection): on GPU backends one launch; on CPU backends ``CPU_SPAN``
+        colours a launch (a sweep's first with the balls' surfaces), then the overflow set (and
+        a projection's planes) a launch of its own, so that a pile of more colours compiles no
+        more kernels than the warm-up's few colours did."""
         span = colours_per_launch()
-        chunks = max(1, -(-self._used // span))
-        return [(k * span, k == 0, k == chunks - 1) for k in range(chunks)]
+        if span == COLOURS:
+            return [(0, True, COLOURS, True)]
+        chunks = [(c0, c0 == 0 and not project, span, False) for c0 in range(0, max(self._used, 1), span)]
+        return chunks + [(0, False, 0, True)]
 
     def launches(self, n: int, iterations: int) -> list[int]:
         """The work items (balls or pairs, each a thread that no other shares) of each parallel loop
         of a step's sweeps and projections with these colours (:func:`gauss_seidel_step`), in
         order, an empty colour's loop included; the overflow set's serial loop counts one item."""
         _, sizes, _ = self.sizes()
-        span = colours_per_launch()
-        chunks = len(self.spans())
-        sizes_all = list(sizes) + [0] * (chunks * span - len(sizes))
-        sweep = [n] + sizes_all + [1]
-        project = sizes_all + [1, n]
-        return sweep * len(step_phases(iterations)) + project * PROJECTIONS
+        loops = []
+        for project, count in ((False, len(step_phases(iterations))), (True, PROJECTIONS)):
+            items = []
+            for c0, head, span, tail in self.spans(project):
+                items += [n] if head and not project else []
+                items += [sizes[c] if c < len(sizes) else 0 for c in range(c0, c0 + span)]
+                items += ([1] + ([n] if project else [])) if tail else []
+            loops += items * count
+        return loops
 
 
 def _no_stash() -> tuple:
@@ -663,8 +675,8 @@ def passes(
     colours: ContactColours, phases: Any, proj: bool, scalars: Any, model: Any, lists: Any, state: Any, scratch: Any
 ) -> None:
     """A pass of :func:`colour_pass` for each of ``phases`` (with ``proj``: of the projection)."""
-    t, span, spans = colours.tables, colours_per_launch(), colours.spans()
+    t, spans = colours.tables, colours.spans(proj)
     with plain_compile():  # see runtime.plain_compile
         for phase in phases:
-            for c0, head, tail in spans:
+            for c0, head, span, tail in spans:
                 colour_pass(phase, c0, proj, head, span, tail, scalars, model, lists, state, scratch, t)
