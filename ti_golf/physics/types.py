@@ -13,7 +13,9 @@ it compiles), so bodies write ``ti.cast(x, float)`` and build vectors with :func
 """
 
 import functools
+import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import taichi as ti
@@ -52,9 +54,26 @@ class Deferred:
         return f"Deferred({self.__name__})"
 
 
+@dataclass
+class LaunchClock:
+    """The host calls of the project's kernels (:func:`kernel`) while ``on``: how many, and the
+    seconds spent inside them (the launch, and on CPU backends the kernel's run, which there
+    runs in the calling thread; on GPU backends the wait for a result a kernel returns). Off, a
+    launch costs one test more (for the benchmarks: ``ti-golf bench pit``)."""
+
+    on: bool = False
+    calls: int = 0
+    inside_s: float = 0.0
+
+
+LAUNCHES = LaunchClock()
+"""The process's :class:`LaunchClock`."""
+
+
 def kernel(fn: Callable[..., Any]) -> Callable[..., Any]:
     """``ti.kernel``, applied at the first call, when the :class:`Deferred` types in ``fn``'s
-    annotations (arguments and return) can be made with the chosen float type."""
+    annotations (arguments and return) can be made with the chosen float type; counted and timed
+    by :data:`LAUNCHES` while it is on."""
     compiled: Callable[..., Any] | None = None
 
     @functools.wraps(fn)
@@ -63,7 +82,14 @@ def kernel(fn: Callable[..., Any]) -> Callable[..., Any]:
         if compiled is None:
             fn.__annotations__ = {k: a.get() if isinstance(a, Deferred) else a for k, a in fn.__annotations__.items()}
             compiled = ti.kernel(fn)
-        return compiled(*args)
+        if not LAUNCHES.on:
+            return compiled(*args)
+        t0 = time.perf_counter()
+        try:
+            return compiled(*args)
+        finally:
+            LAUNCHES.calls += 1
+            LAUNCHES.inside_s += time.perf_counter() - t0
 
     return launch
 

@@ -368,81 +368,10 @@ def sweep_ball(
         for k in range(owned):
             j, p = lists.upper[i, k], p0 + k
             if in_this_pass(col, j, far_only, any_far, inv_cell, lists):
-                if state.status[j] == OUT_OF_BOUNDS:
-                    lists.lam[p] = ti.f32(0.0)  # a frozen ball no longer supports anything
-                elif not skip_pair(state.status, i, j):
-                    n = pair_normal(xi, state.x[j], scratch.J[p, INV])
-                    if n.norm_sqr() > 0.0:
-                        rj, inv_mj = of_ball(model.radius, j), 1.0 / of_ball(model.mass, j)
-                        if stands_firm(contact, state.status[j]):
-                            inv_mj = 0.0
-                        F = ti.cast(lists.friction[p], float)
-                        lam = ti.cast(lists.lam[p], float)
-                        if phase == Phase.FIRST:  # what the warm start applied (pairs.carried_friction)
-                            F = clamp_friction(F, n, contact.mu * lam)
-                        inv_a, inv_b = inv_mi, inv_mj
-                        if phase == Phase.SHOCK and up.norm_sqr() > 0.0:  # the lower ball stands firm
-                            if n.dot(up) > 0.0:
-                                inv_b = 0.0
-                            else:
-                                inv_a = 0.0
-                        if inv_a + inv_b > 0.0:  # (not both standing firm: a ball asleep, and the shock sweep)
-                            v_n0 = 0.0  # the approach before the contacts: read where it is used
-                            if phase == Phase.FIRST or phase == Phase.BOUNCE:
-                                v_n0 = (scratch.v_free[i] - scratch.v_free[j]).dot(n)
-                                if v_n0 < -v_inelastic:
-                                    approached = 1
-                            vj, wj = state.v[j], state.w[j]
-                            shocked = inv_a + inv_b != inv_mi + inv_mj  # (the lower ball made to stand firm)
-                            P, lam_new, F_new = zero3(), lam, F
-                            for attempt in range(2):
-                                P, lam_new, F_new = pair_step(
-                                    phase,
-                                    n,
-                                    scratch.J[p, GAP],
-                                    v_n0,
-                                    vi,
-                                    wi,
-                                    ri,
-                                    inv_a,
-                                    vj,
-                                    wj,
-                                    rj,
-                                    inv_b,
-                                    lam,
-                                    F,
-                                    contact.e,
-                                    contact.mu,
-                                    v_inelastic,
-                                    h,
-                                )
-                                if attempt == 1 or not shocked or P.norm_sqr() == 0.0:
-                                    break
-                                if (
-                                    kinetic_change(vi, wi, ri, inv_a, P, n) + kinetic_change(vj, wj, rj, inv_b, -P, -n)
-                                    <= 0.0
-                                ):
-                                    break
-                                inv_a, inv_b = inv_mi, inv_mj  # the lower ball standing firm would add energy
-                            lists.lam[p] = ti.cast(lam_new, ti.f32)
-                            F = F_new
-                            lists.friction[p] = ti.cast(F, ti.f32)
-                            if P.norm_sqr() > 0.0:  # (a pair apart or at rest changes nothing: ball j left unread)
-                                vi += P * inv_a
-                                wi += spin_jolt(P, n, ri, inv_a)
-                                if scratch.calm[j] != QUIET:
-                                    state.v[j] -= P * inv_b
-                                    state.w[j] += spin_jolt(-P, -n, rj, inv_b)
-                            if phase == Phase.SHOCK and lam_new > 0.0:  # once a step, with the pair's support
-                                inv_Ia, inv_Ib = inverse_inertia(ri, inv_mi), inverse_inertia(rj, inv_mj)
-                                if scratch.calm[j] == QUIET:
-                                    inv_Ib = 0.0
-                                L = pivot_impulse(
-                                    (wi - state.w[j]).dot(n), inv_Ia, inv_Ib, contact.mu_roll * lam_new * ti.min(ri, rj)
-                                )
-                                if L != 0.0:
-                                    wi += L * inv_Ia * n
-                                    state.w[j] -= L * inv_Ib * n
+                vi, wi, hit = sweep_pair(
+                    i, j, p, phase, xi, vi, wi, ri, inv_mi, h, v_inelastic, up, contact, model, lists, state, scratch
+                )
+                approached = ti.max(approached, hit)
         if phase == Phase.FIRST:  # the restitution pass visits the pairs of the balls marked here
             if ti.static(far_only):
                 scratch.impact[i] = ti.max(scratch.impact[i], approached)  # (after the colours)
@@ -453,6 +382,109 @@ def sweep_ball(
                 i, False, vi, wi, contact, terrain, h, v_inelastic, model, lists, state, scratch, phase
             )
         state.v[i], state.w[i] = vi, wi
+
+
+@ti.func
+def sweep_pair(
+    i,
+    j,
+    p,
+    phase,
+    xi,
+    vi,
+    wi,
+    ri,
+    inv_mi,
+    h,
+    v_inelastic,
+    up,
+    contact: ti.template(),
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    scratch: ti.template(),
+):
+    """One Gauss–Seidel update of pair p, ball i (at ``xi`` [m], moving at ``vi``, ``wi``, radius
+    ``ri``, inverse mass ``inv_mi``: 0 when it stands firm) with ball j (:func:`pair_step`, from the
+    current velocities of both balls, applied to both at once, with the normal and gap the warm
+    start stored in ``scratch.J``): ball j's velocity and spin are written, ball i's returned, as
+    (v_i, ω_i, approached), ``approached`` 1 when the pair approached faster than the inelastic
+    speed ``v_inelastic`` before the step's contacts (read in ``FIRST`` and ``BOUNCE``). Both
+    layouts of the sweeps (:func:`sweep_ball`, :mod:`.contact_colour`) make this update."""
+    approached = 0
+    if state.status[j] == OUT_OF_BOUNDS:
+        lists.lam[p] = ti.f32(0.0)  # a frozen ball no longer supports anything
+    elif not skip_pair(state.status, i, j):
+        n = pair_normal(xi, state.x[j], scratch.J[p, INV])
+        if n.norm_sqr() > 0.0:
+            rj, inv_mj = of_ball(model.radius, j), 1.0 / of_ball(model.mass, j)
+            if stands_firm(contact, state.status[j]):
+                inv_mj = 0.0
+            F = ti.cast(lists.friction[p], float)
+            lam = ti.cast(lists.lam[p], float)
+            if phase == Phase.FIRST:  # what the warm start applied (pairs.carried_friction)
+                F = clamp_friction(F, n, contact.mu * lam)
+            inv_a, inv_b = inv_mi, inv_mj
+            if phase == Phase.SHOCK and up.norm_sqr() > 0.0:  # the lower ball stands firm
+                if n.dot(up) > 0.0:
+                    inv_b = 0.0
+                else:
+                    inv_a = 0.0
+            if inv_a + inv_b > 0.0:  # (not both standing firm: a ball asleep, and the shock sweep)
+                v_n0 = 0.0  # the approach before the contacts: read where it is used
+                if phase == Phase.FIRST or phase == Phase.BOUNCE:
+                    v_n0 = (scratch.v_free[i] - scratch.v_free[j]).dot(n)
+                    if v_n0 < -v_inelastic:
+                        approached = 1
+                vj, wj = state.v[j], state.w[j]
+                shocked = inv_a + inv_b != inv_mi + inv_mj  # (the lower ball made to stand firm)
+                P, lam_new, F_new = zero3(), lam, F
+                for attempt in range(2):
+                    P, lam_new, F_new = pair_step(
+                        phase,
+                        n,
+                        scratch.J[p, GAP],
+                        v_n0,
+                        vi,
+                        wi,
+                        ri,
+                        inv_a,
+                        vj,
+                        wj,
+                        rj,
+                        inv_b,
+                        lam,
+                        F,
+                        contact.e,
+                        contact.mu,
+                        v_inelastic,
+                        h,
+                    )
+                    if attempt == 1 or not shocked or P.norm_sqr() == 0.0:
+                        break
+                    if kinetic_change(vi, wi, ri, inv_a, P, n) + kinetic_change(vj, wj, rj, inv_b, -P, -n) <= 0.0:
+                        break
+                    inv_a, inv_b = inv_mi, inv_mj  # the lower ball standing firm would add energy
+                lists.lam[p] = ti.cast(lam_new, ti.f32)
+                F = F_new
+                lists.friction[p] = ti.cast(F, ti.f32)
+                if P.norm_sqr() > 0.0:  # (a pair apart or at rest changes nothing: ball j left unread)
+                    vi += P * inv_a
+                    wi += spin_jolt(P, n, ri, inv_a)
+                    if scratch.calm[j] != QUIET:
+                        state.v[j] -= P * inv_b
+                        state.w[j] += spin_jolt(-P, -n, rj, inv_b)
+                if phase == Phase.SHOCK and lam_new > 0.0:  # once a step, with the pair's support
+                    inv_Ia, inv_Ib = inverse_inertia(ri, inv_mi), inverse_inertia(rj, inv_mj)
+                    if scratch.calm[j] == QUIET:
+                        inv_Ib = 0.0
+                    L = pivot_impulse(
+                        (wi - state.w[j]).dot(n), inv_Ia, inv_Ib, contact.mu_roll * lam_new * ti.min(ri, rj)
+                    )
+                    if L != 0.0:
+                        wi += L * inv_Ia * n
+                        state.w[j] -= L * inv_Ib * n
+    return vi, wi, approached
 
 
 @kernel
@@ -522,20 +554,40 @@ def project_ball(
         col = column_of(lists.x_at_build[i], inv_cell)
         for k in range(listed(lists.first, i)):
             j = lists.upper[i, k]
-            if in_this_pass(col, j, far_only, any_far, inv_cell, lists) and state.status[j] != OUT_OF_BOUNDS:
-                inv_mj = 0.0
-                if state.status[j] != AT_REST and scratch.calm[j] != QUIET:
-                    inv_mj = 1.0 / of_ball(model.mass, j)
-                d = xi - scratch.x_free[j]
-                dist = d.norm()
-                overlap = ri + of_ball(model.radius, j) - dist
-                if overlap > 0.0 and dist > 0.0 and inv_mi + inv_mj > 0.0:
-                    q = (k_p * overlap / (inv_mi + inv_mj)) * (d / dist)
-                    xi += q * inv_mi
-                    scratch.x_free[j] -= q * inv_mj
+            if in_this_pass(col, j, far_only, any_far, inv_cell, lists):
+                xi = project_pair(j, xi, ri, inv_mi, k_p, model, state, scratch)
         if not far_only and inv_mi > 0.0:
-            for p in range(model.plane_n.shape[0]):
-                gap = (xi - model.plane_p[p]).dot(model.plane_n[p]) - ri
-                if gap < 0.0:
-                    xi -= k_p * gap * model.plane_n[p]
+            xi = project_planes(xi, ri, k_p, model)
         scratch.x_free[i] = xi
+
+
+@ti.func
+def project_pair(j, xi, ri, inv_mi, k_p, model: ti.template(), state: ti.template(), scratch: ti.template()):
+    """The position projection (B.18) of a pair of a ball at ``xi`` [m] (radius ``ri``, inverse
+    mass ``inv_mi``: 0 at rest) with ball j, on the step's new positions: when they overlap by Δx,
+    they move apart by k_p·Δx, ball j's share written to ``scratch.x_free[j]`` (none when it is out
+    of bounds, at rest or quiet), the ball's returned. Both layouts of the sweeps
+    (:func:`project_ball`, :mod:`.contact_colour`) make this update."""
+    if state.status[j] != OUT_OF_BOUNDS:
+        inv_mj = 0.0
+        if state.status[j] != AT_REST and scratch.calm[j] != QUIET:
+            inv_mj = 1.0 / of_ball(model.mass, j)
+        d = xi - scratch.x_free[j]
+        dist = d.norm()
+        overlap = ri + of_ball(model.radius, j) - dist
+        if overlap > 0.0 and dist > 0.0 and inv_mi + inv_mj > 0.0:
+            q = (k_p * overlap / (inv_mi + inv_mj)) * (d / dist)
+            xi += q * inv_mi
+            scratch.x_free[j] -= q * inv_mj
+    return xi
+
+
+@ti.func
+def project_planes(xi, ri, k_p, model: ti.template()):
+    """A ball at ``xi`` [m] of radius ``ri`` moved out of each plane it overlaps by k_p of the
+    overlap (B.18, m_red = 1): its new position."""
+    for p in range(model.plane_n.shape[0]):
+        gap = (xi - model.plane_p[p]).dot(model.plane_n[p]) - ri
+        if gap < 0.0:
+            xi -= k_p * gap * model.plane_n[p]
+    return xi

@@ -5,6 +5,8 @@ projection."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import taichi as ti
 
@@ -12,8 +14,9 @@ from ti_golf.physics.model import Model
 from ti_golf.physics.state import State
 from ti_golf.physics.types import BlockOrder
 from ti_golf.runtime import plain_compile
-from ti_golf.solvers import collide, colour, grid, sort, stale
+from ti_golf.solvers import collide, colour, contact_colour, grid, sort, stale
 from ti_golf.solvers.phases import Phase
+from ti_golf.solvers.record import SolverRecord
 from ti_golf.solvers.solver import CollisionSolver
 
 
@@ -30,14 +33,48 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
         self, model: Model, capacity: int = 1, serial: bool | None = None, reorder: bool | None = None
     ) -> None:
         super().__init__(model, capacity, serial, reorder)
-        if not self.serial:  # the balls by grid column (colour.column_order)
+        # the pairs' colours when the sweeps take them (contact_colour), else None: by grid columns
+        self.colours: contact_colour.ContactColours | None = None
+        if self._pairs_laid_out(model) and not self.serial:
+            self.colours = contact_colour.ContactColours(band=2.0 * self.r_ref * contact_colour.BAND_DIAMETERS)
+        elif not self.serial:  # the balls by grid column (colour.column_order)
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, model.n), ti.ndarray(ti.i32, model.n)
         self.col_start = self.col_chunk = None
 
+    def record(self) -> SolverRecord:
+        """The solver's record (:meth:`.solver.CollisionSolver.record`), with the pairs' colours of
+        the contacts layout (``colours.*``): a run loaded again sweeps its pairs in the same order."""
+        record = super().record()
+        if self.colours is not None:
+            values, arrays = self.colours.saved()
+            record.values.update({f"colours.{k}": v for k, v in values.items()})
+            for name, a in arrays.items():
+                record.arrays[f"colours.{name}"], record.elements[f"colours.{name}"] = a, []
+        return record
+
+    def restore(self, record: SolverRecord, state: State) -> None:
+        super().restore(record, state)
+        if self.colours is not None and "colours.builds" in record.values:
+            values = {k.split(".", 1)[1]: v for k, v in record.values.items() if k.startswith("colours.")}
+            arrays = {k.split(".", 1)[1]: a for k, a in record.arrays.items() if k.startswith("colours.")}
+            self.colours.restore(values, arrays)
+        elif self.colours is not None:  # (a record without them: the colours are made again)
+            self._rebuild = True
+
+    def _pairs_laid_out(self, model: Model) -> bool:
+        return contact_colour.resolve_layout(model.scene.contact.layout) == "contacts"
+
     def build(self, state: State) -> None:
         super().build(state)
-        if not self.serial:
+        if self.colours is not None:
+            self.colours.build(self._packs.lists(self))
+        elif not self.serial:
             self._order_columns(state)
+
+    def _carry_pair_order(self, stashed: Any) -> None:
+        if self.colours is not None:  # the pairs listed before keep their colours
+            stash = (stashed, self.stash_first, self.reorder, self.sorted_ids) if stashed is not None else None
+            self.colours.carry(self._packs.lists(self), self._model.n, self.pair_capacity, self._model.gravity, stash)
 
     def _friction_rows(self) -> int:
         return self.pair_capacity  # (each pair's friction impulse, carried from step to step)
@@ -87,6 +124,11 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
         lists must be rebuilt (``stale.lists_stale``)."""
         collide.launch(arguments, serial=False, warm=True, sweeps=0, last=False)
         scalars, _, _, _, _, model, lists, state, _, scratch = arguments
+        if self.colours is not None:  # the contacts layout (contact_colour)
+            contact_colour.gauss_seidel_step(self.colours, iterations, scalars, model, lists, state, scratch)
+            collide.launch(arguments, serial=False, warm=False, sweeps=0, last=True)
+            contact_colour.project(self.colours, scalars, model, lists, state, scratch)
+            return stale.lists_stale(scalars, *self.last_grid(), model, lists, state, scratch)
         inv_cell = 1.0 / self.cell
         any_far = int(self.far_owners > 0)
         phases = colour.step_phases(iterations)

@@ -344,6 +344,17 @@ def stashed_impulse(stashed: ti.template(), stash_first: ti.template(), width, a
     ball a hold its pair with ball b (see :func:`stash_ball` for the layouts): a search of entries
     sorted by id, stopping at the first id past b."""
     found, value, word = 0, 0.0, 0
+    row, bits = stashed_row(stashed, stash_first, width, a, b, with_friction)
+    if row >= 0:
+        found, value, word = 1, stashed[row, LAM], bits
+    return found, value, word
+
+
+@ti.func
+def stashed_row(stashed: ti.template(), stash_first: ti.template(), width, a, b, with_friction: ti.template()):
+    """(the row, or −1, and the friction bits) of ball a's stashed pair with ball b (see
+    :func:`stashed_impulse`): with ``width`` 0 the row is the pair's index in the old lists."""
+    row, word = -1, 0
     lo, hi = a * width, a * width + width
     if width == 0:
         lo, hi = stash_first[a], stash_first[a + 1]
@@ -352,8 +363,8 @@ def stashed_impulse(stashed: ti.template(), stash_first: ti.template(), width, a
         if j < 0 or j > b:
             break
         if j == b:
-            found, value, word = 1, stashed[p, LAM], bits
-    return found, value, word
+            row, word = p, bits
+    return row, word
 
 
 @ti.func

@@ -216,7 +216,9 @@ class CollisionSolver:
         self.h = model.dt  # the time step the lists are built for [s]
         self.cell = grid.cell_size(self._r_max, self.skin, model.dt, 0.0)[0]
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
-        self.serial = steps_serially(n) if serial is None else bool(serial)
+        if serial is None:  # (a layout of the sweeps by pairs, when asked for, is what the steps take, however few)
+            serial = steps_serially(n) and not self._pairs_laid_out(model)
+        self.serial = bool(serial)
         if self.serial and not on_cpu():
             raise ValueError("serial stepping runs on the CPU backend only (on a GPU it would run on one thread)")
         self.reorder = (n >= REORDER_MIN_BALLS and not self.serial) if reorder is None else bool(reorder)
@@ -412,12 +414,13 @@ class CollisionSolver:
                 self.friction,
                 mu,
             )
-            stashed = None
         else:
             links.link_lower(self.upper, self.first, self.lower, self.lower_first, self.impact, self.pair_chunk)
             self.lam.fill(0.0)
             if self.gauss_seidel:  # none yet
                 self.friction.fill(0.0)
+        self._carry_pair_order(stashed)  # (while the stash is kept)
+        stashed = None
         if not self.serial:  # (serial: a row for every ball, see surface_rows.every_ball_a_row)
             self._list_surface_rows(state, carried, v_max)
         if self.impulse is None or self.impulse.shape[0] != self.lam.shape[0]:
@@ -655,6 +658,15 @@ class CollisionSolver:
         state.t += model.dt
         state.steps += 1
         self._rebuild = bool(rebuild)
+
+    def _pairs_laid_out(self, model: Model) -> bool:
+        """Whether the sweeps take the pairs in a layout of their own (not ball by ball), which the
+        serial steps would not follow: the Gauss–Seidel sweeps by contact colours."""
+        return False
+
+    def _carry_pair_order(self, stashed: Any) -> None:
+        """Carry over a rebuild what orders the pairs in the sweeps, from the old lists' ``stashed``
+        table (``None`` at a first build): nothing, unless the sweeps order the pairs themselves."""
 
     def _all_still(self, state: State) -> bool:
         """Whether no ball is awake and in play, so that a step would change nothing (only the
