@@ -34,19 +34,21 @@ pass of their own.
 
 **A sweep** (:func:`colour_pass`): each ball meets its planes and the terrain (a thread per ball),
 then the colours follow one another (a parallel loop per colour, a thread per pair, its bounds
-read from ``start`` on the device), then the overflow set, all in one launch on GPU backends; on
-CPU backends ``CPU_SPAN`` colours a launch (the first with the surfaces), the overflow set a
-launch of its own (:meth:`ContactColours.spans`). A sweep's parallel
+read from ``start`` on the device), then the overflow set: ``SPAN`` colours a launch (the first
+with the surfaces), the overflow set a launch of its own, or all in one launch when the span is
+``COLOURS`` (:meth:`ContactColours.spans`). A sweep's parallel
 loops therefore each hold a ball per thread, or a pair per thread: work in proportion to the
 balls. The position projection (B.18) is laid out the same way, its planes last.
 """
 
+import os
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import taichi as ti
 
+from ti_golf.errors import ConfigError
 from ti_golf.physics.types import (
     BallState,
     ModelArrays,
@@ -87,12 +89,16 @@ OVERFLOW = COLOURS
 UNCOLOURED = -1
 """The colour of a pair before a round gives it one (and its proposal when it has none)."""
 
-CPU_SPAN = 4
-"""Colours a launch of :func:`colour_pass` takes on CPU backends, one parallel loop each: the
-pair update is compiled once per colour of a launch, and all ``COLOURS`` in one kernel took 2.6
-times as long to compile on the CPU as four (a fresh cache's first step, with every other
-kernel: 251 s against 97 s on a loaded 2-core machine), for fewer host calls. On GPU backends a
-launch takes all ``COLOURS`` (one host call a pass)."""
+SPAN = 4
+"""Colours a launch of :func:`colour_pass` takes, one parallel loop each: the pair update is
+compiled once per colour of a launch, so a launch of all ``COLOURS`` costs a host call a pass
+instead of nine, but took 2.6 times as long to compile on the CPU (a fresh cache's first step,
+with every other kernel: 251 s against 97 s on a loaded 2-core machine), and LLVM's full
+optimisation of it did not end within 15 minutes. ``TI_GOLF_COLOURS_PER_LAUNCH`` (a divisor of
+``COLOURS``) sets another span, to measure it on a GPU (``make gpu-check``)."""
+
+SPAN_ENV = "TI_GOLF_COLOURS_PER_LAUNCH"
+"""The environment variable that sets the colours a launch takes (see ``SPAN``)."""
 
 ROUNDS_PER_LAUNCH = 4
 """Colouring rounds a launch of :func:`colour_rounds` makes before it says how many pairs are
@@ -122,8 +128,14 @@ def resolve_layout(layout: str) -> str:
 
 
 def colours_per_launch() -> int:
-    """Colours a launch of :func:`colour_pass` takes on this backend (see ``CPU_SPAN``)."""
-    return CPU_SPAN if on_cpu() else COLOURS
+    """Colours a launch of :func:`colour_pass` takes (``SPAN``, or ``TI_GOLF_COLOURS_PER_LAUNCH``)."""
+    text = os.environ.get(SPAN_ENV, "")
+    if not text:
+        return SPAN
+    allowed = [k for k in range(1, COLOURS + 1) if COLOURS % k == 0]
+    if not text.isdigit() or int(text) not in allowed:
+        raise ConfigError(SPAN_ENV, None, f"must be one of {', '.join(map(str, allowed))}, not {text!r}")
+    return int(text)
 
 
 ColourTables = ti.types.argpack(
@@ -646,7 +658,7 @@ class ContactColours:
 
     def spans(self, project: bool) -> list[tuple[int, bool, int, bool]]:
         """(first colour, head, colours, tail) of each launch of :func:`colour_pass` in a pass (with
-        ``project``, of the projection): on GPU backends one launch; on CPU backends ``CPU_SPAN``
+        ``project``, of the projection): one launch with a span of ``COLOURS``; else ``SPAN``
         colours a launch (a sweep's first with the balls' surfaces), then the overflow set (and
         a projection's planes) a launch of its own, so that a pile of more colours compiles no
         more kernels than the warm-up's few colours did."""
