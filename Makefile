@@ -6,12 +6,12 @@ TIGOLF := $(VENV)/bin/ti-golf
 STAMP  := $(VENV)/.installed
 OUT    ?= out
 
-.PHONY: setup demo test bench gpu-check lint docs docs-keys wheel-check system-deps clean
+.PHONY: setup demo test bench gpu-check gpu-test lint docs docs-keys wheel-check system-deps clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[test,bench]"
+	$(PY) -m pip install --quiet -e ".[test,bench,cluster]"
 	touch $(STAMP)
 
 setup: $(STAMP)
@@ -19,7 +19,7 @@ setup: $(STAMP)
 # Linters, type checker and docs tools, installed on first use of lint or docs.
 DEVSTAMP := $(VENV)/.installed-dev
 $(DEVSTAMP): $(STAMP)
-	$(PY) -m pip install --quiet -e ".[test,bench,dev,docs]"
+	$(PY) -m pip install --quiet -e ".[test,bench,cluster,dev,docs]"
 	touch $(DEVSTAMP)
 
 # The software Vulkan driver for off-screen GGUI rendering (needs root and apt-get; skipped otherwise).
@@ -68,11 +68,12 @@ wheel-check: setup
 bench: setup
 	$(TIGOLF) bench sweep --json
 
-# On a machine with an NVIDIA GPU: the CUDA figures of docs/performance.md ("On a GPU") and the
-# flight-physics tests on CUDA, in one go.
+# On a machine with an NVIDIA GPU: every GPU figure of docs/performance.md, each under a time limit,
+# into $(OUT)/gpu_check.json (see .ci/gpu_check.sh); gpu-test runs the flight-physics tests on CUDA.
 gpu-check: setup
-	$(TIGOLF) bench sweep --n 1000000 --arch cuda --json
-	$(TIGOLF) bench pit --every 0.5 --arch cuda --json
+	PY=$(PY) GPU_CHECK_OUT=$(OUT) bash .ci/gpu_check.sh
+
+gpu-test: setup
 	TI_GOLF_TEST_ARCH=cuda $(PY) -m pytest -q -x tests/test_physics_verification.py
 
 clean:

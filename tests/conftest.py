@@ -95,7 +95,7 @@ def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 600)
 
 def sim_state(sim) -> dict:
     """Everything a step reads of a simulation's balls, by ball id, with t and the step count."""
-    from ti_golf.sim.state import State
+    from ti_golf.physics.state import State
 
     out = {name: sim.state.read(name) for name in State.PER_BALL}
     out.update(t=sim.t, steps=sim.step_count)

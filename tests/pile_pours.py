@@ -80,6 +80,8 @@ VARIANTS = {
     "sleeping_off": (("world.v_rest=0.0",), None, SAMPLE),
     "lively": (("contact.e=0.8",), None, SAMPLE),
     "no_projection_once_landed": ((), _no_projection, STEP),
+    "contacts": (("contact.layout=contacts",), None, SAMPLE),
+    "contacts_lively": (("contact.layout=contacts", "contact.e=0.8"), None, SAMPLE),
 }
 """The pours run on their own: the keys of the bundled pit they change (``--set`` syntax), what
 they do once every ball has landed, and how often [s] they sample the energy."""

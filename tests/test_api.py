@@ -178,7 +178,7 @@ def test_a_putt_is_not_a_flight_but_a_lob_is():
 def test_init_refuses_to_change_a_started_runtime():
     # Taichi cannot switch backend, precision or debug checks in a running process: a second
     # init that asks for another must say so, not return the running one as if it had obeyed
-    # (importing ti_golf.sim.solver starts the runtime with the defaults; the tests start it first)
+    # (importing ti_golf.solvers.solver starts the runtime with the defaults; the tests start it first)
     info = tg.init()
     assert tg.init() is info
     with pytest.raises(RuntimeError, match="debug off"):
@@ -221,7 +221,7 @@ def test_outputs_are_written_whole_or_not_at_all(tmp_path, monkeypatch):
     res = tg.sweep("lab_vacuum", angles_deg=[30.0, 45.0])
     res.to_csv(tmp_path / "s.csv")
     text = (tmp_path / "s.csv").read_text()
-    monkeypatch.setattr("ti_golf.sim.sweep.csv.writer", broken)
+    monkeypatch.setattr("ti_golf.golf.sweep.csv.writer", broken)
     with pytest.raises(OSError):
         res.to_csv(tmp_path / "s.csv")
     assert (tmp_path / "s.csv").read_text() == text

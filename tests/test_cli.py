@@ -34,7 +34,7 @@ from ti_golf.bench.collide import pile_scene
 from ti_golf.cli import main
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
-from ti_golf.sim.solver import SERIAL_MAX_BALLS
+from ti_golf.solvers.solver import SERIAL_MAX_BALLS
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -425,8 +425,8 @@ def test_tour_prints_the_23_rows_beside_the_table_and_plots_them(tmp_path, capsy
     png = tmp_path / "tour.png"
     proc = ok(run_cli("tour", "--plot", str(png)))
     rows = [m for m in (TOUR_ROW.match(ln) for ln in proc.stdout.splitlines()) if m]
-    from ti_golf.sim.tour import fly_tour
-    from ti_golf.sim.trackman import TOUR
+    from ti_golf.golf.tour import fly_tour
+    from ti_golf.golf.trackman import TOUR
 
     assert [m["name"] for m in rows] == [r.name for r in TOUR], proc.stdout
     # the table's columns are the data module's, and the model's are what the API flies
@@ -591,7 +591,7 @@ def test_bench_pit_profile_counts_every_launch_of_the_step(background_runs):
     # step's launches are the solver's: per step 2 of collision_step (the free flight with the
     # warm start, and the last part), one Gauss–Seidel sweep per phase of colour.step_phases and
     # colour.PROJECTIONS projection passes; one list build per rebuild the steps made.
-    from ti_golf.physics.colour import PROJECTIONS, step_phases
+    from ti_golf.solvers.colour import PROJECTIONS, step_phases
 
     proc = ok(background_runs.result("bench-pit-profile")[0])
     result = json.loads(proc.stdout.strip().splitlines()[-1])
@@ -919,7 +919,7 @@ def test_a_render_until_rest_that_reaches_its_time_limit_says_so(tmp_path, capsy
 def test_the_progress_of_a_run_until_rest_follows_the_balls_not_the_time_limit():
     # a roll-out runs until every ball rests, with world.t_max as a limit it seldom reaches: its
     # progress counts the balls at rest, so it ends at 100 %, not at a few per cent of t_max
-    from ti_golf.sim.rollout import roll_out
+    from ti_golf.golf.rollout import roll_out
 
     scene = ti_golf.load_scene("tour_shot")
     calls = []
@@ -1031,14 +1031,14 @@ def test_a_long_start_says_what_taichi_is_doing():
     from ti_golf.cli._common import StartupStatus
 
     class Log:  # a KernelLog in the middle of a long front end
-        busy: tuple[str, str, float] | None = ("front end", "ti_golf.physics.collide.collision_step", 0.0)
+        busy: tuple[str, str, float] | None = ("front end", "ti_golf.solvers.collide.collision_step", 0.0)
 
         def totals(self):
             return 14, 3.0, 0.5
 
     log = Log()
     status = StartupStatus(log, after_s=0.0, every_s=5.0)
-    log.busy = ("front end", "ti_golf.physics.collide.collision_step", status.start - 1.0)
+    log.busy = ("front end", "ti_golf.solvers.collide.collision_step", status.start - 1.0)
     line = status.line()
     assert line is not None and line.startswith(
         "ti-golf: Taichi is reading the kernel collision_step (its front end runs in every new process, "

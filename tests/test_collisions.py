@@ -15,9 +15,8 @@ from conftest import ON_CPU, SERIAL_OR_PARALLEL
 import ti_golf as tg
 from ti_golf.bench.collide import pile_scene
 from ti_golf.bench.pit import pit_scene
-from ti_golf.physics import apart, grid, links, sort
 from ti_golf.scene.schema import AT_REST, Plane
-from ti_golf.sim.solver import CollisionSolver
+from ti_golf.solvers import CollisionSolver, apart, grid, links, sort
 
 # no gravity, air, walls or friction unless a test says otherwise
 FREE = [
@@ -201,8 +200,8 @@ def test_a_ball_that_moved_past_half_the_skin_is_seen_wherever_it_is():
     # direction; and near the origin a ball that moved well within half the skin is not
     import taichi as ti
 
-    from ti_golf.physics.collide import moved_past
     from ti_golf.physics.types import kernel, vec3, vec3_array, vec3f, vec3f_array
+    from ti_golf.solvers.collide import moved_past
 
     def moved(x1, x_build, half_skin, out):
         for i in range(x1.shape[0]):
@@ -335,16 +334,18 @@ def test_a_pair_that_changes_hands_keeps_its_resting_impulse():
 # A pile of 70,000 balls: its hash grid has 2^18 buckets, more than the 65,535 iterations after
 # which Taichi's Vulkan backend silently stops a serial loop.
 _GPU_PILE = textwrap.dedent("""
+    import dataclasses
     import sys
     import numpy as np
     import ti_golf as tg
     from ti_golf.bench.collide import pile_scene
-    from ti_golf.sim.solver import CollisionSolver
+    from ti_golf.solvers import CollisionSolver
 
     info = tg.init()
     if info.arch != "vulkan":
         sys.exit(77)  # Taichi fell back to another backend: nothing to compare
     scene, x = pile_scene(70_000)
+    scene = dataclasses.replace(scene, contact=dataclasses.replace(scene.contact, solver="jacobi"))
     x = x + np.random.default_rng(5).uniform(-0.002, 0.002, x.shape)
     # and the same pile with a ball shot into its top, kept in id order (see the test)
     x_shot = np.vstack([x, [x[:, 0].mean(), x[:, 1].max() + 0.03, x[:, 2].mean()]])
@@ -390,7 +391,9 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(background
     )
     gpu = np.load(workdir / "gpu.npz")
     for name, v, reorder in (("", None, None), ("_shot", gpu["v0_shot"], False)):
-        sim = tg.Simulation(pile_scene(70_000)[0], x=gpu["x0" + name], v=v)
+        scene = pile_scene(70_000)[0]
+        scene = dataclasses.replace(scene, contact=dataclasses.replace(scene.contact, solver="jacobi"))
+        sim = tg.Simulation(scene, x=gpu["x0" + name], v=v)
         sim.solver = CollisionSolver(sim.model, serial=False, reorder=reorder)
         sim.solver.build(sim.state)
         assert sim.solver.n_apart == (1 if name else 0)
@@ -423,7 +426,7 @@ _BOUNDS_CHECKED = textwrap.dedent("""
 
     tg.init(debug=True)  # before importing the kernels' modules, which initialise with the defaults
     from ti_golf.bench.collide import pile_scene
-    from ti_golf.sim.solver import CollisionSolver
+    from ti_golf.solvers import CollisionSolver
 
     scene, x = pile_scene(300)
     x = np.vstack([x[:1], [[0.021, 0.015, 0.021]], x[1:]])  # ball 1 shares ball 0's cell, below it: stored first
@@ -685,7 +688,7 @@ _F32_CARRY = textwrap.dedent("""
     import sys
     import numpy as np
     import ti_golf as tg
-    from ti_golf.sim.solver import CollisionSolver
+    from ti_golf.solvers import CollisionSolver
 
     tg.init(precision="f32")
     free = ["world.ground=true", "air.rho=0", "world.gravity=[0,-9.81,0]", "world.integrator=semi_implicit"]
@@ -1082,7 +1085,9 @@ def test_serial_steps_equal_parallel_steps(name, steps):
     # the chunks of steps per launch. The scenes cover a break (fast balls: lists rebuilt nearly
     # every step), the cradle, a terrain with surface types and out-of-bounds balls, and balls
     # that fall asleep and are woken, and a ball shot at 60 m/s into a pile or a boulder five times
-    # the size of the others dropped on it (the grid lists them apart: apart.APART_MAX)
+    # the size of the others dropped on it (the grid lists them apart: apart.APART_MAX). The
+    # Jacobi sweeps' claim: the Gauss-Seidel sweeps meet the pairs in id order serially and by
+    # columns in parallel, so there the two orders give different round-off
     v, r, m = None, None, None
     if name == "sleeping_column":
         sc = tg.load_scene("lab_vacuum", ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3"])
@@ -1102,6 +1107,7 @@ def test_serial_steps_equal_parallel_steps(name, steps):
         m = sc.ball.mass * (r / 0.02) ** 3
     else:
         sc, x = tg.load_scene(name), None
+    sc = dataclasses.replace(sc, contact=dataclasses.replace(sc.contact, solver="jacobi"))
     runs = []
     for serial in (True, False):
         sim = tg.Simulation(sc, x=x, v=v, radius=r, mass=m) if x is not None else tg.Simulation(sc)
@@ -1129,12 +1135,13 @@ def test_a_step_split_into_launches_equals_the_unrolled_step(monkeypatch):
     # The loops and the arithmetic are those of the unrolled step, in the same order, so the
     # results must be the same bit for bit: here a boulder dropped on a pile (impacts, a ball
     # listed apart, lists rebuilt) with the default 4 sweeps, once in one launch and once in two
-    from ti_golf.physics import collide
-    from ti_golf.sim import solver
+    from ti_golf.solvers import collide
+    from ti_golf.solvers import jacobi as solver
 
     assert solver.sweep_launches(8) == [(True, 4, False), (False, 3, True)]
     assert solver.sweep_launches(9) == [(True, 4, False), (False, 4, False), (False, 0, True)]
     sc, x = pile_scene(300)
+    sc = dataclasses.replace(sc, contact=dataclasses.replace(sc.contact, solver="jacobi"))  # (their launches)
     x = np.vstack([x, [x[:, 0].mean() - 0.01, x[:, 1].max() + 0.125, x[:, 2].mean() + 0.02]])
     v = np.zeros_like(x)
     v[-1] = [0.3, -2.0, 0.0]
@@ -1270,7 +1277,7 @@ def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypa
     # of gigabytes. The solver must stop with a SimulationError that names a ball and its speed
     # before it allocates tables larger than half the memory available; here "available" is made
     # small, and the same run without that limit steps on.
-    import ti_golf.sim.solver as solver_module
+    import ti_golf.solvers.solver as solver_module
 
     pile, x = pile_scene(400)
     fast = apart.APART_MAX + 8
@@ -1295,8 +1302,8 @@ def test_an_f32_run_refuses_more_balls_than_its_floats_can_number(monkeypatch):
     # a rebuild keeps each pair's neighbour id in the float type (links.stash_ball): exact below
     # 2^24 in f32. A run of more balls must refuse to start, naming the limit, not mix up pairs;
     # here the limit is made small and the float type f32, and f64 (this process) is not limited
-    import ti_golf.sim.solver as solver_module
-    from ti_golf.physics import links
+    import ti_golf.solvers.solver as solver_module
+    from ti_golf.solvers import links
 
     pile, x = pile_scene(400)
     sim = tg.Simulation(pile, x=x, track=False)
@@ -1332,7 +1339,7 @@ def test_the_memory_guard_counts_the_bytes_the_pair_tables_take(method):
     # per pair its link in the other ball's lower list, its resting impulse and its row of the
     # sweep's table, the inverse distance and gap, and under Jacobi the impulse too; under
     # Gauss–Seidel its friction impulse, one table that a rebuild carries it into from the stash).
-    import ti_golf.sim.solver as solver_module
+    import ti_golf.solvers.solver as solver_module
 
     x, _ = _random_sets()["clustered"]
     sc = scene("world.gravity=[0,-9.81,0]", "world.ground=true", "contact.mu=0.3", f"contact.solver={method}")
@@ -1427,7 +1434,7 @@ def test_a_ball_knocked_into_a_wall_from_beyond_the_lists_reach_still_meets_it(s
     # 30 m/s (B.11), and the next sweep passes that back to ball 0. The wall must act within the
     # step without a row, exactly as with one: ball 0 leaves at −30 m/s, ball 1 stays 2.5 mm from
     # the wall.
-    import ti_golf.sim.solver as solver_module
+    import ti_golf.solvers.solver as solver_module
 
     real = solver_module.list_surface_rows
     monkeypatch.setattr(solver_module, "list_surface_rows", lambda s, state, carry, v_max: real(s, state, carry, 0.0))

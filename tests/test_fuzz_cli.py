@@ -21,9 +21,9 @@ from hypothesis import strategies as st
 from PIL import Image
 
 from ti_golf.cli import main
-from ti_golf.sim.dispersion import dispersion as real_dispersion
+from ti_golf.golf.dispersion import dispersion as real_dispersion
+from ti_golf.golf.sweep import sweep as real_sweep
 from ti_golf.sim.simulation import Simulation
-from ti_golf.sim.sweep import sweep as real_sweep
 
 FUZZ = settings(
     max_examples=120, derandomize=True, deadline=None, database=None, suppress_health_check=list(HealthCheck)

@@ -5,6 +5,7 @@ integers and vectors alike, and the array is filled again when a struct is repla
 import numpy as np
 import taichi as ti
 
+from ti_golf.physics.packs import Packs
 from ti_golf.physics.types import (
     SCALAR_STRUCTS,
     float_array,
@@ -13,7 +14,6 @@ from ti_golf.physics.types import (
     scalars_of,
 )
 from ti_golf.runtime import ensure_init
-from ti_golf.sim.packs import Packs
 
 
 def distinct_structs(offset: float = 0.0) -> list:

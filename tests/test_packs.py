@@ -4,9 +4,9 @@ pack being made (Taichi 1.7.4 keeps memory of every pack it makes)."""
 
 import taichi as ti
 
+from ti_golf.physics.packs import Packs
 from ti_golf.physics.types import float_array
 from ti_golf.runtime import ensure_init
-from ti_golf.sim.packs import Packs
 
 
 def arrays(*values: float) -> list:

@@ -14,9 +14,9 @@ from scipy.integrate import solve_ivp
 
 import ti_golf as tg
 from ti_golf.bench.reference import derivatives as reference_derivatives
+from ti_golf.golf.tour import APEX_TOL, CARRY_TOL, LAND_TOL, fly_tour
+from ti_golf.golf.trackman import PGA_TOUR, TOUR, YD
 from ti_golf.scene.schema import backspin_axis, launch_velocity
-from ti_golf.sim.tour import APEX_TOL, CARRY_TOL, LAND_TOL, fly_tour
-from ti_golf.sim.trackman import PGA_TOUR, TOUR, YD
 
 G = 9.81
 

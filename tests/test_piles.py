@@ -17,6 +17,7 @@ from pathlib import Path
 import background
 import numpy as np
 import pytest
+from conftest import SCENES
 from pile_pours import LANDED, NARROW_PIT, SAMPLE, STEP, load_variant, pour, total_mass
 
 import ti_golf as tg
@@ -43,7 +44,7 @@ def _pour_on_its_own(variant: str) -> Callable[[Path], background.Command]:
     )
 
 
-for _variant in ("sleeping_off", "lively", "no_projection_once_landed"):
+for _variant in ("sleeping_off", "lively", "no_projection_once_landed", "contacts", "contacts_lively"):
     background.declare(f"pour-{_variant}", _pour_on_its_own(_variant))
 
 
@@ -57,6 +58,7 @@ def _poured(background_runs, variant: str) -> tuple[dict, np.ndarray, float]:
 def test_bundled_pit_needs_no_solver_calming_keys():
     pit = tg.load_scene("ball_pit")
     assert pit.contact.solver == "gauss_seidel" and pit.contact.e >= 0.5
+    assert "solver" not in (SCENES / "ball_pit.toml").read_text()  # the default's, as a user's own scene gets
     defaults = tg.load_scene(None, data={"description": "defaults"}).contact
     for key in ("iterations", "v_bounce", "k_p", "skin"):  # left at their defaults, the same in every scene
         assert getattr(pit.contact, key) == getattr(defaults, key), key
@@ -121,6 +123,18 @@ def test_pit_of_lively_balls_settles(background_runs):
     _assert_settled(*_poured(background_runs, "lively"))
 
 
+@pytest.mark.background("pour-contacts")
+def test_pit_settles_with_contact_colours(background_runs):
+    # the same sweeps laid out by contact colours (contact.layout = contacts, a thread per pair):
+    # the same equations in another order settle the same pour to the same figures
+    _assert_settled(*_poured(background_runs, "contacts"))
+
+
+@pytest.mark.background("pour-contacts_lively")
+def test_pit_of_lively_balls_settles_with_contact_colours(background_runs):
+    _assert_settled(*_poured(background_runs, "contacts_lively"))
+
+
 def test_pour_is_deterministic(settled_pit):
     # Gauss–Seidel in parallel: each block of columns in one thread, the colours in turn, so
     # the run does not depend on thread scheduling (nor on what ran before it in the process)
@@ -132,18 +146,20 @@ def test_pour_is_deterministic(settled_pit):
         np.testing.assert_array_equal(a, b)
 
 
-def _column_scene():
+def _column_scene(layout: str = "auto"):
+    # (no contact.solver: the default must hold it)
     return tg.load_scene(
-        "lab_vacuum",
-        ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.5", "contact.solver=gauss_seidel"],
+        "lab_vacuum", ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.5", f"contact.layout={layout}"]
     )
 
 
-def test_heavy_ball_on_a_column_is_held():
+@pytest.mark.parametrize("layout", ["auto", "contacts"])
+def test_heavy_ball_on_a_column_is_held(layout):
     # a ball 100 times heavier than a golf ball on top of a column of 20: the column stands and
     # shortens by less than 2 % of a radius in 5 s (each contact's λ carries the weight above it
-    # from step to step, so the sweeps need not rebuild a 2,000-fold load ratio every step)
-    sc = _column_scene()
+    # from step to step, so the sweeps need not rebuild a 2,000-fold load ratio every step); with
+    # the contact colours, the column's pairs take rising colours, so a sweep climbs it as well
+    sc = _column_scene(layout)
     r, m = sc.ball.radius, sc.ball.mass
     x = np.array([[0.0, r + 2.0 * r * i, 0.0] for i in range(21)])
     mass = np.full(21, m)

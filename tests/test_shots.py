@@ -19,6 +19,9 @@ from scipy.integrate import solve_ivp
 
 from ti_golf.bench.reference import derivatives
 from ti_golf.cli import main
+from ti_golf.golf.dispersion import chi2_radius, dispersion, ellipse
+from ti_golf.golf.shots import shots
+from ti_golf.golf.sweep import sweep
 from ti_golf.scene.launch_monitor import (
     MPH,
     RPM,
@@ -32,10 +35,7 @@ from ti_golf.scene.launch_monitor import (
 )
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import backspin_axis
-from ti_golf.sim.dispersion import chi2_radius, dispersion, ellipse
-from ti_golf.sim.shots import shots
 from ti_golf.sim.simulation import Simulation
-from ti_golf.sim.sweep import sweep
 
 SEVEN_IRON = MonitorLaunch(123 * MPH, 16.1, 0.0, 7124 * RPM, 0.0)
 """The PGA Tour 7-iron of golf_data.md as a launch monitor gives it."""

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import taichi as ti
 
-from ti_golf.physics import grid, sort
 from ti_golf.physics.types import vec3
 from ti_golf.runtime import ensure_init
+from ti_golf.solvers import grid, sort
 
 
 def stored(x: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:

@@ -12,7 +12,6 @@ import taichi as ti
 from conftest import SERIAL_OR_PARALLEL
 
 import ti_golf as tg
-from ti_golf.physics import stale
 from ti_golf.physics.types import (
     GridParams,
     GridScratch,
@@ -24,7 +23,7 @@ from ti_golf.physics.types import (
     vec3_array,
 )
 from ti_golf.runtime import on_cpu
-from ti_golf.sim.solver import CollisionSolver
+from ti_golf.solvers import CollisionSolver, stale
 
 
 @kernel

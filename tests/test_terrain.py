@@ -19,7 +19,7 @@ import ti_golf as tg
 from ti_golf import ConfigError
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.terrain import Terrain, build_terrain, generate_heights
-from ti_golf.sim.solver import CollisionSolver
+from ti_golf.solvers import CollisionSolver
 
 G = 9.81
 R = 0.02
@@ -75,12 +75,25 @@ def test_flat_terrain_equals_ground_plane_single_ball(case):
     assert a.counts()["flying"] == 0  # it did touch down
 
 
-def test_flat_terrain_equals_ground_plane_colliding_balls():
+@pytest.mark.parametrize(
+    "solver",
+    [
+        "jacobi",
+        pytest.param(
+            "gauss_seidel",
+            marks=pytest.mark.xfail(
+                strict=True, reason="the Gauss-Seidel sweeps end 3e-5 m apart on a flat terrain and on the plane"
+            ),
+        ),
+    ],
+)
+def test_flat_terrain_equals_ground_plane_colliding_balls(solver):
     # reference: the ground plane (the `collision_step` kernel): a break shot, and a small pile that
     # exercises the warm-started resting impulses (the terrain's own column of surface_impulse)
-    break_shot = tg.load_scene("break_shot")
+    break_shot = tg.load_scene("break_shot", [f"contact.solver={solver}"])
     on_terrain = tg.load_scene(
-        "break_shot", ["terrain.amplitude=0", "terrain.origin=[-50,0,-50]", "terrain.resolution=[11,11]"]
+        "break_shot",
+        [f"contact.solver={solver}", "terrain.amplitude=0", "terrain.origin=[-50,0,-50]", "terrain.resolution=[11,11]"],
     )
     a, b = tg.Simulation(break_shot), tg.Simulation(on_terrain)
     a.run(t=0.4)
@@ -88,8 +101,8 @@ def test_flat_terrain_equals_ground_plane_colliding_balls():
     assert_same_state(a, b)
     assert np.linalg.norm(a.v[1:], axis=1).max() > 0.5  # the rack was hit
     pile = {"blocks": [{"kind": "lattice", "count": [3, 4, 3], "origin": [0.0, 0.03, 0.0], "jitter": 0.001}]}
-    a = tg.Simulation(scene(contact={"e": 0.2}, **pile))
-    b = tg.Simulation(scene(contact={"e": 0.2}, terrain=FLAT, **pile))
+    a = tg.Simulation(scene(contact={"e": 0.2, "solver": solver}, **pile))
+    b = tg.Simulation(scene(contact={"e": 0.2, "solver": solver}, terrain=FLAT, **pile))
     a.run(t=0.4)
     b.run(t=0.4)
     assert_same_state(a, b)
@@ -358,12 +371,13 @@ def test_a_ball_over_a_steep_slope_meets_it_within_the_step(tmp_path, serial):
     # (45 + 1.7)/2 − 20 = 3.4 mm from the slope's plane and closes at 5 m/s: it meets it within
     # the 1 ms step (its height alone, 25 mm above the node's level, would say it cannot). With
     # e = 0 the normal velocity is taken away (B.9): v = (0, −10, 0) − (v·n̂)n̂ with
-    # n̂ = (−√3, 1, 0)/2, v·n̂ = −5 m/s.
+    # n̂ = (−√3, 1, 0)/2, v·n̂ = −5 m/s. (The report's sweeps: the Gauss–Seidel sweeps let the ball
+    # close the 3.4 mm gap within the step first, and take the rest when it touches.)
     slope = math.sqrt(3.0)
     np.save(tmp_path / "ramp.npy", np.repeat([[0.0], [slope], [slope]], 3, axis=1))  # h(x) = √3·min(x, 1)
     sc = scene(
         world={"gravity": [0.0, 0.0, 0.0]},
-        contact={"e": 0.0, "mu": 0.0},
+        contact={"e": 0.0, "mu": 0.0, "solver": "jacobi"},
         terrain={"kind": "file", "file": str(tmp_path / "ramp.npy"), "size": [2.0, 2.0]},
         balls=[{"position": [0.999, slope + 0.045, 1.0], "velocity": [0.0, -10.0, 0.0]}, {"position": [1.5, 3.0, 1.0]}],
     )
@@ -619,7 +633,7 @@ def test_surface_types_have_their_own_restitution(tmp_path, collide):
 
 
 def test_surface_defaults_come_from_contact_and_levels_are_checked(tmp_path):
-    from ti_golf.sim.model import Model
+    from ti_golf.physics.model import Model
 
     sc = scene(
         contact={"e": 0.4, "mu": 0.3, "mu_roll": 0.07, "turf": True},

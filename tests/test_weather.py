@@ -15,8 +15,8 @@ from conftest import run_cli
 import ti_golf as tg
 from ti_golf import ConfigError
 from ti_golf.bench.reference import landing_scipy
+from ti_golf.golf.sweep import launch_grid
 from ti_golf.scene import weather
-from ti_golf.sim.sweep import launch_grid
 
 # The PGA Tour driver of golf_data.md (TrackMan 2023): 171 mph, 10.4°, 2545 rpm.
 DRIVER = {"angles_deg": [10.4], "speeds": [171 * 0.44704], "spins": [2545 * 2 * math.pi / 60]}

@@ -13,9 +13,9 @@ from conftest import SERIAL_OR_PARALLEL, assert_same_state, sim_state
 
 import ti_golf as tg
 from ti_golf.cli import main
-from ti_golf.physics import collide, kernels
+from ti_golf.physics import kernels
 from ti_golf.scene.document import scene_document, with_changes
-from ti_golf.sim.solver import CollisionSolver
+from ti_golf.solvers import CollisionSolver, collide
 
 
 def _continued(make, t1: float, t2: float, path):

@@ -30,18 +30,18 @@ os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")
 os.environ.setdefault("TI_LOG_LEVEL", "warn")
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ti_golf.golf.sweep import SweepResult, sweep
     from ti_golf.runtime import init
     from ti_golf.scene.loader import load_scene
     from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING, Scene
     from ti_golf.sim.simulation import Overlap, Recording, Simulation
-    from ti_golf.sim.sweep import SweepResult, sweep
 
 _LAZY = {
     "init": "ti_golf.runtime",
     "load_scene": "ti_golf.scene.loader",
     **dict.fromkeys(("AT_REST", "FLYING", "OUT_OF_BOUNDS", "ROLLING", "Scene"), "ti_golf.scene.schema"),
     **dict.fromkeys(("Overlap", "Recording", "Simulation"), "ti_golf.sim.simulation"),
-    **dict.fromkeys(("SweepResult", "sweep"), "ti_golf.sim.sweep"),
+    **dict.fromkeys(("SweepResult", "sweep"), "ti_golf.golf.sweep"),
 }
 """The public names imported on first use, each from its module: ``import ti_golf`` (and every
 ``ti-golf`` command, which imports the package first) then costs no Taichi, numpy or matplotlib

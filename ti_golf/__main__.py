@@ -2,4 +2,5 @@
 
 from ti_golf.cli import run
 
-run()
+if __name__ == "__main__":  # not when a worker process started by spawning imports this module again
+    run()

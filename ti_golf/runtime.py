@@ -56,17 +56,21 @@ def _resolve(arch: str | None, precision: str | None) -> tuple[str, str]:
     return arch, precision
 
 
-def init_options(arch: str, precision: str, debug: bool = False, profile: bool = False) -> dict:
+def init_options(
+    arch: str, precision: str, debug: bool = False, profile: bool = False, cpu_threads: int | None = None
+) -> dict:
     """The keyword arguments of ``ti.init`` for a backend (one of :data:`ARCHES`) and precision;
     ``profile`` turns on Taichi's kernel profiler, which times every kernel launch (and waits
-    for each to finish: see :mod:`ti_golf.bench.kernel_times`).
+    for each to finish: see :mod:`ti_golf.bench.kernel_times`); ``cpu_threads`` caps the threads
+    of the CPU backend's pool (``None``: one per core), so that several processes on one machine
+    (the workers of a study) do not oversubscribe its cores.
 
     On CUDA (and ``gpu``, which picks CUDA where it can) matrices are scalarised
     (``force_scalarize_matrix``): without it, Taichi 1.7.4's CUDA code for the flight's lane
     matrices stops the first kernel that integrates a flight with
     ``CUDA_ERROR_MISALIGNED_ADDRESS``; scalarised, the same kernels give the CPU's results (see
     docs/performance.md, "On a GPU")."""
-    return dict(
+    options = dict(
         arch=getattr(ti, arch),
         default_fp=ti.f64 if precision == "f64" else ti.f32,
         default_ip=ti.i32,
@@ -76,12 +80,21 @@ def init_options(arch: str, precision: str, debug: bool = False, profile: bool =
         force_scalarize_matrix=arch in ("cuda", "gpu"),
         kernel_profiler=profile,
     )
+    if cpu_threads is not None:
+        options["cpu_max_num_threads"] = max(1, int(cpu_threads))
+    return options
 
 
 def init(
-    arch: str | None = None, precision: str | None = None, *, debug: bool = False, profile: bool = False
+    arch: str | None = None,
+    precision: str | None = None,
+    *,
+    debug: bool = False,
+    profile: bool = False,
+    cpu_threads: int | None = None,
 ) -> RuntimeInfo:
-    """Initialise Taichi once per process.
+    """Initialise Taichi once per process (``cpu_threads``: the CPU backend's threads, default one
+    per core; a second call does not change them).
 
     A second call with the same (or no) request returns the existing runtime; a second call that
     asks for a different backend or precision raises, because Taichi cannot switch in-process
@@ -101,12 +114,12 @@ def init(
                 f"{'' if ti.lang.impl.current_cfg().debug else ', debug off'}"
                 f"{'' if ti.lang.impl.current_cfg().kernel_profiler else ', kernel profiler off'}; "
                 "start a new process to change them "
-                "(importing ti_golf.sim.solver or ti_golf.physics initialises with the defaults: call init first)"
+                "(importing ti_golf.solvers.solver or ti_golf.physics initialises with the defaults: call init first)"
             )
         return _info
     banner = io.StringIO()
     with contextlib.redirect_stdout(banner):  # Taichi prints "Starting on arch=..." on stdout
-        ti.init(**init_options(want_arch, want_prec, debug, profile))
+        ti.init(**init_options(want_arch, want_prec, debug, profile, cpu_threads))
     for line in banner.getvalue().splitlines():  # keep stdout clean for JSON; pass on anything unusual
         if not line.startswith("[Taichi] Starting on arch"):
             print(line, file=sys.stderr)
@@ -238,7 +251,7 @@ def plain_compile() -> Iterator[None]:
     For kernels whose bodies are long straight-line code: the lane-unrolled sweep kernel
     (``physics.kernels.fly_to_landing``, every lane of every RK4 stage spelled out), the
     ``serial`` collision step of small scenes, and the Gauss–Seidel sweep
-    (``physics.colour.gauss_seidel_sweep``, its contact laws spelled out once per colour).
+    (``solvers.colour.gauss_seidel_sweep``, its contact laws spelled out once per colour).
     Taichi's own IR passes grow much faster than linearly with such a body, while LLVM still
     optimises the code, so the kernels compile many times faster and run little or no slower
     (figures on the docs' performance page, "Design measurements").

@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 import taichi as ti
 
+from ti_golf.bench import baseline
 from ti_golf.bench.common import _best_time, _peak_rss_bytes, _restart_peak_rss, _rss_bytes
-from ti_golf.physics import baseline
 from ti_golf.physics.types import vec3
 from ti_golf.runtime import ensure_init, release_freed_memory
 from ti_golf.scene.schema import (
@@ -24,7 +24,8 @@ from ti_golf.scene.schema import (
     World,
 )
 from ti_golf.sim.simulation import Simulation
-from ti_golf.sim.solver import CollisionSolver, steps_serially
+from ti_golf.solvers import CollisionSolver
+from ti_golf.solvers.solver import steps_serially
 
 
 def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scene, np.ndarray]:

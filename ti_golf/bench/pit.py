@@ -14,7 +14,16 @@ figures at its end (``timeline``), so that where the pour's time goes can be rea
 With Taichi's kernel profiler on (``--profile``), the benchmark also reports the seconds and
 launches of each kernel, in all and in each stretch, and the host's part of the wall time (see
 :mod:`ti_golf.bench.kernel_times`); the profiler waits for every launch to end, so the wall time
-is then a little longer than without it. Ctrl-C or SIGTERM ends the pour at the step it reached,
+is then a little longer than without it. Without the profiler, the benchmark reports the host
+calls of the project's kernels a step (``host_calls_per_step``: each call a launch of one kernel,
+whose top-level loops Taichi runs as parallel loops one after another) and an estimate of the
+host's share of the wall time (``host_share``): the time the steps spent in Python outside the
+kernels' calls, plus the calls times the host's cost of one call (``launch_host_s``: a kernel
+that does no work, called with the solver's neighbour lists and step scratch as arguments, 1,000
+times, the last waited for), as a share of the pour's wall time. On a GPU backend a launch
+returns once queued, so that is the time the device may wait on the host (none while the queue
+holds work; all of it after each result a step reads back); on a CPU backend the kernels run in
+the calling thread, and it is the time the threads of the kernels' loops stand idle. Ctrl-C or SIGTERM ends the pour at the step it reached,
 and the benchmark reports that much of it (``interrupted``).
 """
 
@@ -27,16 +36,19 @@ from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
 import numpy as np
+import taichi as ti
 
 from ti_golf.bench.collide import bare_gather_rate
 from ti_golf.bench.common import _peak_rss_bytes, _restart_peak_rss, _rss_bytes
 from ti_golf.bench.kernel_times import FOLD_EVERY, KernelTimes, profiling
-from ti_golf.physics.colour import moving_balls
+from ti_golf.physics.types import LAUNCHES, NeighbourLists, StepScratch, kernel
 from ti_golf.runtime import ensure_init, release_freed_memory
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import AT_REST, Plane, Scene
-from ti_golf.sim.signals import whole_steps
+from ti_golf.signals import whole_steps
 from ti_golf.sim.simulation import Simulation
+from ti_golf.solvers.colour import COLOURS as COLUMN_COLOURS
+from ti_golf.solvers.colour import PROJECTIONS, moving_balls, step_phases
 
 T = TypeVar("T")
 
@@ -122,7 +134,11 @@ def bench_pit(
     sim = Simulation(scene)
     setup_s = time.perf_counter() - t1
     times = KernelTimes() if profiling() else None
-    wall_s, timeline, peak, interrupted = _pour(sim, t, every, side, log, times)
+    LAUNCHES.on, LAUNCHES.calls, LAUNCHES.inside_s = times is None, 0, 0.0
+    try:
+        wall_s, timeline, peak, interrupted = _pour(sim, t, every, side, log, times)
+    finally:
+        LAUNCHES.on = False
     steps = round(sim.t / sim.dt)
     if interrupted and steps == 0:
         raise KeyboardInterrupt("before the pour's first step")
@@ -154,6 +170,9 @@ def bench_pit(
         "baselines": {"bare_gather_balls_per_s": gather_rate},
         "step_cost_in_bare_gathers": gather_rate / ball_steps_per_s,
     }
+    result.update(solver_launches(sim))
+    if times is None and steps > 0 and sim.solver is not None:
+        result.update(host_share(sim, wall_s, steps))
     if every is not None:
         result["timeline"] = timeline
     if times is not None:
@@ -168,6 +187,16 @@ def bench_pit(
         f"p99 speed {1e3 * quality['p99_speed_mps']:.3g} mm/s, {quality['outside_bin']} outside the bin, "
         f"{100 * quality['asleep_fraction']:.3g} % asleep"
     )
+    if "launches_per_step" in result:
+        log(
+            f"{result['layout']} layout: {result['launches_per_step']} parallel loops a step in the sweeps and "
+            f"projections, a median of {result['median_items_per_launch']:.0f} work items each"
+        )
+    if "host_share" in result:
+        log(
+            f"{result['host_calls_per_step']:.1f} kernel calls a step, {1e6 * result['launch_host_s']:.1f} µs of host "
+            f"time each: the host's share of the wall time about {100 * result['host_share']:.2g} %"
+        )
     log(f"baseline bare_gather: {gather_rate:.3g} balls/s -> a step costs {result['step_cost_in_bare_gathers']:.1f}")
     if times is not None:
         dearest = ", ".join(f"{name} {s:.1f} s" for name, s in times.seconds.most_common(6))
@@ -262,6 +291,7 @@ def _timed_steps(sim: Simulation, k: int, times: KernelTimes | None) -> tuple[fl
             t0 = time.perf_counter()
             try:
                 sim.run(steps=min(chunk, k - first))
+                ti.sync()  # (the last launches ended: on a GPU backend they return once queued)
             finally:
                 wall += time.perf_counter() - t0
                 if times is not None:
@@ -269,3 +299,78 @@ def _timed_steps(sim: Simulation, k: int, times: KernelTimes | None) -> tuple[fl
     except KeyboardInterrupt:
         return wall, True
     return wall, False
+
+
+def solver_launches(sim: Simulation) -> dict[str, Any]:
+    """The parallel loops of a step's Gauss–Seidel sweeps and position projections with the lists
+    of the last build, and the independent work items of each (threads that share no ball): the
+    blocks of grid columns of each colour (``contact.layout = columns``), or the pairs of each
+    colour and the balls (``contacts``); a serial loop (the pairs left to ``colour.far_pairs`` or
+    to the overflow set) counts one. Returns the layout, the loops a step, the median items a loop
+    and (contacts) the colours in use and the colouring rounds of the last build; nothing without
+    the parallel Gauss–Seidel sweeps."""
+    solver = sim.solver
+    if solver is None or not solver.gauss_seidel or solver.serial:
+        return {}
+    iterations = sim.scene.contact.iterations
+    if solver.colours is not None:
+        cc = solver.colours
+        items = cc.launches(sim.n, iterations)
+        colours, _, overflow = cc.sizes()
+        extra = {"colours": colours, "overflow_pairs": overflow}
+        extra["colouring_rounds_mean"] = cc.rounds / max(cc.builds, 1)
+        extra["colouring_rounds_max"] = cc.rounds_max
+        if cc.fresh:
+            extra["fresh_pairs_mean"] = float(np.mean(cc.fresh))
+            extra["fresh_pairs_max"] = int(np.max(cc.fresh))
+        layout = "contacts"
+    else:
+        start, colour = solver.col_start.to_numpy(), solver.col_colour.to_numpy()
+        filled = np.nonzero(np.diff(start))[0]
+        blocks = np.bincount(colour[start[filled]], minlength=COLUMN_COLOURS).tolist()
+        far = [1] if solver.far_owners else []
+        items = (blocks + far) * (len(step_phases(iterations)) + PROJECTIONS)
+        extra, layout = {}, "columns"
+    return {
+        "layout": layout,
+        "launches_per_step": len(items),
+        "median_items_per_launch": float(np.median(items)),
+        **extra,
+    }
+
+
+PROBE_CALLS = 1000
+"""Calls of :func:`_no_work` that measure the host's cost of a kernel call."""
+
+
+def _no_work_body(lists, scratch):  # type: ignore[no-untyped-def]
+    """A kernel that does no work, with the solver's arguments (:func:`host_share`)."""
+    for _ in range(lists.first.shape[0] * 0):
+        scratch.flag[0] += 0
+
+
+# (the annotations as objects: this module's are strings, which ti.kernel cannot read)
+_no_work_body.__annotations__ = {"lists": NeighbourLists, "scratch": StepScratch}
+_no_work = kernel(_no_work_body)
+
+
+def host_share(sim: Simulation, wall_s: float, steps: int) -> dict[str, Any]:
+    """The host calls of the project's kernels a step in the pour just timed (``LAUNCHES``), the
+    host's cost of one call (``PROBE_CALLS`` calls of :func:`_no_work`) and the host's estimated
+    share of the pour's ``wall_s`` (see the module's docstring)."""
+    calls, inside = LAUNCHES.calls, LAUNCHES.inside_s
+    solver = sim.solver
+    lists, scratch = solver._packs.lists(solver), solver._packs.scratch(solver)
+    _no_work(lists, scratch)  # (compiled)
+    ti.sync()
+    t0 = time.perf_counter()
+    for _ in range(PROBE_CALLS):
+        _no_work(lists, scratch)
+    ti.sync()
+    per_call = (time.perf_counter() - t0) / PROBE_CALLS
+    host = max(wall_s - inside, 0.0) + calls * per_call
+    return {
+        "host_calls_per_step": calls / steps,
+        "launch_host_s": per_call,
+        "host_share": min(host / wall_s, 1.0),
+    }

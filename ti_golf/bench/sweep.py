@@ -10,6 +10,7 @@ import numpy as np
 
 from ti_golf.bench.common import _best_time
 from ti_golf.bench.reference import carry_numpy, carry_scipy
+from ti_golf.golf.sweep import fly
 from ti_golf.runtime import ensure_init
 from ti_golf.scene.schema import (
     Air,
@@ -19,7 +20,6 @@ from ti_golf.scene.schema import (
     SweepDefaults,
     World,
 )
-from ti_golf.sim.sweep import fly
 
 
 def bench_scene(dt: float = 0.1) -> Scene:

@@ -93,6 +93,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     bd.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(bd)
+    bst = bsub.add_parser(
+        "study", help="eight equal study tasks without Dask, on one and on two local workers: speed-up and overhead"
+    )
+    bst.add_argument("--tasks", type=int, default=8, help="tasks (default 8)")
+    bst.add_argument("--steps", type=int, default=20_000, help="time steps of each task (default 20000)")
+    bst.add_argument("--json", action="store_true", help="end with one line of JSON")
     br = bsub.add_parser("render", help="seconds per off-screen frame of N balls over a terrain")
     br.add_argument("--n", type=int, default=100_000, help="balls (default 100000)")
     br.add_argument("--frames", type=int, default=3, help="timed frames (default 3)")
@@ -162,6 +168,8 @@ def cmd_startup(args: argparse.Namespace) -> int:
 def cmd_bench(args: argparse.Namespace) -> int:
     if args.bench == "startup":
         return cmd_startup(args)
+    if args.bench == "study":
+        return _bench_study(args)
     if args.n <= 0:
         raise ConfigError("--n", None, f"must be > 0 (got {args.n})")
     if args.bench == "dispersion":
@@ -204,4 +212,19 @@ def cmd_bench(args: argparse.Namespace) -> int:
         print(to_json(result))
     if result.get("interrupted"):
         raise KeyboardInterrupt(f"at t = {result['t_s']:.4g} s; the figures of the pour so far are printed above")
+    return 0
+
+
+def _bench_study(args: argparse.Namespace) -> int:
+    from ti_golf.study.benchmark import bench_study
+    from ti_golf.study.cluster import require_dask
+
+    if args.tasks < 2:
+        raise ConfigError("--tasks", None, f"must be >= 2 (got {args.tasks})")
+    if args.steps <= 0:
+        raise ConfigError("--steps", None, f"must be > 0 (got {args.steps})")
+    require_dask()
+    result = bench_study(n=args.tasks, steps=args.steps)
+    if args.json:
+        print(to_json(result))
     return 0

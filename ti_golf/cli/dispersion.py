@@ -11,10 +11,10 @@ from pathlib import Path
 from ti_golf.cli._common import Progress, check_plot, check_writable, plot_help, runtime_options, scene_options
 from ti_golf.cli.shot import LAUNCH_OPTIONS, launch_line, launch_options, read_launch, units_option
 from ti_golf.errors import ConfigError
+from ti_golf.golf.dispersion import MAX_SHOTS, PLAYER_SPREAD, dispersion
+from ti_golf.golf.rollout import has_ground
 from ti_golf.scene.launch_monitor import UNITS, MonitorLaunch, Units, check_launch
 from ti_golf.scene.loader import load_scene
-from ti_golf.sim.dispersion import MAX_SHOTS, PLAYER_SPREAD, dispersion
-from ti_golf.sim.rollout import has_ground
 
 SPREAD = PLAYER_SPREAD
 SPREAD_OPTIONS = {name: f"--sd-{option[2:]}" for name, option in LAUNCH_OPTIONS.items()}

@@ -18,12 +18,12 @@ from ti_golf.cli.play import file_shots
 from ti_golf.cli.table import LAB_TABLE
 from ti_golf.game.course_map import plot_round
 from ti_golf.game.rules import GolfGame, describe_round, describe_stroke, describe_wind
+from ti_golf.golf.sweep import sweep
 from ti_golf.render.plots import plot_spin_family, plot_sweep, plot_terrain_path
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.loader import load_scene, scenes_dir
 from ti_golf.scene.schema import AT_REST, launch_velocity, parse_range
 from ti_golf.sim.simulation import Simulation
-from ti_golf.sim.sweep import sweep
 
 RPM = 2.0 * np.pi / 60.0
 """rad/s per rpm."""

@@ -34,12 +34,14 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "render": ("render", "cmd_render"),
     "play": ("play", "cmd_play"),
     "lab": ("lab", "cmd_lab"),
+    "study": ("study", "cmd_study"),
 }
 """Each subcommand's module in ``ti_golf.cli`` and the function there that runs it (parsed
 arguments -> exit code), in the order ``ti-golf --help`` lists them."""
 
-NO_RUNTIME = ("scenes", "keys", "schema")
-"""Commands that simulate nothing and so start no Taichi runtime (nor import Taichi)."""
+NO_RUNTIME = ("scenes", "keys", "schema", "study")
+"""Commands that start no Taichi runtime: they simulate nothing, or (a study) leave it to their
+worker processes, each of which starts its own."""
 
 
 def _module(command: str) -> ModuleType:

@@ -8,6 +8,7 @@ import json
 from ti_golf.cli._common import check_writable
 from ti_golf.files import write_text
 from ti_golf.scene.jsonschema import json_schema
+from ti_golf.study.spec import study_json_schema
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -21,12 +22,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         '["scenes/*.toml"] sets schema.path = "scene.schema.json".',
     )
     p.add_argument("--out", help="write the schema to this file (default: standard output)")
+    p.add_argument("--study", action="store_true", help="the schema of study files (ti-golf study) instead")
 
 
 def cmd_schema(args: argparse.Namespace) -> int:
     """Print or write (atomically) the scene files' JSON Schema."""
     check_writable(args.out, "--out")
-    text = json.dumps(json_schema(), indent=2, ensure_ascii=False) + "\n"
+    schema = study_json_schema() if args.study else json_schema()
+    text = json.dumps(schema, indent=2, ensure_ascii=False) + "\n"
     if args.out is None:
         print(text, end="")
         return 0

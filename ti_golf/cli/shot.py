@@ -10,12 +10,12 @@ import numpy as np
 
 from ti_golf.cli._common import runtime_options, scene_options
 from ti_golf.errors import ConfigError
+from ti_golf.golf.rollout import has_ground
+from ti_golf.golf.shots import shots
 from ti_golf.scene.launch_monitor import UNITS, MonitorLaunch, Units, check_launch, scene_launch
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import GOLFER_COLUMNS, Shots
-from ti_golf.sim.rollout import has_ground
-from ti_golf.sim.shots import shots
 
 LAUNCH_OPTIONS = {"speed": "--speed", "vla_deg": "--vla", "hla_deg": "--hla", "spin": "--spin", "axis_deg": "--axis"}
 """The option of each launch-monitor value."""

@@ -8,12 +8,12 @@ import time
 from ti_golf.cli._common import HeldInterrupt, check_plot, check_writable, plot_help, runtime_options, scene_options
 from ti_golf.cli.shot import golfer_table
 from ti_golf.errors import ConfigError
+from ti_golf.golf.rollout import has_ground
+from ti_golf.golf.sweep import sweep
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import UNITS
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import parse_range
-from ti_golf.sim.rollout import has_ground
-from ti_golf.sim.sweep import sweep
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

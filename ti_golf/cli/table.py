@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 
 from ti_golf.cli._common import check_plot, plot_help, runtime_options
+from ti_golf.golf.sweep import sweep
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import parse_range
-from ti_golf.sim.sweep import sweep
 
 LAB_TABLE = (
     ("lab_vacuum", "Reference solution (in vacuo)", 45.0, 652.0, "40:50:0.5"),

@@ -8,10 +8,10 @@ import time
 
 from ti_golf.cli._common import check_plot, plot_help, runtime_options, scene_options
 from ti_golf.errors import ConfigError
+from ti_golf.golf.aero_fit import FIT_PARAMETERS, START, bounds, fit
+from ti_golf.golf.tour import fly_tour, within_tolerance_text
+from ti_golf.golf.trackman import LPGA_TOUR, PGA_TOUR, TOUR
 from ti_golf.scene.loader import load_scene
-from ti_golf.sim.aero_fit import FIT_PARAMETERS, START, bounds, fit
-from ti_golf.sim.tour import fly_tour, within_tolerance_text
-from ti_golf.sim.trackman import LPGA_TOUR, PGA_TOUR, TOUR
 
 ROWS = {"all": TOUR, "pga": PGA_TOUR, "lpga": LPGA_TOUR}
 """The rows ``--rows`` picks."""

@@ -34,7 +34,7 @@ slows late in flight; and spin decays as Smits & Smith (1994) measured it (golf_
 
 with S held within S_MIN–S_MAX and C_L in proportion to S below S_MIN, as for ``spin_ratio``
 (:func:`spin_reynolds_coefficients`). The coefficients' defaults are fitted to the PGA Tour
-averages by ``ti-golf fit-aero`` (:mod:`ti_golf.sim.aero_fit`).
+averages by ``ti-golf fit-aero`` (:mod:`ti_golf.golf.aero_fit`).
 
 Balls are integrated in *lanes*: a state matrix ``S`` of shape (10, L) holds L balls side by side,
 rows x, y, z, v_x, v_y, v_z, ω_x, ω_y, ω_z and |ω|. The spin magnitude has a row of its own because

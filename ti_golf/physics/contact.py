@@ -38,15 +38,10 @@ from ti_golf.scene.schema import AT_REST, FLYING, FRICTION_MODELS, ROLLING
 _TINY = 1e-12
 
 GAUSS_SEIDEL = 1
-"""``ContactParams.solver`` of the Gauss–Seidel sweeps (:mod:`.colour`; 0: the Jacobi sweeps)."""
+"""``ContactParams.solver`` of the Gauss–Seidel sweeps (:mod:`ti_golf.solvers.colour`; 0: the Jacobi sweeps)."""
 
 CENTRE_FRICTION = FRICTION_MODELS.index("report")
 """``ContactParams.friction`` of the report's friction from the centre's velocity (0: at the contact point)."""
-
-FIRST, SOLVE, SHOCK, BOUNCE = 0, 1, 3, 4
-"""Phases of a Gauss–Seidel step (:func:`pair_step`): the first sweep (which also applies the
-friction carried from the last step), the later sweeps, the last sweep with shock propagation
-(the lower ball of each pair stands firm, see :mod:`.colour`), then the restitution pass."""
 
 
 @ti.func
@@ -65,7 +60,7 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
     ``relax`` ∈ (0, 1] scales the impulses of lasting contacts in a Jacobi sweep: a ball pressed by
     many neighbours at once would otherwise receive all their corrections together and overshoot.
     Returns (P, lam, touching, impact): ``impact`` is 1 when P is an impact's jolt (a Jacobi sweep
-    takes one of a ball's simultaneous impacts at a time, see :func:`.pairs.matched`).
+    takes one of a ball's simultaneous impacts at a time, see :func:`ti_golf.solvers.pairs.matched`).
     """
     P = zero3()
     touching = 0
@@ -99,55 +94,6 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
 
 
 @ti.func
-def pair_step(
-    phase, n, gap, v_n0, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, F, e, mu, v_inelastic, h, friction=0
-):
-    """One Gauss–Seidel update of a contact (``contact.solver = "gauss_seidel"``): (the impulse P
-    [N·s] on body a, −P on b; the contact's new accumulated normal impulse λ [N·s] and friction
-    impulse F [N·s] on a). ``n``: unit normal from b to a; ``gap``: surface gap [m] at the start
-    of the step; ``v_n0``: the normal velocity [m/s] before the step's contacts (after the free
-    flight); ``lam``, ``F``: what the contact has applied so far; ``inv_m_b = 0`` and ``r_b = 0``
-    make b a plane.
-
-    ``SOLVE``: sequential impulses toward a normal velocity v_n ≥ −max(gap, 0)/h, the pair
-    closing its gap within the step but not overlapping more (what overlaps is projected out
-    after the step, B.18). What is clamped is the accumulated λ ≥ 0, so a warm start that pushed
-    too hard is taken back. Every contact is inelastic here. Coulomb friction (B.15): the
-    accumulated F, toward stopping the slip at the contact point (solid spheres, see
-    :func:`friction_impulse`), is clamped to |F| ≤ μ·λ.
-
-    ``BOUNCE``: restitution, once per step after the sweeps, for a contact that approached faster
-    than ``v_inelastic`` and is pressed (λ > 0): toward v_n = −e·v_n0 (B.9), again through the
-    clamped λ. Slower approaches are resting contacts and never bounce: a resting contact gains no
-    energy. A plastic pair (e = 0) still apart at the step's start is left as the sweeps made it,
-    closing its gap exactly within the step (the next step stops it, touching): v_n = 0 would stop
-    it short, up to h·|v_n0| apart. With e > 0 such a pair bounces from where it is, up to
-    h·|v_n0| before touching, as with the speculative contacts of other engines: moving it to the
-    contact first would take speed from the bounce. ``friction`` = :data:`CENTRE_FRICTION`: the friction stops the centres' tangential
-    velocity instead (:func:`centre_friction`)."""
-    m_eff = 1.0 / (inv_m_a + inv_m_b)
-    v_n = (v_a - v_b).dot(n)
-    target = -ti.max(gap, 0.0) / h
-    if phase == BOUNCE:
-        target = v_n  # no change
-        if v_n0 < -v_inelastic and lam > 0.0 and (e > 0.0 or gap <= 0.0):
-            target = -e * v_n0
-    lam_new = ti.max(lam + m_eff * (target - v_n), 0.0)
-    P = (lam_new - lam) * n
-    F_new = F
-    if phase != BOUNCE:
-        F_new = zero3()  # |F| ≤ μ·λ: a contact that presses no more holds no friction
-        if lam_new > 0.0:
-            if friction == CENTRE_FRICTION:
-                F_new = F + centre_friction(n, v_a - v_b, m_eff, 1e30)
-            else:
-                F_new = F + friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff, 1e30)
-            F_new = clamp_friction(F_new, n, mu * lam_new)
-        P += F_new - F
-    return P, lam_new, F_new
-
-
-@ti.func
 def clamp_friction(F, n, bound):
     """The friction impulse F [N·s] in the tangent plane of ``n``, at most ``bound`` long."""
     F_t = F - F.dot(n) * n
@@ -155,52 +101,6 @@ def clamp_friction(F, n, bound):
     if size > bound:
         F_t *= bound / size
     return F_t
-
-
-@ti.func
-def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, h):
-    """:func:`pair_step` of a ball against a static surface (a plane, or the terrain's patch) with
-    normal n̂, per unit mass [m/s] (``v0``: the ball's velocity before the step's contacts; ``F``:
-    the friction impulse applied so far), with
-    ``contact``'s restitution, or with ``contact.turf`` in the turf frame of :func:`turf_impact`.
-    In the ``BOUNCE`` pass a pressed ball also meets rolling resistance and the resistance to spin
-    about the normal, bounded by μ_roll·λ (once per step, as :func:`plane_jolt` does). With the
-    report's friction (``contact.friction``) the spin is left as it is. Returns (v, ω, λ, F)."""
-    n_eff, e = n, contact.e
-    if contact.turf != 0:
-        n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
-    P, lam_new, F_new = pair_step(
-        phase,
-        n_eff,
-        gap,
-        v0.dot(n_eff),
-        v,
-        w,
-        radius,
-        1.0,
-        zero3(),
-        zero3(),
-        0.0,
-        0.0,
-        lam,
-        F,
-        e,
-        contact.mu,
-        v_inelastic,
-        h,
-        contact.friction,
-    )
-    spin = contact.friction != CENTRE_FRICTION
-    v_new = v + P
-    w_new = w
-    if spin:
-        w_new = w + spin_jolt(P, n_eff, radius, 1.0)
-    if phase == BOUNCE and lam_new > 0.0:
-        dv, dw = rolling_resistance(v_new, radius, contact.mu_roll, lam_new, n_eff)
-        v_new += dv
-        if spin:
-            w_new += dw + pivot_resistance(w_new, radius, contact.mu_roll, lam_new, n_eff)
-    return v_new, w_new, lam_new, F_new
 
 
 @ti.func

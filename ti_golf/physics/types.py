@@ -13,7 +13,9 @@ it compiles), so bodies write ``ti.cast(x, float)`` and build vectors with :func
 """
 
 import functools
+import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import taichi as ti
@@ -52,9 +54,26 @@ class Deferred:
         return f"Deferred({self.__name__})"
 
 
+@dataclass
+class LaunchClock:
+    """The host calls of the project's kernels (:func:`kernel`) while ``on``: how many, and the
+    seconds spent inside them (the launch, and on CPU backends the kernel's run, which there
+    runs in the calling thread; on GPU backends the wait for a result a kernel returns). Off, a
+    launch costs one test more (for the benchmarks: ``ti-golf bench pit``)."""
+
+    on: bool = False
+    calls: int = 0
+    inside_s: float = 0.0
+
+
+LAUNCHES = LaunchClock()
+"""The process's :class:`LaunchClock`."""
+
+
 def kernel(fn: Callable[..., Any]) -> Callable[..., Any]:
     """``ti.kernel``, applied at the first call, when the :class:`Deferred` types in ``fn``'s
-    annotations (arguments and return) can be made with the chosen float type."""
+    annotations (arguments and return) can be made with the chosen float type; counted and timed
+    by :data:`LAUNCHES` while it is on."""
     compiled: Callable[..., Any] | None = None
 
     @functools.wraps(fn)
@@ -63,7 +82,14 @@ def kernel(fn: Callable[..., Any]) -> Callable[..., Any]:
         if compiled is None:
             fn.__annotations__ = {k: a.get() if isinstance(a, Deferred) else a for k, a in fn.__annotations__.items()}
             compiled = ti.kernel(fn)
-        return compiled(*args)
+        if not LAUNCHES.on:
+            return compiled(*args)
+        t0 = time.perf_counter()
+        try:
+            return compiled(*args)
+        finally:
+            LAUNCHES.calls += 1
+            LAUNCHES.inside_s += time.perf_counter() - t0
 
     return launch
 
@@ -322,7 +348,7 @@ ModelArrays = Deferred(
     ),
     "ModelArrays",
 )
-"""The model's arrays (see :class:`ti_golf.sim.model.Model`)."""
+"""The model's arrays (see :class:`ti_golf.physics.model.Model`)."""
 
 BallState = Deferred(
     lambda: ti.types.argpack(
@@ -334,7 +360,7 @@ BallState = Deferred(
     ),
     "BallState",
 )
-"""The balls' state (see :class:`ti_golf.sim.state.State`)."""
+"""The balls' state (see :class:`ti_golf.physics.state.State`)."""
 
 FlightRecord = Deferred(
     lambda: ti.types.argpack(
@@ -346,7 +372,7 @@ FlightRecord = Deferred(
     ),
     "FlightRecord",
 )
-"""Each tracked ball's flight: landing and apex (see :class:`ti_golf.sim.state.State`)."""
+"""Each tracked ball's flight: landing and apex (see :class:`ti_golf.physics.state.State`)."""
 
 NeighbourLists = Deferred(
     lambda: ti.types.argpack(
@@ -375,7 +401,7 @@ BlockOrder = Deferred(
     ),
     "BlockOrder",
 )
-"""The balls grouped by block of grid columns for the Gauss–Seidel sweeps (:mod:`.colour`)."""
+"""The balls grouped by block of grid columns for the Gauss–Seidel sweeps (:mod:`ti_golf.solvers.colour`)."""
 
 StepScratch = Deferred(
     lambda: ti.types.argpack(
@@ -415,7 +441,7 @@ GridParams = Deferred(
     ),
     "GridParams",
 )
-"""Scalars of a neighbour-list build (see :func:`ti_golf.physics.grid.list_neighbours`)."""
+"""Scalars of a neighbour-list build (see :func:`ti_golf.solvers.grid.list_neighbours`)."""
 
 GridScratch = ti.types.argpack(
     rank=int_array,  # each ball's rank within its bucket, (N,)

@@ -12,7 +12,7 @@ from ti_golf.render.plots import save_figure
 from ti_golf.scene.launch_monitor import Units
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ti_golf.sim.dispersion import Dispersion
+    from ti_golf.golf.dispersion import Dispersion
 
 MAX_DRAWN = 50_000
 """The most points drawn (the first ones: the draws are in random order); the ellipses use all."""

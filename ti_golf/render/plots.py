@@ -20,9 +20,9 @@ TERRAIN_FILL = (0.62, 0.74, 0.50)
 """The ground under a terrain profile: pale green."""
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ti_golf.golf.sweep import SweepResult
+    from ti_golf.golf.tour import TourFlight
     from ti_golf.sim.simulation import Recording
-    from ti_golf.sim.sweep import SweepResult
-    from ti_golf.sim.tour import TourFlight
 
 
 class _NoTransparencyNotice(logging.Filter):
@@ -280,7 +280,7 @@ def _time_series(t: np.ndarray, values: np.ndarray, ylabel: str, path: str | os.
 def plot_tour(flight: "TourFlight", path: str | os.PathLike[str], title: str = "") -> None:
     """Each row of the tour table: the model's carry, apex and land-angle errors against the table,
     with the tolerance shaded (bars in blue within it, red outside)."""
-    from ti_golf.sim.tour import APEX_TOL, CARRY_TOL, LAND_TOL
+    from ti_golf.golf.tour import APEX_TOL, CARRY_TOL, LAND_TOL
 
     rows = flight.rows
     n = len(rows)

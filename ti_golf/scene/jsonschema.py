@@ -24,6 +24,7 @@ _TYPES: dict[str, dict[str, Any]] = {
     "vec3": {"type": "array", "items": _NUMBER, "minItems": 3, "maxItems": 3},
     "vec2": {"type": "array", "items": _NUMBER, "minItems": 2, "maxItems": 2},
     "list2": {"type": "array", "items": _NUMBER, "minItems": 2, "maxItems": 2},
+    "strs": {"type": "array", "items": {"type": "string"}},
     "range": {"anyOf": [{"type": "string"}, {"type": "array", "items": _NUMBER, "minItems": 1}]},
 }
 """JSON Schema of each kind of key (see :class:`~ti_golf.scene.keys.Key`)."""

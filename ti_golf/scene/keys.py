@@ -10,7 +10,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-KINDS = ("float", "int", "bool", "str", "vec3", "vec2", "list2", "range", "text")
+KINDS = ("float", "int", "bool", "str", "vec3", "vec2", "list2", "range", "text", "strs")
 """Kinds of value a key takes: see :class:`Key`."""
 
 
@@ -31,7 +31,7 @@ class Key:
 
     ``kind`` is one of :data:`KINDS`: ``"float"``, ``"int"``, ``"bool"``, ``"str"``, ``"vec3"``,
     ``"vec2"`` (2 numbers), ``"list2"`` ([min, max]), ``"range"`` (a START:STOP:STEP string or a
-    list of numbers) or ``"text"`` (free text). ``default`` is ``None`` for a key that is unset
+    list of numbers), ``"text"`` (free text) or ``"strs"`` (a list of strings, of study files). ``default`` is ``None`` for a key that is unset
     unless given (and for a required key). ``check`` returns ``None`` when a (type-correct) value
     is allowed, else a phrase such as ``"must be > 0"`` (see :mod:`ti_golf.scene.checks`);
     ``allowed`` says the same for people. ``unit`` is ``"-"`` for dimensionless keys.

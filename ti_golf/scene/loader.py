@@ -83,6 +83,10 @@ def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
     elif kind in ("str", "text"):
         if not isinstance(value, str):
             raise_config(source, dotted, f"must be a string (got {value!r})")
+    elif kind == "strs":
+        if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+            raise_config(source, dotted, f"must be a list of strings (got {value!r})")
+        value = tuple(value)
     elif kind in _LISTS:
         count, shape = _LISTS[kind]
         if (
@@ -101,6 +105,13 @@ def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
         if problem:
             raise_config(source, dotted, f"{problem} (got {value!r})")
     return value
+
+
+def check_value(value: Any, key: Key, source: str, dotted: str) -> Any:
+    """``value`` of the key ``key`` (named ``dotted`` in ``source``) checked and normalised as a
+    scene file's value is (the same one-line errors): for other files declared with the same keys,
+    such as study files (:mod:`ti_golf.study.spec`)."""
+    return _coerce(value, key, source, dotted)
 
 
 def _unit(key: Key) -> str:
@@ -181,19 +192,29 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise ConfigError(str(p), None, f"is not valid TOML: {exc}") from None
 
 
-def resolve_scene_path(name: str | os.PathLike[str]) -> Path:
-    """A scene path as given, or a bare name looked up in the bundled ``scenes/`` folder (a
-    :class:`ConfigError` suggesting the closest bundled name when there is none)."""
+def resolve_scene_path(name: str | os.PathLike[str], folder: Path | None = None) -> Path:
+    """A scene path as given, or a bare name looked up in the bundled ``scenes/`` folder (or in
+    ``folder``: the bundled studies'); a :class:`ConfigError` suggesting the closest name there
+    when there is none."""
     p = Path(name)
     if p.exists() or p.suffix == ".toml" and p.parent != Path("."):
         return p
-    for cand in (scenes_dir() / p, scenes_dir() / f"{p}.toml"):
+    look_in = scenes_dir() if folder is None else folder
+    for cand in (look_in / p, look_in / f"{p}.toml"):
         if cand.exists():
             return cand
-    if p.parent == Path(".") and p.suffix in ("", ".toml"):  # a bare name: a bundled scene's, misspelled?
-        close = difflib.get_close_matches(p.stem, [f.stem for f in scenes_dir().glob("*.toml")], n=1)
+    if p.parent == Path(".") and p.suffix in ("", ".toml"):  # a bare name: a bundled one's, misspelled?
+        close = difflib.get_close_matches(p.stem, [f.stem for f in look_in.glob("*.toml")], n=1)
         hint = f"did you mean '{close[0]}'? " if close else ""
-        raise ConfigError(str(name), None, f"file not found, nor a bundled scene ({hint}`ti-golf scenes` lists them)")
+        if folder is None:
+            raise ConfigError(
+                str(name), None, f"file not found, nor a bundled scene ({hint}`ti-golf scenes` lists them)"
+            )
+        raise ConfigError(
+            str(name),
+            None,
+            f"file not found, nor a file of that name in {look_in}" + (f" ({hint.strip()})" if hint else ""),
+        )
     return p
 
 

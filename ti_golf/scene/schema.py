@@ -58,6 +58,9 @@ STATUS_NAMES = {FLYING: "flying", ROLLING: "rolling", AT_REST: "at_rest", OUT_OF
 INTEGRATORS = ("semi_implicit", "rk4")
 SOLVERS = ("jacobi", "gauss_seidel")
 """Contact solvers (``contact.solver``): the report's Jacobi sweeps, or coloured Gauss–Seidel sweeps."""
+LAYOUTS = ("auto", "columns", "contacts")
+"""Layouts of the Gauss–Seidel sweeps (``contact.layout``): by blocks of grid columns, or by contact
+colours, or chosen by the backend (see :mod:`ti_golf.solvers.contact_colour`)."""
 FRICTION_MODELS = ("spin", "report")
 """Friction of the ball–surface contacts (``contact.friction_model``): at the contact point, coupled
 to the spin, or the report's, from the centre's velocity alone (see :mod:`ti_golf.physics.contact`)."""
@@ -158,12 +161,24 @@ class Contact:
     )
     solver: str = key(
         "str",
-        "jacobi",
+        "gauss_seidel",
         "-",
-        "jacobi (the report's B.5-B.18: every pair at once from the last sweep's velocities) or "
-        "gauss_seidel (each pair at once after the last, columns of balls bottom-up: for piles)",
+        "gauss_seidel (each pair at once after the last, columns of balls bottom-up: holds piles, heavy "
+        "balls on light ones and bouncing balls) or jacobi (the report's B.5-B.18: every pair at once "
+        "from the last sweep's velocities, as the lab scenes use)",
         OneOf(SOLVERS),
         read_when=("world.collisions", (True,)),
+    )
+    layout: str = key(
+        "str",
+        "auto",
+        "-",
+        "how the gauss_seidel sweeps are spread over threads: columns (blocks of grid columns, each "
+        "walked bottom-up by one thread: fastest on a few CPU cores), contacts (the pairs coloured so "
+        "that no two of a colour share a ball, a thread per pair: thousands of threads, for GPUs) or "
+        "auto (columns on CPU backends, contacts elsewhere)",
+        OneOf(LAYOUTS),
+        read_when=("contact.solver", ("gauss_seidel",)),
     )
     iterations: int = key(
         "int",

@@ -16,8 +16,9 @@ import dataclasses
 import json
 import os
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import taichi as ti
@@ -25,13 +26,13 @@ import taichi as ti
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.physics.integrate import NOT_TRACKED
+from ti_golf.physics.model import Model
+from ti_golf.physics.state import State
 from ti_golf.runtime import ensure_init, np_float, on_cpu
 from ti_golf.scene.document import scene_document
 from ti_golf.scene.loader import load_scene
-from ti_golf.sim.solver_state import restore_solver, solver_arrays
-
-if TYPE_CHECKING:
-    from ti_golf.sim.simulation import Recording, Simulation
+from ti_golf.scene.schema import Scene
+from ti_golf.solvers import CollisionSolver, record
 
 FORMAT = 2
 """The layout of a saved run. Files without ``run`` (format 1) hold the final state only, and
@@ -47,8 +48,9 @@ INITIAL = ("x", "v", "w", "radius", "mass", "track")
 """The fields of ``InitialBalls``, saved as ``initial.NAME`` when given."""
 
 
-def write_run(sim: Simulation, path: str | os.PathLike[str], recording: Recording | None, partial: bool) -> None:
-    """Write ``sim`` to ``path`` (``.npz`` added when missing) as the module says."""
+def write_run(sim: Any, path: str | os.PathLike[str], recording: Any, partial: bool) -> None:
+    """Write the :class:`~ti_golf.sim.simulation.Simulation` ``sim`` to ``path`` (``.npz`` added
+    when missing) as the module says, with its ``Recording`` (or ``None``)."""
     state = sim.state
     data: dict[str, Any] = {
         "x": sim.x,
@@ -76,7 +78,7 @@ def write_run(sim: Simulation, path: str | os.PathLike[str], recording: Recordin
         data["order"] = state.order
     solver_meta = None
     if sim.solver is not None:
-        arrays, solver_meta = solver_arrays(sim.solver)
+        arrays, solver_meta = record.to_file(sim.solver.record())
         solver_meta["serial"], solver_meta["reorder"] = sim.solver.serial, sim.solver.reorder
         data.update({f"solver.{name}": a for name, a in arrays.items()})
     if sim.initial is not None:
@@ -105,8 +107,58 @@ def write_run(sim: Simulation, path: str | os.PathLike[str], recording: Recordin
         np.savez(fh, **data)
 
 
-def read_run(cls: type[Simulation], path: str | os.PathLike[str]) -> Simulation:
-    """A ``cls`` simulation continued from the run saved in ``path``."""
+@dataclass
+class SavedRun:
+    """A run read back from a saved file (:func:`read_run`): its scene, arrays and description,
+    from which a simulation is set up again (:meth:`balls`, :attr:`solver_flags`) and then given
+    its state (:func:`restore_run`)."""
+
+    source: str
+    """The file it was read from."""
+    scene: Scene
+    """The scene, with every change made by ``Simulation.set`` in it."""
+    data: dict[str, np.ndarray]
+    """The file's arrays by name."""
+    meta: dict[str, Any]
+    """The file's ``run`` description."""
+
+    @property
+    def tracking(self) -> bool:
+        """Whether some ball's flight is tracked (its flight records saved)."""
+        return bool(self.meta["tracking"])
+
+    @property
+    def initial_kept(self) -> bool:
+        """Whether the run can go back to its t0."""
+        return bool(self.meta["initial_kept"])
+
+    @property
+    def solver_flags(self) -> dict[str, bool] | None:
+        """``serial`` and ``reorder`` for a new collision solver, as the saved one stepped (serial
+        only on the CPU), or ``None`` without one."""
+        solver = self.meta["solver"]
+        if solver is None:
+            return None
+        return {"serial": bool(solver["serial"]) and on_cpu(), "reorder": bool(solver["reorder"])}
+
+    def balls(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool | np.ndarray]:
+        """The balls to set the simulation up with: (launch points or positions (N, 3), radii,
+        masses, which balls are tracked)."""
+        data = self.data
+        track = data["landed"] != NOT_TRACKED if self.tracking else False
+        launch_x = data["launch_x"] if self.tracking else data["x"]
+        return launch_x, data["radius"], data["mass"], track
+
+    def initial(self) -> dict[str, Any] | None:
+        """The fields of the ``InitialBalls`` saved with the run, or ``None``."""
+        if not any(f"initial.{name}" in self.data for name in INITIAL):
+            return None
+        return {name: self.data.get(f"initial.{name}") for name in INITIAL}
+
+
+def read_run(path: str | os.PathLike[str]) -> SavedRun:
+    """The run saved in ``path``, or a :class:`ConfigError` naming the file that says why it cannot
+    be continued."""
     source = str(path)
     data, meta = _read(source)
     precision = ensure_init().precision
@@ -122,20 +174,15 @@ def read_run(cls: type[Simulation], path: str | os.PathLike[str]) -> Simulation:
     except ConfigError as exc:
         raise ConfigError(f"{source} (its scene)", exc.key, exc.reason) from None
     scene = dataclasses.replace(scene, name=meta["scene_name"], path=meta["scene_path"])
+    return SavedRun(source, scene, data, meta)
+
+
+def restore_run(saved: SavedRun, state: State, model: Model, solver: CollisionSolver | None) -> None:
+    """Give the state, the model and the collision solver of a simulation set up again from
+    ``saved`` (:meth:`SavedRun.balls`) what the saved run held: the storage order, the per-ball
+    arrays, the time and step count, and the solver's lists and carried impulses."""
+    data, meta = saved.data, saved.meta
     f = np_float()
-    tracking = bool(meta["tracking"])
-    x = data["x"]
-    track = data["landed"] != NOT_TRACKED if tracking else False
-    launch_x = data["launch_x"] if tracking else x
-    sim = cls.__new__(cls)
-    sim.initial = _initial(data)
-    sim.initial_kept = bool(meta["initial_kept"])
-    solver = meta["solver"]
-    flags = None
-    if solver is not None:
-        flags = {"serial": bool(solver["serial"]) and on_cpu(), "reorder": bool(solver["reorder"])}
-    sim._set_up(scene, launch_x, None, None, data["radius"], data["mass"], track, solver_flags=flags)
-    state, model = sim.state, sim.model
     if "order" in data:  # the balls stored as the solver last sorted them, the model's per-ball arrays too
         order = data["order"].astype(np.int32)
         state.ids = ti.ndarray(ti.i32, state.n)
@@ -143,17 +190,17 @@ def read_run(cls: type[Simulation], path: str | os.PathLike[str]) -> Simulation:
         for name in model.per_ball():
             values = getattr(model, name)
             values.from_numpy(np.ascontiguousarray(values.to_numpy()[order]))
-    for name in STATE + (FLIGHT if tracking else ()):
+    for name in STATE + (FLIGHT if saved.tracking else ()):
         values = data[name]
         state.write(name, values.astype(f if values.dtype.kind == "f" else np.int32))
     state.t = float(data["t"])
     state.steps = int(meta["steps"])
-    if solver is not None and sim.solver is not None:
+    kept = meta["solver"]
+    if kept is not None and solver is not None:
         arrays = {name[len("solver.") :]: a for name, a in data.items() if name.startswith("solver.")}
-        restore_solver(sim.solver, state, arrays, solver)
-        if bool(solver["serial"]) != sim.solver.serial:  # saved on a CPU, stepped in parallel now
-            sim.solver.invalidate()
-    return sim
+        solver.restore(record.from_file(arrays, kept, state.n, solver.serial, solver.gauss_seidel), state)
+        if bool(kept["serial"]) != solver.serial:  # saved on a CPU, stepped in parallel now
+            solver.invalidate()
 
 
 def _read(source: str) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
@@ -183,14 +230,7 @@ def _read(source: str) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         raise ConfigError(source, None, "is not a run saved by ti-golf (its 'run' entry is not readable)") from None
     if fmt != FORMAT:
         raise ConfigError(source, None, f"is a saved run of format {fmt}; this ti-golf reads format {FORMAT}")
+    reason = None if meta.get("solver") is None else record.unreadable(meta["solver"])
+    if reason is not None:
+        raise ConfigError(source, None, reason)
     return data, meta
-
-
-def _initial(data: dict[str, np.ndarray]) -> Any:
-    """The ``InitialBalls`` saved with the run, or ``None``."""
-    from ti_golf.sim.simulation import InitialBalls
-
-    if not any(f"initial.{name}" in data for name in INITIAL):
-        return None
-    values: dict[str, Any] = {name: data.get(f"initial.{name}") for name in INITIAL}
-    return InitialBalls(**values)

@@ -17,11 +17,15 @@ import taichi as ti
 
 from ti_golf.errors import ConfigError, SimulationError
 from ti_golf.physics import kernels
+from ti_golf.physics.model import Model
+from ti_golf.physics.packs import Packs
+from ti_golf.physics.state import State
 from ti_golf.runtime import available_memory, ensure_init, np_float
 from ti_golf.scene.balls import ball_count, block_size, build_balls
 from ti_golf.scene.document import with_changes
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, STATUS_NAMES, Scene
+from ti_golf.signals import whole_steps
 from ti_golf.sim.changes import (
     _UNSET,
     MOVES_T0_BALLS,
@@ -31,12 +35,9 @@ from ti_golf.sim.changes import (
     refuse_for_given_balls,
     refuse_unread,
 )
-from ti_golf.sim.model import Model
-from ti_golf.sim.packs import Packs
 from ti_golf.sim.results import Flight
-from ti_golf.sim.signals import whole_steps
-from ti_golf.sim.solver import CollisionSolver
-from ti_golf.sim.state import State
+from ti_golf.sim.saved_run import read_run, restore_run, write_run
+from ti_golf.solvers import CollisionSolver
 
 
 @dataclass
@@ -185,9 +186,15 @@ class Simulation:
         would have given (on the same backend and precision). :meth:`reset` goes back to the
         run's t0. Raises :class:`ConfigError` naming the file when it cannot be continued (a
         file written before runs could be resumed, another precision)."""
-        from ti_golf.sim.saved_run import read_run
-
-        return read_run(cls, path)
+        saved = read_run(path)
+        sim = cls.__new__(cls)
+        initial = saved.initial()
+        sim.initial = None if initial is None else InitialBalls(**initial)
+        sim.initial_kept = saved.initial_kept
+        x, radius, mass, track = saved.balls()
+        sim._set_up(saved.scene, x, None, None, radius, mass, track, solver_flags=saved.solver_flags)
+        restore_run(saved, sim.state, sim.model, sim.solver)
+        return sim
 
     # -- changing the scene between runs ----------------------------------------------------------
     def set(self, changes: Mapping[str, Any] | Iterable[str] | str, value: Any = _UNSET) -> None:
@@ -507,8 +514,6 @@ class Simulation:
         before the time it was asked to reach; and all that :meth:`load` needs to continue the
         run bit for bit (the scene, the step count, the flight records, the sleeping timers, the
         collision solver's lists and carried impulses, the balls at t0; see the docs' lab page)."""
-        from ti_golf.sim.saved_run import write_run
-
         write_run(self, path, recording, partial)
 
 

@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# `make gpu-check`: every GPU figure of docs/performance.md in one command, on a machine with an NVIDIA GPU.
+#
+# Each benchmark runs under its own time limit (the whole script at most about 9 minutes) and its JSON line is
+# collected into $GPU_CHECK_OUT/gpu_check.json, one object keyed by the figure's name, written as each
+# one ends (so a script stopped early keeps what it measured). Taichi's kernel cache is kept in
+# $TI_OFFLINE_CACHE_FILE_PATH (default: .ticache/ in the checkout, which git ignores), so a second run
+# on a machine still warm compiles nothing; the cold compile is timed in an empty cache of its own.
+#
+#   make gpu-check                       # with the project's venv
+#   PY=python3 bash .ci/gpu_check.sh     # with another interpreter that has taichi (PYTHONPATH=. is set)
+set -u
+cd "$(dirname "$0")/.."
+PY=${PY:-.venv/bin/python}
+OUT_DIR=${GPU_CHECK_OUT:-out}
+mkdir -p "$OUT_DIR"
+export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}" PYTHONUNBUFFERED=1
+export TI_OFFLINE_CACHE_FILE_PATH=${TI_OFFLINE_CACHE_FILE_PATH:-$PWD/.ticache}
+ONLY=${GPU_CHECK_ONLY:-.}  # a regular expression: run only the figures whose names match
+GPU_ARCH=${GPU_ARCH:-cuda}  # cpu: a dry run of the script itself on a machine without a GPU
+RESULT="$OUT_DIR/gpu_check.json"
+echo "{}" >"$RESULT"
+
+# figure NAME LIMIT_S [ENV=VALUE ...] -- ARGS...: run `ti-golf ARGS --json` under LIMIT_S seconds and keep its
+# JSON line as RESULT[NAME] (or its exit status and last error line when it printed none).
+figure() {
+  local name=$1 limit=$2
+  shift 2
+  [[ $name =~ $ONLY ]] || return 0
+  local envs=()
+  while [ "$1" != "--" ]; do envs+=("$1"); shift; done
+  shift
+  local log="$OUT_DIR/$name.log" start end
+  echo "== $name (limit ${limit} s): ti-golf $*" >&2
+  start=$(date +%s.%N)
+  env "${envs[@]}" timeout -s INT -k 20 "$limit" "$PY" -m ti_golf "$@" --json >"$log.out" 2>"$log"
+  local rc=$?
+  end=$(date +%s.%N)
+  "$PY" - "$RESULT" "$name" "$log.out" "$log" "$rc" "$start" "$end" "$*" <<'PY'
+import json, os, sys
+result, name, out, err, rc, start, end, args = sys.argv[1:]
+lines = [l for l in open(out).read().splitlines() if l.startswith("{")]
+entry = json.loads(lines[-1]) if lines else {"error": (open(err).read().strip().splitlines() or ["(nothing)"])[-1]}
+entry.update(exit_status=int(rc), process_wall_s=round(float(end) - float(start), 2), command="ti-golf " + args + " --json")
+data = json.load(open(result))
+data[name] = entry
+tmp = result + ".tmp"
+json.dump(data, open(tmp, "w"), indent=1)
+os.replace(tmp, result)
+print(f"   exit {rc}, {float(end) - float(start):.1f} s", file=sys.stderr)
+PY
+}
+
+nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader >"$OUT_DIR/gpu.txt" 2>&1 || true
+cold=$(mktemp -d)
+# The pour's kernels compiled from an empty cache (a pour of a few thousand balls: compile time is reported apart).
+figure cuda_cold_compile 130 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --n 8192 --t 0.05 --arch "$GPU_ARCH"
+rm -rf "$cold"
+figure cuda_pit_100k 120 -- bench pit --every 1 --arch "$GPU_ARCH"
+figure cuda_pit_1m 150 -- bench pit --n 1000000 --every 1 --arch "$GPU_ARCH"
+# How the CPU backend scales: the same 20,000-ball pour on 16 threads and on 2.
+figure cpu16_pit_20k 60 TI_CPU_MAX_NUM_THREADS=16 -- bench pit --n 20000 --t 1 --arch cpu
+figure cpu2_pit_20k 90 TI_CPU_MAX_NUM_THREADS=2 -- bench pit --n 20000 --t 1 --arch cpu
+cat "$RESULT"

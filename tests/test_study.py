@@ -1,0 +1,434 @@
+"""Parameter studies (ti-golf study) on a real Dask cluster, every process on 127.0.0.1: a small
+study end to end, figures equal to `ti-golf run` alone, a scheduler and two workers started by
+hand, a worker killed mid-task, a resumed study, a failing task, and the study file's checks."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import ROOT, cli, run_cli, sigint_as_in_a_terminal
+
+from ti_golf.errors import ConfigError
+from ti_golf.study.figures import pile_height, repose_angle
+from ti_golf.study.spec import load_study, study_json_schema
+
+distributed = pytest.importorskip("distributed", reason="the cluster extra: pip install 'ti-golf[cluster]'")
+pytest.importorskip("pyarrow", reason="the cluster extra: pip install 'ti-golf[cluster]'")
+
+FLIGHT_STUDY = """
+description = "carry against launch speed and drag"
+scene = "lab_turbulent"
+
+[task]
+kind = "run"
+until = "landed"
+
+[grid]
+"launch.speed" = [40.0, 60.0]
+"air.C_D" = "0.2:0.3:0.1"
+"""
+
+PILE_SCENE = """
+description = "150 balls dropped in a heap"
+[world]
+dt = 0.001
+[contact]
+solver = "gauss_seidel"
+mu = 0.4
+[[planes]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 1.0, 0.0]
+[[blocks]]
+kind = "random"
+number = 150
+box_min = [-0.15, 0.05, -0.15]
+box_max = [0.15, 0.5, 0.15]
+seed = 3
+"""
+
+PILE_STUDY = """
+scene = "heap.toml"
+seeds = [1, 2]
+
+[task]
+kind = "run"
+steps = 300
+figures = ["pile_height", "repose_angle", "deepest_overlap", "p99_speed"]
+
+[grid]
+"contact.mu" = [0.2, 0.6]
+"""
+
+
+def write(folder: Path, name: str, text: str) -> Path:
+    path = folder / name
+    path.write_text(text)
+    return path
+
+
+def figures_of(row: dict) -> str:
+    """A row's figures (every column but the bookkeeping that differs run to run), as JSON text:
+    equal bit for bit, NaN equal to NaN."""
+    kept = {k: v for k, v in row.items() if k not in ("wall_s", "sim_wall_s", "host", "worker", "run_path")}
+    return json.dumps(kept, sort_keys=True)
+
+
+@pytest.fixture(scope="module")
+def flight_study(tmp_path_factory):
+    """The flight study run once on a local cluster of two workers."""
+    from ti_golf.study import run_study
+
+    folder = tmp_path_factory.mktemp("flight")
+    spec = write(folder, "flight.toml", FLIGHT_STUDY)
+    result = run_study(spec, out=folder / "out", workers=2, log=lambda line: None)
+    return spec, result
+
+
+# -- the study file ------------------------------------------------------------------------------
+BAD = [
+    ('scene = "lab_turbulent"\nwrkers = 2\n', "wrkers", "is not a study key"),
+    ('scene = "lab_turbulent"\n[task]\nkind = "walk"\n', "task.kind", "must be one of"),
+    ('scene = "lab_turbulent"\n[task]\nkind = "run"\nshots = 10\n', "task.shots", "read only when task.kind"),
+    ('scene = "lab_turbulent"\n[grid]\n"air.CD" = [0.1]\n', "grid.air.CD", "is not a scene key"),
+    ('scene = "lab_turbulent"\n[grid]\n"contact.e" = [0.5, 2.0]\n', "grid.contact.e", "must be in [0, 1]"),
+    (
+        'scene = "lab_turbulent"\n[grid]\n"air.C_D" = [0.1]\n[random.uniform]\n"air.C_D" = [0, 1]\n',
+        "random",
+        "give one of",
+    ),
+    ('scene = "lab_turbulent"\n[task]\nkind = "tour"\nfigures = ["pile_height"]\n', "task.figures", "not a figure of"),
+    ('scene = "lab_turbulent"\n[task]\nfigures = ["carri"]\n', "task.figures", "names no figure"),
+    ('scene = "lab_turbulent"\nseeds = [1]\n[task]\nkind = "sweep"\n', "seeds", "draws nothing at random"),
+    ('scene = "no_such_scene"\n', "scene", "no scene file"),
+    (
+        'scene = "lab_turbulent"\n[random]\nsamples = 0\n[random.uniform]\n"air.C_D" = [0, 1]\n',
+        "random.samples",
+        "must be in",
+    ),
+    ('scene = "lab_turbulent"\n[random.uniform]\n"air.C_D" = [1, 0]\n', "random.uniform.air.C_D", "low <= high"),
+    ('scene = "lab_turbulent"\n[[points]]\n"air.model" = "magic"\n', "points[0].air.model", "must be one of"),
+]
+
+
+@pytest.mark.parametrize("text,key,reason", BAD, ids=[b[1] for b in BAD])
+def test_a_bad_study_file_is_one_error_naming_the_file_and_the_key(tmp_path, text, key, reason):
+    path = write(tmp_path, "bad.toml", text)
+    with pytest.raises(ConfigError) as err:
+        load_study(path)
+    assert err.value.source == str(path) and err.value.key == key, str(err.value)
+    assert reason in err.value.reason and "\n" not in str(err.value)
+
+
+def test_the_command_reports_a_bad_study_in_one_line_with_exit_code_2(tmp_path):
+    path = write(tmp_path, "bad.toml", 'scene = "lab_turbulent"\n[grid]\n"contact.e" = [2.0]\n')
+    done = run_cli("study", str(path), "--out", str(tmp_path / "out"))
+    assert done.returncode == 2
+    assert done.stderr.strip().count("\n") == 0 and "bad.toml: key 'grid.contact.e' must be in [0, 1]" in done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_without_dask_the_command_says_how_to_install_it_and_exits_2(tmp_path, monkeypatch, capsys):
+    from ti_golf.cli.main import main
+
+    path = write(tmp_path, "s.toml", FLIGHT_STUDY)
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError
+    assert main(["study", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "pip install 'ti-golf[cluster]'" in err and err.count("\n") == 1
+
+
+def test_a_grid_is_every_combination_and_random_samples_follow_their_seed(tmp_path):
+    spec = load_study(write(tmp_path, "g.toml", FLIGHT_STUDY))
+    assert [t.point for t in spec.tasks] == [
+        {"launch.speed": s, "air.C_D": c} for s in (40.0, 60.0) for c in (0.2, 0.3)
+    ]
+    assert spec.tasks[0].changes == ("launch.speed=40.0", "air.C_D=0.2")
+    text = 'scene = "lab_turbulent"\n[random]\nsamples = 5\nseed = 4\n[random.uniform]\n"air.C_D" = [0.1, 0.4]\n'
+    a, b = (load_study(write(tmp_path, f"r{i}.toml", text)) for i in (1, 2))
+    drawn = [t.point["air.C_D"] for t in a.tasks]
+    assert drawn == [t.point["air.C_D"] for t in b.tasks] and len(set(drawn)) == 5
+    assert all(0.1 <= c <= 0.4 for c in drawn)
+
+
+def test_the_study_schema_declares_every_key_the_loader_reads():
+    from ti_golf.study.spec import RANDOM_KEYS, STUDY_KEYS, TASK_KEYS
+
+    schema = study_json_schema()
+    props = schema["properties"]
+    assert set(props) == {*STUDY_KEYS, "task", "grid", "points", "random"}
+    assert set(props["task"]["properties"]) == set(TASK_KEYS)
+    assert set(props["random"]["properties"]) == {*RANDOM_KEYS, "uniform"}
+    assert props["task"]["properties"]["kind"]["enum"] == ["run", "sweep", "shot", "dispersion", "tour", "pit"]
+
+
+@pytest.mark.parametrize("name", ["bag_weather", "repose"])
+def test_the_bundled_studies_load(name):
+    spec = load_study(name)
+    assert spec.tasks and len({t.id for t in spec.tasks}) == len(spec.tasks)
+
+
+# -- the pile's figures --------------------------------------------------------------------------
+def test_the_angle_of_repose_of_a_cone_of_balls_is_its_slope():
+    rng = np.random.default_rng(0)
+    r = 0.02
+    for slope_deg in (20.0, 30.0):
+        rho = np.sqrt(rng.uniform(0, 1.0, 20000))  # uniform over a disc of radius 1 m
+        phi = rng.uniform(0, 2 * np.pi, rho.size)
+        top = (1.0 - rho) * math.tan(math.radians(slope_deg))
+        y = rng.uniform(r, np.maximum(top, r))  # balls fill the cone below its surface
+        x = np.stack([rho * np.cos(phi) + 3.0, y, rho * np.sin(phi) - 1.0], axis=1)
+        radius = np.full(rho.size, r)
+        in_play = np.ones(rho.size, bool)
+        assert repose_angle(x, radius, in_play) == pytest.approx(slope_deg, abs=1.5)
+        assert pile_height(x, radius, in_play) == pytest.approx(y.max() + r - (y.min() - r))
+
+
+# -- on a cluster --------------------------------------------------------------------------------
+def test_a_small_study_runs_on_a_local_cluster_into_one_table(flight_study):
+    from ti_golf.study.results import read_table
+
+    spec, result = flight_study
+    assert result.failed == 0 and result.ran == 4 and result.skipped == 0
+    table = read_table(result.folder)
+    assert table["status"] == ["ok"] * 4
+    assert table["launch.speed"] == [40.0, 40.0, 60.0, 60.0] and table["air.C_D"] == [0.2, 0.3, 0.2, 0.3]
+    carry = table["carry_m"]
+    assert carry[0] > carry[1] and carry[2] > carry[3] and carry[2] > carry[0]  # more drag, shorter; faster, longer
+    assert all(h for h in table["host"]) and all(w.startswith("tcp://127.0.0.1:") for w in table["worker"])
+    assert all((result.folder / p).is_file() for p in table["run_path"])
+    with open(result.folder / "results.csv") as fh:  # the CSV holds the same bits
+        header, *rows = [line.rstrip("\n").split(",") for line in fh]
+    col = header.index("carry_m")
+    assert [float(row[col]) for row in rows] == carry
+
+
+def test_a_tasks_figures_equal_those_of_its_scene_run_alone(flight_study, tmp_path):
+    from ti_golf.sim.simulation import Simulation
+    from ti_golf.study.results import read_table
+    from ti_golf.study.tasks import run_figures
+
+    spec, result = flight_study
+    table = read_table(result.folder)
+    i = 3
+    changes = load_study(spec).tasks[i].changes
+    alone = tmp_path / "alone.npz"
+    sets = [a for c in changes for a in ("--set", c)]
+    done = run_cli("run", "lab_turbulent", *sets, "--until", "landed", "--out", str(alone))
+    assert done.returncode == 0, done.stderr
+    figures = run_figures(Simulation.load(alone))
+    for name, column in (("carry", "carry_m"), ("apex", "apex_m"), ("landing_angle", "landing_angle_deg")):
+        assert figures[name] == table[column][i], name  # bit for bit
+    with np.load(alone) as a, np.load(result.folder / table["run_path"][i]) as b:
+        for name in ("x", "v", "w", "t"):
+            np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+
+
+@pytest.mark.slow
+def test_a_pile_study_with_seeds_equals_its_runs_alone(tmp_path):
+    from ti_golf.sim.simulation import Simulation
+    from ti_golf.study import run_study
+    from ti_golf.study.tasks import run_figures
+
+    write(tmp_path, "heap.toml", PILE_SCENE)
+    spec = write(tmp_path, "pile.toml", PILE_STUDY)
+    result = run_study(spec, out=tmp_path / "out", workers=2, log=lambda line: None)
+    assert result.failed == 0 and len(result.rows) == 4
+    assert [row["seed"] for row in result.rows] == [1, 2, 1, 2]
+    for row in result.rows:
+        assert 0 < row["pile_height_m"] < 0.4 and row["deepest_overlap"] < 0.5
+        sim = Simulation.load(result.folder / row["run_path"])  # the saved run gives the row's figures again
+        again = run_figures(sim)
+        assert again["pile_height"] == row["pile_height_m"] and again["p99_speed"] == row["p99_speed_mps"]
+    assert result.rows[0]["pile_height_m"] != result.rows[1]["pile_height_m"]  # another seed, another pour
+    # the base scene's seed, run alone with `ti-golf run --set`, is a study without seeds
+    (tmp_path / "pile.toml").write_text(PILE_STUDY.replace("seeds = [1, 2]\n", ""))
+    plain = run_study(spec, out=tmp_path / "plain", workers=1, log=lambda line: None)
+    alone = tmp_path / "alone.npz"
+    done = run_cli("run", str(tmp_path / "heap.toml"), "--set", "contact.mu=0.6", "--steps", "300", "--out", str(alone))
+    assert done.returncode == 0, done.stderr
+    figures = run_figures(Simulation.load(alone))
+    row = plain.rows[1]
+    assert row["contact.mu"] == 0.6
+    for name, column in (
+        ("pile_height", "pile_height_m"),
+        ("repose_angle", "repose_angle_deg"),
+        ("deepest_overlap", "deepest_overlap"),
+        ("p99_speed", "p99_speed_mps"),
+    ):
+        assert figures[name] == row[column] or (math.isnan(figures[name]) and math.isnan(row[column])), name
+
+
+def test_every_process_of_the_local_cluster_listens_on_127_0_0_1_only():
+    psutil = pytest.importorskip("psutil")
+    from ti_golf.study.cluster import study_client
+
+    def listening(proc):
+        return [c.laddr for c in proc.net_connections(kind="inet") if c.status == psutil.CONN_LISTEN]
+
+    me = psutil.Process()
+    before = set(listening(me))
+    with study_client(workers=2) as client:
+        assert len(client.scheduler_info()["workers"]) == 2
+        addresses = [a for a in listening(me) if a not in before]
+        for child in me.children(recursive=True):
+            addresses += listening(child)
+    assert len(addresses) >= 3  # the scheduler, and each worker (and its nanny)
+    assert {a.ip for a in addresses} == {"127.0.0.1"}, addresses
+
+
+def test_a_failing_task_records_its_error_and_the_others_go_on(tmp_path):
+    text = (
+        'scene = "lab_turbulent"\n[task]\nkind = "run"\nuntil = "landed"\nfigures = ["carry"]\n'
+        '[[points]]\n"launch.speed" = 40.0\n[[points]]\n"launch.speed" = 1e200\n[[points]]\n"launch.speed" = 50.0\n'
+    )
+    path = write(tmp_path, "fails.toml", text)
+    done = run_cli("study", str(path), "--out", str(tmp_path / "out"), "--workers", "2")
+    assert done.returncode == 1, done.stderr
+    from ti_golf.study.results import read_table
+
+    table = read_table(tmp_path / "out")
+    assert table["status"] == ["ok", "failed", "ok"]
+    assert "went non-finite" in table["error"][1] and table["error"][0] == ""
+    assert math.isfinite(table["carry_m"][0]) and math.isfinite(table["carry_m"][2])
+    assert "1 failed" in done.stdout
+
+
+def test_a_resumed_study_runs_only_the_tasks_not_finished(flight_study, tmp_path):
+    from ti_golf.study import run_study
+
+    spec, result = flight_study
+    folder = tmp_path / "out"
+    shutil.copytree(result.folder, folder)
+    lines = (folder / "manifest.jsonl").read_text().splitlines()
+    dropped = json.loads(lines[1])["id"]
+    (folder / "manifest.jsonl").write_text("\n".join(lines[:1] + lines[2:]) + "\n" + lines[1][:20])  # a torn last line
+    again = run_study(spec, out=folder, workers=1, log=lambda line: None)
+    assert (again.ran, again.skipped, again.failed) == (1, 3, 0)
+    assert [r["task_id"] for r in again.rows] == [r["task_id"] for r in result.rows]
+    assert [figures_of(r) for r in again.rows] == [figures_of(r) for r in result.rows]
+    assert any(r["task_id"] == dropped for r in again.rows)
+
+
+def test_a_worker_killed_mid_task_is_replaced_and_the_row_equals_an_undisturbed_one(
+    flight_study, tmp_path, monkeypatch
+):
+    from ti_golf.study import run_study
+    from ti_golf.study.tasks import KILL_ONCE_ENV
+
+    spec, result = flight_study
+    marker = tmp_path / "killed"
+    monkeypatch.setenv(KILL_ONCE_ENV, str(marker))  # the workers inherit it: the first task to run kills its worker
+    disturbed = run_study(spec, out=tmp_path / "out", workers=2, log=lambda line: None)
+    assert marker.exists()  # a worker did die mid-task
+    assert disturbed.failed == 0
+    assert [figures_of(r) for r in disturbed.rows] == [figures_of(r) for r in result.rows]
+
+
+def dask_command(*args: str) -> list[str]:
+    return [str(Path(sys.executable).parent / "dask"), *args]
+
+
+@pytest.mark.slow
+def test_a_scheduler_and_two_workers_started_by_hand_share_the_tasks(flight_study, tmp_path):
+    from ti_golf.study import run_study
+
+    spec, result = flight_study
+    scheduler_file = tmp_path / "scheduler.json"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    procs = [
+        subprocess.Popen(
+            dask_command(
+                "scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--no-dashboard",
+                "--scheduler-file",
+                str(scheduler_file),
+            ),
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+    ]
+    try:
+        deadline = time.monotonic() + 60
+        while not scheduler_file.exists() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        for name in ("node-a", "node-b"):
+            procs.append(
+                subprocess.Popen(
+                    dask_command(
+                        "worker",
+                        "--scheduler-file",
+                        str(scheduler_file),
+                        "--host",
+                        "127.0.0.1",
+                        "--nthreads",
+                        "1",
+                        "--no-dashboard",
+                        "--name",
+                        name,
+                    ),
+                    env=env,
+                    stdout=subprocess.DEVNULL,
+                    stderr=subprocess.DEVNULL,
+                )
+            )
+        from distributed import Client
+
+        with Client(scheduler_file=str(scheduler_file), timeout="60s") as client:
+            client.wait_for_workers(2, timeout=120)
+        by_hand = run_study(spec, out=tmp_path / "out", address=str(scheduler_file), log=lambda line: None)
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            p.wait(timeout=60)
+    assert by_hand.failed == 0
+    assert len({r["worker"] for r in by_hand.rows}) == 2  # tasks landed on both workers
+    assert all(r["worker"].startswith("tcp://127.0.0.1:") for r in by_hand.rows)
+    assert [figures_of(r) for r in by_hand.rows] == [figures_of(r) for r in result.rows]
+
+
+@pytest.mark.slow
+def test_ctrl_c_keeps_the_finished_rows_and_a_rerun_completes_the_study(tmp_path):
+    text = FLIGHT_STUDY.replace('"air.C_D" = "0.2:0.3:0.1"', '"air.C_D" = "0.1:0.5:0.05"')
+    path = write(tmp_path, "long.toml", text)
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        cli("study", str(path), "--out", str(out), "--workers", "1"),
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=sigint_as_in_a_terminal,
+    )
+    manifest = out / "manifest.jsonl"
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and not (manifest.exists() and manifest.read_text().count("\n") >= 2):
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "run the study again to finish it" in err
+    from ti_golf.study.results import read_table
+
+    kept = read_table(out)
+    assert 2 <= len(kept["task_id"]) < 18 and set(kept["status"]) == {"ok"}
+    done = run_cli("study", str(path), "--out", str(out), "--workers", "2")
+    assert done.returncode == 0, done.stderr
+    table = read_table(out)
+    assert len(table["task_id"]) == 18 and set(table["status"]) == {"ok"}
+    assert f"{len(kept['task_id'])} finished before" in done.stdout

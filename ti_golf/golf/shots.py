@@ -1,0 +1,70 @@
+"""Shots as golfers meet them: launch-monitor launches flown to landing, then rolled out to rest.
+
+Two phases, each the fastest the engine has for it:
+
+1. the flight to landing (at launch height) in SIMD lanes (:func:`ti_golf.golf.sweep.fly`, the
+   scene's integrator, step ``world.dt`` or a chosen flight step);
+2. from the landing state (x, v, ω), bounce and roll on the scene's ground, turf included, with
+   ball–ball collisions off (:func:`ti_golf.golf.rollout.roll_out`, step ``world.dt``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+
+from ti_golf.golf.rollout import shots_from_landing
+from ti_golf.golf.sweep import fly
+from ti_golf.scene.balls import launch_position
+from ti_golf.scene.launch_monitor import MonitorLaunch
+from ti_golf.scene.schema import Scene
+from ti_golf.sim.results import Shots
+
+
+def target_direction(scene: Scene) -> float:
+    """Azimuth of the scene's target line [deg]: its ``launch.direction_deg`` (0, the +x axis, without a launch)."""
+    return scene.launch.direction_deg if scene.launch is not None else 0.0
+
+
+def fly_shots(
+    scene: Scene,
+    x0: np.ndarray,
+    v0: np.ndarray,
+    w0: np.ndarray,
+    to_rest: bool = True,
+    flight_dt: float | None = None,
+    progress: Callable[[float, float], None] | None = None,
+) -> Shots:
+    """Fly balls from (x0, v0, ω0) (each (N, 3), SI) to landing and, with ``to_rest``, roll them
+    out to rest on the scene's ground.
+
+    ``flight_dt`` [s] replaces ``world.dt`` for the flight only (the roll-out keeps ``world.dt``,
+    which the contacts need); ``progress(t_done, t_total)`` follows the roll-out.
+    """
+    x0 = np.asarray(x0, dtype=float)
+    flown = scene if flight_dt is None else replace(scene, world=replace(scene.world, dt=float(flight_dt)))
+    raw = fly(flown, x0, v0, w0)
+    return shots_from_landing(scene, x0, raw, to_rest, progress)
+
+
+def shots(
+    scene: Scene,
+    launch: MonitorLaunch,
+    to_rest: bool = True,
+    flight_dt: float | None = None,
+    progress: Callable[[float, float], None] | None = None,
+) -> Shots:
+    """Fly launch-monitor launches (floats, or arrays of shape (N,)) from the scene's launch point
+    (the ball on the ground at the origin unless ``launch.position`` says otherwise), the target
+    line along the scene's launch azimuth; see :func:`fly_shots`.
+
+    Example:
+        >>> from ti_golf.scene.launch_monitor import MonitorLaunch, MPH, RPM   # doctest: +SKIP
+        >>> fade = MonitorLaunch(123 * MPH, 16.1, 0.0, 7124 * RPM, 5.0)         # doctest: +SKIP
+        >>> s = shots(load_scene("tour_shot"), fade); s.carry, s.offline        # doctest: +SKIP
+    """
+    v0, w0 = launch.vectors(target_direction(scene))
+    x0 = np.tile(np.asarray(launch_position(scene), float), (len(v0), 1))
+    return fly_shots(scene, x0, v0, w0, to_rest=to_rest, flight_dt=flight_dt, progress=progress)

@@ -1,0 +1,268 @@
+"""Launch-condition sweeps: one ball per (angle, speed, spin), all integrated together to landing."""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ti_golf.errors import ConfigError, SimulationError
+from ti_golf.files import atomic_path
+from ti_golf.golf.rollout import shots_from_landing
+from ti_golf.physics import kernels
+from ti_golf.physics.aero import air_params
+from ti_golf.physics.integrate import INTEGRATOR_CODES
+from ti_golf.physics.types import vec3
+from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile
+from ti_golf.scene.balls import launch_position
+from ti_golf.scene.loader import load_scene
+from ti_golf.scene.schema import Scene, backspin_axis
+from ti_golf.sim.results import CSV_COLUMNS, ROLLED_CSV_COLUMNS, Flight, Shots
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Outcome of a sweep, one entry per launch condition (N entries).
+
+    Attributes:
+        angle_deg, speed_mps, spin_radps: the launch conditions, shape (N,).
+        flight: carry, apex, landing point, time, angle and speed, shape (N,) each.
+        traj_index: indices of the conditions whose trajectories were recorded, shape (K,).
+        traj: their centre positions [m], shape (K, S, 3), sampled every ``traj_dt`` seconds
+            (after landing a trajectory repeats its landing point); ``None`` if not recorded.
+        traj_dt: sampling interval of ``traj`` [s].
+        scene: the scene the sweep ran.
+        shots: the numbers golfers read (offline, apex above launch, land spin; total and roll
+            when rolled out to rest), shape (N,) each; ``None`` for a result built without them.
+    """
+
+    angle_deg: np.ndarray
+    speed_mps: np.ndarray
+    spin_radps: np.ndarray
+    flight: Flight
+    scene: Scene
+    traj_index: np.ndarray | None = None
+    traj: np.ndarray | None = None
+    traj_dt: float = 0.0
+    shots: Shots | None = None
+
+    @property
+    def carry(self) -> np.ndarray:
+        """Carry [m], shape (N,)."""
+        return self.flight.carry
+
+    def best(self) -> int:
+        """Index of the longest carry (ignoring balls that did not land)."""
+        c = np.where(self.flight.landed, self.flight.carry, -np.inf)
+        return int(np.argmax(c))
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The CSV columns (see :data:`ti_golf.sim.results.CSV_COLUMNS`), then, when the balls
+        were rolled out, :data:`~ti_golf.sim.results.ROLLED_CSV_COLUMNS`, as arrays (SI)."""
+        f, s = self.flight, self.shots
+        if s is None:
+            raise ValueError("the CSV columns need the sweep's shots (SweepResult.shots)")
+        cols = dict(
+            zip(
+                CSV_COLUMNS,
+                (
+                    self.angle_deg,
+                    self.speed_mps,
+                    self.spin_radps,
+                    f.carry,
+                    f.landing_x,
+                    f.landing_z,
+                    s.apex,
+                    f.flight_time,
+                    f.landing_angle,
+                    f.landing_speed,
+                    s.offline,
+                    s.land_spin,
+                ),
+            )
+        )
+        if s.rolled_out:
+            cols.update(zip(ROLLED_CSV_COLUMNS, (s.total, s.roll)))
+        return cols
+
+    def to_csv(self, path: str | os.PathLike[str]) -> None:
+        """Write one row per launch condition with the :meth:`columns` header (whole or not at
+        all)."""
+        cols = self.columns()
+        with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
+            out = csv.writer(fh)
+            out.writerow(cols)
+            for row in zip(*cols.values()):
+                out.writerow([f"{v:.10g}" for v in row])
+
+
+def launch_grid(
+    scene: Scene,
+    angles_deg: Sequence[float] | None = None,
+    speeds: Sequence[float] | None = None,
+    spins: Sequence[float] | None = None,
+) -> tuple[np.ndarray, ...]:
+    """All combinations (angle fastest, then spin, then speed) as arrays.
+
+    ``spins`` are magnitudes [rad/s] along the scene's spin axis (or the backspin axis when the
+    scene's spin is zero). Returns (angle_deg, speed, spin, x0, v0, w0), the last three (N, 3).
+    """
+    if scene.launch is None:
+        raise ConfigError(scene.path, "launch", "a sweep needs a [launch] table in the scene")
+    L = scene.launch
+    angles = np.asarray(angles_deg if angles_deg is not None else (scene.sweep.angles or (L.angle_deg,)), float)
+    speeds_ = np.asarray(speeds if speeds is not None else (scene.sweep.speeds or (L.speed,)), float)
+    spin_vec = np.asarray(L.spin, float)
+    spin_mag = float(np.linalg.norm(spin_vec))
+    axis = spin_vec / spin_mag if spin_mag > 0 else np.asarray(backspin_axis(L.direction_deg))
+    spins_ = np.asarray(spins if spins is not None else (scene.sweep.spins or (spin_mag,)), float)
+    for name, arr, lo, hi in (
+        ("angles", angles, -90, 90),
+        ("speeds", speeds_, 0, math.inf),
+        ("spins", spins_, -math.inf, math.inf),
+    ):
+        if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr < lo) or np.any(arr > hi):
+            raise ConfigError(f"--{name}", None, f"values must be finite and in [{lo}, {hi}]")
+    sp, sn, an = np.meshgrid(speeds_, spins_, angles, indexing="ij")
+    an, sp, sn = an.ravel(), sp.ravel(), sn.ravel()
+    n = an.size
+    x0 = np.tile(np.asarray(launch_position(scene), float), (n, 1))
+    th, ph = np.radians(an), math.radians(L.direction_deg)
+    v0 = np.stack([sp * np.cos(th) * math.cos(ph), sp * np.sin(th), sp * np.cos(th) * math.sin(ph)], axis=1)
+    w0 = sn[:, None] * axis[None, :]
+    return an, sp, sn, x0, v0, w0
+
+
+def default_lanes() -> int:
+    """Balls per CPU thread stepped side by side: 8 in f64, 16 in f32 (one AVX-512 register), 1 on
+    GPUs, which already run one ball per SIMT lane."""
+    if not on_cpu():
+        return 1
+    return 8 if ensure_init().precision == "f64" else 16
+
+
+def fly(
+    scene: Scene,
+    x0: np.ndarray,
+    v0: np.ndarray,
+    w0: np.ndarray,
+    record_every: int = 0,
+    n_samples: int = 0,
+    lanes: int | None = None,
+) -> dict[str, np.ndarray]:
+    """Integrate balls from (x0, v0, w0) (each (N, 3)) to landing at their launch height.
+
+    Uses the scene's integrator and ``world.dt``; gives up on a ball after ``world.t_max``.
+    Balls are ordered by their drag-free flight time before they are grouped into SIMD lanes, so a
+    group's balls land at about the same step. Returns the raw per-ball arrays: landed (N,), apex
+    (N,), t_land (N,), the landing point land_x, velocity land_v and spin land_w (N, 3) and, when
+    recording, traj (N, n_samples, 3).
+    """
+    ensure_init()
+    lanes = default_lanes() if lanes is None else int(lanes)
+    f = np_float()
+    a, wld = scene.air, scene.world
+    n0 = len(x0)
+    g = max(float(np.linalg.norm(wld.gravity)), 1e-9)
+    order = np.argsort(2.0 * np.asarray(v0)[:, 1] / g)
+    pad = (-n0) % lanes
+    order = np.concatenate([order, np.full(pad, order[-1])])
+
+    # numpy arrays go to the kernel directly (zero-copy on the CPU)
+    def arr(values: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(values, dtype=f)
+
+    radius, mass = np.full(n0, scene.ball.radius, f), np.full(n0, scene.ball.mass, f)
+    landed = np.zeros(n0, np.int32)
+    apex, t_land = np.zeros(n0, f), np.zeros(n0, f)
+    land_x, land_v, land_w = np.zeros((n0, 3), f), np.zeros((n0, 3), f), np.zeros((n0, 3), f)
+    traj = np.zeros((n0, n_samples, 3) if record_every else (1, 1, 3), f)
+    air = air_params(a, wld.ground_height)
+    with plain_compile():  # minutes less of compiling on first use, see runtime.plain_compile
+        kernels.fly_to_landing(
+            air,
+            vec3(*wld.gravity),
+            wld.dt,
+            INTEGRATOR_CODES[wld.integrator],
+            lanes,
+            wld.t_max,
+            int(record_every),
+            radius,
+            mass,
+            order.astype(np.int32),
+            arr(x0),
+            arr(v0),
+            arr(w0),
+            landed,
+            apex,
+            t_land,
+            land_x,
+            land_v,
+            land_w,
+            traj,
+        )
+    out = dict(landed=landed, apex=apex, t_land=t_land, land_x=land_x, land_v=land_v, land_w=land_w)
+    if record_every:
+        out["traj"] = traj
+    bad = ~np.all(np.isfinite(np.concatenate([out["land_x"], out["land_v"], out["apex"][:, None]], axis=1)), axis=1)
+    if np.any(bad):
+        ids = np.flatnonzero(bad)
+        raise SimulationError(
+            f"{ids.size} ball(s) went non-finite, first ball {ids[0]} "
+            f"(launch v = {np.round(v0[ids[0]], 6).tolist()} m/s); try a smaller world.dt",
+            ids[:20].tolist(),
+        )
+    return out
+
+
+def sweep(
+    scene: Scene | str | os.PathLike[str],
+    angles_deg: Sequence[float] | None = None,
+    speeds: Sequence[float] | None = None,
+    spins: Sequence[float] | None = None,
+    overrides: Mapping[str, Any] | Iterable[str] | None = None,
+    trajectories: int = 0,
+    to_rest: bool = False,
+) -> SweepResult:
+    """Fly one ball per launch condition, all together, until every ball has landed.
+
+    Args:
+        scene: a Scene, a TOML path or a bundled scene name.
+        angles_deg: launch elevations [deg] (default: the scene's ``[sweep]`` list, else its
+            ``[launch]`` value). Every combination of angle, speed and spin is flown.
+        speeds: launch speeds [m/s], likewise.
+        spins: spin magnitudes [rad/s] along the scene's spin axis, likewise.
+        overrides: scene overrides (``{"air.wind": [-5, 0, 0]}`` or ``["air.wind=[-5,0,0]"]``).
+        trajectories: also record the trajectories of up to this many evenly spaced conditions.
+        to_rest: also bounce and roll every ball from its landing to rest on the scene's ground
+            (:func:`ti_golf.golf.rollout.roll_out`), for total and roll.
+
+    Example:
+        >>> res = sweep("lab_turbulent", angles_deg=np.arange(36, 37.41, 0.02))   # doctest: +SKIP
+        >>> res.angle_deg[res.best()], res.carry.max()                           # doctest: +SKIP
+    """
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene, overrides)
+    elif overrides:
+        raise ValueError("overrides apply to scene files; pass a modified Scene instead")
+    an, sp, sn, x0, v0, w0 = launch_grid(scene, angles_deg, speeds, spins)
+    raw = fly(scene, x0, v0, w0)
+    flight = Flight.from_arrays(x0, raw["landed"], raw["apex"], raw["t_land"], raw["land_x"], raw["land_v"])
+    shots = shots_from_landing(scene, x0, raw, to_rest)
+    res = SweepResult(an, sp, sn, flight, scene, shots=shots)
+    if trajectories > 0:
+        k = min(int(trajectories), an.size)
+        idx = np.unique(np.linspace(0, an.size - 1, k).round().astype(int))
+        t_longest = np.nanmax(np.append(flight.flight_time[idx], 0.0))
+        dt = scene.world.dt
+        t_span = min(t_longest if t_longest > 0 else scene.world.t_max, scene.world.t_max)
+        every = max(1, int(t_span / dt / 400))
+        n_samples = int(math.ceil(t_span / dt / every)) + 2
+        rec = fly(scene, x0[idx], v0[idx], w0[idx], record_every=every, n_samples=n_samples)
+        res = SweepResult(an, sp, sn, flight, scene, traj_index=idx, traj=rec["traj"], traj_dt=every * dt, shots=shots)
+    return res

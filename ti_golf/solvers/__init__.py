@@ -1,0 +1,17 @@
+"""The contact solvers: the balls' collisions with one another, the planes and the terrain.
+
+A shared base lists the neighbours and keeps the carried impulses (:mod:`.sort`, :mod:`.grid`,
+:mod:`.apart`, :mod:`.links`, :mod:`.stale`, :mod:`.pairs`, :mod:`.surfaces`, and their driver,
+:class:`.solver.CollisionSolver`, with :mod:`.storage_order`, :mod:`.surface_rows` and the saved
+:mod:`.record`); one kernel steps the balls (:mod:`.collide`); each solver's sweeps and driver lie
+side by side: Jacobi's (:mod:`.jacobi`) and Gauss–Seidel's (:mod:`.colour`, :mod:`.sequential`,
+:mod:`.gauss_seidel`). :mod:`.phases` names the phases of a sweep.
+
+``CollisionSolver(model)`` makes the solver that the scene's ``contact.solver`` names.
+"""
+
+from ti_golf.solvers.gauss_seidel import GaussSeidelSolver
+from ti_golf.solvers.jacobi import JacobiSolver
+from ti_golf.solvers.solver import CollisionSolver
+
+__all__ = ["CollisionSolver", "GaussSeidelSolver", "JacobiSolver"]

@@ -1,0 +1,451 @@
+"""Links between the neighbour lists, and the impulses they carry across rebuilds.
+
+Each pair is listed once, in its owner's upper list (:mod:`ti_golf.solvers.grid`); the other ball
+finds it through a *slot* in its lower list: the owner's index times 2^bits plus the column
+(:func:`slot_bits`, :func:`owner_slot`). When the lists are rebuilt, each pair's accumulated
+resting impulse is stashed by (owner, neighbour) and carried into the new lists
+(:func:`stash`, :func:`link_and_carry`). :func:`relist_all_pairs` rebuilds the lists of a small
+scene inside a serial kernel by testing every pair.
+"""
+
+import taichi as ti
+
+from ti_golf.physics.types import (
+    FRIC,
+    ID,
+    LAM,
+    f32_array,
+    int_array,
+    int_table,
+    is_f64,
+    kernel,
+    of_ball,
+    pair_table,
+    vec3_array,
+    vec3f_array,
+)
+from ti_golf.solvers.apart import APART_MAX, is_apart
+from ti_golf.solvers.grid import owns, pair_reach
+from ti_golf.solvers.sort import bucket_starts
+
+ID_EXACT_F32 = 2**24
+"""Balls an f32 run can hold: :func:`stash_ball` keeps the neighbours' ids in the float type, exact
+below 2^24 in f32 (below 2^53 in f64)."""
+
+
+@ti.func
+def slot_bits(width):
+    """Bits of a lower-list slot that hold the column k < ``width`` of the pair in its owner's
+    upper list (the owner's id is in the bits above): decoding a slot is then a shift and a mask,
+    not an integer division (which costs tens of cycles, several times per ball and sweep)."""
+    bits = 0
+    while (1 << bits) < width:
+        bits += 1
+    return bits
+
+
+@ti.func
+def owner_slot(slot, bits):
+    """(owner j, column k) of a pair from its lower-list slot ``j · 2^bits + k``."""
+    return slot >> bits, slot & ((1 << bits) - 1)
+
+
+@ti.func
+def listed(first: ti.template(), i):
+    """How many pairs ball i owns: the length of its upper list, ``first[i + 1] − first[i]`` (see
+    ``NeighbourLists.first``)."""
+    return first[i + 1] - first[i]
+
+
+@kernel
+def link_lower(
+    upper: int_table, first: int_array, lower: int_array, lower_first: int_array, count: int_array, chunk: int_array
+):
+    """Every ball's lower list from the upper lists (see :func:`link_lower_lists`)."""
+    link_lower_lists(upper, first, lower, lower_first, count, chunk, False)
+
+
+@ti.func
+def link_lower_lists(
+    upper: ti.template(),
+    first: ti.template(),
+    lower: ti.template(),
+    lower_first: ti.template(),
+    count: ti.template(),
+    chunk: ti.template(),
+    serial: ti.template(),
+):
+    """Every ball's lower list from the upper lists: ball j's list, ``lower[lower_first[j] :
+    lower_first[j + 1]]``, holds the slot ``i · 2^bits + k`` (:func:`slot_bits`) of each pair
+    that another ball i owns with it, ``upper[i, k] = j``, in the order of the owners' ids: the
+    ball that owns a pair stores its impulse there, and the other ball gathers it from there. The
+    lists lie ball after ball, as the pair tables do (``lower`` holds as many entries as they
+    do), rather than in a table as wide as the longest list: 4 bytes a pair, not 4 times the
+    longest list a ball. Each ball's links are counted (an integer atomic add, in ``count``),
+    their starts scanned (:func:`.sort.bucket_starts`, ``chunk``: its scratch), the slots
+    written, each at the next free place of its ball's list (an atomic add again), then each
+    list sorted: the lists are the same whatever order the threads ran in. ``serial``: in a
+    serial loop (the lists then come out sorted, and the scan runs serially too)."""
+    bits = slot_bits(upper.shape[1])
+    n = first.shape[0] - 1
+    for i in range(n):
+        count[i] = 0
+    for i in range(n):
+        for k in range(listed(first, i)):
+            ti.atomic_add(count[upper[i, k]], 1)
+    for i in range(n):
+        lower_first[i + 1] = count[i]
+        count[i] = 0
+    if ti.static(serial):
+        lower_first[0] = 0
+        for i in range(n):
+            lower_first[i + 1] += lower_first[i]
+    else:
+        bucket_starts(lower_first, chunk)
+    for i in range(n):
+        for k in range(listed(first, i)):
+            j = upper[i, k]
+            lower[lower_first[j] + ti.atomic_add(count[j], 1)] = (i << bits) | k
+    for j in range(n):
+        lo, hi = lower_first[j], lower_first[j + 1]
+        for m in range(lo + 1, hi):  # an insertion sort: a few links a ball
+            slot, q = lower[m], m
+            while q > lo:  # the test apart: Taichi evaluates both sides of an `and` (no lower[−1])
+                if lower[q - 1] <= slot:
+                    break
+                lower[q] = lower[q - 1]
+                q -= 1
+            lower[q] = slot
+
+
+@kernel
+def pair_starts(first: int_array, chunk_start: int_array) -> ti.i32:
+    """Lay the pair tables out ball after ball, each ball's pairs as many entries as its list
+    holds: from the lists' lengths in ``first[1:]`` (as :func:`.grid.list_neighbours` leaves
+    them), ``first[i]`` = the lengths of the lists before ball i's (``first[0]`` = 0, ``first[N]``
+    the pairs in all), in place, by the grid's chunked scan (:func:`.sort.bucket_starts`;
+    ``chunk_start``: its scratch, ``sort.scan_chunks(N)`` entries). Returns the pairs in all. The
+    tables are then as long as the lists are in all, not N times the longest list (8 pairs while
+    a pour lands, 3.5 on average)."""
+    bucket_starts(first, chunk_start)
+    return first[first.shape[0] - 1]
+
+
+@kernel
+def stash(
+    upper: int_table,
+    first: int_array,
+    lam: f32_array,
+    scratch: pair_table,
+    with_friction: ti.template(),
+    x: vec3_array,
+    friction: vec3f_array,
+    mu: float,
+):
+    """Keep every pair's (accumulated impulse, neighbour id) in ``scratch``, laid out as the pair
+    tables, and ``with_friction`` its friction impulse (see :func:`stash_ball`)."""
+    for i in range(first.shape[0] - 1):
+        stash_ball(i, upper, first, lam, scratch, 0, with_friction, x, friction, mu)
+
+
+@ti.func
+def stash_ball(
+    i,
+    upper: ti.template(),
+    first: ti.template(),
+    lam: ti.template(),
+    scratch: ti.template(),
+    width,
+    with_friction: ti.template(),
+    x: ti.template(),
+    friction: ti.template(),
+    mu,
+):
+    """Keep the (accumulated impulse, neighbour id) of every pair that ball i owns in the columns
+    ``LAM`` and ``ID`` of ``scratch`` (the sweep's table, free between steps) so that the lists
+    and the pair tables can be rebuilt in place: in the pair tables' rows of ball i, or with
+    ``width`` > 0 in rows i · width onwards, followed by the id −1 when the list is shorter (the
+    serial rebuild, which overwrites ``first`` before it carries the impulses over). The id is
+    exact in f32 as well below 2^24 (``ID_EXACT_F32``). With ``with_friction`` (the Gauss–Seidel
+    sweeps, ``width`` 0) each pair's friction impulse from ``friction`` is kept beside them, in
+    32 bits (:func:`friction_bits`, from the positions ``x`` and friction coefficient ``mu``), so
+    that a rebuild needs no second friction table to carry it into."""
+    p0, count = first[i], listed(first, i)
+    if width > 0:
+        p0 = i * width
+        if count < width:
+            scratch[p0 + count, ID] = -1.0
+    for k in range(count):
+        j, p = upper[i, k], first[i] + k
+        bits = 0
+        if ti.static(with_friction):
+            bits = friction_bits(friction[p], x[i] - x[j], mu * lam[p])
+        put_stashed(scratch, p0 + k, lam[p], j, bits, with_friction)
+
+
+@ti.func
+def put_stashed(scratch: ti.template(), p, lam, j, bits, with_friction: ti.template()):
+    """Write a stashed pair into row p of ``scratch``: its resting impulse ``lam`` into ``LAM``, its
+    neighbour's id j into ``ID`` and, ``with_friction``, the 32 ``bits`` of its friction impulse:
+    in f64 into ``ID`` too, the id in the upper 32 bits of the float's 64 (never read as a
+    number), in f32 into ``FRIC``."""
+    scratch[p, LAM] = lam
+    if ti.static(with_friction and is_f64()):
+        scratch[p, ID] = ti.bit_cast((ti.cast(j, ti.i64) << 32) | ti.cast(ti.cast(bits, ti.u32), ti.i64), ti.f64)
+    else:
+        scratch[p, ID] = ti.cast(j, float)
+        if ti.static(with_friction):
+            scratch[p, FRIC] = ti.bit_cast(bits, ti.f32)
+
+
+@ti.func
+def stashed_id_bits(scratch: ti.template(), p, with_friction: ti.template()):
+    """(neighbour id, friction bits) of the stashed pair in row p of ``scratch`` (see
+    :func:`put_stashed`; the bits are 0 without ``with_friction``)."""
+    j, bits = 0, 0
+    if ti.static(with_friction and is_f64()):
+        word = ti.bit_cast(scratch[p, ID], ti.i64)
+        j, bits = ti.cast(word >> 32, ti.i32), ti.cast(word, ti.i32)  # (the cast keeps the low 32 bits)
+    else:
+        j = ti.cast(scratch[p, ID], ti.i32)
+        if ti.static(with_friction):
+            bits = ti.bit_cast(scratch[p, FRIC], ti.i32)
+    return j, bits
+
+
+FRICTION_STEPS = 32767
+"""Steps of each tangent component of a stashed friction impulse from 0 to its bound μ·λ (a signed
+16-bit integer each, :func:`friction_bits`)."""
+
+
+@ti.func
+def tangent_basis(n):
+    """Two unit vectors that make a right-handed orthonormal basis with the unit vector n (Duff et
+    al. 2017, "Building an orthonormal basis, revisited"): a function of n alone, so that the
+    stash and the carry of a rebuild, which see the same positions, use the same basis."""
+    s = 1.0 if n[2] >= 0.0 else -1.0
+    a = -1.0 / (s + n[2])
+    b = n[0] * n[1] * a
+    t1 = ti.Vector([1.0 + s * n[0] * n[0] * a, s * b, -s * n[0]])
+    t2 = ti.Vector([b, s + n[1] * n[1] * a, -n[1]])
+    return t1, t2
+
+
+@ti.func
+def friction_bits(F, d, bound):
+    """A pair's friction impulse F [N·s] (f32) in 32 bits, for a pair whose centres are ``d`` [m]
+    apart (owner minus neighbour) and whose friction is at most ``bound`` = μ·λ [N·s]: its
+    components along :func:`tangent_basis` of the normal d/|d|, as shares of ``bound`` in
+    steps of 1/``FRICTION_STEPS`` (a signed 16-bit integer each, the first in the low bits).
+    What the next step uses of F is kept whole but for those steps: the warm start and the first
+    sweep take F in the tangent plane of the same normal and at most ``bound`` long
+    (:func:`ti_golf.physics.contact.clamp_friction`), so the normal part and the part beyond ``bound`` are
+    dropped here. 0 when ``bound`` or d is 0 (F is then not used)."""
+    bits = 0
+    dd = d.norm_sqr()
+    if bound > 0.0 and dd > 0.0:
+        t1, t2 = tangent_basis(d / ti.sqrt(dd))
+        Fv = ti.cast(F, float)
+        u, w = Fv.dot(t1) / bound, Fv.dot(t2) / bound
+        size = ti.sqrt(u * u + w * w)
+        if size > 1.0:
+            u, w = u / size, w / size
+        qu, qw = ti.cast(ti.round(u * FRICTION_STEPS), ti.i32), ti.cast(ti.round(w * FRICTION_STEPS), ti.i32)
+        bits = (qu & 0xFFFF) | (qw << 16)
+    return bits
+
+
+@ti.func
+def friction_from_bits(bits, d, bound):
+    """The friction impulse [N·s] (f32) that :func:`friction_bits` kept in ``bits`` for the same
+    ``d`` and ``bound``."""
+    F = ti.Vector([0.0, 0.0, 0.0])
+    dd = d.norm_sqr()
+    if bound > 0.0 and dd > 0.0:
+        t1, t2 = tangent_basis(d / ti.sqrt(dd))
+        qu, qw = (bits << 16) >> 16, bits >> 16  # (arithmetic shifts: the signs come back)
+        F = (bound / FRICTION_STEPS) * (ti.cast(qu, float) * t1 + ti.cast(qw, float) * t2)
+    return ti.cast(F, ti.f32)
+
+
+@kernel
+def link_and_carry(
+    upper: int_table,
+    first: int_array,
+    lower: int_array,
+    lower_first: int_array,
+    count: int_array,
+    chunk: int_array,
+    stashed: pair_table,
+    stash_first: int_array,
+    lam: f32_array,
+    moved: ti.template(),
+    old_id: int_array,
+    with_friction: ti.template(),
+    x: vec3_array,
+    friction: vec3f_array,
+    mu: float,
+):
+    """:func:`link_lower` (``count``, ``chunk``: its scratch), and each pair's accumulated impulse
+    carried from the stashed old lists (see :func:`stash` and :func:`carry_ball`; ``stash_first``:
+    their layout) to the new ones, in one launch (neither writes what the other reads). With
+    ``moved`` the balls were stored in a new order since the stash: ball i was ball ``old_id[i]``
+    of the stashed lists. With ``with_friction`` the pairs' friction impulses (of the
+    Gauss–Seidel sweeps) are carried from the stash into ``friction`` too (``x``: the positions,
+    ``mu``: the friction coefficient, as at the stash)."""
+    link_lower_lists(upper, first, lower, lower_first, count, chunk, False)
+    for i in range(first.shape[0] - 1):
+        carry_ball(i, stashed, stash_first, 0, upper, first, lam, old_id, moved, with_friction, x, friction, mu)
+
+
+@ti.func
+def carry_ball(
+    i,
+    stashed: ti.template(),
+    stash_first: ti.template(),
+    width,
+    upper: ti.template(),
+    first: ti.template(),
+    lam: ti.template(),
+    old_id: ti.template(),
+    moved: ti.template(),
+    with_friction: ti.template(),
+    x: ti.template(),
+    friction: ti.template(),
+    mu,
+):
+    """Carry the accumulated impulse of each pair ball i owns in the new lists from the stashed old
+    ones (see :func:`stash_ball`: laid out by ``stash_first``, or ``width`` a ball), and with
+    ``with_friction`` its friction impulse into ``friction``; new pairs start at zero. The pair
+    of balls a and b (their old ids: ``old_id`` of i and j when ``moved``) is looked up in the
+    entries of its old owner, which is a's, or b's when the pair changed hands (a pair's owner
+    is the ball behind the other along their main axis, see :func:`owns`, and that axis can
+    change as the balls move)."""
+    p = first[i]
+    for k in range(listed(first, i)):
+        j = upper[i, k]
+        a, b = i, j
+        if ti.static(moved):
+            a, b = old_id[a], old_id[b]
+        found, value, word = stashed_impulse(stashed, stash_first, width, a, b, with_friction)
+        sign = 1.0
+        if not found:
+            found, value, word = stashed_impulse(stashed, stash_first, width, b, a, with_friction)
+            sign = -1.0  # (stashed by b: the friction on b, with b's normal)
+        lam[p + k] = ti.cast(value, ti.f32)
+        if ti.static(with_friction):
+            F = friction_from_bits(word, sign * (x[i] - x[j]), mu * value)
+            friction[p + k] = ti.cast(sign, ti.f32) * F
+
+
+@ti.func
+def stashed_impulse(stashed: ti.template(), stash_first: ti.template(), width, a, b, with_friction: ti.template()):
+    """(whether, with which accumulated impulse, and with which friction bits) the stashed pairs of
+    ball a hold its pair with ball b (see :func:`stash_ball` for the layouts): a search of entries
+    sorted by id, stopping at the first id past b."""
+    found, value, word = 0, 0.0, 0
+    row, bits = stashed_row(stashed, stash_first, width, a, b, with_friction)
+    if row >= 0:
+        found, value, word = 1, stashed[row, LAM], bits
+    return found, value, word
+
+
+@ti.func
+def stashed_row(stashed: ti.template(), stash_first: ti.template(), width, a, b, with_friction: ti.template()):
+    """(the row, or −1, and the friction bits) of ball a's stashed pair with ball b (see
+    :func:`stashed_impulse`): with ``width`` 0 the row is the pair's index in the old lists."""
+    row, word = -1, 0
+    lo, hi = a * width, a * width + width
+    if width == 0:
+        lo, hi = stash_first[a], stash_first[a + 1]
+    for p in range(lo, hi):
+        j, bits = stashed_id_bits(stashed, p, with_friction)  # (−1: the list's end)
+        if j < 0 or j > b:
+            break
+        if j == b:
+            row, word = p, bits
+    return row, word
+
+
+@ti.func
+def relist_all_pairs(
+    x: ti.template(),
+    radius: ti.template(),
+    skin,
+    v: ti.template(),
+    h,
+    v_cut,
+    r_cut,
+    upper: ti.template(),
+    first: ti.template(),
+    lower: ti.template(),
+    lower_first: ti.template(),
+    x_at_build: ti.template(),
+    lam: ti.template(),
+    scratch: ti.template(),
+    friction: ti.template(),
+    clear_friction,
+    count: ti.template(),
+):
+    """Rebuild the neighbour lists of a few balls in place without a grid, by testing every pair:
+    the lists, slots and carried-over impulses that ``list_neighbours`` and ``link_and_carry``
+    give on a CPU backend (with the same owners: the balls faster than ``v_cut`` or bigger than
+    ``r_cut`` are listed apart unless there are more than ``APART_MAX``), in O(n²) work. The
+    tables must be n − 1 wide (no list can overflow), and ``scratch`` hold n (n − 1) entries:
+    the old impulses are stashed n − 1 a ball (:func:`stash_ball`), as ``first`` is rewritten.
+    Meant for a serial loop (the ``serial`` variant of ``collide.collision_step``; ``count``: a
+    scratch entry per ball, see :func:`link_lower_lists`). With
+    ``clear_friction`` the pairs' friction impulses (of the Gauss–Seidel sweeps) are set to zero:
+    they are not carried over in place."""
+    width = upper.shape[1]
+    n_apart = 0
+    for i in range(x.shape[0]):
+        stash_ball(i, upper, first, lam, scratch, width, False, x, friction, 0.0)
+        if is_apart(v, radius, i, v_cut, r_cut, 1):  # as apart_balls counts them
+            n_apart += 1
+    if n_apart > APART_MAX:
+        n_apart = 0
+    first[0] = 0
+    for i in range(x.shape[0]):
+        xi, ri = x[i], of_ball(radius, i)
+        apart_i = is_apart(v, radius, i, v_cut, r_cut, n_apart)
+        n_up = 0
+        for j in range(x.shape[0]):  # in id order: the lists come out sorted
+            reach = ri + of_ball(radius, j) + pair_reach(skin, h, v[i], v[j])
+            if j != i and (x[j] - xi).norm_sqr() < reach * reach:  # the test of list_ball
+                if owns(xi, x[j], i, j, apart_i, is_apart(v, radius, j, v_cut, r_cut, n_apart)):
+                    upper[i, n_up] = j
+                    n_up += 1
+        first[i + 1] = first[i] + n_up
+        x_at_build[i] = ti.cast(xi, ti.f32)
+    link_lower_lists(upper, first, lower, lower_first, count, count, True)
+    for i in range(x.shape[0]):
+        carry_ball(i, scratch, first, width, upper, first, lam, first, False, False, x, friction, 0.0)  # ids kept
+        if clear_friction:  # (not carried: the pairs' friction impulses start again from zero)
+            for k in range(listed(first, i)):
+                friction[first[i] + k] = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
+
+
+@ti.func
+def distance_from_build(x1, x_build):
+    """How far [m] a ball now at ``x1`` [m] may be from where it was when the lists were built.
+
+    The position at the build, ``x_build``, is kept in f32 (12 bytes per ball less in f64): it
+    only serves the tests of whether the lists still hold. Rounding moved it by at most
+    2^-24·|x| (round to nearest), so the distance adds twice that, |x_build|·2^-23 (in f64;
+    nothing in f32, where nothing was rounded): a ball never moves past the skin unseen, and the
+    lists are rebuilt a little early, by 2 % of half the skin of a golf ball (1.07 mm) for a ball
+    170 m from the origin, by 11 % at 1 km."""
+    xb = ti.cast(x_build, float)
+    margin = 0.0
+    if ti.static(is_f64()):
+        margin = xb.norm() * 2.0**-23
+    return (x1 - xb).norm() + margin
+
+
+@ti.func
+def moved_past(x1, x_build, reach, half_skin):
+    """Whether a ball now at ``x1`` [m], which may move ``reach`` [m] more before the next step's
+    test, can be farther than ``half_skin`` [m] from where it was when the lists were built
+    (:func:`distance_from_build`)."""
+    return distance_from_build(x1, x_build) + reach > half_skin

@@ -1,0 +1,448 @@
+"""Ball pairs in a collision step: their impulses from the owner's side, gathered by each ball.
+
+A pair (a, b) is owned by one ball, a (see :func:`ti_golf.solvers.grid.owns`); the owner
+evaluates the pair's impulse P once per sweep (:func:`owned_pairs`), −P acting on b, and each
+ball then sums the impulses of its pairs in id order (:func:`gather`): no float atomics, and
+momentum is conserved to round-off. Resting impulses carry from step to step (:func:`warm_start`),
+and a ball takes one impact per sweep (:func:`impact_keys`, :func:`matched`).
+"""
+
+import taichi as ti
+
+from ti_golf.physics.contact import (
+    PRESSED,
+    clamp_friction,
+    pair_impulse,
+)
+from ti_golf.physics.types import (
+    GAP,
+    INV,
+    P_X,
+    P_Y,
+    P_Z,
+    of_ball,
+    zero3,
+)
+from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
+from ti_golf.solvers.links import listed, owner_slot
+
+QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
+
+
+@ti.func
+def pair_geometry(x: ti.template(), radius: ti.template(), a, b):
+    """(1/|x_a − x_b| [1/m], zero when the centres of balls a and b coincide, and their surface
+    gap [m]); :func:`pair_normal` turns the first into the unit normal."""
+    dist = (x[a] - x[b]).norm()
+    inv = 0.0
+    if dist > 0.0:
+        inv = 1.0 / dist
+    return inv, dist - of_ball(radius, a) - of_ball(radius, b)
+
+
+@ti.func
+def pair_normal(x_a, x_b, inv):
+    """Unit normal from ball b at ``x_b`` to ball a at ``x_a`` [m] (zero when their centres
+    coincide), from their inverse distance ``inv`` (:func:`pair_geometry`). The sweeps keep
+    ``inv`` rather than the normal (one float a pair rather than three) and recompute the normal
+    from the start-of-step positions, which do not change during them: bit for bit the normal
+    that the warm start used."""
+    return (x_a - x_b) * inv
+
+
+@ti.func
+def skip_pair(status: ti.template(), i, j):
+    """Whether the pair (i, j) gets no impulse: a ball is out of bounds, or both are at rest."""
+    return status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS or (status[i] == AT_REST and status[j] == AT_REST)
+
+
+@ti.func
+def owned_pairs(
+    i,
+    final: ti.template(),
+    contact: ti.template(),
+    h,
+    v_inelastic,
+    x: ti.template(),
+    radius: ti.template(),
+    mass: ti.template(),
+    status: ti.template(),
+    upper: ti.template(),
+    first: ti.template(),
+    lam: ti.template(),
+    J: ti.template(),
+    v: ti.template(),
+    w: ti.template(),
+    flag: ti.template(),
+):
+    """One Jacobi sweep over the pairs that ball i owns, with its neighbours j = upper[i, k]: the
+    impulse P on i (−P acts on j) from the current velocities (which updates the resting impulse
+    ``lam``), stored in the pair's row p = first[i] + k of J (columns ``P_X`` to ``P_Z``). The
+    inverse distance [1/m] (``INV``), which gives the unit normal n̂ from j to i
+    (:func:`pair_normal`), and the surface gap [m] (``GAP``) were stored there by
+    :func:`warm_start` (positions do not change during the sweeps).
+    An impact (see :func:`ti_golf.physics.contact.pair_impulse`) is marked by the inverse distance's sign, negative
+    (:func:`impact_mark`; and ``flag[1]`` is set, so that :func:`impact_keys` looks for the balls'
+    first impacts; :func:`gather` takes one impact per ball, see :func:`matched`).
+
+    With ``final`` (the last sweep) the gap's place, J[p, GAP], takes, for an overlapping pair,
+    q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position projection (B.18: ball i moves by
+    q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the other way); for a pair apart,
+    −gap ≤ 0 (the surface gap [m]: the balls touch while it is below 1 % of a radius)."""
+    inv_mi, xi, p0 = 1.0 / of_ball(mass, i), x[i], first[i]
+    for k in range(listed(first, i)):
+        j, p = upper[i, k], p0 + k
+        inv = ti.abs(J[p, INV])  # (the mark of an impact in the last sweep, see impact_mark)
+        n, gap = pair_normal(xi, x[j], inv), J[p, GAP]
+        ok = n.norm_sqr() > 0.0
+        inv_mj = 1.0 / of_ball(mass, j)
+        P = zero3()
+        kick = 0
+        if status[i] == OUT_OF_BOUNDS or status[j] == OUT_OF_BOUNDS:
+            lam[p] = ti.f32(0.0)  # a frozen ball no longer supports anything (no warm start from it)
+        elif ok and not skip_pair(status, i, j):  # (Jacobi only: the Gauss–Seidel step's end reads the gaps alone)
+            P, lam_p, _, kick = pair_impulse(
+                n,
+                gap,
+                v[i],
+                w[i],
+                of_ball(radius, i),
+                inv_mi,
+                v[j],
+                w[j],
+                of_ball(radius, j),
+                inv_mj,
+                ti.cast(lam[p], float),
+                contact.e,
+                contact.mu,
+                v_inelastic,
+                h,
+                contact.relax,
+            )
+            lam[p] = ti.cast(lam_p, ti.f32)
+            if kick != 0:
+                flag[1] = 1  # every thread that writes, writes 1
+        g = gap
+        if ti.static(final):
+            g = -gap
+            if gap < 0.0:
+                g = 0.0
+                if ok:
+                    g = -contact.k_p * gap / (inv_mi + inv_mj)
+        if kick != 0:
+            inv = -inv
+        J[p, INV], J[p, GAP], J[p, P_X], J[p, P_Y], J[p, P_Z] = inv, g, P[0], P[1], P[2]
+
+
+@ti.func
+def impulse_of(J: ti.template(), p):
+    """The impulse P [N·s] on the owner of the pair in row p of the Jacobi sweeps' table."""
+    return ti.Vector([J[p, P_X], J[p, P_Y], J[p, P_Z]])
+
+
+@ti.func
+def impact_mark(J: ti.template(), p):
+    """Whether the pair in row p of the sweep's table (:func:`owned_pairs`) met as an impact in the
+    sweep: its stored inverse distance is then negative. The sign is the mark, so that no table
+    of marks is kept (the inverse distance is positive for every pair that gets an impact: the
+    centres of the pair's balls are apart)."""
+    return J[p, INV] < 0.0
+
+
+@ti.func
+def quiet_ball(
+    i,
+    status: ti.template(),
+    upper: ti.template(),
+    first: ti.template(),
+    lower: ti.template(),
+    lower_first: ti.template(),
+    bits,
+):
+    """Whether ball i is *quiet*: at rest, and every listed neighbour at rest or out of bounds
+    (see :func:`warm_start`)."""
+    quiet = status[i] == AT_REST
+    if quiet:
+        for m in range(lower_first[i], lower_first[i + 1]):
+            j, _ = owner_slot(lower[m], bits)
+            quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
+        for k in range(listed(first, i)):
+            j = upper[i, k]
+            quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
+    return quiet
+
+
+@ti.func
+def warm_start(
+    i,
+    x: ti.template(),
+    radius: ti.template(),
+    mass: ti.template(),
+    status: ti.template(),
+    rest_time: ti.template(),
+    upper: ti.template(),
+    first: ti.template(),
+    lower: ti.template(),
+    lower_first: ti.template(),
+    bits,
+    lam: ti.template(),
+    J: ti.template(),
+    friction: ti.template(),
+    mu,
+    carried,
+    hop,
+):
+    """Δv [m/s] and Δω [rad/s] of ball i from last step's resting impulses λ of its ball pairs, each
+    along the pair's normal at the start of the step, summed in id order (lower then upper). A
+    normal impulse gives no spin; friction is left to the sweeps, but with ``carried`` (the
+    Gauss–Seidel sweeps), where each pair's friction impulse F from the last step is applied too,
+    in the pair's tangent plane and at most μ·λ (:func:`ti_golf.physics.contact.clamp_friction`: the same on both
+    balls, bit for bit). Also stores the geometry of the pairs
+    ball i owns for the sweeps in their rows first[i] + k of J: 1/|x_i − x_j| (``INV``, positive:
+    no impact, see :func:`impact_mark`), the surface gap [m] (``GAP``) and, in a table with the
+    Jacobi sweeps' columns, no impulse yet. Reads only
+    what the free-flight loop does not write (start-of-step positions, status, λ, rest timers),
+    so it runs inside that loop. Returns (Δv, the calm time [s] of ball i: the least of its rest
+    timer and the rest timers of the balls it touches, each plus ``hop`` [s] (:func:`island_calm`),
+    see :func:`finish`; or ``QUIET`` for a ball at rest
+    whose listed neighbours are all at rest or out of bounds: nothing can touch it this step, so
+    the step leaves it exactly as it is and the sweeps skip it)."""
+    P, T = zero3(), zero3()
+    calm, xi = rest_time[i], x[i]
+    quiet = quiet_ball(i, status, upper, first, lower, lower_first, bits)
+    if not quiet:  # (a quiet ball's impulses and calm time would not be used: see the caller)
+        for m in range(lower_first[i], lower_first[i + 1]):
+            slot = lower[m]
+            j, k = owner_slot(slot, bits)  # the pair's owner j keeps its λ
+            p = first[j] + k
+            inv, gap = pair_geometry(x, radius, i, j)
+            n = pair_normal(xi, x[j], inv)
+            P += resting_impulse(status, i, j, n, lam[p])
+            if carried:
+                F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
+                P -= F
+                T += n.cross(F)
+            calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop)
+    p0 = first[i]
+    for k in range(listed(first, i)):  # (a quiet ball's too: the gaps of its neighbours' lower pairs)
+        j, p = upper[i, k], p0 + k
+        inv, gap = pair_geometry(x, radius, i, j)
+        J[p, INV], J[p, GAP] = inv, gap
+        if J.shape[1] > P_X:  # (a quiet ball's pairs keep no impulse: the Jacobi sweeps skip them)
+            J[p, P_X], J[p, P_Y], J[p, P_Z] = 0.0, 0.0, 0.0
+        if not quiet:
+            n = pair_normal(xi, x[j], inv)
+            P += resting_impulse(status, i, j, n, lam[p])
+            if carried:
+                F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
+                P += F
+                T -= n.cross(F)
+            calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop)
+    if quiet:
+        calm = QUIET
+    m = of_ball(mass, i)
+    return P / m, T * (2.5 / (m * of_ball(radius, i))), calm
+
+
+@ti.func
+def carried_friction(status: ti.template(), i, j, n, lam, F, mu):
+    """The friction impulse [N·s] that a pair (i, j) with normal ``n`` and resting impulse ``lam``
+    carries into the step, from its stored impulse ``F`` (f32) on the pair's owner; zero when the
+    pair gets no impulse."""
+    F_t = zero3()
+    if lam > 0.0 and not skip_pair(status, i, j):
+        F_t = clamp_friction(ti.cast(F, float), n, mu * lam)
+    return F_t
+
+
+@ti.func
+def island_calm(calm, gap, r, status_j, rest_time_j, hop):
+    """The calm time [s] so far, lowered to the rest timer of a neighbour that touches the ball
+    (surface gap below 1 % of its radius ``r``) and is not out of bounds, plus ``hop`` [s].
+
+    With ``hop`` 0 a calm group falls asleep as a whole (an island: every ball of it calm for
+    ``t_rest``). With ``hop`` = t_rest / ``colour.REGION_HOPS`` (the Gauss–Seidel sweeps) a ball
+    falls asleep once every ball within ``REGION_HOPS`` contacts of it is calm, each for as much
+    longer as it is nearer: a ball moving somewhere in a pile of 100,000 keeps only its region
+    awake."""
+    if gap < 0.01 * r and status_j != OUT_OF_BOUNDS:
+        calm = ti.min(calm, rest_time_j + hop)
+    return calm
+
+
+@ti.func
+def touched_by_moving(i, status: ti.template(), rest_time: ti.template(), lists: ti.template(), bits):
+    """Whether a listed neighbour of ball i moved faster than ``v_rest`` in the last step or flew
+    (its rest timer is 0) and is not out of bounds: a ball asleep among the Gauss–Seidel sweeps
+    wakes then (the first loop of ``collide.start_step``). Reads only rest timers and the
+    out-of-bounds status, which waking does not change."""
+    moving = False
+    for m in range(lists.lower_first[i], lists.lower_first[i + 1]):
+        j, _ = owner_slot(lists.lower[m], bits)
+        moving |= rest_time[j] == 0.0 and status[j] != OUT_OF_BOUNDS
+    for k in range(listed(lists.first, i)):
+        j = lists.upper[i, k]
+        moving |= rest_time[j] == 0.0 and status[j] != OUT_OF_BOUNDS
+    return moving
+
+
+@ti.func
+def resting_impulse(status: ti.template(), i, j, n, lam):
+    """λ·n̂ [N·s] on ball i from its pair with j (n̂ from j to i), or zero when the pair gets no impulse."""
+    P = zero3()
+    if lam > 0.0 and not skip_pair(status, i, j):
+        P = lam * n
+    return P
+
+
+@ti.func
+def impact_keys(
+    i,
+    first: ti.template(),
+    lower: ti.template(),
+    lower_first: ti.template(),
+    bits,
+    J: ti.template(),
+    impact: ti.template(),
+):
+    """Keep in ``impact[i]`` the greatest key of ball i's impacts in this sweep (0 when it has
+    none): the key of a pair is its slot, owner·2^bits + column (as in the
+    lower lists, see :func:`.grid.owner_slot`), plus one. Gathered from the pairs' marks
+    (:func:`impact_mark`), as the impulses are: no atomics."""
+    key = 0
+    for m in range(lower_first[i], lower_first[i + 1]):
+        slot = lower[m]
+        j, k = owner_slot(slot, bits)
+        if impact_mark(J, first[j] + k):
+            key = ti.max(key, slot + 1)
+    for k in range(listed(first, i)):
+        if impact_mark(J, first[i] + k):
+            key = ti.max(key, (i << bits) + k + 1)
+    impact[i] = key
+
+
+@ti.func
+def matched(impact: ti.template(), a, b, key):
+    """Whether the impact of balls a and b with ``key`` (see :func:`impact_keys`) is taken in this
+    sweep: it is the first of both balls' impacts in the sweep's order, the greatest key.
+
+    A Jacobi sweep evaluates every pair from the same velocities, so a ball that meets several
+    balls at once would take each impact's whole jolt, as if the others were not there: a ball at
+    v into two touching balls at ±30° with e = 1 would leave at −v/2 and send both off at
+    0.87 v, 75 % more kinetic energy than it brought. So each sweep takes, for every ball, at most
+    one of its impacts, a binary collision by B.9 that keeps kinetic energy with e = 1 and loses
+    some with e < 1; the others are evaluated again in the next sweep, from the velocities that
+    collision left (the next step's sweeps when this was the last). The impacts are taken one
+    after another in a fixed order, as if the balls had met a moment apart."""
+    return impact[a] == key and impact[b] == key
+
+
+@ti.func
+def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p, pressed):
+    """0, 1 or ``PRESSED`` (see :func:`gather`) for the pair of ball i (radius ``r``, 1/m_i
+    ``inv_m_i``) with ball j whose last-sweep J[·, GAP] is ``g`` (the projection q ≥ 0 of an
+    overlap, or minus the gap: see :func:`owned_pairs`): pressed when they overlap by more than
+    ``pressed`` of ``r``. Ball j's mass is read only for an overlap (this runs for every pair of
+    the step's last sweep)."""
+    state = 0
+    if g > -0.01 * r:
+        state = 1
+        if g > 0.0:
+            if g * (inv_m_i + 1.0 / of_ball(mass, j)) > pressed * r * k_p:
+                state = PRESSED
+    return state
+
+
+@ti.func
+def touching_by_gaps(
+    i,
+    r,
+    first: ti.template(),
+    lower: ti.template(),
+    lower_first: ti.template(),
+    bits,
+    J: ti.template(),
+    k_p,
+    pressed,
+):
+    """Whether ball i (radius ``r`` [m]) touches a ball, as :func:`gather` tells it with ``final``
+    (0, 1 or ``PRESSED``), from the surface gaps [m] its pairs keep in J[·, GAP] through the
+    Gauss–Seidel sweeps (:func:`warm_start` stores them; the sweeps apply their impulses at once
+    and leave nothing else in J): touching below 1 % of ``r``, pressed when overlapping by more
+    than ``pressed`` of ``r`` (with a projection, ``k_p`` > 0, as :func:`contact_state`)."""
+    touching = 0
+    for m in range(lower_first[i], lower_first[i + 1]):
+        j, k = owner_slot(lower[m], bits)
+        touching = ti.max(touching, gap_state(J[first[j] + k, GAP], r, k_p, pressed))
+    for k in range(listed(first, i)):
+        touching = ti.max(touching, gap_state(J[first[i] + k, GAP], r, k_p, pressed))
+    return touching
+
+
+@ti.func
+def gap_state(gap, r, k_p, pressed):
+    """:func:`contact_state` of a pair from its surface gap [m] (see :func:`touching_by_gaps`)."""
+    state = 0
+    if gap < 0.01 * r:
+        state = 1
+        if k_p > 0.0 and -gap > pressed * r:
+            state = PRESSED
+    return state
+
+
+@ti.func
+def gather(
+    i,
+    final: ti.template(),
+    x: ti.template(),
+    radius: ti.template(),
+    mass: ti.template(),
+    upper: ti.template(),
+    first: ti.template(),
+    lower: ti.template(),
+    lower_first: ti.template(),
+    bits,
+    J: ti.template(),
+    impact: ti.template(),
+    any_impact,
+    k_p,
+    pressed,
+):
+    """What ball i gets from all its pairs, summed in id order (lower then upper): (Δv [m/s],
+    Δω [rad/s], and with ``final`` the position projection Δx [m] and whether it touches a ball:
+    0 when no gap is below 1 % of its radius, ``PRESSED`` when some ball overlaps it by more than
+    that (the overlap is q·(1/m_i + 1/m_j)/k_p, q the pair's projection in J), else 1).
+
+    An impulse ±P at the contact point −r·n̂ᵢ of a solid sphere (n̂ᵢ = ±n̂ from the other ball to
+    i) gives Δv = ±P/m and Δω = (−r n̂ᵢ) × (±P)·5/(2 m r²) = −(5/(2 m r))·(n̂ × P) for both balls
+    of the pair (n̂ᵢ and the sign of P flip together). Of a ball's impacts, only the one
+    :func:`matched` in this sweep acts (``any_impact``: whether the sweep has any, ``flag[1]``)."""
+    P, T, q_n = zero3(), zero3(), zero3()
+    touching = 0
+    r = of_ball(radius, i)
+    inv_m, xi = 1.0 / of_ball(mass, i), x[i]
+    for m in range(lower_first[i], lower_first[i + 1]):
+        slot = lower[m]
+        j, k = owner_slot(slot, bits)  # the pair's owner j stores it
+        p = first[j] + k
+        P_k, n_k = impulse_of(J, p), pair_normal(x[j], xi, ti.abs(J[p, INV]))
+        if any_impact != 0:  # (the marks are read only in a sweep that has impacts)
+            if impact_mark(J, p) and not matched(impact, i, j, slot + 1):
+                P_k = zero3()
+        P -= P_k
+        T += n_k.cross(P_k)
+        if ti.static(final):
+            q_n -= ti.max(J[p, GAP], 0.0) * n_k
+            touching = ti.max(touching, contact_state(J[p, GAP], r, inv_m, mass, j, k_p, pressed))
+    for k in range(listed(first, i)):
+        p = first[i] + k
+        P_k, n_k = impulse_of(J, p), pair_normal(xi, x[upper[i, k]], ti.abs(J[p, INV]))
+        if any_impact != 0:
+            if impact_mark(J, p) and not matched(impact, i, upper[i, k], (i << bits) + k + 1):
+                P_k = zero3()
+        P += P_k
+        T += n_k.cross(P_k)
+        if ti.static(final):
+            q_n += ti.max(J[p, GAP], 0.0) * n_k
+            touching = ti.max(touching, contact_state(J[p, GAP], r, inv_m, mass, upper[i, k], k_p, pressed))
+    return P * inv_m, T * (-2.5 * inv_m / r), q_n * inv_m, touching

@@ -1,0 +1,704 @@
+"""The collision solvers' shared driver: the hash-grid neighbour lists, the pair and surface
+tables with their carried impulses, the storage order, serial and parallel stepping, and the
+saved record. A step is free flight, the contact sweeps and the end-of-step position update, in
+that fixed order (see :mod:`.collide`); the sweeps are each kind's own: :class:`.jacobi.JacobiSolver`
+and :class:`.gauss_seidel.GaussSeidelSolver`, which ``CollisionSolver(model)`` picks by
+``contact.solver``."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+import taichi as ti
+
+from ti_golf.errors import SimulationError
+from ti_golf.physics.kernels import zero_f32_vectors
+from ti_golf.physics.model import Model
+from ti_golf.physics.packs import Packs
+from ti_golf.physics.state import State
+from ti_golf.physics.types import GridParams, GridScratch, pair_columns, vec3, vec3f
+from ti_golf.runtime import (
+    available_memory,
+    byte_size,
+    ensure_init,
+    free_dropped_arrays,
+    np_float,
+    on_cpu,
+    plain_compile,
+    release_freed_memory,
+)
+from ti_golf.signals import whole_steps
+from ti_golf.solvers import apart, collide, grid, links, sort, surfaces
+from ti_golf.solvers.record import SolverRecord
+from ti_golf.solvers.storage_order import store_in_grid_order
+from ti_golf.solvers.surface_rows import (
+    every_ball_a_row,
+    list_surface_rows,
+    surface_columns,
+    surface_table,
+    table_fits,
+    table_for,
+)
+
+SERIAL_MAX_BALLS = 256
+"""Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
+(``serial`` in ``collide.collision_step``): for so few balls a parallel step is mostly launch
+overhead (see the docs' performance page, "Design measurements")."""
+
+
+REORDER_MIN_BALLS = 8192
+"""From this many balls on, the parallel step stores the balls in grid order (see
+:attr:`CollisionSolver.reorder`): smaller piles stay in the CPU's caches whatever their order."""
+
+
+def table_bytes(n: int, width: int, pairs: int, gauss_seidel: bool) -> int:
+    """Bytes of the neighbour and pair tables of ``n`` balls with upper lists ``width`` wide and
+    room for ``pairs`` pairs: per upper-list entry a neighbour (4 bytes); per pair its link in the
+    other ball's lower list (4 bytes), its resting impulse (f32), its row of the sweep's table
+    (:func:`ti_golf.physics.types.pair_columns` floats), and with the Gauss–Seidel sweeps its friction impulse
+    (3 f32)."""
+    f = np.dtype(np_float()).itemsize
+    per_pair = 4 + 4 + pair_columns(gauss_seidel) * f + (12 if gauss_seidel else 0)
+    return n * width * 4 + pairs * per_pair
+
+
+PAIR_ROOM = 16
+"""Pair tables that the lists outgrow are made for the pairs listed plus 1/PAIR_ROOM of them (see
+``CollisionSolver._fit_pair_tables``): room for the lists to grow a little before the tables are
+allocated again, while a pour lands."""
+
+
+COLLECT_EVERY = 64
+"""Rebuilds of the lists between two full collections of Python's garbage, in piles of
+``REORDER_MIN_BALLS`` or more: Taichi's kernel launches leave reference cycles that only a full
+collection frees, and while a pour lands the lists are rebuilt at every step (what they hold and
+what a collection costs: the docs' performance page, "Design measurements")."""
+
+
+def steps_serially(n: int) -> bool:
+    """Whether :class:`CollisionSolver` steps ``n`` balls serially by default: few balls, on the CPU
+    (a GPU would run the serial loop on one slow thread)."""
+    return n <= SERIAL_MAX_BALLS and on_cpu()
+
+
+class CollisionSolver:
+    """Buffers and neighbour lists for stepping N colliding balls: the driver both kinds of
+    sweeps share. ``CollisionSolver(model, ...)`` makes the kind that ``contact.solver`` names
+    (:attr:`KINDS`); each kind steps with its own sweeps (:meth:`_sweep`).
+
+    Attributes:
+        cell: grid cell size [m] at the last build: the largest diameter plus the skin, or plus
+            2h·v_max when the fastest pair could close more than the skin in a step (see
+            ``grid.cell_size``: pairs are listed by their closing speed too); both of the balls
+            not listed apart when some are (``n_apart``).
+        skin: neighbour-list skin [m] (``contact.skin`` × ``r_ref``).
+        r_cut, r_ref: balls bigger than ``r_cut`` [m] are listed apart, and ``r_ref`` [m] is the
+            largest radius of the others (``apart.size_cut``: infinite, and the largest radius,
+            unless a few balls are more than twice the size of the rest).
+        n_apart: how many balls, much faster or bigger than the rest, the last build set apart
+            (``apart.APART_MAX``): they own none of their pairs with the others, and on CPU
+            backends they are listed apart.
+        loop_cap: on Taichi's Vulkan backend, the loop iterations after which a thread stops (see
+            ``grid.LOOP_CAP``): a build that needs more stops the run; ``None`` elsewhere.
+        capacity: width of the neighbour table, the upper lists' (it grows when a list overflows).
+        pair_capacity: entries of the pair tables (resting and friction impulses, the sweep's
+            entries): the pairs listed, laid out ball after ball (``first``), plus room to grow.
+        rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
+        skip_still: whether a parallel step in which no ball is awake and in play is skipped, the
+            time advanced alone (default: with the Gauss–Seidel sweeps, under which such a step
+            changes nothing, see ``colour.moving_balls``): a pile asleep then costs one pass over
+            the balls' status a step, not the step's dozen kernel launches.
+        still_steps: how many steps were so skipped (for benchmarks and tests).
+        far_owners: how many balls own pairs that the Gauss–Seidel colours leave to
+            ``colour.far_pairs`` (0 with the Jacobi sweeps).
+        serial: whether steps run serially, many per launch, with the lists rebuilt in the kernel
+            by testing every pair (default: :func:`steps_serially`; CPU backends only); else one
+            parallel launch per step, with the hash grid. Both give the same lists and
+            bit-identical steps.
+        reorder: whether every list build also stores the balls in the grid's order, so that
+            balls close in space lie close in memory (default: from ``REORDER_MIN_BALLS`` balls
+            on, parallel steps only). A pile whose ids are in no spatial order (balls passed in
+            any order, balls that have mixed) otherwise fetches every neighbour from a cache line
+            of its own. Each per-ball array of the state and the model is gathered into the new order
+            (``State.order`` records it; :class:`~ti_golf.sim.simulation.Simulation` reads and writes by
+            ball id), and the pairs keep their accumulated impulses. The physics is the same, but
+            sums over a ball's neighbours run in another order: results differ from a run
+            without reordering by round-off, and two runs of a scene still agree bit for bit.
+    """
+
+    KINDS: ClassVar[dict[str, type[CollisionSolver]]] = {}
+    """The kinds of solver by their ``contact.solver`` name (each subclass adds itself)."""
+
+    gauss_seidel: ClassVar[bool] = False
+    """Whether the sweeps are Gauss–Seidel's: the kernels' flag for the pairs' friction impulses."""
+
+    SAVED_VALUES: ClassVar[dict[str, str]] = {
+        "r_max": "_r_max",
+        "r_cut": "r_cut",
+        "r_ref": "r_ref",
+        "skin": "skin",
+        "v_cut": "v_cut",
+        "h": "h",
+        "cell": "cell",
+        "mask": "mask",
+        "capacity": "capacity",
+        "rebuilds": "rebuilds",
+        "still_steps": "still_steps",
+        "pair_capacity": "pair_capacity",
+        "n_apart": "n_apart",
+        "skip_still": "skip_still",
+        "far_owners": "far_owners",
+        "valid": "_valid",
+        "rebuild": "_rebuild",
+    }
+    """The numbers a saved run keeps (:meth:`record`), by their name in the record: the
+    attributes that hold them. (The grid hash, a pair of vectors, is kept as ``hash``.)"""
+
+    SAVED_ARRAYS: ClassVar[tuple[str, ...]] = (
+        "sorted_ids",
+        "start",
+        "x_at_build",
+        "upper",
+        "first",
+        "lam",
+        "lower",
+        "lower_first",
+        "surface_start",
+        "surface_impulse",
+        "flag",
+        "apart_ids",
+        "friction",
+    )
+    """The arrays a saved run keeps whole (:meth:`record`): the lists, the carried impulses and the
+    grid of the last build."""
+
+    SCRATCH: ClassVar[tuple[str, ...]] = (
+        "x_free",
+        "v_free",
+        "calm",
+        "clear",
+        "rank",
+        "chunk_start",
+        "impulse",
+        "impact",
+        "stash_first",
+        "pair_chunk",
+        "surface_impulse_back",
+    )
+    """Arrays that each step or list build writes before it reads them: a saved run keeps only
+    their shapes and types."""
+
+    def __init_subclass__(cls, kind: str = "", **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if kind:
+            CollisionSolver.KINDS[kind] = cls
+
+    def __new__(cls, model: Model, *args: Any, **kwargs: Any) -> CollisionSolver:
+        if cls is CollisionSolver:  # the kind the scene names
+            cls = CollisionSolver.KINDS[model.scene.contact.solver]
+        return super().__new__(cls)
+
+    def __init__(
+        self, model: Model, capacity: int = 1, serial: bool | None = None, reorder: bool | None = None
+    ) -> None:
+        self._model = model
+        self._packs = Packs()
+        n = model.n
+        if np_float() == np.float32 and n > links.ID_EXACT_F32:
+            raise SimulationError(
+                f"{n:,} balls are more than an f32 run can hold ({links.ID_EXACT_F32:,}: the neighbour lists keep "
+                "ball ids in the float type); run in f64 (--precision f64 or TI_GOLF_PRECISION=f64)"
+            )
+        self._r_max = float(model.radius_np.max())
+        self.r_cut, self.r_ref = apart.size_cut(model.radius_np)
+        self.skin = model.scene.contact.skin * self.r_ref
+        self.v_cut = apart.fast_speed(self.r_ref, self.skin, model.dt)  # faster balls are listed apart
+        self.h = model.dt  # the time step the lists are built for [s]
+        self.cell = grid.cell_size(self._r_max, self.skin, model.dt, 0.0)[0]
+        self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
+        if serial is None:  # (a layout of the sweeps by pairs, when asked for, is what the steps take, however few)
+            serial = steps_serially(n) and not self._pairs_laid_out(model)
+        self.serial = bool(serial)
+        if self.serial and not on_cpu():
+            raise ValueError("serial stepping runs on the CPU backend only (on a GPU it would run on one thread)")
+        self.reorder = (n >= REORDER_MIN_BALLS and not self.serial) if reorder is None else bool(reorder)
+        if self.reorder and self.serial:
+            raise ValueError("serial stepping keeps the balls in id order (reorder=False)")
+        if self.serial:  # a table wide enough for every other ball: the kernel's lists cannot overflow
+            capacity = max(capacity, n - 1, 1)
+        self.capacity = capacity
+        self.rebuilds = 0
+        self.still_steps = 0
+        self.rank = ti.ndarray(ti.i32, n)
+        self.sorted_ids = ti.ndarray(ti.i32, n)
+        self.start = ti.ndarray(ti.i32, self.mask + 2)
+        self.chunk_start = ti.ndarray(ti.i32, sort.scan_chunks(self.mask + 1))
+        self.x_at_build = ti.ndarray(vec3f, n)  # f32: only tested against the skin (links.distance_from_build)
+        self.x_free = ti.ndarray(vec3.get(), n)
+        self.v_free = ti.ndarray(vec3.get(), n)
+        self.calm = ti.ndarray(float, n)  # least rest timer of each ball and the balls it touches [s]
+        self.clear = ti.ndarray(ti.f32, n)  # least gap of each ball to the planes [m] (collide.surface_clearance)
+        self.upper = self.impulse = None
+        # ball i's upper list's length, first[i + 1] − first[i], and its pairs' entries in the pair tables
+        # from first[i] on (links.pair_starts); and the layout of the stashed pairs during a rebuild
+        self.first, self.stash_first = ti.ndarray(ti.i32, n + 1), ti.ndarray(ti.i32, n + 1)
+        self.first.fill(0)
+        self.pair_chunk = ti.ndarray(ti.i32, sort.scan_chunks(n))
+        self.pair_capacity = 1
+        self.lam = ti.ndarray(ti.f32, self.pair_capacity)
+        # ball i's lower list: lower[lower_first[i] : lower_first[i + 1]], as long as the pair tables (links.link_lower)
+        self.lower, self.lower_first = ti.ndarray(ti.i32, self.pair_capacity), ti.ndarray(ti.i32, n + 1)
+        self.lower_first.fill(0)
+        self.impact = ti.ndarray(ti.i32, n)  # each ball's first impact in a sweep (pairs.impact_keys)
+        # resting impulses per unit mass [m/s] of the planes and (one column more) the terrain, in f32, and
+        # (Gauss–Seidel) friction impulses, in a row per ball within reach of one (surfaces.list_surfaces),
+        # and the tables a rebuild carries them into (surface_rows.list_surface_rows)
+        self.surface_start = ti.ndarray(ti.i32, n + 1)
+        self.surface_start.fill(0)
+        self.surface_impulse, self.surface_impulse_back = surface_table(1, surface_columns(model)), None
+        self.flag = ti.ndarray(ti.i32, 2)
+        self.apart_ids = ti.ndarray(ti.i32, apart.APART_MAX + 1)  # the balls listed apart (apart.apart_balls), count
+        self.n_apart = 0
+        # the loop iterations after which a thread stops its loops without a word (grid.LOOP_CAP)
+        self.loop_cap = grid.LOOP_CAP if ensure_init().arch == "vulkan" else None
+        self.skip_still = self.gauss_seidel
+        # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only: a
+        # rebuild stashes it beside the resting impulse, links.stash)
+        self.friction = ti.ndarray(vec3f, 1)
+        if self.serial:
+            self.surface_impulse = every_ball_a_row(self.surface_start, model)
+        self.far_owners = 0
+        self._valid = False
+        self._rebuild = True
+        self._ids: ti.Ndarray | None = None  # the state's storage order at the last build (see pairs)
+        self._hash = None  # the grid hash's (origin, stride) at the last build (grid.hash_strides)
+        self._last_grid = None  # (a cache of last_grid())
+
+    @property
+    def model(self) -> Model:
+        """The model the solver was made for (its balls' radii, the planes, the terrain)."""
+        return self._model
+
+    @property
+    def packs(self) -> Packs:
+        """The kernels' argument packs of the solver's arrays (see :class:`~ti_golf.physics.packs.Packs`)."""
+        return self._packs
+
+    def record(self) -> SolverRecord:
+        """What the next steps read, to continue bit for bit after :meth:`restore`: the numbers of
+        ``SAVED_VALUES`` and the grid hash, the arrays of ``SAVED_ARRAYS`` (those made), and the
+        shapes and types of the ``SCRATCH`` arrays."""
+        values: dict[str, Any] = {name: getattr(self, attr) for name, attr in self.SAVED_VALUES.items()}
+        values["hash"] = None if self._hash is None else [[int(c) for c in v.to_list()] for v in self._hash]
+        arrays, elements, scratch = {}, {}, {}
+        for name in self.SAVED_ARRAYS:
+            a = getattr(self, name, None)  # (a serial Gauss–Seidel solver has no column order)
+            if a is not None:
+                arrays[name] = a.to_numpy()
+                elements[name] = list(getattr(a, "element_shape", ()))
+        for name in self.SCRATCH:
+            a = getattr(self, name)
+            if a is not None:
+                scratch[name] = [list(a.shape), list(getattr(a, "element_shape", ())), str(a.to_numpy().dtype)]
+        return SolverRecord(values, arrays, elements, scratch)
+
+    def restore(self, record: SolverRecord, state: State) -> None:
+        """Take back what :meth:`record` returned, for ``state`` restored to the same moment (its
+        storage order included): the next step is then the one that the recorded solver would
+        have made. What the record lacks keeps the value this solver was made with."""
+        for name, attribute in self.SAVED_VALUES.items():
+            if name in record.values:
+                setattr(self, attribute, record.values[name])
+        if "hash" in record.values:
+            hashed = record.values["hash"]
+            self._hash = None if hashed is None else tuple(ti.Vector(v, dt=ti.i32) for v in hashed)
+        for name in self.SAVED_ARRAYS:
+            if name in record.arrays:
+                setattr(self, name, record.ndarray(name))
+        for name in self.SCRATCH:
+            if name in record.scratch:
+                setattr(self, name, record.scratch_array(name))
+        if record.rebuild:
+            self._rebuild = True
+        self._ids = state.ids
+        self._packs = Packs()
+        self._last_grid = None
+
+    def build(self, state: State) -> None:
+        """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
+        pair's accumulated impulse over (the neighbour tables widen to the longest list when one
+        overflows; the pair tables grow with the pairs listed in all)."""
+        n = state.n
+        self._last_grid = None
+        if n >= REORDER_MIN_BALLS:  # 0.2 ms, against the build's tens of milliseconds
+            release_freed_memory()  # before the tables: numpy copies freed since (balls set up, storage order)
+        stashed = None
+        mu = float(self._model.scene.contact.mu)
+        if self._valid:  # the sweep's table is scratch between steps: it keeps the old lists' λ, ids and friction
+            stashed = self.impulse
+            links.stash(self.upper, self.first, self.lam, stashed, self.gauss_seidel, state.x, self.friction, mu)
+            self.stash_first.copy_from(self.first)
+        h = self._model.dt
+        v_max, v_rest, n_apart = (
+            float(s) for s in apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
+        )
+        self.n_apart = int(n_apart) if n_apart <= apart.APART_MAX else 0  # a few own no pair with the others
+        scan_apart = self.n_apart > 0 and on_cpu()  # and are listed apart (see apart.APART_MAX)
+        # the cells hold every pair of the other balls; fast: their pairs are listed by closing speed too
+        if scan_apart:
+            self.cell, fast = grid.cell_size(self.r_ref, self.skin, h, v_rest)
+        else:
+            self.cell, fast = grid.cell_size(self._r_max, self.skin, h, v_max)
+        bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
+        self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, self.mask + 1))
+        if self.reorder:
+            grid_order = (1.0 / self.cell, self.mask, *self._hash, self.rank, self.start, self.chunk_start)
+            self.v_free, self.calm, self.rank = store_in_grid_order(
+                state, self._model, (*grid_order, self.sorted_ids), [self.v_free, self.calm, self.rank]
+            )
+            if scan_apart:  # their new indices
+                apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
+        self._ids = state.ids
+        while True:
+            if self.upper is None or self.upper.shape[1] != self.capacity:
+                self._packs.clear()  # (their references would keep the narrower table in memory)
+                self.upper = None
+                free_dropped_arrays()
+                self.upper = ti.ndarray(ti.i32, (n, self.capacity))
+            params, scratch = self._grid_params(fast), self._grid_scratch()
+            longest = grid.list_neighbours(
+                params,
+                state.x,
+                state.v,
+                self._model.radius,
+                self.apart_ids,
+                scratch,
+                self._packs.lists(self),
+                self.flag,
+                self.reorder,
+            )
+            if longest[0] <= self.capacity:
+                break
+            # widen to the longest list found (no power-of-two padding: memory follows the pile)
+            wider = int(longest[0])
+            self._check_table_memory(state, wider, self.pair_capacity)
+            self.capacity = wider
+        self._check_loop_cap(state, int(longest[2]))
+        if n << self.slot_bits > 2**31:  # the largest slot, (n − 1)·2^bits + 2^bits − 1, must fit an i32
+            raise SimulationError(
+                f"{n} balls with up to {self.capacity} neighbours each are more than the "
+                f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)"
+            )
+        pairs = int(links.pair_starts(self.first, self.pair_chunk))
+        if self.serial:  # the kernel rebuilds the lists in place: room for every list to grow to n − 1
+            self._fit_pair_tables(state, n * self.capacity, 0)  # (and the stash, links.relist_all_pairs)
+        else:
+            self._fit_pair_tables(state, pairs, PAIR_ROOM)
+        carried = stashed is not None
+        if carried:
+            # after a reorder, sorted_ids still maps each ball to its index in the stashed lists
+            links.link_and_carry(
+                self.upper,
+                self.first,
+                self.lower,
+                self.lower_first,
+                self.impact,
+                self.pair_chunk,
+                stashed,
+                self.stash_first,
+                self.lam,
+                self.reorder,
+                self.sorted_ids,
+                self.gauss_seidel,
+                state.x,
+                self.friction,
+                mu,
+            )
+        else:
+            links.link_lower(self.upper, self.first, self.lower, self.lower_first, self.impact, self.pair_chunk)
+            self.lam.fill(0.0)
+            if self.gauss_seidel:  # none yet
+                zero_f32_vectors(self.friction)  # (not fill: see zero_f32_vectors)
+        self._carry_pair_order(stashed)  # (while the stash is kept)
+        stashed = None
+        if not self.serial:  # (serial: a row for every ball, see surface_rows.every_ball_a_row)
+            self._list_surface_rows(state, carried, v_max)
+        if self.impulse is None or self.impulse.shape[0] != self.lam.shape[0]:
+            self.impulse = None  # free the old table (the stash) before allocating
+            free_dropped_arrays()
+            # each pair's inverse distance, gap or projection, and (Jacobi) impulse in a sweep (pairs.owned_pairs)
+            self.impulse = ti.ndarray(float, (self.lam.shape[0], pair_columns(self.gauss_seidel)))
+        self.rebuilds += 1
+        if n >= REORDER_MIN_BALLS and self.rebuilds % COLLECT_EVERY == 0:
+            free_dropped_arrays()  # (the cycles that Taichi's launches leave: see COLLECT_EVERY)
+        self._valid = True
+
+    def _list_surface_rows(self, state: State, carry: bool, v_max: float) -> None:
+        """Give a row of surface impulses to each ball that may touch a plane or the terrain before
+        the next rebuild (:func:`.surface_rows.list_surface_rows`), in the second of two tables,
+        then swap them: each ball that had a row keeps its impulses when ``carry``, the others
+        start from zero."""
+        rows, old = list_surface_rows(self, state, carry, v_max)
+        columns = surface_columns(self._model)
+        back = self.surface_impulse_back
+        if not table_fits(back, rows, columns):
+            self._packs.clear()  # (their references would keep the old table in memory)
+            self.surface_impulse_back = back = None
+            free_dropped_arrays()
+            back = table_for(rows, columns)
+        surfaces.carry_surfaces(*old, self.surface_start, back)
+        self.surface_impulse, self.surface_impulse_back = back, self.surface_impulse
+
+    def _grid_params(self, fast: bool) -> Any:
+        """The :data:`~ti_golf.physics.types.GridParams` of the grid as the last build made it (its
+        cells, hash, skin, step and the balls set apart), ``fast`` when pairs are listed by their
+        closing speed too (``grid.cell_size``)."""
+        return GridParams(
+            inv_cell=1.0 / self.cell,
+            mask=self.mask,
+            origin=self._hash[0],
+            stride=self._hash[1],
+            skin=self.skin,
+            h=self._model.dt,
+            fast=int(fast),
+            v_cut=self.v_cut,
+            r_cut=self.r_cut,
+            n_apart=self.n_apart,
+            scan_apart=int(self.n_apart > 0 and on_cpu()),
+        )
+
+    def _grid_scratch(self) -> Any:
+        """The grid's :data:`~ti_golf.physics.types.GridScratch`: its buckets' starts and the balls
+        sorted by bucket, which the last build left and the steps read until the next."""
+        return self._packs.get(
+            GridScratch, rank=self.rank, start=self.start, chunk_start=self.chunk_start, sorted_ids=self.sorted_ids
+        )
+
+    def last_grid(self) -> tuple:
+        """The grid of the last build as ``stale.lists_stale`` reads it, after the step it builds
+        the lists for: its :data:`~ti_golf.physics.types.GridParams` and
+        :data:`~ti_golf.physics.types.GridScratch`, the balls it set apart and whether the balls
+        are stored in its order (``stored_sorted`` of ``grid.list_neighbours``). Made from what the
+        build kept, and so also for a solver restored from a saved run."""
+        if self._last_grid is None:
+            self._last_grid = (self._grid_params(False), self._grid_scratch(), self.apart_ids, self.reorder)
+        return self._last_grid
+
+    def _fit_pair_tables(self, state: State, pairs: int, room: int) -> None:
+        """Make room for ``pairs`` pairs in the tables of the pairs' resting impulses, lower-list links
+        and (Gauss–Seidel) friction impulses: when they hold fewer, new tables, the old ones freed first (their values
+        are in the stash): for ``pairs`` at the first build, and when they outgrew tables built
+        before, for ``pairs`` plus 1/``room`` of them (none with ``room`` 0)."""
+        grow = pairs > self.pair_capacity
+        if grow:
+            capacity = max(1, pairs + (pairs // room if room and self.rebuilds > 0 else 0))
+            self._check_table_memory(state, self.capacity, capacity)
+            self.pair_capacity = capacity
+        rows = self._friction_rows()
+        new_friction = self.friction is None or self.friction.shape[0] != rows  # (the first build, or grown)
+        if grow or new_friction:
+            self._packs.clear()  # (their references would keep the old tables in memory)
+            if grow:
+                self.lam = self.lower = None
+            if new_friction:
+                self.friction = None
+            free_dropped_arrays()
+            if grow:
+                self.lam = ti.ndarray(ti.f32, self.pair_capacity)
+                self.lower = ti.ndarray(ti.i32, self.pair_capacity)
+            if new_friction:
+                self.friction = ti.ndarray(vec3f, rows)
+
+    def _check_table_memory(self, state: State, width: int, pairs: int) -> None:
+        """Raise :class:`SimulationError` before a neighbour table ``width`` wide and pair tables of
+        ``pairs`` entries take more than half the memory available (:func:`available_memory`),
+        naming the ball that reaches farthest within a step (r + h·|v|): the neighbour table is as
+        wide as the longest list, so many balls shot fast into a pile (3,100 balls within the reach
+        of one ball at 1,000 m/s in a pile of 20,000, in one 1 ms step) would make the tables take
+        gigabytes, and then swap or be killed, losing the run."""
+        need = table_bytes(state.n, width, pairs, self.gauss_seidel)
+        avail = available_memory()
+        if avail is None or need <= 0.5 * avail:
+            return
+        ball, farthest = self._farthest_reaching(state)
+        raise SimulationError(
+            f"the neighbour lists would take {byte_size(need)}, more than half the {byte_size(avail)} of memory "
+            f"available: {pairs:,} pairs within reach of one step, and a ball with {width:,}, the neighbour table "
+            f"as wide as the longest list. {farthest}; lower world.dt, or that ball's speed or radius",
+            [ball],
+        )
+
+    def _check_loop_cap(self, state: State, loops: int) -> None:
+        """Raise :class:`SimulationError` when a build ran a thread's loops past ``loop_cap`` (see
+        ``grid.LOOP_CAP``; ``loops``: the bound :func:`grid.list_neighbours` returns): on Taichi's
+        Vulkan backend that thread stopped without a word, and pairs are missing from the lists."""
+        if self.loop_cap is None or loops <= self.loop_cap:
+            return
+        ball, farthest = self._farthest_reaching(state)
+        raise SimulationError(
+            f"listing the neighbours of a ball took up to {loops:,} loop iterations in one thread, and Taichi's "
+            f"Vulkan backend stops a thread's loops after {self.loop_cap:,} without a word: pairs would be "
+            f"missed. The cells are {self.cell:.4g} m wide for the largest ball and the fastest pair. "
+            f"{farthest}; run on the CPU or CUDA backend (--arch), or lower that ball's radius or speed",
+            [ball],
+        )
+
+    def _farthest_reaching(self, state: State) -> tuple[int, str]:
+        """(id, a sentence naming it) of the ball that reaches farthest within a step (r + h·|v|):
+        the one that widens the lists, and on a GPU the cells."""
+        h = self._model.dt
+        speed = np.linalg.norm(state.v.to_numpy(), axis=1)
+        radius = np.broadcast_to(self._model.radius.to_numpy(), speed.shape)  # one entry when all are alike
+        k = int(np.argmax(radius + h * speed))
+        order = state.order
+        ball = int(order[k]) if order is not None else k
+        return ball, (
+            f"Ball {ball} reaches farthest (radius {radius[k]:.4g} m, speed {speed[k]:.4g} m/s: "
+            f"{h * speed[k]:.4g} m per step of {h:g} s)"
+        )
+
+    def ensure_lists(self, state: State) -> None:
+        """Build the neighbour lists for the current positions unless they still hold every pair in
+        reach: before the first step, after balls were moved (:meth:`invalidate`), or when the last
+        step asked for a rebuild. The next step then starts from these lists, as it would have
+        built them itself (same lists, same step)."""
+        stale = not self._valid or (self.flag.to_numpy()[0] != 0 if self.serial else self._rebuild)
+        if not stale:
+            return
+        if self.serial:
+            self.capacity = max(self.capacity, state.n - 1, 1)
+        self.build(state)
+        grid.clear(self.flag)  # build() left the longest lists there
+        self._rebuild = False
+
+    def retune(self, model: Model) -> None:
+        """Take the model's parameters as changed between steps (``Model.set_parameters``): a new
+        skin (``contact.skin``) or time step changes which pairs the lists must hold, so they are
+        rebuilt before the next step (each pair that stays listed keeps its impulse); a new number of
+        planes (``world.ground``) starts every ball's plane impulses again from zero, and the lists are
+        rebuilt (they list the balls within reach of a plane). The kind of solver (``contact.solver``)
+        is fixed: a change of it needs a new solver."""
+        skin = model.scene.contact.skin * self.r_ref
+        if (skin, model.dt) != (self.skin, self.h):
+            self.skin, self.h = skin, model.dt
+            self.v_cut = apart.fast_speed(self.r_ref, self.skin, model.dt)
+            self.invalidate()
+        if self.surface_impulse.shape[1] != surface_columns(model):
+            if self.serial:
+                self.surface_impulse, self.surface_impulse_back = every_ball_a_row(self.surface_start, model), None
+            else:
+                self.invalidate()  # (the build makes the tables for the new planes)
+
+    def invalidate(self) -> None:
+        """Rebuild the neighbour lists before the next step (balls were moved between steps), each
+        pair that stays listed keeping its accumulated impulse."""
+        self._rebuild = True
+        self.flag.from_numpy(np.array([1, 0], dtype=np.int32))  # the serial kernel's request
+
+    @property
+    def slot_bits(self) -> int:
+        """Low bits of a lower-list entry that hold the pair's column in its owner's upper list (the
+        owner's id is in the bits above; see ``grid.slot_bits``)."""
+        return max(0, int(self.capacity - 1).bit_length())
+
+    def pairs(self) -> np.ndarray:
+        """The listed neighbour pairs (i, j) by ball id, each once, sorted: int array of shape (n_pairs, 2)
+        with i < j."""
+        upper, count = self.upper.to_numpy(), np.diff(self.first.to_numpy())
+        listed = np.arange(upper.shape[1])[None, :] < count[:, None]
+        i = np.broadcast_to(np.arange(len(count))[:, None], upper.shape)
+        pairs = np.stack([i[listed], upper[listed]], axis=1)
+        if self._ids is not None:  # storage indices to ball ids
+            pairs = self._ids.to_numpy()[pairs]
+        pairs = np.sort(pairs, axis=1)  # (owner, other) to (lower id, higher id)
+        return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+
+    def advance(self, model: Model, state: State, steps: int) -> None:
+        """Advance all balls by ``steps`` steps of ``model.dt``: serially in one launch, or one
+        parallel launch per step (see ``serial``); Ctrl-C and SIGTERM wait for whole steps
+        (:func:`~ti_golf.signals.whole_steps`)."""
+        if self.serial:
+            with whole_steps():
+                self._advance_serially(model, state, int(steps))
+        else:
+            with whole_steps() as came:  # (the handlers set once, not at every step)
+                for _ in range(int(steps)):
+                    self._step_in_parallel(model, state)
+                    if came:  # Ctrl-C or SIGTERM: stop after this whole step
+                        break
+
+    def _advance_serially(self, model: Model, state: State, steps: int) -> None:
+        width = max(1, state.n - 1)
+        if not self._valid or self.upper.shape[1] < width:  # first step, or lists built narrower since
+            self.capacity = width
+            self.build(state)
+            grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
+        with plain_compile():  # see runtime.plain_compile
+            self.rebuilds += collide.launch(
+                self._arguments(model, state, steps),
+                serial=True,
+                warm=True,
+                sweeps=model.scene.contact.iterations - 1,
+                last=True,
+            )
+        for _ in range(steps):
+            state.t += model.dt  # as one step at a time adds it, to the same round-off
+        state.steps += steps
+
+    def _step_in_parallel(self, model: Model, state: State) -> None:
+        if not self._valid or self._rebuild:
+            self.build(state)
+        elif self.skip_still and self._all_still(state):  # the step would change nothing
+            self.still_steps += 1
+            state.t += model.dt
+            state.steps += 1
+            return
+        rebuild = self._sweep(model.scene.contact.iterations, self._arguments(model, state, 1))
+        state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
+        state.t += model.dt
+        state.steps += 1
+        self._rebuild = bool(rebuild)
+
+    def _pairs_laid_out(self, model: Model) -> bool:
+        """Whether the sweeps take the pairs in a layout of their own (not ball by ball), which the
+        serial steps would not follow: the Gauss–Seidel sweeps by contact colours."""
+        return False
+
+    def _carry_pair_order(self, stashed: Any) -> None:
+        """Carry over a rebuild what orders the pairs in the sweeps, from the old lists' ``stashed``
+        table (``None`` at a first build): nothing, unless the sweeps order the pairs themselves."""
+
+    def _all_still(self, state: State) -> bool:
+        """Whether no ball is awake and in play, so that a step would change nothing (only the
+        kinds whose sweeps leave such a step unchanged say so)."""
+        return False
+
+    def _sweep(self, iterations: int, arguments: tuple) -> int:
+        """One parallel step's launches, from the free flight to the new positions in ``x_free``,
+        with ``iterations`` sweeps; ``arguments``: :meth:`_arguments`. Returns whether the lists
+        must be rebuilt before the next step."""
+        raise NotImplementedError
+
+    def _friction_rows(self) -> int:
+        """Rows of the pairs' friction impulses: one placeholder, unless the sweeps carry them."""
+        return 1
+
+    def _arguments(self, m: Model, s: State, steps: int) -> tuple:
+        """The arguments of ``collide.collision_step`` before ``serial``: the array of the air,
+        contact, terrain and step parameters, the launch's start time [s], the time step [s] and
+        the steps to take, the integrator, the model, the lists, the state, the flight record and
+        the scratch."""
+        packs = self._packs
+        return (
+            packs.step_scalars(m, self.skin, self.v_cut, self.r_cut),
+            s.t,
+            m.dt,
+            steps,
+            m.integrator,
+            packs.model(m),
+            packs.lists(self),
+            packs.state(s),
+            packs.flight(s),
+            packs.scratch(self),
+        )

@@ -1,0 +1,215 @@
+"""Whether the neighbour lists must be rebuilt after a Gauss–Seidel step, pair by pair.
+
+A build lists every pair whose surface gap is below the skin (or the reach of its closing speed,
+see :func:`.grid.pair_reach`). A pair left out was at least its gap at the build apart, so it can
+only touch in the next step when its balls together have moved that gap since the build, counting
+2h·|v| each for the step ahead: |x_a,b − x_b,b| − r_a − r_b < u_a + u_b, with u the skin a ball has
+*used* (:func:`skin_used`). The Jacobi steps rebuild as soon as one ball has used half the skin
+(:func:`.links.moved_past`), which guarantees that for every pair. The Gauss–Seidel steps test the
+pairs themselves (:func:`flag_stale_lists`): a ball that has used more than half the skin, but not all
+of it, is tested against the balls that were within reach of it at the build, in the 125 grid
+cells around its cell then (a pair out of the lists within 2·r + 2·skin of it lies in them, as the
+cells are at least 2·r + skin wide), and the lists are rebuilt only when such a pair is missing
+from them. So one ball rolling over a settled pile, whose neighbours have not moved, uses the
+whole skin before it forces a rebuild, not half of it.
+
+Rebuilt earlier or later, the lists hold every pair that can touch in the step; the steps between
+differ only in which pairs are listed but still apart, which change nothing (see
+:func:`.sequential.pair_step`), and in the order of the balls that the build stores.
+"""
+
+import taichi as ti
+
+from ti_golf.physics.types import (
+    BallState,
+    GridParams,
+    GridScratch,
+    ModelArrays,
+    NeighbourLists,
+    StepScratch,
+    float_array,
+    int_array,
+    kernel,
+    of_ball,
+    scalars_of,
+)
+from ti_golf.solvers.links import distance_from_build, listed
+from ti_golf.solvers.sort import bucket_of, cell_of
+
+REACH_CELLS = 2
+"""Cells on each side of a ball's cell (at the build) in which :func:`stale_near` looks for the
+balls it may have come within reach of: a pair within 2·r + 2·skin lies within two cells, which
+are at least 2·r + skin wide."""
+
+
+@ti.func
+def skin_used(x1, x_build, v, h):
+    """How much of the skin [m] a ball now at ``x1`` [m] with velocity ``v`` [m/s] has used: its
+    distance from ``x_build`` (its position at the build, f32, with the rounding margin of
+    :func:`.links.distance_from_build`), plus 2h·|v| for the step ahead (``h`` [s])."""
+    return distance_from_build(x1, x_build) + 2.0 * h * v.norm()
+
+
+@ti.func
+def pair_listed(i, j, lists: ti.template()):
+    """Whether the lists hold the pair of balls i and j (in either ball's upper list)."""
+    found = False
+    for k in range(listed(lists.first, i)):
+        if lists.upper[i, k] == j:
+            found = True
+    for k in range(listed(lists.first, j)):
+        if lists.upper[j, k] == i:
+            found = True
+    return found
+
+
+@ti.func
+def unlisted_within_reach(
+    i, j, used_i, h, radius: ti.template(), lists: ti.template(), x1: ti.template(), v: ti.template()
+):
+    """Whether balls i and j (j ≠ i) form a pair the lists miss that may touch in the next step:
+    their gap at the build, from the f32 positions, below the skin both have used (``used_i``:
+    ball i's; ``x1``, ``v``: the balls' new positions [m] and velocities [m/s])."""
+    stale = False
+    if j != i:
+        used_j = skin_used(x1[j], lists.x_at_build[j], v[j], h)
+        d = ti.cast(lists.x_at_build[i], float) - ti.cast(lists.x_at_build[j], float)
+        gap = d.norm() - of_ball(radius, i) - of_ball(radius, j)
+        if gap < used_i + used_j:
+            if not pair_listed(i, j, lists):
+                stale = True
+    return stale
+
+
+@ti.func
+def set_apart(i, apart_ids: ti.template(), n_apart):
+    """Whether ball i is one of the ``n_apart`` balls the last build set apart (``apart_ids``)."""
+    found = False
+    for f in range(n_apart):
+        if apart_ids[f] == i:
+            found = True
+    return found
+
+
+@ti.func
+def stale_by_every_ball(i, used_i, h, radius: ti.template(), lists: ti.template(), x1: ti.template(), v: ti.template()):
+    """Whether ball i has come within reach of a ball the lists miss, every ball tested."""
+    stale = False
+    for j in range(x1.shape[0]):
+        if unlisted_within_reach(i, j, used_i, h, radius, lists, x1, v):
+            stale = True
+    return stale
+
+
+@ti.func
+def stale_near(
+    i,
+    used_i,
+    g: ti.template(),
+    start: ti.template(),
+    sorted_ids: ti.template(),
+    apart_ids: ti.template(),
+    stored_sorted: ti.template(),
+    radius: ti.template(),
+    lists: ti.template(),
+    x1: ti.template(),
+    v: ti.template(),
+):
+    """:func:`stale_by_every_ball`, with the grid of the last build (``g``: its
+    :data:`ti_golf.physics.types.GridParams`; ``start``, ``sorted_ids``: its buckets, see
+    :func:`.grid.list_neighbours` for ``stored_sorted``): the balls of the ``REACH_CELLS`` cells
+    around ball i's at the build, and the balls listed apart (every ball, for a ball listed apart),
+    as the build tested them."""
+    stale = False
+    if g.scan_apart != 0 and set_apart(i, apart_ids, g.n_apart):
+        stale = stale_by_every_ball(i, used_i, g.h, radius, lists, x1, v)
+    else:
+        c = cell_of(ti.cast(lists.x_at_build[i], float), g.inv_cell)
+        span = 2 * REACH_CELLS + 1
+        for q in range(span * span):  # the columns of cells around c, each a run of buckets
+            row = c + ti.Vector([q % span - REACH_CELLS, -REACH_CELLS, q // span - REACH_CELLS])
+            b = bucket_of(row, g.mask, g.origin, g.stride)
+            for part in range(2):
+                lo, hi = start[b], start[ti.min(b + span, g.mask + 1)]
+                if part == 1:  # the run wraps around the table's end
+                    lo, hi = start[0], start[ti.max(b + span - (g.mask + 1), 0)]
+                for k in range(lo, hi):
+                    j = k
+                    if ti.static(not stored_sorted):
+                        j = sorted_ids[k]
+                    if unlisted_within_reach(i, j, used_i, g.h, radius, lists, x1, v):
+                        stale = True
+        for f in range(g.n_apart * g.scan_apart):
+            if unlisted_within_reach(i, apart_ids[f], used_i, g.h, radius, lists, x1, v):
+                stale = True
+    return stale
+
+
+@ti.func
+def flag_stale_lists(
+    serial: ti.template(),
+    params: ti.template(),
+    radius: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    scratch: ti.template(),
+    g: ti.template(),
+    grid: ti.template(),
+    apart_ids: ti.template(),
+    stored_sorted: ti.template(),
+):
+    """Set ``scratch.flag[0]`` when the lists must be rebuilt before the next step of balls now at
+    ``scratch.x_free`` [m] with velocities ``state.v`` [m/s]: a ball has used the whole skin
+    (``params``: the step's scalars, h and the skin), or a pair out of the lists is within reach
+    of a ball that has used more than half of it (see the module's docstring), looked for only
+    when no ball has used the whole skin (as while a pour lands, when most steps rebuild), with the
+    grid of the last build (``g``, ``grid``: its :data:`ti_golf.physics.types.GridParams` and
+    :data:`ti_golf.physics.types.GridScratch`; ``apart_ids``, ``stored_sorted``: see :func:`stale_near`) or,
+    ``serial``, among every ball (the four are not read). Both find the same pairs."""
+    for i in range(scratch.x_free.shape[0]):
+        if skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h) > params.skin:
+            scratch.flag[0] = 1
+    for i in range(scratch.x_free.shape[0]):  # (a second loop: no ball searched when one used the skin)
+        if scratch.flag[0] == 0:  # (once the lists must be rebuilt, no other ball need be tested)
+            used = skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h)
+            if used > params.half_skin and used <= params.skin:
+                stale = False
+                if ti.static(serial):
+                    stale = stale_by_every_ball(i, used, params.h, radius, lists, scratch.x_free, state.v)
+                else:
+                    stale = stale_near(
+                        i,
+                        used,
+                        g,
+                        grid.start,
+                        grid.sorted_ids,
+                        apart_ids,
+                        stored_sorted,
+                        radius,
+                        lists,
+                        scratch.x_free,
+                        state.v,
+                    )
+                if stale:
+                    scratch.flag[0] = 1
+
+
+@kernel
+def lists_stale(
+    scalars: float_array,
+    g: GridParams,
+    grid: GridScratch,
+    apart_ids: int_array,
+    stored_sorted: ti.template(),
+    model: ModelArrays,
+    lists: NeighbourLists,
+    state: BallState,
+    scratch: StepScratch,
+) -> ti.i32:
+    """Whether the lists must be rebuilt after a parallel Gauss–Seidel step (its projection done):
+    :func:`flag_stale_lists` with the grid of the last build (``g``, ``grid``, ``apart_ids`` and
+    ``stored_sorted`` as :func:`.grid.list_neighbours` had them) and the step's scalars
+    (:func:`ti_golf.physics.types.scalars_of`). Returns ``scratch.flag[0]``."""
+    _air, _contact, _terrain, params = scalars_of(scalars)
+    flag_stale_lists(False, params, model.radius, lists, state, scratch, g, grid, apart_ids, stored_sorted)
+    return scratch.flag[0]

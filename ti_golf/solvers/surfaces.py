@@ -1,0 +1,345 @@
+"""A ball's contacts with the planes and the terrain in a collision step (report Appendix B).
+
+Each ball meets the planes, then the plane of the terrain patch under its free-flight end point,
+in turn (:func:`surface_impulses`); a resting impulse on each is kept from step to step. A ball
+whose clearance (:func:`surface_clearance`) shows it cannot reach any of them within the step
+skips them, which changes no result.
+
+The impulses are kept in a row per ball that the neighbour lists' build finds within reach of a
+plane or the terrain, as it lists the ball pairs (:func:`list_surfaces`, with the same skin): a
+ball more than that from every surface cannot touch one before the lists are rebuilt, and keeps no
+row. In a pile most balls touch no surface, and a row for every ball (the five planes of a bin:
+80 bytes a ball with the friction impulses of the Gauss–Seidel sweeps) was the largest table of a
+pile after the pair tables. Each rebuild carries the rows of the balls that keep one
+(:func:`carry_surfaces`).
+"""
+
+import taichi as ti
+
+from ti_golf.physics.contact import (
+    CENTRE_FRICTION,
+    GAUSS_SEIDEL,
+    centre_friction,
+    clamp_friction,
+    plane_jolt,
+    spin_jolt,
+    surface_impulse,
+    warm_impulse,
+)
+from ti_golf.physics.terrain import (
+    same_cell,
+    surface,
+    surface_contact,
+    terrain_clearance,
+)
+from ti_golf.physics.types import (
+    ModelArrays,
+    TerrainParams,
+    int_array,
+    is_f64,
+    kernel,
+    of_ball,
+    vec3_array,
+    vec4f,
+    vec4f_table,
+    zero3,
+)
+from ti_golf.solvers.phases import Phase
+from ti_golf.solvers.sequential import surface_step
+from ti_golf.solvers.sort import bucket_starts
+
+LAMBDA = 0
+"""The component of a contact's (λ, F) in ``NeighbourLists.surface_impulse`` that holds λ."""
+FAR = 1e30  # the surface clearance of a ball when there are no planes and no terrain (see surface_clearance)
+NEAR = -1.0  # the surface clearance of a ball resting on a plane or the terrain: it always visits them
+
+
+@ti.func
+def surface_clearance(
+    i, x_free_i, terrain: ti.template(), model: ti.template(), lists: ti.template(), state: ti.template()
+):
+    """The least surface gap [m] of ball i to the planes at the start of the step and, with a
+    terrain, a lower bound on its gap to the terrain less its free-flight displacement (see
+    :func:`terrain.terrain_clearance`; the free-flight end point ``x_free_i``); ``FAR`` with
+    neither, ``NEAR`` when the ball keeps a resting impulse on one of them. A plane's gap at any
+    point y is at least the plane clearance less |y − x_i| (the normals are unit vectors), a
+    terrain patch's at least the terrain clearance less twice that (the patch is taken under a
+    moved point too). This lets the sweeps and :func:`finish` skip the planes and the terrain of a
+    ball that cannot reach any of them (most balls of a pile) without changing any result."""
+    c = FAR
+    row = surface_row(lists.surface_start, i)
+    for p in range(model.plane_n.shape[0]):
+        c = ti.min(c, (state.x[i] - model.plane_p[p]).dot(model.plane_n[p]) - of_ball(model.radius, i))
+        if row >= 0 and lists.surface_impulse[row, p][LAMBDA] > 0.0:
+            c = NEAR
+    if terrain.on != 0:
+        if row >= 0 and lists.surface_impulse[row, model.plane_n.shape[0]][LAMBDA] > 0.0:
+            c = NEAR
+        elif c != NEAR:
+            c = ti.min(c, terrain_clearance(model.heights, terrain, state.x[i], x_free_i, of_ball(model.radius, i)))
+    return c
+
+
+@ti.func
+def rounded_down(c):
+    """``c`` [m] as an f32 no larger than ``c``, for the ``clear`` array (f32 whatever the
+    precision: 4 bytes per ball less in f64): a clearance may only err on the near side, where
+    it makes the ball visit planes that it cannot reach (no impulse, no change). In f64 the value
+    is first lowered by 2^-23·|c|, twice what rounding to f32 can add."""
+    low = c
+    if ti.static(is_f64()):
+        low = c - ti.abs(c) * 2.0**-23
+    return ti.cast(low, ti.f32)
+
+
+@ti.func
+def beyond_reach(clear, r, reach_sqr):
+    """Whether a ball of radius ``r`` with surface clearance ``clear`` (:func:`surface_clearance`)
+    stays more than 2 % of a radius from every plane and the terrain while its gaps shrink by at
+    most sqrt(``reach_sqr``) [m]: it can neither touch one nor count as touching one (below 1 %),
+    with room for round-off."""
+    c = clear - 0.02 * r
+    return c > 0.0 and c * c > reach_sqr
+
+
+@ti.func
+def surface_impulses(
+    i,
+    warm: ti.template(),
+    vi,
+    wi,
+    contact: ti.template(),
+    terrain: ti.template(),
+    h,
+    v_inelastic,
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    scratch: ti.template(),
+    phase=Phase.JACOBI,
+):
+    """Ball i's contacts with the planes, then the terrain (the plane of the patch under its
+    free-flight end point; its resting impulse is kept in the column after the planes' in
+    the ball's row of ``surface_impulse``, in f32: only the ball reads and writes its own λ, so nothing
+    can disagree about it, and the next sweep or step corrects what the rounding left, 2^-24 of
+    the impulse; a ball without a row touches none: see :func:`list_surfaces`), applied in turn to
+    (vi, wi): the warm start (``warm``) or a sweep, Jacobi (``Phase.JACOBI``, :func:`ti_golf.physics.contact.surface_impulse`)
+    or Gauss–Seidel (``phase``: that of :func:`.sequential.surface_step`). A sweep skips
+    them when the ball is too far from all of them (``clear[i]``, see :func:`surface_clearance`)
+    to touch one within the step at its speed, and marks the ball ``NEAR`` once it rests on one
+    (that resting impulse must be visited in later sweeps, to be given back). Returns (v, ω)."""
+    r = of_ball(model.radius, i)
+    row = surface_row(lists.surface_start, i)
+    far = False
+    if ti.static(warm):
+        far = row < 0  # (no resting impulse to apply)
+    else:
+        far = beyond_reach(scratch.clear[i], r, h * h * vi.norm_sqr())
+    n_planes = model.plane_n.shape[0]
+    if far:
+        n_planes = 0
+    for p in range(n_planes):
+        n = model.plane_n[p]
+        gap = (state.x[i] - model.plane_p[p]).dot(n) - r
+        vi, wi = surface_contact_step(
+            i, row, p, warm, n, gap, vi, wi, r, contact, h, v_inelastic, lists, scratch, phase
+        )
+    if terrain.on != 0 and not far:
+        q = model.plane_n.shape[0]
+        if ti.static(not warm) or lists.surface_impulse[row, q][LAMBDA] > 0.0:  # (warm: row ≥ 0)
+            pt, n = surface(model.heights, terrain, scratch.x_free[i])
+            ct = surface_contact(
+                contact, model.surface_table, model.terrain_cells, model.heights, terrain, scratch.x_free[i]
+            )
+            gap = (state.x[i] - pt).dot(n) - r
+            vi, wi = surface_contact_step(i, row, q, warm, n, gap, vi, wi, r, ct, h, v_inelastic, lists, scratch, phase)
+    return vi, wi
+
+
+@ti.func
+def surface_contact_step(
+    i,
+    row,
+    column,
+    warm: ti.template(),
+    n,
+    gap,
+    vi,
+    wi,
+    r,
+    contact,
+    h,
+    v_inelastic,
+    lists: ti.template(),
+    scratch: ti.template(),
+    phase,
+):
+    """Ball i's contact with one surface of normal ``n`` and surface gap ``gap`` [m], whose resting
+    impulse (and, for the Gauss–Seidel sweeps, friction impulse) per unit mass is kept in
+    ``column`` of the ball's ``row`` of ``lists.surface_impulse``: see :func:`surface_impulses`. A
+    ball without a row (``row`` −1) meets a surface that the lists' build found out of its reach
+    (:func:`list_surfaces`), as a ball knocked more than the skin in one step does: from no
+    carried impulse, and with nothing kept from one sweep to the next; the lists are then rebuilt
+    before the next step. Returns (v, ω)."""
+    lam0, F0 = 0.0, zero3()
+    if row >= 0:  # f32 in the table (see surface_impulses)
+        kept = lists.surface_impulse[row, column]
+        lam0 = ti.cast(kept[LAMBDA], float)
+        F0 = ti.cast(ti.Vector([kept[1], kept[2], kept[3]]), float)
+    if ti.static(warm):
+        if lam0 > 0.0:
+            if contact.solver == GAUSS_SEIDEL:  # the normal and friction impulses carried from the last step
+                P = lam0 * n + clamp_friction(F0, n, contact.mu * lam0)
+                vi += P
+                if contact.friction != CENTRE_FRICTION:
+                    wi += spin_jolt(P, n, r, 1.0)
+            else:
+                P = zero3()
+                if contact.friction == CENTRE_FRICTION:
+                    P = lam0 * n + centre_friction(n, vi, 1.0, contact.mu * lam0)
+                else:
+                    P = warm_impulse(n, vi, wi, r, zero3(), zero3(), 0.0, 1.0, lam0, contact.mu)
+                vi, wi = plane_jolt(P, lam0, vi, wi, r, n, contact.mu_roll, contact.friction)
+    elif gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam0 > 0.0:  # else no impulse (pair_impulse)
+        lam_p = 0.0
+        if row < 0:  # an impulse the lists did not foresee (see list_surfaces): rebuild them
+            scratch.flag[0] = 1
+        if phase != Phase.JACOBI:
+            F = F0
+            if phase == Phase.FIRST:  # what the warm start applied
+                F = clamp_friction(F, n, contact.mu * lam0)
+            vi, wi, lam_p, F = surface_step(
+                phase, n, gap, scratch.v_free[i], vi, wi, r, lam0, F, contact, v_inelastic, h
+            )
+            if row >= 0:
+                lists.surface_impulse[row, column] = ti.Vector([lam_p, F[0], F[1], F[2]], dt=ti.f32)
+        else:
+            P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, contact, v_inelastic, h)
+            if P.dot(n) != 0.0:
+                vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, contact.mu_roll, contact.friction)
+            if row >= 0:
+                lists.surface_impulse[row, column][LAMBDA] = ti.cast(lam_p, ti.f32)
+        if lam_p > 0.0:
+            scratch.clear[i] = ti.cast(NEAR, ti.f32)
+    return vi, wi
+
+
+@ti.func
+def surface_row(start: ti.template(), i):
+    """Ball i's row of surface impulses (see :func:`list_surfaces`), or −1 when it keeps none."""
+    row = start[i]
+    if start[i + 1] == row:
+        row = -1
+    return row
+
+
+@ti.func
+def near_a_surface(i, xi, reach, terrain: ti.template(), model: ti.template()):
+    """Whether ball i at ``xi`` [m] may touch a plane or the terrain before the neighbour lists are
+    rebuilt, when it moves no farther than ``reach`` [m] until then (see :func:`list_surfaces`). A
+    plane is within reach when its surface gap is below it; the terrain when its clearance
+    (:func:`ti_golf.physics.terrain.terrain_clearance`, at least the gap to any patch of the cell under the ball)
+    is below twice the reach, since a patch taken under a moved point is nearer by up to twice the
+    move, or when a move of the reach can take the ball over another cell."""
+    r = of_ball(model.radius, i)
+    near = False
+    for p in range(model.plane_n.shape[0]):
+        if (xi - model.plane_p[p]).dot(model.plane_n[p]) - r < reach:
+            near = True
+    if terrain.on != 0 and not near:
+        if terrain_clearance(model.heights, terrain, xi, xi, r) < 2.0 * reach:
+            near = True
+        for corner in ti.static(range(4)):
+            dx = ti.Vector([reach if corner % 2 else -reach, 0.0, reach if corner // 2 else -reach])
+            if not same_cell(model.heights, terrain, xi, xi + dx):
+                near = True
+    return near
+
+
+@ti.func
+def old_row(i, carry, old_start: ti.template(), reorder, old_index: ti.template()):
+    """Ball i's row in the old tables of surface impulses (see :func:`carry_surfaces`), or −1."""
+    old = -1
+    if carry != 0:
+        o = i
+        if reorder != 0:
+            o = old_index[i]
+        old = surface_row(old_start, o)
+    return old
+
+
+@kernel
+def list_surfaces(
+    terrain: TerrainParams,
+    model: ModelArrays,
+    x: vec3_array,
+    reach: float,
+    carry: ti.i32,
+    old_start: int_array,
+    old_impulse: vec4f_table,
+    reorder: ti.i32,
+    old_index: int_array,
+    start: int_array,
+    chunk_start: int_array,
+) -> ti.i32:
+    """Give a row of surface impulses to each ball at ``x`` [m] that may touch a plane or the
+    terrain before the next rebuild of the lists (:func:`near_a_surface`) or, with ``carry``, still
+    holds a resting impulse in its old row (see :func:`carry_surfaces`: a Jacobi sweep gives an
+    impulse back only as the ball moves away, and the warm start applies it again); ball i's row is
+    ``start[i]`` when ``start[i + 1] > start[i]`` (see :func:`surface_row`), the rows numbered in
+    ball order by the grid's chunked scan (``chunk_start``: its scratch, see
+    ``links.pair_starts``). Returns the rows in all.
+
+    ``reach`` [m] bounds how far a ball moves before the next rebuild: the skin between rebuilds
+    with the Gauss–Seidel sweeps (``stale.flag_stale_lists``), half of it with the Jacobi sweeps
+    (``links.moved_past``), or in the step right after the build h·|v|, where |v| may be up to the
+    fastest ball's speed for a ball that it knocks on; the caller passes max(skin, 2h·v_max), as
+    ball pairs are listed within the skin (``grid.pair_reach``). A ball knocked farther within one
+    step still meets the surface (see :func:`surface_contact_step`), and has then used more than
+    the skin: the lists are rebuilt before the next step."""
+    for i in range(x.shape[0]):
+        listed = near_a_surface(i, x[i], reach, terrain, model)
+        old = old_row(i, carry, old_start, reorder, old_index)
+        if old >= 0 and not listed:
+            for c in range(old_impulse.shape[1]):
+                if old_impulse[old, c][LAMBDA] > 0.0:
+                    listed = True
+        start[i + 1] = 0
+        if listed:
+            start[i + 1] = 1
+    bucket_starts(start, chunk_start)
+    return start[start.shape[0] - 1]
+
+
+@kernel
+def carry_surfaces(
+    carry: ti.i32,
+    old_start: int_array,
+    old_impulse: vec4f_table,
+    reorder: ti.i32,
+    old_index: int_array,
+    start: int_array,
+    impulse: vec4f_table,
+):
+    """Fill each ball's new row of surface impulses (``start``, ``impulse``; see
+    :func:`list_surfaces`) with its old row's (``old_start``, ``old_impulse``, of as many columns)
+    when ``carry`` and it kept one, else with zeros. With ``reorder`` the balls were stored in
+    another order since the old rows were made: ball i was ball ``old_index[i]`` (as
+    ``links.link_and_carry`` reads it)."""
+    for i in range(start.shape[0] - 1):
+        row = surface_row(start, i)
+        if row >= 0:
+            old = old_row(i, carry, old_start, reorder, old_index)
+            for c in range(impulse.shape[1]):
+                kept = vec4f(0.0)
+                if old >= 0:
+                    kept = old_impulse[old, c]
+                impulse[row, c] = kept
+
+
+@kernel
+def every_ball_a_row(start: int_array):
+    """Give every ball a row of surface impulses, its own index (the serial steps, whose lists
+    are rebuilt inside the kernel: see ``collide.collision_step``)."""
+    for i in range(start.shape[0]):
+        start[i] = i

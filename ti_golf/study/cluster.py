@@ -1,0 +1,162 @@
+"""The Dask client of a study: a local cluster bound to the loopback address, or a scheduler joined.
+
+Dask's distributed scheduler (``pip install 'ti-golf[cluster]'``) places the tasks, honours
+per-task resources (a GPU) and runs a task again elsewhere when its worker dies. Locally, one
+worker process per core, each with one thread, every process listening on 127.0.0.1 only, and no
+dashboard. ``address`` (or :data:`ADDRESS_ENV`) joins a running scheduler instead: its address
+(``tcp://10.0.0.5:8786``) or the JSON file ``dask scheduler --scheduler-file`` wrote.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import shutil
+import subprocess
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from ti_golf.errors import ConfigError
+
+ADDRESS_ENV = "TI_GOLF_SCHEDULER"
+"""The environment variable naming a scheduler to join when ``--address`` is not given."""
+
+INSTALL_HINT = "pip install 'ti-golf[cluster]'"
+
+LOOPBACK = "127.0.0.1"
+
+
+def require_dask() -> None:
+    """A one-line error (exit code 2) saying how to install Dask and pyarrow when they are missing."""
+    missing = []
+    for module in ("distributed", "pyarrow"):
+        try:
+            __import__(module)
+        except ImportError:
+            missing.append({"distributed": "dask[distributed]"}.get(module, module))
+    if missing:
+        raise ConfigError(
+            "ti-golf study",
+            None,
+            f"needs {' and '.join(missing)}, which are not installed: {INSTALL_HINT} (or pip install "
+            f"{' '.join(repr(m) for m in missing)})",
+        )
+
+
+def cores() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def local_gpus() -> int:
+    """How many NVIDIA GPUs ``nvidia-smi -L`` lists here (0 without it)."""
+    smi = shutil.which("nvidia-smi")
+    if smi is None:
+        return 0
+    try:
+        out = subprocess.run([smi, "-L"], capture_output=True, text=True, timeout=20, check=False).stdout
+    except (OSError, subprocess.SubprocessError):
+        return 0
+    return sum(1 for line in out.splitlines() if line.startswith("GPU "))
+
+
+@contextlib.contextmanager
+def study_client(
+    address: str | None = None,
+    workers: int | None = None,
+    gpus: int | None = None,
+    need_gpu: bool = False,
+    task_threads: int | None = None,
+) -> Iterator[Any]:
+    """A ``distributed.Client``: joined to ``address`` (or :data:`ADDRESS_ENV`), else of a local
+    cluster of ``workers`` processes (default: one per core) and ``gpus`` more with the resource
+    ``GPU = 1`` (default: one per GPU here when ``need_gpu``), each task's Taichi given
+    ``task_threads`` CPU threads (default: the cores shared among the workers). Closed (the local
+    cluster stopped) when the block ends."""
+    require_dask()
+    from distributed import Client
+
+    address = address or os.environ.get(ADDRESS_ENV) or None
+    logging.getLogger("distributed").setLevel(logging.ERROR)
+    if address:
+        if workers is not None:
+            raise ConfigError("--workers", None, "starts a local cluster: leave it out with --address")
+        if Path(address).suffix == ".json":
+            if not Path(address).is_file():
+                raise ConfigError("--address", None, f"scheduler file {address!r} not found")
+            client = Client(scheduler_file=address, timeout="30s")
+        else:
+            client = Client(address, timeout="30s")
+        try:
+            if need_gpu and not any(
+                w.get("resources", {}).get("GPU") for w in client.scheduler_info()["workers"].values()
+            ):
+                raise ConfigError(
+                    "--address",
+                    None,
+                    f"the study's tasks ask for a GPU (task.gpu = true) and no worker of {address} has one: start "
+                    "workers with `dask worker ... --resources GPU=1`",
+                )
+            yield client
+        finally:
+            client.close()
+        return
+    n = cores() if workers is None else workers
+    if n < 1:
+        raise ConfigError("--workers", None, f"must be >= 1 (got {n})")
+    if gpus is None:
+        gpus = local_gpus() if need_gpu else 0
+    if need_gpu and gpus < 1:
+        raise ConfigError(
+            "task.gpu",
+            None,
+            "the study's tasks ask for a GPU and this machine has none (nvidia-smi lists none): join a cluster with "
+            "GPU workers (--address)",
+        )
+    cluster = _local_cluster(n, gpus, task_threads)
+    try:
+        client = Client(cluster)
+        try:
+            yield client
+        finally:
+            client.close()
+    finally:
+        cluster.close()
+
+
+def _local_cluster(n: int, gpus: int, task_threads: int | None = None) -> Any:
+    """``n`` single-threaded CPU workers (Taichi given ``cores / n`` threads each) and ``gpus``
+    GPU workers, every process listening on 127.0.0.1, no dashboard."""
+    from distributed import LocalCluster, Nanny
+
+    from ti_golf.study.worker import THREADS_ENV
+
+    threads = task_threads or max(1, cores() // max(n, 1))
+    options = {
+        "host": LOOPBACK,
+        "dashboard_address": None,
+        "worker_dashboard_address": None,
+        "protocol": "tcp://",
+        "silence_logs": logging.ERROR,
+    }
+    cluster = LocalCluster(
+        n_workers=n, threads_per_worker=1, processes=True, env={THREADS_ENV: str(threads)}, **options
+    )
+    for i in range(gpus):
+        cluster.worker_spec[f"gpu-{i}"] = {
+            "cls": Nanny,
+            "options": {
+                "host": LOOPBACK,
+                "nthreads": 1,
+                "resources": {"GPU": 1},
+                "dashboard_address": None,
+                "silence_logs": logging.ERROR,
+                "env": {THREADS_ENV: str(threads), "CUDA_VISIBLE_DEVICES": str(i)},
+            },
+        }
+    if gpus:
+        cluster.sync(cluster._correct_state)
+        cluster.wait_for_workers(n + gpus)
+    return cluster

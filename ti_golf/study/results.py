@@ -1,0 +1,134 @@
+"""A study's folder: the manifest of finished tasks, and the results table (Parquet and CSV).
+
+The manifest (``manifest.jsonl``) gets one line per finished task as soon as its row comes back,
+flushed to the disk, so that a study stopped at any point (Ctrl-C, SIGTERM, a lost machine) keeps
+every row it finished; running the study again skips the tasks whose rows say ``ok`` and runs the
+others (failed or never run). The table (``results.parquet`` and ``results.csv``) has one row per
+finished task of the study in the study's order, and is written whole or not at all
+(:func:`ti_golf.files.atomic_path`): the task's id, the varied keys, the seed, the figures, the
+status and error, the wall time, the host and worker that ran it, and the path of its saved run
+(relative to the folder).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from ti_golf.files import atomic_path
+
+MANIFEST = "manifest.jsonl"
+TABLE_PARQUET = "results.parquet"
+TABLE_CSV = "results.csv"
+RUNS = "runs"
+
+BOOKKEEPING = ("status", "error", "wall_s", "host", "worker", "run_path")
+"""The columns after the figures."""
+
+
+class Manifest:
+    """The rows finished so far in a study folder, by task id (the last row of a task wins)."""
+
+    def __init__(self, folder: str | os.PathLike[str]) -> None:
+        self.path = Path(folder) / MANIFEST
+        self.rows: dict[str, dict[str, Any]] = {}
+        if self.path.is_file():
+            with open(self.path, encoding="utf-8") as fh:
+                for line in fh:
+                    line = line.strip()
+                    if not line:
+                        continue
+                    try:
+                        row = json.loads(line)
+                    except json.JSONDecodeError:  # a line cut short when the machine went down: that task runs again
+                        continue
+                    self.rows[row["id"]] = row
+
+    def finished(self, task_id: str) -> bool:
+        """Whether the task has a row that says ``ok``."""
+        return self.rows.get(task_id, {}).get("status") == "ok"
+
+    def add(self, row: Mapping[str, Any]) -> None:
+        """Keep a finished task's row: in memory and, at once, at the end of the manifest file."""
+        self.rows[row["id"]] = dict(row)
+        with open(self.path, "a", encoding="utf-8") as fh:
+            fh.write(json.dumps(row, default=_plain) + "\n")
+            fh.flush()
+            os.fsync(fh.fileno())
+
+
+def _plain(value: Any) -> Any:
+    return value.tolist() if hasattr(value, "tolist") else str(value)
+
+
+def table_rows(tasks: Iterable[Any], manifest: Manifest, keys: Sequence[str]) -> tuple[list[str], list[dict[str, Any]]]:
+    """The columns and the rows of the results table: the finished ``tasks`` (TaskSpec) in order."""
+    rows = []
+    figure_columns: list[str] = []
+    for t in tasks:
+        done = manifest.rows.get(t.id)
+        if done is None:
+            continue
+        row: dict[str, Any] = {"task_id": t.id}
+        for k in keys:
+            value = t.point.get(k)
+            row[k] = json.dumps(value) if isinstance(value, (list, tuple)) else value
+        row["seed"] = t.seed
+        for name, value in done.items():
+            if name in ("id", *BOOKKEEPING):
+                continue
+            if name not in figure_columns:
+                figure_columns.append(name)
+            row[name] = value
+        for name in BOOKKEEPING:
+            row[name] = done.get(name, "")
+        rows.append(row)
+    columns = ["task_id", *keys, "seed", *figure_columns, *BOOKKEEPING]
+    return columns, rows
+
+
+def write_table(folder: str | os.PathLike[str], columns: Sequence[str], rows: Sequence[Mapping[str, Any]]) -> None:
+    """Write the table as ``results.parquet`` (pyarrow) and ``results.csv``, each whole or not at all.
+
+    The figures are 64-bit floats in both (the CSV's written with every digit, so that it reads
+    back to the same bits); a figure a row lacks is null in Parquet and empty in the CSV."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    folder = Path(folder)
+    arrays = {}
+    for name in columns:
+        values = [row.get(name) for row in rows]
+        present = [v for v in values if v is not None]
+        if present and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in present):
+            if name != "seed" and any(isinstance(v, float) for v in present):
+                values = [None if v is None else float(v) for v in values]
+        arrays[name] = pa.array(values)
+    table = pa.table(arrays) if columns else pa.table({})
+    with atomic_path(folder / TABLE_PARQUET) as tmp:
+        pq.write_table(table, tmp)
+    with atomic_path(folder / TABLE_CSV) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(columns)
+        for row in rows:
+            writer.writerow([_cell(row.get(name)) for name in columns])
+
+
+def _cell(value: Any) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return repr(value) if math.isfinite(value) else str(value)
+    return str(value)
+
+
+def read_table(folder: str | os.PathLike[str]) -> dict[str, list[Any]]:
+    """The results table of a study folder as columns (from the Parquet file)."""
+    import pyarrow.parquet as pq
+
+    return pq.read_table(Path(folder) / TABLE_PARQUET).to_pydict()

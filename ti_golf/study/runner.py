@@ -1,0 +1,135 @@
+"""Running a study: its tasks submitted to Dask, each row kept as it comes back, the table written.
+
+>>> from ti_golf.study import run_study                                    # doctest: +SKIP
+>>> result = run_study("bag_weather", out="bag", workers=2)                # doctest: +SKIP
+>>> result.failed, result.table["carry_m[PGA Driver]"][:3]                 # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ti_golf.errors import ConfigError
+from ti_golf.study.cluster import study_client
+from ti_golf.study.results import RUNS, Manifest, table_rows, write_table
+from ti_golf.study.spec import StudySpec, TaskSpec, load_study
+
+TABLE_EVERY_S = 30.0
+"""While a study runs, its table is rewritten at most this often (the manifest at every row)."""
+
+
+@dataclass
+class StudyResult:
+    """What a study ran: its folder, the rows of the table (columns -> values), how many tasks
+    ran now, were skipped as finished before, and failed; ``interrupted`` when stopped early."""
+
+    spec: StudySpec
+    folder: Path
+    columns: list[str] = field(default_factory=list)
+    rows: list[dict[str, Any]] = field(default_factory=list)
+    ran: int = 0
+    skipped: int = 0
+    failed: int = 0
+    interrupted: bool = False
+
+    @property
+    def table(self) -> dict[str, list[Any]]:
+        """The table by column."""
+        return {c: [row.get(c) for row in self.rows] for c in self.columns}
+
+
+def default_folder(spec: StudySpec) -> Path:
+    """Where a study's results go unless ``--out`` says: ``NAME_study`` in the current folder."""
+    return Path(f"{spec.name}_study")
+
+
+def run_study(
+    study: str | os.PathLike[str] | StudySpec,
+    out: str | os.PathLike[str] | None = None,
+    workers: int | None = None,
+    address: str | None = None,
+    overrides: Sequence[str] = (),
+    gpus: int | None = None,
+    log: Callable[[str], None] = print,
+) -> StudyResult:
+    """Run the tasks of ``study`` (a study file, a bundled study's name, or a loaded spec) not
+    finished in its folder ``out``, on a local Dask cluster of ``workers`` processes or on the
+    scheduler at ``address``; returns the table. Ctrl-C (``KeyboardInterrupt``) stops it after
+    writing the finished rows, and is raised again."""
+    spec = study if isinstance(study, StudySpec) else load_study(study, overrides)
+    folder = Path(out) if out is not None else default_folder(spec)
+    if folder.exists() and not folder.is_dir():
+        raise ConfigError("--out", None, f"{str(folder)!r} is a file, not a folder")
+    (folder / RUNS).mkdir(parents=True, exist_ok=True)
+    manifest = Manifest(folder)
+    todo = [t for t in spec.tasks if not manifest.finished(t.id)]
+    result = StudyResult(spec, folder, skipped=len(spec.tasks) - len(todo))
+    if result.skipped:
+        log(f"{spec.name}: {result.skipped} of {len(spec.tasks)} tasks finished before (in {folder}), skipped")
+    try:
+        if todo:
+            with study_client(address, workers, gpus, need_gpu=spec.gpu) as client:
+                _run(spec, todo, client, folder, manifest, result, log)
+    except KeyboardInterrupt:
+        result.interrupted = True
+        raise KeyboardInterrupt(
+            f"after {result.ran} of {len(todo)} tasks; the finished rows are in {folder}: run the study again to "
+            "finish it"
+        ) from None
+    finally:
+        result.columns, result.rows = table_rows(spec.tasks, manifest, spec.keys)
+        write_table(folder, result.columns, result.rows)
+        result.failed = sum(1 for row in result.rows if row["status"] != "ok")
+    return result
+
+
+def _run(
+    spec: StudySpec,
+    todo: list[TaskSpec],
+    client: Any,
+    folder: Path,
+    manifest: Manifest,
+    result: StudyResult,
+    log: Callable[[str], None],
+) -> None:
+    from distributed import as_completed
+
+    from ti_golf.study.worker import run_task
+
+    workers = client.scheduler_info()["workers"]
+    log(f"{spec.name}: {len(todo)} tasks on {len(workers)} worker(s) of {client.scheduler.address}")
+    run_dir = str((folder / RUNS).resolve())
+    resources = {"GPU": 1} if spec.gpu else None
+    futures = {
+        client.submit(run_task, t.as_dict(), run_dir, key=f"ti-golf-{t.id}", pure=False, resources=resources): t
+        for t in todo
+    }
+    last_table = time.monotonic()
+    try:
+        for future in as_completed(futures):
+            task = futures[future]
+            try:
+                row = future.result()
+            except Exception as exc:  # the task's worker died too often (KilledWorker), or the scheduler left
+                row = {"id": task.id, "status": "failed", "error": f"{type(exc).__name__}: {exc}", "wall_s": None}
+            row["run_path"] = os.path.relpath(row["run_path"], folder) if row.get("run_path") else ""
+            manifest.add(row)
+            result.ran += 1
+            what = ", ".join(f"{k} = {v}" for k, v in task.point.items()) or "the base scene"
+            seed = "" if task.seed is None else f", seed {task.seed}"
+            outcome = "ok" if row["status"] == "ok" else f"FAILED: {row['error']}"
+            wall = f" in {row['wall_s']:.1f} s" if row.get("wall_s") is not None else ""
+            where = f" on {row['host']}" if row.get("host") else ""
+            log(f"[{result.ran}/{len(todo)}] {what}{seed}: {outcome}{wall}{where}")
+            if time.monotonic() - last_table > TABLE_EVERY_S:
+                write_table(folder, *table_rows(spec.tasks, manifest, spec.keys))
+                last_table = time.monotonic()
+    finally:
+        unfinished = [f for f in futures if not f.done()]
+        if unfinished:
+            client.cancel(unfinished)
