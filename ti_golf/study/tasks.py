@@ -186,7 +186,7 @@ def _kill_once():
     if not marker:
         return None
 
-    def progress(done: float, total: float) -> None:
+    def progress(done: float, total: float, finished: tuple[int, int, str] | None = None) -> None:
         try:
             fd = os.open(marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
         except FileExistsError:
