@@ -7,7 +7,7 @@ import os
 import background
 import numpy as np
 import pytest
-from conftest import SCENES, cli
+from conftest import ROOT, SCENES, cli
 
 import ti_golf as tg
 
@@ -190,7 +190,7 @@ def test_init_refuses_to_change_a_started_runtime():
 def test_cuda_runs_with_matrices_scalarised_and_the_cpu_as_it_always_has():
     # Taichi 1.7.4's CUDA code for the flight's lane matrices stopped the first flight kernel with
     # CUDA_ERROR_MISALIGNED_ADDRESS on an H200; scalarised, it ran and gave the CPU's carries
-    # (docs/performance.md, "On a GPU"). No GPU here: the options are what the runtime asks for.
+    # (docs/solvers.md, "Few balls and backends"). No GPU here: the options are what the runtime asks for.
     from ti_golf.runtime import init_options
 
     assert init_options("cuda", "f64")["force_scalarize_matrix"]
@@ -246,3 +246,15 @@ def test_a_scene_too_big_for_the_memory_is_refused_before_any_ball_is_made(tmp_p
     text = str(err.value)
     assert text.startswith(str(path)) and "blocks[0]" in text, text
     assert "27,000,000 balls" in text and "51.5 GiB" in text and "24.0 GiB available" in text, text
+
+
+def test_every_public_name_is_in_the_api_reference():
+    # the docs' API page (docs/api.md) renders each name of ti_golf.__all__ from its docstring
+    # (`::: ti_golf.NAME`, mkdocstrings) or, for the status constants, lists it in a table; every
+    # class and function among them has a docstring to render
+    text = (ROOT / "docs" / "api.md").read_text(encoding="utf-8")
+    for name in tg.__all__:
+        assert f"::: ti_golf.{name}\n" in text or f"| `ti_golf.{name}` |" in text, name
+        obj = getattr(tg, name)
+        if callable(obj):
+            assert (obj.__doc__ or "").strip(), name

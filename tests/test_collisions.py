@@ -934,12 +934,16 @@ def test_kinetic_energy_is_conserved_with_e1_mu0():
     # resolved by Jacobi sweeps and the position projection leave a small error we bound at 1 %.
     sim = _gas(scene("contact.e=1", "contact.v_bounce=0", "contact.k_p=0"))
     m = sim.model.mass_np
-    e0 = 0.5 * (m * (sim.v**2).sum(axis=1)).sum()
+    v0 = sim.v
+    e0 = 0.5 * (m * (v0**2).sum(axis=1)).sum()
     sim.run(t=0.5)
     e1 = 0.5 * (m * (sim.v**2).sum(axis=1)).sum()
     assert abs(e1 - e0) / e0 < 0.01
-    # and collisions did happen: the velocity distribution changed
-    assert np.abs(sim.v).max() > 0
+    # and the energy was passed between the balls: no air, no gravity, so a ball's velocity changes
+    # only in a collision, and most balls of the gas (1 cm apart, at about 1.6 m/s for 0.5 s) met
+    # another, their velocity changed by more than a tenth of the typical speed
+    changed = np.linalg.norm(sim.v - v0, axis=1) > 0.1 * np.sqrt(2.0 * e0 / m.sum())
+    assert changed.mean() > 0.8, changed.mean()
 
 
 def test_newtons_cradle_passes_the_impulse_through_the_row():
