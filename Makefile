@@ -43,9 +43,9 @@ demo: setup system-deps
 	$(TIGOLF) render --resume $(OUT)/ball_pit.npz --out $(OUT)/ball_pit.png
 	$(TIGOLF) play golf_hole --seed 3 --shots scenes/golf_hole_round.txt --out $(OUT)/golf_round.csv --plot $(OUT)/golf_round.png
 
-# The test suite on two pytest-xdist workers; the slow tests (pours, processes that compile their
-# own kernels, renders in subprocesses) are handed out first. Ends with the 15 slowest tests.
-PYTEST := $(PY) -m pytest -q -n 2 --dist loadgroup
+# The test suite on two pytest-xdist workers, a test file at a time, the files of slow tests (pours,
+# processes that compile their own kernels, renders in subprocesses) handed out first.
+PYTEST := $(PY) -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder
 
 test: setup system-deps
 	$(PYTEST) --durations=15

@@ -4,8 +4,10 @@ run the CLI.
 Tiers: a test marked ``slow`` (a pour, a process of its own that compiles its own kernels, a
 render in a subprocess) is left out of ``make test-fast`` (``pytest -m "not slow"``); every test
 that waits for a background run (tests/background.py) is slow. ``make test`` runs them all on two
-pytest-xdist workers (``-n 2``): slow tests are handed out first, so that the short ones fill the
-gaps, and the tests that share the settled narrow pit stay on one worker (``--dist loadgroup``).
+pytest-xdist workers, a test file at a time (``-n 2 --dist loadfile --no-loadscope-reorder``: a
+module's costly fixtures, such as the settled narrow pit, are made once), the files of slow tests
+handed out first so that the short ones fill the gaps. (``--dist loadgroup`` would group tests
+across files, but pytest-xdist 3.8 cannot rename pytest 9's node ids, so its groups have no effect.)
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ def pytest_configure(config):
         "background(key): the test uses the run `key` of tests/background.py, which "
         "starts in the background when a plain (not xdist) session does; implies slow",
     )
+    config.addinivalue_line("markers", "vulkan: the test uses Vulkan (GGUI or the backend); one such test at a time")
 
 
 def pytest_collection_modifyitems(session, config, items):
@@ -66,6 +69,12 @@ def pytest_collection_modifyitems(session, config, items):
     else:
         items.sort(key=lambda item: item.get_closest_marker("slow") is None)
 
+
+ON_VULKAN = pytest.mark.vulkan
+"""The mark of a test that draws with GGUI or computes on Vulkan, in this process or a child: no two
+such tests run at once, whatever worker runs them (:func:`one_vulkan_user_at_a_time`). Under load,
+with two processes on mesa's software driver at once, a GGUI picture has come out without its
+meshes (the ground missing)."""
 
 VULKAN_SKIPS_FAIL_IN_CI = "Vulkan"
 """A skip whose reason names this fails in CI: a broken Vulkan install must not silently stop every
@@ -111,6 +120,21 @@ def taichi_runtime():
     import ti_golf
 
     return ti_golf.init(TEST_ARCH, "f64")
+
+
+@pytest.fixture(autouse=True)
+def one_vulkan_user_at_a_time(request, tmp_path_factory):
+    """A test marked ``vulkan`` holds a lock shared by every pytest-xdist worker of the session (a
+    file in their common temporary folder) while it runs, its subprocesses included."""
+    if request.node.get_closest_marker("vulkan") is None:
+        yield
+        return
+    import fcntl
+
+    root = tmp_path_factory.getbasetemp()
+    with open((root.parent if XDIST_WORKER else root) / "vulkan.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        yield
 
 
 @pytest.fixture(scope="session", autouse=True)

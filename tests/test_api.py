@@ -36,6 +36,7 @@ def test_continuing_equals_one_long_run():
     np.testing.assert_array_equal(a.w, b.w)
 
 
+@pytest.mark.slow
 def test_many_balls_of_different_size_and_mass():
     # a heavier ball of the same size loses less speed to drag (k_D/m): it carries farther
     scene = tg.load_scene("lab_turbulent", ["world.ground=false"])
@@ -86,6 +87,7 @@ def test_nonfinite_simulation_names_the_ball():
     assert err.value.balls == [0]
 
 
+@pytest.mark.slow
 def test_status_counts():
     sim = tg.Simulation(tg.load_scene("lab_vacuum"), x=[[0, 0.02, 0], [1, 2.0, 0]], v=[[0, 0, 0], [0, 0, 0]])
     sim.step(1)
@@ -95,7 +97,15 @@ def test_status_counts():
     assert sim.counts()["at_rest"] == 2
 
 
-@pytest.mark.parametrize("path", sorted(SCENES.glob("*.toml")), ids=lambda p: p.stem)
+MANY_BALLS = {"avalanche", "ball_pit", "break_shot", "driving_range", "heap", "terrain_3d"}
+"""Bundled scenes of many balls: filling them and their solvers' kernels take seconds (slow tier)."""
+
+
+@pytest.mark.parametrize(
+    "path",
+    [pytest.param(p, marks=pytest.mark.slow) if p.stem in MANY_BALLS else p for p in sorted(SCENES.glob("*.toml"))],
+    ids=lambda p: p.stem,
+)
 def test_every_scene_loads_and_runs(path):
     scene = tg.load_scene(path)
     assert scene.description
@@ -137,6 +147,7 @@ def test_plain_compile_restores_the_compiler_setting():
     assert cfg.advanced_optimization == before
 
 
+@pytest.mark.slow
 def test_dropped_vector_arrays_give_their_memory_back():
     # Taichi 1.7.4 frees only scalar ndarrays when Python drops them (taichi issue 8763);
     # runtime.free_every_ndarray frees vector ones too: 24 arrays of 24 MB, each widened a little

@@ -21,7 +21,17 @@ from pathlib import Path
 import background
 import numpy as np
 import pytest
-from conftest import MATPLOTLIB_BLUE, ROOT, SCENES, cli, colour_pixels, png_rgb, run_cli, sigint_as_in_a_terminal
+from conftest import (
+    MATPLOTLIB_BLUE,
+    ON_VULKAN,
+    ROOT,
+    SCENES,
+    cli,
+    colour_pixels,
+    png_rgb,
+    run_cli,
+    sigint_as_in_a_terminal,
+)
 
 try:  # Python >= 3.11
     import tomllib
@@ -120,6 +130,7 @@ def test_keys_is_a_well_formed_markdown_table(keys_output):
                 assert rows[f"{section}.{name}"][3].replace("\\|", "|") == key.allowed, (section, name)
 
 
+@pytest.mark.slow
 def test_help_and_unknown_subcommand():
     proc = ok(run_cli("--help"))
     for command in (
@@ -229,6 +240,7 @@ def test_sweep_stdout_names_best_angle(turbulent_sweep):
     assert "71 launch conditions" in proc.stdout
 
 
+@ON_VULKAN
 def test_the_sweep_runs_on_a_gpu_backend():
     # Vulkan (in software in CI: mesa's lavapipe) compiles kernels as a GPU does. The sweep kernel
     # was compiled there without Taichi's IR passes, as on the CPU (see runtime.plain_compile), and
@@ -260,6 +272,7 @@ def test_sweep_writes_png(turbulent_sweep):
     assert np.min(np.hypot(star_rows - rows[top], star_cols - cols[top])) < 6.0  # the star marks it
 
 
+@pytest.mark.slow
 def test_sweep_speeds_and_spins_grid(tmp_path):
     csv_path = tmp_path / "magnus.csv"
     ok(run_cli("sweep", "lab_magnus", "--speeds", "60,80", "--spins", "0,10", "--out", str(csv_path)))
@@ -334,6 +347,7 @@ def test_run_spin_decay_npz_and_plot(tmp_path):
     assert "1 flying" in proc.stdout
 
 
+@pytest.mark.slow
 def test_run_reports_the_deepest_overlap(tmp_path):
     # two balls at rest overlapping by Δx = 4 mm (20 % of a radius), no gravity: one step moves each
     # by k_p·m_red·Δx (B.18, m_red = 1/2) apart and leaves (1 − k_p)·Δx = 3.2 mm (16 %) with k_p = 0.2
@@ -365,6 +379,7 @@ def test_run_reports_the_deepest_overlap(tmp_path):
     assert "no two balls overlap" in ok(run_cli("run", str(scene), "--steps", "1")).stdout
 
 
+@pytest.mark.slow
 def test_run_reports_the_distance_to_the_hole(tmp_path):
     # a scene with a [hole] ends with each ball's horizontal distance from the cup, as the saved
     # state gives it
@@ -391,6 +406,7 @@ REPORT_TABLE = [
 ]
 
 
+@pytest.mark.slow
 def test_table_reproduces_report():
     proc = ok(run_cli("table"))
     row_re = re.compile(r"^(?P<label>\S.*?)\s+(?P<ra>[\d.]+)°\s+(?P<rd>\d+) m\s+(?P<a>[\d.]+)°\s+(?P<d>[\d.]+) m\s*$")
@@ -416,6 +432,7 @@ TOUR_ROW = re.compile(
 )
 
 
+@pytest.mark.slow
 def test_tour_prints_the_23_rows_beside_the_table_and_plots_them(tmp_path, capsys):
     png = tmp_path / "tour.png"
     proc = ok(run_cli("tour", "--plot", str(png)))
@@ -461,6 +478,7 @@ def test_tour_prints_the_23_rows_beside_the_table_and_plots_them(tmp_path, capsy
     assert "air.viscosity" in err and "spin_reynolds" in err, err
 
 
+@pytest.mark.slow
 def test_fit_aero_finds_the_bundled_coefficients_from_its_start():
     # the documented, repeatable fit: from Ferguson's coefficients it finds the defaults that
     # tour_shot flies (schema.SPIN_REYNOLDS_*), to the 4 decimals printed, within published ranges
@@ -505,6 +523,7 @@ def test_bench_sweep_json():
     assert baselines["scipy_solve_ivp_dop853"] < 0.2 * baselines["numpy_rk4_vectorised"]
 
 
+@pytest.mark.slow
 def test_bench_pit_pours_the_scene_and_reports_the_piles_quality():
     # the bundled pour scaled down (the bin narrowed so the pile is as deep), in this process
     from ti_golf.bench.pit import PIT_BALLS, bench_pit, pit_scene
@@ -549,6 +568,7 @@ def test_bench_pit_pours_the_scene_and_reports_the_piles_quality():
     json.loads(json.dumps(result))
 
 
+@pytest.mark.slow
 def test_an_interrupted_bench_pit_reports_the_pour_so_far(monkeypatch, capsys):
     # Ctrl-C or SIGTERM 30 steps into a 50-step pour: Simulation.run ends after the whole step it
     # reached and raises KeyboardInterrupt (stood in for here); the benchmark still prints its
@@ -579,6 +599,7 @@ def test_an_interrupted_bench_pit_reports_the_pour_so_far(monkeypatch, capsys):
     )
 
 
+@pytest.mark.slow
 def test_bench_pit_interrupted_while_it_measures_the_pile_keeps_that_stretch(monkeypatch, capsys):
     # SIGTERM while the pile is measured at the end of the first stretch (t = 0.02 s): the signal
     # waits for the stretch's row, then the pour ends there, with its figures printed, code 130
@@ -809,6 +830,7 @@ def interrupt_mid_run(args: list[str], sig: int = signal.SIGTERM) -> tuple[int, 
         proc.kill()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
 def test_an_interrupted_run_keeps_what_it_computed(sig, tmp_path):
     # a real process, stopped mid-run: it saves the state it reached, marked partial, says so in
@@ -845,6 +867,8 @@ def test_an_interrupted_sweep_keeps_its_results(tmp_path, capsys, monkeypatch):
     assert signal.getsignal(signal.SIGTERM) == before  # the handlers are put back
 
 
+@pytest.mark.slow
+@ON_VULKAN
 def test_an_interrupted_render_draws_the_state_it_reached(tmp_path):
     out = tmp_path / "p.png"
     code, rest = interrupt_mid_run(["render", "terrain_3d", "--t", "100", "--out", str(out), "--size", "160x120"])

@@ -14,7 +14,7 @@ import re
 import background
 import numpy as np
 import pytest
-from conftest import colour_pixels, png_rgb
+from conftest import ON_VULKAN, colour_pixels, png_rgb
 
 import ti_golf as tg
 from ti_golf import cli
@@ -408,6 +408,7 @@ def _window_run(workdir):
 background.declare("game-window", _window_run)
 
 
+@ON_VULKAN
 @pytest.mark.background("game-window")
 def test_the_game_window_plays_a_stroke_and_draws_the_course(background_runs):
     # one GGUI window per process: a process of its own, hidden (show_window=False)

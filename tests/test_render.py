@@ -20,10 +20,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ON_VULKAN
 
 import ti_golf as tg
 import ti_golf.render as R
 from ti_golf.render import camera, frame
+
+pytestmark = ON_VULKAN  # one worker draws with GGUI at a time (conftest)
 
 ROOT = Path(__file__).resolve().parent.parent
 BASELINES = Path(__file__).resolve().parent / "baselines"
@@ -459,6 +462,7 @@ def test_ggui_process_is_quiet_and_leaves_no_imgui_ini(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pic.png"]  # Dear ImGui's imgui.ini went elsewhere
 
 
+@pytest.mark.slow
 def test_run_writes_numbered_frames_and_a_gif(tmp_path):
     # ti-golf run --frames-every K: one frame at the start and one every K steps, kept as PNGs and
     # as an animated GIF with the same number of frames
