@@ -6,7 +6,7 @@ TIGOLF := $(VENV)/bin/ti-golf
 STAMP  := $(VENV)/.installed
 OUT    ?= out
 
-.PHONY: setup demo test bench gpu-check gpu-test lint docs docs-keys wheel-check system-deps clean
+.PHONY: setup demo test test-fast test-slow bench gpu-check gpu-test lint docs docs-keys wheel-check system-deps clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -43,8 +43,20 @@ demo: setup system-deps
 	$(TIGOLF) render --resume $(OUT)/ball_pit.npz --out $(OUT)/ball_pit.png
 	$(TIGOLF) play golf_hole --seed 3 --shots scenes/golf_hole_round.txt --out $(OUT)/golf_round.csv --plot $(OUT)/golf_round.png
 
+# The test suite on two pytest-xdist workers, a test file at a time, the files of slow tests (pours,
+# processes that compile their own kernels, renders in subprocesses) handed out first.
+PYTEST := $(PY) -m pytest -q -n 2 --dist loadfile --no-loadscope-reorder
+
 test: setup system-deps
-	$(PY) -m pytest -q --durations=15
+	$(PYTEST) --durations=15
+
+# The fast tier, before a commit: every test not marked slow (tests/conftest.py says what is).
+test-fast: setup
+	$(PYTEST) -m "not slow" --durations=10
+
+# The rest: the slow tests alone (.ci/run runs the fast tier first, then these).
+test-slow: setup system-deps
+	$(PYTEST) -m slow --durations=15
 
 # ruff (lint and format), mypy on the non-kernel code, and the import layers (pyproject.toml).
 lint: $(DEVSTAMP)

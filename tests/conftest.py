@@ -1,4 +1,14 @@
-"""Shared test set-up: one Taichi runtime per test session (CPU, f64), helpers to run the CLI."""
+"""Shared test set-up: one Taichi runtime per test process (CPU, f64), the test tiers, helpers to
+run the CLI.
+
+Tiers: a test marked ``slow`` (a pour, a process of its own that compiles its own kernels, a
+render in a subprocess) is left out of ``make test-fast`` (``pytest -m "not slow"``); every test
+that waits for a background run (tests/background.py) is slow. ``make test`` runs them all on two
+pytest-xdist workers, a test file at a time (``-n 2 --dist loadfile --no-loadscope-reorder``: a
+module's costly fixtures, such as the settled narrow pit, are made once), the files of slow tests
+handed out first so that the short ones fill the gaps. (``--dist loadgroup`` would group tests
+across files, but pytest-xdist 3.8 cannot rename pytest 9's node ids, so its groups have no effect.)
+"""
 
 from __future__ import annotations
 
@@ -7,6 +17,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from background import BackgroundRuns
 
@@ -20,6 +31,10 @@ start, and of any kernel a test module launches while it is collected."""
 os.environ["TI_GOLF_ARCH"] = TEST_ARCH
 
 ON_CPU = TEST_ARCH == "cpu"
+IN_CI = os.environ.get("CI", "").lower() in ("1", "true", "yes")
+"""CI sets ``CI=true``: there a test skipped for want of Vulkan fails (see :func:`pytest_runtest_makereport`)."""
+XDIST_WORKER = os.environ.get("PYTEST_XDIST_WORKER")
+"""The pytest-xdist worker this process is (``gw0``, ``gw1``, ...), or ``None`` in a plain run."""
 SERIAL_OR_PARALLEL = pytest.mark.parametrize(
     "serial",
     [pytest.param(True, marks=pytest.mark.skipif(not ON_CPU, reason="serial stepping runs on the CPU only")), False],
@@ -35,14 +50,52 @@ def pytest_configure(config):
     config.addinivalue_line(
         "markers",
         "background(key): the test uses the run `key` of tests/background.py, which "
-        "starts in the background when the session does",
+        "starts in the background when a plain (not xdist) session does; implies slow",
     )
+    config.addinivalue_line("markers", "vulkan: the test uses Vulkan (GGUI or the backend); one such test at a time")
 
 
 def pytest_collection_modifyitems(session, config, items):
-    """The tests that wait for a background run (tests/background.py) go last, in their order:
-    their runs then overlap every other test, not only those before them in the files."""
-    items.sort(key=lambda item: item.get_closest_marker("background") is not None)  # a stable sort
+    """Every test that waits for a background run is slow. In a plain run those tests go last, in
+    their order: their runs then overlap every other test on the second core. Under pytest-xdist
+    the slow tests go first instead (the longest work handed out first leaves the least idle time
+    at the end), and each runs its subprocess when it comes to it, the two workers keeping both
+    cores busy."""
+    for item in items:
+        if item.get_closest_marker("background") is not None:
+            item.add_marker(pytest.mark.slow)
+    if XDIST_WORKER is None:
+        items.sort(key=lambda item: item.get_closest_marker("background") is not None)  # a stable sort
+    else:
+        items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+
+
+ON_VULKAN = pytest.mark.vulkan
+"""The mark of a test that draws with GGUI or computes on Vulkan, in this process or a child: no two
+such tests run at once, whatever worker runs them (:func:`one_vulkan_user_at_a_time`). Under load,
+with two processes on mesa's software driver at once, a GGUI picture has come out without its
+meshes (the ground missing)."""
+
+VULKAN_SKIPS_FAIL_IN_CI = "Vulkan"
+"""A skip whose reason names this fails in CI: a broken Vulkan install must not silently stop every
+picture check (the GGUI snapshots, the windows, the Vulkan backend)."""
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """In CI (``CI=true``), a test skipped for want of Vulkan is reported as failed."""
+    outcome = yield
+    report = outcome.get_result()
+    if not (IN_CI and report.skipped) or hasattr(report, "wasxfail"):
+        return
+    reason = report.longrepr[2] if isinstance(report.longrepr, tuple) else str(report.longrepr)
+    reason = reason.removeprefix("Skipped: ")
+    if VULKAN_SKIPS_FAIL_IN_CI in reason:
+        report.outcome = "failed"
+        report.longrepr = (
+            f"CI=true, and this picture check was skipped: {reason}. CI must render with GGUI "
+            "(`make system-deps` installs mesa-vulkan-drivers and libvulkan1)."
+        )
 
 
 def pytest_sessionfinish(session, exitstatus):
@@ -69,15 +122,35 @@ def taichi_runtime():
     return ti_golf.init(TEST_ARCH, "f64")
 
 
+@pytest.fixture(autouse=True)
+def one_vulkan_user_at_a_time(request, tmp_path_factory):
+    """A test marked ``vulkan`` holds a lock shared by every pytest-xdist worker of the session (a
+    file in their common temporary folder) while it runs, its subprocesses included."""
+    if request.node.get_closest_marker("vulkan") is None:
+        yield
+        return
+    import fcntl
+
+    root = tmp_path_factory.getbasetemp()
+    with open((root.parent if XDIST_WORKER else root) / "vulkan.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        yield
+
+
 @pytest.fixture(scope="session", autouse=True)
 def background_runs(request, tmp_path_factory):
-    """The session's background runs (tests/background.py): those the selected tests mark start
-    with the session's first test, in the order the tests will run."""
+    """The session's background runs (tests/background.py): in a plain session those the selected
+    tests mark start with the session's first test, in the order the tests will run; under
+    pytest-xdist none starts early, each test runs its own when it comes to it (the other worker
+    keeps the second core busy). Each xdist worker's runs keep their kernels in a cache of their
+    own, as a plain session's do."""
     import taichi as ti
 
     cache = os.environ.get("TI_OFFLINE_CACHE_FILE_PATH") or ti.lang.impl.default_cfg().offline_cache_file_path
-    runs = BackgroundRuns(tmp_path_factory.mktemp("background"), str(cache).rstrip("/\\") + "-background")
-    runs.start([mark.args[0] for item in request.session.items for mark in item.iter_markers("background")])
+    suffix = "-background" + (f"-{XDIST_WORKER}" if XDIST_WORKER else "")
+    runs = BackgroundRuns(tmp_path_factory.mktemp("background"), str(cache).rstrip("/\\") + suffix)
+    early = [] if XDIST_WORKER else request.session.items
+    runs.start([mark.args[0] for item in early for mark in item.iter_markers("background")])
     yield runs
     runs.stop()
 
@@ -128,3 +201,24 @@ def sigint_as_in_a_terminal() -> None:
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+MATPLOTLIB_BLUE = (0x1F / 255, 0x77 / 255, 0xB4 / 255)
+"""matplotlib's first line colour (``C0``, ``tab:blue``)."""
+
+
+def png_rgb(path) -> np.ndarray:
+    """The PNG at ``path`` as RGB floats in [0, 1], shape (height, width, 3) (it must be a PNG)."""
+    import matplotlib.image as mpimg
+
+    with open(path, "rb") as fh:
+        assert fh.read(8) == PNG_SIGNATURE, f"{path} is not a PNG"
+    return np.asarray(mpimg.imread(path), dtype=float)[..., :3]
+
+
+def colour_pixels(img, colour, tol: float = 0.06) -> np.ndarray:
+    """The pixels of ``img`` within ``tol`` of ``colour`` in every channel (a plotted line's core,
+    beside its anti-aliased edges), as a boolean mask."""
+    return np.all(np.abs(img - np.asarray(colour, float)) <= tol, axis=-1)

@@ -7,7 +7,7 @@ import os
 import background
 import numpy as np
 import pytest
-from conftest import SCENES, cli
+from conftest import ROOT, SCENES, cli
 
 import ti_golf as tg
 
@@ -36,6 +36,7 @@ def test_continuing_equals_one_long_run():
     np.testing.assert_array_equal(a.w, b.w)
 
 
+@pytest.mark.slow
 def test_many_balls_of_different_size_and_mass():
     # a heavier ball of the same size loses less speed to drag (k_D/m): it carries farther
     scene = tg.load_scene("lab_turbulent", ["world.ground=false"])
@@ -86,6 +87,7 @@ def test_nonfinite_simulation_names_the_ball():
     assert err.value.balls == [0]
 
 
+@pytest.mark.slow
 def test_status_counts():
     sim = tg.Simulation(tg.load_scene("lab_vacuum"), x=[[0, 0.02, 0], [1, 2.0, 0]], v=[[0, 0, 0], [0, 0, 0]])
     sim.step(1)
@@ -95,7 +97,15 @@ def test_status_counts():
     assert sim.counts()["at_rest"] == 2
 
 
-@pytest.mark.parametrize("path", sorted(SCENES.glob("*.toml")), ids=lambda p: p.stem)
+MANY_BALLS = {"avalanche", "ball_pit", "break_shot", "driving_range", "heap", "terrain_3d"}
+"""Bundled scenes of many balls: filling them and their solvers' kernels take seconds (slow tier)."""
+
+
+@pytest.mark.parametrize(
+    "path",
+    [pytest.param(p, marks=pytest.mark.slow) if p.stem in MANY_BALLS else p for p in sorted(SCENES.glob("*.toml"))],
+    ids=lambda p: p.stem,
+)
 def test_every_scene_loads_and_runs(path):
     scene = tg.load_scene(path)
     assert scene.description
@@ -137,6 +147,7 @@ def test_plain_compile_restores_the_compiler_setting():
     assert cfg.advanced_optimization == before
 
 
+@pytest.mark.slow
 def test_dropped_vector_arrays_give_their_memory_back():
     # Taichi 1.7.4 frees only scalar ndarrays when Python drops them (taichi issue 8763);
     # runtime.free_every_ndarray frees vector ones too: 24 arrays of 24 MB, each widened a little
@@ -190,7 +201,7 @@ def test_init_refuses_to_change_a_started_runtime():
 def test_cuda_runs_with_matrices_scalarised_and_the_cpu_as_it_always_has():
     # Taichi 1.7.4's CUDA code for the flight's lane matrices stopped the first flight kernel with
     # CUDA_ERROR_MISALIGNED_ADDRESS on an H200; scalarised, it ran and gave the CPU's carries
-    # (docs/performance.md, "On a GPU"). No GPU here: the options are what the runtime asks for.
+    # (docs/solvers.md, "Few balls and backends"). No GPU here: the options are what the runtime asks for.
     from ti_golf.runtime import init_options
 
     assert init_options("cuda", "f64")["force_scalarize_matrix"]
@@ -246,3 +257,15 @@ def test_a_scene_too_big_for_the_memory_is_refused_before_any_ball_is_made(tmp_p
     text = str(err.value)
     assert text.startswith(str(path)) and "blocks[0]" in text, text
     assert "27,000,000 balls" in text and "51.5 GiB" in text and "24.0 GiB available" in text, text
+
+
+def test_every_public_name_is_in_the_api_reference():
+    # the docs' API page (docs/api.md) renders each name of ti_golf.__all__ from its docstring
+    # (`::: ti_golf.NAME`, mkdocstrings) or, for the status constants, lists it in a table; every
+    # class and function among them has a docstring to render
+    text = (ROOT / "docs" / "api.md").read_text(encoding="utf-8")
+    for name in tg.__all__:
+        assert f"::: ti_golf.{name}\n" in text or f"| `ti_golf.{name}` |" in text, name
+        obj = getattr(tg, name)
+        if callable(obj):
+            assert (obj.__doc__ or "").strip(), name

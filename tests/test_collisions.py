@@ -10,7 +10,7 @@ from pathlib import Path
 import background
 import numpy as np
 import pytest
-from conftest import ON_CPU, SERIAL_OR_PARALLEL
+from conftest import ON_CPU, ON_VULKAN, SERIAL_OR_PARALLEL
 
 import ti_golf as tg
 from ti_golf.bench.collide import pile_scene
@@ -374,6 +374,7 @@ def _gpu_pile(workdir: Path) -> background.Command:
 background.declare("gpu-pile", _gpu_pile, timeout=600)
 
 
+@ON_VULKAN
 @pytest.mark.background("gpu-pile")
 def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(background_runs):
     # Vulkan is the GPU backend that CI can run (in software, mesa's lavapipe): it compiles the
@@ -517,6 +518,7 @@ def test_a_non_finite_ball_is_named_by_id_in_grid_order():
         sim.step(1)
 
 
+@pytest.mark.slow
 def test_balls_stored_in_grid_order_step_as_in_id_order():
     # storing the balls in another order changes nothing but the order of sums over a ball's
     # neighbours. A lattice pile settling under gravity with friction and walls, rebuilt every 5
@@ -604,6 +606,7 @@ def test_a_pile_that_tracks_no_flight_keeps_no_flight_record_and_steps_the_same(
     assert untracked.t == pytest.approx(tracked.t + 0.05)  # one chunk of 0.05 s, the first check
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["jacobi", "gauss_seidel"])
 def test_rebuild_keeps_each_pairs_resting_impulse(method):
     # the warm start needs each pair's accumulated impulse λ to survive a rebuild of the lists
@@ -761,6 +764,7 @@ def test_an_f32_rebuild_carries_the_friction_impulses_in_a_column_of_their_own(b
         assert steps.max() < 1.0, steps.max()
 
 
+@pytest.mark.slow
 def test_widening_the_pair_tables_never_holds_the_old_and_the_new_together(monkeypatch):
     # the peak memory of a pour is reached while its lists widen and its pairs grow in number: the
     # narrower or shorter tables must be freed before the new ones are allocated (the stash of the
@@ -888,6 +892,7 @@ def _gas(sc, n=1000, seed=0):
     return tg.Simulation(sc, x=x, v=v, mass=mass, radius=0.02)
 
 
+@pytest.mark.slow
 def test_momentum_is_conserved_to_round_off_in_a_gas():
     sim = _gas(scene("contact.e=0.7", "contact.mu=0.3"))
     m = sim.model.mass_np
@@ -929,17 +934,23 @@ def test_the_benchs_one_pass_floor_gives_the_two_balls_of_a_pair_opposite_impuls
     assert np.count_nonzero(np.abs(dw).sum(axis=1)) > n // 2  # friction at most contacts
 
 
+@pytest.mark.slow
 def test_kinetic_energy_is_conserved_with_e1_mu0():
     # e = 1, μ = 0: every binary impact conserves kinetic energy exactly; simultaneous contacts
-    # resolved by Jacobi sweeps and the position projection leave a small error we bound at 1 %.
-    sim = _gas(scene("contact.e=1", "contact.v_bounce=0", "contact.k_p=0"))
+    # resolved by Jacobi sweeps and the position projection leave a small error we bound at 1 %
+    # (the Gauss–Seidel sweeps, the default, bounce a group of touching balls as one and lose 2 %).
+    sim = _gas(scene("contact.solver=jacobi", "contact.e=1", "contact.v_bounce=0", "contact.k_p=0"))
     m = sim.model.mass_np
-    e0 = 0.5 * (m * (sim.v**2).sum(axis=1)).sum()
+    v0 = sim.v
+    e0 = 0.5 * (m * (v0**2).sum(axis=1)).sum()
     sim.run(t=0.5)
     e1 = 0.5 * (m * (sim.v**2).sum(axis=1)).sum()
     assert abs(e1 - e0) / e0 < 0.01
-    # and collisions did happen: the velocity distribution changed
-    assert np.abs(sim.v).max() > 0
+    # and the energy was passed between the balls: no air, no gravity, so a ball's velocity changes
+    # only in a collision, and most balls of the gas (1 cm apart, at about 1.6 m/s for 0.5 s) met
+    # another, their velocity changed by more than a tenth of the typical speed
+    changed = np.linalg.norm(sim.v - v0, axis=1) > 0.1 * np.sqrt(2.0 * e0 / m.sum())
+    assert changed.mean() > 0.8, changed.mean()
 
 
 def test_newtons_cradle_passes_the_impulse_through_the_row():
@@ -963,6 +974,7 @@ def test_column_of_ten_balls_stands():
     assert sim.counts()["at_rest"] == 10  # and it has come to rest, not to a limit cycle
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("iterations", [2, 4])
 def test_a_calm_column_falls_asleep_in_one_step(iterations):
     # island-like sleeping: a ball's rest timer counts on from the least timer of the balls it
@@ -1028,6 +1040,7 @@ def _outcome(sim, asleep: int, *arrays: np.ndarray) -> tuple:
     )
 
 
+@pytest.mark.slow
 def test_a_step_with_every_ball_asleep_is_skipped_and_changes_nothing():
     # with the Gauss–Seidel sweeps a ball asleep takes no impulse and does not move
     # (colour.stands_firm), and only a moving ball wakes it: a step in which no ball is awake
@@ -1129,6 +1142,7 @@ def test_serial_steps_equal_parallel_steps(name, steps):
         assert serial[0] == 10 and np.any(serial[4] != AT_REST)  # the column slept, the falling ball woke it
 
 
+@pytest.mark.slow
 def test_a_step_split_into_launches_equals_the_unrolled_step(monkeypatch):
     # a parallel step of more than solver.UNROLL_MAX_SWEEPS sweeps is split into launches: the
     # free flight, warm start and first sweeps, more sweeps, the last sweep (solver.sweep_launches).
@@ -1502,6 +1516,7 @@ def test_deepest_overlap_names_the_pair_on_the_current_positions(serial):
     assert sim.deepest_overlap() is None
 
 
+@pytest.mark.slow
 @SERIAL_OR_PARALLEL
 def test_measuring_overlaps_does_not_change_the_run(serial):
     # deepest_overlap builds the lists when they are stale; the next step must then be the step it
@@ -1519,6 +1534,7 @@ def test_measuring_overlaps_does_not_change_the_run(serial):
         np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.slow
 def test_runs_are_deterministic():
     def run():
         sim = _gas(scene("contact.e=0.6", "contact.mu=0.4", "world.gravity=[0,-9.81,0]", "world.ground=true"), n=800)

@@ -163,6 +163,7 @@ def command_lines(command: str):
     return pairs.map(lambda ps: words + scene + [w for p in ps for w in p])
 
 
+@pytest.mark.slow
 @FUZZ
 @given(argv=st.sampled_from(sorted(OPTIONS)).flatmap(command_lines))
 @example(argv=["run", "break_shot", "--frames-every", "1", "--size", "0x0"])

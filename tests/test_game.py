@@ -14,6 +14,7 @@ import re
 import background
 import numpy as np
 import pytest
+from conftest import ON_VULKAN, colour_pixels, png_rgb
 
 import ti_golf as tg
 from ti_golf import cli
@@ -289,7 +290,13 @@ def test_play_from_a_shots_file_holes_out_and_saves_the_round(green_file, tmp_pa
     rows = out.read_text().splitlines()
     assert rows[0].startswith("stroke,direction_deg,speed_kmh") and len(rows) == 3
     assert rows[2].split(",")[14] == "holed" and float(rows[2].split(",")[-1]) == 0.0
-    assert plot.stat().st_size > 10_000
+    # the map draws each stroke's path in its own colour of the autumn map, the first red, the
+    # last (here the second) yellow, in the course's view and in the 12 m around the cup
+    img = png_rgb(plot)
+    half = img.shape[1] // 2
+    for colour in ((1.0, 0.0, 0.0), (1.0, 1.0, 0.0)):
+        assert colour_pixels(img[:, :half], colour, tol=0.1).sum() > 20, f"no stroke drawn in {colour}"
+    assert colour_pixels(img[:, half:], (1.0, 1.0, 0.0), tol=0.1).sum() > 20  # the last putt, near the cup
 
 
 def test_the_readme_round_holes_in_three_strokes(capsys):
@@ -435,6 +442,7 @@ def _window_run(workdir):
 background.declare("game-window", _window_run)
 
 
+@ON_VULKAN
 @pytest.mark.background("game-window")
 def test_the_game_window_plays_a_stroke_and_draws_the_course(background_runs):
     # one GGUI window per process: a process of its own, hidden (show_window=False)

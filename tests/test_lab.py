@@ -8,7 +8,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import assert_same_state
+from conftest import assert_same_state, png_rgb
 
 import ti_golf as tg
 from ti_golf.lab.app import Lab, bundled_scenes
@@ -157,8 +157,18 @@ def test_save_writes_the_run_its_plots_and_the_screenshot(tmp_path):
         "lab_magnus_001_spin.png",
         "lab_magnus_001_screen.png",
     ]
-    for p in written[1:]:
-        assert p.read_bytes()[:8] == PNG_SIGNATURE
+    assert written[-1].read_bytes() == PNG_SIGNATURE  # the screenshot is the window's (here a stand-in)
+    # the plots show the ball's 30 steps: climbing (the Magnus shot at 11.5°), slowing in the air,
+    # and spinning at its launch spin (no spin decay in lab_magnus: a level line)
+    slopes = {}
+    for p in written[1:4]:
+        img = png_rgb(p)
+        line = (img[..., 2] - img[..., 0]) > 0.15  # the one ball's line, matplotlib's blue, and its edges
+        rows, cols = np.nonzero(line)
+        assert line.sum() > 100, p.name
+        first, last = cols <= np.percentile(cols, 10), cols >= np.percentile(cols, 90)
+        slopes[p.name.split("_")[-1]] = rows[first].mean() - rows[last].mean()  # > 0: rising to the right
+    assert slopes["trajectory.png"] > 20 and slopes["speed.png"] < -20 and abs(slopes["spin.png"]) < 3, slopes
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)  # no temporary files left
     with np.load(tmp_path / "lab_magnus_001.npz") as npz:
         assert npz["traj_v"].shape == (31, 1, 3) and bool(npz["partial"])

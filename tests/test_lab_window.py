@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import background
 import pytest
-from conftest import ROOT, run_cli
+from conftest import ON_VULKAN, ROOT, run_cli
 from test_render import compare_with_baseline, matches, read_png
 
 from ti_golf import cli
@@ -14,6 +14,8 @@ from ti_golf.lab.app import Lab
 from ti_golf.lab.controls import LEFT, PITCH_DEG, RIGHT, YAW_DEG, Controls
 from ti_golf.render import STATUS_COLORS
 from ti_golf.scene.schema import ROLLING
+
+pytestmark = ON_VULKAN  # one worker draws with GGUI at a time (conftest)
 
 
 # ----------------------------------------------------------------------------------------------

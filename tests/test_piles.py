@@ -77,6 +77,7 @@ def _assert_settled(quality: dict, energy: np.ndarray, total_mass: float) -> Non
     assert np.mean(kinetic) <= 0.5 * total_mass * 0.005**2, kinetic
 
 
+@pytest.mark.slow  # the settled pit's pour: a minute or more, once per process
 def test_pit_with_restitution_settles(settled_pit):
     sim, quality, energy, _, _ = settled_pit
     _assert_settled(quality, energy, total_mass(sim))
@@ -93,7 +94,7 @@ def test_once_landed_the_contacts_only_take_energy_out_of_the_pit(background_run
     # 0.05 s (a collapse turns potential energy into kinetic, so the kinetic energy alone may). The
     # position projection (B.18) is turned off once the pour has landed: it moves balls without an
     # impulse, and lifting one out of an overlap adds potential energy that no contact took from the
-    # pile (docs' solver page, "Energy").
+    # pile (docs' solver page, the Gauss–Seidel sweeps' limits).
     # Step by step, the sweeps stop short of convergence: a warm-started impulse not yet taken back
     # can leave a ball rising a little, so the energy may rise within a step by noise below what
     # the scene counts as at rest, one ball's ½·m·v_rest² (the last sweep's shock propagation, the
@@ -135,6 +136,7 @@ def test_pit_of_lively_balls_settles_with_contact_colours(background_runs):
     _assert_settled(*_poured(background_runs, "contacts_lively"))
 
 
+@pytest.mark.slow  # the settled pit's pour: a minute or more, once per process
 def test_pour_is_deterministic(settled_pit):
     # Gauss–Seidel in parallel: each block of columns in one thread, the colours in turn, so
     # the run does not depend on thread scheduling (nor on what ran before it in the process)
@@ -171,6 +173,7 @@ def test_heavy_ball_on_a_column_is_held(layout):
     assert np.all(np.diff(sim.x[:, 1]) > 2.0 * r * (1.0 - 0.01))  # no pair overlapping by 1 % of a radius
 
 
+@pytest.mark.slow  # the settled pit's pour: a minute or more, once per process
 def test_heavy_ball_dropped_on_the_pit_stays_near_the_top(settled_pit):
     # the same heavy ball dropped from 0.5 m onto the settled pit ends in the top quarter of it
     pit, _, _, side, _ = settled_pit
@@ -187,6 +190,7 @@ def test_heavy_ball_dropped_on_the_pit_stays_near_the_top(settled_pit):
     assert quality["outside_bin"] == 0 and quality["deepest_overlap"] < 0.02, quality
 
 
+@pytest.mark.slow  # the settled pit's pour: a minute or more, once per process
 def test_the_settled_pit_sleeps_by_regions_and_a_landing_ball_wakes_its_own(settled_pit, tmp_path):
     # with the Gauss–Seidel sweeps a ball sleeps once every ball within colour.REGION_HOPS contacts
     # of it is calm: the pit, one island, never slept as a whole (0 % asleep at 4 s), but its
@@ -249,11 +253,13 @@ def _heap_angle(mu: float) -> float:
     return float(np.degrees(np.arctan2(height, spread)))
 
 
+@pytest.mark.slow
 def test_friction_steepens_the_heap():
     loose, rough = _heap_angle(0.1), _heap_angle(0.5)
     assert rough > loose + 4.0, (loose, rough)  # measured: 9.4° and 14.2°
 
 
+@pytest.mark.slow
 def test_boulder_pushed_into_a_pile_takes_its_far_pairs_in_turn():
     # a ball five times the size of the rest is set apart (physics.apart): the balls beside it
     # touch it two or three grid columns from its centre, so the colours leave those pairs to a

@@ -2,7 +2,9 @@
 and the matplotlib fallback.
 
 Snapshots are compared by mean absolute difference and by the share of strongly changed pixels,
-never byte for byte (software Vulkan drivers differ in the last bits). ``TI_GOLF_UPDATE_BASELINES=1``
+never byte for byte (software Vulkan drivers differ in the last bits), and, so that a small object
+cannot go missing within those shares (a ball is a few pixels of 76,800, a trail a few hundred),
+by the pixels of each ball and trail colour counted in each of 4 × 4 regions. ``TI_GOLF_UPDATE_BASELINES=1``
 rewrites tests/baselines/*.png; a failing comparison leaves the obtained picture and an amplified
 difference in the test's tmp_path and names them in the message.
 """
@@ -18,10 +20,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ON_VULKAN
 
 import ti_golf as tg
 import ti_golf.render as R
 from ti_golf.render import camera, frame
+
+pytestmark = ON_VULKAN  # one worker draws with GGUI at a time (conftest)
 
 ROOT = Path(__file__).resolve().parent.parent
 BASELINES = Path(__file__).resolve().parent / "baselines"
@@ -32,6 +37,9 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 MAX_MEAN_DIFF_PCT = 1.0  # mean |obtained - baseline| over all pixels and channels, % of full scale
 CHANGED_LEVEL = 0.25  # a pixel "changed strongly" when a channel moved by more than 25 % ...
 MAX_CHANGED_FRACTION = 0.01  # ... and at most 1 % of the pixels may do so
+REGIONS = (4, 4)  # the picture cut into 4 × 4 regions (rows, columns) ...
+MAX_OBJECT_PIXELS_CHANGE = (2, 0.02)  # ... where the pixels of each ball and trail colour may differ
+# in number from the baseline's by at most 2 pixels or 2 %, whichever is more (a ball's edge)
 
 GGUI = R.ggui_available()
 needs_ggui = pytest.mark.skipif(
@@ -60,6 +68,51 @@ def matches(
     return (cos >= cos_min) & (norm >= min_norm)
 
 
+def object_colours() -> dict[str, tuple[float, float, float]]:
+    """The colours of balls (by status) and of their trails (blended toward white), by name."""
+    from ti_golf.render import style
+    from ti_golf.scene.schema import STATUS_NAMES
+
+    colours = {}
+    for status, colour in R.STATUS_COLORS.items():
+        colours[f"ball {STATUS_NAMES[status]}"] = colour
+        colours[f"trail {STATUS_NAMES[status]}"] = tuple(
+            np.asarray(colour) * (1.0 - style.TRAIL_WHITEN) + style.TRAIL_WHITEN
+        )
+    return colours
+
+
+def object_pixels(img: np.ndarray) -> dict[str, np.ndarray]:
+    """For each ball and trail colour, how many pixels of it each of the REGIONS holds."""
+    rows, cols = REGIONS
+    h, w = img.shape[:2]
+    counts = {}
+    for name, colour in object_colours().items():
+        mask = matches(img, colour)
+        counts[name] = np.array(
+            [
+                [
+                    mask[r * h // rows : (r + 1) * h // rows, c * w // cols : (c + 1) * w // cols].sum()
+                    for c in range(cols)
+                ]
+                for r in range(rows)
+            ]
+        )
+    return counts
+
+
+def missing_objects(a: np.ndarray, b: np.ndarray) -> list[str]:
+    """Where picture ``a`` holds more or fewer pixels of a ball or trail colour than ``b``, region by
+    region, beyond MAX_OBJECT_PIXELS_CHANGE: a ball or a trail missing, added or moved."""
+    least, share = MAX_OBJECT_PIXELS_CHANGE
+    found = []
+    for (name, ca), cb in zip(object_pixels(a).items(), object_pixels(b).values()):
+        for (r, c), want in np.ndenumerate(cb):
+            if abs(int(ca[r, c]) - int(want)) > max(least, share * want):
+                found.append(f"{name} colour in region ({r}, {c}): {ca[r, c]} pixels, the baseline {want}")
+    return found
+
+
 def compare_with_baseline(obtained: Path, name: str, tmp_path: Path) -> None:
     baseline = BASELINES / name
     if UPDATE:
@@ -74,7 +127,8 @@ def compare_with_baseline(obtained: Path, name: str, tmp_path: Path) -> None:
     diff = np.abs(a - b)
     mean_pct = 100.0 * float(diff.mean())
     changed = float(np.mean(diff.max(axis=2) > CHANGED_LEVEL))
-    if mean_pct > MAX_MEAN_DIFF_PCT or changed > MAX_CHANGED_FRACTION:
+    objects = missing_objects(a, b)
+    if mean_pct > MAX_MEAN_DIFF_PCT or changed > MAX_CHANGED_FRACTION or objects:
         import matplotlib.image as mpimg
 
         kept = tmp_path / f"obtained_{name}"
@@ -84,7 +138,8 @@ def compare_with_baseline(obtained: Path, name: str, tmp_path: Path) -> None:
         pytest.fail(
             f"{name} differs from {baseline}: mean difference {mean_pct:.3f} % (allowed "
             f"{MAX_MEAN_DIFF_PCT} %), {100 * changed:.3f} % of pixels changed by more than "
-            f"{100 * CHANGED_LEVEL:.0f} % (allowed {100 * MAX_CHANGED_FRACTION:g} %). Obtained: {kept}; "
+            f"{100 * CHANGED_LEVEL:.0f} % (allowed {100 * MAX_CHANGED_FRACTION:g} %); "
+            f"{'; '.join(objects) or 'the balls and trails as in the baseline'}. Obtained: {kept}; "
             f"difference x8: {amplified}. If the change is intended: TI_GOLF_UPDATE_BASELINES=1 pytest "
             "tests/test_render.py"
         )
@@ -136,6 +191,38 @@ def test_ball_pit_snapshot(tmp_path):
 def test_terrain_snapshot(tmp_path):
     # generated hills (seed 11) with bunkers, fairway and rough, and 400 balls above them
     snapshot(tg.Simulation.from_scene("terrain_3d"), "terrain_3d_iso.png", tmp_path, camera="iso")
+
+
+def test_the_snapshot_comparison_sees_a_missing_ball_and_a_missing_trail(tmp_path):
+    # On the baselines themselves (no GGUI needed): the flying ball of the lab shot (a few pixels),
+    # most of its trail, or the cue ball of the rack erased. Each change is within the limits on the
+    # whole picture (1 % mean difference, 1 % of the pixels changed strongly); the count of each
+    # ball and trail colour by region must catch it.
+    import matplotlib.image as mpimg
+
+    lab = read_png(BASELINES / "lab_turbulent_side.png")
+    ball = matches(lab, R.FLYING_COLOR)
+    trail = matches(lab, object_colours()["trail flying"])
+    assert 0 < ball.sum() < 20 and trail.sum() > 200, (ball.sum(), trail.sum())  # a tiny ball, a long trail
+    most_of_trail = trail & (np.arange(lab.shape[1]) < np.percentile(np.nonzero(trail)[1], 70))
+    rack = read_png(BASELINES / "break_shot_top.png")
+    cue = matches(rack, R.ROLLING_COLOR) & (np.arange(rack.shape[1]) < rack.shape[1] // 4)  # left of the rack
+    assert 30 < cue.sum() < 200, cue.sum()
+    for baseline, name, erased, what in (
+        (lab, "lab_turbulent_side.png", ball, "ball flying"),
+        (lab, "lab_turbulent_side.png", most_of_trail, "trail flying"),
+        (rack, "break_shot_top.png", cue, "ball rolling"),
+    ):
+        img = baseline.copy()
+        img[erased] = np.median(baseline[~erased & ~matches(baseline, R.ROLLING_COLOR)], axis=0)  # what lies behind
+        diff = np.abs(img - baseline)
+        assert (
+            100 * diff.mean() < MAX_MEAN_DIFF_PCT and np.mean(diff.max(axis=2) > CHANGED_LEVEL) < MAX_CHANGED_FRACTION
+        )
+        out = tmp_path / name
+        mpimg.imsave(out, img)
+        with pytest.raises(pytest.fail.Exception, match=f"{what} colour in region"):
+            compare_with_baseline(out, name, tmp_path)
 
 
 # -- where balls appear ---------------------------------------------------------------------------
@@ -375,6 +462,7 @@ def test_ggui_process_is_quiet_and_leaves_no_imgui_ini(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pic.png"]  # Dear ImGui's imgui.ini went elsewhere
 
 
+@pytest.mark.slow
 def test_run_writes_numbered_frames_and_a_gif(tmp_path):
     # ti-golf run --frames-every K: one frame at the start and one every K steps, kept as PNGs and
     # as an animated GIF with the same number of frames

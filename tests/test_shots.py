@@ -334,5 +334,10 @@ def test_bench_dispersion_reports_rates_baselines_and_accuracy():
     assert fine["max_carry_error_m"] < 1e-6 and coarse["max_carry_error_m"] < 1e-3
     assert r["rest"]["at_rest_fraction"] == 1.0 and r["rest"]["max_rest_gap_vs_one_simulation_m"] < 0.1
     assert set(r["baselines"]) == set(r["speedup"]) == set(r["baseline_sizes"])
-    assert all(rate > 0 for rate in r["baselines"].values())
+    # each speed-up is the lanes' rate at h = 1 ms over the baseline's, each rate shots over seconds
+    assert fine["shots_per_s"] == pytest.approx(64 / fine["seconds"], rel=1e-9)
+    for name, rate in r["baselines"].items():
+        assert r["speedup"][name] == pytest.approx(fine["shots_per_s"] / rate, rel=1e-9), name
+    # the coarse step flies the same shots in about a tenth of the steps
+    assert coarse["seconds"] < fine["seconds"]
     assert any("shots/s" in line for line in lines)

@@ -115,6 +115,7 @@ def _steps_that_rebuild(sim: tg.Simulation, steps: int) -> list[int]:
     return rebuilt
 
 
+@pytest.mark.slow
 @SERIAL_OR_PARALLEL
 @pytest.mark.parametrize("solver", ["jacobi", "gauss_seidel"])
 def test_a_lone_ball_uses_the_whole_skin_under_gauss_seidel_and_half_of_it_under_jacobi(solver, serial):

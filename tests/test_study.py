@@ -319,6 +319,7 @@ def test_a_resumed_study_runs_only_the_tasks_not_finished(flight_study, tmp_path
     assert any(r["task_id"] == dropped for r in again.rows)
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_task_is_replaced_and_the_row_equals_an_undisturbed_one(
     flight_study, tmp_path, monkeypatch
 ):
@@ -432,3 +433,19 @@ def test_ctrl_c_keeps_the_finished_rows_and_a_rerun_completes_the_study(tmp_path
     table = read_table(out)
     assert len(table["task_id"]) == 18 and set(table["status"]) == {"ok"}
     assert f"{len(kept['task_id'])} finished before" in done.stdout
+
+
+def test_the_benchmarks_tasks_are_equal_runs_of_one_scene():
+    # `ti-golf bench study` compares Dask with running the same tasks without it: its tasks must
+    # be equal (the same scene, steps and precision; only the ids differ, so that Dask runs each)
+    # and each run must give the same figures, here run in this process as a worker would
+    from ti_golf.study.benchmark import BENCH_SCENE, bench_tasks
+    from ti_golf.study.worker import run_task
+
+    tasks = bench_tasks(3, 700)  # 7 s of lab_turbulent's 10 ms steps: the ball lands at 6.8 s
+    assert len({t["id"] for t in tasks}) == 3
+    assert all({**t, "id": ""} == {**tasks[0], "id": ""} for t in tasks) and tasks[0]["scene"] == BENCH_SCENE
+    rows = [run_task(t, None) for t in tasks]
+    assert [r["status"] for r in rows] == ["ok"] * 3, rows
+    assert [r["carry_m"] for r in rows] == [rows[0]["carry_m"]] * 3
+    assert rows[0]["carry_m"] == pytest.approx(212.243, abs=5e-4)  # the report's Appendix A

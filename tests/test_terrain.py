@@ -649,6 +649,7 @@ def test_surface_defaults_come_from_contact_and_levels_are_checked(tmp_path):
         scene(terrain=_two_plateaus(tmp_path), surfaces=[{"name": "only one"}])
 
 
+@pytest.mark.slow
 def test_a_thousand_balls_hit_at_80_mps_onto_rough_terrain_end_at_rest_above_it():
     # stress (issue 33): 1,000 balls shot downward at 80 m/s in random directions, with spin, onto
     # a rough generated terrain, run to rest. No ball's energy grows on the way; every ball stays
@@ -709,6 +710,7 @@ def test_a_thousand_balls_hit_at_80_mps_onto_rough_terrain_end_at_rest_above_it(
     assert np.all(sim.v[~out] == 0.0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("slope", [0.0, 0.03], ids=["flat", "gentler than rolling resistance"])
 def test_a_resting_ball_does_not_creep_in_a_million_steps(slope):
     # tan θ = 0.03 < μ_roll = 0.05: gravity's pull along the slope, g sin θ, is less than the

@@ -68,6 +68,7 @@ def _columns_scene() -> tg.Scene:
     return tg.load_scene(None, data=data)
 
 
+@pytest.mark.slow
 @SERIAL_OR_PARALLEL
 def test_a_pile_saved_asleep_wakes_as_if_it_never_stopped(serial, tmp_path):
     # Gauss-Seidel sweeps with each pair's friction impulse carried, balls put to sleep, the
@@ -148,6 +149,7 @@ def _pairs_in_rows(path) -> None:
     np.savez(path, **data)
 
 
+@pytest.mark.slow
 @SERIAL_OR_PARALLEL
 def test_a_run_saved_with_the_pair_tables_in_rows_still_continues_bit_for_bit(serial, tmp_path):
     # a solver saved before its pair tables were laid out ball after ball (see _pairs_in_rows) is

@@ -69,7 +69,7 @@ def init_options(
     (``force_scalarize_matrix``): without it, Taichi 1.7.4's CUDA code for the flight's lane
     matrices stops the first kernel that integrates a flight with
     ``CUDA_ERROR_MISALIGNED_ADDRESS``; scalarised, the same kernels give the CPU's results (see
-    docs/performance.md, "On a GPU")."""
+    docs/solvers.md, "Few balls and backends")."""
     options = dict(
         arch=getattr(ti, arch),
         default_fp=ti.f64 if precision == "f64" else ti.f32,

@@ -64,7 +64,7 @@ PROJECTIONS = 3
 """Passes of the position projection (B.18, :func:`project_sweep`) at the end of a Gauss–Seidel
 step. A pass moves each overlapping pair apart by k_p of its overlap; a ball wedged between
 neighbours is pushed back in by the pairs handled after its own, so a pile needs more than one
-pass to shed such overlaps (docs/solvers.md, "Deep piles")."""
+pass to shed such overlaps (docs/solvers.md, "Gauss–Seidel sweeps")."""
 
 COLOURS = 4
 """Colours of the blocks of 2 × 2 grid columns: the parities of the block's coordinates."""
