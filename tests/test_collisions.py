@@ -839,7 +839,7 @@ def test_overlap_is_projected_out_in_proportion_to_the_other_mass():
     # B.18: an overlap Δx is reduced by k_p·m_red·Δx·n̂ per ball and step, m_red = m_other/(m_a + m_b);
     # balls at rest get no impulse, so after one step only the projection has moved them
     k_p, m1, m2, overlap = 0.2, 0.045, 0.135, 0.004
-    sc = scene(f"contact.k_p={k_p}")
+    sc = scene(f"contact.k_p={k_p}", "contact.solver=jacobi")  # (the report's step: one projection)
     x = np.array([[0.0, 1.0, 0.0], [0.04 - overlap, 1.0, 0.0]])
     sim = tg.Simulation(sc, x=x, mass=[m1, m2])
     sim.step(1)
@@ -1246,7 +1246,7 @@ def test_simultaneous_impacts_are_taken_one_at_a_time(serial):
     c, s = np.cos(np.pi / 6), np.sin(np.pi / 6)
     x = np.array([[0.0, 1.0, 0.0], [2 * r * c, 1.0, -2 * r * s], [2 * r * c, 1.0, 2 * r * s]])
     v0 = np.array([[1.0, 0, 0], [0, 0, 0], [0, 0, 0]])
-    sim = tg.Simulation(scene("contact.e=1", "contact.k_p=0", "contact.v_bounce=0"), x=x, v=v0)
+    sim = tg.Simulation(scene("contact.e=1", "contact.k_p=0", "contact.v_bounce=0", "contact.solver=jacobi"), x=x, v=v0)
     sim.solver = CollisionSolver(sim.model, serial=serial)
     e0 = _kinetic_energy(sim)
     sim.step(5)
@@ -1453,7 +1453,7 @@ def test_a_ball_knocked_into_a_wall_from_beyond_the_lists_reach_still_meets_it(s
     real = solver_module.list_surface_rows
     monkeypatch.setattr(solver_module, "list_surface_rows", lambda s, state, carry, v_max: real(s, state, carry, 0.0))
     sc = dataclasses.replace(
-        scene("contact.e=1", "contact.mu=0", "contact.mu_roll=0", "contact.v_bounce=0"),
+        scene("contact.e=1", "contact.mu=0", "contact.mu_roll=0", "contact.v_bounce=0", "contact.solver=jacobi"),
         planes=(Plane((0.5, 0, 0), (-1, 0, 0)), Plane((0, -5, 0), (0, 1, 0)), Plane((0, 0, -5), (0, 0, 1))),
     )
     r = sc.ball.radius

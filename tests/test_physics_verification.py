@@ -560,6 +560,8 @@ def test_a_turf_bounce_is_penners(u, v_n, spin, rolls, where):
             "terrain.size=[100,100]",
             "terrain.resolution=[5,5]",
         ]
+    if where == "colliding":
+        overrides.append("contact.solver=jacobi")  # (the report's sweeps: one step holds the impact)
     scene = lab("lab_vacuum", *overrides)
     if where == "terrain":
         import dataclasses
@@ -637,7 +639,7 @@ def test_spin_about_the_normal_decays_at_five_halves_mu_roll_g_over_r(n_balls):
         data={
             "air": {"rho": 0.0},
             "world": {"integrator": "semi_implicit", "dt": h},
-            "contact": {"mu": 0.4, "mu_roll": mu_r},
+            "contact": {"mu": 0.4, "mu_roll": mu_r, "solver": "jacobi"},  # (the report's sweeps)
         }
     )
     x0 = np.array([[0.0, 0.02, 0.0], [5.0, 0.02, 0.0]][:n_balls])
