@@ -75,6 +75,7 @@ def test_colouring_of_a_dense_random_set_is_valid(seed):
     assert sim.solver.colours.sizes()[0] >= 8
 
 
+@pytest.mark.slow
 def test_colouring_of_a_settled_pile_is_valid_and_climbs():
     sim = tg.Simulation(_scene(250, 0.2, 3))
     sim.run(t=0.8)
@@ -117,6 +118,7 @@ def _colours_by_pair(sim) -> dict[tuple[int, int], int]:
     return {(int(min(ids[a], ids[b])), int(max(ids[a], ids[b]))): int(c) for a, b, c in listed}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("reorder", [False, True])
 def test_pairs_keep_their_colours_over_rebuilds(reorder):
     # a pour landing: the lists are rebuilt step after step, the balls stored in the grid's order
@@ -144,6 +146,7 @@ def test_pairs_keep_their_colours_over_rebuilds(reorder):
     assert colours.rounds - rounds <= 20 * 8  # a few rounds a rebuild for the few new pairs
 
 
+@pytest.mark.slow
 def test_runs_with_contact_colours_repeat_bit_for_bit():
     runs = []
     for _ in range(2):
@@ -154,6 +157,7 @@ def test_runs_with_contact_colours_repeat_bit_for_bit():
         np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.slow
 def test_a_saved_run_with_contact_colours_continues_bit_for_bit(tmp_path):
     # the colours are carried from build to build, so the order of the sweeps depends on the run's
     # history: a run loaded again must sweep its pairs in the same colours (a run that coloured its

@@ -155,7 +155,7 @@ def _column_scene(layout: str = "auto"):
     )
 
 
-@pytest.mark.parametrize("layout", ["auto", "contacts"])
+@pytest.mark.parametrize("layout", ["auto", pytest.param("contacts", marks=pytest.mark.slow)])
 def test_heavy_ball_on_a_column_is_held(layout):
     # a ball 100 times heavier than a golf ball on top of a column of 20: the column stands and
     # shortens by less than 2 % of a radius in 5 s (each contact's λ carries the weight above it

@@ -157,7 +157,9 @@ def _profile(z: float) -> float:
     return U_REF * math.log(z / Z0) / math.log(Z_REF / Z0) if z > Z0 else 0.0
 
 
-@pytest.mark.parametrize("collisions", [False, True], ids=["one_thread_per_ball", "collision_solver"])
+@pytest.mark.parametrize(
+    "collisions", [False, pytest.param(True, marks=pytest.mark.slow)], ids=["one_thread_per_ball", "collision_solver"]
+)
 def test_a_ball_moving_with_the_log_wind_feels_no_force(collisions):
     # Without gravity a ball flying level at the wind's speed at its height has v_rel = 0: no drag,
     # so it keeps its speed exactly. A kernel reading the wind at any other height, or from
