@@ -427,7 +427,7 @@ def _seeds(study: Study, task: Task, source: str) -> list[int | None]:
         raise_config(
             source, "seeds", f"task.kind = {task.kind!r} draws nothing at random; seeds are for run, dispersion, pit"
         )
-    out = []
+    out: list[int | None] = []
     for s in study.seeds:
         if not (s.is_integer() and 0 <= s < 2**31):
             raise_config(source, "seeds", f"must be whole numbers in [0, 2147483647] (got {s:g})")
