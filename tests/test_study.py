@@ -190,6 +190,12 @@ def test_the_angle_of_repose_of_a_cone_of_balls_is_its_slope():
         radius = np.full(rho.size, r)
         in_play = np.ones(rho.size, bool)
         assert repose_angle(x, radius, in_play) == pytest.approx(slope_deg, abs=1.5)
+        # a skirt of single balls that rolled up to 2.5 m away on the floor leaves the flank's slope
+        out = np.sqrt(rng.uniform(1.0, 6.25, 3000))
+        psi = rng.uniform(0, 2 * np.pi, out.size)
+        skirt = np.stack([out * np.cos(psi) + 3.0, np.full(out.size, r), out * np.sin(psi) - 1.0], axis=1)
+        both = np.concatenate([x, skirt])
+        assert repose_angle(both, np.full(len(both), r), np.ones(len(both), bool)) == pytest.approx(slope_deg, abs=1.5)
         assert pile_height(x, radius, in_play) == pytest.approx(y.max() + r - (y.min() - r))
 
 

@@ -58,6 +58,9 @@ def cmd_study(args: argparse.Namespace) -> int:
     if args.plot and result.rows:
         table = result.table
         column = args.figure or (figure_columns(table, spec.keys) or [""])[0]
-        plot_study(table, spec.keys, column, args.plot, title=spec.description or spec.name, lines=args.lines)
+        title = spec.description or spec.name
+        if args.overrides:  # the plot says what the command changed, e.g. a smaller study's task.balls
+            title += "\n" + ", ".join(args.overrides)
+        plot_study(table, spec.keys, column, args.plot, title=title, lines=args.lines)
         print(f"wrote {args.plot}")
     return 1 if result.failed else 0

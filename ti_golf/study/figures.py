@@ -68,30 +68,33 @@ def pile_height(x: np.ndarray, radius: np.ndarray, in_play: np.ndarray) -> float
 
 
 def repose_angle(x: np.ndarray, radius: np.ndarray, in_play: np.ndarray) -> float:
-    """The angle of repose of a heap [deg]: the slope of its top surface against the distance from
-    its axis.
+    """The angle of repose of a heap [deg]: the slope of its flank.
 
-    The axis is the vertical through the balls' median x and z. The top surface is the highest
-    ball top in each ring two mean diameters wide; the angle is the arctangent of the least-squares
-    slope of those tops against the rings' distances, over the rings between a fifth and four fifths
-    of the heap's radius (the 95th percentile of the balls' distances), leaving out the rounded
-    summit and the foot where the last balls rolled away. NaN for fewer than three such rings."""
+    The axis is the vertical through the balls' median x and z. The heap's surface is the highest
+    ball top in each ring two mean diameters wide about the axis. Going out from the axis, the
+    flank is the rings whose top lies between 80 % and 20 % of the way down from the summit to one
+    layer of balls on the floor; the angle is the arctangent of the least-squares slope of their
+    tops against the rings' distances. The rounded summit and the skirt of single balls that rolled
+    away are left out, however far the skirt reaches. NaN for fewer than three such rings."""
     if np.count_nonzero(in_play) < 10:
         return float("nan")
     p, r = x[in_play], radius[in_play]
     centre = np.median(p[:, [0, 2]], axis=0)
     rho = np.hypot(p[:, 0] - centre[0], p[:, 2] - centre[1])
     top = p[:, 1] + r
-    edge = float(np.percentile(rho, 95))
     width = 4.0 * float(np.mean(r))
     ring = np.floor(rho / width).astype(np.int64)
     rings = np.unique(ring)
-    mid = (rings + 0.5) * width
-    keep = (mid >= 0.2 * edge) & (mid <= 0.8 * edge)
-    if np.count_nonzero(keep) < 3:
+    tops = np.array([top[ring == k].max() for k in rings])
+    layer = float(np.min(p[:, 1] - r) + 2.0 * np.mean(r))
+    summit = float(tops.max())
+    high, low = layer + 0.8 * (summit - layer), layer + 0.2 * (summit - layer)
+    below = np.flatnonzero(tops < low)
+    end = below[0] if below.size else rings.size  # the flank ends where the heap thins out
+    flank = np.arange(end)[tops[:end] <= high]
+    if flank.size < 3:
         return float("nan")
-    tops = np.array([top[ring == k].max() for k in rings[keep]])
-    slope = np.polyfit(mid[keep], tops, 1)[0]
+    slope = np.polyfit((rings[flank] + 0.5) * width, tops[flank], 1)[0]
     return float(np.degrees(np.arctan(max(-slope, 0.0))))
 
 
