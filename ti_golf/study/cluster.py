@@ -142,7 +142,14 @@ def _local_cluster(n: int, gpus: int, task_threads: int | None = None) -> Any:
         "silence_logs": logging.ERROR,
     }
     cluster = LocalCluster(
-        n_workers=n, threads_per_worker=1, processes=True, env={THREADS_ENV: str(threads)}, **options
+        n_workers=n,
+        threads_per_worker=1,
+        processes=True,
+        env={THREADS_ENV: str(threads)},
+        # the scheduler's HTTP server (health and metrics; no dashboard) on a free loopback port, so
+        # that a second study on the machine neither collides with the first nor warns
+        scheduler_kwargs={"dashboard": False, "dashboard_address": f"{LOOPBACK}:0"},
+        **options,
     )
     for i in range(gpus):
         cluster.worker_spec[f"gpu-{i}"] = {
