@@ -150,7 +150,7 @@ def free_every_ndarray() -> None:
     from taichi.lang._ndarray import Ndarray, ScalarNdarray
 
     if "__del__" not in Ndarray.__dict__:
-        Ndarray.__del__ = ScalarNdarray.__del__  # type: ignore[attr-defined]
+        Ndarray.__del__ = ScalarNdarray.__del__
 
 
 def free_dropped_arrays() -> None:
@@ -239,7 +239,7 @@ def info() -> RuntimeInfo | None:
     return _info
 
 
-def np_float():
+def np_float() -> type[np.float64] | type[np.float32]:
     """The numpy float type matching the Taichi default float."""
     return np.float64 if ensure_init().precision == "f64" else np.float32
 

@@ -15,10 +15,10 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-try:  # Python >= 3.11
+if sys.version_info >= (3, 11):
     import tomllib
-except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef,unused-ignore]
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
 
 from ti_golf.errors import ConfigError
 from ti_golf.scene.checks import parse_range, raise_config
@@ -187,7 +187,8 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     except UnicodeDecodeError:
         raise ConfigError(str(p), None, "is not UTF-8 text") from None
     try:
-        return tomllib.loads(text)
+        doc: dict[str, Any] = tomllib.loads(text)
+        return doc
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(str(p), None, f"is not valid TOML: {exc}") from None
 
