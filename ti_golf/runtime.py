@@ -207,10 +207,8 @@ def release_freed_memory() -> None:
     much of that memory in the process for the rest of the run."""
     if not sys.platform.startswith("linux"):
         return
-    try:
+    with contextlib.suppress(OSError, AttributeError):  # not glibc (musl has no malloc_trim)
         ctypes.CDLL(None).malloc_trim(0)
-    except (OSError, AttributeError):  # not glibc (musl has no malloc_trim)
-        pass
 
 
 def kernels_cached() -> bool:

@@ -43,6 +43,7 @@ class Deferred:
         return self._type
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        """A value of the type (made now if this is its first use), as the type's own call makes it."""
         return self.get()(*args, **kwargs)
 
     def __getattr__(self, name: str) -> Any:

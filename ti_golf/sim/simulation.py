@@ -46,7 +46,8 @@ class RunProgress(Protocol):
     run with ``until`` also ``finished=(k, n, what)``: k of the n balls are ``what`` (at rest or out
     of bounds, landed). A callable of two arguments alone fails on a run with ``until``."""
 
-    def __call__(self, done: float, total: float, /, finished: tuple[int, int, str] | None = None) -> None: ...
+    def __call__(self, done: float, total: float, /, finished: tuple[int, int, str] | None = None) -> None:
+        """Say that ``done`` of ``total`` simulated seconds are done (and ``finished``: see the class)."""
 
 
 @dataclass
@@ -89,6 +90,8 @@ class InitialBalls:
 
     @classmethod
     def copy_of(cls, x: Any, v: Any, w: Any, radius: Any, mass: Any, track: Any) -> "InitialBalls":
+        """The balls as given, each array copied (``None`` kept), so that later changes leave them."""
+
         def copy(a: Any) -> Any:
             return None if a is None else np.array(a, copy=True)
 

@@ -214,6 +214,7 @@ class StudySpec:
 
     @property
     def gpu(self) -> bool:
+        """Whether each task asks for a GPU (the ``[task]`` table's ``gpu``)."""
         return self.task.gpu
 
 
