@@ -58,7 +58,7 @@ test-fast: setup
 test-slow: setup system-deps
 	$(PYTEST) -m slow --durations=15
 
-# ruff (lint and format), mypy on the non-kernel code, and the import layers (pyproject.toml).
+# ruff (lint and format), mypy over the package (strict on the public API), and the import layers (pyproject.toml).
 lint: $(DEVSTAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/ruff format --check .

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 
 def one_line(text: str) -> str:
-    """``text`` on one line: line breaks and other control characters (from the user's input,
-    quoted back) written as escapes (``\\n``)."""
+    r"""``text`` on one line: line breaks and other control characters (from the user's input,
+    quoted back) written as escapes (``\n``)."""
     return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in text)
 
 

@@ -126,11 +126,11 @@ class KernelLog:
                 finally:
                     runtime.prog = program
 
-        Kernel.materialize, Kernel.launch_kernel = timed_materialize, timed_launch  # type: ignore[method-assign]
+        Kernel.materialize, Kernel.launch_kernel = timed_materialize, timed_launch
         try:
             yield self
         finally:
-            Kernel.materialize, Kernel.launch_kernel = materialize, launch  # type: ignore[method-assign]
+            Kernel.materialize, Kernel.launch_kernel = materialize, launch
 
 
 class _TimedProgram:

@@ -150,7 +150,7 @@ def free_every_ndarray() -> None:
     from taichi.lang._ndarray import Ndarray, ScalarNdarray
 
     if "__del__" not in Ndarray.__dict__:
-        Ndarray.__del__ = ScalarNdarray.__del__  # type: ignore[attr-defined]
+        Ndarray.__del__ = ScalarNdarray.__del__
 
 
 def free_dropped_arrays() -> None:
@@ -207,10 +207,8 @@ def release_freed_memory() -> None:
     much of that memory in the process for the rest of the run."""
     if not sys.platform.startswith("linux"):
         return
-    try:
+    with contextlib.suppress(OSError, AttributeError):  # not glibc (musl has no malloc_trim)
         ctypes.CDLL(None).malloc_trim(0)
-    except (OSError, AttributeError):  # not glibc (musl has no malloc_trim)
-        pass
 
 
 def kernels_cached() -> bool:
@@ -239,7 +237,7 @@ def info() -> RuntimeInfo | None:
     return _info
 
 
-def np_float():
+def np_float() -> type[np.float64] | type[np.float32]:
     """The numpy float type matching the Taichi default float."""
     return np.float64 if ensure_init().precision == "f64" else np.float32
 

@@ -42,7 +42,7 @@ def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scen
     grid = np.stack([idx % side, idx // (side * side), (idx // side) % side], axis=1)
     x = r + 2.0 * r * grid.astype(float)
     width = 2.0 * r * side
-    planes = (
+    planes: tuple[Plane, ...] = (
         Plane((0, 0, 0), (0, 1, 0)),
         Plane((0, 0, 0), (1, 0, 0)),
         Plane((width, 0, 0), (-1, 0, 0)),
@@ -135,6 +135,7 @@ def bench_collide(
         for parallel, reorder in ((False, None),) * serial + ((True, False), (True, True)):
             warm = pile(64, floor, parallel, reorder)
             warm.step(2)
+            assert warm.solver is not None  # 64 balls that collide
             warm.solver.invalidate()  # a rebuild that carries the pairs' impulses over
             warm.step(1)
             del warm

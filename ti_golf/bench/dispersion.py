@@ -165,7 +165,8 @@ def _two_phase_gap(scene: Scene, x0: np.ndarray, v0: np.ndarray, w0: np.ndarray)
     """Largest distance [m] between the points of rest of the two-phase path (lanes to landing at
     ``world.dt``, roll-out) and of one Simulation from the tee, shots without ball-ball contact."""
     raw = fly(scene, x0, v0, w0)
-    rest, _ = roll_out(scene, *(raw[k].astype(np.float64) for k in ("land_x", "land_v", "land_w")))
+    land_x, land_v, land_w = (raw[k].astype(np.float64) for k in ("land_x", "land_v", "land_w"))
+    rest, _ = roll_out(scene, land_x, land_v, land_w)
     sim = Simulation(replace(scene, world=replace(scene.world, collisions=False)), x=x0, v=v0, w=w0, track=False)
     sim.run(t=scene.world.t_max, until="rest")
     return float(np.max(np.linalg.norm(rest - sim.x, axis=1)))

@@ -49,6 +49,7 @@ from ti_golf.signals import whole_steps
 from ti_golf.sim.simulation import Simulation
 from ti_golf.solvers.colour import COLOURS as COLUMN_COLOURS
 from ti_golf.solvers.colour import PROJECTIONS, moving_balls, step_phases
+from ti_golf.solvers.gauss_seidel import GaussSeidelSolver
 
 T = TypeVar("T")
 
@@ -310,14 +311,14 @@ def solver_launches(sim: Simulation) -> dict[str, Any]:
     and (contacts) the colours in use and the colouring rounds of the last build; nothing without
     the parallel Gauss–Seidel sweeps."""
     solver = sim.solver
-    if solver is None or not solver.gauss_seidel or solver.serial:
+    if not isinstance(solver, GaussSeidelSolver) or solver.serial:  # (only its class has gauss_seidel)
         return {}
     iterations = sim.scene.contact.iterations
     if solver.colours is not None:
         cc = solver.colours
         items = cc.launches(sim.n, iterations)
         colours, _, overflow = cc.sizes()
-        extra = {"colours": colours, "overflow_pairs": overflow}
+        extra: dict[str, Any] = {"colours": colours, "overflow_pairs": overflow}
         extra["colouring_rounds_mean"] = cc.rounds / max(cc.builds, 1)
         extra["colouring_rounds_max"] = cc.rounds_max
         if cc.fresh:
@@ -325,7 +326,8 @@ def solver_launches(sim: Simulation) -> dict[str, Any]:
             extra["fresh_pairs_max"] = int(np.max(cc.fresh))
         layout = "contacts"
     else:
-        start, colour = solver.col_start.to_numpy(), solver.col_colour.to_numpy()
+        # (col_start is set to None in GaussSeidelSolver.__init__ and unannotated there: typed None)
+        start, colour = solver.col_start.to_numpy(), solver.col_colour.to_numpy()  # type: ignore[attr-defined]
         filled = np.nonzero(np.diff(start))[0]
         blocks = np.bincount(colour[start[filled]], minlength=COLUMN_COLOURS).tolist()
         far = [1] if solver.far_owners else []
@@ -343,7 +345,7 @@ PROBE_CALLS = 1000
 """Calls of :func:`_no_work` that measure the host's cost of a kernel call."""
 
 
-def _no_work_body(lists, scratch):  # type: ignore[no-untyped-def]
+def _no_work_body(lists, scratch):
     """A kernel that does no work, with the solver's arguments (:func:`host_share`)."""
     for _ in range(lists.first.shape[0] * 0):
         scratch.flag[0] += 0
@@ -360,6 +362,7 @@ def host_share(sim: Simulation, wall_s: float, steps: int) -> dict[str, Any]:
     share of the pour's ``wall_s`` (see the module's docstring)."""
     calls, inside = LAUNCHES.calls, LAUNCHES.inside_s
     solver = sim.solver
+    assert solver is not None  # a pour: its balls collide
     lists, scratch = solver._packs.lists(solver), solver._packs.scratch(solver)
     _no_work(lists, scratch)  # (compiled)
     ti.sync()

@@ -69,6 +69,9 @@ def read_spread(args: argparse.Namespace, units: Units) -> MonitorLaunch:
 
 
 def cmd_dispersion(args: argparse.Namespace) -> int:
+    """Fly ``--n`` shots of ``args.scene`` drawn about the mean launch with the given spread (seed
+    ``--seed``), rolled out where the scene has a ground; print the spread of the results and
+    write the shots (``--out``) and their picture (``--plot``); 0."""
     units = UNITS[args.units]
     if not 2 <= args.n <= MAX_SHOTS:
         raise ConfigError("--n", None, f"must be in [2, {MAX_SHOTS}] shots (got {args.n})")

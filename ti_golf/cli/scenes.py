@@ -16,6 +16,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_scenes(args: argparse.Namespace) -> int:
+    """Print each bundled scene's name and one-line description; 0."""
     folder = scenes_dir()
     files = sorted(folder.glob("*.toml"))
     if not files:
@@ -32,5 +33,6 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 
 
 def cmd_keys(args: argparse.Namespace) -> int:
+    """Print every scene key with its unit, default and allowed values; 0."""
     print(describe_keys())
     return 0

@@ -130,6 +130,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_shot(args: argparse.Namespace) -> int:
+    """Fly one shot of ``args.scene`` from the launch given (rolled out where the scene has a
+    ground) and print its carry, apex, landing and rest in ``--units`` (one JSON line with
+    ``--json``); 0."""
     units = UNITS[args.units]
     scene = load_scene(args.scene, args.overrides)
     launch = read_launch(args, scene, units)

@@ -39,6 +39,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_study(args: argparse.Namespace) -> int:
+    """Run the tasks of the study ``args.study`` not yet finished in its folder, on a Dask cluster,
+    print where the table is and plot a figure (``--plot``); 1 when a task failed, else 0."""
     from ti_golf.study.plot import figure_columns, plot_study
     from ti_golf.study.runner import run_study
     from ti_golf.study.spec import load_study

@@ -27,6 +27,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_table(args: argparse.Namespace) -> int:
+    """Print the report's Table 3.1-1 beside ti_golf's sweeps of the lab scenes (and plot the four
+    trajectory families with ``--plot``); 0."""
     check_plot(args.plot)
     print("Table 3.1-1 (report) reproduced: best launch angle and maximum distance, v0 = 80 m/s")
     print(f"{'conditions':<36} {'report':>16} {'ti_golf':>22}")

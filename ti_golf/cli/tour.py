@@ -41,6 +41,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_tour(args: argparse.Namespace) -> int:
+    """Fly the TrackMan tour-average shots (``--rows``) in ``args.scene`` and print them beside the
+    published figures (and plot them with ``--plot``); 0."""
     check_plot(args.plot)
     scene = load_scene(args.scene, args.overrides)
     if scene.launch is None:  # the rows launch from the scene's launch point
@@ -64,6 +66,8 @@ def cmd_tour(args: argparse.Namespace) -> int:
 
 
 def cmd_fit_aero(args: argparse.Namespace) -> int:
+    """Fit the spin_reynolds air model's coefficients of ``args.scene`` to the 12 PGA Tour rows and
+    print them (as scene keys too) and the fitted model on every row; 0."""
     scene = load_scene(args.scene, args.overrides)
     if scene.launch is None:
         raise ConfigError(scene.path, "launch", "the tour rows need a [launch] table in the scene")

@@ -86,8 +86,10 @@ def holed_at(
         t: sample times (S,) [s], increasing.
         x: ball centres (S, 3) [m] (x, y, z with y up).
         gap: the ball's gap to the surface under it at each sample (S,) [m].
-        centre: the cup's centre [x, z] [m]; ``cup_radius`` R_c [m].
-        radius: the ball's radius r [m]; ``g`` the magnitude of gravity [m/s²].
+        centre: the cup's centre [x, z] [m].
+        cup_radius: the cup's radius R_c [m].
+        radius: the ball's radius r [m].
+        g: the magnitude of gravity [m/s²].
     """
     t = np.asarray(t, dtype=float)
     if len(t) < 2:

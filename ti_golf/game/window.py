@@ -55,6 +55,12 @@ def check_display() -> None:
         raise ConfigError("--gui", None, f"{problem}; play in the console without --gui")
 
 
+def _three_floats(v: Any) -> tuple[float, float, float]:
+    """A vector of the GGUI camera (position, look-at point, up) as three Python floats."""
+    x, y, z = map(float, v)
+    return x, y, z
+
+
 class GolfWindow:
     """A round of :class:`GolfGame` in a GGUI window of ``size`` pixels (hidden with
     ``show_window=False``: then :meth:`hit`, :meth:`frame` and :meth:`save` drive it, for tests)."""
@@ -89,7 +95,7 @@ class GolfWindow:
         }
         self.message = "Choose a club, aim and hit."
         self.replay: tuple[Stroke, float] | None = None
-        self._display = None
+        self._display: Simulation | None = None  # the drawn ball (_show_ball)
         self._show_ball(game.ball)
         self.behind_ball()
 
@@ -115,9 +121,9 @@ class GolfWindow:
     def _view(self) -> Any:
         c = self.camera
         return View(
-            tuple(map(float, c.curr_position)),
-            tuple(map(float, c.curr_lookat)),
-            tuple(map(float, c.curr_up)),
+            _three_floats(c.curr_position),
+            _three_floats(c.curr_lookat),
+            _three_floats(c.curr_up),
             45.0,
             self.size,
             z_near=0.05,
@@ -144,6 +150,7 @@ class GolfWindow:
 
     def _replay_time(self) -> float:
         """How far [s of the stroke] the replay has come."""
+        assert self.replay is not None  # (asked only during a replay)
         return (time.perf_counter() - self.replay[1]) * self.replay_speed
 
     # -- one frame ---------------------------------------------------------------------------
@@ -224,6 +231,7 @@ class GolfWindow:
         if self.shown:  # (a hidden window has no cursor)
             self.camera.track_user_inputs(self.window, movement_speed=0.3, hold_key=ti.ui.RMB)
         self._advance_replay()
+        assert self._display is not None  # (shown from the start)
         frame = build_frame(self._display, self._view(), "status", self._trail(), 3.0, None)
         draw = draw_scene(frame, self.scene, self.camera)
         self.canvas.set_background_color(BACKGROUND_COLOR)

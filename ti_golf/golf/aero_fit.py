@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -46,7 +47,8 @@ def _component(field: str, i: int) -> tuple[Callable[[Air], float], Callable[[Ai
     def put(air: Air, value: float) -> Air:
         v = list(getattr(air, field))
         v[i] = value
-        return dataclasses.replace(air, **{field: tuple(v)})
+        changes: dict[str, Any] = {field: tuple(v)}
+        return dataclasses.replace(air, **changes)
 
     return get, put
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable
 from dataclasses import dataclass, fields
 from pathlib import Path
 
@@ -23,6 +22,7 @@ from ti_golf.golf.shots import shots
 from ti_golf.scene.launch_monitor import MPH, RPM, MonitorLaunch, Units
 from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import Shots
+from ti_golf.sim.simulation import RunProgress
 
 MAX_SHOTS = 1_000_000
 """The most shots one dispersion flies."""
@@ -184,7 +184,7 @@ def dispersion(
     seed: int = 0,
     to_rest: bool = True,
     flight_dt: float | None = None,
-    progress: Callable[[float, float], None] | None = None,
+    progress: RunProgress | None = None,
 ) -> Dispersion:
     """Fly ``n`` shots drawn from a player's spread (:func:`draw_launches`) all at once, to landing
     and, with ``to_rest``, to rest on the scene's ground (see :func:`ti_golf.golf.shots.shots`).

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -10,7 +9,7 @@ import numpy as np
 from ti_golf.errors import ConfigError
 from ti_golf.scene.schema import AT_REST, Scene
 from ti_golf.sim.results import Flight, Shots
-from ti_golf.sim.simulation import Simulation
+from ti_golf.sim.simulation import RunProgress, Simulation
 
 
 def has_ground(scene: Scene) -> bool:
@@ -23,7 +22,7 @@ def roll_out(
     x: np.ndarray,
     v: np.ndarray,
     w: np.ndarray,
-    progress: Callable[[float, float], None] | None = None,
+    progress: RunProgress | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Run balls from (x, v, ω) (each (N, 3), SI) on the scene's ground until every ball is at rest,
     out of bounds, or ``world.t_max`` has passed.
@@ -52,7 +51,7 @@ def shots_from_landing(
     x0: np.ndarray,
     raw: dict[str, np.ndarray],
     to_rest: bool,
-    progress: Callable[[float, float], None] | None = None,
+    progress: RunProgress | None = None,
 ) -> Shots:
     """The :class:`Shots` of balls launched from ``x0`` (N, 3) whose flight to landing is ``raw``
     (:func:`ti_golf.golf.sweep.fly`'s record), rolled out to rest with ``to_rest``; the target line

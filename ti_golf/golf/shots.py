@@ -10,7 +10,6 @@ Two phases, each the fastest the engine has for it:
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -21,6 +20,7 @@ from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import MonitorLaunch
 from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import Shots
+from ti_golf.sim.simulation import RunProgress
 
 
 def target_direction(scene: Scene) -> float:
@@ -35,7 +35,7 @@ def fly_shots(
     w0: np.ndarray,
     to_rest: bool = True,
     flight_dt: float | None = None,
-    progress: Callable[[float, float], None] | None = None,
+    progress: RunProgress | None = None,
 ) -> Shots:
     """Fly balls from (x0, v0, ω0) (each (N, 3), SI) to landing and, with ``to_rest``, roll them
     out to rest on the scene's ground.
@@ -54,7 +54,7 @@ def shots(
     launch: MonitorLaunch,
     to_rest: bool = True,
     flight_dt: float | None = None,
-    progress: Callable[[float, float], None] | None = None,
+    progress: RunProgress | None = None,
 ) -> Shots:
     """Fly launch-monitor launches (floats, or arrays of shape (N,)) from the scene's launch point
     (the ball on the ground at the origin unless ``launch.position`` says otherwise), the target

@@ -120,4 +120,4 @@ class Controls:
         w, h = size
         between = max(int((RIGHT[0] - LEFT[0] - LEFT[2]) * w), 16)
         view = orbit_view(lab.sim, self.yaw, self.pitch, self.zoom, (between, h), 45.0, lab.trails(), target)
-        return dataclasses.replace(view, size=tuple(size))
+        return dataclasses.replace(view, size=(w, h))

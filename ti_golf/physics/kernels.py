@@ -46,7 +46,7 @@ def lane_state(x, v, w):
 
 
 @kernel
-def fly_to_landing(
+def fly_to_landing(  # noqa: C901 (the fused flight kernel: steps, apex, landing and samples in one loop)
     # Model:
     air: AirParams,
     gravity: vec3,
@@ -261,9 +261,11 @@ def first_nonfinite(x: vec3_array, v: vec3_array, w: vec3_array, out: int_array)
 
 @kernel
 def zero_f32_vectors(a: vec3f_array):
-    """Set every vector of an f32 array to zero. (``Ndarray.fill`` compiles a kernel that holds its
-    value in the run's float type: in an f64 run Taichi warns "Assign may lose precision" while it
-    compiles it.)"""
+    """Set every vector of an f32 array to zero.
+
+    ``Ndarray.fill`` would compile a kernel that holds its value in the run's float type: in an f64
+    run Taichi warns "Assign may lose precision" while it compiles it.
+    """
     for i in a:
         a[i] = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
 

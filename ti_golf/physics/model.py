@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import taichi as ti
 
@@ -61,8 +63,10 @@ class Model:
         self.radius_np = _compact(radius)
         self.mass_np = _compact(mass)
         self.terrain = None
-        heights = np.zeros((2, 2))
-        origin, spacing, kill = (0.0, 0.0, 0.0), (1.0, 1.0), 0.0
+        heights: np.ndarray = np.zeros((2, 2))
+        origin: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0)
+        spacing: Sequence[float] | np.ndarray = (1.0, 1.0)
+        kill = 0.0
         if scene.terrain is not None:
             self.terrain = build_terrain(scene.terrain, scene.path)
             heights, origin, spacing, kill = (
@@ -80,7 +84,11 @@ class Model:
         )
         self.terrain_h = ti.ndarray(float, heights.shape)
         self.terrain_h.from_numpy(np.ascontiguousarray(heights, dtype=f))
-        cells = self.terrain.cells if self.terrain is not None else np.zeros((1, 1), np.int32)
+        cells = np.zeros((1, 1), np.int32)
+        if self.terrain is not None:
+            # a terrain without surface types is all of the first (as build_terrain makes it without levels)
+            t_cells = self.terrain.cells
+            cells = t_cells if t_cells is not None else np.zeros_like(self.terrain.heights[:-1, :-1], np.int32)
         self.terrain_cells = ti.ndarray(ti.i32, cells.shape)
         self.terrain_cells.from_numpy(np.ascontiguousarray(cells, dtype=np.int32))
         self.set_parameters(scene)

@@ -85,8 +85,8 @@ class Packs:
             values = np.asarray(scalar_values(*structs), dtype=np_float())
             array = kept[1] if kept is not None else ti.ndarray(float, values.size)
             array.from_numpy(values)
-            self._scalars = (structs, array)
-        return self._scalars[1]
+            self._scalars = kept = (structs, array)
+        return kept[1]
 
     def step_scalars(self, m: Any, skin: float = 0.0, v_cut: float = 0.0, r_cut: float = 0.0) -> Any:
         """:meth:`scalars` of a :class:`~ti_golf.physics.model.Model`'s air, contact and terrain and of

@@ -16,7 +16,7 @@ import functools
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeAlias
 
 import taichi as ti
 
@@ -43,6 +43,7 @@ class Deferred:
         return self._type
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        """A value of the type (made now if this is its first use), as the type's own call makes it."""
         return self.get()(*args, **kwargs)
 
     def __getattr__(self, name: str) -> Any:
@@ -130,14 +131,14 @@ def zero3():
     return ti.Vector([0.0, 0.0, 0.0], dt=float)
 
 
-real = Deferred(lambda: ti.f64 if is_f64() else ti.f32, "real")
+real: TypeAlias = Deferred(lambda: ti.f64 if is_f64() else ti.f32, "real")
 """The float type chosen at ``ti.init`` (f32 or f64): Taichi's own ``ti.f32``/``ti.f64`` objects,
 which its argument checks compare by identity."""
 
-vec3 = Deferred(lambda: ti.types.vector(3, float), "vec3")
+vec3: TypeAlias = Deferred(lambda: ti.types.vector(3, float), "vec3")
 """3-vector of the chosen float [SI units]."""
 
-AirParams = Deferred(
+AirParams: TypeAlias = Deferred(
     lambda: ti.types.struct(
         rho=float,  # air density ρ [kg/m³]
         gamma=ti.i32,  # flow type γ: 1 laminar, 2 turbulent
@@ -162,7 +163,7 @@ AirParams = Deferred(
 )
 """Air parameters, passed to kernels by value (tunable without recompiling)."""
 
-ContactParams = Deferred(
+ContactParams: TypeAlias = Deferred(
     lambda: ti.types.struct(
         e=float,  # restitution (B.9)
         mu=float,  # Coulomb friction (B.15)
@@ -178,7 +179,7 @@ ContactParams = Deferred(
 )
 """Impulse-contact parameters (report Appendix B)."""
 
-TerrainParams = Deferred(
+TerrainParams: TypeAlias = Deferred(
     lambda: ti.types.struct(
         on=ti.i32,  # 1: the scene has a terrain (its heights are the kernel's height-grid argument); 0: none
         origin=vec3.get(),  # the grid's first corner [m]; heights are added to its y
@@ -191,12 +192,12 @@ TerrainParams = Deferred(
 """Height-field terrain parameters (see :mod:`ti_golf.physics.terrain`)."""
 
 # ndarray annotations (any length; element types follow the precision chosen at init)
-vec3_array = Deferred(lambda: ti.types.ndarray(dtype=vec3.get(), ndim=1), "vec3_array")
-float_array = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=1), "float_array")
-vec3_table = Deferred(lambda: ti.types.ndarray(dtype=vec3.get(), ndim=2), "vec3_table")
-float_grid = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=2), "float_grid")
+vec3_array: TypeAlias = Deferred(lambda: ti.types.ndarray(dtype=vec3.get(), ndim=1), "vec3_array")
+float_array: TypeAlias = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=1), "float_array")
+vec3_table: TypeAlias = Deferred(lambda: ti.types.ndarray(dtype=vec3.get(), ndim=2), "vec3_table")
+float_grid: TypeAlias = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=2), "float_grid")
 """2-D float array (terrain heights, tables)."""
-pair_table = float_grid
+pair_table: TypeAlias = float_grid
 """The pairs' sweep entries, a row per listed pair (see ``NeighbourLists.first``), ``INV`` to
 ``P_Z`` or ``INV`` and ``GAP`` alone (see :func:`pair_columns`)."""
 
@@ -222,26 +223,26 @@ def pair_columns(gauss_seidel: bool) -> int:
 
 
 # Types that do not depend on the precision.
-int_array = ti.types.ndarray(dtype=ti.i32, ndim=1)
-int_grid = ti.types.ndarray(dtype=ti.i32, ndim=2)
+int_array: TypeAlias = ti.types.ndarray(dtype=ti.i32, ndim=1)
+int_grid: TypeAlias = ti.types.ndarray(dtype=ti.i32, ndim=2)
 """2-D int array (terrain cell surface types)."""
-vec3f = ti.types.vector(3, ti.f32)
+vec3f: TypeAlias = ti.types.vector(3, ti.f32)
 """3-vector of f32 whatever the precision (positions kept only to test how far balls moved, see
 ``links.distance_from_build``)."""
-vec3f_array = ti.types.ndarray(dtype=vec3f, ndim=1)
-f32_array = ti.types.ndarray(dtype=ti.f32, ndim=1)
-vec4f = ti.types.vector(4, ti.f32)
+vec3f_array: TypeAlias = ti.types.ndarray(dtype=vec3f, ndim=1)
+f32_array: TypeAlias = ti.types.ndarray(dtype=ti.f32, ndim=1)
+vec4f: TypeAlias = ti.types.vector(4, ti.f32)
 """A contact's (λ, F_x, F_y, F_z) in f32 (see ``NeighbourLists.surface_impulse``)."""
-vec4f_table = ti.types.ndarray(dtype=vec4f, ndim=2)
-int_table = ti.types.ndarray(dtype=ti.i32, ndim=2)
+vec4f_table: TypeAlias = ti.types.ndarray(dtype=vec4f, ndim=2)
+int_table: TypeAlias = ti.types.ndarray(dtype=ti.i32, ndim=2)
 """2-D int array (neighbour lists: a row per ball)."""
 
-ivec3 = ti.types.vector(3, ti.i32)
+ivec3: TypeAlias = ti.types.vector(3, ti.i32)
 """3-vector of i32 (grid cells)."""
 
 # Kernel data grouped by what it is (argument packs of arrays, structs of scalars), as the
 # kernels take it: model before state, inputs before outputs.
-StepParams = Deferred(
+StepParams: TypeAlias = Deferred(
     lambda: ti.types.struct(
         gravity=vec3.get(),  # g [m/s²]
         h=float,  # time step [s]
@@ -335,7 +336,7 @@ def scalars_of(s: ti.template()):
     )
 
 
-ModelArrays = Deferred(
+ModelArrays: TypeAlias = Deferred(
     lambda: ti.types.argpack(
         radius=float_array.get(),  # ball radii [m], (N,) or (1,) (see of_ball)
         mass=float_array.get(),  # ball masses [kg], (N,) or (1,)
@@ -350,7 +351,7 @@ ModelArrays = Deferred(
 )
 """The model's arrays (see :class:`ti_golf.physics.model.Model`)."""
 
-BallState = Deferred(
+BallState: TypeAlias = Deferred(
     lambda: ti.types.argpack(
         x=vec3_array.get(),  # positions [m], (N,)
         v=vec3_array.get(),  # velocities [m/s], (N,)
@@ -362,7 +363,7 @@ BallState = Deferred(
 )
 """The balls' state (see :class:`ti_golf.physics.state.State`)."""
 
-FlightRecord = Deferred(
+FlightRecord: TypeAlias = Deferred(
     lambda: ti.types.argpack(
         landed=int_array,  # IN_FLIGHT, LANDED or NOT_TRACKED, (N,) or (1,) when no ball is tracked
         apex=float_array.get(),  # highest centre height so far [m]
@@ -374,7 +375,7 @@ FlightRecord = Deferred(
 )
 """Each tracked ball's flight: landing and apex (see :class:`ti_golf.physics.state.State`)."""
 
-NeighbourLists = Deferred(
+NeighbourLists: TypeAlias = Deferred(
     lambda: ti.types.argpack(
         upper=int_table,  # the neighbours whose pairs each ball owns (grid.owns), sorted by index, (N, K)
         # ball i's pairs: upper[i, :first[i + 1] − first[i]], and in lam, friction, J the entries from first[i]
@@ -393,7 +394,7 @@ NeighbourLists = Deferred(
 )
 """The collision solver's neighbour lists and the impulses it carries from step to step."""
 
-BlockOrder = Deferred(
+BlockOrder: TypeAlias = Deferred(
     lambda: ti.types.argpack(
         start=int_array,  # each hash bucket's first entry in ids, (B + 1,)
         ids=int_array,  # the balls bucket by bucket, bottom-up in each, (N,)
@@ -403,7 +404,7 @@ BlockOrder = Deferred(
 )
 """The balls grouped by block of grid columns for the Gauss–Seidel sweeps (:mod:`ti_golf.solvers.colour`)."""
 
-StepScratch = Deferred(
+StepScratch: TypeAlias = Deferred(
     lambda: ti.types.argpack(
         x_free=vec3_array.get(),  # free-flight positions, then the step's new positions [m], (N,)
         v_free=vec3_array.get(),  # free-flight velocities [m/s], (N,)
@@ -425,7 +426,7 @@ def of_ball(a: ti.template(), i):
     return a[ti.min(i, a.shape[0] - 1)]
 
 
-GridParams = Deferred(
+GridParams: TypeAlias = Deferred(
     lambda: ti.types.struct(
         inv_cell=float,  # 1 / the grid's cell size [1/m]
         mask=ti.i32,  # the hash table's size − 1 (a power of two − 1)
@@ -443,7 +444,7 @@ GridParams = Deferred(
 )
 """Scalars of a neighbour-list build (see :func:`ti_golf.solvers.grid.list_neighbours`)."""
 
-GridScratch = ti.types.argpack(
+GridScratch: TypeAlias = ti.types.argpack(
     rank=int_array,  # each ball's rank within its bucket, (N,)
     start=int_array,  # each bucket's first entry in sorted_ids, (buckets + 1,)
     chunk_start=int_array,  # the counting sort's per-chunk starts

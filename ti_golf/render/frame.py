@@ -82,7 +82,7 @@ def _plane_tiles(
     hi: np.ndarray,
     r_max: float,
     reach: float = 0.0,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
     """Checkered quads of every plane seen from its open side, sized to the box ``lo``–``hi`` (and,
     with ``reach`` > 0, to what the camera sees of the plane up to that distance)."""
     cam = np.asarray(view.position)
@@ -110,8 +110,8 @@ def _plane_tiles(
             step = _nice_step(step * 1.5)
         i0, i1 = math.floor(ulo / step), math.ceil(uhi / step)
         j0, j1 = math.floor(vlo / step), math.ceil(vhi / step)
-        ii, jj = np.meshgrid(np.arange(i0, i1), np.arange(j0, j1), indexing="ij")
-        ii, jj = ii.ravel(), jj.ravel()
+        i_grid, j_grid = np.meshgrid(np.arange(i0, i1), np.arange(j0, j1), indexing="ij")
+        ii, jj = i_grid.ravel(), j_grid.ravel()
         quad = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
         u = (ii[:, None] + quad[None, :, 0]) * step
         v = (jj[:, None] + quad[None, :, 1]) * step
@@ -150,8 +150,8 @@ def _clip_to_open_sides(
     eps = 1e-9 * (1.0 + float(np.abs(quads).max()))
     d = np.stack([(quads - q) @ m for q, m in planes])  # (P, T, 4)
     inside = d >= -eps
-    whole = inside.all(axis=(0, 2))
-    gone = (~inside).all(axis=2).any(axis=0)
+    whole = np.asarray(inside.all(axis=(0, 2)))
+    gone = np.asarray((~inside).all(axis=2).any(axis=0))
     out: list[np.ndarray] = []
     idx = []
     for t in range(len(quads)):

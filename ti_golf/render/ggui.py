@@ -91,10 +91,11 @@ def ggui_available() -> bool:
 
 def _ggui_window(size: tuple[int, int]) -> Any:
     if _ggui.window is not None:
-        if _ggui.size != size:
+        made = _ggui.size
+        assert made is not None  # set with the window
+        if made != size:
             raise _GGUIUnavailable(
-                f"the GGUI window of this process is {_ggui.size[0]}x{_ggui.size[1]} and cannot be resized "
-                f"to {size[0]}x{size[1]}"
+                f"the GGUI window of this process is {made[0]}x{made[1]} and cannot be resized to {size[0]}x{size[1]}"
             )
         return _ggui.window
     problem = ggui_problem()
@@ -169,7 +170,8 @@ class _GGUIDraw:
     """
 
     def __init__(self, scene: Any) -> None:
-        self.scene, self.info, self.keep = scene.scene, get_field_info, []
+        self.scene, self.info = scene.scene, get_field_info
+        self.keep: list[np.ndarray] = []
 
     def _hold(self, *arrays: np.ndarray | None) -> list[Any]:
         self.keep.extend(a for a in arrays if a is not None)

@@ -127,8 +127,11 @@ def _render_matplotlib(frame: _Frame, path: str) -> None:
         seg[cut_b, 1] = point[cut_b]
         px = np.stack([0.5 * w + f * seg[..., 0] / seg[..., 2], 0.5 * h - f * seg[..., 1] / seg[..., 2]], axis=-1)
         ax.add_collection(
-            LineCollection(
-                px, colors=np.clip(frame.segment_colors[ok], 0, 1), linewidths=frame.line_px * pt_per_px, zorder=2
+            LineCollection(  # (matplotlib's stubs ask for sequences where it takes arrays)
+                px,  # type: ignore[arg-type]
+                colors=np.clip(frame.segment_colors[ok], 0, 1),
+                linewidths=frame.line_px * pt_per_px,
+                zorder=2,
             )
         )
     if len(frame.centers):
@@ -144,8 +147,8 @@ def _render_matplotlib(frame: _Frame, path: str) -> None:
             px[order, 1],
             s=(2.0 * r_px[order] * pt_per_px) ** 2,
             c=c,
-            edgecolors=edge,
-            linewidths=np.where(r_px[order] > 3.0, 0.6, 0.0),
+            edgecolors=edge,  # type: ignore[arg-type]
+            linewidths=np.where(r_px[order] > 3.0, 0.6, 0.0),  # type: ignore[arg-type]
             marker="o",
             zorder=3,
         )

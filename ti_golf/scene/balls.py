@@ -30,6 +30,7 @@ class Balls:
 
     @property
     def n(self) -> int:
+        """How many balls."""
         return len(self.x)
 
 

@@ -39,18 +39,19 @@ class Interval:
     unit_word: str = ""
 
     def __call__(self, v: float) -> str | None:
+        """``None`` when ``v`` is allowed, else the reason it is not (``must be …``)."""
         above = v > self.lo if self.lo_open else v >= self.lo
         below = self.hi is None or (v < self.hi if self.hi_open else v <= self.hi)
         return None if above and below else "must be " + self.text + (f" {self.unit_word}" if self.unit_word else "")
 
     @property
     def text(self) -> str:
-        """``> 0``, ``>= 0``, ``in [0, 1]``, ``in (0, 1]``, …"""
+        """The allowed values as the error says them: ``> 0``, ``>= 0``, ``in [0, 1]``, ``in (0, 1]``."""
         return self.allowed if self.hi is None else "in " + self.allowed
 
     @property
     def allowed(self) -> str:
-        """``> 0``, ``>= 0``, ``[0, 1]``, ``(0, 1]``, …"""
+        """The allowed values: ``> 0``, ``>= 0``, ``[0, 1]``, ``(0, 1]``."""
         if self.hi is None:
             return f"{'>' if self.lo_open else '>='} {_number(self.lo)}"
         lo, hi = _number(self.lo), _number(self.hi)
@@ -71,11 +72,12 @@ class OneOf:
     choices: tuple[Any, ...]
 
     def __call__(self, v: Any) -> str | None:
+        """``None`` when ``v`` is allowed, else the reason it is not (``must be …``)."""
         return None if v in self.choices else "must be one of " + ", ".join(repr(c) for c in self.choices)
 
     @property
     def allowed(self) -> str:
-        """``lab | spin_ratio``"""
+        """The choices: ``lab | spin_ratio``."""
         return " | ".join(str(c) for c in self.choices)
 
     def json_schema(self) -> dict[str, Any]:
@@ -91,13 +93,14 @@ class Each:
     n: int = 2
 
     def __call__(self, v: Sequence[float]) -> str | None:
+        """``None`` when ``v`` is allowed, else the reason it is not (``must be …``)."""
         if all(self.interval(c) is None for c in v):
             return None
         return f"must be {self.interval.text} on {'both' if self.n == 2 else 'all'} axes"
 
     @property
     def allowed(self) -> str:
-        """``[> 0, > 0]``"""
+        """The allowed values of each number: ``[> 0, > 0]``."""
         return "[" + ", ".join([self.interval.allowed] * self.n) + "]"
 
     def json_schema(self) -> dict[str, Any]:
@@ -116,6 +119,7 @@ class WholeCounts:
     things: str
 
     def __call__(self, v: Sequence[float]) -> str | None:
+        """``None`` when ``v`` is allowed, else the reason it is not (``must be …``)."""
         if all(c >= self.least and float(c).is_integer() for c in v) and math.prod(v) <= self.most:
             return None
         return (
@@ -124,7 +128,7 @@ class WholeCounts:
 
     @property
     def allowed(self) -> str:
-        """``3 whole numbers >= 1``"""
+        """The allowed values: ``3 whole numbers >= 1``."""
         return f"{self.n} whole numbers >= {self.least}"
 
     def json_schema(self) -> dict[str, Any]:
@@ -140,13 +144,14 @@ class MinMax:
     hi: float = math.inf
 
     def __call__(self, v: Sequence[float]) -> str | None:
+        """``None`` when ``v`` is allowed, else the reason it is not (``must be …``)."""
         if len(v) != 2 or v[0] > v[1]:
             return "must be [min, max] with min <= max"
         return None if self.lo <= v[0] and v[1] <= self.hi else f"must lie in [{self.lo:g}, {self.hi:g}]"
 
     @property
     def allowed(self) -> str:
-        """``[min, max] >= 0``, ``[min, max] in [-90, 90]``"""
+        """The allowed pairs: ``[min, max] >= 0``, ``[min, max] in [-90, 90]``."""
         if math.isinf(self.hi):
             return f"[min, max] >= {_number(self.lo)}"
         return f"[min, max] in [{_number(self.lo)}, {_number(self.hi)}]"
@@ -166,6 +171,7 @@ class NonZero:
     allowed: str = "non-zero vec3"
 
     def __call__(self, v: Sequence[float]) -> str | None:
+        """``None`` when ``v`` is allowed, else the reason it is not (``must be …``)."""
         return None if any(c != 0 for c in v) else "must not be the zero vector"
 
     def json_schema(self) -> dict[str, Any]:

@@ -15,10 +15,10 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-try:  # Python >= 3.11
+if sys.version_info >= (3, 11):
     import tomllib
-except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef,unused-ignore]
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
 
 from ti_golf.errors import ConfigError
 from ti_golf.scene.checks import parse_range, raise_config
@@ -65,18 +65,7 @@ def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
     """Check the type of one value against its schema entry and return it normalised."""
     kind = key.kind
     if kind == "float" or kind == "int":
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise_config(source, dotted, f"must be a number{_unit(key)} (got {value!r})")
-        if kind == "int":
-            if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
-                raise_config(source, dotted, f"must be an integer (got {value!r})")
-            if key.check is not None and key.check(value):
-                raise_config(source, dotted, f"{key.check(value)} (got {value!r})")
-            value = int(value)
-        else:
-            value = float(value)
-            if not math.isfinite(value):
-                raise_config(source, dotted, f"must be a finite number (got {value!r})")
+        value = _coerce_number(value, key, source, dotted)
     elif kind == "bool":
         if not isinstance(value, bool):
             raise_config(source, dotted, f"must be true or false (got {value!r})")
@@ -88,16 +77,7 @@ def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
             raise_config(source, dotted, f"must be a list of strings (got {value!r})")
         value = tuple(value)
     elif kind in _LISTS:
-        count, shape = _LISTS[kind]
-        if (
-            not isinstance(value, (list, tuple))
-            or len(value) != count
-            or any(isinstance(c, bool) or not isinstance(c, (int, float)) for c in value)
-        ):
-            raise_config(source, dotted, f"must be {shape.format(unit=_unit(key))} (got {value!r})")
-        value = tuple(float(c) for c in value)
-        if not all(math.isfinite(c) for c in value):
-            raise_config(source, dotted, f"must hold finite numbers (got {list(value)!r})")
+        value = _coerce_numbers(value, key, source, dotted)
     elif kind == "range":
         value = parse_range(value if isinstance(value, (list, tuple)) else str(value), source, dotted)
     if key.check is not None:
@@ -105,6 +85,38 @@ def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
         if problem:
             raise_config(source, dotted, f"{problem} (got {value!r})")
     return value
+
+
+def _coerce_number(value: Any, key: Key, source: str, dotted: str) -> int | float:
+    """A ``float`` key's value as a finite float, an ``int`` key's as an int (a whole number, within
+    the key's check: the check sees the value as given)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise_config(source, dotted, f"must be a number{_unit(key)} (got {value!r})")
+    if key.kind == "int":
+        if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
+            raise_config(source, dotted, f"must be an integer (got {value!r})")
+        if key.check is not None and key.check(value):
+            raise_config(source, dotted, f"{key.check(value)} (got {value!r})")
+        return int(value)
+    number = float(value)
+    if not math.isfinite(number):
+        raise_config(source, dotted, f"must be a finite number (got {number!r})")
+    return number
+
+
+def _coerce_numbers(value: Any, key: Key, source: str, dotted: str) -> tuple[float, ...]:
+    """The value of a key of a fixed-length list kind (:data:`_LISTS`) as a tuple of finite floats."""
+    count, shape = _LISTS[key.kind]
+    if (
+        not isinstance(value, (list, tuple))
+        or len(value) != count
+        or any(isinstance(c, bool) or not isinstance(c, (int, float)) for c in value)
+    ):
+        raise_config(source, dotted, f"must be {shape.format(unit=_unit(key))} (got {value!r})")
+    numbers = tuple(float(c) for c in value)
+    if not all(math.isfinite(c) for c in numbers):
+        raise_config(source, dotted, f"must hold finite numbers (got {list(numbers)!r})")
+    return numbers
 
 
 def check_value(value: Any, key: Key, source: str, dotted: str) -> Any:
@@ -187,7 +199,8 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     except UnicodeDecodeError:
         raise ConfigError(str(p), None, "is not UTF-8 text") from None
     try:
-        return tomllib.loads(text)
+        doc: dict[str, Any] = tomllib.loads(text)
+        return doc
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(str(p), None, f"is not valid TOML: {exc}") from None
 
@@ -267,12 +280,38 @@ def load_scene(
 
 
 def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
+    """The :class:`Scene` of a scene document (the file's tables with the overrides applied), every
+    key checked: the top-level keys and table names, then each table in :data:`SCHEMA`'s order,
+    then the ``[[...]]`` arrays."""
     kwargs: dict[str, Any] = {"name": name, "path": source}
+    _build_top_level(doc, source, kwargs)
+    for section, keys in SCHEMA.items():
+        table = doc.get(section)
+        if table is not None:
+            _build_section(section, keys, table, source, doc, kwargs)
+    if "launch" not in doc:
+        kwargs["launch"] = None
+    _build_arrays(doc, source, kwargs)
+    if (kwargs["planes"] or kwargs.get("terrain") is not None) and "ground" not in doc.get("world", {}):
+        world = kwargs.get("world", World())
+        kwargs["world"] = World(**{**world.__dict__, "ground": False})
+    return Scene(**kwargs)
+
+
+def _with_source(value: Any, source: str) -> tuple[str, Any]:
+    """A value of the document and where it came from: ``--set`` for an override's (stored as
+    ``("--set", value)``), else ``source``."""
+    if isinstance(value, tuple) and len(value) == 2 and value[0] == "--set":
+        return value[0], value[1]
+    return source, value
+
+
+def _build_top_level(doc: dict[str, Any], source: str, kwargs: dict[str, Any]) -> None:
+    """Check the document's top level into ``kwargs``: its keys (:data:`TOP_LEVEL`) coerced, and
+    every other name a table of :data:`SCHEMA` or an array of :data:`ARRAY_SCHEMA`."""
     for top, value in doc.items():
         if top in TOP_LEVEL:
-            src = source
-            if isinstance(value, tuple) and len(value) == 2 and value[0] == "--set":
-                src, value = value
+            src, value = _with_source(value, source)
             kwargs[top] = _coerce(value, TOP_LEVEL[top], src, top)
             continue
         if top in ARRAY_SCHEMA:
@@ -287,46 +326,47 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
             )
         if not isinstance(value, dict):
             raise_config(source, top, f"must be a table [{top}] (got {value!r})")
-    for section, keys in SCHEMA.items():
-        table = doc.get(section)
-        if table is None:
-            continue
-        values: dict[str, Any] = {}
-        sources: dict[str, str] = {}
-        for name_, value in table.items():
-            dotted = f"{section}.{name_}"
-            src = source
-            if isinstance(value, tuple) and len(value) == 2 and value[0] == "--set":
-                src, value = value
-            if name_ not in keys:
-                raise_config(
-                    src, dotted, f"is unknown{_suggest(name_, keys)}; allowed in [{section}]: " + ", ".join(keys)
-                )
-            values[name_] = _coerce(value, keys[name_], src, dotted)
-            sources[name_] = src
-        if section == "terrain" and "file" in values and "kind" not in values:
-            values["kind"] = "file"  # a heights file names the kind of terrain it is
-        _refuse_unread(values, keys, section, sources, source, doc)
-        if section == "air":
-            values = _air(values, sources, source)
-        if section == "sweep":
-            kwargs["sweep"] = SweepDefaults(**values)
-        elif section == "terrain":
-            kwargs["terrain"] = _terrain(values, sources, source)
-        elif section == "hole":
-            if "position" not in values:
-                raise_config(source, "hole.position", "is required (the cup's centre [x, z] in m)")
-            kwargs["hole"] = HoleConfig(**values)
-        else:
-            kwargs[section] = _SECTION_TYPES[section](**values)
-        if section == "air" and kwargs["air"].model in ("spin_ratio", "spin_reynolds") and kwargs["air"].gamma != 2:
-            raise_config(
-                sources.get("gamma", sources.get("model", source)),
-                "air.gamma",
-                f'must be 2 with air.model = "{kwargs["air"].model}" (its drag and lift are for turbulent flow)',
-            )
-    if "launch" not in doc:
-        kwargs["launch"] = None
+
+
+def _build_section(
+    section: str, keys: dict[str, Key], table: dict[str, Any], source: str, doc: dict[str, Any], kwargs: dict[str, Any]
+) -> None:
+    """Check the table ``[section]`` against its ``keys`` and put its dataclass into ``kwargs``."""
+    values: dict[str, Any] = {}
+    sources: dict[str, str] = {}
+    for name, value in table.items():
+        dotted = f"{section}.{name}"
+        src, value = _with_source(value, source)
+        if name not in keys:
+            raise_config(src, dotted, f"is unknown{_suggest(name, keys)}; allowed in [{section}]: " + ", ".join(keys))
+        values[name] = _coerce(value, keys[name], src, dotted)
+        sources[name] = src
+    if section == "terrain" and "file" in values and "kind" not in values:
+        values["kind"] = "file"  # a heights file names the kind of terrain it is
+    _refuse_unread(values, keys, section, sources, source, doc)
+    if section == "air":
+        values = _air(values, sources, source)
+    if section == "sweep":
+        kwargs["sweep"] = SweepDefaults(**values)
+    elif section == "terrain":
+        kwargs["terrain"] = _terrain(values, sources, source)
+    elif section == "hole":
+        if "position" not in values:
+            raise_config(source, "hole.position", "is required (the cup's centre [x, z] in m)")
+        kwargs["hole"] = HoleConfig(**values)
+    else:
+        kwargs[section] = _SECTION_TYPES[section](**values)
+    if section == "air" and kwargs["air"].model in ("spin_ratio", "spin_reynolds") and kwargs["air"].gamma != 2:
+        raise_config(
+            sources.get("gamma", sources.get("model", source)),
+            "air.gamma",
+            f'must be 2 with air.model = "{kwargs["air"].model}" (its drag and lift are for turbulent flow)',
+        )
+
+
+def _build_arrays(doc: dict[str, Any], source: str, kwargs: dict[str, Any]) -> None:
+    """Check the ``[[balls]]``, ``[[blocks]]``, ``[[planes]]`` and ``[[surfaces]]`` arrays into
+    ``kwargs``, and the surface types against the terrain's ``surface_levels``."""
     arrays = {name: _array_tables(doc.get(name), name, source, doc) for name in ARRAY_SCHEMA}
     kwargs["balls"] = tuple(_ball_spec(t, source, i) for i, t in enumerate(arrays["balls"]))
     kwargs["blocks"] = tuple(_block(t, source, i) for i, t in enumerate(arrays["blocks"]))
@@ -345,10 +385,6 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
             raise_config(source, "terrain.surface_levels", "must increase")
     elif kwargs["surfaces"] and kwargs.get("terrain") is None:
         raise_config(source, "surfaces", "surface types need a [terrain] (with terrain.surface_levels)")
-    if (kwargs["planes"] or kwargs.get("terrain") is not None) and "ground" not in doc.get("world", {}):
-        world = kwargs.get("world", World())
-        kwargs["world"] = World(**{**world.__dict__, "ground": False})
-    return Scene(**kwargs)
 
 
 def _array_tables(value: Any, name: str, source: str, doc: Mapping[str, Any]) -> list[dict[str, Any]]:
@@ -475,9 +511,8 @@ def _ball_spec(values: dict[str, Any], source: str, i: int) -> BallSpec:
 
 def _block(values: dict[str, Any], source: str, i: int) -> Block:
     block = Block(**values)
-    if block.kind == "random":
-        if any(lo >= hi for lo, hi in zip(block.box_min, block.box_max)):
-            raise_config(source, f"blocks[{i}].box_max", "must exceed box_min on every axis")
+    if block.kind == "random" and any(lo >= hi for lo, hi in zip(block.box_min, block.box_max)):
+        raise_config(source, f"blocks[{i}].box_max", "must exceed box_min on every axis")
     if (block.speed is None) != (block.angle_deg is None):
         raise_config(source, f"blocks[{i}].speed", "shots need both speed and angle_deg ([min, max] each)")
     return block

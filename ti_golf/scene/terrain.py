@@ -43,6 +43,7 @@ class Terrain:
 
     @property
     def shape(self) -> tuple[int, int]:
+        """Grid points (nx, nz)."""
         return self.heights.shape
 
     @property
@@ -195,10 +196,7 @@ def build_terrain(cfg: TerrainConfig, source: str = "") -> Terrain:
 
     Generated heights are cached per table (read-only arrays); files are read on every call.
     """
-    if cfg.kind == "file":
-        heights = load_heights_file(cfg.file, source)
-    else:
-        heights = _generated(cfg)
+    heights = load_heights_file(cfg.file, source) if cfg.kind == "file" else _generated(cfg)
     nx, nz = heights.shape
     spacing = np.array([cfg.size[0] / (nx - 1), cfg.size[1] / (nz - 1)])
     if cfg.slope[0] or cfg.slope[1]:

@@ -10,7 +10,7 @@ import math
 import os
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import taichi as ti
@@ -25,6 +25,7 @@ from ti_golf.scene.balls import ball_count, block_size, build_balls
 from ti_golf.scene.document import with_changes
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, STATUS_NAMES, Scene
+from ti_golf.scene.terrain import Terrain
 from ti_golf.signals import whole_steps
 from ti_golf.sim.changes import (
     _UNSET,
@@ -38,6 +39,15 @@ from ti_golf.sim.changes import (
 from ti_golf.sim.results import Flight
 from ti_golf.sim.saved_run import read_run, restore_run, write_run
 from ti_golf.solvers import CollisionSolver
+
+
+class RunProgress(Protocol):
+    """What :meth:`Simulation.run` calls between chunks: ``progress(t_done, t_total)`` [s], and for a
+    run with ``until`` also ``finished=(k, n, what)``: k of the n balls are ``what`` (at rest or out
+    of bounds, landed). A callable of two arguments alone fails on a run with ``until``."""
+
+    def __call__(self, done: float, total: float, /, finished: tuple[int, int, str] | None = None) -> None:
+        """Say that ``done`` of ``total`` simulated seconds are done (and ``finished``: see the class)."""
 
 
 @dataclass
@@ -80,6 +90,8 @@ class InitialBalls:
 
     @classmethod
     def copy_of(cls, x: Any, v: Any, w: Any, radius: Any, mass: Any, track: Any) -> "InitialBalls":
+        """The balls as given, each array copied (``None`` kept), so that later changes leave them."""
+
         def copy(a: Any) -> Any:
             return None if a is None else np.array(a, copy=True)
 
@@ -164,7 +176,7 @@ class Simulation:
         self.state.reset(x, v, w, track)
         self.launch_x = x.copy() if tracking else None
         """Launch points [m], shape (N, 3): carry is measured from here; ``None`` when no ball is tracked."""
-        self._check_buf = None
+        self._check_buf: Any = None  # a Taichi i32 array of 1, made on the first check
         self._packs = Packs()
         self.solver = None
         """The CollisionSolver when balls can collide (several balls and ``world.collisions``)."""
@@ -329,7 +341,7 @@ class Simulation:
         return self.state.read("status")
 
     @property
-    def terrain(self):
+    def terrain(self) -> Terrain | None:
         """The scene's height field (:class:`ti_golf.scene.terrain.Terrain`: heights, origin, spacing,
         ``height(x, z)``, ``normal(x, z)``), or ``None``."""
         return self.model.terrain
@@ -450,7 +462,7 @@ class Simulation:
         steps: int | None = None,
         until: str | None = None,
         record_every: int = 0,
-        progress: Callable[[float, float], None] | None = None,
+        progress: RunProgress | None = None,
         every: int = 0,
         on_every: Callable[["Simulation"], None] | None = None,
     ) -> Recording:

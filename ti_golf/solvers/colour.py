@@ -385,7 +385,7 @@ def sweep_ball(
 
 
 @ti.func
-def sweep_pair(
+def sweep_pair(  # noqa: C901 (a ti.func: a pair's update in both layouts' sweeps)
     i,
     j,
     p,

@@ -219,7 +219,7 @@ def colour_carry(
 
 
 @ti.func
-def colour_round(
+def colour_round(  # noqa: C901 (a ti.func of the colouring kernel, inlined in it)
     p,
     climb,
     up,

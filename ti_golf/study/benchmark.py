@@ -103,7 +103,7 @@ def bench_study(n: int = 8, steps: int = 20_000, log: Callable[[str], None] = pr
     same = all(a["carry_m"] == b["carry_m"] or a["carry_m"] != a["carry_m"] for a, b in zip(base_rows, rows1 + rows2))
     task_s = base_s / n
     overhead = (one_s - base_s) / n
-    result = {
+    result: dict[str, Any] = {
         "benchmark": "study",
         "tasks": n,
         "steps": steps,

@@ -105,9 +105,9 @@ def write_table(folder: str | os.PathLike[str], columns: Sequence[str], rows: Se
     for name in columns:
         values = [row.get(name) for row in rows]
         present = [v for v in values if v is not None]
-        if present and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in present):
-            if name != "seed" and any(isinstance(v, float) for v in present):
-                values = [None if v is None else float(v) for v in values]
+        numbers = bool(present) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in present)
+        if numbers and name != "seed" and any(isinstance(v, float) for v in present):
+            values = [None if v is None else float(v) for v in values]
         arrays[name] = pa.array(values)
     table = pa.table(arrays) if columns else pa.table({})
     with atomic_path(folder / TABLE_PARQUET) as tmp:

@@ -27,6 +27,7 @@ import hashlib
 import itertools
 import json
 import math
+import os
 import random
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -213,10 +214,11 @@ class StudySpec:
 
     @property
     def gpu(self) -> bool:
+        """Whether each task asks for a GPU (the ``[task]`` table's ``gpu``)."""
         return self.task.gpu
 
 
-def resolve_study_path(name: str | Path) -> Path:
+def resolve_study_path(name: str | os.PathLike[str]) -> Path:
     """A study file as given, or a bundled study's name (``scenes/studies/NAME.toml``)."""
     return resolve_scene_path(name, bundled_studies_dir())
 
@@ -226,7 +228,7 @@ def bundled_studies_dir() -> Path:
     return scenes_dir() / "studies"
 
 
-def load_study(path: str | Path, overrides: Sequence[str] = ()) -> StudySpec:
+def load_study(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> StudySpec:
     """Read and check a study file (a path or a bundled study's name), with ``overrides``
     (``--set``-style texts: ``task.KEY=VALUE`` changes the ``[task]`` table, any other is added to
     the study's ``set``), and expand it into its tasks.
