@@ -16,7 +16,7 @@ from ti_golf.files import atomic_path
 from ti_golf.golf.rollout import shots_from_landing
 from ti_golf.physics import kernels
 from ti_golf.physics.aero import air_params
-from ti_golf.physics.integrate import INTEGRATOR_CODES
+from ti_golf.physics.kinds import kinds_of
 from ti_golf.physics.types import vec3
 from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile
 from ti_golf.scene.balls import launch_position
@@ -188,7 +188,7 @@ def fly(
             air,
             vec3(*wld.gravity),
             wld.dt,
-            INTEGRATOR_CODES[wld.integrator],
+            kinds_of(scene),
             lanes,
             wld.t_max,
             int(record_every),

@@ -97,9 +97,7 @@ def air_params(air: Any, ground_height: float) -> Any:
         omega_M=air.omega_M,
         C_omega=air.C_omega,
         wind=vec3(*air.wind),
-        model=AIR_MODEL_CODES[air.model],
         viscosity=air.viscosity,
-        wind_profile=WIND_PROFILE_CODES[air.wind_profile],
         wind_height=air.wind_height,
         wind_z0=air.wind_z0,
         ground_height=ground_height,
@@ -112,16 +110,16 @@ def air_params(air: Any, ground_height: float) -> Any:
 
 
 @ti.func
-def coefficients(air, radius, mass):
+def coefficients(air, kinds: ti.template(), radius, mass):
     """(4, L) matrix of k_D/m, k_M/m, k_ω [1/m] and R [m] for lanes of radius [m] and mass [kg];
     with the spin-ratio models the first two rows are ½ρA/m, which :func:`rates` multiplies by
     C_D and C_L/|ω|, and with ``spin_reynolds`` k_ω is λ/R."""
     half_rho_A = 0.5 * air.rho * math.pi * radius * radius
     c_D, c_M = air.C_D, air.C_M / air.omega_M
     k_omega = half_rho_A * air.C_omega / mass
-    if air.model != LAB:
+    if ti.static(kinds.air_model != LAB):
         c_D, c_M = 1.0, 1.0
-    if air.model == SPIN_REYNOLDS:
+    if ti.static(kinds.air_model == SPIN_REYNOLDS):
         k_omega = air.spin_decay / radius
     return ti.Matrix.rows(
         [
@@ -144,11 +142,11 @@ def spin_ratio_coefficients(s):
 
 
 @ti.func
-def wind_scale(y, air):
+def wind_scale(y, air, kinds: ti.template()):
     """u(z)/|wind| at heights ``y`` [m] (a vector over lanes): 1 with the constant profile; with
     the log profile ln(z/z₀)/ln(z_ref/z₀) for z = y − ground_height > z₀, else 0."""
     scale = ti.Vector([1.0 for _ in ti.static(range(y.n))], dt=float)
-    if air.wind_profile == LOG_WIND:
+    if ti.static(kinds.wind_profile == LOG_WIND):
         z0 = air.wind_z0
         scale = log(ti.max(y - air.ground_height, z0) / z0) / log(air.wind_height / z0)
     return scale
@@ -167,11 +165,11 @@ def spin_reynolds_coefficients(s, re, air):
 
 
 @ti.func
-def rates(S, coef, air, gravity):
+def rates(S, coef, air, kinds: ti.template(), gravity):
     """dS/dt of a lane state matrix S (10, L): (v, dv/dt [m/s²], dω/dt [rad/s²], d|ω|/dt) per lane."""
     vx, vy, vz = row(S, 3), row(S, 4), row(S, 5)
     wx, wy, wz = row(S, 6), row(S, 7), row(S, 8)
-    u = wind_scale(row(S, 1), air)
+    u = wind_scale(row(S, 1), air, kinds)
     rx, ry, rz = vx - u * air.wind[0], vy - u * air.wind[1], vz - u * air.wind[2]
     speed = ti.sqrt(rx * rx + ry * ry + rz * rz)
     drag = row(coef, 0)
@@ -180,11 +178,11 @@ def rates(S, coef, air, gravity):
         drag = drag * speed
         decay = decay * (speed + row(coef, 3) * row(S, SPIN))
     lift = row(coef, 1) * speed
-    if air.model != LAB:  # (γ = 2: the scene is checked when read)
+    if ti.static(kinds.air_model != LAB):  # (γ = 2: the scene is checked when read)
         spin = row(S, SPIN)
         s = row(coef, 3) * spin / ti.max(speed, _TINY)
         C_D, C_L = 0.0 * s, 0.0 * s
-        if air.model == SPIN_REYNOLDS:
+        if ti.static(kinds.air_model == SPIN_REYNOLDS):
             C_D, C_L = spin_reynolds_coefficients(s, (2.0 * air.rho / air.viscosity) * row(coef, 3) * speed, air)
             decay = row(coef, 2) * speed  # λ|v_rel|/R
         else:

@@ -1,6 +1,6 @@
 """Time integrators for one ball and the landing/apex bookkeeping of a flight.
 
-Integrators (``integrator`` code passed to kernels):
+Integrators (``Kinds.integrator``, a compile-time argument of the kernels):
 
 * ``SEMI_IMPLICIT`` (0): the report's semi-implicit (symplectic) Euler,
   v' = v + h·a(v, ω), ω' = ω + h·α(v, ω), x' = x + h·v'. First order; contact impulses are applied
@@ -25,17 +25,18 @@ NOT_TRACKED, IN_FLIGHT, LANDED = -1, 0, 1
 
 
 @ti.func
-def step_free(S, h, integrator: ti.template(), coef, air, gravity):
-    """One free-flight step of size ``h`` [s] of a lane state matrix S (9, L) (see :mod:`.aero`)."""
+def step_free(S, h, kinds: ti.template(), coef, air, gravity):
+    """One free-flight step of size ``h`` [s] of a lane state matrix S (9, L) (see :mod:`.aero`) by
+    ``kinds.integrator`` in ``kinds.air_model``'s air (:class:`~ti_golf.physics.kinds.Kinds`)."""
     S1 = S
-    if ti.static(integrator == RK4):
-        k1 = rates(S, coef, air, gravity)
-        k2 = rates(S + (0.5 * h) * k1, coef, air, gravity)
-        k3 = rates(S + (0.5 * h) * k2, coef, air, gravity)
-        k4 = rates(S + h * k3, coef, air, gravity)
+    if ti.static(kinds.integrator == RK4):
+        k1 = rates(S, coef, air, kinds, gravity)
+        k2 = rates(S + (0.5 * h) * k1, coef, air, kinds, gravity)
+        k3 = rates(S + (0.5 * h) * k2, coef, air, kinds, gravity)
+        k4 = rates(S + h * k3, coef, air, kinds, gravity)
         S1 = S + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
     else:
-        S1 = S + h * rates(S, coef, air, gravity)  # v' = v + h·a(v, ω), ω' likewise
+        S1 = S + h * rates(S, coef, air, kinds, gravity)  # v' = v + h·a(v, ω), ω' likewise
         for c, l in ti.static(ti.ndrange(3, S.m)):  # x' = x + h·v' (the new velocity: symplectic)
             S1[X + c, l] = S[X + c, l] + h * S1[V + c, l]
     return S1

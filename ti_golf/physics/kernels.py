@@ -51,7 +51,7 @@ def fly_to_landing(  # noqa: C901 (the fused flight kernel: steps, apex, landing
     air: AirParams,
     gravity: vec3,
     h: float,
-    integrator: ti.template(),
+    kinds: ti.template(),
     lanes: ti.template(),
     t_max: float,
     record_every: ti.i32,
@@ -95,7 +95,7 @@ def fly_to_landing(  # noqa: C901 (the fused flight kernel: steps, apex, landing
             S[SPIN, l] = w0[ids[l]].norm()
             rad[l] = of_ball(radius, ids[l])
             mas[l] = of_ball(mass, ids[l])
-        coef = coefficients(air, rad, mas)
+        coef = coefficients(air, kinds, rad, mas)
         level = row(S, 1)
         state = ti.Vector([IN_FLIGHT] * lanes, dt=ti.i32)
         top = row(S, 1)
@@ -109,7 +109,7 @@ def fly_to_landing(  # noqa: C901 (the fused flight kernel: steps, apex, landing
         k = 0
         flying = 1
         while flying != 0 and k * h < t_max:
-            S1 = step_free(S, h, integrator, coef, air, gravity)
+            S1 = step_free(S, h, kinds, coef, air, gravity)
             # Lane-wise checks every step; the scalar per-ball work runs only at an apex or a landing.
             in_flight = state == IN_FLIGHT
             y, y1, vy, vy1 = row(S, 1), row(S1, 1), row(S, 4), row(S1, 4)
@@ -156,7 +156,7 @@ def advance(
     scalars: float_array,
     t0: ti.f64,
     steps: ti.i32,
-    integrator: ti.template(),
+    kinds: ti.template(),
     model: ModelArrays,
     # State in/out:
     state: BallState,
@@ -180,7 +180,7 @@ def advance(
         st = state.status[i]
         if st != AT_REST and st != OUT_OF_BOUNDS:
             r = of_ball(model.radius, i)
-            coef = coefficients(air, ti.Vector([r]), ti.Vector([of_ball(model.mass, i)]))
+            coef = coefficients(air, kinds, ti.Vector([r]), ti.Vector([of_ball(model.mass, i)]))
             xi, vi, wi = state.x[i], state.v[i], state.w[i]
             rt = state.rest_time[i]
             fl, top, tl, lx, lv, level = NOT_TRACKED, 0.0, 0.0, zero3(), zero3(), 0.0
@@ -194,7 +194,7 @@ def advance(
                     model.launch_height[i],
                 )
             for k in range(steps):
-                S1 = step_free(lane_state(xi, vi, wi), h, integrator, coef, air, params.gravity)
+                S1 = step_free(lane_state(xi, vi, wi), h, kinds, coef, air, params.gravity)
                 x_free, v_free, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
                 fl, top, tl, lx, lv = track_flight(
                     xi, vi, x_free, v_free, h, t_start + k * h, level, fl, top, tl, lx, lv
@@ -207,7 +207,7 @@ def advance(
                     )
                     touching |= t
                 pt, nt = zero3(), vec(0.0, 1.0, 0.0)
-                if terrain.on != 0:  # the terrain: the plane of the patch under the free-flight end point
+                if ti.static(kinds.terrain):  # the terrain: the plane of the patch under the free-flight end point
                     pt, nt = surface(model.heights, terrain, x_free)
                     ct = surface_contact(
                         contact, model.surface_table, model.terrain_cells, model.heights, terrain, x_free
@@ -219,16 +219,17 @@ def advance(
                     x1 = plane_position(
                         xi, x_free, x1, v_free, v1, r, model.plane_p[p], model.plane_n[p], contact.k_p, h
                     )
-                if terrain.on != 0:
+                if ti.static(kinds.terrain):
                     x1 = plane_position(xi, x_free, x1, v_free, v1, r, pt, nt, contact.k_p, h)
                     x1 = terrain_position(xi, x1, pt, nt, r, model.heights, terrain)
                 xi, vi, wi = x1, v1, w1
                 st, rt = rest_update(touching, vi, wi, r, rt, h, params.v_rest, params.t_rest, contact.friction)
-                if terrain.on != 0 and outside(model.heights, terrain, xi):
-                    st = OUT_OF_BOUNDS
-                    vi = zero3()
-                    wi = zero3()
-                    break
+                if ti.static(kinds.terrain):
+                    if outside(model.heights, terrain, xi):
+                        st = OUT_OF_BOUNDS
+                        vi = zero3()
+                        wi = zero3()
+                        break
                 if st == AT_REST:
                     vi = zero3()
                     wi = zero3()

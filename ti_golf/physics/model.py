@@ -8,7 +8,7 @@ import numpy as np
 import taichi as ti
 
 from ti_golf.physics.aero import air_params
-from ti_golf.physics.integrate import INTEGRATOR_CODES
+from ti_golf.physics.kinds import kinds_of
 from ti_golf.physics.types import ContactParams, TerrainParams, vec3
 from ti_golf.runtime import np_float
 from ti_golf.scene.schema import FRICTION_MODELS, SOLVERS, Scene, Surface
@@ -32,7 +32,8 @@ class Model:
         collision solver may store the balls in another order than their ids.
         air, contact: kernel-argument structs (AirParams, ContactParams).
         gravity: g [m/s²], vec3.
-        integrator: the integrator code (a compile-time constant of the kernels).
+        kinds: the scene's choices of code, the kernels' compile-time argument
+            (:class:`~ti_golf.physics.kinds.Kinds`: integrator, air model, wind profile, terrain).
         plane_p, plane_n: points on and unit normals of the impenetrable planes (the ground
             included), numpy (P, 3); passed to kernels directly.
         terrain: the scene's height field (:class:`ti_golf.scene.terrain.Terrain`, numpy) or ``None``.
@@ -113,7 +114,7 @@ class Model:
             friction=FRICTION_MODELS.index(c.friction_model),
         )
         self.gravity = vec3(*w.gravity)
-        self.integrator = INTEGRATOR_CODES[w.integrator]
+        self.kinds = kinds_of(scene)
         self.dt = w.dt
         planes = [(pl.point, pl.normal) for pl in scene.planes]
         if w.ground:

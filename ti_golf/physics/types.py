@@ -147,9 +147,7 @@ AirParams: TypeAlias = Deferred(
         omega_M=float,  # Magnus reference angular velocity ω_M [1/s] (L.2)
         C_omega=float,  # spin-decay coefficient (L.23)
         wind=vec3.get(),  # wind velocity [m/s]; with the log profile, at the height wind_height
-        model=ti.i32,  # aerodynamic model (aero.AIR_MODEL_CODES): 0 the report's laws, 1 coefficients of the spin ratio, 2 of S and Re
         viscosity=float,  # dynamic viscosity μ [Pa·s] (Re = ρ|v_rel|·2R/μ; model 2)
-        wind_profile=ti.i32,  # aero.WIND_PROFILE_CODES: 0 constant, 1 logarithmic in the height
         wind_height=float,  # reference height z_ref of the log profile [m]
         wind_z0=float,  # roughness length z₀ of the log profile [m]
         ground_height=float,  # y [m] from which the log profile's heights are measured

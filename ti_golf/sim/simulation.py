@@ -433,7 +433,7 @@ class Simulation:
                 self._packs.step_scalars(m),
                 s.t,
                 int(n),
-                m.integrator,
+                m.kinds,
                 self._packs.model(m),
                 self._packs.state(s),
                 self._packs.flight(s),

@@ -102,7 +102,7 @@ def collision_step(
     t0: ti.f64,
     dt: ti.f64,
     steps: ti.i32,
-    integrator: ti.template(),
+    kinds: ti.template(),
     model: ModelArrays,
     # Neighbour lists and carried impulses in/out:
     lists: NeighbourLists,
@@ -124,7 +124,7 @@ def collision_step(
     Arguments: the air, contact and terrain parameters and the step's scalars ``params``
     (:data:`~ti_golf.physics.types.StepParams`) in one array, ``scalars`` (see
     :func:`~ti_golf.physics.types.scalars_of`); the time at the start of the launch ``t0`` [s];
-    the time step ``dt`` [s] in f64; the steps to take, ``steps``; the integrator code; the model's arrays
+    the time step ``dt`` [s] in f64; the steps to take, ``steps``; the scene's ``kinds`` of code (:class:`~ti_golf.physics.kinds.Kinds`); the model's arrays
     ``model``; the neighbour lists with the impulses they carry, ``lists``; the balls' ``state``
     and ``flight`` records; the step's ``scratch`` (:mod:`ti_golf.physics.types` documents each
     array's shape and units); and which part of a step this launch takes.
@@ -167,7 +167,7 @@ def collision_step(
             terrain,
             params,
             ti.cast(t0, float),
-            integrator,
+            kinds,
             model,
             lists,
             state,
@@ -211,7 +211,7 @@ def collision_step(
                 terrain,
                 params,
                 ti.cast(t, float),
-                integrator,
+                kinds,
                 model,
                 lists,
                 state,
@@ -244,7 +244,7 @@ def step_balls(
     terrain: ti.template(),
     params: ti.template(),
     t0,
-    integrator: ti.template(),
+    kinds: ti.template(),
     model: ti.template(),
     lists: ti.template(),
     state: ti.template(),
@@ -256,9 +256,7 @@ def step_balls(
     v_inelastic = inelastic_speed(contact, params)
     bits = slot_bits(lists.upper.shape[1])  # lower-list slots: owner · 2^bits + column (once, not per ball)
     if ti.static(warm):
-        start_step(
-            air, contact, terrain, params, t0, integrator, v_inelastic, bits, model, lists, state, flight, scratch
-        )
+        start_step(air, contact, terrain, params, t0, kinds, v_inelastic, bits, model, lists, state, flight, scratch)
     # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
     if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
         if contact.solver == GAUSS_SEIDEL:  # all the step's sweeps: the last one only finishes it
@@ -280,7 +278,7 @@ def start_step(
     terrain: ti.template(),
     params: ti.template(),
     t0,
-    integrator: ti.template(),
+    kinds: ti.template(),
     v_inelastic,
     bits,
     model: ti.template(),
@@ -302,8 +300,8 @@ def start_step(
         xi = state.x[i]
         x1, v1, w1 = xi, zero3(), zero3()
         if state.status[i] != AT_REST and state.status[i] != OUT_OF_BOUNDS:
-            coef = coefficients(air, ti.Vector([of_ball(model.radius, i)]), ti.Vector([of_ball(model.mass, i)]))
-            S1 = step_free(lane_state(xi, state.v[i], state.w[i]), h, integrator, coef, air, params.gravity)
+            coef = coefficients(air, kinds, ti.Vector([of_ball(model.radius, i)]), ti.Vector([of_ball(model.mass, i)]))
+            S1 = step_free(lane_state(xi, state.v[i], state.w[i]), h, kinds, coef, air, params.gravity)
             x1, v1, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
             if tracking:  # else the flight records hold one entry each, not read (see State.tracking)
                 if flight.landed[i] == IN_FLIGHT:  # a landed ball's record is final: neither read nor written

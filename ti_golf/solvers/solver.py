@@ -687,7 +687,7 @@ class CollisionSolver:
     def _arguments(self, m: Model, s: State, steps: int) -> tuple:
         """The arguments of ``collide.collision_step`` before ``serial``: the array of the air,
         contact, terrain and step parameters, the launch's start time [s], the time step [s] and
-        the steps to take, the integrator, the model, the lists, the state, the flight record and
+        the steps to take, the kinds (:class:`~ti_golf.physics.kinds.Kinds`), the model, the lists, the state, the flight record and
         the scratch."""
         packs = self._packs
         return (
@@ -695,7 +695,7 @@ class CollisionSolver:
             s.t,
             m.dt,
             steps,
-            m.integrator,
+            m.kinds,
             packs.model(m),
             packs.lists(self),
             packs.state(s),
