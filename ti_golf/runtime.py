@@ -22,6 +22,7 @@ from typing import NoReturn
 import numpy as np
 import taichi as ti
 
+from ti_golf import front_end
 from ti_golf.errors import ConfigError
 
 ARCHES = ("cpu", "cuda", "vulkan", "gpu")
@@ -117,6 +118,7 @@ def init(
                 "(importing ti_golf.solvers.solver or ti_golf.physics initialises with the defaults: call init first)"
             )
         return _info
+    front_end.install()  # the same kernels, with less of Taichi's front end repeated per call site
     banner = io.StringIO()
     with contextlib.redirect_stdout(banner):  # Taichi prints "Starting on arch=..." on stdout
         ti.init(**init_options(want_arch, want_prec, debug, profile, cpu_threads))
