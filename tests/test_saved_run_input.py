@@ -206,6 +206,16 @@ CASES = {
         "run",
         "solver scratch 'x_free' is [[1], [3], 'float64']; expects [4], [3], float64",
     ),
+    "no scratch shapes": (
+        lambda d, m: m["solver"].update(scratch={}),
+        "run",
+        "solver scratch 'impulse' is missing; a record of lists that were built gives its shape",
+    ),
+    "no grid hash": (
+        lambda d, m: m["solver"]["values"].update(hash=None),
+        "run",
+        "solver value 'hash' is missing or null",
+    ),
     "unknown format": (
         lambda d, m: m.update(format=3),
         "run",

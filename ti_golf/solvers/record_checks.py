@@ -141,7 +141,7 @@ def check_record(rec: SolverRecord, taker: Taker) -> None:
     sizes = _sizes(rec.values, taker.n, taker.columns, taker.gauss_seidel)
     valid = _check_values(rec.values, sizes)
     colours = _colour_values(rec.values)
-    _check_scratch(rec.scratch, sizes)
+    _check_scratch(rec.scratch, sizes, valid)
     _check_shapes(rec, sizes, valid and taker.blocks, colours)
     _check_surfaces(rec.arrays)
     if valid:
@@ -204,7 +204,12 @@ def _check_values(values: dict[str, Any], sizes: Sizes) -> bool:
         raise RecordError(
             RUN, f"solver value 'hash' is {_short(hashed)}; expects null or [[3 whole numbers], [3 whole numbers]]"
         )
-    return bool(values.get("valid", False))
+    valid = bool(values.get("valid", False))
+    if valid and hashed is None:
+        raise RecordError(
+            RUN, "solver value 'hash' is missing or null; a record of lists that were built gives the grid's hash"
+        )
+    return valid
 
 
 def _value(values: dict[str, Any], name: str, lo: int, hi: int | None, required: bool = False) -> int:
@@ -240,9 +245,13 @@ def _expected_scratch(sizes: Sizes) -> dict[str, tuple[tuple[int, ...], list[int
     }
 
 
-def _check_scratch(scratch: dict[str, list[Any]], sizes: Sizes) -> None:
+def _check_scratch(scratch: dict[str, list[Any]], sizes: Sizes, valid: bool) -> None:
     """Each scratch array the record gives a shape: the shape and type a solver of ``sizes`` makes
-    it in (a step writes it before reading it, so too small a table would be written past its end)."""
+    it in (a step writes it before reading it, so too small a table would be written past its end);
+    the sweep's table (``impulse``, which a solver makes at its first build) given once the
+    lists were built."""
+    if valid and "impulse" not in scratch:
+        raise RecordError(RUN, "solver scratch 'impulse' is missing; a record of lists that were built gives its shape")
     expected = _expected_scratch(sizes)
     for name, (shape, element, dtype) in scratch.items():
         if name == "surface_impulse_back":
@@ -343,7 +352,7 @@ def _check_array(name: str, a: Any, dtype: str, shape: tuple[int, ...], why: str
     entry = f"solver.{name}"
     if not isinstance(a, np.ndarray):
         raise RecordError(entry, "is not an array")
-    if a.dtype.name != dtype:
+    if a.dtype != np.dtype(dtype):  # (native byte order: Taichi takes no other)
         raise RecordError(entry, f"dtype {a.dtype}; expects {dtype}")
     if a.shape != shape:
         raise RecordError(entry, f"shape {a.shape} but {why} (expects {shape})")
