@@ -100,7 +100,6 @@ REQUIRED = [
     "solver.surface_start",
     "solver.surface_impulse",
     "solver.friction",
-    "solver.col_ids",
 ]
 
 
@@ -205,6 +204,11 @@ CASES = {
         lambda d, m: m["solver"]["scratch"]["x_free"].__setitem__(0, [1]),
         "run",
         "solver scratch 'x_free' is [[1], [3], 'float64']; expects [4], [3], float64",
+    ),
+    "no blocks of columns for the next step": (
+        lambda d, m: (d.pop("solver.col_ids"), m["solver"]["values"].update(rebuild=False)),
+        "solver.col_ids",
+        "missing; the next step sweeps the balls by blocks of grid columns",
     ),
     "no scratch shapes": (
         lambda d, m: m["solver"].update(scratch={}),

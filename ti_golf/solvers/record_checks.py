@@ -142,7 +142,8 @@ def check_record(rec: SolverRecord, taker: Taker) -> None:
     valid = _check_values(rec.values, sizes)
     colours = _colour_values(rec.values)
     _check_scratch(rec.scratch, sizes, valid)
-    _check_shapes(rec, sizes, valid and taker.blocks, colours)
+    stepping = valid and not rec.values.get("rebuild", True)  # (the next step reads the lists as they are)
+    _check_shapes(rec, sizes, stepping and taker.blocks, colours)
     _check_surfaces(rec.arrays)
     if valid:
         _check_lists(rec.arrays, sizes, int(rec.values.get("n_apart", 0)))
@@ -322,9 +323,16 @@ def _check_shapes(rec: SolverRecord, sizes: Sizes, blocks: bool, colours: bool) 
     ``elements`` of the description agreeing)."""
     arrays = rec.arrays
     built = ("upper",) if rec.values.get("valid") else ()
-    for name in REQUIRED + built + (BLOCKS if blocks else ()):
+    for name in REQUIRED + built:
         if name not in arrays:
             raise RecordError(f"solver.{name}", "missing; the collision solver's record holds it")
+    for name in BLOCKS if blocks else ():
+        if name not in arrays:
+            raise RecordError(
+                f"solver.{name}",
+                "missing; the next step sweeps the balls by blocks of grid columns, whose order it holds (a run "
+                "saved with the contacts layout, or on a GPU, continues on the backend and layout it was saved with)",
+            )
     if "col_start" in arrays and "col_chunk" not in arrays:
         raise RecordError("solver.col_chunk", "missing; the record holds the columns' buckets (solver.col_start)")
     if colours and any(name.startswith("colours.") for name in arrays):
