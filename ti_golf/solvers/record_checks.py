@@ -339,6 +339,8 @@ def _check_shapes(rec: SolverRecord, sizes: Sizes, blocks: bool, colours: bool) 
         missing = [name for name in ContactColours.TABLES if f"colours.{name}" not in arrays]
         if missing:
             raise RecordError(f"solver.colours.{missing[0]}", "missing; the record holds the other colour tables")
+        if rec.values["colours.room"] < 1:
+            raise RecordError(RUN, "solver value 'colours.room' is 0; expects at least 1 with the colour tables")
     shapes = _expected_shapes(rec, sizes)
     for name, a in arrays.items():
         if name == "surface_impulse":
