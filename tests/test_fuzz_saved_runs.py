@@ -31,7 +31,7 @@ from ti_golf.errors import ConfigError, SimulationError
 from ti_golf.solvers import CollisionSolver
 
 FUZZ = settings(
-    max_examples=100, derandomize=True, deadline=None, database=None, suppress_health_check=list(HealthCheck)
+    max_examples=300, derandomize=True, deadline=None, database=None, suppress_health_check=list(HealthCheck)
 )
 
 R = 0.02
