@@ -92,7 +92,7 @@ def check_entries(source: str, data: dict[str, np.ndarray], meta: dict[str, Any]
     number of balls."""
     n = _ball_count(source, data)
     for name, (what, shape, allowed, words) in BALLS.items():
-        _numbers(source, data, name, what, (n, *shape), "f", allowed, words)
+        _numbers(source, data, name, what, (n, *shape), allowed, words)
     _codes(source, data, "status", "the balls' statuses", n, STATUS_NAMES)
     _time(source, data)
     if meta["tracking"]:
@@ -100,7 +100,7 @@ def check_entries(source: str, data: dict[str, np.ndarray], meta: dict[str, Any]
         if np.all(landed == NOT_TRACKED):
             fail(source, "landed", "tracks no ball, but the run says some ball is tracked (entry 'run', 'tracking')")
         for name, (what, shape, allowed, words) in FLIGHT.items():
-            _numbers(source, data, name, what, (n, *shape), "f", allowed, words)
+            _numbers(source, data, name, what, (n, *shape), allowed, words)
     if "order" in data:
         _order(source, data["order"], n)
     _initial(source, data, n)
@@ -128,15 +128,13 @@ def _numbers(
     name: str,
     what: str,
     shape: tuple[int, ...],
-    kinds: str,
     allowed: Check,
     words: str,
 ) -> np.ndarray:
-    """The entry ``name`` (``what``: what it holds): numbers of a numpy kind in ``kinds`` (``"f"``:
-    floating-point, ``"iu"``: whole) of ``shape`` (its first axis the balls), each ``allowed``
-    (``words`` says what is)."""
+    """The entry ``name`` (``what``: what it holds): floating-point numbers of ``shape`` (its first
+    axis the balls), each ``allowed`` (``words`` says what is)."""
     a = _present(source, data, name, f"{what}, shape {shape}")
-    _kind(source, name, a, kinds)
+    _kind(source, name, a, "f")
     if a.shape != shape:
         fail(source, name, f"shape {a.shape} but the run has {shape[0]} balls (expects {shape})")
     ok = allowed(a)
