@@ -210,6 +210,11 @@ CASES = {
         "solver.col_ids",
         "missing; the next step sweeps the balls by blocks of grid columns",
     ),
+    "serial and reordering": (
+        lambda d, m: m["solver"].update(serial=True),
+        "run",
+        "'solver.serial' and 'solver.reorder' are both true",
+    ),
     "no scratch shapes": (
         lambda d, m: m["solver"].update(scratch={}),
         "run",

@@ -132,6 +132,10 @@ def check_description(meta: Any) -> None:
     for key in ("serial", "reorder"):
         if not isinstance(meta.get(key), bool):
             raise RecordError(RUN, f"'solver.{key}' is {_short(meta.get(key))}; expects true or false")
+    if meta["serial"] and meta["reorder"]:
+        raise RecordError(
+            RUN, "'solver.serial' and 'solver.reorder' are both true; a serial solver keeps the balls in id order"
+        )
 
 
 def check_record(rec: SolverRecord, taker: Taker) -> None:
