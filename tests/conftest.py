@@ -184,6 +184,22 @@ def assert_same_state(a, b) -> None:
         np.testing.assert_array_equal(sa[name], sb[name], err_msg=name)
 
 
+def read_saved_run(path) -> tuple[dict, dict]:
+    """The arrays of a saved run (``Simulation.save``) by entry name and its ``run`` description."""
+    import json
+
+    with np.load(path) as d:
+        data = {k: d[k] for k in d.files}
+    return data, json.loads(str(data["run"]))
+
+
+def write_saved_run(path, data: dict, meta: dict) -> None:
+    """Write a saved run of the arrays ``data`` with the ``run`` description ``meta``."""
+    import json
+
+    np.savez(path, **{**data, "run": np.array(json.dumps(meta))})
+
+
 @pytest.fixture
 def ctrl_c():
     """Ctrl-C (SIGINT) raises ``KeyboardInterrupt`` in this test, as in a terminal, even where the

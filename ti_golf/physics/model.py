@@ -11,7 +11,7 @@ from ti_golf.physics.aero import air_params
 from ti_golf.physics.kinds import kinds_of
 from ti_golf.physics.types import ContactParams, TerrainParams, vec3
 from ti_golf.runtime import np_float
-from ti_golf.scene.schema import FRICTION_MODELS, SOLVERS, Scene, Surface
+from ti_golf.scene.schema import FRICTION_MODELS, SOLVERS, Scene, Surface, Vec3
 from ti_golf.scene.terrain import build_terrain
 
 
@@ -116,9 +116,7 @@ class Model:
         self.gravity = vec3(*w.gravity)
         self.kinds = kinds_of(scene)
         self.dt = w.dt
-        planes = [(pl.point, pl.normal) for pl in scene.planes]
-        if w.ground:
-            planes.append(((0.0, w.ground_height, 0.0), (0.0, 1.0, 0.0)))
+        planes = scene_planes(scene)
         self.plane_p = np.array([p for p, _ in planes], dtype=f).reshape(-1, 3)
         self.plane_n = np.array([n for _, n in planes], dtype=f).reshape(-1, 3)
         self.v_inelastic = c.v_bounce + 2.0 * float(np.linalg.norm(w.gravity)) * w.dt
@@ -158,3 +156,12 @@ def _compact(values: np.ndarray) -> np.ndarray:
     a = a.copy()
     a.flags.writeable = False
     return a
+
+
+def scene_planes(scene: Scene) -> list[tuple[Vec3, Vec3]]:
+    """The impenetrable planes of ``scene`` as (a point on it [m], its unit normal): its
+    ``[[planes]]``, then the ground when ``world.ground``."""
+    planes: list[tuple[Vec3, Vec3]] = [(pl.point, pl.normal) for pl in scene.planes]
+    if scene.world.ground:
+        planes.append(((0.0, scene.world.ground_height, 0.0), (0.0, 1.0, 0.0)))
+    return planes

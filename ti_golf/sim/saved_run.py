@@ -15,7 +15,9 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import struct
 import zipfile
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,7 +34,11 @@ from ti_golf.runtime import ensure_init, np_float, on_cpu
 from ti_golf.scene.document import scene_document
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene
+from ti_golf.sim import run_checks
 from ti_golf.solvers import CollisionSolver, record
+from ti_golf.solvers.record import SolverRecord
+from ti_golf.solvers.record_checks import RecordError, Taker, read_record
+from ti_golf.solvers.surface_rows import scene_surface_columns
 
 FORMAT = 2
 """The layout of a saved run. Files without ``run`` (format 1) hold the final state only, and
@@ -121,6 +127,9 @@ class SavedRun:
     """The file's arrays by name."""
     meta: dict[str, Any]
     """The file's ``run`` description."""
+    record: SolverRecord | None = None
+    """The collision solver's record, checked, for the solver the simulation is set up with
+    (:attr:`solver_flags`), or ``None`` without one."""
 
     @property
     def tracking(self) -> bool:
@@ -157,8 +166,9 @@ class SavedRun:
 
 
 def read_run(path: str | os.PathLike[str]) -> SavedRun:
-    """The run saved in ``path``, or a :class:`ConfigError` naming the file that says why it cannot
-    be continued."""
+    """The run saved in ``path``, every entry the next steps read checked (:mod:`.run_checks`,
+    :mod:`~ti_golf.solvers.record_checks`), or a :class:`ConfigError` naming the file (and the
+    entry at fault) that says why it cannot be continued."""
     source = str(path)
     data, meta = _read(source)
     precision = ensure_init().precision
@@ -172,9 +182,28 @@ def read_run(path: str | os.PathLike[str]) -> SavedRun:
     try:
         scene = load_scene(meta["scene_path"] or None, data=meta["scene"])
     except ConfigError as exc:
-        raise ConfigError(f"{source} (its scene)", exc.key, exc.reason) from None
+        raise ConfigError(f"{source}: entry 'run', its scene", exc.key, exc.reason) from None
     scene = dataclasses.replace(scene, name=meta["scene_name"], path=meta["scene_path"])
-    return SavedRun(source, scene, data, meta)
+    n = run_checks.check_entries(source, data, meta)
+    return SavedRun(source, scene, data, meta, _solver_record(source, data, meta, scene, n))
+
+
+def _solver_record(
+    source: str, data: dict[str, np.ndarray], meta: dict[str, Any], scene: Scene, n: int
+) -> SolverRecord | None:
+    """The collision solver's record of a saved run of ``n`` balls and ``scene``, read and
+    checked for the solver a simulation of them is set up with; ``None`` without one."""
+    kept = meta["solver"]
+    if kept is None or n < 2 or not scene.world.collisions:
+        return None
+    kind = CollisionSolver.KINDS[scene.contact.solver]
+    try:
+        serial = (kept.get("serial") is True) and on_cpu()
+        taker = Taker(n, scene_surface_columns(scene), serial, kind.gauss_seidel, kind.sweeps_by_blocks(scene, serial))
+        arrays = {name[len("solver.") :]: a for name, a in data.items() if name.startswith("solver.")}
+        return read_record(arrays, kept, taker)
+    except RecordError as exc:
+        raise ConfigError(source, None, str(exc)) from None
 
 
 def restore_run(saved: SavedRun, state: State, model: Model, solver: CollisionSolver | None) -> None:
@@ -196,24 +225,37 @@ def restore_run(saved: SavedRun, state: State, model: Model, solver: CollisionSo
     state.t = float(data["t"])
     state.steps = int(meta["steps"])
     kept = meta["solver"]
-    if kept is not None and solver is not None:
-        arrays = {name[len("solver.") :]: a for name, a in data.items() if name.startswith("solver.")}
-        solver.restore(record.from_file(arrays, kept, state.n, solver.serial, solver.gauss_seidel), state)
+    if saved.record is not None and solver is not None:
+        solver.restore(saved.record, state)
         if bool(kept["serial"]) != solver.serial:  # saved on a CPU, stepped in parallel now
             solver.invalidate()
 
 
+READ_ERRORS = (
+    OSError,
+    EOFError,
+    ValueError,
+    zipfile.BadZipFile,
+    zlib.error,
+    struct.error,
+    NotImplementedError,
+    RuntimeError,
+    OverflowError,
+    MemoryError,
+)
+"""What reading a damaged ``.npz`` raises: a zip cut short or not a zip, a flipped byte (a CRC
+or a header that does not parse, a compression method or encryption that was never used), an
+array header that claims more than the file holds, or an object array (``allow_pickle`` stays
+false: a saved run holds numbers and text only)."""
+
+
 def _read(source: str) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-    """The arrays and the ``run`` description of a saved run, or a :class:`ConfigError` that says
-    why it cannot be continued."""
+    """The arrays and the ``run`` description of a saved run, each entry read whole, or a
+    :class:`ConfigError` that says why it cannot be continued."""
     p = Path(source)
     if not p.is_file():
         raise ConfigError(source, None, "file not found" if not p.exists() else "is not a file")
-    try:
-        with np.load(p, allow_pickle=False) as npz:
-            data = {name: npz[name] for name in npz.files}
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
-        raise ConfigError(source, None, f"is not a run saved by ti-golf (an .npz file): {exc}") from None
+    data = _entries(source, p)
     if "run" not in data:
         if "x" in data and "t" in data:
             raise ConfigError(
@@ -223,14 +265,57 @@ def _read(source: str) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
                 "with --out, to get a run that can be continued",
             )
         raise ConfigError(source, None, "is not a run saved by ti-golf (no 'run' entry)")
+    run = data["run"]
     try:
-        meta = json.loads(str(data["run"]))
+        if run.dtype.kind != "U" or run.shape != ():
+            raise ValueError(f"dtype {run.dtype}, shape {run.shape}")
+        meta = json.loads(str(run))
         fmt = meta["format"]
-    except (ValueError, KeyError, TypeError):
-        raise ConfigError(source, None, "is not a run saved by ti-golf (its 'run' entry is not readable)") from None
+    except (ValueError, KeyError, TypeError, IndexError, RecursionError):
+        raise ConfigError(source, None, "entry 'run': is not readable (a saved run's description, JSON text)") from None
     if fmt != FORMAT:
-        raise ConfigError(source, None, f"is a saved run of format {fmt}; this ti-golf reads format {FORMAT}")
-    reason = None if meta.get("solver") is None else record.unreadable(meta["solver"])
+        raise ConfigError(
+            source, None, f"entry 'run': is a saved run of format {fmt!r}; this ti-golf reads format {FORMAT}"
+        )
+    run_checks.check_description(source, meta)
+    reason = None if meta["solver"] is None else record.unreadable(meta["solver"])
     if reason is not None:
-        raise ConfigError(source, None, reason)
+        raise ConfigError(source, None, f"entry 'run': {reason}")
     return data, meta
+
+
+def _entries(source: str, p: Path) -> dict[str, np.ndarray]:
+    """Every entry of the ``.npz`` file ``p`` as a numpy array, or a :class:`ConfigError` naming the
+    file (and the entry that cannot be read)."""
+    data: dict[str, np.ndarray] = {}
+    if not _is_zip(source, p):  # (np.load would take it for a .npy file, or a pickle)
+        raise ConfigError(source, None, "is not a run saved by ti-golf (an .npz file): it is not a zip archive")
+    try:
+        with np.load(p, allow_pickle=False) as npz:
+            for name in npz.files:
+                try:
+                    value = npz[name]
+                except READ_ERRORS as exc:
+                    raise ConfigError(source, None, f"entry '{name}': cannot be read ({_why(exc)})") from None
+                if not isinstance(value, np.ndarray):
+                    raise ConfigError(source, None, f"entry '{name}': is not an array (.npy) but {len(value)} bytes")
+                data[name] = value
+    except READ_ERRORS as exc:
+        raise ConfigError(source, None, f"is not a run saved by ti-golf (an .npz file): {_why(exc)}") from None
+    return data
+
+
+def _is_zip(source: str, p: Path) -> bool:
+    """Whether the file ``p`` is a zip archive, from its first bytes and its end (as ``np.load``
+    tells an ``.npz`` file from a ``.npy`` file, and ``zipfile`` finds its entries)."""
+    try:
+        with open(p, "rb") as fh:
+            head = fh.read(4)
+    except OSError as exc:
+        raise ConfigError(source, None, f"cannot be read: {exc.strerror or exc}") from None
+    return head in (b"PK\x03\x04", b"PK\x05\x06") and zipfile.is_zipfile(p)
+
+
+def _why(exc: BaseException) -> str:
+    """What went wrong, in a few words: the exception's text, or its kind when it has none."""
+    return str(exc) or type(exc).__name__

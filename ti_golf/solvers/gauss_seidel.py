@@ -14,6 +14,7 @@ from ti_golf.physics.model import Model
 from ti_golf.physics.state import State
 from ti_golf.physics.types import BlockOrder
 from ti_golf.runtime import plain_compile
+from ti_golf.scene.schema import Scene
 from ti_golf.solvers import collide, colour, contact_colour, grid, sort, stale
 from ti_golf.solvers.phases import Phase
 from ti_golf.solvers.record import SolverRecord
@@ -37,7 +38,7 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
         self.colours: contact_colour.ContactColours | None = None
         if self._pairs_laid_out(model) and not self.serial:
             self.colours = contact_colour.ContactColours(band=2.0 * self.r_ref * contact_colour.BAND_DIAMETERS)
-        elif not self.serial:  # the balls by grid column (colour.column_order)
+        elif self.sweeps_by_blocks(model.scene, self.serial):  # the balls by grid column (colour.column_order)
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, model.n), ti.ndarray(ti.i32, model.n)
         self.col_start = self.col_chunk = None
 
@@ -63,6 +64,10 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
 
     def _pairs_laid_out(self, model: Model) -> bool:
         return contact_colour.resolve_layout(model.scene.contact.layout) == "contacts"
+
+    @classmethod
+    def sweeps_by_blocks(cls, scene: Scene, serial: bool) -> bool:
+        return not serial and contact_colour.resolve_layout(scene.contact.layout) != "contacts"
 
     def build(self, state: State) -> None:
         super().build(state)

@@ -28,6 +28,7 @@ from ti_golf.runtime import (
     plain_compile,
     release_freed_memory,
 )
+from ti_golf.scene.schema import Scene
 from ti_golf.signals import whole_steps
 from ti_golf.solvers import apart, collide, grid, links, sort, surfaces
 from ti_golf.solvers.record import SolverRecord
@@ -663,6 +664,13 @@ class CollisionSolver:
     def _pairs_laid_out(self, model: Model) -> bool:
         """Whether the sweeps take the pairs in a layout of their own (not ball by ball), which the
         serial steps would not follow: the Gauss–Seidel sweeps by contact colours."""
+        return False
+
+    @classmethod
+    def sweeps_by_blocks(cls, scene: Scene, serial: bool) -> bool:
+        """Whether a solver of this kind for ``scene``, stepping ``serial`` or not, sweeps the balls
+        by blocks of grid columns (the Gauss–Seidel sweeps' column layout), whose order its
+        record keeps (``col_ids``, ``col_colour``, ``col_start``, ``col_chunk``)."""
         return False
 
     def _carry_pair_order(self, stashed: Any) -> None:

@@ -9,9 +9,10 @@ from typing import Any
 import taichi as ti
 
 from ti_golf.physics.kernels import zero_f32_table
-from ti_golf.physics.model import Model
+from ti_golf.physics.model import Model, scene_planes
 from ti_golf.physics.state import State
 from ti_golf.physics.types import vec4f
+from ti_golf.scene.schema import Scene
 from ti_golf.solvers import surfaces
 
 ROW_ROOM = 4
@@ -24,6 +25,11 @@ MIN_ROWS = 64
 def surface_columns(model: Model) -> int:
     """Columns of a row of surface impulses: one per plane, and one for the terrain."""
     return max(1, len(model.plane_p) + (model.terrain is not None))
+
+
+def scene_surface_columns(scene: Scene) -> int:
+    """:func:`surface_columns` of a model of ``scene``, from the scene alone (no model made)."""
+    return max(1, len(scene_planes(scene)) + (scene.terrain is not None))
 
 
 def surface_table(rows: int, columns: int) -> ti.Ndarray:
