@@ -1,4 +1,5 @@
-"""The scene's choices of code: which integrator, air model, wind profile and ground the kernels run.
+"""The scene's choices of code: which integrator, air model, wind profile, ground and contact solver
+the kernels run.
 
 Each choice selects code rather than a number, so the kernels take them as one compile-time
 argument (``ti.template()``), :class:`Kinds`, and test them with ``ti.static``: a kernel is built
@@ -28,6 +29,8 @@ class Kinds(NamedTuple):
     """:data:`~ti_golf.physics.aero.WIND_PROFILE_CODES` of ``air.wind_profile``."""
     terrain: bool
     """Whether the scene has a height field (``[terrain]``)."""
+    gauss_seidel: bool
+    """Whether ``contact.solver`` is ``"gauss_seidel"`` (the serial step's sweeps and projection)."""
 
 
 def kinds_of(scene: Any) -> Kinds:
@@ -37,4 +40,5 @@ def kinds_of(scene: Any) -> Kinds:
         air_model=AIR_MODEL_CODES[scene.air.model],
         wind_profile=WIND_PROFILE_CODES[scene.air.wind_profile],
         terrain=scene.terrain is not None,
+        gauss_seidel=scene.contact.solver == "gauss_seidel",
     )

@@ -218,7 +218,7 @@ def collision_step(
                 flight,
                 scratch,
             )
-            if contact.solver == GAUSS_SEIDEL:
+            if ti.static(kinds.gauss_seidel):
                 serial_projection(params, contact.k_p, model, lists, state, scratch)
             for i in range(state.x.shape[0]):
                 state.x[i] = scratch.x_free[i]
@@ -259,7 +259,7 @@ def step_balls(
         start_step(air, contact, terrain, params, t0, kinds, v_inelastic, bits, model, lists, state, flight, scratch)
     # 2. Jacobi sweeps; the last sweep's ball loop also finishes the step (3.)
     if ti.static(serial):  # every loop is serial here: the sweeps before the last need not be unrolled
-        if contact.solver == GAUSS_SEIDEL:  # all the step's sweeps: the last one only finishes it
+        if ti.static(kinds.gauss_seidel):  # all the step's sweeps: the last one only finishes it
             serial_sweeps(sweeps + 1, contact, terrain, params, model, lists, state, scratch)
         else:
             for _ in range(sweeps):
