@@ -97,7 +97,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "study", help="eight equal study tasks without Dask, on one and on two local workers: speed-up and overhead"
     )
     bst.add_argument("--tasks", type=int, default=8, help="tasks (default 8)")
-    bst.add_argument("--steps", type=int, default=20_000, help="time steps of each task (default 20000)")
+    bst.add_argument(
+        "--steps", type=int, default=120_000, help="time steps of each task (default 120000: about 8 s on the CI class)"
+    )
     bst.add_argument("--json", action="store_true", help="end with one line of JSON")
     br = bsub.add_parser("render", help="seconds per off-screen frame of N balls over a terrain")
     br.add_argument("--n", type=int, default=100_000, help="balls (default 100000)")

@@ -90,7 +90,7 @@ def _without_dask(tasks: list[dict[str, Any]]) -> tuple[float, list[dict[str, An
     return sum(r["wall_s"] for r in rows), rows
 
 
-def bench_study(n: int = 8, steps: int = 20_000, log: Callable[[str], None] = print) -> dict[str, Any]:
+def bench_study(n: int = 8, steps: int = 120_000, log: Callable[[str], None] = print) -> dict[str, Any]:
     """Run the benchmark (see the module's docstring); returns the figures as a dict."""
     tasks = bench_tasks(n, steps)
     log(f"study: {n} tasks of {steps} steps of {BENCH_SCENE}, without Dask, then on 1 and 2 workers ...")
