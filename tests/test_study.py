@@ -455,3 +455,20 @@ def test_the_benchmarks_tasks_are_equal_runs_of_one_scene():
     assert [r["status"] for r in rows] == ["ok"] * 3, rows
     assert [r["carry_m"] for r in rows] == [rows[0]["carry_m"]] * 3
     assert rows[0]["carry_m"] == pytest.approx(212.243, abs=5e-4)  # the report's Appendix A
+
+
+def test_tasks_that_ask_for_a_gpu_go_to_the_worker_that_has_one(tmp_path):
+    # a local cluster of one CPU worker and one worker with the resource GPU = 1 (here without a
+    # GPU: its Taichi falls back to the CPU); every task with task.gpu = true lands on the latter
+    from ti_golf.study import run_study
+    from ti_golf.study.cluster import study_client
+
+    text = FLIGHT_STUDY.replace('until = "landed"', 'until = "landed"\ngpu = true')
+    spec = write(tmp_path, "gpu.toml", text)
+    with study_client(workers=1, gpus=1, need_gpu=True) as client:
+        workers = client.scheduler_info()["workers"]
+        with_gpu = [a for a, w in workers.items() if w.get("resources", {}).get("GPU")]
+        assert len(workers) == 2 and len(with_gpu) == 1
+        result = run_study(spec, out=tmp_path / "out", address=client.scheduler.address, log=lambda line: None)
+    assert result.failed == 0 and len(result.rows) == 4
+    assert {row["worker"] for row in result.rows} == set(with_gpu)
