@@ -61,7 +61,7 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
             arrays = {k.split(".", 1)[1]: a for k, a in record.arrays.items() if k.startswith("colours.")}
             self.colours.restore(values, arrays)
         elif self.colours is not None:  # (a record without them: the colours are made again)
-            self._rebuild = True
+            self.rebuild_due = True
 
     def _pairs_laid_out(self, model: Model) -> bool:
         return contact_colour.resolve_layout(model.scene.contact.layout) == "contacts"
