@@ -129,7 +129,7 @@ def collision_step(
 
     In parallel (``serial`` False) the kernel takes exactly one step, or the part of one that
     ``warm``, ``sweeps`` and ``last`` name, so that a step of many sweeps can be split into
-    launches (see ``solver.sweep_launches``; ``steps``, ``dt``, ``params.skin``, ``v_cut`` and
+    launches (see :func:`.jacobi.sweep_launches`; ``steps``, ``dt``, ``params.skin``, ``v_cut`` and
     ``r_cut`` are not read). It returns 1 (also left in ``scratch.flag[0]``) when some ball may
     come within reach of a ball missing from its neighbour lists next step: rebuild the lists
     (read it after the ``last`` part; the ``warm`` part clears it). The new positions are left in

@@ -86,9 +86,12 @@ def steps_serially(n: int) -> bool:
 class CollisionSolver(Recorded, Stepping):
     """Buffers and neighbour lists for stepping N colliding balls: the driver both kinds of
     sweeps share. ``CollisionSolver(model, ...)`` makes the kind that ``contact.solver`` names
-    (:attr:`KINDS`); each kind steps with its own sweeps (:meth:`_sweep`).
+    (:attr:`KINDS`); each kind steps with its own sweeps (:meth:`.stepping.Stepping._sweep`), the
+    steps as :class:`.stepping.Stepping` takes them, and a saved run keeps what
+    :class:`.record.Recorded` names.
 
     Attributes:
+        r_max: the largest radius [m] of the balls.
         cell: grid cell size [m] at the last build: the largest diameter plus the skin, or plus
             2h·v_max when the fastest pair could close more than the skin in a step (see
             ``grid.cell_size``: pairs are listed by their closing speed too); both of the balls
