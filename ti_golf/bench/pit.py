@@ -363,7 +363,7 @@ def host_share(sim: Simulation, wall_s: float, steps: int) -> dict[str, Any]:
     calls, inside = LAUNCHES.calls, LAUNCHES.inside_s
     solver = sim.solver
     assert solver is not None  # a pour: its balls collide
-    lists, scratch = solver._packs.lists(solver), solver._packs.scratch(solver)
+    lists, scratch = solver.packs.lists(solver), solver.packs.scratch(solver)
     _no_work(lists, scratch)  # (compiled)
     ti.sync()
     t0 = time.perf_counter()

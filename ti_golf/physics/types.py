@@ -74,20 +74,20 @@ LAUNCHES = LaunchClock()
 def kernel(fn: Callable[..., Any]) -> Callable[..., Any]:
     """``ti.kernel``, applied at the first call, when the :class:`Deferred` types in ``fn``'s
     annotations (arguments and return) can be made with the chosen float type; counted and timed
-    by :data:`LAUNCHES` while it is on."""
+    by :data:`LAUNCHES` while it is on. Arguments may be passed by name, as to ``ti.kernel``."""
     compiled: Callable[..., Any] | None = None
 
     @functools.wraps(fn)
-    def launch(*args: Any) -> Any:
+    def launch(*args: Any, **kwargs: Any) -> Any:
         nonlocal compiled
         if compiled is None:
             fn.__annotations__ = {k: a.get() if isinstance(a, Deferred) else a for k, a in fn.__annotations__.items()}
             compiled = ti.kernel(fn)
         if not LAUNCHES.on:
-            return compiled(*args)
+            return compiled(*args, **kwargs)
         t0 = time.perf_counter()
         try:
-            return compiled(*args)
+            return compiled(*args, **kwargs)
         finally:
             LAUNCHES.calls += 1
             LAUNCHES.inside_s += time.perf_counter() - t0

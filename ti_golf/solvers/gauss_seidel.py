@@ -1,7 +1,9 @@
 """The Gauss–Seidel solver (``contact.solver = "gauss_seidel"``): sequential impulses over the
-pairs, coloured by blocks of grid columns so that the blocks of one colour are swept in parallel
-(the kernels: :mod:`.colour`; one contact's update: :mod:`.sequential`), then the position
-projection."""
+pairs, then the position projection. The pairs are taken in one of two layouts
+(``contact.layout``): by blocks of grid columns, the blocks of one colour swept in parallel (the
+kernels: :mod:`.colour`), or by contact colours, the pairs of one colour swept in parallel
+(:mod:`.contact_colour`, coloured by :mod:`.edge_colouring`); one contact's update is the same in
+both (:mod:`.sequential`)."""
 
 from __future__ import annotations
 
@@ -15,7 +17,7 @@ from ti_golf.physics.state import State
 from ti_golf.physics.types import BlockOrder
 from ti_golf.runtime import plain_compile
 from ti_golf.scene.schema import Scene
-from ti_golf.solvers import collide, colour, contact_colour, grid, sort, stale
+from ti_golf.solvers import collide, colour, contact_colour, edge_colouring, grid, sort, stale
 from ti_golf.solvers.phases import Phase
 from ti_golf.solvers.record import SolverRecord
 from ti_golf.solvers.solver import CollisionSolver
@@ -37,7 +39,7 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
         # the pairs' colours when the sweeps take them (contact_colour), else None: by grid columns
         self.colours: contact_colour.ContactColours | None = None
         if self._pairs_laid_out(model) and not self.serial:
-            self.colours = contact_colour.ContactColours(band=2.0 * self.r_ref * contact_colour.BAND_DIAMETERS)
+            self.colours = contact_colour.ContactColours(band=2.0 * self.r_ref * edge_colouring.BAND_DIAMETERS)
         elif self.sweeps_by_blocks(model.scene, self.serial):  # the balls by grid column (colour.column_order)
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, model.n), ti.ndarray(ti.i32, model.n)
         self.col_start = self.col_chunk = None
@@ -60,7 +62,7 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
             arrays = {k.split(".", 1)[1]: a for k, a in record.arrays.items() if k.startswith("colours.")}
             self.colours.restore(values, arrays)
         elif self.colours is not None:  # (a record without them: the colours are made again)
-            self._rebuild = True
+            self.rebuild_due = True
 
     def _pairs_laid_out(self, model: Model) -> bool:
         return contact_colour.resolve_layout(model.scene.contact.layout) == "contacts"
@@ -112,13 +114,13 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
             buckets - 1,
             ti.Vector(origin, dt=ti.i32),
             ti.Vector(stride, dt=ti.i32),
-            self.rank,
-            self.col_start,
-            self.col_chunk,
-            self.col_ids,
-            self.col_colour,
-            sort.bucket_tasks(buckets),
-            self._packs.lists(self),
+            rank=self.rank,
+            start=self.col_start,
+            chunk_start=self.col_chunk,
+            ids=self.col_ids,
+            colour=self.col_colour,
+            tasks=sort.bucket_tasks(buckets),
+            lists=self._packs.lists(self),
         )
         self.far_owners = int(far_owners)
 
@@ -142,7 +144,16 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
         for phase in phases:
             with plain_compile():  # see runtime.plain_compile
                 colour.gauss_seidel_sweep(
-                    phase, any_far, inv_cell, tasks, scalars, model, lists, state, scratch, blocks
+                    phase,
+                    any_far,
+                    inv_cell,
+                    tasks,
+                    scalars,
+                    model=model,
+                    lists=lists,
+                    state=state,
+                    scratch=scratch,
+                    blocks=blocks,
                 )
             if any_far:
                 colour.far_pairs(phase, inv_cell, scalars, model, lists, state, scratch)
@@ -150,5 +161,7 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
         for _ in range(colour.PROJECTIONS):
             if any_far:
                 colour.far_pairs(Phase.PROJECT, inv_cell, scalars, model, lists, state, scratch)
-            colour.project_sweep(any_far, inv_cell, tasks, scalars, model, lists, state, scratch, blocks)
+            colour.project_sweep(
+                any_far, inv_cell, tasks, scalars, model, lists=lists, state=state, scratch=scratch, blocks=blocks
+            )
         return stale.lists_stale(scalars, *self.last_grid(), model, lists, state, scratch)

@@ -163,37 +163,16 @@ def list_neighbours(
             g.mask,
             g.origin,
             g.stride,
-            scratch.rank,
-            scratch.start,
-            scratch.chunk_start,
-            scratch.sorted_ids,
+            rank=scratch.rank,
+            start=scratch.start,
+            chunk_start=scratch.chunk_start,
+            sorted_ids=scratch.sorted_ids,
         )
     for idx in range(x.shape[0]):
         i = idx  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         if ti.static(not stored_sorted):
             i = scratch.sorted_ids[idx]
-        n_up, n_low, loops = list_ball(
-            i,
-            x,
-            radius,
-            g.inv_cell,
-            g.mask,
-            g.origin,
-            g.stride,
-            g.skin,
-            v,
-            g.h,
-            g.fast,
-            g.v_cut,
-            g.r_cut,
-            apart_ids,
-            g.n_apart,
-            g.scan_apart,
-            scratch.start,
-            scratch.sorted_ids,
-            lists.upper,
-            stored_sorted,
-        )
+        n_up, n_low, loops = list_ball(i, x, v, radius, apart_ids, g, scratch, lists.upper, stored_sorted=stored_sorted)
         lists.first[i + 1] = ti.min(n_up, lists.upper.shape[1])  # its length, until links.pair_starts
         lists.x_at_build[i] = ti.cast(x[i], ti.f32)
         ti.atomic_max(longest[0], n_up)
@@ -206,118 +185,145 @@ def list_neighbours(
 def list_ball(
     i,
     x: ti.template(),
-    radius: ti.template(),
-    inv_cell,
-    mask,
-    origin,
-    stride,
-    skin,
     v: ti.template(),
-    h,
-    fast,
-    v_cut,
-    r_cut,
+    radius: ti.template(),
     apart_ids: ti.template(),
-    n_apart,
-    scan_apart,
-    start: ti.template(),
-    sorted_ids: ti.template(),
+    g: ti.template(),
+    scratch: ti.template(),
     upper: ti.template(),
     stored_sorted: ti.template(),
 ):
     """The neighbours whose pairs ball i owns into its row of ``upper`` in id order (as many as
-    fit; ``stored_sorted``: see :func:`list_neighbours`). Returns how many neighbours it has
-    (whose pairs it owns, whose pairs the others own) and a bound on the iterations of the
-    thread's loops (see ``LOOP_CAP``).
+    fit; ``g``, ``scratch``, ``stored_sorted``: see :func:`list_neighbours`). Returns how many
+    neighbours it has (whose pairs it owns, whose pairs the others own) and a bound on the
+    iterations of the thread's loops (see ``LOOP_CAP``).
 
-    The balls in its own and the 26 adjacent cells, but, with ``scan_apart``, for the balls
-    listed apart (:func:`is_apart`): those are tested by every ball, and a ball listed apart tests
-    every ball. So one ball shot into a pile does not widen the cells of all (a 70 m/s ball with a
-    1 ms step would make them 4.5 diameters wide: 90 times as many balls tested), nor does one
-    boulder (see :func:`size_cut`), and both balls of every pair still test it, with the same
-    :func:`pair_reach`. Without ``scan_apart`` (a GPU, see ``APART_MAX``) the cells are sized
-    for all balls, and the balls apart still own none of their pairs with the others."""
+    The balls in its own and the 26 adjacent cells (:func:`list_nearby`), but, with
+    ``scan_apart``, for the balls listed apart (:func:`is_apart`): those are tested by every
+    ball, and a ball listed apart tests every ball. So one ball shot into a pile does not widen
+    the cells of all (a 70 m/s ball with a 1 ms step would make them 4.5 diameters wide: 90 times
+    as many balls tested), nor does one boulder (see :func:`size_cut`), and both balls of every
+    pair still test it, with the same :func:`pair_reach`. Without ``scan_apart`` (a GPU, see
+    ``APART_MAX``) the cells are sized for all balls, and the balls apart still own none of their
+    pairs with the others."""
     xi = x[i]
     ri = of_ball(radius, i)
     n_up, n_low = 0, 0
-    apart_i = is_apart(v, radius, i, v_cut, r_cut, n_apart)
+    apart_i = is_apart(v, radius, i, g.v_cut, g.r_cut, g.n_apart)
     tested = 0  # candidates tested, for the bound on the thread's loop iterations (see LOOP_CAP)
-    if apart_i and scan_apart != 0:
+    if apart_i and g.scan_apart != 0:
         tested = x.shape[0]
         for j in range(x.shape[0]):
             if j != i:
+                apart_j = is_apart(v, radius, j, g.v_cut, g.r_cut, g.n_apart)
                 n_up, n_low = list_pair(
                     i,
                     j,
                     xi,
                     x[j],
                     ri + of_ball(radius, j),
-                    skin,
+                    g.skin,
                     v,
-                    h,
-                    1,
-                    True,
-                    is_apart(v, radius, j, v_cut, r_cut, n_apart),
-                    upper,
-                    n_up,
-                    n_low,
+                    g.h,
+                    fast=1,
+                    apart_i=True,
+                    apart_j=apart_j,
+                    upper=upper,
+                    n_up=n_up,
+                    n_low=n_low,
                 )
     else:
-        c = cell_of(xi, inv_cell)  # recomputed, not stored: 12 bytes per ball less
-        # no pair the cells list is farther apart than a cell's side (see cell_size): the square of
-        # that side, with room for the rounding of 1/inv_cell and of the pair's reach
-        cell_sqr = (1.0 + 1e-4) / (inv_cell * inv_cell)
-        for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2)))):
-            # the column of three cells c + (dx, −1…1, dz): consecutive buckets, one range unless it wraps
-            row = c + ti.Vector([d[0], -1, d[1]])
-            b = bucket_of(row, mask, origin, stride)
-            for part in range(2):
-                lo, hi = start[b], start[ti.min(b + 3, mask + 1)]
-                if part == 1:
-                    lo, hi = start[0], start[ti.max(b + 3 - (mask + 1), 0)]
-                tested += hi - lo
-                for k in range(lo, hi):
-                    j = k
-                    if ti.static(not stored_sorted):
-                        j = sorted_ids[k]
-                    xj = x[j]
-                    # most candidates are out of reach: test that first, the cell and the rest only
-                    # for the few within it (a third off the build of a dense pile)
-                    if (xj - xi).norm_sqr() < cell_sqr:
-                        cj = cell_of(xj, inv_cell)
-                        apart_j = is_apart(v, radius, j, v_cut, r_cut, n_apart)
-                        # a ball of the column (not of another cell sharing its buckets), not one listed apart
-                        if (
-                            j != i
-                            and cj[0] == row[0]
-                            and cj[2] == row[2]
-                            and ti.abs(cj[1] - c[1]) <= 1
-                            and not (apart_j and scan_apart != 0)
-                        ):
-                            n_up, n_low = list_pair(
-                                i,
-                                j,
-                                xi,
-                                xj,
-                                ri + of_ball(radius, j),
-                                skin,
-                                v,
-                                h,
-                                fast,
-                                apart_i,
-                                apart_j,
-                                upper,
-                                n_up,
-                                n_low,
-                            )
-        for f in range(n_apart * scan_apart):
+        n_up, n_low, tested = list_nearby(i, apart_i, x, v, radius, g, scratch, upper, stored_sorted=stored_sorted)
+        for f in range(g.n_apart * g.scan_apart):
             j = apart_ids[f]
             n_up, n_low = list_pair(
-                i, j, xi, x[j], ri + of_ball(radius, j), skin, v, h, 1, False, True, upper, n_up, n_low
+                i,
+                j,
+                xi,
+                x[j],
+                ri + of_ball(radius, j),
+                g.skin,
+                v,
+                g.h,
+                fast=1,
+                apart_i=False,
+                apart_j=True,
+                upper=upper,
+                n_up=n_up,
+                n_low=n_low,
             )
-        tested += 18 + n_apart * scan_apart
+        tested += 18 + g.n_apart * g.scan_apart
     # the insertions' shifts: at most n(n − 1)/2 for a list of n (and the lower list's in links.link_lower_lists)
     return n_up, n_low, tested + (n_up * n_up + n_low * n_low) // 2
+
+
+@ti.func
+def list_nearby(
+    i,
+    apart_i,
+    x: ti.template(),
+    v: ti.template(),
+    radius: ti.template(),
+    g: ti.template(),
+    scratch: ti.template(),
+    upper: ti.template(),
+    stored_sorted: ti.template(),
+):
+    """:func:`list_ball` of ball i among the balls of its own and the 26 adjacent cells (but those
+    listed apart, with ``scan_apart``): the column of three cells along y at each of the 3 × 3
+    (x, z) cells around it, whose buckets are consecutive (one range, or two where they wrap).
+    Returns (n_up, n_low, the candidates tested)."""
+    xi = x[i]
+    ri = of_ball(radius, i)
+    n_up, n_low, tested = 0, 0, 0
+    c = cell_of(xi, g.inv_cell)  # recomputed, not stored: 12 bytes per ball less
+    # no pair the cells list is farther apart than a cell's side (see cell_size): the square of
+    # that side, with room for the rounding of 1/inv_cell and of the pair's reach
+    cell_sqr = (1.0 + 1e-4) / (g.inv_cell * g.inv_cell)
+    for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2)))):
+        # the column of three cells c + (dx, −1…1, dz): consecutive buckets, one range unless it wraps
+        row = c + ti.Vector([d[0], -1, d[1]])
+        b = bucket_of(row, g.mask, g.origin, g.stride)
+        for part in range(2):
+            lo, hi = scratch.start[b], scratch.start[ti.min(b + 3, g.mask + 1)]
+            if part == 1:
+                lo, hi = scratch.start[0], scratch.start[ti.max(b + 3 - (g.mask + 1), 0)]
+            tested += hi - lo
+            for k in range(lo, hi):
+                j = k
+                if ti.static(not stored_sorted):
+                    j = scratch.sorted_ids[k]
+                xj = x[j]
+                # most candidates are out of reach: test that first, the cell and the rest only
+                # for the few within it (a third off the build of a dense pile)
+                if (xj - xi).norm_sqr() < cell_sqr:
+                    cj = cell_of(xj, g.inv_cell)
+                    apart_j = is_apart(v, radius, j, g.v_cut, g.r_cut, g.n_apart)
+                    # a ball of the column (not of another cell sharing its buckets), not one listed apart
+                    if (
+                        j != i
+                        and cj[0] == row[0]
+                        and cj[2] == row[2]
+                        and ti.abs(cj[1] - c[1]) <= 1
+                        and not (apart_j and g.scan_apart != 0)
+                    ):
+                        n_up, n_low = list_pair(
+                            i,
+                            j,
+                            xi,
+                            xj,
+                            ri + of_ball(radius, j),
+                            g.skin,
+                            v,
+                            g.h,
+                            fast=g.fast,
+                            apart_i=apart_i,
+                            apart_j=apart_j,
+                            upper=upper,
+                            n_up=n_up,
+                            n_low=n_low,
+                        )
+    return n_up, n_low, tested
 
 
 @ti.func

@@ -62,7 +62,7 @@ def link_lower(
     upper: int_table, first: int_array, lower: int_array, lower_first: int_array, count: int_array, chunk: int_array
 ):
     """Every ball's lower list from the upper lists (see :func:`link_lower_lists`)."""
-    link_lower_lists(upper, first, lower, lower_first, count, chunk, False)
+    link_lower_lists(upper, first, lower, lower_first, count, chunk, serial=False)
 
 
 @ti.func
@@ -145,7 +145,7 @@ def stash(
     """Keep every pair's (accumulated impulse, neighbour id) in ``scratch``, laid out as the pair
     tables, and ``with_friction`` its friction impulse (see :func:`stash_ball`)."""
     for i in range(first.shape[0] - 1):
-        stash_ball(i, upper, first, lam, scratch, 0, with_friction, x, friction, mu)
+        stash_ball(i, upper, first, lam, scratch, width=0, with_friction=with_friction, x=x, friction=friction, mu=mu)
 
 
 @ti.func
@@ -293,9 +293,23 @@ def link_and_carry(
     of the stashed lists. With ``with_friction`` the pairs' friction impulses (of the
     Gauss–Seidel sweeps) are carried from the stash into ``friction`` too (``x``: the positions,
     ``mu``: the friction coefficient, as at the stash)."""
-    link_lower_lists(upper, first, lower, lower_first, count, chunk, False)
+    link_lower_lists(upper, first, lower, lower_first, count, chunk, serial=False)
     for i in range(first.shape[0] - 1):
-        carry_ball(i, stashed, stash_first, 0, upper, first, lam, old_id, moved, with_friction, x, friction, mu)
+        carry_ball(
+            i,
+            stashed,
+            stash_first,
+            width=0,
+            upper=upper,
+            first=first,
+            lam=lam,
+            old_id=old_id,
+            moved=moved,
+            with_friction=with_friction,
+            x=x,
+            friction=friction,
+            mu=mu,
+        )
 
 
 @ti.func
@@ -369,38 +383,33 @@ def stashed_row(stashed: ti.template(), stash_first: ti.template(), width, a, b,
 
 @ti.func
 def relist_all_pairs(
-    x: ti.template(),
-    radius: ti.template(),
-    skin,
-    v: ti.template(),
-    h,
-    v_cut,
-    r_cut,
-    upper: ti.template(),
-    first: ti.template(),
-    lower: ti.template(),
-    lower_first: ti.template(),
-    x_at_build: ti.template(),
-    lam: ti.template(),
-    scratch: ti.template(),
-    friction: ti.template(),
+    params: ti.template(),
     clear_friction,
-    count: ti.template(),
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
+    step_scratch: ti.template(),
 ):
     """Rebuild the neighbour lists of a few balls in place without a grid, by testing every pair:
     the lists, slots and carried-over impulses that ``list_neighbours`` and ``link_and_carry``
     give on a CPU backend (with the same owners: the balls faster than ``v_cut`` or bigger than
-    ``r_cut`` are listed apart unless there are more than ``APART_MAX``), in O(n²) work. The
-    tables must be n − 1 wide (no list can overflow), and ``scratch`` hold n (n − 1) entries:
-    the old impulses are stashed n − 1 a ball (:func:`stash_ball`), as ``first`` is rewritten.
-    Meant for a serial loop (the ``serial`` variant of ``collide.collision_step``; ``count``: a
-    scratch entry per ball, see :func:`link_lower_lists`). With
-    ``clear_friction`` the pairs' friction impulses (of the Gauss–Seidel sweeps) are set to zero:
-    they are not carried over in place."""
+    ``r_cut`` are listed apart unless there are more than ``APART_MAX``), in O(n²) work, with the
+    step's parameters ``params`` (the skin, h, ``v_cut`` and ``r_cut``), the model's radii and the
+    balls' positions and velocities. The tables must be n − 1 wide (no list can overflow), and the
+    step's table ``step_scratch.J`` hold n (n − 1) entries: the old impulses are stashed n − 1 a
+    ball (:func:`stash_ball`), as ``first`` is rewritten. Meant for a serial loop (the ``serial``
+    variant of ``collide.collision_step``; ``step_scratch.impact``: a scratch entry per ball, see
+    :func:`link_lower_lists`). With ``clear_friction`` the pairs' friction impulses (of the
+    Gauss–Seidel sweeps) are set to zero: they are not carried over in place."""
+    x, radius, v = ti.static((state.x, model.radius, state.v))
+    skin, h, v_cut, r_cut = ti.static((params.skin, params.h, params.v_cut, params.r_cut))
+    upper, first, lower, lower_first = ti.static((lists.upper, lists.first, lists.lower, lists.lower_first))
+    x_at_build, lam, friction = ti.static((lists.x_at_build, lists.lam, lists.friction))
+    scratch, count = ti.static((step_scratch.J, step_scratch.impact))
     width = upper.shape[1]
     n_apart = 0
     for i in range(x.shape[0]):
-        stash_ball(i, upper, first, lam, scratch, width, False, x, friction, 0.0)
+        stash_ball(i, upper, first, lam, scratch, width=width, with_friction=False, x=x, friction=friction, mu=0.0)
         if is_apart(v, radius, i, v_cut, r_cut, 1):  # as apart_balls counts them
             n_apart += 1
     if n_apart > APART_MAX:
@@ -418,9 +427,23 @@ def relist_all_pairs(
                     n_up += 1
         first[i + 1] = first[i] + n_up
         x_at_build[i] = ti.cast(xi, ti.f32)
-    link_lower_lists(upper, first, lower, lower_first, count, count, True)
+    link_lower_lists(upper, first, lower, lower_first, count, count, serial=True)
     for i in range(x.shape[0]):
-        carry_ball(i, scratch, first, width, upper, first, lam, first, False, False, x, friction, 0.0)  # ids kept
+        carry_ball(
+            i,
+            stashed=scratch,
+            stash_first=first,
+            width=width,
+            upper=upper,
+            first=first,
+            lam=lam,
+            old_id=first,
+            moved=False,
+            with_friction=False,
+            x=x,
+            friction=friction,
+            mu=0.0,
+        )  # ids kept
         if clear_friction:  # (not carried: the pairs' friction impulses start again from zero)
             for k in range(listed(first, i)):
                 friction[first[i] + k] = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)

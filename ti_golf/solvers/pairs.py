@@ -57,25 +57,9 @@ def skip_pair(status: ti.template(), i, j):
 
 
 @ti.func
-def owned_pairs(
-    i,
-    final: ti.template(),
-    contact: ti.template(),
-    h,
-    v_inelastic,
-    x: ti.template(),
-    radius: ti.template(),
-    mass: ti.template(),
-    status: ti.template(),
-    upper: ti.template(),
-    first: ti.template(),
-    lam: ti.template(),
-    J: ti.template(),
-    v: ti.template(),
-    w: ti.template(),
-    flag: ti.template(),
-):
-    """One Jacobi sweep over the pairs that ball i owns, with its neighbours j = upper[i, k]: the
+def owned_pairs(i, final: ti.template(), h, v_inelastic, s: ti.template()):
+    """One Jacobi sweep over the pairs that ball i owns (``s``: the step's :class:`.step.Step`;
+    the arrays below are its lists', state's and scratch's), with its neighbours j = upper[i, k]: the
     impulse P on i (−P acts on j) from the current velocities (which updates the resting impulse
     ``lam``), stored in the pair's row p = first[i] + k of J (columns ``P_X`` to ``P_Z``). The
     inverse distance [1/m] (``INV``), which gives the unit normal n̂ from j to i
@@ -89,6 +73,10 @@ def owned_pairs(
     q = k_p·overlap/(1/m_i + 1/m_j) ≥ 0, the pair's position projection (B.18: ball i moves by
     q/m_i along n̂, which is k_p·m_red·Δx, and j by q/m_j the other way); for a pair apart,
     −gap ≤ 0 (the surface gap [m]: the balls touch while it is below 1 % of a radius)."""
+    contact, x, radius, mass, status = ti.static((s.contact, s.state.x, s.model.radius, s.model.mass, s.state.status))
+    upper, first, lam, J, v, w, flag = ti.static(
+        (s.lists.upper, s.lists.first, s.lists.lam, s.scratch.J, s.state.v, s.state.w, s.scratch.flag)
+    )
     inv_mi, xi, p0 = 1.0 / of_ball(mass, i), x[i], first[i]
     for k in range(listed(first, i)):
         j, p = upper[i, k], p0 + k
@@ -110,14 +98,14 @@ def owned_pairs(
                 inv_mi,
                 v[j],
                 w[j],
-                of_ball(radius, j),
-                inv_mj,
-                ti.cast(lam[p], float),
-                contact.e,
-                contact.mu,
-                v_inelastic,
-                h,
-                contact.relax,
+                r_b=of_ball(radius, j),
+                inv_m_b=inv_mj,
+                lam=ti.cast(lam[p], float),
+                e=contact.e,
+                mu=contact.mu,
+                v_inelastic=v_inelastic,
+                h=h,
+                relax=contact.relax,
             )
             lam[p] = ti.cast(lam_p, ti.f32)
             if kick != 0:
@@ -173,26 +161,10 @@ def quiet_ball(
 
 
 @ti.func
-def warm_start(
-    i,
-    x: ti.template(),
-    radius: ti.template(),
-    mass: ti.template(),
-    status: ti.template(),
-    rest_time: ti.template(),
-    upper: ti.template(),
-    first: ti.template(),
-    lower: ti.template(),
-    lower_first: ti.template(),
-    bits,
-    lam: ti.template(),
-    J: ti.template(),
-    friction: ti.template(),
-    mu,
-    carried,
-    hop,
-):
-    """Δv [m/s] and Δω [rad/s] of ball i from last step's resting impulses λ of its ball pairs, each
+def warm_start(i, bits, carried, hop, s: ti.template()):
+    """Δv [m/s] and Δω [rad/s] of ball i (``s``: the step's :class:`.step.Step`; the arrays below
+    are its model's, lists', state's and scratch's; μ its contact's; ``bits``: see
+    :func:`.links.slot_bits`) from last step's resting impulses λ of its ball pairs, each
     along the pair's normal at the start of the step, summed in id order (lower then upper). A
     normal impulse gives no spin; friction is left to the sweeps, but with ``carried`` (the
     Gauss–Seidel sweeps), where each pair's friction impulse F from the last step is applied too,
@@ -207,6 +179,11 @@ def warm_start(
     see :func:`finish`; or ``QUIET`` for a ball at rest
     whose listed neighbours are all at rest or out of bounds: nothing can touch it this step, so
     the step leaves it exactly as it is and the sweeps skip it)."""
+    x, radius, mass, status, rest_time = ti.static(
+        (s.state.x, s.model.radius, s.model.mass, s.state.status, s.state.rest_time)
+    )
+    upper, first, lower, lower_first = ti.static((s.lists.upper, s.lists.first, s.lists.lower, s.lists.lower_first))
+    lam, J, friction, mu = ti.static((s.lists.lam, s.scratch.J, s.lists.friction, s.contact.mu))
     P, T = zero3(), zero3()
     calm, xi = rest_time[i], x[i]
     quiet = quiet_ball(i, status, upper, first, lower, lower_first, bits)
@@ -296,19 +273,13 @@ def resting_impulse(status: ti.template(), i, j, n, lam):
 
 
 @ti.func
-def impact_keys(
-    i,
-    first: ti.template(),
-    lower: ti.template(),
-    lower_first: ti.template(),
-    bits,
-    J: ti.template(),
-    impact: ti.template(),
-):
-    """Keep in ``impact[i]`` the greatest key of ball i's impacts in this sweep (0 when it has
+def impact_keys(i, bits, lists: ti.template(), scratch: ti.template()):
+    """Keep in ``scratch.impact[i]`` the greatest key of ball i's impacts in this sweep (0 when it has
     none): the key of a pair is its slot, owner·2^bits + column (as in the
     lower lists, see :func:`.grid.owner_slot`), plus one. Gathered from the pairs' marks
     (:func:`impact_mark`), as the impulses are: no atomics."""
+    first, lower, lower_first = ti.static((lists.first, lists.lower, lists.lower_first))
+    J, impact = ti.static((scratch.J, scratch.impact))
     key = 0
     for m in range(lower_first[i], lower_first[i + 1]):
         slot = lower[m]
@@ -354,22 +325,13 @@ def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p, pressed):
 
 
 @ti.func
-def touching_by_gaps(
-    i,
-    r,
-    first: ti.template(),
-    lower: ti.template(),
-    lower_first: ti.template(),
-    bits,
-    J: ti.template(),
-    k_p,
-    pressed,
-):
+def touching_by_gaps(i, r, bits, k_p, pressed, lists: ti.template(), scratch: ti.template()):
     """Whether ball i (radius ``r`` [m]) touches a ball, as :func:`gather` tells it with ``final``
     (0, 1 or ``PRESSED``), from the surface gaps [m] its pairs keep in J[·, GAP] through the
     Gauss–Seidel sweeps (:func:`warm_start` stores them; the sweeps apply their impulses at once
     and leave nothing else in J): touching below 1 % of ``r``, pressed when overlapping by more
     than ``pressed`` of ``r`` (with a projection, ``k_p`` > 0, as :func:`contact_state`)."""
+    first, lower, lower_first, J = ti.static((lists.first, lists.lower, lists.lower_first, scratch.J))
     touching = 0
     for m in range(lower_first[i], lower_first[i + 1]):
         j, k = owner_slot(lower[m], bits)
@@ -391,32 +353,21 @@ def gap_state(gap, r, k_p, pressed):
 
 
 @ti.func
-def gather(
-    i,
-    final: ti.template(),
-    x: ti.template(),
-    radius: ti.template(),
-    mass: ti.template(),
-    upper: ti.template(),
-    first: ti.template(),
-    lower: ti.template(),
-    lower_first: ti.template(),
-    bits,
-    J: ti.template(),
-    impact: ti.template(),
-    any_impact,
-    k_p,
-    pressed,
-):
-    """What ball i gets from all its pairs, summed in id order (lower then upper): (Δv [m/s],
-    Δω [rad/s], and with ``final`` the position projection Δx [m] and whether it touches a ball:
-    0 when no gap is below 1 % of its radius, ``PRESSED`` when some ball overlaps it by more than
-    that (the overlap is q·(1/m_i + 1/m_j)/k_p, q the pair's projection in J), else 1).
+def gather(i, final: ti.template(), bits, k_p, pressed, s: ti.template()):
+    """What ball i gets from all its pairs (``s``: the step's :class:`.step.Step`), summed in id order
+    (lower then upper): (Δv [m/s], Δω [rad/s], and with ``final`` the position projection Δx [m]
+    and whether it touches a ball: 0 when no gap is below 1 % of its radius, ``PRESSED`` when
+    some ball overlaps it by more than that (the overlap is q·(1/m_i + 1/m_j)/k_p, q the pair's
+    projection in J), else 1).
 
     An impulse ±P at the contact point −r·n̂ᵢ of a solid sphere (n̂ᵢ = ±n̂ from the other ball to
     i) gives Δv = ±P/m and Δω = (−r n̂ᵢ) × (±P)·5/(2 m r²) = −(5/(2 m r))·(n̂ × P) for both balls
     of the pair (n̂ᵢ and the sign of P flip together). Of a ball's impacts, only the one
     :func:`matched` in this sweep acts (``any_impact``: whether the sweep has any, ``flag[1]``)."""
+    x, radius, mass = ti.static((s.state.x, s.model.radius, s.model.mass))
+    upper, first, lower, lower_first = ti.static((s.lists.upper, s.lists.first, s.lists.lower, s.lists.lower_first))
+    J, impact = ti.static((s.scratch.J, s.scratch.impact))
+    any_impact = s.scratch.flag[1]
     P, T, q_n = zero3(), zero3(), zero3()
     touching = 0
     r = of_ball(radius, i)

@@ -1,6 +1,6 @@
 """A collision solver's state saved with a run (:mod:`ti_golf.sim.saved_run`) and given back to a
 new solver: the neighbour lists, the carried impulses and the numbers they were built with, so
-that a run loaded again continues bit for bit.
+that a run loaded again continues bit for bit (what a solver keeps: :class:`Recorded`).
 
 The record is versioned (:data:`VERSION`). In a saved run it is the ``solver`` entry of the run's
 description, ``{"version", "values", "elements", "scratch"}`` (the numbers by name; each kept
@@ -13,7 +13,7 @@ tables are laid out anew as they are read (:func:`from_file`).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import taichi as ti
@@ -33,10 +33,10 @@ class SolverRecord:
     the arrays kept whole (in storage order) and the scratch arrays' shapes."""
 
     values: dict[str, Any]
-    """Numbers by name (``CollisionSolver.SAVED_VALUES``), and ``hash``: the grid hash's (origin,
+    """Numbers by name (:attr:`Recorded.SAVED_VALUES`), and ``hash``: the grid hash's (origin,
     stride) as two lists of ints, or ``None``."""
     arrays: dict[str, np.ndarray]
-    """The arrays kept whole, by name (``CollisionSolver.SAVED_ARRAYS``)."""
+    """The arrays kept whole, by name (:attr:`Recorded.SAVED_ARRAYS`)."""
     elements: dict[str, list[int]]
     """Each array's element shape ([] for scalars, [3] for 3-vectors)."""
     scratch: dict[str, list[Any]] = field(default_factory=dict)
@@ -54,6 +54,99 @@ class SolverRecord:
         """A Taichi array of the shape and type of the scratch array ``name`` (not filled)."""
         shape, element, dtype = self.scratch[name]
         return _ndarray(tuple(shape), element, np.zeros(0, dtype))
+
+
+class Recorded:
+    """What a saved run keeps of a collision solver (:class:`.solver.CollisionSolver`), by the
+    names of the solver's public attributes: the numbers of ``SAVED_VALUES``, the arrays of
+    ``SAVED_ARRAYS`` kept whole, and the shapes and types of the ``SCRATCH`` arrays.
+    :meth:`record` reads them, :meth:`restore` sets them again; a solver adds what else its steps
+    read (the grid hash) in its own."""
+
+    SAVED_VALUES: ClassVar[dict[str, str]] = {
+        "r_max": "r_max",
+        "r_cut": "r_cut",
+        "r_ref": "r_ref",
+        "skin": "skin",
+        "v_cut": "v_cut",
+        "h": "h",
+        "cell": "cell",
+        "mask": "mask",
+        "capacity": "capacity",
+        "rebuilds": "rebuilds",
+        "still_steps": "still_steps",
+        "pair_capacity": "pair_capacity",
+        "n_apart": "n_apart",
+        "skip_still": "skip_still",
+        "far_owners": "far_owners",
+        "valid": "lists_valid",
+        "rebuild": "rebuild_due",
+    }
+    """The numbers a saved run keeps (:meth:`record`), by their name in the record: the
+    attributes that hold them. (The grid hash, a pair of vectors, is kept as ``hash``.)"""
+
+    SAVED_ARRAYS: ClassVar[tuple[str, ...]] = (
+        "sorted_ids",
+        "start",
+        "x_at_build",
+        "upper",
+        "first",
+        "lam",
+        "lower",
+        "lower_first",
+        "surface_start",
+        "surface_impulse",
+        "flag",
+        "apart_ids",
+        "friction",
+    )
+    """The arrays a saved run keeps whole (:meth:`record`): the lists, the carried impulses and the
+    grid of the last build."""
+
+    SCRATCH: ClassVar[tuple[str, ...]] = (
+        "x_free",
+        "v_free",
+        "calm",
+        "clear",
+        "rank",
+        "chunk_start",
+        "impulse",
+        "impact",
+        "stash_first",
+        "pair_chunk",
+        "surface_impulse_back",
+    )
+    """Arrays that each step or list build writes before it reads them: a saved run keeps only
+    their shapes and types."""
+
+    def record(self) -> SolverRecord:
+        """The numbers of ``SAVED_VALUES``, the arrays of ``SAVED_ARRAYS`` (those made) and the
+        shapes and types of the ``SCRATCH`` arrays."""
+        values: dict[str, Any] = {name: getattr(self, attr) for name, attr in self.SAVED_VALUES.items()}
+        arrays, elements, scratch = {}, {}, {}
+        for name in self.SAVED_ARRAYS:
+            a = getattr(self, name, None)  # (a serial Gauss–Seidel solver has no column order)
+            if a is not None:
+                arrays[name] = a.to_numpy()
+                elements[name] = list(getattr(a, "element_shape", ()))
+        for name in self.SCRATCH:
+            a = getattr(self, name)
+            if a is not None:
+                scratch[name] = [list(a.shape), list(getattr(a, "element_shape", ())), str(a.to_numpy().dtype)]
+        return SolverRecord(values, arrays, elements, scratch)
+
+    def restore(self, record: SolverRecord, state: Any) -> None:
+        """Take back what :meth:`record` returned (for ``state`` restored to the same moment): what
+        the record lacks keeps the value the solver was made with."""
+        for name, attribute in self.SAVED_VALUES.items():
+            if name in record.values:
+                setattr(self, attribute, record.values[name])
+        for name in self.SAVED_ARRAYS:
+            if name in record.arrays:
+                setattr(self, name, record.ndarray(name))
+        for name in self.SCRATCH:
+            if name in record.scratch:
+                setattr(self, name, record.scratch_array(name))
 
 
 def to_file(record: SolverRecord) -> tuple[dict[str, np.ndarray], dict[str, Any]]:

@@ -21,7 +21,8 @@ from ti_golf.physics.types import pair_columns
 from ti_golf.runtime import np_float
 from ti_golf.solvers import record
 from ti_golf.solvers.apart import APART_MAX
-from ti_golf.solvers.contact_colour import COLOURS, UNCOLOURED, ContactColours
+from ti_golf.solvers.contact_colour import COLOURS, ContactColours
+from ti_golf.solvers.edge_colouring import UNCOLOURED
 from ti_golf.solvers.gauss_seidel import GaussSeidelSolver
 from ti_golf.solvers.record import SolverRecord
 from ti_golf.solvers.solver import CollisionSolver

@@ -1,9 +1,11 @@
-"""The collision solvers' shared driver: the hash-grid neighbour lists, the pair and surface
-tables with their carried impulses, the storage order, serial and parallel stepping, and the
-saved record. A step is free flight, the contact sweeps and the end-of-step position update, in
-that fixed order (see :mod:`.collide`); the sweeps are each kind's own: :class:`.jacobi.JacobiSolver`
-and :class:`.gauss_seidel.GaussSeidelSolver`, which ``CollisionSolver(model)`` picks by
-``contact.solver``."""
+"""The collision solvers' shared base (:class:`CollisionSolver`): the hash-grid neighbour lists,
+the pair and surface tables with their carried impulses, the storage order, and the build of the
+lists (:meth:`CollisionSolver.build`). It steps as :class:`.stepping.Stepping` does (serially or
+in parallel, the lists built again when a step asks), and a saved run keeps it as
+:class:`.record.Recorded` says. A step is free flight, the contact sweeps and the end-of-step
+position update, in that fixed order (see :mod:`.collide`); the sweeps are each kind's own:
+:class:`.jacobi.JacobiSolver` and :class:`.gauss_seidel.GaussSeidelSolver`, which
+``CollisionSolver(model)`` picks by ``contact.solver``."""
 
 from __future__ import annotations
 
@@ -25,13 +27,12 @@ from ti_golf.runtime import (
     free_dropped_arrays,
     np_float,
     on_cpu,
-    plain_compile,
     release_freed_memory,
 )
 from ti_golf.scene.schema import Scene
-from ti_golf.signals import whole_steps
-from ti_golf.solvers import apart, collide, grid, links, sort, surfaces
-from ti_golf.solvers.record import SolverRecord
+from ti_golf.solvers import apart, grid, links, sort, surfaces
+from ti_golf.solvers.record import Recorded, SolverRecord
+from ti_golf.solvers.stepping import Stepping
 from ti_golf.solvers.storage_order import store_in_grid_order
 from ti_golf.solvers.surface_rows import (
     every_ball_a_row,
@@ -83,12 +84,15 @@ def steps_serially(n: int) -> bool:
     return n <= SERIAL_MAX_BALLS and on_cpu()
 
 
-class CollisionSolver:
+class CollisionSolver(Recorded, Stepping):
     """Buffers and neighbour lists for stepping N colliding balls: the driver both kinds of
     sweeps share. ``CollisionSolver(model, ...)`` makes the kind that ``contact.solver`` names
-    (:attr:`KINDS`); each kind steps with its own sweeps (:meth:`_sweep`).
+    (:attr:`KINDS`); each kind steps with its own sweeps (:meth:`.stepping.Stepping._sweep`), the
+    steps as :class:`.stepping.Stepping` takes them, and a saved run keeps what
+    :class:`.record.Recorded` names.
 
     Attributes:
+        r_max: the largest radius [m] of the balls.
         cell: grid cell size [m] at the last build: the largest diameter plus the skin, or plus
             2h·v_max when the fastest pair could close more than the skin in a step (see
             ``grid.cell_size``: pairs are listed by their closing speed too); both of the balls
@@ -134,62 +138,6 @@ class CollisionSolver:
     gauss_seidel: ClassVar[bool] = False
     """Whether the sweeps are Gauss–Seidel's: the kernels' flag for the pairs' friction impulses."""
 
-    SAVED_VALUES: ClassVar[dict[str, str]] = {
-        "r_max": "_r_max",
-        "r_cut": "r_cut",
-        "r_ref": "r_ref",
-        "skin": "skin",
-        "v_cut": "v_cut",
-        "h": "h",
-        "cell": "cell",
-        "mask": "mask",
-        "capacity": "capacity",
-        "rebuilds": "rebuilds",
-        "still_steps": "still_steps",
-        "pair_capacity": "pair_capacity",
-        "n_apart": "n_apart",
-        "skip_still": "skip_still",
-        "far_owners": "far_owners",
-        "valid": "_valid",
-        "rebuild": "_rebuild",
-    }
-    """The numbers a saved run keeps (:meth:`record`), by their name in the record: the
-    attributes that hold them. (The grid hash, a pair of vectors, is kept as ``hash``.)"""
-
-    SAVED_ARRAYS: ClassVar[tuple[str, ...]] = (
-        "sorted_ids",
-        "start",
-        "x_at_build",
-        "upper",
-        "first",
-        "lam",
-        "lower",
-        "lower_first",
-        "surface_start",
-        "surface_impulse",
-        "flag",
-        "apart_ids",
-        "friction",
-    )
-    """The arrays a saved run keeps whole (:meth:`record`): the lists, the carried impulses and the
-    grid of the last build."""
-
-    SCRATCH: ClassVar[tuple[str, ...]] = (
-        "x_free",
-        "v_free",
-        "calm",
-        "clear",
-        "rank",
-        "chunk_start",
-        "impulse",
-        "impact",
-        "stash_first",
-        "pair_chunk",
-        "surface_impulse_back",
-    )
-    """Arrays that each step or list build writes before it reads them: a saved run keeps only
-    their shapes and types."""
-
     def __init_subclass__(cls, kind: str = "", **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
         if kind:
@@ -211,12 +159,12 @@ class CollisionSolver:
                 f"{n:,} balls are more than an f32 run can hold ({links.ID_EXACT_F32:,}: the neighbour lists keep "
                 "ball ids in the float type); run in f64 (--precision f64 or TI_GOLF_PRECISION=f64)"
             )
-        self._r_max = float(model.radius_np.max())
+        self.r_max = float(model.radius_np.max())
         self.r_cut, self.r_ref = apart.size_cut(model.radius_np)
         self.skin = model.scene.contact.skin * self.r_ref
         self.v_cut = apart.fast_speed(self.r_ref, self.skin, model.dt)  # faster balls are listed apart
         self.h = model.dt  # the time step the lists are built for [s]
-        self.cell = grid.cell_size(self._r_max, self.skin, model.dt, 0.0)[0]
+        self.cell = grid.cell_size(self.r_max, self.skin, model.dt, 0.0)[0]
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
         if serial is None:  # (a layout of the sweeps by pairs, when asked for, is what the steps take, however few)
             serial = steps_serially(n) and not self._pairs_laid_out(model)
@@ -273,8 +221,10 @@ class CollisionSolver:
         self._valid = False
         self._rebuild = True
         self._ids: ti.Ndarray | None = None  # the state's storage order at the last build (see pairs)
-        self._hash = None  # the grid hash's (origin, stride) at the last build (grid.hash_strides)
-        self._last_grid = None  # (a cache of last_grid())
+        self._hash: tuple[Any, ...] | None = (
+            None  # the grid hash's (origin, stride) at the last build (grid.hash_strides)
+        )
+        self._last_grid: tuple[Any, ...] | None = None  # (a cache of last_grid())
 
     @property
     def model(self) -> Model:
@@ -286,40 +236,39 @@ class CollisionSolver:
         """The kernels' argument packs of the solver's arrays (see :class:`~ti_golf.physics.packs.Packs`)."""
         return self._packs
 
+    @property
+    def lists_valid(self) -> bool:
+        """Whether the neighbour lists were built for the balls' positions (a saved run keeps it)."""
+        return self._valid
+
+    @lists_valid.setter
+    def lists_valid(self, valid: bool) -> None:
+        self._valid = valid
+
+    @property
+    def rebuild_due(self) -> bool:
+        """Whether the lists are to be built again before the next parallel step (a saved run keeps it)."""
+        return self._rebuild
+
+    @rebuild_due.setter
+    def rebuild_due(self, due: bool) -> None:
+        self._rebuild = due
+
     def record(self) -> SolverRecord:
-        """What the next steps read, to continue bit for bit after :meth:`restore`: the numbers of
-        ``SAVED_VALUES`` and the grid hash, the arrays of ``SAVED_ARRAYS`` (those made), and the
-        shapes and types of the ``SCRATCH`` arrays."""
-        values: dict[str, Any] = {name: getattr(self, attr) for name, attr in self.SAVED_VALUES.items()}
-        values["hash"] = None if self._hash is None else [[int(c) for c in v.to_list()] for v in self._hash]
-        arrays, elements, scratch = {}, {}, {}
-        for name in self.SAVED_ARRAYS:
-            a = getattr(self, name, None)  # (a serial Gauss–Seidel solver has no column order)
-            if a is not None:
-                arrays[name] = a.to_numpy()
-                elements[name] = list(getattr(a, "element_shape", ()))
-        for name in self.SCRATCH:
-            a = getattr(self, name)
-            if a is not None:
-                scratch[name] = [list(a.shape), list(getattr(a, "element_shape", ())), str(a.to_numpy().dtype)]
-        return SolverRecord(values, arrays, elements, scratch)
+        """What the next steps read, to continue bit for bit after :meth:`restore`: the record of
+        :class:`.record.Recorded`, and the grid hash (``hash``)."""
+        record = super().record()
+        record.values["hash"] = None if self._hash is None else [[int(c) for c in v.to_list()] for v in self._hash]
+        return record
 
     def restore(self, record: SolverRecord, state: State) -> None:
         """Take back what :meth:`record` returned, for ``state`` restored to the same moment (its
         storage order included): the next step is then the one that the recorded solver would
         have made. What the record lacks keeps the value this solver was made with."""
-        for name, attribute in self.SAVED_VALUES.items():
-            if name in record.values:
-                setattr(self, attribute, record.values[name])
+        super().restore(record, state)
         if "hash" in record.values:
             hashed = record.values["hash"]
             self._hash = None if hashed is None else tuple(ti.Vector(v, dt=ti.i32) for v in hashed)
-        for name in self.SAVED_ARRAYS:
-            if name in record.arrays:
-                setattr(self, name, record.ndarray(name))
-        for name in self.SCRATCH:
-            if name in record.scratch:
-                setattr(self, name, record.scratch_array(name))
         if record.rebuild:
             self._rebuild = True
         self._ids = state.ids
@@ -329,7 +278,9 @@ class CollisionSolver:
     def build(self, state: State) -> None:
         """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
         pair's accumulated impulse over (the neighbour tables widen to the longest list when one
-        overflows; the pair tables grow with the pairs listed in all)."""
+        overflows; the pair tables grow with the pairs listed in all): the old lists stashed, the
+        cells sized (:meth:`_size_cells`), the balls listed (:meth:`_list_balls`), then the pair
+        tables fitted and linked (:meth:`_link_pairs`)."""
         n = state.n
         self._last_grid = None
         if n >= REORDER_MIN_BALLS:  # 0.2 ms, against the build's tens of milliseconds
@@ -340,51 +291,9 @@ class CollisionSolver:
             stashed = self.impulse
             links.stash(self.upper, self.first, self.lam, stashed, self.gauss_seidel, state.x, self.friction, mu)
             self.stash_first.copy_from(self.first)
-        h = self._model.dt
-        v_max, v_rest, n_apart = (
-            float(s) for s in apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
-        )
-        self.n_apart = int(n_apart) if n_apart <= apart.APART_MAX else 0  # a few own no pair with the others
-        scan_apart = self.n_apart > 0 and on_cpu()  # and are listed apart (see apart.APART_MAX)
-        # the cells hold every pair of the other balls; fast: their pairs are listed by closing speed too
-        if scan_apart:
-            self.cell, fast = grid.cell_size(self.r_ref, self.skin, h, v_rest)
-        else:
-            self.cell, fast = grid.cell_size(self._r_max, self.skin, h, v_max)
-        bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
-        self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, self.mask + 1))
-        if self.reorder:
-            grid_order = (1.0 / self.cell, self.mask, *self._hash, self.rank, self.start, self.chunk_start)
-            self.v_free, self.calm, self.rank = store_in_grid_order(
-                state, self._model, (*grid_order, self.sorted_ids), [self.v_free, self.calm, self.rank]
-            )
-            if scan_apart:  # their new indices
-                apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
+        fast, v_max = self._size_cells(state)
         self._ids = state.ids
-        while True:
-            if self.upper is None or self.upper.shape[1] != self.capacity:
-                self._packs.clear()  # (their references would keep the narrower table in memory)
-                self.upper = None
-                free_dropped_arrays()
-                self.upper = ti.ndarray(ti.i32, (n, self.capacity))
-            params, scratch = self._grid_params(fast), self._grid_scratch()
-            longest = grid.list_neighbours(
-                params,
-                state.x,
-                state.v,
-                self._model.radius,
-                self.apart_ids,
-                scratch,
-                self._packs.lists(self),
-                self.flag,
-                self.reorder,
-            )
-            if longest[0] <= self.capacity:
-                break
-            # widen to the longest list found (no power-of-two padding: memory follows the pile)
-            wider = int(longest[0])
-            self._check_table_memory(state, wider, self.pair_capacity)
-            self.capacity = wider
+        longest = self._list_balls(state, fast)
         self._check_loop_cap(state, int(longest[2]))
         if n << self.slot_bits > 2**31:  # the largest slot, (n − 1)·2^bits + 2^bits − 1, must fit an i32
             raise SimulationError(
@@ -396,32 +305,9 @@ class CollisionSolver:
             self._fit_pair_tables(state, n * self.capacity, 0)  # (and the stash, links.relist_all_pairs)
         else:
             self._fit_pair_tables(state, pairs, PAIR_ROOM)
-        carried = stashed is not None
-        if carried:
-            # after a reorder, sorted_ids still maps each ball to its index in the stashed lists
-            links.link_and_carry(
-                self.upper,
-                self.first,
-                self.lower,
-                self.lower_first,
-                self.impact,
-                self.pair_chunk,
-                stashed,
-                self.stash_first,
-                self.lam,
-                self.reorder,
-                self.sorted_ids,
-                self.gauss_seidel,
-                state.x,
-                self.friction,
-                mu,
-            )
-        else:
-            links.link_lower(self.upper, self.first, self.lower, self.lower_first, self.impact, self.pair_chunk)
-            self.lam.fill(0.0)
-            if self.gauss_seidel:  # none yet
-                zero_f32_vectors(self.friction)  # (not fill: see zero_f32_vectors)
+        self._link_pairs(state, stashed, mu)
         self._carry_pair_order(stashed)  # (while the stash is kept)
+        carried = stashed is not None
         stashed = None
         if not self.serial:  # (serial: a row for every ball, see surface_rows.every_ball_a_row)
             self._list_surface_rows(state, carried, v_max)
@@ -434,6 +320,91 @@ class CollisionSolver:
         if n >= REORDER_MIN_BALLS and self.rebuilds % COLLECT_EVERY == 0:
             free_dropped_arrays()  # (the cycles that Taichi's launches leave: see COLLECT_EVERY)
         self._valid = True
+
+    def _size_cells(self, state: State) -> tuple[bool, float]:
+        """Size the grid's cells and hash for a build (``grid.cell_size``, ``grid.hash_strides``),
+        the balls much faster or bigger than the rest set apart first (``apart.apart_balls``), and
+        with :attr:`reorder` store the balls in the grid's order. Returns (whether pairs are listed
+        by their closing speed too, the fastest ball's speed [m/s])."""
+        h = self._model.dt
+        v_max, v_rest, n_apart = (
+            float(s) for s in apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
+        )
+        self.n_apart = int(n_apart) if n_apart <= apart.APART_MAX else 0  # a few own no pair with the others
+        scan_apart = self.n_apart > 0 and on_cpu()  # and are listed apart (see apart.APART_MAX)
+        # the cells hold every pair of the other balls; fast: their pairs are listed by closing speed too
+        if scan_apart:
+            self.cell, fast = grid.cell_size(self.r_ref, self.skin, h, v_rest)
+        else:
+            self.cell, fast = grid.cell_size(self.r_max, self.skin, h, v_max)
+        bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
+        self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, self.mask + 1))
+        if self.reorder:
+            grid_order = (1.0 / self.cell, self.mask, *self._hash, self.rank, self.start, self.chunk_start)
+            self.v_free, self.calm, self.rank = store_in_grid_order(
+                state, self._model, (*grid_order, self.sorted_ids), [self.v_free, self.calm, self.rank]
+            )
+            if scan_apart:  # their new indices
+                apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
+        return fast, v_max
+
+    def _list_balls(self, state: State, fast: bool) -> Any:
+        """List every ball's neighbours (``grid.list_neighbours``; ``fast``: see
+        :meth:`_size_cells`), the neighbour table widened to the longest list and the balls listed
+        again while one overflows it. Returns what ``grid.list_neighbours`` returns."""
+        while True:
+            if self.upper is None or self.upper.shape[1] != self.capacity:
+                self._packs.clear()  # (their references would keep the narrower table in memory)
+                self.upper = None
+                free_dropped_arrays()
+                self.upper = ti.ndarray(ti.i32, (state.n, self.capacity))
+            params, scratch = self._grid_params(fast), self._grid_scratch()
+            longest = grid.list_neighbours(
+                params,
+                state.x,
+                state.v,
+                self._model.radius,
+                self.apart_ids,
+                scratch=scratch,
+                lists=self._packs.lists(self),  # (not kept: a wider table frees this one's first)
+                longest=self.flag,
+                stored_sorted=self.reorder,
+            )
+            if longest[0] <= self.capacity:
+                return longest
+            # widen to the longest list found (no power-of-two padding: memory follows the pile)
+            wider = int(longest[0])
+            self._check_table_memory(state, wider, self.pair_capacity)
+            self.capacity = wider
+
+    def _link_pairs(self, state: State, stashed: Any, mu: float) -> None:
+        """Link the lower lists to the pairs (``links.link_lower``) and, from the old lists'
+        ``stashed`` table (``None`` at a first build), carry each pair's accumulated impulses over
+        (``links.link_and_carry``; after a reorder, ``sorted_ids`` still maps each ball to its index
+        in the stashed lists); without a stash, every pair starts from zero."""
+        if stashed is not None:
+            links.link_and_carry(
+                self.upper,
+                self.first,
+                self.lower,
+                self.lower_first,
+                self.impact,
+                chunk=self.pair_chunk,
+                stashed=stashed,
+                stash_first=self.stash_first,
+                lam=self.lam,
+                moved=self.reorder,
+                old_id=self.sorted_ids,
+                with_friction=self.gauss_seidel,
+                x=state.x,
+                friction=self.friction,
+                mu=mu,
+            )
+        else:
+            links.link_lower(self.upper, self.first, self.lower, self.lower_first, self.impact, self.pair_chunk)
+            self.lam.fill(0.0)
+            if self.gauss_seidel:  # none yet
+                zero_f32_vectors(self.friction)  # (not fill: see zero_f32_vectors)
 
     def _list_surface_rows(self, state: State, carry: bool, v_max: float) -> None:
         """Give a row of surface impulses to each ball that may touch a plane or the terrain before
@@ -559,44 +530,6 @@ class CollisionSolver:
             f"{h * speed[k]:.4g} m per step of {h:g} s)"
         )
 
-    def ensure_lists(self, state: State) -> None:
-        """Build the neighbour lists for the current positions unless they still hold every pair in
-        reach: before the first step, after balls were moved (:meth:`invalidate`), or when the last
-        step asked for a rebuild. The next step then starts from these lists, as it would have
-        built them itself (same lists, same step)."""
-        stale = not self._valid or (self.flag.to_numpy()[0] != 0 if self.serial else self._rebuild)
-        if not stale:
-            return
-        if self.serial:
-            self.capacity = max(self.capacity, state.n - 1, 1)
-        self.build(state)
-        grid.clear(self.flag)  # build() left the longest lists there
-        self._rebuild = False
-
-    def retune(self, model: Model) -> None:
-        """Take the model's parameters as changed between steps (``Model.set_parameters``): a new
-        skin (``contact.skin``) or time step changes which pairs the lists must hold, so they are
-        rebuilt before the next step (each pair that stays listed keeps its impulse); a new number of
-        planes (``world.ground``) starts every ball's plane impulses again from zero, and the lists are
-        rebuilt (they list the balls within reach of a plane). The kind of solver (``contact.solver``)
-        is fixed: a change of it needs a new solver."""
-        skin = model.scene.contact.skin * self.r_ref
-        if (skin, model.dt) != (self.skin, self.h):
-            self.skin, self.h = skin, model.dt
-            self.v_cut = apart.fast_speed(self.r_ref, self.skin, model.dt)
-            self.invalidate()
-        if self.surface_impulse.shape[1] != surface_columns(model):
-            if self.serial:
-                self.surface_impulse, self.surface_impulse_back = every_ball_a_row(self.surface_start, model), None
-            else:
-                self.invalidate()  # (the build makes the tables for the new planes)
-
-    def invalidate(self) -> None:
-        """Rebuild the neighbour lists before the next step (balls were moved between steps), each
-        pair that stays listed keeping its accumulated impulse."""
-        self._rebuild = True
-        self.flag.from_numpy(np.array([1, 0], dtype=np.int32))  # the serial kernel's request
-
     @property
     def slot_bits(self) -> int:
         """Low bits of a lower-list entry that hold the pair's column in its owner's upper list (the
@@ -615,52 +548,6 @@ class CollisionSolver:
         pairs = np.sort(pairs, axis=1)  # (owner, other) to (lower id, higher id)
         return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
-    def advance(self, model: Model, state: State, steps: int) -> None:
-        """Advance all balls by ``steps`` steps of ``model.dt``: serially in one launch, or one
-        parallel launch per step (see ``serial``); Ctrl-C and SIGTERM wait for whole steps
-        (:func:`~ti_golf.signals.whole_steps`)."""
-        if self.serial:
-            with whole_steps():
-                self._advance_serially(model, state, int(steps))
-        else:
-            with whole_steps() as came:  # (the handlers set once, not at every step)
-                for _ in range(int(steps)):
-                    self._step_in_parallel(model, state)
-                    if came:  # Ctrl-C or SIGTERM: stop after this whole step
-                        break
-
-    def _advance_serially(self, model: Model, state: State, steps: int) -> None:
-        width = max(1, state.n - 1)
-        if not self._valid or self.upper.shape[1] < width:  # first step, or lists built narrower since
-            self.capacity = width
-            self.build(state)
-            grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
-        with plain_compile():  # see runtime.plain_compile
-            self.rebuilds += collide.launch(
-                self._arguments(model, state, steps),
-                serial=True,
-                warm=True,
-                sweeps=model.scene.contact.iterations - 1,
-                last=True,
-            )
-        for _ in range(steps):
-            state.t += model.dt  # as one step at a time adds it, to the same round-off
-        state.steps += steps
-
-    def _step_in_parallel(self, model: Model, state: State) -> None:
-        if not self._valid or self._rebuild:
-            self.build(state)
-        elif self.skip_still and self._all_still(state):  # the step would change nothing
-            self.still_steps += 1
-            state.t += model.dt
-            state.steps += 1
-            return
-        rebuild = self._sweep(model.scene.contact.iterations, self._arguments(model, state, 1))
-        state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
-        state.t += model.dt
-        state.steps += 1
-        self._rebuild = bool(rebuild)
-
     def _pairs_laid_out(self, model: Model) -> bool:
         """Whether the sweeps take the pairs in a layout of their own (not ball by ball), which the
         serial steps would not follow: the Gauss–Seidel sweeps by contact colours."""
@@ -677,36 +564,6 @@ class CollisionSolver:
         """Carry over a rebuild what orders the pairs in the sweeps, from the old lists' ``stashed``
         table (``None`` at a first build): nothing, unless the sweeps order the pairs themselves."""
 
-    def _all_still(self, state: State) -> bool:
-        """Whether no ball is awake and in play, so that a step would change nothing (only the
-        kinds whose sweeps leave such a step unchanged say so)."""
-        return False
-
-    def _sweep(self, iterations: int, arguments: tuple) -> int:
-        """One parallel step's launches, from the free flight to the new positions in ``x_free``,
-        with ``iterations`` sweeps; ``arguments``: :meth:`_arguments`. Returns whether the lists
-        must be rebuilt before the next step."""
-        raise NotImplementedError
-
     def _friction_rows(self) -> int:
         """Rows of the pairs' friction impulses: one placeholder, unless the sweeps carry them."""
         return 1
-
-    def _arguments(self, m: Model, s: State, steps: int) -> tuple:
-        """The arguments of ``collide.collision_step`` before ``serial``: the array of the air,
-        contact, terrain and step parameters, the launch's start time [s], the time step [s] and
-        the steps to take, the kinds (:class:`~ti_golf.physics.kinds.Kinds`), the model, the lists, the state, the flight record and
-        the scratch."""
-        packs = self._packs
-        return (
-            packs.step_scalars(m, self.skin, self.v_cut, self.r_cut),
-            s.t,
-            m.dt,
-            steps,
-            m.kinds,
-            packs.model(m),
-            packs.lists(self),
-            packs.state(s),
-            packs.flight(s),
-            packs.scratch(self),
-        )

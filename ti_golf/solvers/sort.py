@@ -128,7 +128,9 @@ def storage_order(
     position, y then z then x (then id), so the order does not depend on thread scheduling. The
     balls of each column of cells (:func:`hash_strides`), and of the columns a ball's neighbours
     lie in, end up in runs of consecutive indices."""
-    counting_sort(x, inv_cell, mask, origin, stride, rank, start, chunk_start, sorted_ids)
+    counting_sort(
+        x, inv_cell, mask, origin, stride, rank=rank, start=start, chunk_start=chunk_start, sorted_ids=sorted_ids
+    )
     sort_buckets(x, start, sorted_ids)
 
 

@@ -183,12 +183,12 @@ def flag_stale_lists(
                         g,
                         grid.start,
                         grid.sorted_ids,
-                        apart_ids,
-                        stored_sorted,
-                        radius,
-                        lists,
-                        scratch.x_free,
-                        state.v,
+                        apart_ids=apart_ids,
+                        stored_sorted=stored_sorted,
+                        radius=radius,
+                        lists=lists,
+                        x1=scratch.x_free,
+                        v=state.v,
                     )
                 if stale:
                     scratch.flag[0] = 1
@@ -211,5 +211,16 @@ def lists_stale(
     ``stored_sorted`` as :func:`.grid.list_neighbours` had them) and the step's scalars
     (:func:`ti_golf.physics.types.scalars_of`). Returns ``scratch.flag[0]``."""
     _air, _contact, _terrain, params = scalars_of(scalars)
-    flag_stale_lists(False, params, model.radius, lists, state, scratch, g, grid, apart_ids, stored_sorted)
+    flag_stale_lists(
+        serial=False,
+        params=params,
+        radius=model.radius,
+        lists=lists,
+        state=state,
+        scratch=scratch,
+        g=g,
+        grid=grid,
+        apart_ids=apart_ids,
+        stored_sorted=stored_sorted,
+    )
     return scratch.flag[0]

@@ -103,31 +103,21 @@ def beyond_reach(clear, r, reach_sqr):
 
 
 @ti.func
-def surface_impulses(
-    i,
-    warm: ti.template(),
-    vi,
-    wi,
-    contact: ti.template(),
-    terrain: ti.template(),
-    h,
-    v_inelastic,
-    model: ti.template(),
-    lists: ti.template(),
-    state: ti.template(),
-    scratch: ti.template(),
-    phase=Phase.JACOBI,
-):
-    """Ball i's contacts with the planes, then the terrain (the plane of the patch under its
-    free-flight end point; its resting impulse is kept in the column after the planes' in
-    the ball's row of ``surface_impulse``, in f32: only the ball reads and writes its own λ, so nothing
-    can disagree about it, and the next sweep or step corrects what the rounding left, 2^-24 of
-    the impulse; a ball without a row touches none: see :func:`list_surfaces`), applied in turn to
-    (vi, wi): the warm start (``warm``) or a sweep, Jacobi (``Phase.JACOBI``, :func:`ti_golf.physics.contact.surface_impulse`)
-    or Gauss–Seidel (``phase``: that of :func:`.sequential.surface_step`). A sweep skips
-    them when the ball is too far from all of them (``clear[i]``, see :func:`surface_clearance`)
-    to touch one within the step at its speed, and marks the ball ``NEAR`` once it rests on one
-    (that resting impulse must be visited in later sweeps, to be given back). Returns (v, ω)."""
+def surface_impulses(i, warm: ti.template(), vi, wi, h, v_inelastic, s: ti.template(), phase=Phase.JACOBI):
+    """Ball i's contacts (``s``: the step's :class:`.step.Step`) with the planes, then the terrain (the
+    plane of the patch under its free-flight end point; its resting impulse is kept in the
+    column after the planes' in the ball's row of ``surface_impulse``, in f32: only the ball
+    reads and writes its own λ, so nothing can disagree about it, and the next sweep or step
+    corrects what the rounding left, 2^-24 of the impulse; a ball without a row touches none:
+    see :func:`list_surfaces`), applied in turn to (vi, wi): the warm start (``warm``) or a
+    sweep, Jacobi (``Phase.JACOBI``, :func:`ti_golf.physics.contact.surface_impulse`) or
+    Gauss–Seidel (``phase``: that of :func:`.sequential.surface_step`). A sweep skips them when
+    the ball is too far from all of them (``clear[i]``, see :func:`surface_clearance`) to touch
+    one within the step at its speed, and marks the ball ``NEAR`` once it rests on one (that
+    resting impulse must be visited in later sweeps, to be given back). Returns (v, ω)."""
+    contact, terrain, model, lists, state, scratch = ti.static(
+        (s.contact, s.terrain, s.model, s.lists, s.state, s.scratch)
+    )
     r = of_ball(model.radius, i)
     row = surface_row(lists.surface_start, i)
     far = False
@@ -142,7 +132,7 @@ def surface_impulses(
         n = model.plane_n[p]
         gap = (state.x[i] - model.plane_p[p]).dot(n) - r
         vi, wi = surface_contact_step(
-            i, row, p, warm, n, gap, vi, wi, r, contact, h, v_inelastic, lists, scratch, phase
+            i, row, p, n, gap, vi, wi, r, contact=contact, h=h, v_inelastic=v_inelastic, s=s, warm=warm, phase=phase
         )
     if terrain.on != 0 and not far:
         q = model.plane_n.shape[0]
@@ -152,27 +142,15 @@ def surface_impulses(
                 contact, model.surface_table, model.terrain_cells, model.heights, terrain, scratch.x_free[i]
             )
             gap = (state.x[i] - pt).dot(n) - r
-            vi, wi = surface_contact_step(i, row, q, warm, n, gap, vi, wi, r, ct, h, v_inelastic, lists, scratch, phase)
+            vi, wi = surface_contact_step(
+                i, row, q, n, gap, vi, wi, r, contact=ct, h=h, v_inelastic=v_inelastic, s=s, warm=warm, phase=phase
+            )
     return vi, wi
 
 
 @ti.func
 def surface_contact_step(
-    i,
-    row,
-    column,
-    warm: ti.template(),
-    n,
-    gap,
-    vi,
-    wi,
-    r,
-    contact,
-    h,
-    v_inelastic,
-    lists: ti.template(),
-    scratch: ti.template(),
-    phase,
+    i, row, column, n, gap, vi, wi, r, contact, h, v_inelastic, s: ti.template(), warm: ti.template(), phase
 ):
     """Ball i's contact with one surface of normal ``n`` and surface gap ``gap`` [m], whose resting
     impulse (and, for the Gauss–Seidel sweeps, friction impulse) per unit mass is kept in
@@ -180,7 +158,9 @@ def surface_contact_step(
     ball without a row (``row`` −1) meets a surface that the lists' build found out of its reach
     (:func:`list_surfaces`), as a ball knocked more than the skin in one step does: from no
     carried impulse, and with nothing kept from one sweep to the next; the lists are then rebuilt
-    before the next step. Returns (v, ω)."""
+    before the next step (``s``: the step's :class:`.step.Step`; ``contact``: the surface's
+    contact parameters). Returns (v, ω)."""
+    lists, scratch = ti.static((s.lists, s.scratch))
     lam0, F0 = 0.0, zero3()
     if row >= 0:  # f32 in the table (see surface_impulses)
         kept = lists.surface_impulse[row, column]
@@ -198,7 +178,9 @@ def surface_contact_step(
                 if contact.friction == CENTRE_FRICTION:
                     P = lam0 * n + centre_friction(n, vi, 1.0, contact.mu * lam0)
                 else:
-                    P = warm_impulse(n, vi, wi, r, zero3(), zero3(), 0.0, 1.0, lam0, contact.mu)
+                    P = warm_impulse(
+                        n, vi, wi, r, v_b=zero3(), w_b=zero3(), r_b=0.0, m_eff=1.0, lam=lam0, mu=contact.mu
+                    )
                 vi, wi = plane_jolt(P, lam0, vi, wi, r, n, contact.mu_roll, contact.friction)
     elif gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam0 > 0.0:  # else no impulse (pair_impulse)
         lam_p = 0.0
@@ -209,12 +191,25 @@ def surface_contact_step(
             if phase == Phase.FIRST:  # what the warm start applied
                 F = clamp_friction(F, n, contact.mu * lam0)
             vi, wi, lam_p, F = surface_step(
-                phase, n, gap, scratch.v_free[i], vi, wi, r, lam0, F, contact, v_inelastic, h
+                phase,
+                n,
+                gap,
+                scratch.v_free[i],
+                vi,
+                w=wi,
+                radius=r,
+                lam=lam0,
+                F=F,
+                contact=contact,
+                v_inelastic=v_inelastic,
+                h=h,
             )
             if row >= 0:
                 lists.surface_impulse[row, column] = ti.Vector([lam_p, F[0], F[1], F[2]], dt=ti.f32)
         else:
-            P, lam_p, _, n_eff = surface_impulse(n, gap, vi, wi, r, lam0, contact, v_inelastic, h)
+            P, lam_p, _, n_eff = surface_impulse(
+                n, gap, vi, wi, r, lam=lam0, contact=contact, v_inelastic=v_inelastic, h=h
+            )
             if P.dot(n) != 0.0:
                 vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, contact.mu_roll, contact.friction)
             if row >= 0:

@@ -1,0 +1,165 @@
+"""How a collision solver steps its balls (:class:`Stepping`): serially, many steps in one launch
+of ``collide.collision_step``, or a parallel launch a step with its kind's sweeps
+(:meth:`Stepping._sweep`), and when it builds its neighbour lists again: before the first step,
+when a step or the caller asks for it (balls moved, the model retuned)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ti_golf.physics.model import Model
+from ti_golf.physics.packs import Packs
+from ti_golf.physics.state import State
+from ti_golf.runtime import plain_compile
+from ti_golf.signals import whole_steps
+from ti_golf.solvers import apart, collide, grid
+from ti_golf.solvers.surface_rows import every_ball_a_row, surface_columns
+
+
+class Stepping:
+    """The steps of a collision solver (:class:`.solver.CollisionSolver`, which builds the lists
+    and holds the arrays named below) and the schedule of its list builds."""
+
+    serial: bool
+    capacity: int
+    rebuilds: int
+    still_steps: int
+    skip_still: bool
+    lists_valid: bool
+    rebuild_due: bool
+    r_ref: float
+    skin: float
+    h: float
+    v_cut: float
+    r_cut: float
+    flag: Any
+    upper: Any
+    x_free: Any
+    surface_start: Any
+    surface_impulse: Any
+    surface_impulse_back: Any
+
+    @property
+    def packs(self) -> Packs:
+        """The kernels' argument packs of the solver's arrays (the solver's own)."""
+        raise NotImplementedError
+
+    def build(self, state: State) -> None:
+        """Build the neighbour lists for the balls of ``state`` (the solver's own)."""
+        raise NotImplementedError
+
+    def ensure_lists(self, state: State) -> None:
+        """Build the neighbour lists for the current positions unless they still hold every pair in
+        reach: before the first step, after balls were moved (:meth:`invalidate`), or when the last
+        step asked for a rebuild. The next step then starts from these lists, as it would have
+        built them itself (same lists, same step)."""
+        stale = not self.lists_valid or (self.flag.to_numpy()[0] != 0 if self.serial else self.rebuild_due)
+        if not stale:
+            return
+        if self.serial:
+            self.capacity = max(self.capacity, state.n - 1, 1)
+        self.build(state)
+        grid.clear(self.flag)  # build() left the longest lists there
+        self.rebuild_due = False
+
+    def retune(self, model: Model) -> None:
+        """Take the model's parameters as changed between steps (``Model.set_parameters``): a new
+        skin (``contact.skin``) or time step changes which pairs the lists must hold, so they are
+        rebuilt before the next step (each pair that stays listed keeps its impulse); a new number of
+        planes (``world.ground``) starts every ball's plane impulses again from zero, and the lists are
+        rebuilt (they list the balls within reach of a plane). The kind of solver (``contact.solver``)
+        is fixed: a change of it needs a new solver."""
+        skin = model.scene.contact.skin * self.r_ref
+        if (skin, model.dt) != (self.skin, self.h):
+            self.skin, self.h = skin, model.dt
+            self.v_cut = apart.fast_speed(self.r_ref, self.skin, model.dt)
+            self.invalidate()
+        if self.surface_impulse.shape[1] != surface_columns(model):
+            if self.serial:
+                self.surface_impulse, self.surface_impulse_back = every_ball_a_row(self.surface_start, model), None
+            else:
+                self.invalidate()  # (the build makes the tables for the new planes)
+
+    def invalidate(self) -> None:
+        """Rebuild the neighbour lists before the next step (balls were moved between steps), each
+        pair that stays listed keeping its accumulated impulse."""
+        self.rebuild_due = True
+        self.flag.from_numpy(np.array([1, 0], dtype=np.int32))  # the serial kernel's request
+
+    def advance(self, model: Model, state: State, steps: int) -> None:
+        """Advance all balls by ``steps`` steps of ``model.dt``: serially in one launch, or one
+        parallel launch per step (see ``serial``); Ctrl-C and SIGTERM wait for whole steps
+        (:func:`~ti_golf.signals.whole_steps`)."""
+        if self.serial:
+            with whole_steps():
+                self._advance_serially(model, state, int(steps))
+        else:
+            with whole_steps() as came:  # (the handlers set once, not at every step)
+                for _ in range(int(steps)):
+                    self._step_in_parallel(model, state)
+                    if came:  # Ctrl-C or SIGTERM: stop after this whole step
+                        break
+
+    def _advance_serially(self, model: Model, state: State, steps: int) -> None:
+        width = max(1, state.n - 1)
+        if not self.lists_valid or self.upper.shape[1] < width:  # first step, or lists built narrower since
+            self.capacity = width
+            self.build(state)
+            grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
+        with plain_compile():  # see runtime.plain_compile
+            self.rebuilds += collide.launch(
+                self._arguments(model, state, steps),
+                serial=True,
+                warm=True,
+                sweeps=model.scene.contact.iterations - 1,
+                last=True,
+            )
+        for _ in range(steps):
+            state.t += model.dt  # as one step at a time adds it, to the same round-off
+        state.steps += steps
+
+    def _step_in_parallel(self, model: Model, state: State) -> None:
+        if not self.lists_valid or self.rebuild_due:
+            self.build(state)
+        elif self.skip_still and self._all_still(state):  # the step would change nothing
+            self.still_steps += 1
+            state.t += model.dt
+            state.steps += 1
+            return
+        rebuild = self._sweep(model.scene.contact.iterations, self._arguments(model, state, 1))
+        state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
+        state.t += model.dt
+        state.steps += 1
+        self.rebuild_due = bool(rebuild)
+
+    def _all_still(self, state: State) -> bool:
+        """Whether no ball is awake and in play, so that a step would change nothing (only the
+        kinds whose sweeps leave such a step unchanged say so)."""
+        return False
+
+    def _sweep(self, iterations: int, arguments: tuple) -> int:
+        """One parallel step's launches, from the free flight to the new positions in ``x_free``,
+        with ``iterations`` sweeps; ``arguments``: :meth:`_arguments`. Returns whether the lists
+        must be rebuilt before the next step."""
+        raise NotImplementedError
+
+    def _arguments(self, m: Model, s: State, steps: int) -> tuple:
+        """The arguments of ``collide.collision_step`` before ``serial``: the array of the air,
+        contact, terrain and step parameters, the launch's start time [s], the time step [s] and
+        the steps to take, the kinds (:class:`~ti_golf.physics.kinds.Kinds`), the model, the lists, the state, the flight record and
+        the scratch."""
+        packs = self.packs
+        return (
+            packs.step_scalars(m, self.skin, self.v_cut, self.r_cut),
+            s.t,
+            m.dt,
+            steps,
+            m.kinds,
+            packs.model(m),
+            packs.lists(self),
+            packs.state(s),
+            packs.flight(s),
+            packs.scratch(self),
+        )
