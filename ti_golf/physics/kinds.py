@@ -34,7 +34,15 @@ class Kinds(NamedTuple):
 
 
 def kinds_of(scene: Any) -> Kinds:
-    """The :class:`Kinds` of a validated scene (:class:`ti_golf.scene.schema.Scene`)."""
+    """The :class:`Kinds` of a validated scene (:class:`ti_golf.scene.schema.Scene`); a choice
+    without code (a scene built by hand, not read) raises ValueError."""
+    for key, value, codes in (
+        ("world.integrator", scene.world.integrator, INTEGRATOR_CODES),
+        ("air.model", scene.air.model, AIR_MODEL_CODES),
+        ("air.wind_profile", scene.air.wind_profile, WIND_PROFILE_CODES),
+    ):
+        if value not in codes:
+            raise ValueError(f"{key} must be one of {', '.join(codes)} (got {value!r})")
     return Kinds(
         integrator=INTEGRATOR_CODES[scene.world.integrator],
         air_model=AIR_MODEL_CODES[scene.air.model],
