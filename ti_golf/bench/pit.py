@@ -326,8 +326,8 @@ def solver_launches(sim: Simulation) -> dict[str, Any]:
             extra["fresh_pairs_max"] = int(np.max(cc.fresh))
         layout = "contacts"
     else:
-        # (col_start is set to None in GaussSeidelSolver.__init__ and unannotated there: typed None)
-        start, colour = solver.col_start.to_numpy(), solver.col_colour.to_numpy()  # type: ignore[attr-defined]
+        assert solver.col_start is not None, "the pour built the lists"
+        start, colour = solver.col_start.to_numpy(), solver.col_colour.to_numpy()
         filled = np.nonzero(np.diff(start))[0]
         blocks = np.bincount(colour[start[filled]], minlength=COLUMN_COLOURS).tolist()
         far = [1] if solver.far_owners else []

@@ -42,7 +42,9 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
             self.colours = contact_colour.ContactColours(band=2.0 * self.r_ref * edge_colouring.BAND_DIAMETERS)
         elif self.sweeps_by_blocks(model.scene, self.serial):  # the balls by grid column (colour.column_order)
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, model.n), ti.ndarray(ti.i32, model.n)
-        self.col_start = self.col_chunk = None
+        # the columns' bucket starts and their scan's scratch, made at the first build (_order_columns)
+        self.col_start: ti.Ndarray | None = None
+        self.col_chunk: ti.Ndarray | None = None
 
     def record(self) -> SolverRecord:
         """The solver's record (:meth:`.solver.CollisionSolver.record`), with the pairs' colours of
@@ -136,6 +138,7 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
             collide.launch(arguments, serial=False, warm=False, sweeps=0, last=True)
             contact_colour.project(self.colours, scalars, model, lists, state, scratch)
             return stale.lists_stale(scalars, *self.last_grid(), model, lists, state, scratch)
+        assert self.col_start is not None, "the lists are built before a step"
         inv_cell = 1.0 / self.cell
         any_far = int(self.far_owners > 0)
         phases = colour.step_phases(iterations)

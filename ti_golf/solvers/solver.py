@@ -426,6 +426,7 @@ class CollisionSolver(Recorded, Stepping):
         """The :data:`~ti_golf.physics.types.GridParams` of the grid as the last build made it (its
         cells, hash, skin, step and the balls set apart), ``fast`` when pairs are listed by their
         closing speed too (``grid.cell_size``)."""
+        assert self._hash is not None, "the lists are built before the grid is read"
         return GridParams(
             inv_cell=1.0 / self.cell,
             mask=self.mask,
