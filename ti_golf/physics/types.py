@@ -20,7 +20,7 @@ from typing import Any, TypeAlias
 
 import taichi as ti
 
-from ti_golf import runtime
+from ti_golf import launcher, runtime
 
 
 class Deferred:
@@ -83,6 +83,8 @@ def kernel(fn: Callable[..., Any]) -> Callable[..., Any]:
         if compiled is None:
             fn.__annotations__ = {k: a.get() if isinstance(a, Deferred) else a for k, a in fn.__annotations__.items()}
             compiled = ti.kernel(fn)
+            if launcher.enabled():
+                compiled = launcher.FastCall(compiled)
         if not LAUNCHES.on:
             return compiled(*args, **kwargs)
         t0 = time.perf_counter()
