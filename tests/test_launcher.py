@@ -32,7 +32,7 @@ def _fast_calls() -> int:
     return sum(f.fast_calls for f in launcher.MADE)
 
 
-STEPS = 40
+STEPS = 20
 
 
 def _run(name: str, overrides: tuple[str, ...]) -> np.ndarray:
