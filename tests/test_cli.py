@@ -1055,6 +1055,7 @@ def _gif_frames(path: Path) -> list[np.ndarray]:
     return frames
 
 
+@pytest.mark.slow  # two renders of 1,500 steps in subprocesses
 def test_the_gif_report_matches_the_file_and_the_camera_holds_still(tmp_path):
     # break_shot spreads its balls: a camera that refits every frame (--follow) zooms out and
     # every frame's ground moves; the still camera draws the same ground in every frame, and the
@@ -1156,6 +1157,7 @@ def test_bench_startup_times_commands_in_fresh_processes_against_the_targets():
     assert "ti-golf keys" in proc.stdout.splitlines()[2] and "target 0.5 s" in proc.stdout
 
 
+@pytest.mark.slow  # a cold compile in a subprocess
 def test_bench_startup_kernels_reports_each_kernels_front_end_and_what_was_compiled():
     # from an empty cache every instance is compiled; once the cache holds them, none is
     cold = ok(run_cli("bench", "startup", "--kernels", "lab_vacuum", "--cache", "cold", "--json"))

@@ -419,9 +419,11 @@ def test_a_gpu_backend_lists_the_neighbours_and_steps_as_the_cpu_does(background
 
 # Every array access of the grid's and the step's kernels checked against the array's bounds
 # (Taichi's debug mode), on balls that share cells, with and without the grid's order, tracked or
-# not (then the flight records hold one entry), stepped serially, in parallel and without
-# collisions, and on the terrain.
+# not (then the flight records hold one entry), stepped serially, in parallel (the Jacobi sweeps,
+# and the Gauss-Seidel sweeps in both layouts) and without collisions, and on the terrain.
 _BOUNDS_CHECKED = textwrap.dedent("""
+    import dataclasses
+
     import numpy as np
     import ti_golf as tg
 
@@ -451,6 +453,12 @@ _BOUNDS_CHECKED = textwrap.dedent("""
         sim.x = sim.x + [0.0, 0.003, 0.0]  # every ball moved: the lists are rebuilt
         sim.step(1)
         assert sim.solver.rebuilds > 1
+    for layout in ("columns", "contacts"):  # the Gauss-Seidel sweeps, by grid columns and by contact colours
+        contact = dataclasses.replace(scene.contact, solver="gauss_seidel", layout=layout)
+        sim = tg.Simulation(dataclasses.replace(scene, contact=contact), x=x, track=False)
+        sim.step(3)
+        sim.x = sim.x[::-1]
+        sim.step(2)
     free = tg.Simulation(tg.load_scene("lab_vacuum", ["world.collisions=false"]), x=x[:5], track=False)
     free.step(3)
     for name in ("terrain_2d", "terrain_3d"):  # a height field: one ball alone, 400 colliding

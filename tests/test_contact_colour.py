@@ -59,6 +59,7 @@ def _assert_valid(sim) -> None:
     for c in range(COLOURS + 1):
         run = laid_out[start[c] : start[c + 1]]
         assert np.all(listed[run, 2] == c)
+        assert np.all(np.diff(run) > 0), c  # in index order, whatever order the threads ran in
         if c < COLOURS:  # no two pairs of a colour share a ball
             balls = listed[run, :2].ravel()
             assert len(np.unique(balls)) == len(balls), c
@@ -148,12 +149,14 @@ def test_pairs_keep_their_colours_over_rebuilds(reorder):
 
 @pytest.mark.slow
 def test_runs_with_contact_colours_repeat_bit_for_bit():
+    # the states, and what a saved run keeps of the solver: the pairs' layout colour by colour too
     runs = []
     for _ in range(2):
         sim = tg.Simulation(_scene(250, 0.2, 5, e=0.8))
         sim.run(t=0.3)
-        runs.append((sim.x, sim.v, sim.w))
-    for a, b in zip(*runs):
+        runs.append((sim.x, sim.v, sim.w, *sim.solver.record().arrays.values()))
+    assert len(runs[0]) == len(runs[1]) > 3 + len(sim.solver.colours.TABLES)
+    for a, b in zip(*runs, strict=True):
         np.testing.assert_array_equal(a, b)
 
 

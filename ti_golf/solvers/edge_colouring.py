@@ -23,8 +23,8 @@ it in one sweep (a heavy ball on a column of light ones). A pair that finds all 
 colours taken at its balls, or is still uncoloured after ``ROUND_CAP`` rounds, goes to an
 *overflow* set, swept after the colours one pair after another, in index order (and coloured
 again at the next rebuild). :func:`colour_sort` then lays the pairs out colour by colour
-(``pairs[start[c] : start[c + 1]]``; within a colour, in the order the threads took places,
-which changes no result: the pairs of a colour share no ball). Every listed pair is coloured, so
+(``pairs[start[c] : start[c + 1]]``, each colour in index order: the layout, and so a saved run,
+does not depend on the order the threads ran in). Every listed pair is coloured, so
 the pairs of balls set apart (:mod:`.apart`) need no pass of their own. :class:`PairColouring`
 keeps the colours and drives the kernels.
 """
@@ -64,6 +64,10 @@ BAND_DIAMETERS = 0.25
 """Height of the priority's bands, in diameters of the balls the lists are built for: of two
 pairs that share a ball and propose one colour, the pair of the lower band keeps it."""
 
+SORT_CHUNK = 512
+"""Pairs a thread of :func:`colour_sort` takes: the sort's parallel loops have a thread per
+``SORT_CHUNK`` listed pairs (about 600 in the 100,000-ball pour's pile)."""
+
 BAND_LIMIT = 1 << 10
 """Height bands of the priority key, either side of zero (a height beyond is taken as the last band)."""
 
@@ -79,7 +83,8 @@ ColourTables: TypeAlias = ti.types.argpack(
     fresh=int_array,  # the pairs to colour (new to the lists) in fresh[:count[0]], (pairs,)
     count=int_array,  # the pairs in fresh, (1,)
     start=int_array,  # where each colour starts in pairs; the overflow set last, (COLOURS + 2,)
-    fill=int_array,  # scratch: the pairs placed of each colour, (COLOURS + 1,)
+    fill=int_array,  # the pairs of each colour at the last sort, the overflow set last, (COLOURS + 1,)
+    chunk_count=int_array,  # scratch of the sort: each chunk's pairs of each colour, (chunks × (COLOURS + 1),)
 )
 """The pairs' colours and the colouring's tables on the device (see :class:`PairColouring`)."""
 
@@ -139,13 +144,40 @@ def colour_carry(
                 if c == OVERFLOW:
                     c = UNCOLOURED
             tables.colour_b[p] = c
-    tables.count[0] = 0
-    for p in range(lists.first[n]):
-        c = tables.colour_b[p]
-        tables.colour[p] = c
-        tables.propose[p], tables.propose_b[p] = UNCOLOURED, UNCOLOURED
-        if c == UNCOLOURED:
-            tables.fresh[ti.atomic_add(tables.count[0], 1)] = p
+    list_fresh(lists.first[n], tables)
+
+
+@ti.func
+def list_fresh(listed_pairs, tables: ti.template()):
+    """Copy the carried colours (``colour_b``) to ``colour``, clear the proposals, and list the
+    pairs left uncoloured in ``tables.fresh[:count[0]]``, in index order (a stable compaction in
+    chunks of ``SORT_CHUNK``, as :func:`colour_sort` sorts: the list does not depend on the order
+    the threads ran in)."""
+    width = COLOURS + 1
+    chunks = (listed_pairs + SORT_CHUNK - 1) // SORT_CHUNK
+    for k in range(chunks):
+        here = 0
+        for p in range(k * SORT_CHUNK, ti.min(listed_pairs, (k + 1) * SORT_CHUNK)):
+            c = tables.colour_b[p]
+            tables.colour[p] = c
+            tables.propose[p], tables.propose_b[p] = UNCOLOURED, UNCOLOURED
+            if c == UNCOLOURED:
+                here += 1
+        tables.chunk_count[k * width] = here
+    ti.loop_config(serialize=True)
+    for _ in range(1):
+        total = 0
+        for k in range(chunks):
+            here = tables.chunk_count[k * width]
+            tables.chunk_count[k * width] = total
+            total += here
+        tables.count[0] = total
+    for k in range(chunks):
+        at = tables.chunk_count[k * width]
+        for p in range(k * SORT_CHUNK, ti.min(listed_pairs, (k + 1) * SORT_CHUNK)):
+            if tables.colour[p] == UNCOLOURED:
+                tables.fresh[at] = p
+                at += 1
 
 
 @ti.func
@@ -297,34 +329,43 @@ def colour_rounds(
 @ti.func
 def colour_sort(listed_pairs, tables: ti.template()):
     """Lay the ``listed_pairs`` pairs out colour by colour: ``tables.pairs[start[c] : start[c + 1]]`` are
-    the pairs of colour c (in the order their threads took places: the pairs of a colour share no
-    ball, so the order among them changes nothing), the overflow set last, sorted by index (it is
-    swept in that order). Uncoloured pairs (a colouring not yet finished) are left out."""
-    for c in range(COLOURS + 2):
+    the pairs of colour c in index order, the overflow set last (a stable counting sort, so the
+    layout does not depend on the order the threads ran in). Uncoloured pairs (a colouring not yet
+    finished) are left out. The pairs are taken in chunks of ``SORT_CHUNK``, a thread each: each
+    chunk counts its pairs of each colour (``chunk_count``, a row a chunk), the counts are scanned
+    over the chunks colour by colour (``fill``: each colour's pairs), then over the colours
+    (``start``), and each chunk places its pairs from its own offsets."""
+    width = COLOURS + 1
+    chunks = (listed_pairs + SORT_CHUNK - 1) // SORT_CHUNK
+    for k in range(chunks):
+        for c in range(width):
+            tables.chunk_count[k * width + c] = 0
+        for p in range(k * SORT_CHUNK, ti.min(listed_pairs, (k + 1) * SORT_CHUNK)):
+            if tables.colour[p] != UNCOLOURED:
+                tables.chunk_count[k * width + tables.colour[p]] += 1
+    for c in range(width):
+        total = 0
+        for k in range(chunks):
+            here = tables.chunk_count[k * width + c]
+            tables.chunk_count[k * width + c] = total
+            total += here
+        tables.fill[c] = total
+    ti.loop_config(serialize=True)
+    for c in range(width + 1):
         tables.start[c] = 0
-    for c in range(COLOURS + 1):
-        tables.fill[c] = 0
-    for p in range(listed_pairs):
-        if tables.colour[p] != UNCOLOURED:
-            ti.atomic_add(tables.start[tables.colour[p] + 1], 1)
-    ti.loop_config(serialize=True)
-    for c in range(COLOURS + 1):
-        tables.start[c + 1] += tables.start[c]
-    for p in range(listed_pairs):
-        c = tables.colour[p]
-        if c != UNCOLOURED:
-            tables.pairs[tables.start[c] + ti.atomic_add(tables.fill[c], 1)] = p
-    ti.loop_config(serialize=True)
-    for _ in range(1):  # the overflow set by index: an insertion sort (a few pairs, if any)
-        lo, hi = tables.start[OVERFLOW], tables.start[OVERFLOW + 1]
-        for m in range(lo + 1, hi):
-            p, q = tables.pairs[m], m
-            while q > lo:
-                if tables.pairs[q - 1] <= p:
-                    break
-                tables.pairs[q] = tables.pairs[q - 1]
-                q -= 1
-            tables.pairs[q] = p
+        if c > 0:
+            tables.start[c] = tables.start[c - 1] + tables.fill[c - 1]
+    for k in range(chunks):
+        for p in range(k * SORT_CHUNK, ti.min(listed_pairs, (k + 1) * SORT_CHUNK)):
+            c = tables.colour[p]
+            if c != UNCOLOURED:
+                tables.pairs[tables.start[c] + tables.chunk_count[k * width + c]] = p
+                tables.chunk_count[k * width + c] += 1
+
+
+def sort_chunks(room: int) -> int:
+    """The entries of ``chunk_count`` for pair tables of ``room`` entries (:func:`colour_sort`)."""
+    return max(1, -(-room // SORT_CHUNK)) * (COLOURS + 1)
 
 
 @dataclass
@@ -355,7 +396,8 @@ class PairColouring:
     _up: Any = None
 
     TABLES = ("owner", "colour", "colour_b", "propose", "propose_b", "key", "pairs", "fresh", "count", "start", "fill")
-    """The arrays of :data:`ColourTables`, in its order."""
+    """The arrays of :data:`ColourTables` that a saved run keeps, in its order (``chunk_count``, the
+    sort's scratch, is made again)."""
 
     def saved(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         """What the next steps and rebuilds read of the colours, for a saved run: the numbers by
@@ -379,7 +421,7 @@ class PairColouring:
             for name in self.TABLES:
                 tables[name] = ti.ndarray(ti.i32, arrays[name].shape)
                 tables[name].from_numpy(arrays[name])
-            self.tables = ColourTables(**tables)
+            self.tables = ColourTables(**tables, chunk_count=ti.ndarray(ti.i32, sort_chunks(self._room)))
 
     def carry(self, lists: Any, n: int, pairs_room: int, gravity: Any, stash: tuple | None) -> None:
         """Start the colouring of the neighbour lists ``lists`` (a ``NeighbourLists`` pack of ``n``
@@ -397,6 +439,7 @@ class PairColouring:
                 count=ti.ndarray(ti.i32, 1),
                 start=ti.ndarray(ti.i32, COLOURS + 2),
                 fill=ti.ndarray(ti.i32, COLOURS + 1),
+                chunk_count=ti.ndarray(ti.i32, sort_chunks(self._room)),
             )
         t = self.tables
         g = np.asarray(gravity, dtype=float)
