@@ -51,6 +51,38 @@ def test_source_positions_made_once_are_the_messages_taichi_makes_each_time():
     assert nodes > 1000
 
 
+def test_wrapped_lines_made_once_are_the_lines_taichis_wrapper_makes():
+    import textwrap
+
+    from taichi.lang.ast import ast_transformer_utils
+
+    lines = ["", "x = 1", "    y = a + b  # " + "long " * 30, "\tz = f(x)", " " * 12 + "^" * 70, "^" * 200]
+    for _ in range(2):  # the second pass comes from the memo
+        for line in lines:
+            wrapped = ast_transformer_utils.TextWrapper(width=80).wrap(line)
+            assert wrapped == textwrap.TextWrapper(width=80).wrap(line), line
+            wrapped.append("changed by a caller")  # a caller's list is its own
+    assert ast_transformer_utils.TextWrapper(width=40).wrap(lines[2]) == textwrap.wrap(lines[2], width=40)
+
+
+def _both(level: int) -> tuple[bool, bool]:
+    """The faster and Taichi's own test of whether the frame ``level`` up is a class body."""
+    from taichi.lang import kernel_impl
+
+    return kernel_impl._inside_class(level), kernel_impl._inside_class.__wrapped__(level)
+
+
+def test_the_method_test_reads_the_callers_line_as_taichis_does():
+    assert front_end.install()
+
+    # on one line: the class body's frame is then on its `class` line, as a decorator's is
+    class Methods: both = _both(2)  # noqa: E701  # fmt: skip
+
+    assert Methods.both == (True, True)
+    assert _both(2) == (False, False)  # a test function
+    assert _both(10_000) == (False, False)  # no frame so far up
+
+
 @pytest.mark.slow
 def test_kernels_built_by_taichis_own_front_end_load_from_the_cache_under_the_faster_one(tmp_path):
     # the offline cache's key of a kernel is made from its IR: a kernel compiled in a process with

@@ -14,6 +14,14 @@ transforming its source again at every call site. Two parts of that work repeat 
   (which tokenises the file's lines) and expands the tabs of each line with :func:`textwrap.fill`
   at every call site. Here each function's source is read, and each line expanded, once.
 
+* **wrapped lines**: each message wraps the node's source line at 80 columns, so a line with
+  twenty nodes is wrapped twenty times; here each text is wrapped once (the same lines).
+* **the method test**: ``ti.func`` and ``ti.kernel`` ask whether they decorate a method by
+  reading their caller's source line through :func:`inspect.getframeinfo`, which looks the frame's
+  module up among every loaded module, at each of the package's 300 decorators; here the line is
+  read from :mod:`linecache` (the same line). This part is installed when
+  :mod:`ti_golf.physics.types` is imported, before the kernel modules' decorators run.
+
 Together they take about half of the front end's time off (``ti-golf bench startup --kernels
 SCENE`` shows each kernel's front end). They are installed by :func:`install` (called by
 :func:`ti_golf.runtime.init`) only on the Taichi versions whose internals they were written
@@ -24,7 +32,9 @@ from __future__ import annotations
 
 import ast
 import functools
+import linecache
 import os
+import sys
 import textwrap
 import types
 from collections.abc import Callable
@@ -56,12 +66,21 @@ def install() -> bool:
     context = getattr(ast_transformer_utils, "ASTTransformerContext", None)
     if tuple(ti.__version__[:2]) not in _VERSIONS or context is None:
         return False
-    if not all(
-        hasattr(m, a)
-        for m, a in ((context, "get_pos_info"), (kernel_impl, "getsourcelines"), (kernel_impl, "textwrap"))
-    ):
+    needed = (
+        (context, "get_pos_info"),
+        (kernel_impl, "getsourcelines"),
+        (kernel_impl, "textwrap"),
+        (kernel_impl, "_inside_class"),
+        (kernel_impl, "_KERNEL_CLASS_STACKFRAME_STMT_RES"),
+        (ast_transformer_utils, "TextWrapper"),
+    )
+    if not all(hasattr(m, a) for m, a in needed):
         return False
     context.get_pos_info = _memoised_positions(context.get_pos_info)
+    ast_transformer_utils.TextWrapper = _MemoisedWrapper
+    inside_class = _statement_test(kernel_impl._KERNEL_CLASS_STACKFRAME_STMT_RES)
+    inside_class.__wrapped__ = kernel_impl._inside_class  # type: ignore[attr-defined]
+    kernel_impl._inside_class = inside_class
     kernel_impl.getsourcelines = functools.lru_cache(maxsize=None)(kernel_impl.getsourcelines)
     # the module's one use of textwrap.fill expands each source line's tabs, at every call site
     kernel_impl.textwrap = types.SimpleNamespace(
@@ -69,6 +88,38 @@ def install() -> bool:
     )
     _installed = True
     return True
+
+
+class _MemoisedWrapper(textwrap.TextWrapper):
+    """Taichi's ``TextWrapper(width=80)`` of the source-position messages, each text wrapped once:
+    a message wraps its source line again for every node on the line."""
+
+    _wrapped: dict[tuple[int, str], list[str]] = {}
+
+    def wrap(self, text: str) -> list[str]:
+        """The lines of ``text`` wrapped, as :meth:`textwrap.TextWrapper.wrap` makes them."""
+        key = (self.width, text)
+        lines = self._wrapped.get(key)
+        if lines is None:
+            lines = self._wrapped[key] = super().wrap(text)
+        return list(lines)
+
+
+def _statement_test(patterns: list[Any]) -> Callable[[int], bool]:
+    """Taichi's test of whether ``ti.kernel`` or ``ti.func`` decorates a method (its caller's
+    caller's statement, ``level`` frames up, begins a class or ``@data_oriented``), reading that
+    line from :mod:`linecache` rather than through :func:`inspect.getframeinfo`, which looks up
+    the frame's module among every module loaded at each decorator (about 0.1 s a process)."""
+
+    def inside_class(level_of_class_stackframe: int) -> bool:
+        try:
+            frame = sys._getframe(level_of_class_stackframe)
+            line = linecache.getline(frame.f_code.co_filename, frame.f_lineno, frame.f_globals).strip()
+        except (ValueError, AttributeError):
+            return False
+        return any(pattern.match(line) for pattern in patterns)
+
+    return inside_class
 
 
 def _memoised_positions(get_pos_info: Callable[[Any, ast.AST], str]) -> Callable[[Any, ast.AST], str]:

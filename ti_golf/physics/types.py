@@ -20,7 +20,9 @@ from typing import Any, TypeAlias
 
 import taichi as ti
 
-from ti_golf import launcher, runtime
+from ti_golf import front_end, launcher, runtime
+
+front_end.install()  # before the kernel modules' decorators run: they read the caller's source line
 
 
 class Deferred:
