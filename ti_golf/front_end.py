@@ -1,8 +1,9 @@
-"""A faster Taichi front end: the same kernels, with less repeated work per ``ti.func`` call site.
+"""A faster Taichi front end: kernels of the same arithmetic, with less repeated work per
+``ti.func`` call site.
 
 Taichi's front end turns every kernel's Python source into its IR in every new process, even when
 the compiled kernel then comes from the offline cache, and it inlines a ``ti.func`` by
-transforming its source again at every call site. Two parts of that work repeat exactly:
+transforming its source again at every call site. Much of that work repeats:
 
 * **source positions**: for every AST node Taichi formats a message of the file, the line and a
   ``^^^`` marker under the node (``ASTTransformerContext.get_pos_info``, for error messages and
@@ -13,16 +14,20 @@ transforming its source again at every call site. Two parts of that work repeat 
 * **source lookup**: Taichi reads every function's source with :func:`inspect.getsourcelines`
   (which tokenises the file's lines) and expands the tabs of each line with :func:`textwrap.fill`
   at every call site. Here each function's source is read, and each line expanded, once.
-
 * **wrapped lines**: each message wraps the node's source line at 80 columns, so a line with
   twenty nodes is wrapped twenty times; here each text is wrapped once (the same lines).
+* **vector reductions**: ``v.dot(u)``, ``v.norm()``, ``v.norm_sqr()``, ``v.sum()`` and
+  ``v.cross(u)`` are Taichi ``ti.func`` bodies nested up to three deep, transformed at each of
+  some 260 call sites of the collision step; here they are built by Python as the same sums and
+  products in the same order: the kernels' arithmetic, and so every run, is the same bit for bit;
+  their IR is simpler, so the cache holds them under other keys than Taichi's own front end's.
 * **the method test**: ``ti.func`` and ``ti.kernel`` ask whether they decorate a method by
   reading their caller's source line through :func:`inspect.getframeinfo`, which looks the frame's
   module up among every loaded module, at each of the package's 300 decorators; here the line is
   read from :mod:`linecache` (the same line). This part is installed when
   :mod:`ti_golf.physics.types` is imported, before the kernel modules' decorators run.
 
-Together they take about half of the front end's time off (``ti-golf bench startup --kernels
+Together they take about two thirds of the front end's time off (``ti-golf bench startup --kernels
 SCENE`` shows each kernel's front end). They are installed by :func:`install` (called by
 :func:`ti_golf.runtime.init`) only on the Taichi versions whose internals they were written
 against, and not at all with ``TI_GOLF_PLAIN_FRONT_END=1`` (to compare).
@@ -59,7 +64,7 @@ def install() -> bool:
         return False
     try:
         import taichi as ti
-        from taichi.lang import kernel_impl
+        from taichi.lang import impl, kernel_impl, matrix_ops
         from taichi.lang.ast import ast_transformer_utils
     except ImportError:
         return False
@@ -73,11 +78,14 @@ def install() -> bool:
         (kernel_impl, "_inside_class"),
         (kernel_impl, "_KERNEL_CLASS_STACKFRAME_STMT_RES"),
         (ast_transformer_utils, "TextWrapper"),
+        *((matrix_ops, name) for name in ("sum", "dot", "norm_sqr", "norm", "cross")),
+        (impl, "subscript"),
     )
     if not all(hasattr(m, a) for m, a in needed):
         return False
     context.get_pos_info = _memoised_positions(context.get_pos_info)
     ast_transformer_utils.TextWrapper = _MemoisedWrapper
+    _inline_reductions()
     inside_class = _statement_test(kernel_impl._KERNEL_CLASS_STACKFRAME_STMT_RES)
     inside_class.__wrapped__ = kernel_impl._inside_class  # type: ignore[attr-defined]
     kernel_impl._inside_class = inside_class
@@ -103,6 +111,62 @@ class _MemoisedWrapper(textwrap.TextWrapper):
         if lines is None:
             lines = self._wrapped[key] = super().wrap(text)
         return list(lines)
+
+
+def _inline_reductions() -> None:
+    """Taichi's ``sum``, ``dot``, ``norm_sqr`` and ``norm`` of a vector, built inside kernels as
+    the same sums in the same order (x₀ + x₁ + x₂, left to right), and the cross product of two
+    3-vectors as the same differences of products, by Python at the call site
+    rather than as ``ti.func`` bodies that the front end transforms at every call (``dot`` calls
+    ``sum``, which calls ``_reduce``: three transforms a call, some 260 in the collision step).
+    Outside kernels, and for anything but a vector, Taichi's own run."""
+    from taichi.lang import impl, matrix_ops
+    from taichi.lang import ops as ops_mod
+    from taichi.lang.matrix import Vector
+
+    own = {name: getattr(matrix_ops, name) for name in ("sum", "dot", "norm_sqr", "norm", "cross")}
+
+    def vector_length(*values: Any) -> int | None:
+        shapes = {tuple(v.get_shape()) if hasattr(v, "get_shape") else None for v in values}
+        shape = shapes.pop() if len(shapes) == 1 else None
+        return shape[0] if shape is not None and len(shape) == 1 and impl.inside_kernel() else None
+
+    def total(vector: Any, n: int) -> Any:
+        result = impl.subscript(None, vector, 0)
+        for i in range(1, n):
+            result = ops_mod.add(result, impl.subscript(None, vector, i))
+        return result
+
+    def vector_sum(mat: Any) -> Any:
+        n = vector_length(mat)
+        return own["sum"](mat) if n is None else total(mat, n)
+
+    def dot(vec_x: Any, vec_y: Any) -> Any:
+        n = vector_length(vec_x, vec_y)
+        return own["dot"](vec_x, vec_y) if n is None else total(ops_mod.mul(vec_x, vec_y), n)
+
+    def norm_sqr(mat: Any) -> Any:
+        n = vector_length(mat)
+        return own["norm_sqr"](mat) if n is None else total(ops_mod.mul(mat, mat), n)
+
+    def norm(mat: Any, eps: Any = 0.0) -> Any:
+        n = vector_length(mat)
+        return own["norm"](mat, eps) if n is None else ops_mod.sqrt(total(ops_mod.mul(mat, mat), n) + eps)
+
+    def cross(vec_x: Any, vec_y: Any) -> Any:
+        if vector_length(vec_x, vec_y) != 3:
+            return own["cross"](vec_x, vec_y)
+        x, y = ([impl.subscript(None, v, i) for i in range(3)] for v in (vec_x, vec_y))
+        return Vector(
+            [
+                ops_mod.sub(ops_mod.mul(x[1], y[2]), ops_mod.mul(x[2], y[1])),
+                ops_mod.sub(ops_mod.mul(x[2], y[0]), ops_mod.mul(x[0], y[2])),
+                ops_mod.sub(ops_mod.mul(x[0], y[1]), ops_mod.mul(x[1], y[0])),
+            ]
+        )
+
+    matrix_ops.sum, matrix_ops.dot, matrix_ops.norm_sqr, matrix_ops.norm = vector_sum, dot, norm_sqr, norm
+    matrix_ops.cross = cross
 
 
 def _statement_test(patterns: list[Any]) -> Callable[[int], bool]:
