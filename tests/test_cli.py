@@ -537,6 +537,7 @@ def test_fit_aero_without_scipy_says_what_it_needs(capsys, monkeypatch):
 # ----------------------------------------------------------------------------------------------
 # bench
 # ----------------------------------------------------------------------------------------------
+@pytest.mark.slow  # a benchmark's process: 2,000 trajectories timed
 def test_bench_sweep_json():
     proc = ok(run_cli("bench", "sweep", "--n", "2000", "--repeats", "1", "--json"))
     last = proc.stdout.strip().splitlines()[-1]
@@ -1142,6 +1143,7 @@ def test_a_long_start_says_what_taichi_is_doing():
     assert status.line() is None  # nothing prepared now: nothing to say
 
 
+@pytest.mark.slow  # three commands, each timed in processes of its own
 def test_bench_startup_times_commands_in_fresh_processes_against_the_targets():
     proc = ok(run_cli("bench", "startup", "--cache", "warm", "--scenes", "lab_vacuum", "--json"))
     result = json.loads(proc.stdout.strip().splitlines()[-1])
