@@ -1057,6 +1057,7 @@ def _gif_frames(path: Path) -> list[np.ndarray]:
 
 
 @pytest.mark.slow  # two renders of 1,500 steps in subprocesses
+@ON_VULKAN  # (their frames are drawn with GGUI)
 def test_the_gif_report_matches_the_file_and_the_camera_holds_still(tmp_path):
     # break_shot spreads its balls: a camera that refits every frame (--follow) zooms out and
     # every frame's ground moves; the still camera draws the same ground in every frame, and the
@@ -1073,6 +1074,7 @@ def test_the_gif_report_matches_the_file_and_the_camera_holds_still(tmp_path):
     assert np.mean(np.abs(refit[-1] - refit[0]).max(axis=2) > 8) > 0.1  # the ground moved
 
 
+@ON_VULKAN  # (its frames are drawn with GGUI)
 def test_a_gif_of_frames_that_do_not_change_reports_the_frames_it_holds(tmp_path):
     # Pillow merges identical neighbouring frames: the report counts what the file holds
     scene = tmp_path / "resting.toml"
