@@ -205,8 +205,8 @@ def warm_start(i, bits, carried, hop, s: ti.template()):
         j, p = upper[i, k], p0 + k
         inv, gap = pair_geometry(x, radius, i, j)
         J[p, INV], J[p, GAP] = inv, gap
-        if J.shape[1] > P_X:  # (a quiet ball's pairs keep no impulse: the Jacobi sweeps skip them)
-            J[p, P_X], J[p, P_Y], J[p, P_Z] = 0.0, 0.0, 0.0
+        if J.shape[1] > P_Z:  # the Jacobi sweeps' table (a quiet ball's pairs keep no impulse: they skip them)
+            J[p, P_X], J[p, P_Y], J[p, P_Z] = 0.0, 0.0, 0.0  # (not the f32 Gauss–Seidel table's 3 columns)
         if not quiet:
             n = pair_normal(xi, x[j], inv)
             P += resting_impulse(status, i, j, n, lam[p])
