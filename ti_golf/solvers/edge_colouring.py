@@ -334,15 +334,21 @@ def colour_sort(listed_pairs, tables: ti.template()):
     finished) are left out. The pairs are taken in chunks of ``SORT_CHUNK``, a thread each: each
     chunk counts its pairs of each colour (``chunk_count``, a row a chunk), the counts are scanned
     over the chunks colour by colour (``fill``: each colour's pairs), then over the colours
-    (``start``), and each chunk places its pairs from its own offsets."""
+    (``start``), and each chunk places its pairs from its own offsets.
+
+    A chunk's row of counts is its thread's alone, so the counts are plain adds, not ``+=``, which
+    Taichi makes an integer atomic: on its Vulkan backend (Taichi 1.7.4, mesa's lavapipe) a
+    thread's loop of integer atomics on one entry added up to at most 2, and the layout then left
+    most pairs out of every sweep."""
     width = COLOURS + 1
     chunks = (listed_pairs + SORT_CHUNK - 1) // SORT_CHUNK
     for k in range(chunks):
         for c in range(width):
             tables.chunk_count[k * width + c] = 0
         for p in range(k * SORT_CHUNK, ti.min(listed_pairs, (k + 1) * SORT_CHUNK)):
-            if tables.colour[p] != UNCOLOURED:
-                tables.chunk_count[k * width + tables.colour[p]] += 1
+            c = tables.colour[p]
+            if c != UNCOLOURED:
+                tables.chunk_count[k * width + c] = tables.chunk_count[k * width + c] + 1
     for c in range(width):
         total = 0
         for k in range(chunks):
@@ -359,8 +365,9 @@ def colour_sort(listed_pairs, tables: ti.template()):
         for p in range(k * SORT_CHUNK, ti.min(listed_pairs, (k + 1) * SORT_CHUNK)):
             c = tables.colour[p]
             if c != UNCOLOURED:
-                tables.pairs[tables.start[c] + tables.chunk_count[k * width + c]] = p
-                tables.chunk_count[k * width + c] += 1
+                at = tables.chunk_count[k * width + c]
+                tables.pairs[tables.start[c] + at] = p
+                tables.chunk_count[k * width + c] = at + 1
 
 
 def sort_chunks(room: int) -> int:

@@ -81,31 +81,38 @@ def link_lower_lists(
     ball that owns a pair stores its impulse there, and the other ball gathers it from there. The
     lists lie ball after ball, as the pair tables do (``lower`` holds as many entries as they
     do), rather than in a table as wide as the longest list: 4 bytes a pair, not 4 times the
-    longest list a ball. Each ball's links are counted (an integer atomic add, in ``count``),
-    their starts scanned (:func:`.sort.bucket_starts`, ``chunk``: its scratch), the slots
-    written, each at the next free place of its ball's list (an atomic add again), then each
-    list sorted: the lists are the same whatever order the threads ran in. ``serial``: in a
-    serial loop (the lists then come out sorted, and the scan runs serially too)."""
+    longest list a ball. Each ball's links are counted (in ``count``), their starts scanned
+    (:func:`.sort.bucket_starts`, ``chunk``: its scratch), the slots written, each at the next
+    free place of its ball's list, then each list sorted: the lists are the same whatever order
+    the threads ran in. ``serial``: in a serial loop (the lists then come out sorted, and the
+    scan runs serially too).
+
+    The counts are integer atomic adds (:func:`next_link`), one a thread: a thread per slot of
+    the upper lists, not a thread per ball looping over its list. On Taichi's Vulkan backend
+    (1.7.4, mesa's lavapipe) a thread's loop of atomic adds lost some of them (3 % of a dense
+    set's links), which left pairs out of the lower lists."""
     bits = slot_bits(upper.shape[1])
     n = first.shape[0] - 1
     for i in range(n):
         count[i] = 0
-    for i in range(n):
-        for k in range(listed(first, i)):
-            ti.atomic_add(count[upper[i, k]], 1)
+    for q in range(n << bits):  # slot q: the pair in column k of ball i's upper list, if listed
+        i, k = q >> bits, q & ((1 << bits) - 1)
+        if k < listed(first, i):
+            next_link(count, upper[i, k], serial)
     for i in range(n):
         lower_first[i + 1] = count[i]
         count[i] = 0
     if ti.static(serial):
         lower_first[0] = 0
         for i in range(n):
-            lower_first[i + 1] += lower_first[i]
+            lower_first[i + 1] = lower_first[i + 1] + lower_first[i]
     else:
         bucket_starts(lower_first, chunk)
-    for i in range(n):
-        for k in range(listed(first, i)):
+    for q in range(n << bits):
+        i, k = q >> bits, q & ((1 << bits) - 1)
+        if k < listed(first, i):
             j = upper[i, k]
-            lower[lower_first[j] + ti.atomic_add(count[j], 1)] = (i << bits) | k
+            lower[lower_first[j] + next_link(count, j, serial)] = q
     for j in range(n):
         lo, hi = lower_first[j], lower_first[j + 1]
         for m in range(lo + 1, hi):  # an insertion sort: a few links a ball
@@ -116,6 +123,19 @@ def link_lower_lists(
                 lower[q] = lower[q - 1]
                 q -= 1
             lower[q] = slot
+
+
+@ti.func
+def next_link(count: ti.template(), j, serial: ti.template()):
+    """``count[j]`` before adding one to it: an integer atomic add in a parallel loop, a plain one
+    in a serial loop (``serial``)."""
+    k = 0
+    if ti.static(serial):
+        k = count[j]
+        count[j] = k + 1
+    else:
+        k = ti.atomic_add(count[j], 1)
+    return k
 
 
 @kernel
