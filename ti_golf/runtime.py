@@ -250,11 +250,12 @@ def plain_compile() -> Iterator[None]:
 
     For kernels whose bodies are long straight-line code: the lane-unrolled sweep kernel
     (``physics.kernels.fly_to_landing``, every lane of every RK4 stage spelled out), the
-    ``serial`` collision step of small scenes, and the Gauss–Seidel sweep
-    (``solvers.colour.gauss_seidel_sweep``, its contact laws spelled out once per colour).
+    collision step (``solvers.collide.collision_step``: the Jacobi sweeps unrolled, the warm
+    start, the contact laws), the grid's listing (``solvers.grid.list_neighbours``), and the
+    Gauss–Seidel sweeps in both layouts (their contact laws spelled out once per colour).
     Taichi's own IR passes grow much faster than linearly with such a body, while LLVM still
-    optimises the code, so the kernels compile many times faster and run little or no slower
-    (figures on the docs' performance page, "Design measurements").
+    optimises the code, so the kernels compile many times faster and run as fast, with the
+    same results bit for bit (figures on the docs' performance page, "Design measurements").
 
     On the CPU only: elsewhere kernels have one lane (short bodies, quick to compile with the
     passes), and Taichi's SPIR-V code generator (Vulkan) cannot compile the sweep kernel without

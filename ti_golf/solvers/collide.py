@@ -76,6 +76,7 @@ from ti_golf.physics.types import (
     scalars_of,
     zero3,
 )
+from ti_golf.runtime import plain_compile
 from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING
 from ti_golf.solvers.colour import ASLEEP_OVERLAP, region_hop, serial_projection, serial_sweeps
 from ti_golf.solvers.links import moved_past, relist_all_pairs, slot_bits
@@ -198,7 +199,8 @@ def launch(arguments: tuple, *, serial: bool, warm: bool, sweeps: int, last: boo
     """:func:`collision_step` with its flags by name: ``arguments``, the ten before them
     (``CollisionSolver._arguments``), then ``serial``, ``warm``, ``sweeps`` and ``last``.
     Returns what it returns."""
-    return collision_step(*arguments, serial, warm, sweeps, last)
+    with plain_compile():
+        return collision_step(*arguments, serial, warm, sweeps, last)
 
 
 @ti.func

@@ -27,6 +27,7 @@ from ti_golf.runtime import (
     free_dropped_arrays,
     np_float,
     on_cpu,
+    plain_compile,
     release_freed_memory,
 )
 from ti_golf.scene.schema import Scene
@@ -359,17 +360,18 @@ class CollisionSolver(Recorded, Stepping):
                 free_dropped_arrays()
                 self.upper = ti.ndarray(ti.i32, (state.n, self.capacity))
             params, scratch = self._grid_params(fast), self._grid_scratch()
-            longest = grid.list_neighbours(
-                params,
-                state.x,
-                state.v,
-                self._model.radius,
-                self.apart_ids,
-                scratch=scratch,
-                lists=self._packs.lists(self),  # (not kept: a wider table frees this one's first)
-                longest=self.flag,
-                stored_sorted=self.reorder,
-            )
+            with plain_compile():
+                longest = grid.list_neighbours(
+                    params,
+                    state.x,
+                    state.v,
+                    self._model.radius,
+                    self.apart_ids,
+                    scratch=scratch,
+                    lists=self._packs.lists(self),  # (not kept: a wider table frees this one's first)
+                    longest=self.flag,
+                    stored_sorted=self.reorder,
+                )
             if longest[0] <= self.capacity:
                 return longest
             # widen to the longest list found (no power-of-two padding: memory follows the pile)
