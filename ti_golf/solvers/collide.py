@@ -199,7 +199,7 @@ def launch(arguments: tuple, *, serial: bool, warm: bool, sweeps: int, last: boo
     """:func:`collision_step` with its flags by name: ``arguments``, the ten before them
     (``CollisionSolver._arguments``), then ``serial``, ``warm``, ``sweeps`` and ``last``.
     Returns what it returns."""
-    with plain_compile():
+    with plain_compile(vulkan=True):  # (see runtime.plain_compile)
         return collision_step(*arguments, serial, warm, sweeps, last)
 
 

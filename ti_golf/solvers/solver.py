@@ -360,7 +360,7 @@ class CollisionSolver(Recorded, Stepping):
                 free_dropped_arrays()
                 self.upper = ti.ndarray(ti.i32, (state.n, self.capacity))
             params, scratch = self._grid_params(fast), self._grid_scratch()
-            with plain_compile():
+            with plain_compile(vulkan=True):  # (see runtime.plain_compile)
                 longest = grid.list_neighbours(
                     params,
                     state.x,
