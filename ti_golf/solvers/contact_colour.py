@@ -283,7 +283,7 @@ def passes(
 ) -> None:
     """A pass of :func:`colour_pass` for each of ``phases`` (with ``proj``: of the projection)."""
     t, spans = colours.tables, colours.spans(proj)
-    with plain_compile():  # see runtime.plain_compile
+    with plain_compile(vulkan=True):  # see runtime.plain_compile
         for phase in phases:
             for c0, head, span, tail in spans:
                 colour_pass(

@@ -452,7 +452,7 @@ class PairColouring:
         g = np.asarray(gravity, dtype=float)
         self._up = ti.math.vec3(*(-g / np.linalg.norm(g) if np.linalg.norm(g) > 0.0 else np.zeros(3)))
         inv_band = 1.0 / self.band if self.band > 0.0 else 0.0
-        with plain_compile():
+        with plain_compile(vulkan=True):
             if carried and stash is not None:  # (carried: a stash)
                 stashed, stash_first, moved, old_id = stash
                 old_colour, moved = old["colour"], bool(moved)
@@ -465,7 +465,7 @@ class PairColouring:
     def build(self, lists: Any) -> None:
         """Colour the pairs :meth:`carry` left uncoloured, and lay the pairs out colour by colour."""
         t, rounds, left = self.tables, 0, 1
-        with plain_compile():
+        with plain_compile(vulkan=True):
             while left > 0:
                 last = int(rounds + ROUNDS_PER_LAUNCH >= ROUND_CAP)
                 left = colour_rounds(ROUNDS_PER_LAUNCH, int(self.climb), last, self._up, lists, t)
