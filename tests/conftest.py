@@ -96,6 +96,10 @@ such tests run at once, whatever worker runs them (:func:`one_vulkan_user_at_a_t
 with two processes on mesa's software driver at once, a GGUI picture has come out without its
 meshes (the ground missing)."""
 
+NO_VULKAN_BACKEND = "Taichi cannot start its Vulkan backend here (apt-get install mesa-vulkan-drivers)"
+"""The skip reason of a test that computes on Taichi's Vulkan backend when it cannot start (it
+names Vulkan, so the skip fails in CI: see :data:`VULKAN_SKIPS_FAIL_IN_CI`)."""
+
 VULKAN_SKIPS_FAIL_IN_CI = "Vulkan"
 """A skip whose reason names this fails in CI: a broken Vulkan install must not silently stop every
 picture check (the GGUI snapshots, the windows, the Vulkan backend)."""

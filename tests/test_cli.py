@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 from conftest import (
     MATPLOTLIB_BLUE,
+    NO_VULKAN_BACKEND,
     ON_VULKAN,
     ROOT,
     SCENES,
@@ -277,7 +278,7 @@ def test_the_sweep_runs_on_a_gpu_backend():
     # Taichi's SPIR-V code generator then stopped with "Not supported" and a traceback.
     proc = run_cli("sweep", "lab_turbulent", "--angles", "36.6", "--arch", "vulkan")
     if "falling back" in proc.stderr:
-        pytest.skip("Taichi cannot start its Vulkan backend here (apt-get install mesa-vulkan-drivers)")
+        pytest.skip(NO_VULKAN_BACKEND)
     assert proc.returncode == 0, proc.stderr[-2000:]
     m = re.search(r"best: angle ([\d.]+) deg.*carry ([\d.]+) m", proc.stdout)
     assert m, proc.stdout
