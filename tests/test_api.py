@@ -172,6 +172,42 @@ def test_dropped_vector_arrays_give_their_memory_back():
     assert _rss_bytes() - before < 3 * 24e6
 
 
+def test_dropped_arrays_are_collected_only_when_a_cycle_keeps_one(monkeypatch):
+    # the solver frees its old tables before it allocates larger ones (runtime.free_dropped_arrays);
+    # a full collection costs tens of milliseconds in a process that has built many kernels, and
+    # a pour's pair tables grow a hundred times, so it runs only when a dropped array outlived its
+    # last reference (kept by a reference cycle, as Taichi's compile context keeps the arrays a
+    # kernel was compiled with)
+    import gc
+
+    import taichi as ti
+
+    from ti_golf import runtime
+
+    runtime.ensure_init()
+    real, collections = gc.collect, []
+    monkeypatch.setattr(gc, "collect", lambda *a: collections.append(a) or real(*a))
+    gc.disable()  # (no automatic collection between the lines below)
+    try:
+        alone = ti.ndarray(ti.f64, 10)
+        dropped = runtime.watch(alone, None)
+        del alone
+        runtime.free_dropped_arrays(dropped)
+        assert collections == [] and dropped[0]() is None  # freed with its last reference
+        cycled = ti.ndarray(ti.f64, 10)
+        holder: list = [cycled]
+        holder.append(holder)
+        dropped = runtime.watch(cycled)
+        del cycled, holder
+        assert dropped[0]() is not None  # kept by the cycle
+        runtime.free_dropped_arrays(dropped)
+        assert len(collections) == 1 and dropped[0]() is None
+        runtime.free_dropped_arrays()  # nothing watched: always a collection
+        assert len(collections) == 2
+    finally:
+        gc.enable()
+
+
 def test_a_putt_is_not_a_flight_but_a_lob_is():
     # carry, apex and landing describe a ball that leaves the ground: a putt (launch angle 0) rolls
     # over the green and must not report a landing at t = 0 with zero carry; a lob from the same

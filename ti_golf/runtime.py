@@ -14,6 +14,7 @@ import gc
 import io
 import os
 import sys
+import weakref
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -155,13 +156,22 @@ def free_every_ndarray() -> None:
         Ndarray.__del__ = ScalarNdarray.__del__
 
 
-def free_dropped_arrays() -> None:
+def watch(*arrays: object) -> list[weakref.ref]:
+    """Weak references to ``arrays`` (``None`` left out) that are about to be dropped, for
+    :func:`free_dropped_arrays`."""
+    return [weakref.ref(a) for a in arrays if a is not None]
+
+
+def free_dropped_arrays(watched: list[weakref.ref] | None = None) -> None:
     """Free the Taichi arrays that Python dropped since the last call, before larger ones are
     allocated, so that the old and the new are never in memory together: an array that a kernel
     was compiled with sits in a reference cycle (see :func:`free_every_ndarray`) that only the
-    cycle collector breaks. Costs a full collection: for when tables change shape, and now and then
-    while a big pile's lists are rebuilt, not per step."""
-    gc.collect()
+    cycle collector breaks. A full collection costs tens of milliseconds in a process that has
+    built many kernels, so with ``watched`` (:func:`watch`, taken before the arrays were dropped)
+    it runs only when one of them outlived its last reference, that is, sits in such a cycle;
+    without, it always runs (for cycles of arrays nobody watched)."""
+    if watched is None or any(ref() is not None for ref in watched):
+        gc.collect()
 
 
 def exit_process(code: int) -> NoReturn:

@@ -29,6 +29,7 @@ from ti_golf.runtime import (
     on_cpu,
     plain_compile,
     release_freed_memory,
+    watch,
 )
 from ti_golf.scene.schema import Scene
 from ti_golf.solvers import apart, grid, links, sort, surfaces
@@ -313,8 +314,9 @@ class CollisionSolver(Recorded, Stepping):
         if not self.serial:  # (serial: a row for every ball, see surface_rows.every_ball_a_row)
             self._list_surface_rows(state, carried, v_max)
         if self.impulse is None or self.impulse.shape[0] != self.lam.shape[0]:
+            dropped = watch(self.impulse)
             self.impulse = None  # free the old table (the stash) before allocating
-            free_dropped_arrays()
+            free_dropped_arrays(dropped)
             # each pair's inverse distance, gap or projection, and (Jacobi) impulse in a sweep (pairs.owned_pairs)
             self.impulse = ti.ndarray(float, (self.lam.shape[0], pair_columns(self.gauss_seidel)))
         self.rebuilds += 1
@@ -356,8 +358,9 @@ class CollisionSolver(Recorded, Stepping):
         while True:
             if self.upper is None or self.upper.shape[1] != self.capacity:
                 self._packs.clear()  # (their references would keep the narrower table in memory)
+                dropped = watch(self.upper)
                 self.upper = None
-                free_dropped_arrays()
+                free_dropped_arrays(dropped)
                 self.upper = ti.ndarray(ti.i32, (state.n, self.capacity))
             params, scratch = self._grid_params(fast), self._grid_scratch()
             with plain_compile(vulkan=True):  # (see runtime.plain_compile)
@@ -418,8 +421,9 @@ class CollisionSolver(Recorded, Stepping):
         back = self.surface_impulse_back
         if not table_fits(back, rows, columns):
             self._packs.clear()  # (their references would keep the old table in memory)
+            dropped = watch(back)
             self.surface_impulse_back = back = None
-            free_dropped_arrays()
+            free_dropped_arrays(dropped)
             back = table_for(rows, columns)
         surfaces.carry_surfaces(*old, self.surface_start, back)
         self.surface_impulse, self.surface_impulse_back = back, self.surface_impulse
@@ -474,11 +478,12 @@ class CollisionSolver(Recorded, Stepping):
         new_friction = self.friction is None or self.friction.shape[0] != rows  # (the first build, or grown)
         if grow or new_friction:
             self._packs.clear()  # (their references would keep the old tables in memory)
+            dropped = watch(*((self.lam, self.lower) if grow else ()), *((self.friction,) if new_friction else ()))
             if grow:
                 self.lam = self.lower = None
             if new_friction:
                 self.friction = None
-            free_dropped_arrays()
+            free_dropped_arrays(dropped)
             if grow:
                 self.lam = ti.ndarray(ti.f32, self.pair_capacity)
                 self.lower = ti.ndarray(ti.i32, self.pair_capacity)
