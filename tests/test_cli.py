@@ -607,13 +607,18 @@ def test_an_interrupted_bench_pit_reports_the_pour_so_far(monkeypatch, capsys):
     # Ctrl-C or SIGTERM 30 steps into a 50-step pour: Simulation.run ends after the whole step it
     # reached and raises KeyboardInterrupt (stood in for here); the benchmark still prints its
     # figures for those 30 steps, its last stretch ending there, and the command exits with 130
+    # without asking for another step
     from ti_golf.bench import pit
+
+    asked_after = []
 
     class InterruptedAfter30Steps(pit.Simulation):
         def run(self, *, steps: int, **kwargs) -> None:
             if self.n != 300:  # the warm-up pour
                 return super().run(steps=steps, **kwargs)
             left = 30 - self.state.steps
+            if left <= 0:
+                asked_after.append(steps)
             super().run(steps=min(steps, left), **kwargs)
             if steps > left:
                 raise KeyboardInterrupt
@@ -623,6 +628,7 @@ def test_an_interrupted_bench_pit_reports_the_pour_so_far(monkeypatch, capsys):
     out, err = capsys.readouterr()
     result = json.loads(out.strip().splitlines()[-1])
     assert result["interrupted"] is True and result["steps"] == 30 and result["t_s"] == pytest.approx(0.03)
+    assert asked_after == []  # the pour ended at the interrupted stretch's row
     assert [row["t_s"] for row in result["timeline"]] == pytest.approx([0.02, 0.03])
     # (the JSON's figures carry 6 digits)
     assert sum(row["wall_s"] for row in result["timeline"]) == pytest.approx(result["wall_s"], rel=1e-5)

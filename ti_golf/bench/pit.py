@@ -240,7 +240,8 @@ def _pour(
         wall_s, done, peak = wall_s + wall, done + taken, max(peak, _peak_rss_bytes())
         if every is None or taken == 0:
             continue
-        q, interrupted = _held(lambda: _measure_stretch(sim, side))  # (a signal ends the pour after this row)
+        q, held = _held(lambda: _measure_stretch(sim, side))  # (a signal ends the pour after this row)
+        interrupted = interrupted or held
         row = {
             "t_s": sim.t,
             "wall_s": wall,
