@@ -128,6 +128,7 @@ def _poke(name, index, value):
 
 CASES = {
     "v of 3 balls": (_set("v", lambda v: v[:3]), "v", "shape (3, 3) but the run has 4 balls (expects (4, 3))"),
+    "x of 3 balls": (_set("x", lambda x: x[:3]), "x", "shape (3, 3) but the run has 4 balls (expects (4, 3))"),
     "x of 2 columns": (_set("x", lambda x: x[:, :2]), "x", "shape (4, 2); expects (N, 3)"),
     "no balls": (_set("x", np.zeros((0, 3))), "x", "shape (0, 3); expects (N, 3)"),
     "radius of 5": (_set("radius", np.full(5, R)), "radius", "shape (5,) but the run has 4 balls (expects (4,))"),

@@ -10,6 +10,7 @@ description's fields of the right types. A failed check raises a
 from __future__ import annotations
 
 import math
+from collections import Counter
 from collections.abc import Callable
 from typing import Any, NoReturn
 
@@ -108,11 +109,17 @@ def check_entries(source: str, data: dict[str, np.ndarray], meta: dict[str, Any]
 
 
 def _ball_count(source: str, data: dict[str, np.ndarray]) -> int:
-    """The number of balls, the rows of ``x``: (N, 3), N >= 1."""
+    """The number of balls: the length that most of the per-ball entries (:data:`BALLS`) have, the
+    positions' when as many have another, so that an entry cut or padded alone is the one named
+    (the positions first checked to be rows of 3)."""
     x = _present(source, data, "x", "the balls' positions [m], shape (N, 3)")
     if x.ndim != 2 or x.shape[1] != 3 or x.shape[0] < 1:
         fail(source, "x", f"shape {x.shape}; expects (N, 3), a row of 3 for each of N >= 1 balls")
-    return int(x.shape[0])
+    lengths = Counter(int(data[name].shape[0]) for name in BALLS if name in data and np.ndim(data[name]) >= 1)
+    most = max(lengths.values())
+    if lengths[int(x.shape[0])] == most:
+        return int(x.shape[0])
+    return min(length for length, count in lengths.items() if count == most)
 
 
 def _present(source: str, data: dict[str, np.ndarray], name: str, what: str) -> np.ndarray:
