@@ -831,6 +831,17 @@ def test_bogus_arch_env_error_names_the_variable(bogus_arch):
     assert "TI_GOLF_ARCH" in bogus_arch.stderr, bogus_arch.stderr
 
 
+def test_a_bad_plain_compile_switch_exits_2_naming_the_variable(monkeypatch):
+    # TI_GOLF_PLAIN_COMPILE (runtime.PLAIN_COMPILE_ENV) takes 'cuda' or nothing: any other value is
+    # refused before anything runs, as a bad TI_GOLF_ARCH is
+    monkeypatch.setenv("TI_GOLF_PLAIN_COMPILE", "gpu")
+    proc = cli_main_process(["sweep", "lab_turbulent", "--angles", "36"])
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.strip() == "ti-golf: error: TI_GOLF_PLAIN_COMPILE: must be 'cuda' or empty, not 'gpu'"
+    monkeypatch.setenv("TI_GOLF_PLAIN_COMPILE", "cuda")  # (on the CPU it changes nothing)
+    assert cli_main_process(["sweep", "lab_turbulent", "--angles", "36"]).returncode == 0
+
+
 def test_the_first_run_on_a_machine_is_announced(tmp_path):
     # a new user's first commands pause while Taichi compiles the kernels: the CLI says so while
     # Taichi's kernel cache is empty, and no more once it holds a kernel (here the command then

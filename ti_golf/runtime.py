@@ -46,6 +46,19 @@ announce_first_compile = False
 a new user knows why the first commands on a machine pause (compiling, up to a minute in all)."""
 
 
+PLAIN_COMPILE_ENV = "TI_GOLF_PLAIN_COMPILE"
+"""Set to ``cuda`` to compile the kernels that :func:`plain_compile` wraps without Taichi's
+advanced IR passes on CUDA as well, so that ``make gpu-check`` can time both ways on one GPU."""
+
+
+def _plain_on_cuda() -> bool:
+    """Whether :data:`PLAIN_COMPILE_ENV` asks for :func:`plain_compile` on CUDA (empty: no)."""
+    text = os.environ.get(PLAIN_COMPILE_ENV, "")
+    if text not in ("", "cuda"):
+        raise ConfigError(PLAIN_COMPILE_ENV, None, f"must be 'cuda' or empty, not {text!r}")
+    return text == "cuda"
+
+
 def _resolve(arch: str | None, precision: str | None) -> tuple[str, str]:
     arch_from = "--arch" if arch else "TI_GOLF_ARCH"
     prec_from = "--precision" if precision else "TI_GOLF_PRECISION"
@@ -55,6 +68,7 @@ def _resolve(arch: str | None, precision: str | None) -> tuple[str, str]:
         raise ConfigError(arch_from, None, f"unknown backend {arch!r}; allowed: {', '.join(ARCHES)}")
     if precision not in PRECISIONS:
         raise ConfigError(prec_from, None, f"unknown precision {precision!r}; allowed: f32, f64")
+    _plain_on_cuda()  # (a wrong value is refused before anything runs)
     return arch, precision
 
 
@@ -272,10 +286,12 @@ def plain_compile(vulkan: bool = False) -> Iterator[None]:
     the grid's listing and the contact colours' sweeps and colouring without them to the same
     results bit for bit (from an empty cache: a 70,000-ball pile's Jacobi step in 15 s instead
     of 87 s; 20 steps of a 5,000-ball pile with the contact colours in 23 s instead of 44 s).
-    CUDA keeps the passes: not yet measured there.
+    CUDA keeps the passes unless ``TI_GOLF_PLAIN_COMPILE=cuda`` (:data:`PLAIN_COMPILE_ENV`): not
+    yet measured there.
     """
     arch = ensure_init().arch
-    if arch not in ("x64", "arm64") and not (vulkan and arch == "vulkan"):
+    llvm = arch in ("x64", "arm64") or (arch == "cuda" and _plain_on_cuda())
+    if not llvm and not (vulkan and arch == "vulkan"):
         yield
         return
     cfg = ti.lang.impl.current_cfg()
