@@ -45,10 +45,12 @@ from ti_golf.solvers.surface_rows import (
     table_for,
 )
 
-SERIAL_MAX_BALLS = 256
+SERIAL_MAX_BALLS = 512
 """Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
-(``serial`` in ``collide.collision_step``): for so few balls a parallel step is mostly launch
-overhead (see the docs' performance page, "Design measurements")."""
+(``serial`` in ``collide.collision_step``): for so few balls a parallel step is mostly launch and
+thread-pool overhead. Its lists are rebuilt by testing every pair, in tables n − 1 wide, so its
+time and memory grow as n²: beyond some 1,500 balls the parallel step is faster while a pour
+lands (see the docs' performance page, "Design measurements")."""
 
 
 REORDER_MIN_BALLS = 8192
