@@ -438,6 +438,7 @@ _BOUNDS_CHECKED = textwrap.dedent("""
     for layout in ("columns", "contacts"):  # the Gauss-Seidel sweeps, by grid columns and by contact colours
         contact = dataclasses.replace(scene.contact, solver="gauss_seidel", layout=layout)
         sim = tg.Simulation(dataclasses.replace(scene, contact=contact), x=x, track=False)
+        sim.solver = CollisionSolver(sim.model, serial=False)  # (302 balls: the serial step by default)
         sim.step(3)
         sim.x = sim.x[::-1]
         sim.step(2)
@@ -465,8 +466,11 @@ _BOUNDS_CHECKED = textwrap.dedent("""
         assert sim.solver.rebuilds > 1
     free = tg.Simulation(tg.load_scene("lab_vacuum", ["world.collisions=false"]), x=x[:5], track=False)
     free.step(3)
-    for name in ("terrain_2d", "terrain_3d"):  # a height field: one ball alone, 400 colliding
+    for name in ("terrain_2d", "terrain_3d"):  # a height field: one ball alone, 400 colliding (serially)
         tg.Simulation.from_scene(name).step(3)
+    on_terrain = tg.Simulation.from_scene("terrain_3d")
+    on_terrain.solver = CollisionSolver(on_terrain.model, serial=False)  # ... and in parallel
+    on_terrain.step(3)
 """)
 
 
@@ -641,6 +645,7 @@ def test_rebuild_keeps_each_pairs_resting_impulse(method):
     x, r = _random_sets()["clustered"]
     sc = scene("world.gravity=[0,-9.81,0]", "world.ground=true", "contact.mu=0.3", f"contact.solver={method}")
     sim = tg.Simulation(sc, x=x[:400] * 0.3 + [0, 0.2, 0], radius=np.full(400, 0.02))
+    sim.solver = CollisionSolver(sim.model, serial=False)  # (400 balls: the serial step by default)
     sim.run(t=0.3)  # a heap on the ground: many pairs with λ > 0
     solver: CollisionSolver = sim.solver
     with_friction = method == "gauss_seidel"
