@@ -222,6 +222,7 @@ def _draw_ggui(frame: _Frame, path: str) -> None:
         if before is not None and np.array_equal(rgba, before):
             break
         before = rgba
+    assert rgba is not None  # (one pass at least)
     write_png(rgba, path)
 
 
