@@ -32,11 +32,13 @@ PRECISIONS = ("f32", "f64")
 
 @dataclass(frozen=True)
 class RuntimeInfo:
-    """What :func:`init` settled on: requested and actual backend, and the float type."""
+    """What :func:`init` settled on: requested and actual backend, the float type, and whether
+    :func:`plain_compile` applies on CUDA too (:data:`PLAIN_COMPILE_ENV`)."""
 
     requested_arch: str
     arch: str
     precision: str
+    plain_on_cuda: bool = False
 
 
 _info: RuntimeInfo | None = None
@@ -142,7 +144,9 @@ def init(
             print(line, file=sys.stderr)
     free_every_ndarray()
     actual = ti.lang.impl.current_cfg().arch
-    _info = RuntimeInfo(requested_arch=want_arch, arch=str(actual).split(".")[-1], precision=want_prec)
+    _info = RuntimeInfo(
+        requested_arch=want_arch, arch=str(actual).split(".")[-1], precision=want_prec, plain_on_cuda=_plain_on_cuda()
+    )
     if announce_first_compile and not kernels_cached():
         print(
             "ti-golf: first run on this machine: Taichi compiles the kernels as they are first used "
@@ -289,9 +293,9 @@ def plain_compile(vulkan: bool = False) -> Iterator[None]:
     CUDA keeps the passes unless ``TI_GOLF_PLAIN_COMPILE=cuda`` (:data:`PLAIN_COMPILE_ENV`): not
     yet measured there.
     """
-    arch = ensure_init().arch
-    llvm = arch in ("x64", "arm64") or (arch == "cuda" and _plain_on_cuda())
-    if not llvm and not (vulkan and arch == "vulkan"):
+    info = ensure_init()  # (read once at start: this wraps launches on the step's path)
+    llvm = on_cpu() or (info.arch == "cuda" and info.plain_on_cuda)
+    if not llvm and not (vulkan and info.arch == "vulkan"):
         yield
         return
     cfg = ti.lang.impl.current_cfg()
