@@ -662,9 +662,15 @@ def test_bench_pit_interrupted_while_it_measures_the_pile_keeps_that_stretch(mon
     assert err.strip().splitlines()[-1].startswith("ti-golf: interrupted at t = 0.02 s;")
 
 
+PARALLEL_PIT = SERIAL_MAX_BALLS + 1
+"""Balls of the benchmarks' piles that take the parallel step: more than ``SERIAL_MAX_BALLS``."""
+
 background.declare(
     "bench-pit-profile",
-    lambda _: (cli("bench", "pit", "--n", "600", "--t", "0.005", "--every", "0.003", "--profile", "--json"), {}),
+    lambda _: (
+        cli("bench", "pit", "--n", str(PARALLEL_PIT), "--t", "0.005", "--every", "0.003", "--profile", "--json"),
+        {},
+    ),
 )
 
 
@@ -673,14 +679,14 @@ def test_bench_pit_profile_counts_every_launch_of_the_step(background_runs):
     # Taichi's kernel profiler on: each kernel's seconds and launches, in all and per stretch. The
     # step's launches are the solver's: per step 2 of collision_step (the free flight with the
     # warm start, and the last part), one Gauss–Seidel sweep per phase of colour.step_phases and
-    # colour.PROJECTIONS projection passes; one list build per rebuild the steps made (600 balls:
-    # more than SERIAL_MAX_BALLS, the parallel step)
+    # colour.PROJECTIONS projection passes; one list build per rebuild the steps made (more balls
+    # than SERIAL_MAX_BALLS: the parallel step)
     from ti_golf.solvers.colour import PROJECTIONS, step_phases
 
     proc = ok(background_runs.result("bench-pit-profile")[0])
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     steps, kernels = result["steps"], result["kernels"]
-    assert result["n"] == 600 > SERIAL_MAX_BALLS and steps == 5
+    assert result["n"] == PARALLEL_PIT and steps == 5
     assert kernels["collision_step"]["launches"] == 2 * steps
     assert kernels["gauss_seidel_sweep"]["launches"] == len(step_phases(4)) * steps
     assert kernels["project_sweep"]["launches"] == PROJECTIONS * steps
@@ -699,7 +705,11 @@ def test_bench_pit_profile_counts_every_launch_of_the_step(background_runs):
     assert "s in kernels" in proc.stdout and "the host" in proc.stdout
 
 
-_BENCH_COLLIDE = {"awake": (1000, ()), "asleep-8-sweeps": (1000, ("--asleep", "--iterations", "8")), "serial": (64, ())}
+_BENCH_COLLIDE = {
+    "awake": (PARALLEL_PIT, ()),
+    "asleep-8-sweeps": (PARALLEL_PIT, ("--asleep", "--iterations", "8")),
+    "serial": (64, ()),
+}
 """The collide bench's runs: the parallel step (more balls than SERIAL_MAX_BALLS), awake and asleep, and the serial one."""
 for _name, (_n, _flags) in _BENCH_COLLIDE.items():
     background.declare(

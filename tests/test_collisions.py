@@ -18,6 +18,7 @@ from ti_golf.bench.collide import pile_scene
 from ti_golf.bench.pit import pit_scene
 from ti_golf.scene.schema import AT_REST, Plane
 from ti_golf.solvers import CollisionSolver, apart, grid, links, sort
+from ti_golf.solvers.solver import RELIST_MAX_BALLS
 
 # no gravity, air, walls or friction unless a test says otherwise
 FREE = [
@@ -1578,9 +1579,42 @@ def test_measuring_overlaps_does_not_change_the_run(serial, solver, request):
 
 
 @pytest.mark.slow
+@pytest.mark.skipif(not ON_CPU, reason="serial stepping runs on the CPU only")
+@pytest.mark.parametrize("solver", ["jacobi", "gauss_seidel"])
+def test_serial_launches_between_builds_step_as_the_parallel_step(solver):
+    # beyond RELIST_MAX_BALLS the serial launches stop where the lists must be rebuilt, which the
+    # grid's kernels then do as for the parallel step; the Gauss–Seidel ones sweep the blocks of
+    # columns colour after colour in one thread. Both are the parallel step bit for bit, while a
+    # pour lands (every step a rebuild) on a boulder, which is listed apart (its pairs with balls
+    # beyond the next column: the far pairs of colour.far_pairs)
+    n = RELIST_MAX_BALLS + 200
+    sc, _ = pit_scene(n, [f"contact.solver={solver}"])
+    poured = tg.Simulation(sc)
+    x, r = poured.x, np.full(n, float(poured.model.radius_np.max()))
+    x[0], r[0] = (x[:, 0].mean(), 0.1, x[:, 2].mean()), 0.05  # a boulder on the floor, under the pour
+    runs = []
+    for serial in (True, False):
+        sim = tg.Simulation(sc, x=x, v=poured.v, radius=r)
+        sim.solver = CollisionSolver(sim.model, serial=serial)
+        assert not sim.solver.relists
+        far = 0
+        for _ in range(6):
+            sim.run(t=0.05)
+            far = max(far, sim.solver.far_owners)
+        runs.append((sim.x, sim.v, sim.w, sim.solver.rebuilds, sim.solver.still_steps, far))
+    (xs, vs, ws, rebuilds, still, far), parallel = runs
+    for a, b in zip((xs, vs, ws), parallel[:3]):
+        np.testing.assert_array_equal(a, b)
+    assert rebuilds == parallel[3] > 100 and still == parallel[4]
+    if solver == "gauss_seidel":
+        assert far == parallel[5] > 0
+
+
 def test_runs_are_deterministic():
+    # the parallel step, whose threads may take the balls in any order (a serial one takes them in one)
     def run():
         sim = _gas(scene("contact.e=0.6", "contact.mu=0.4", "world.gravity=[0,-9.81,0]", "world.ground=true"), n=800)
+        sim.solver = CollisionSolver(sim.model, serial=False)
         sim.run(t=0.3)
         return sim.x, sim.v, sim.w
 

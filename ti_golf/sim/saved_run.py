@@ -38,6 +38,7 @@ from ti_golf.sim import run_checks
 from ti_golf.solvers import CollisionSolver, record
 from ti_golf.solvers.record import SolverRecord
 from ti_golf.solvers.record_checks import RecordError, Taker, read_record
+from ti_golf.solvers.solver import relists_in_kernel
 from ti_golf.solvers.surface_rows import scene_surface_columns
 
 FORMAT = 2
@@ -199,7 +200,8 @@ def _solver_record(
     kind = CollisionSolver.KINDS[scene.contact.solver]
     try:
         serial = (kept.get("serial") is True) and on_cpu()
-        taker = Taker(n, scene_surface_columns(scene), serial, kind.gauss_seidel, kind.sweeps_by_blocks(scene, serial))
+        blocks = kind.sweeps_by_blocks(scene, relists_in_kernel(n, serial))
+        taker = Taker(n, scene_surface_columns(scene), serial, kind.gauss_seidel, blocks)
         arrays = {name[len("solver.") :]: a for name, a in data.items() if name.startswith("solver.")}
         return read_record(arrays, kept, taker)
     except RecordError as exc:

@@ -38,8 +38,9 @@ The kernel's top-level loops run one after another, each over all balls in paral
 :func:`collision_step` launches these loops in parallel, one step per launch (with many
 sweeps, a few launches: see :func:`.jacobi.sweep_launches`); for a few balls, its ``serial``
 variant runs the same loops (:func:`step_balls`) one ball after another, many steps per launch
-(:func:`serial_steps`), and rebuilds the lists itself by testing every pair: the same step, bit
-for bit, without the launch overhead that dominates a step of a few balls. The functions take
+(:func:`serial_steps`): the same step, bit for bit, without the launch overhead that dominates
+a step of a few hundred balls. It rebuilds the lists itself by testing every pair, or stops for
+the caller to build them through the grid. The functions take
 the step's parameters and arrays as one argument, a :class:`.step.Step`.
 
 Loop 1 reads almost every array of the step, and Taichi 1.7.4's Vulkan backend crashes the
@@ -93,6 +94,11 @@ from ti_golf.solvers.sequential import inelastic_speed, stands_firm
 from ti_golf.solvers.step import Step
 from ti_golf.solvers.surfaces import beyond_reach, rounded_down, surface_clearance, surface_impulses
 
+PARALLEL, SERIAL_RELISTS, SERIAL_STOPS = 0, 1, 2
+"""How :func:`collision_step` steps (its ``serial``): one step in parallel; serially, many steps
+in one launch, the lists rebuilt in the kernel by testing every pair; or serially until the lists
+must be rebuilt (see :func:`serial_steps`)."""
+
 
 @kernel
 def collision_step(
@@ -136,16 +142,17 @@ def collision_step(
     (read it after the ``last`` part; the ``warm`` part clears it). The new positions are left in
     ``scratch.x_free`` (swap it with ``state.x``).
 
-    With ``serial`` the balls are stepped one after another, ``steps`` steps in one launch:
-    for scenes so small that launches and rebuilding the lists through the grid's kernels cost far
-    more than the step itself. Each step is the parallel one on the same data, the time [s]
-    advanced by ``dt`` from ``t0`` in f64, as the caller advances it between
-    parallel steps; the neighbour lists are rebuilt in the kernel by testing every pair
-    (:func:`~ti_golf.solvers.links.relist_all_pairs`, with the skin [m]; the balls faster than
-    ``v_cut`` [m/s] or bigger than ``r_cut`` [m] own no pair with the others, as in the grid's
-    lists: see :func:`~ti_golf.solvers.grid.owns`) whenever ``scratch.flag[0]`` asks for it at the
-    start of a step, so the tables must be n − 1 wide; new positions are copied to ``state.x``
-    after every step. Returns how many times the lists were rebuilt.
+    Serially (``serial`` :data:`SERIAL_RELISTS` or :data:`SERIAL_STOPS`) the balls are stepped one
+    after another, up to ``steps`` whole steps in one launch: for piles so small that a parallel
+    step is mostly launches. Each step is the parallel one on the same data, the time [s]
+    advanced by ``dt`` from ``t0`` in f64, as the caller advances it between parallel steps, and
+    new positions are copied to ``state.x`` after every step. When ``scratch.flag[0]`` asks for new
+    lists at the start of a step, :data:`SERIAL_RELISTS` rebuilds them in the kernel by testing
+    every pair (:func:`~ti_golf.solvers.links.relist_all_pairs`, with the skin [m]; the balls
+    faster than ``v_cut`` [m/s] or bigger than ``r_cut`` [m] own no pair with the others, as in
+    the grid's lists: see :func:`~ti_golf.solvers.grid.owns`), so the tables must be n − 1 wide,
+    and returns how many times it did; :data:`SERIAL_STOPS` stops there and returns the steps it
+    took (:func:`serial_steps`).
 
     With a terrain (``terrain.on``; ``model.heights`` its grid, else any 2×2 array;
     ``lists.surface_impulse`` then has a column more than there are planes) a ball that leaves the grid's
@@ -153,52 +160,51 @@ def collision_step(
     air, contact, terrain, params = scalars_of(scalars)
     s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, air=air, flight=flight))
     result = 0
-    if ti.static(not serial):
+    if ti.static(serial == PARALLEL):
         if ti.static(warm):
             scratch.flag[0] = 0
         step_balls(ti.cast(t0, float), kinds, s, serial=False, warm=warm, sweeps=sweeps, last=last)
         result = scratch.flag[0]
     else:
-        result = serial_steps(t0, dt, steps, kinds, s, warm=warm, sweeps=sweeps, last=last)
+        result = serial_steps(t0, dt, steps, kinds, s, relist=serial == SERIAL_RELISTS, sweeps=sweeps)
     return result
 
 
 @ti.func
-def serial_steps(
-    t0,
-    dt,
-    steps,
-    kinds: ti.template(),
-    s: ti.template(),
-    warm: ti.template(),
-    sweeps: ti.template(),
-    last: ti.template(),
-):
-    """The ``serial`` :func:`collision_step`: ``steps`` steps of every ball, one ball after another
-    (see there), from the time ``t0`` [s] in steps of ``dt`` [s] (f64), the lists rebuilt in the
-    kernel whenever ``scratch.flag[0]`` asks for it (``s``: the :class:`.step.Step`). Returns how
-    many times they were."""
+def serial_steps(t0, dt, steps, kinds: ti.template(), s: ti.template(), relist: ti.template(), sweeps: ti.template()):
+    """The serial :func:`collision_step`: up to ``steps`` whole steps of ``sweeps`` + 1 sweeps,
+    every ball one after another (see there), from the time ``t0`` [s] in steps of ``dt`` [s]
+    (f64) (``s``: the :class:`.step.Step`). When ``scratch.flag[0]`` asks for new lists at the
+    start of a step, with ``relist`` they are rebuilt in the kernel by testing every pair
+    (:func:`~ti_golf.solvers.links.relist_all_pairs`), and it returns how many times they were;
+    without, the launch stops there, and it returns the steps it took, for the caller to build
+    them through the grid (``CollisionSolver.build``) and launch again."""
     result = 0
     t = t0
     ti.loop_config(serialize=True)
     for _ in range(steps):
         if s.scratch.flag[0] != 0:
+            if ti.static(not relist):
+                break
             relist_all_pairs(s.params, s.contact.solver == GAUSS_SEIDEL, s.model, s.lists, s.state, s.scratch)
             result += 1
             s.scratch.flag[0] = 0
-        step_balls(ti.cast(t, float), kinds, s, serial=True, warm=warm, sweeps=sweeps, last=last)
+        step_balls(ti.cast(t, float), kinds, s, serial=True, warm=True, sweeps=sweeps, last=True)
         if ti.static(kinds.gauss_seidel):
             serial_projection(s)
         for i in range(s.state.x.shape[0]):
             s.state.x[i] = s.scratch.x_free[i]
         t += dt
+        if ti.static(not relist):
+            result += 1
     return result
 
 
-def launch(arguments: tuple, *, serial: bool, warm: bool, sweeps: int, last: bool) -> int:
+def launch(arguments: tuple, *, serial: int, warm: bool, sweeps: int, last: bool) -> int:
     """:func:`collision_step` with its flags by name: ``arguments``, the ten before them
-    (``CollisionSolver._arguments``), then ``serial``, ``warm``, ``sweeps`` and ``last``.
-    Returns what it returns."""
+    (``CollisionSolver._arguments``), then ``serial`` (:data:`PARALLEL`, :data:`SERIAL_RELISTS`
+    or :data:`SERIAL_STOPS`), ``warm``, ``sweeps`` and ``last`` (a serial launch takes whole
+    steps: ``warm`` and ``last`` true). Returns what it returns."""
     with plain_compile(vulkan=True):  # (see runtime.plain_compile)
         return collision_step(*arguments, serial, warm, sweeps, last)
 

@@ -89,9 +89,14 @@ def moving_balls(status: int_array) -> ti.i32:
     asleep takes no impulse and does not move, and only a moving ball wakes it)."""
     moving = 0
     for i in range(status.shape[0]):
-        if status[i] != AT_REST and status[i] != OUT_OF_BOUNDS:
-            moving += 1  # (an integer sum: the same on every thread order)
+        moving += in_play(status[i])  # (an integer sum: the same on every thread order)
     return moving
+
+
+@ti.func
+def in_play(status):
+    """1 for a ball of ``status`` awake and in play (neither ``AT_REST`` nor ``OUT_OF_BOUNDS``), else 0."""
+    return ti.cast(status != AT_REST and status != OUT_OF_BOUNDS, ti.i32)
 
 
 @ti.func

@@ -17,7 +17,7 @@ from ti_golf.physics.state import State
 from ti_golf.physics.types import BlockOrder
 from ti_golf.runtime import plain_compile
 from ti_golf.scene.schema import Scene
-from ti_golf.solvers import collide, colour, contact_colour, edge_colouring, grid, sort, stale
+from ti_golf.solvers import block_steps, collide, colour, contact_colour, edge_colouring, grid, sort, stale
 from ti_golf.solvers.phases import Phase
 from ti_golf.solvers.record import SolverRecord
 from ti_golf.solvers.solver import CollisionSolver
@@ -40,7 +40,7 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
         self.colours: contact_colour.ContactColours | None = None
         if self._pairs_laid_out(model) and not self.serial:
             self.colours = contact_colour.ContactColours(band=2.0 * self.r_ref * edge_colouring.BAND_DIAMETERS)
-        elif self.sweeps_by_blocks(model.scene, self.serial):  # the balls by grid column (colour.column_order)
+        elif self.sweeps_by_blocks(model.scene, self.relists):  # the balls by grid column (colour.column_order)
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, model.n), ti.ndarray(ti.i32, model.n)
         # the columns' bucket starts and their scan's scratch, made at the first build (_order_columns)
         self.col_start: ti.Ndarray | None = None
@@ -70,14 +70,14 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
         return contact_colour.resolve_layout(model.scene.contact.layout) == "contacts"
 
     @classmethod
-    def sweeps_by_blocks(cls, scene: Scene, serial: bool) -> bool:
-        return not serial and contact_colour.resolve_layout(scene.contact.layout) != "contacts"
+    def sweeps_by_blocks(cls, scene: Scene, relists: bool) -> bool:
+        return not relists and contact_colour.resolve_layout(scene.contact.layout) != "contacts"
 
     def build(self, state: State) -> None:
         super().build(state)
         if self.colours is not None:
             self.colours.build(self._packs.lists(self))
-        elif not self.serial:
+        elif not self.relists:
             self._order_columns(state)
 
     def _carry_pair_order(self, stashed: Any) -> None:
@@ -126,25 +126,50 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
         )
         self.far_owners = int(far_owners)
 
+    def _block_order(self) -> tuple:
+        """What the sweeps by blocks read besides the step's arguments: whether some balls own far
+        pairs (``colour.far_pairs``), the grid's inverse cell size [1/m], the threads' share of
+        the blocks (``sort.bucket_tasks``) and the blocks (``BlockOrder``)."""
+        assert self.col_start is not None, "the lists are built before a step"
+        tasks = sort.bucket_tasks(self.col_start.shape[0] - 1)
+        blocks = self._packs.get(BlockOrder, start=self.col_start, ids=self.col_ids, colour=self.col_colour)
+        return int(self.far_owners > 0), 1.0 / self.cell, tasks, blocks
+
+    def _serial_steps(self, iterations: int, arguments: tuple) -> int:
+        """The parallel step's launches in one thread, many steps in one launch
+        (``block_steps.gauss_seidel_steps``): the same steps, bit for bit."""
+        g, _grid, apart_ids, _stored_sorted = self.last_grid()
+        any_far, inv_cell, tasks, blocks = self._block_order()
+        return int(
+            block_steps.gauss_seidel_steps(
+                *arguments,
+                g,
+                self.start,
+                self.sorted_ids,
+                apart_ids,
+                iterations,
+                any_far,
+                inv_cell,
+                tasks,
+                int(self.skip_still),
+                blocks,
+            )
+        )
+
     def _sweep(self, iterations: int, arguments: tuple) -> int:
         """One parallel step: the free flight and warm start, ``iterations`` coloured sweeps and
         the restitution pass (``colour.step_phases``), the last sweep, which only finishes the
         step, then ``colour.PROJECTIONS`` passes of the position projection. Returns whether the
         lists must be rebuilt (``stale.lists_stale``)."""
-        collide.launch(arguments, serial=False, warm=True, sweeps=0, last=False)
+        collide.launch(arguments, serial=collide.PARALLEL, warm=True, sweeps=0, last=False)
         scalars, _, _, _, _, model, lists, state, _, scratch = arguments
         if self.colours is not None:  # the contacts layout (contact_colour)
             contact_colour.gauss_seidel_step(self.colours, iterations, scalars, model, lists, state, scratch)
-            collide.launch(arguments, serial=False, warm=False, sweeps=0, last=True)
+            collide.launch(arguments, serial=collide.PARALLEL, warm=False, sweeps=0, last=True)
             contact_colour.project(self.colours, scalars, model, lists, state, scratch)
             return stale.lists_stale(scalars, *self.last_grid(), model, lists, state, scratch)
-        assert self.col_start is not None, "the lists are built before a step"
-        inv_cell = 1.0 / self.cell
-        any_far = int(self.far_owners > 0)
-        phases = colour.step_phases(iterations)
-        tasks = sort.bucket_tasks(self.col_start.shape[0] - 1)
-        blocks = self._packs.get(BlockOrder, start=self.col_start, ids=self.col_ids, colour=self.col_colour)
-        for phase in phases:
+        any_far, inv_cell, tasks, blocks = self._block_order()
+        for phase in colour.step_phases(iterations):
             with plain_compile():  # see runtime.plain_compile
                 colour.gauss_seidel_sweep(
                     phase,
@@ -160,7 +185,7 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
                 )
             if any_far:
                 colour.far_pairs(phase, inv_cell, scalars, model, lists, state, scratch)
-        collide.launch(arguments, serial=False, warm=False, sweeps=0, last=True)
+        collide.launch(arguments, serial=collide.PARALLEL, warm=False, sweeps=0, last=True)
         for _ in range(colour.PROJECTIONS):
             if any_far:
                 colour.far_pairs(Phase.PROJECT, inv_cell, scalars, model, lists, state, scratch)

@@ -37,5 +37,5 @@ class JacobiSolver(CollisionSolver, kind="jacobi"):
     def _sweep(self, iterations: int, arguments: tuple) -> int:
         rebuild = 0
         for warm, sweeps, last in sweep_launches(iterations):
-            rebuild = collide.launch(arguments, serial=False, warm=warm, sweeps=sweeps, last=last)
+            rebuild = collide.launch(arguments, serial=collide.PARALLEL, warm=warm, sweeps=sweeps, last=last)
         return rebuild

@@ -45,12 +45,15 @@ from ti_golf.solvers.surface_rows import (
     table_for,
 )
 
-SERIAL_MAX_BALLS = 512
+SERIAL_MAX_BALLS = 4096
 """Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
 (``serial`` in ``collide.collision_step``): for so few balls a parallel step is mostly launch and
-thread-pool overhead. Its lists are rebuilt by testing every pair, in tables n − 1 wide, so its
-time and memory grow as n²: beyond some 1,500 balls the parallel step is faster while a pour
-lands (see the docs' performance page, "Design measurements")."""
+thread-pool overhead (see the docs' performance page, "Design measurements")."""
+
+RELIST_MAX_BALLS = 512
+"""Up to this many balls, the serial launch also rebuilds the lists itself, by testing every pair
+in tables n − 1 wide (time and memory that grow as n²); beyond, it stops when the lists must be
+rebuilt, and they are built through the grid between launches (:attr:`CollisionSolver.relists`)."""
 
 
 REORDER_MIN_BALLS = 8192
@@ -80,6 +83,12 @@ COLLECT_EVERY = 64
 ``REORDER_MIN_BALLS`` or more: Taichi's kernel launches leave reference cycles that only a full
 collection frees, and while a pour lands the lists are rebuilt at every step (what they hold and
 what a collection costs: the docs' performance page, "Design measurements")."""
+
+
+def relists_in_kernel(n: int, serial: bool) -> bool:
+    """Whether a solver of ``n`` balls that steps ``serial`` or not rebuilds its lists in the
+    serial kernel (``RELIST_MAX_BALLS``) and sweeps its balls in storage order."""
+    return serial and n <= RELIST_MAX_BALLS
 
 
 def steps_serially(n: int) -> bool:
@@ -121,10 +130,12 @@ class CollisionSolver(Recorded, Stepping):
         still_steps: how many steps were so skipped (for benchmarks and tests).
         far_owners: how many balls own pairs that the Gauss–Seidel colours leave to
             ``colour.far_pairs`` (0 with the Jacobi sweeps).
-        serial: whether steps run serially, many per launch, with the lists rebuilt in the kernel
-            by testing every pair (default: :func:`steps_serially`; CPU backends only); else one
-            parallel launch per step, with the hash grid. Both give the same lists and
-            bit-identical steps.
+        serial: whether steps run serially, many per launch (default: :func:`steps_serially`; CPU
+            backends only); else one parallel launch per step. Both give the same lists and, with
+            the Jacobi sweeps, bit-identical steps.
+        relists: whether the serial launches rebuild the lists themselves by testing every pair
+            (up to ``RELIST_MAX_BALLS`` balls); else they are built with the hash grid, between
+            launches when serial. Either gives the same lists.
         reorder: whether every list build also stores the balls in the grid's order, so that
             balls close in space lie close in memory (default: from ``REORDER_MIN_BALLS`` balls
             on, parallel steps only). A pile whose ids are in no spatial order (balls passed in
@@ -170,15 +181,17 @@ class CollisionSolver(Recorded, Stepping):
         self.h = model.dt  # the time step the lists are built for [s]
         self.cell = grid.cell_size(self.r_max, self.skin, model.dt, 0.0)[0]
         self.mask = (1 << max(4, int(np.ceil(np.log2(2 * n))))) - 1
-        if serial is None:  # (a layout of the sweeps by pairs, when asked for, is what the steps take, however few)
-            serial = steps_serially(n) and not self._pairs_laid_out(model)
+        if serial is None:  # (a layout of the sweeps by pairs, or the grid's storage order, when asked for, is
+            # what the steps take, however few the balls)
+            serial = steps_serially(n) and not self._pairs_laid_out(model) and not reorder
         self.serial = bool(serial)
         if self.serial and not on_cpu():
             raise ValueError("serial stepping runs on the CPU backend only (on a GPU it would run on one thread)")
         self.reorder = (n >= REORDER_MIN_BALLS and not self.serial) if reorder is None else bool(reorder)
         if self.reorder and self.serial:
             raise ValueError("serial stepping keeps the balls in id order (reorder=False)")
-        if self.serial:  # a table wide enough for every other ball: the kernel's lists cannot overflow
+        self.relists = relists_in_kernel(n, self.serial)
+        if self.relists:  # a table wide enough for every other ball: the kernel's lists cannot overflow
             capacity = max(capacity, n - 1, 1)
         self.capacity = capacity
         self.rebuilds = 0
@@ -219,7 +232,7 @@ class CollisionSolver(Recorded, Stepping):
         # each pair's friction impulse, carried from step to step and over rebuilds (Gauss–Seidel only: a
         # rebuild stashes it beside the resting impulse, links.stash)
         self.friction = ti.ndarray(vec3f, 1)
-        if self.serial:
+        if self.relists:
             self.surface_impulse = every_ball_a_row(self.surface_start, model)
         self.far_owners = 0
         self._valid = False
@@ -305,7 +318,7 @@ class CollisionSolver(Recorded, Stepping):
                 f"neighbour lists can address (n × 2^{self.slot_bits} must not exceed 2^31)"
             )
         pairs = int(links.pair_starts(self.first, self.pair_chunk))
-        if self.serial:  # the kernel rebuilds the lists in place: room for every list to grow to n − 1
+        if self.relists:  # the kernel rebuilds the lists in place: room for every list to grow to n − 1
             self._fit_pair_tables(state, n * self.capacity, 0)  # (and the stash, links.relist_all_pairs)
         else:
             self._fit_pair_tables(state, pairs, PAIR_ROOM)
@@ -313,7 +326,7 @@ class CollisionSolver(Recorded, Stepping):
         self._carry_pair_order(stashed)  # (while the stash is kept)
         carried = stashed is not None
         stashed = None
-        if not self.serial:  # (serial: a row for every ball, see surface_rows.every_ball_a_row)
+        if not self.relists:  # (relisting in the kernel: a row for every ball, see surface_rows.every_ball_a_row)
             self._list_surface_rows(state, carried, v_max)
         if self.impulse is None or self.impulse.shape[0] != self.lam.shape[0]:
             dropped = watch(self.impulse)
@@ -564,10 +577,11 @@ class CollisionSolver(Recorded, Stepping):
         return False
 
     @classmethod
-    def sweeps_by_blocks(cls, scene: Scene, serial: bool) -> bool:
-        """Whether a solver of this kind for ``scene``, stepping ``serial`` or not, sweeps the balls
-        by blocks of grid columns (the Gauss–Seidel sweeps' column layout), whose order its
-        record keeps (``col_ids``, ``col_colour``, ``col_start``, ``col_chunk``)."""
+    def sweeps_by_blocks(cls, scene: Scene, relists: bool) -> bool:
+        """Whether a solver of this kind for ``scene``, relisting in the serial kernel (``relists``:
+        :func:`relists_in_kernel`) or not, sweeps the balls by blocks of grid columns (the
+        Gauss–Seidel sweeps' column layout), whose order its record keeps (``col_ids``,
+        ``col_colour``, ``col_start``, ``col_chunk``)."""
         return False
 
     def _carry_pair_order(self, stashed: Any) -> None:

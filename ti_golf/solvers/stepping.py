@@ -1,5 +1,6 @@
 """How a collision solver steps its balls (:class:`Stepping`): serially, many steps in one launch
-of ``collide.collision_step``, or a parallel launch a step with its kind's sweeps
+of ``collide.collision_step`` (which rebuilds the lists itself, or stops for a build through the
+grid), or a parallel launch a step with its kind's sweeps
 (:meth:`Stepping._sweep`), and when it builds its neighbour lists again: before the first step,
 when a step or the caller asks for it (balls moved, the model retuned)."""
 
@@ -23,6 +24,7 @@ class Stepping:
     and holds the arrays named below) and the schedule of its list builds."""
 
     serial: bool
+    relists: bool
     capacity: int
     rebuilds: int
     still_steps: int
@@ -58,7 +60,7 @@ class Stepping:
         stale = not self.lists_valid or (self.flag.to_numpy()[0] != 0 if self.serial else self.rebuild_due)
         if not stale:
             return
-        if self.serial:
+        if self.relists:
             self.capacity = max(self.capacity, state.n - 1, 1)
         self.build(state)
         grid.clear(self.flag)  # build() left the longest lists there
@@ -77,7 +79,7 @@ class Stepping:
             self.v_cut = apart.fast_speed(self.r_ref, self.skin, model.dt)
             self.invalidate()
         if self.surface_impulse.shape[1] != surface_columns(model):
-            if self.serial:
+            if self.relists:
                 self.surface_impulse, self.surface_impulse_back = every_ball_a_row(self.surface_start, model), None
             else:
                 self.invalidate()  # (the build makes the tables for the new planes)
@@ -89,20 +91,22 @@ class Stepping:
         self.flag.from_numpy(np.array([1, 0], dtype=np.int32))  # the serial kernel's request
 
     def advance(self, model: Model, state: State, steps: int) -> None:
-        """Advance all balls by ``steps`` steps of ``model.dt``: serially in one launch, or one
+        """Advance all balls by ``steps`` steps of ``model.dt``: serially, many in one launch, or one
         parallel launch per step (see ``serial``); Ctrl-C and SIGTERM wait for whole steps
         (:func:`~ti_golf.signals.whole_steps`)."""
-        if self.serial:
-            with whole_steps():
+        with whole_steps() as came:  # (the handlers set once, not at every step)
+            if self.relists:
                 self._advance_serially(model, state, int(steps))
-        else:
-            with whole_steps() as came:  # (the handlers set once, not at every step)
+            elif self.serial:
+                self._advance_serially_between_builds(model, state, int(steps), came)
+            else:
                 for _ in range(int(steps)):
                     self._step_in_parallel(model, state)
                     if came:  # Ctrl-C or SIGTERM: stop after this whole step
                         break
 
     def _advance_serially(self, model: Model, state: State, steps: int) -> None:
+        """``steps`` steps in one serial launch that rebuilds the lists itself (``relists``)."""
         width = max(1, state.n - 1)
         if not self.lists_valid or self.upper.shape[1] < width:  # first step, or lists built narrower since
             self.capacity = width
@@ -111,11 +115,34 @@ class Stepping:
         with plain_compile():  # see runtime.plain_compile
             self.rebuilds += collide.launch(
                 self._arguments(model, state, steps),
-                serial=True,
+                serial=collide.SERIAL_RELISTS,
                 warm=True,
                 sweeps=model.scene.contact.iterations - 1,
                 last=True,
             )
+        self._advance_time(model, state, steps)
+
+    def _advance_serially_between_builds(self, model: Model, state: State, steps: int, came: list[int]) -> None:
+        """``steps`` steps in serial launches, each until a step asks for new lists, which are built
+        through the grid between them (:meth:`ensure_lists`), or until no ball is awake and in
+        play, when steps are skipped as the parallel steps skip them (``skip_still``); Ctrl-C or
+        SIGTERM (``came``) stops at the end of a launch."""
+        while steps > 0:
+            self.ensure_lists(state)
+            if self.skip_still and self._all_still(state):  # as a parallel step would be skipped
+                self.still_steps += 1
+                taken = 1
+            else:
+                with plain_compile():  # see runtime.plain_compile
+                    taken = self._serial_steps(model.scene.contact.iterations, self._arguments(model, state, steps))
+            self._advance_time(model, state, taken)
+            steps -= taken
+            if came:
+                break
+
+    @staticmethod
+    def _advance_time(model: Model, state: State, steps: int) -> None:
+        """Count ``steps`` steps taken in one launch on the state's clock."""
         for _ in range(steps):
             state.t += model.dt  # as one step at a time adds it, to the same round-off
         state.steps += steps
@@ -144,6 +171,13 @@ class Stepping:
         with ``iterations`` sweeps; ``arguments``: :meth:`_arguments`. Returns whether the lists
         must be rebuilt before the next step."""
         raise NotImplementedError
+
+    def _serial_steps(self, iterations: int, arguments: tuple) -> int:
+        """Serial steps with ``iterations`` sweeps each, in one launch, until one asks for new lists
+        (or, with ``skip_still``, until no ball is awake and in play; ``arguments``:
+        :meth:`_arguments`, with the steps to take at most). Returns the steps taken. These:
+        ``collide.collision_step``'s, the same step as its parallel launch."""
+        return collide.launch(arguments, serial=collide.SERIAL_STOPS, warm=True, sweeps=iterations - 1, last=True)
 
     def _arguments(self, m: Model, s: State, steps: int) -> tuple:
         """The arguments of ``collide.collision_step`` before ``serial``: the array of the air,

@@ -1,0 +1,139 @@
+"""Serial Gauss–Seidel steps by blocks of grid columns (:func:`gauss_seidel_steps`): the parallel
+step of :meth:`.gauss_seidel.GaussSeidelSolver._sweep`, its launches run one after another in one
+thread, many steps in one launch. A colour's blocks never share a ball (:mod:`.colour`), so taking
+them one after another gives what the threads give: the same step, bit for bit, without the dozen
+launches a step that cost a pile of a few thousand balls more than the step itself. The launch
+stops where a step asks for new lists, which the caller builds through the grid."""
+
+from typing import Any, NamedTuple
+
+import taichi as ti
+
+from ti_golf.physics.types import (
+    BallState,
+    BlockOrder,
+    FlightRecord,
+    GridParams,
+    ModelArrays,
+    NeighbourLists,
+    StepScratch,
+    float_array,
+    int_array,
+    kernel,
+    scalars_of,
+)
+from ti_golf.solvers.collide import step_balls
+from ti_golf.solvers.colour import PROJECTIONS, block_sweep, in_play, project_ball, sweep_ball
+from ti_golf.solvers.phases import Phase
+from ti_golf.solvers.stale import flag_stale_lists
+from ti_golf.solvers.step import Step
+
+
+class BuildGrid(NamedTuple):
+    """The grid of the last build as :func:`.stale.flag_stale_lists` reads it: its buckets' starts
+    and the balls sorted by bucket (the members of :data:`~ti_golf.physics.types.GridScratch` it reads)."""
+
+    start: Any
+    sorted_ids: Any
+
+
+@kernel
+def gauss_seidel_steps(
+    scalars: float_array,
+    t0: ti.f64,
+    dt: ti.f64,
+    steps: ti.i32,
+    kinds: ti.template(),
+    model: ModelArrays,
+    lists: NeighbourLists,
+    state: BallState,
+    flight: FlightRecord,
+    scratch: StepScratch,
+    g: GridParams,
+    grid_start: int_array,
+    grid_sorted_ids: int_array,
+    apart_ids: int_array,
+    iterations: ti.template(),
+    any_far: ti.i32,
+    inv_cell: float,
+    tasks: ti.i32,
+    skip_still: ti.i32,
+    blocks: BlockOrder,
+) -> ti.i32:
+    """Up to ``steps`` Gauss–Seidel steps of ``dt`` [s] (f64) from the time ``t0`` [s], each with
+    ``iterations`` sweeps, as the parallel launches take them: the free flight and warm start,
+    the sweeps and the restitution pass block by block (``blocks``; with ``any_far``, the pairs
+    the colours leave out after each, as :func:`.colour.far_pairs` takes them), the last sweep, which finishes
+    the step, the ``PROJECTIONS`` passes of the position projection, then the test of the lists
+    with the grid of the last build (``g``, its buckets' starts and the balls by bucket,
+    ``grid_start`` and ``grid_sorted_ids``, and ``apart_ids``: see :func:`.stale.flag_stale_lists`;
+    arrays, not the :data:`~ti_golf.physics.types.GridScratch` pack: Taichi 1.7.4 mixes up the
+    members of two packs that share a name, here ``start``, reading one pack's as missing). The first ten arguments are those of
+    :func:`.collide.collision_step`; ``inv_cell`` and ``tasks`` those of
+    :func:`.colour.gauss_seidel_sweep`. Stops before a step when ``scratch.flag[0]`` asks for
+    new lists, or, with ``skip_still``, when no ball is awake and in play (the caller skips such
+    steps: see ``CollisionSolver.skip_still``); returns the steps taken."""
+    air, contact, terrain, params = scalars_of(scalars)
+    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, air=air, flight=flight))
+    taken = 0
+    t = t0
+    ti.loop_config(serialize=True)
+    for _ in range(steps):
+        if scratch.flag[0] != 0 or (skip_still != 0 and not any_in_play(state.status)):
+            break
+        step_balls(ti.cast(t, float), kinds, s, serial=False, warm=True, sweeps=0, last=False)
+        for k in range(iterations + 1):  # (one call site: each inlines the whole sweep)
+            phase = phase_of_sweep(k, iterations)
+            block_sweep(phase, project=False, any_far=any_far, inv_cell=inv_cell, tasks=tasks, blocks=blocks, s=s)
+            if any_far != 0:
+                for i in range(state.x.shape[0]):  # (the pairs the colours left out: colour.far_pairs)
+                    sweep_ball(i, phase, far_only=True, any_far=1, inv_cell=inv_cell, s=s)
+        step_balls(ti.cast(t, float), kinds, s, serial=False, warm=False, sweeps=0, last=True)
+        for _pass in range(PROJECTIONS):
+            if any_far != 0:
+                for i in range(state.x.shape[0]):
+                    project_ball(i, far_only=True, any_far=1, inv_cell=inv_cell, s=s)
+            block_sweep(
+                Phase.PROJECT, project=True, any_far=any_far, inv_cell=inv_cell, tasks=tasks, blocks=blocks, s=s
+            )
+        flag_stale_lists(
+            serial=False,
+            params=params,
+            radius=model.radius,
+            lists=lists,
+            state=state,
+            scratch=scratch,
+            g=g,
+            grid=ti.static(BuildGrid(grid_start, grid_sorted_ids)),
+            apart_ids=apart_ids,
+            stored_sorted=False,
+        )
+        for i in range(state.x.shape[0]):
+            state.x[i] = scratch.x_free[i]
+        t += dt
+        taken += 1
+    return taken
+
+
+@ti.func
+def any_in_play(status: ti.template()):
+    """Whether some ball of ``status`` is awake and in play (:func:`.colour.in_play`), in the
+    calling (serial) thread."""
+    moving = 0
+    for i in range(status.shape[0]):
+        moving += in_play(status[i])
+    return moving > 0
+
+
+@ti.func
+def phase_of_sweep(k, iterations: ti.template()):
+    """The phase of sweep k (0 to ``iterations``) of a step (``colour.step_phases``): ``FIRST``,
+    ``SOLVE`` …, ``SHOCK`` (with two sweeps or more), then the restitution pass, ``BOUNCE``."""
+    phase = Phase.SOLVE
+    if k == 0:
+        phase = Phase.FIRST
+    elif k == iterations:
+        phase = Phase.BOUNCE
+    elif k == iterations - 1:
+        phase = Phase.SHOCK
+    return phase
