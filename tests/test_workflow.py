@@ -9,13 +9,15 @@ import signal
 
 import numpy as np
 import pytest
-from conftest import SERIAL_OR_PARALLEL, assert_same_state, sim_state
+from conftest import ON_CPU, SERIAL_OR_PARALLEL, assert_same_state, sim_state
 
 import ti_golf as tg
+from ti_golf.bench.pit import pit_scene
 from ti_golf.cli import main
 from ti_golf.physics import kernels
 from ti_golf.scene.document import scene_document, with_changes
 from ti_golf.solvers import CollisionSolver, collide
+from ti_golf.solvers.solver import RELIST_MAX_BALLS
 
 
 def _continued(make, t1: float, t2: float, path):
@@ -88,6 +90,33 @@ def test_a_pile_saved_asleep_wakes_as_if_it_never_stopped(serial, tmp_path):
         assert ("order" in d.files) == (not serial)
     assert np.count_nonzero(whole.status == tg.AT_REST) < 27  # and are woken after it
     assert (resumed.solver.serial, resumed.solver.reorder) == (serial, not serial)
+    assert_same_state(whole, resumed)
+
+
+@pytest.mark.skipif(not ON_CPU, reason="serial stepping runs on the CPU only")
+def test_a_pour_saved_serially_goes_on_in_parallel_bit_for_bit(tmp_path, monkeypatch):
+    # a pile of more than RELIST_MAX_BALLS balls steps serially on the CPU with the parallel
+    # step's lists, tables and sweep order (solver.relists false): a run saved so while the pour
+    # lands goes on where only the parallel step runs (a GPU, here the CPU taken for one when the
+    # run is read) as the serial steps would have, without a rebuild of its lists at the load
+    from ti_golf.sim import saved_run
+
+    scene, _ = pit_scene(RELIST_MAX_BALLS + 100)
+    first = tg.Simulation(scene)
+    first.run(t=0.25)
+    while first.solver.rebuild_due:  # (saved where the lists still hold: a rebuild at the load would show)
+        first.run(steps=1)
+    first.save(tmp_path / "pour.npz")
+    assert first.solver.serial and not first.solver.relists
+    monkeypatch.setattr(saved_run, "on_cpu", lambda: False)
+    resumed = tg.Simulation.load(tmp_path / "pour.npz")
+    assert not resumed.solver.serial
+    rebuilds = resumed.solver.rebuilds
+    resumed.run(steps=1)
+    assert resumed.solver.rebuilds == rebuilds
+    resumed.run(steps=99)
+    whole = tg.Simulation(scene)
+    whole.run(steps=resumed.state.steps)
     assert_same_state(whole, resumed)
 
 

@@ -229,7 +229,7 @@ def restore_run(saved: SavedRun, state: State, model: Model, solver: CollisionSo
     kept = meta["solver"]
     if saved.record is not None and solver is not None:
         solver.restore(saved.record, state)
-        if bool(kept["serial"]) != solver.serial:  # saved on a CPU, stepped in parallel now
+        if relists_in_kernel(state.n, bool(kept["serial"])) != solver.relists:  # lists laid out for the other
             solver.invalidate()
 
 

@@ -95,10 +95,12 @@ class Stepping:
         parallel launch per step (see ``serial``); Ctrl-C and SIGTERM wait for whole steps
         (:func:`~ti_golf.signals.whole_steps`)."""
         with whole_steps() as came:  # (the handlers set once, not at every step)
-            if self.relists:
-                self._advance_serially(model, state, int(steps))
-            elif self.serial:
-                self._advance_serially_between_builds(model, state, int(steps), came)
+            if self.serial:
+                if self.relists:
+                    self._advance_serially(model, state, int(steps))
+                else:
+                    self._advance_serially_between_builds(model, state, int(steps), came)
+                self.rebuild_due = bool(self.flag.to_numpy()[0])  # (the serial kernels' request, for a saved run)
             else:
                 for _ in range(int(steps)):
                     self._step_in_parallel(model, state)
