@@ -23,7 +23,7 @@ from ti_golf.physics.types import (
     scalars_of,
 )
 from ti_golf.solvers.collide import step_balls
-from ti_golf.solvers.colour import PROJECTIONS, block_sweep, in_play, project_ball, sweep_ball
+from ti_golf.solvers.colour import COLOURS, PROJECTIONS, in_play, project_ball, sweep_ball
 from ti_golf.solvers.phases import Phase
 from ti_golf.solvers.stale import flag_stale_lists
 from ti_golf.solvers.step import Step
@@ -56,21 +56,20 @@ def gauss_seidel_steps(
     iterations: ti.template(),
     any_far: ti.i32,
     inv_cell: float,
-    tasks: ti.i32,
     skip_still: ti.i32,
     blocks: BlockOrder,
 ) -> ti.i32:
     """Up to ``steps`` Gauss–Seidel steps of ``dt`` [s] (f64) from the time ``t0`` [s], each with
     ``iterations`` sweeps, as the parallel launches take them: the free flight and warm start,
-    the sweeps and the restitution pass block by block (``blocks``; with ``any_far``, the pairs
-    the colours leave out after each, as :func:`.colour.far_pairs` takes them), the last sweep, which finishes
-    the step, the ``PROJECTIONS`` passes of the position projection, then the test of the lists
-    with the grid of the last build (``g``, its buckets' starts and the balls by bucket,
-    ``grid_start`` and ``grid_sorted_ids``, and ``apart_ids``: see :func:`.stale.flag_stale_lists`;
-    arrays, not the :data:`~ti_golf.physics.types.GridScratch` pack: Taichi 1.7.4 mixes up the
-    members of two packs that share a name, here ``start``, reading one pack's as missing). The first ten arguments are those of
-    :func:`.collide.collision_step`; ``inv_cell`` and ``tasks`` those of
-    :func:`.colour.gauss_seidel_sweep`. Stops before a step when ``scratch.flag[0]`` asks for
+    the sweeps and the restitution pass, the last sweep, which finishes the step, and the
+    ``PROJECTIONS`` passes of the position projection (each pass: :func:`serial_pass`, with
+    ``any_far``, ``blocks`` and ``inv_cell`` as :func:`.colour.gauss_seidel_sweep` has them), then
+    the test of the lists with the grid of the last build (``g``, its buckets' starts and the
+    balls by bucket, ``grid_start`` and ``grid_sorted_ids``, and ``apart_ids``: see
+    :func:`.stale.flag_stale_lists`; arrays, not the :data:`~ti_golf.physics.types.GridScratch`
+    pack: Taichi 1.7.4 mixes up the members of two packs that share a name, here ``start``,
+    reading one pack's as missing). The first ten arguments are those of
+    :func:`.collide.collision_step`. Stops before a step when ``scratch.flag[0]`` asks for
     new lists, or, with ``skip_still``, when no ball is awake and in play (the caller skips such
     steps: see ``CollisionSolver.skip_still``); returns the steps taken."""
     air, contact, terrain, params = scalars_of(scalars)
@@ -82,20 +81,14 @@ def gauss_seidel_steps(
         if scratch.flag[0] != 0 or (skip_still != 0 and not any_in_play(state.status)):
             break
         step_balls(ti.cast(t, float), kinds, s, serial=False, warm=True, sweeps=0, last=False)
-        for k in range(iterations + 1):  # (one call site: each inlines the whole sweep)
-            phase = phase_of_sweep(k, iterations)
-            block_sweep(phase, project=False, any_far=any_far, inv_cell=inv_cell, tasks=tasks, blocks=blocks, s=s)
-            if any_far != 0:
-                for i in range(state.x.shape[0]):  # (the pairs the colours left out: colour.far_pairs)
-                    sweep_ball(i, phase, far_only=True, any_far=1, inv_cell=inv_cell, s=s)
-        step_balls(ti.cast(t, float), kinds, s, serial=False, warm=False, sweeps=0, last=True)
-        for _pass in range(PROJECTIONS):
-            if any_far != 0:
-                for i in range(state.x.shape[0]):
-                    project_ball(i, far_only=True, any_far=1, inv_cell=inv_cell, s=s)
-            block_sweep(
-                Phase.PROJECT, project=True, any_far=any_far, inv_cell=inv_cell, tasks=tasks, blocks=blocks, s=s
-            )
+        for k in range(iterations + 2 + PROJECTIONS):  # (one call site each: each inlines its whole pass)
+            if k == iterations + 1:  # the last sweep, which finishes the step
+                step_balls(ti.cast(t, float), kinds, s, serial=False, warm=False, sweeps=0, last=True)
+            else:
+                phase = Phase.PROJECT
+                if k <= iterations:
+                    phase = phase_of_sweep(k, iterations)
+                serial_pass(phase, any_far, blocks, inv_cell, s)
         flag_stale_lists(
             serial=False,
             params=params,
@@ -123,6 +116,31 @@ def any_in_play(status: ti.template()):
     for i in range(status.shape[0]):
         moving += in_play(status[i])
     return moving > 0
+
+
+@ti.func
+def serial_pass(phase, any_far, blocks: ti.template(), inv_cell, s: ti.template()):
+    """A sweep of ``phase``, or a pass of the position projection (``Phase.PROJECT``), as the
+    parallel launches take it, in the calling (serial) thread: the blocks' balls colour after
+    colour, each block bottom-up (``blocks``; the blocks of a colour share no ball, so their order
+    does not matter: :func:`.colour.block_sweep`) and, with ``any_far``, every ball's pairs that
+    the colours left out (:func:`.colour.far_pairs`), after the colours in a sweep and before
+    them in a projection pass."""
+    n = s.state.x.shape[0]
+    for q in range((COLOURS + 1) * n):
+        c, m = q // n, q % n
+        if phase == Phase.PROJECT:  # (a projection pass takes the far pairs first)
+            c = (c + COLOURS) % (COLOURS + 1)
+        i, far_only, take = m, 0, any_far != 0
+        if c < COLOURS:
+            i, take = blocks.ids[m], blocks.colour[m] == c
+        else:
+            far_only = 1
+        if take:
+            if phase == Phase.PROJECT:
+                project_ball(i, far_only, any_far, inv_cell, s)
+            else:
+                sweep_ball(i, phase, far_only, any_far, inv_cell, s)
 
 
 @ti.func

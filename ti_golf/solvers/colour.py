@@ -138,14 +138,14 @@ def adjacent(col_a, col_b):
 
 
 @ti.func
-def in_this_pass(col, j, far_only: ti.template(), any_far, inv_cell, lists: ti.template()):
+def in_this_pass(col, j, far_only, any_far, inv_cell, lists: ti.template()):
     """Whether a pair of a ball in grid column ``col`` with ball j is taken by the colours
     (``far_only`` False) or by :func:`far_pairs` (True): with ``any_far``, the pairs whose balls
     were not in columns beside each other at the build are :func:`far_pairs`' alone."""
     far = False
     if any_far != 0:
         far = not adjacent(col, column_of(lists.x_at_build[j], inv_cell))
-    return far == far_only
+    return far == (far_only != 0)
 
 
 @kernel
@@ -313,7 +313,7 @@ def step_phases(iterations: int) -> list[int]:
 
 
 @ti.func
-def sweep_ball(i, phase, far_only: ti.template(), any_far, inv_cell, s: ti.template()):
+def sweep_ball(i, phase, far_only, any_far, inv_cell, s: ti.template()):
     """Ball i's Gauss–Seidel step (``s``: the step's :class:`.step.Step`): each pair it owns
     (:func:`.sequential.sweep_pair`, from the current velocities of both balls, applied to both at
     once, with the normal and gap the warm start stored in ``scratch.J``), then (unless
@@ -345,7 +345,7 @@ def sweep_ball(i, phase, far_only: ti.template(), any_far, inv_cell, s: ti.templ
                 vi, wi, hit = sweep_pair(i, j, p, phase, xi, body(vi, wi, ri, inv_mi), k, s)
                 approached = ti.max(approached, hit)
         if phase == Phase.FIRST:  # the restitution pass visits the pairs of the balls marked here
-            if ti.static(far_only):
+            if far_only:
                 scratch.impact[i] = ti.max(scratch.impact[i], approached)  # (after the colours)
             else:
                 scratch.impact[i] = approached
@@ -377,7 +377,7 @@ def serial_projection(s: ti.template()):
 
 
 @ti.func
-def project_ball(i, far_only: ti.template(), any_far, inv_cell, s: ti.template()):
+def project_ball(i, far_only, any_far, inv_cell, s: ti.template()):
     """Ball i's position projection at the end of a Gauss–Seidel step, on the new positions
     ``scratch.x_free`` [m]: each pair it owns that overlaps by Δx moves apart by k_p·Δx, ball i by
     k_p·m_red·Δx along the normal and the other ball the rest (B.18); a ball at rest does not move

@@ -139,7 +139,7 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
         """The parallel step's launches in one thread, many steps in one launch
         (``block_steps.gauss_seidel_steps``): the same steps, bit for bit."""
         g, _grid, apart_ids, _stored_sorted = self.last_grid()
-        any_far, inv_cell, tasks, blocks = self._block_order()
+        any_far, inv_cell, _tasks, blocks = self._block_order()
         return int(
             block_steps.gauss_seidel_steps(
                 *arguments,
@@ -150,7 +150,6 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
                 iterations,
                 any_far,
                 inv_cell,
-                tasks,
                 int(self.skip_still),
                 blocks,
             )
