@@ -23,7 +23,7 @@ from ti_golf.physics.types import (
     scalars_of,
 )
 from ti_golf.solvers.collide import step_balls
-from ti_golf.solvers.colour import COLOURS, PROJECTIONS, in_play, project_ball, sweep_ball
+from ti_golf.solvers.colour import COLOURS, PROJECTIONS, in_play, phase_of_sweep, project_ball, sweep_ball
 from ti_golf.solvers.phases import Phase
 from ti_golf.solvers.stale import flag_stale_lists
 from ti_golf.solvers.step import Step
@@ -141,17 +141,3 @@ def serial_pass(phase, any_far, blocks: ti.template(), inv_cell, s: ti.template(
                 project_ball(i, far_only, any_far, inv_cell, s)
             else:
                 sweep_ball(i, phase, far_only, any_far, inv_cell, s)
-
-
-@ti.func
-def phase_of_sweep(k, iterations: ti.template()):
-    """The phase of sweep k (0 to ``iterations``) of a step (``colour.step_phases``): ``FIRST``,
-    ``SOLVE`` …, ``SHOCK`` (with two sweeps or more), then the restitution pass, ``BOUNCE``."""
-    phase = Phase.SOLVE
-    if k == 0:
-        phase = Phase.FIRST
-    elif k == iterations:
-        phase = Phase.BOUNCE
-    elif k == iterations - 1:
-        phase = Phase.SHOCK
-    return phase

@@ -286,23 +286,29 @@ def far_pairs(
 
 
 @ti.func
-def serial_sweeps(sweeps: ti.template(), s: ti.template()):
-    """A step's ``sweeps`` Gauss–Seidel sweeps (:func:`step_phases`) and the restitution pass,
+def serial_sweeps(iterations: ti.template(), s: ti.template()):
+    """A step's ``iterations`` Gauss–Seidel sweeps and the restitution pass (:func:`step_phases`),
     every ball in storage order, in the calling (serial) loop's thread (``s``: the step's
-    :class:`.step.Step`)."""
-    serial_sweep(Phase.FIRST, s)
-    for _ in range(sweeps - 2):
-        serial_sweep(Phase.SOLVE, s)
-    if sweeps > 1:
-        serial_sweep(Phase.SHOCK, s)
-    serial_sweep(Phase.BOUNCE, s)
+    :class:`.step.Step`; one call site of the ball's sweep, which each inlines whole)."""
+    for k in range(iterations + 1):
+        phase = phase_of_sweep(k, iterations)
+        for i in range(s.state.x.shape[0]):
+            sweep_ball(i, phase, far_only=False, any_far=0, inv_cell=1.0, s=s)
 
 
 @ti.func
-def serial_sweep(phase, s: ti.template()):
-    """A Gauss–Seidel sweep of every ball in storage order, in the calling (serial) loop's thread."""
-    for i in range(s.state.x.shape[0]):
-        sweep_ball(i, phase, far_only=False, any_far=0, inv_cell=1.0, s=s)
+def phase_of_sweep(k, iterations: ti.template()):
+    """The phase of sweep k (0 to ``iterations``) of a step, as :func:`step_phases` lists them:
+    ``FIRST``, ``SOLVE`` …, ``SHOCK`` (with two sweeps or more), then the restitution pass,
+    ``BOUNCE``."""
+    phase = Phase.SOLVE
+    if k == 0:
+        phase = Phase.FIRST
+    elif k == iterations:
+        phase = Phase.BOUNCE
+    elif k == iterations - 1:
+        phase = Phase.SHOCK
+    return phase
 
 
 def step_phases(iterations: int) -> list[int]:
