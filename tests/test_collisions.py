@@ -1107,6 +1107,42 @@ def test_a_step_with_every_ball_asleep_is_skipped_and_changes_nothing():
     assert skipped[0][0] > 20 and skipped[0][1] > 20 and skipped[1] == (0, 0)  # the steps asleep, skipped
 
 
+@pytest.mark.slow
+@pytest.mark.skipif(not ON_CPU, reason="serial stepping runs on the CPU only")
+def test_serial_launches_skip_the_steps_of_a_pile_asleep_as_the_parallel_steps_do():
+    # beyond RELIST_MAX_BALLS the serial launches stop when no ball is awake, and the steps left
+    # of the call are skipped (none would change anything, so neither would the next): a slab of
+    # touching balls falls asleep, is woken by a ball tossed onto it and sleeps again, the same bit
+    # for bit serially and in parallel, skipping or not
+    sc = tg.load_scene(
+        "lab_vacuum",
+        ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3", 'contact.solver="gauss_seidel"'],
+    )
+    probe = tg.Simulation(sc)
+    d = 2.0 * float(probe.model.radius_np.max())
+    side, layers = 10, (RELIST_MAX_BALLS + 99) // 100 + 1
+    x = np.array([[d * i, d * (k + 0.5), d * j] for k in range(layers) for j in range(side) for i in range(side)])
+    assert len(x) > RELIST_MAX_BALLS
+    runs, skipped = [], []
+    for serial, skip in ((True, True), (False, True), (True, False)):
+        sim = tg.Simulation(sc, x=x)
+        sim.solver = solver = CollisionSolver(sim.model, serial=serial)
+        solver.skip_still = skip
+        assert not solver.relists
+        sim.step(250)
+        asleep, before = sim.counts()["at_rest"], solver.still_steps
+        sim.set_ball(len(x) - 45, v=[0.0, 0.3, 0.0])  # a ball amid the top layer, tossed up between steps
+        for _ in range(30):
+            sim.step(10)
+        runs.append(_outcome(sim, asleep, solver.lam.to_numpy(), solver.friction.to_numpy()))
+        skipped.append((before, solver.still_steps - before))
+    for run in runs[1:]:
+        for a, b in zip(runs[0], run):
+            np.testing.assert_array_equal(a, b)
+    assert runs[0][0] == len(x) and np.all(runs[0][4] == AT_REST)  # asleep, woken, and asleep again
+    assert skipped[0] == skipped[1] and skipped[0][0] > 20 and skipped[0][1] > 20 and skipped[2] == (0, 0)
+
+
 @pytest.mark.parametrize(
     "name, steps",
     [

@@ -102,8 +102,10 @@ class Stepping:
                     self._advance_serially_between_builds(model, state, int(steps), came)
                 self.rebuild_due = bool(self.flag.to_numpy()[0])  # (the serial kernels' request, for a saved run)
             else:
-                for _ in range(int(steps)):
-                    self._step_in_parallel(model, state)
+                for k in range(int(steps)):
+                    if not self._step_in_parallel(model, state):  # skipped: so would every step after it be
+                        self._skip_still_steps(model, state, int(steps) - k - 1)
+                        break
                     if came:  # Ctrl-C or SIGTERM: stop after this whole step
                         break
 
@@ -127,16 +129,15 @@ class Stepping:
     def _advance_serially_between_builds(self, model: Model, state: State, steps: int, came: list[int]) -> None:
         """``steps`` steps in serial launches, each until a step asks for new lists, which are built
         through the grid between them (:meth:`ensure_lists`), or until no ball is awake and in
-        play, when steps are skipped as the parallel steps skip them (``skip_still``); Ctrl-C or
-        SIGTERM (``came``) stops at the end of a launch."""
+        play, when the steps left are skipped as the parallel steps skip them (``skip_still``);
+        Ctrl-C or SIGTERM (``came``) stops at the end of a launch."""
         while steps > 0:
             self.ensure_lists(state)
-            if self.skip_still and self._all_still(state):  # as a parallel step would be skipped
-                self.still_steps += 1
-                taken = 1
-            else:
-                with plain_compile():  # see runtime.plain_compile
-                    taken = self._serial_steps(model.scene.contact.iterations, self._arguments(model, state, steps))
+            if self.skip_still and self._all_still(state):  # as the parallel steps are skipped
+                self._skip_still_steps(model, state, steps)
+                return
+            with plain_compile():  # see runtime.plain_compile
+                taken = self._serial_steps(model.scene.contact.iterations, self._arguments(model, state, steps))
             self._advance_time(model, state, taken)
             steps -= taken
             if came:
@@ -149,19 +150,28 @@ class Stepping:
             state.t += model.dt  # as one step at a time adds it, to the same round-off
         state.steps += steps
 
-    def _step_in_parallel(self, model: Model, state: State) -> None:
+    def _step_in_parallel(self, model: Model, state: State) -> bool:
+        """One parallel step, the lists built first when due; or, with ``skip_still`` and no ball
+        awake and in play, the time advanced alone (the step would change nothing). Returns
+        whether the step was taken."""
         if not self.lists_valid or self.rebuild_due:
             self.build(state)
-        elif self.skip_still and self._all_still(state):  # the step would change nothing
-            self.still_steps += 1
-            state.t += model.dt
-            state.steps += 1
-            return
+        elif self.skip_still and self._all_still(state):
+            self._skip_still_steps(model, state, 1)
+            return False
         rebuild = self._sweep(model.scene.contact.iterations, self._arguments(model, state, 1))
         state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
         state.t += model.dt
         state.steps += 1
         self.rebuild_due = bool(rebuild)
+        return True
+
+    def _skip_still_steps(self, model: Model, state: State, steps: int) -> None:
+        """Skip ``steps`` steps in which no ball is awake and in play (``skip_still``): none would
+        change anything, so neither would the next, and only the time advances (counted in
+        ``still_steps``)."""
+        self.still_steps += steps
+        self._advance_time(model, state, steps)
 
     def _all_still(self, state: State) -> bool:
         """Whether no ball is awake and in play, so that a step would change nothing (only the
