@@ -25,7 +25,7 @@ from ti_golf.scene.schema import (
 )
 from ti_golf.sim.simulation import Simulation
 from ti_golf.solvers import CollisionSolver
-from ti_golf.solvers.solver import steps_serially
+from ti_golf.solvers.solver import RELIST_MAX_BALLS, relists_in_kernel, steps_serially
 
 
 def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scene, np.ndarray]:
@@ -131,9 +131,12 @@ def bench_collide(
             sim.solver = CollisionSolver(sim.model, serial=False if parallel else None, reorder=reorder)
         return sim
 
+    # a serial pile relists in its kernel or is built between launches (solver.RELIST_MAX_BALLS): the
+    # warm-up's serial pile is of the same kind
+    serial_warm = 64 if relists_in_kernel(n, serial) else RELIST_MAX_BALLS + 1
     for floor in (False, True) if terrain else (False,):  # compile every kernel before timing
         for parallel, reorder in ((False, None),) * serial + ((True, False), (True, True)):
-            warm = pile(64, floor, parallel, reorder)
+            warm = pile(64 if parallel else serial_warm, floor, parallel, reorder)
             warm.step(2)
             assert warm.solver is not None  # 64 balls that collide
             warm.solver.invalidate()  # a rebuild that carries the pairs' impulses over
