@@ -589,7 +589,7 @@ def test_bench_pit_pours_the_scene_and_reports_the_piles_quality():
     assert result["sim_s_per_wall_s"] == pytest.approx(0.05 / result["wall_s"], rel=1e-6)
     # the pile's arrays: a few hundred bytes a ball (docs: about 400), not nothing, not megabytes
     assert result["peak_rss_bytes"] >= result["bytes_per_ball_above_baseline"] * 1000
-    assert result["bytes_per_ball_above_baseline"] < 1e5
+    assert result["bytes_per_ball_above_baseline"] < 5000  # (the warm-up compiled the pour's kernels, as it steps)
     assert result["outside_bin"] == 0
     # still falling at 0.05 s: dropped at 1 ± 0.3 m/s per component, plus g·t
     assert 1.0 < result["p99_speed_mps"] < 1.0 + 0.3 * 3**0.5 + 9.81 * 0.05 + 1e-9

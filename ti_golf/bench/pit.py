@@ -61,7 +61,8 @@ PIT_BALLS = 100_000
 
 WARM_UP_BALLS = 8192
 """Balls of the warm-up pour that compiles the kernels: enough for the parallel step stored in
-the grid's order, as the full pour is."""
+the grid's order, as the full pour is; a smaller pour warms up with its own number of balls,
+which are stepped as it is (serially or in parallel: ``solver.SERIAL_MAX_BALLS``)."""
 
 
 def pit_scene(n: int | None = None, overrides: Sequence[str] = ()) -> tuple[Scene, float]:
@@ -120,7 +121,7 @@ def bench_pit(
     scene, side = pit_scene(n, overrides)
     n_balls = scene.blocks[0].number
     t0 = time.perf_counter()
-    warm_scene, _ = pit_scene(WARM_UP_BALLS, overrides)
+    warm_scene, _ = pit_scene(min(n_balls, WARM_UP_BALLS), overrides)  # (stepped as the pour is)
     warm = Simulation(warm_scene)
     warm.run(steps=3)
     if warm.solver is not None and warm.solver.skip_still:  # (the pour's steps asleep count the balls awake)
