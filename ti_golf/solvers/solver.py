@@ -131,8 +131,9 @@ class CollisionSolver(Recorded, Stepping):
         far_owners: how many balls own pairs that the Gauss–Seidel colours leave to
             ``colour.far_pairs`` (0 with the Jacobi sweeps).
         serial: whether steps run serially, many per launch (default: :func:`steps_serially`; CPU
-            backends only); else one parallel launch per step. Both give the same lists and, with
-            the Jacobi sweeps, bit-identical steps.
+            backends only); else one parallel launch per step. Both give the same lists, and
+            bit-identical steps with the Jacobi sweeps, and with the Gauss–Seidel sweeps when the
+            lists are not rebuilt in the kernel (``relists``).
         relists: whether the serial launches rebuild the lists themselves by testing every pair
             (up to ``RELIST_MAX_BALLS`` balls); else they are built with the hash grid, between
             launches when serial. Either gives the same lists.

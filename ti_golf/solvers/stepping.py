@@ -145,7 +145,7 @@ class Stepping:
 
     @staticmethod
     def _advance_time(model: Model, state: State, steps: int) -> None:
-        """Count ``steps`` steps taken in one launch on the state's clock."""
+        """Count ``steps`` steps on the state's clock, taken in one launch or skipped."""
         for _ in range(steps):
             state.t += model.dt  # as one step at a time adds it, to the same round-off
         state.steps += steps
@@ -186,9 +186,9 @@ class Stepping:
 
     def _serial_steps(self, iterations: int, arguments: tuple) -> int:
         """Serial steps with ``iterations`` sweeps each, in one launch, until one asks for new lists
-        (or, with ``skip_still``, until no ball is awake and in play; ``arguments``:
-        :meth:`_arguments`, with the steps to take at most). Returns the steps taken. These:
-        ``collide.collision_step``'s, the same step as its parallel launch."""
+        (``arguments``: :meth:`_arguments`, with the steps to take at most). Returns the steps
+        taken. These: ``collide.collision_step``'s, the same step as its parallel launch (the
+        Gauss–Seidel kind's own also stop when no ball is awake and in play, with ``skip_still``)."""
         return collide.launch(arguments, serial=collide.SERIAL_STOPS, warm=True, sweeps=iterations - 1, last=True)
 
     def _arguments(self, m: Model, s: State, steps: int) -> tuple:
