@@ -17,13 +17,16 @@ from pathlib import Path
 import background
 import numpy as np
 import pytest
+import taichi as ti
 from conftest import ON_CPU, SCENES
 from pile_pours import LANDED, NARROW_PIT, SAMPLE, STEP, load_variant, pour, total_mass
 
 import ti_golf as tg
 from ti_golf.bench.pit import pile_quality, pit_scene
+from ti_golf.runtime import ensure_init
 from ti_golf.scene.schema import AT_REST
 from ti_golf.solvers import CollisionSolver
+from ti_golf.solvers.colour import phase_of_sweep, step_phases
 
 SNAPSHOT = 0.9
 """Time [s] at which the pour is landing, every kind of contact at once (the determinism check)."""
@@ -298,3 +301,19 @@ def test_boulder_pushed_into_a_pile_takes_its_far_pairs_in_turn():
     assert np.abs(sim.x[:-1] - x[:-1]).max() > 0.001  # it met the pile and moved balls of it
     deepest = sim.deepest_overlap()
     assert deepest is None or deepest.fraction < 0.02, deepest
+
+
+@pytest.mark.parametrize("iterations", [1, 2, 3, 4, 8])
+def test_the_serial_kernels_take_the_phases_the_parallel_launches_take(iterations):
+    # the serial kernels' phase of each sweep (a value at run time, so that each inlines the ball's
+    # sweep once) is the list by which the parallel step launches its sweeps
+    ensure_init()
+
+    @ti.kernel
+    def phases(sweeps: ti.template(), out: ti.types.ndarray(dtype=ti.i32, ndim=1)):
+        for k in range(sweeps + 1):
+            out[k] = phase_of_sweep(k, sweeps)
+
+    out = np.full(iterations + 1, -9, dtype=np.int32)
+    phases(iterations, out)
+    assert out.tolist() == step_phases(iterations)

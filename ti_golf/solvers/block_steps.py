@@ -89,18 +89,8 @@ def gauss_seidel_steps(
                 if k <= iterations:
                     phase = phase_of_sweep(k, iterations)
                 serial_pass(phase, any_far, blocks, inv_cell, s)
-        flag_stale_lists(
-            serial=False,
-            params=params,
-            radius=model.radius,
-            lists=lists,
-            state=state,
-            scratch=scratch,
-            g=g,
-            grid=ti.static(BuildGrid(grid_start, grid_sorted_ids)),
-            apart_ids=apart_ids,
-            stored_sorted=False,
-        )
+        grid = ti.static(BuildGrid(grid_start, grid_sorted_ids))
+        flag_stale_lists(s, serial=False, g=g, grid=grid, apart_ids=apart_ids, stored_sorted=False)
         for i in range(state.x.shape[0]):
             state.x[i] = scratch.x_free[i]
         t += dt

@@ -368,18 +368,7 @@ def serial_projection(s: ti.template()):
     for _ in range(PROJECTIONS):
         for i in range(s.state.x.shape[0]):
             project_ball(i, far_only=False, any_far=0, inv_cell=1.0, s=s)
-    flag_stale_lists(
-        serial=True,
-        params=s.params,
-        radius=s.model.radius,
-        lists=s.lists,
-        state=s.state,
-        scratch=s.scratch,
-        g=0,
-        grid=0,
-        apart_ids=0,
-        stored_sorted=False,
-    )
+    flag_stale_lists(s, serial=True, g=0, grid=0, apart_ids=0, stored_sorted=False)
 
 
 @ti.func

@@ -35,6 +35,7 @@ from ti_golf.physics.types import (
 )
 from ti_golf.solvers.links import distance_from_build, listed
 from ti_golf.solvers.sort import bucket_of, cell_of
+from ti_golf.solvers.step import Step
 
 REACH_CELLS = 2
 """Cells on each side of a ball's cell (at the build) in which :func:`stale_near` looks for the
@@ -147,25 +148,24 @@ def stale_near(
 
 @ti.func
 def flag_stale_lists(
+    s: ti.template(),
     serial: ti.template(),
-    params: ti.template(),
-    radius: ti.template(),
-    lists: ti.template(),
-    state: ti.template(),
-    scratch: ti.template(),
     g: ti.template(),
     grid: ti.template(),
     apart_ids: ti.template(),
     stored_sorted: ti.template(),
 ):
     """Set ``scratch.flag[0]`` when the lists must be rebuilt before the next step of balls now at
-    ``scratch.x_free`` [m] with velocities ``state.v`` [m/s]: a ball has used the whole skin
-    (``params``: the step's scalars, h and the skin), or a pair out of the lists is within reach
+    ``scratch.x_free`` [m] with velocities ``state.v`` [m/s] (``s``: the step's
+    :class:`.step.Step`, of which the radii, lists, state, scratch and the step's scalars, h and
+    the skin, are read): a ball has used the whole skin, or a pair out of the lists is within reach
     of a ball that has used more than half of it (see the module's docstring), looked for only
     when no ball has used the whole skin (as while a pour lands, when most steps rebuild), with the
     grid of the last build (``g``, ``grid``: its :data:`ti_golf.physics.types.GridParams` and
-    :data:`ti_golf.physics.types.GridScratch`; ``apart_ids``, ``stored_sorted``: see :func:`stale_near`) or,
-    ``serial``, among every ball (the four are not read). Both find the same pairs."""
+    :data:`ti_golf.physics.types.GridScratch`, or what holds its ``start`` and ``sorted_ids``;
+    ``apart_ids``, ``stored_sorted``: see :func:`stale_near`) or, ``serial``, among every ball (the
+    four are not read). Both find the same pairs."""
+    params, radius, lists, state, scratch = ti.static((s.params, s.model.radius, s.lists, s.state, s.scratch))
     for i in range(scratch.x_free.shape[0]):
         if skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h) > params.skin:
             scratch.flag[0] = 1
@@ -210,17 +210,7 @@ def lists_stale(
     :func:`flag_stale_lists` with the grid of the last build (``g``, ``grid``, ``apart_ids`` and
     ``stored_sorted`` as :func:`.grid.list_neighbours` had them) and the step's scalars
     (:func:`ti_golf.physics.types.scalars_of`). Returns ``scratch.flag[0]``."""
-    _air, _contact, _terrain, params = scalars_of(scalars)
-    flag_stale_lists(
-        serial=False,
-        params=params,
-        radius=model.radius,
-        lists=lists,
-        state=state,
-        scratch=scratch,
-        g=g,
-        grid=grid,
-        apart_ids=apart_ids,
-        stored_sorted=stored_sorted,
-    )
+    _air, contact, terrain, params = scalars_of(scalars)
+    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch))
+    flag_stale_lists(s, serial=False, g=g, grid=grid, apart_ids=apart_ids, stored_sorted=stored_sorted)
     return scratch.flag[0]
