@@ -267,12 +267,27 @@ def zero_f32_vectors(a: vec3f_array):
     ``Ndarray.fill`` would compile a kernel that holds its value in the run's float type: in an f64
     run Taichi warns "Assign may lose precision" while it compiles it.
     """
-    for i in a:
+    for i in range(a.shape[0]):
         a[i] = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
 
 
 @kernel
 def zero_f32_table(a: vec4f_table):
     """Set every entry of a table of f32 4-vectors to zero (see :func:`zero_f32_vectors`)."""
-    for i, j in a:
+    for i, j in ti.ndrange(a.shape[0], a.shape[1]):
         a[i, j] = ti.Vector([0.0, 0.0, 0.0, 0.0], dt=ti.f32)
+
+
+@kernel
+def copy_ints(source: int_array, target: int_array):
+    """``target[i] = source[i]`` for every entry of ``source`` (``target`` at least as long; as ``Ndarray.copy_from``, which
+    launches Taichi's own kernel: its loop stays parallel in :func:`ti_golf.one_thread.in_one_thread`)."""
+    for i in range(source.shape[0]):
+        target[i] = source[i]
+
+
+@kernel
+def int_at(a: int_array, i: ti.i32) -> ti.i32:
+    """Entry i of an int array (a fifth of the time of ``a.to_numpy()[i]`` for a small array on the
+    CI class: no copy, no loop)."""
+    return a[i]

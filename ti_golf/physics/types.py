@@ -20,7 +20,7 @@ from typing import Any, TypeAlias
 
 import taichi as ti
 
-from ti_golf import front_end, launcher, runtime
+from ti_golf import front_end, launcher, one_thread, runtime
 
 front_end.install()  # before the kernel modules' decorators run: they read the caller's source line
 
@@ -76,22 +76,33 @@ LAUNCHES = LaunchClock()
 def kernel(fn: Callable[..., Any]) -> Callable[..., Any]:
     """``ti.kernel``, applied at the first call, when the :class:`Deferred` types in ``fn``'s
     annotations (arguments and return) can be made with the chosen float type; counted and timed
-    by :data:`LAUNCHES` while it is on. Arguments may be passed by name, as to ``ti.kernel``."""
+    by :data:`LAUNCHES` while it is on. Arguments may be passed by name, as to ``ti.kernel``.
+    Inside :func:`ti_golf.one_thread.in_one_thread` it launches its one-thread variant, every loop
+    in the calling thread (:func:`ti_golf.one_thread.variant`): the same result."""
     compiled: Callable[..., Any] | None = None
+    in_one_thread: Callable[..., Any] | None = None
+
+    def make() -> Callable[..., Any]:
+        fn.__annotations__ = {k: a.get() if isinstance(a, Deferred) else a for k, a in fn.__annotations__.items()}
+        made = ti.kernel(fn)
+        return launcher.FastCall(made) if launcher.enabled() else made
 
     @functools.wraps(fn)
     def launch(*args: Any, **kwargs: Any) -> Any:
-        nonlocal compiled
-        if compiled is None:
-            fn.__annotations__ = {k: a.get() if isinstance(a, Deferred) else a for k, a in fn.__annotations__.items()}
-            compiled = ti.kernel(fn)
-            if launcher.enabled():
-                compiled = launcher.FastCall(compiled)
+        nonlocal compiled, in_one_thread
+        if one_thread.active():
+            if in_one_thread is None:
+                in_one_thread = one_thread.variant(make())
+            target = in_one_thread
+        else:
+            if compiled is None:
+                compiled = make()
+            target = compiled
         if not LAUNCHES.on:
-            return compiled(*args, **kwargs)
+            return target(*args, **kwargs)
         t0 = time.perf_counter()
         try:
-            return compiled(*args, **kwargs)
+            return target(*args, **kwargs)
         finally:
             LAUNCHES.calls += 1
             LAUNCHES.inside_s += time.perf_counter() - t0

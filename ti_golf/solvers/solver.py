@@ -15,7 +15,7 @@ import numpy as np
 import taichi as ti
 
 from ti_golf.errors import SimulationError
-from ti_golf.physics.kernels import zero_f32_vectors
+from ti_golf.physics.kernels import copy_ints, zero_f32_vectors
 from ti_golf.physics.model import Model
 from ti_golf.physics.packs import Packs
 from ti_golf.physics.state import State
@@ -243,6 +243,7 @@ class CollisionSolver(Recorded, Stepping):
             None  # the grid hash's (origin, stride) at the last build (grid.hash_strides)
         )
         self._last_grid: tuple[Any, ...] | None = None  # (a cache of last_grid())
+        self._grid_struct: tuple[Any, Any] | None = None  # (the GridParams last made, by their values)
 
     @property
     def model(self) -> Model:
@@ -308,7 +309,7 @@ class CollisionSolver(Recorded, Stepping):
         if self._valid:  # the sweep's table is scratch between steps: it keeps the old lists' λ, ids and friction
             stashed = self.impulse
             links.stash(self.upper, self.first, self.lam, stashed, self.gauss_seidel, state.x, self.friction, mu)
-            self.stash_first.copy_from(self.first)
+            copy_ints(self.first, self.stash_first)
         fast, v_max = self._size_cells(state)
         self._ids = state.ids
         longest = self._list_balls(state, fast)
@@ -357,7 +358,9 @@ class CollisionSolver(Recorded, Stepping):
         else:
             self.cell, fast = grid.cell_size(self.r_max, self.skin, h, v_max)
         bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
-        self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, self.mask + 1))
+        strides = grid.hash_strides(bounds, self.mask + 1)
+        if self._hash is None or [v.to_list() for v in self._hash] != [list(v) for v in strides]:
+            self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in strides)  # (kept while it holds: see _grid_params)
         if self.reorder:
             grid_order = (1.0 / self.cell, self.mask, *self._hash, self.rank, self.start, self.chunk_start)
             self.v_free, self.calm, self.rank = store_in_grid_order(
@@ -449,19 +452,26 @@ class CollisionSolver(Recorded, Stepping):
         cells, hash, skin, step and the balls set apart), ``fast`` when pairs are listed by their
         closing speed too (``grid.cell_size``)."""
         assert self._hash is not None, "the lists are built before the grid is read"
-        return GridParams(
-            inv_cell=1.0 / self.cell,
-            mask=self.mask,
-            origin=self._hash[0],
-            stride=self._hash[1],
-            skin=self.skin,
-            h=self._model.dt,
-            fast=int(fast),
-            v_cut=self.v_cut,
-            r_cut=self.r_cut,
-            n_apart=self.n_apart,
-            scan_apart=int(self.n_apart > 0 and on_cpu()),
-        )
+        scalars = (self.cell, self.mask, self.skin, self._model.dt, int(fast), self.v_cut, self.r_cut, self.n_apart)
+        key = (scalars, *(tuple(v.to_list()) for v in self._hash))
+        if (
+            self._grid_struct is None or self._grid_struct[0] != key
+        ):  # (a struct costs more to make than a build's launch)
+            params = GridParams(
+                inv_cell=1.0 / self.cell,
+                mask=self.mask,
+                origin=self._hash[0],
+                stride=self._hash[1],
+                skin=self.skin,
+                h=self._model.dt,
+                fast=int(fast),
+                v_cut=self.v_cut,
+                r_cut=self.r_cut,
+                n_apart=self.n_apart,
+                scan_apart=int(self.n_apart > 0 and on_cpu()),
+            )
+            self._grid_struct = (key, params)
+        return self._grid_struct[1]
 
     def _grid_scratch(self) -> Any:
         """The grid's :data:`~ti_golf.physics.types.GridScratch`: its buckets' starts and the balls

@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from ti_golf.one_thread import in_one_thread
+from ti_golf.physics.kernels import int_at
 from ti_golf.physics.model import Model
 from ti_golf.physics.packs import Packs
 from ti_golf.physics.state import State
@@ -57,13 +59,14 @@ class Stepping:
         reach: before the first step, after balls were moved (:meth:`invalidate`), or when the last
         step asked for a rebuild. The next step then starts from these lists, as it would have
         built them itself (same lists, same step)."""
-        stale = not self.lists_valid or (self.flag.to_numpy()[0] != 0 if self.serial else self.rebuild_due)
+        stale = not self.lists_valid or (int_at(self.flag, 0) != 0 if self.serial else self.rebuild_due)
         if not stale:
             return
         if self.relists:
             self.capacity = max(self.capacity, state.n - 1, 1)
-        self.build(state)
-        grid.clear(self.flag)  # build() left the longest lists there
+        with in_one_thread(self.serial):  # (a serial solver's balls are few: see one_thread)
+            self.build(state)
+            grid.clear(self.flag)  # build() left the longest lists there
         self.rebuild_due = False
 
     def retune(self, model: Model) -> None:
@@ -100,7 +103,7 @@ class Stepping:
                     self._advance_serially(model, state, int(steps))
                 else:
                     self._advance_serially_between_builds(model, state, int(steps), came)
-                self.rebuild_due = bool(self.flag.to_numpy()[0])  # (the serial kernels' request, for a saved run)
+                self.rebuild_due = bool(int_at(self.flag, 0))  # (the serial kernels' request, for a saved run)
             else:
                 for k in range(int(steps)):
                     if not self._step_in_parallel(model, state):  # skipped: so would every step after it be
@@ -114,8 +117,9 @@ class Stepping:
         width = max(1, state.n - 1)
         if not self.lists_valid or self.upper.shape[1] < width:  # first step, or lists built narrower since
             self.capacity = width
-            self.build(state)
-            grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
+            with in_one_thread():  # (see one_thread)
+                self.build(state)
+                grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
         with plain_compile():  # see runtime.plain_compile
             self.rebuilds += collide.launch(
                 self._arguments(model, state, steps),
@@ -133,7 +137,9 @@ class Stepping:
         Ctrl-C or SIGTERM (``came``) stops at the end of a launch."""
         while steps > 0:
             self.ensure_lists(state)
-            if self.skip_still and self._all_still(state):  # as the parallel steps are skipped
+            with in_one_thread():  # (see one_thread)
+                still = self.skip_still and self._all_still(state)
+            if still:  # as the parallel steps are skipped
                 self._skip_still_steps(model, state, steps)
                 return
             with plain_compile():  # see runtime.plain_compile

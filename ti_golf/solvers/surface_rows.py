@@ -8,7 +8,7 @@ from typing import Any
 
 import taichi as ti
 
-from ti_golf.physics.kernels import zero_f32_table
+from ti_golf.physics.kernels import copy_ints, zero_f32_table
 from ti_golf.physics.model import Model, scene_planes
 from ti_golf.physics.state import State
 from ti_golf.physics.types import vec4f
@@ -57,7 +57,7 @@ def list_surface_rows(solver: Any, state: State, carry: bool, v_max: float) -> t
     model = solver.model
     carry = carry and solver.surface_impulse.shape[1] == surface_columns(model)
     if carry:
-        solver.stash_first.copy_from(solver.surface_start)
+        copy_ints(solver.surface_start, solver.stash_first)
     old = (int(carry), solver.stash_first, solver.surface_impulse, int(solver.reorder), solver.sorted_ids)
     rows = surfaces.list_surfaces(
         model.terrain_params,
