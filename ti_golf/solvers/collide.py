@@ -186,7 +186,7 @@ def serial_steps(t0, dt, steps, kinds: ti.template(), s: ti.template(), relist: 
         if s.scratch.flag[0] != 0:
             if ti.static(not relist):
                 break
-            relist_all_pairs(s.params, s.contact.solver == GAUSS_SEIDEL, s.model, s.lists, s.state, s.scratch)
+            relist_all_pairs(s.params, kinds.gauss_seidel, s.contact.mu, s.model, s.lists, s.state, s.scratch)
             result += 1
             s.scratch.flag[0] = 0
         step_balls(ti.cast(t, float), kinds, s, serial=True, warm=True, sweeps=sweeps, last=True)

@@ -187,7 +187,7 @@ def stash_ball(
     ``width`` > 0 in rows i · width onwards, followed by the id −1 when the list is shorter (the
     serial rebuild, which overwrites ``first`` before it carries the impulses over). The id is
     exact in f32 as well below 2^24 (``ID_EXACT_F32``). With ``with_friction`` (the Gauss–Seidel
-    sweeps, ``width`` 0) each pair's friction impulse from ``friction`` is kept beside them, in
+    sweeps) each pair's friction impulse from ``friction`` is kept beside them, in
     32 bits (:func:`friction_bits`, from the positions ``x`` and friction coefficient ``mu``), so
     that a rebuild needs no second friction table to carry it into."""
     p0, count = first[i], listed(first, i)
@@ -404,7 +404,8 @@ def stashed_row(stashed: ti.template(), stash_first: ti.template(), width, a, b,
 @ti.func
 def relist_all_pairs(
     params: ti.template(),
-    clear_friction,
+    with_friction: ti.template(),
+    mu,
     model: ti.template(),
     lists: ti.template(),
     state: ti.template(),
@@ -419,8 +420,10 @@ def relist_all_pairs(
     step's table ``step_scratch.J`` hold n (n − 1) entries: the old impulses are stashed n − 1 a
     ball (:func:`stash_ball`), as ``first`` is rewritten. Meant for a serial loop (the ``serial``
     variant of ``collide.collision_step``; ``step_scratch.impact``: a scratch entry per ball, see
-    :func:`link_lower_lists`). With ``clear_friction`` the pairs' friction impulses (of the
-    Gauss–Seidel sweeps) are set to zero: they are not carried over in place."""
+    :func:`link_lower_lists`). With ``with_friction`` the pairs' friction impulses (of the
+    Gauss–Seidel sweeps, friction coefficient ``mu``) are carried over too, as ``link_and_carry``
+    carries them: a build through the grid on the same positions gives the same lists and
+    impulses, bit for bit."""
     x, radius, v = ti.static((state.x, model.radius, state.v))
     skin, h, v_cut, r_cut = ti.static((params.skin, params.h, params.v_cut, params.r_cut))
     upper, first, lower, lower_first = ti.static((lists.upper, lists.first, lists.lower, lists.lower_first))
@@ -429,7 +432,9 @@ def relist_all_pairs(
     width = upper.shape[1]
     n_apart = 0
     for i in range(x.shape[0]):
-        stash_ball(i, upper, first, lam, scratch, width=width, with_friction=False, x=x, friction=friction, mu=0.0)
+        stash_ball(
+            i, upper, first, lam, scratch, width=width, with_friction=with_friction, x=x, friction=friction, mu=mu
+        )
         if is_apart(v, radius, i, v_cut, r_cut, 1):  # as apart_balls counts them
             n_apart += 1
     if n_apart > APART_MAX:
@@ -459,14 +464,11 @@ def relist_all_pairs(
             lam=lam,
             old_id=first,
             moved=False,
-            with_friction=False,
+            with_friction=with_friction,
             x=x,
             friction=friction,
-            mu=0.0,
+            mu=mu,
         )  # ids kept
-        if clear_friction:  # (not carried: the pairs' friction impulses start again from zero)
-            for k in range(listed(first, i)):
-                friction[first[i] + k] = ti.Vector([0.0, 0.0, 0.0], dt=ti.f32)
 
 
 @ti.func
