@@ -58,6 +58,7 @@ def gauss_seidel_steps(
     inv_cell: float,
     skip_still: ti.i32,
     blocks: BlockOrder,
+    walk: int_array,
 ) -> ti.i32:
     """Up to ``steps`` Gauss–Seidel steps of ``dt`` [s] (f64) from the time ``t0`` [s], each with
     ``iterations`` sweeps, as the parallel launches take them: the free flight and warm start,
@@ -71,13 +72,16 @@ def gauss_seidel_steps(
     reading one pack's as missing). The first ten arguments are those of
     :func:`.collide.collision_step`. Stops before a step when ``scratch.flag[0]`` asks for
     new lists, or, with ``skip_still``, when no ball is awake and in play (the caller skips such
-    steps: see ``CollisionSolver.skip_still``); returns the steps taken."""
+    steps: see ``CollisionSolver.skip_still``); returns the steps taken. ``walk`` (n entries) is
+    its scratch: the balls colour after colour (:func:`colour_walk`)."""
     air, contact, terrain, params = scalars_of(scalars)
     s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, air=air, flight=flight))
     taken = 0
     t = t0
     ti.loop_config(serialize=True)
-    for _ in range(steps):
+    for step in range(steps):
+        if step == 0:  # (the blocks hold until the lists are built again, after the launch)
+            colour_walk(blocks, walk)
         if scratch.flag[0] != 0 or (skip_still != 0 and not any_in_play(state.status)):
             break
         step_balls(ti.cast(t, float), kinds, s, serial=False, warm=True, sweeps=0, last=False)
@@ -88,7 +92,7 @@ def gauss_seidel_steps(
                 phase = Phase.PROJECT
                 if k <= iterations:
                     phase = phase_of_sweep(k, iterations)
-                serial_pass(phase, any_far, blocks, inv_cell, s)
+                serial_pass(phase, any_far, walk, inv_cell, s)
         grid = ti.static(BuildGrid(grid_start, grid_sorted_ids))
         flag_stale_lists(s, serial=False, g=g, grid=grid, apart_ids=apart_ids, stored_sorted=False)
         for i in range(state.x.shape[0]):
@@ -109,25 +113,38 @@ def any_in_play(status: ti.template()):
 
 
 @ti.func
-def serial_pass(phase, any_far, blocks: ti.template(), inv_cell, s: ti.template()):
-    """A sweep of ``phase``, or a pass of the position projection (``Phase.PROJECT``), as the
-    parallel launches take it, in the calling (serial) thread: the blocks' balls colour after
-    colour, each block bottom-up (``blocks``; the blocks of a colour share no ball, so their order
-    does not matter: :func:`.colour.block_sweep`) and, with ``any_far``, every ball's pairs that
-    the colours left out (:func:`.colour.far_pairs`), after the colours in a sweep and before
-    them in a projection pass."""
-    n = s.state.x.shape[0]
-    for q in range((COLOURS + 1) * n):
+def colour_walk(blocks: ti.template(), walk: ti.template()):
+    """The balls in the order the colours take them, into ``walk``: colour after colour, the
+    blocks of a colour in their order and each block's balls bottom-up (``blocks``: see
+    :func:`.colour.column_order`), in the calling (serial) thread."""
+    n, taken = blocks.ids.shape[0], 0
+    for q in range(COLOURS * n):
         c, m = q // n, q % n
+        if blocks.colour[m] == c:
+            walk[taken] = blocks.ids[m]
+            taken += 1
+
+
+@ti.func
+def serial_pass(phase, any_far, walk: ti.template(), inv_cell, s: ti.template()):
+    """A sweep of ``phase``, or a pass of the position projection (``Phase.PROJECT``), as the
+    parallel launches take it, in the calling (serial) thread: the balls colour after colour
+    (``walk``, :func:`colour_walk`; the blocks of a colour share no ball, so their order does not
+    matter: :func:`.colour.block_sweep`) and, with ``any_far``, every ball's pairs that the
+    colours left out (:func:`.colour.far_pairs`), after the colours in a sweep and before them
+    in a projection pass."""
+    n = s.state.x.shape[0]
+    slots = n
+    if any_far != 0:
+        slots = 2 * n  # slots n to 2n − 1: every ball's far pairs, in storage order
+    for q in range(slots):
+        k = q
         if phase == Phase.PROJECT:  # (a projection pass takes the far pairs first)
-            c = (c + COLOURS) % (COLOURS + 1)
-        i, far_only, take = m, 0, any_far != 0
-        if c < COLOURS:
-            i, take = blocks.ids[m], blocks.colour[m] == c
+            k = (q + n) % slots
+        i, far_only = k - n, 1
+        if k < n:
+            i, far_only = walk[k], 0
+        if phase == Phase.PROJECT:
+            project_ball(i, far_only, any_far, inv_cell, s)
         else:
-            far_only = 1
-        if take:
-            if phase == Phase.PROJECT:
-                project_ball(i, far_only, any_far, inv_cell, s)
-            else:
-                sweep_ball(i, phase, far_only, any_far, inv_cell, s)
+            sweep_ball(i, phase, far_only, any_far, inv_cell, s)

@@ -42,6 +42,8 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
             self.colours = contact_colour.ContactColours(band=2.0 * self.r_ref * edge_colouring.BAND_DIAMETERS)
         elif self.sweeps_by_blocks(model.scene, self.relists):  # the balls by grid column (colour.column_order)
             self.col_ids, self.col_colour = ti.ndarray(ti.i32, model.n), ti.ndarray(ti.i32, model.n)
+            if self.serial:  # the balls colour after colour (block_steps.colour_walk), made at each launch
+                self.col_walk = ti.ndarray(ti.i32, model.n)
         # the columns' bucket starts and their scan's scratch, made at the first build (_order_columns)
         self.col_start: ti.Ndarray | None = None
         self.col_chunk: ti.Ndarray | None = None
@@ -152,6 +154,7 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
                 inv_cell,
                 int(self.skip_still),
                 blocks,
+                self.col_walk,
             )
         )
 
