@@ -45,7 +45,7 @@ from ti_golf.bench.collide import pile_scene
 from ti_golf.cli import main
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
-from ti_golf.solvers.solver import RELIST_MAX_BALLS, SERIAL_MAX_BALLS
+from ti_golf.solvers.stepping import RELIST_MAX_BALLS, SERIAL_MAX_BALLS
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 

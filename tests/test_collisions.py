@@ -18,7 +18,7 @@ from ti_golf.bench.collide import pile_scene
 from ti_golf.bench.pit import pit_scene
 from ti_golf.scene.schema import AT_REST, Plane
 from ti_golf.solvers import CollisionSolver, apart, grid, links, sort
-from ti_golf.solvers.solver import RELIST_MAX_BALLS
+from ti_golf.solvers.stepping import RELIST_MAX_BALLS
 
 # no gravity, air, walls or friction unless a test says otherwise
 FREE = [

@@ -17,7 +17,7 @@ from ti_golf.cli import main
 from ti_golf.physics import kernels
 from ti_golf.scene.document import scene_document, with_changes
 from ti_golf.solvers import CollisionSolver, collide
-from ti_golf.solvers.solver import RELIST_MAX_BALLS
+from ti_golf.solvers.stepping import RELIST_MAX_BALLS
 
 
 def _continued(make, t1: float, t2: float, path):

@@ -25,7 +25,7 @@ from ti_golf.scene.schema import (
 )
 from ti_golf.sim.simulation import Simulation
 from ti_golf.solvers import CollisionSolver
-from ti_golf.solvers.solver import RELIST_MAX_BALLS, relists_in_kernel, steps_serially
+from ti_golf.solvers.stepping import RELIST_MAX_BALLS, relists_in_kernel, steps_serially
 
 
 def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scene, np.ndarray]:
@@ -104,7 +104,7 @@ def bench_collide(
     timed in the same run as the baseline (``terrain_overhead``: relative extra time per step).
     With ``asleep`` every ball of the pile is at rest, as a settled pile ends up, and the same pile
     awake is timed in the same run as the baseline (``asleep_speedup``). A pile small enough to be
-    stepped serially (``serial``, see ``solver.SERIAL_MAX_BALLS``) is also timed stepped in
+    stepped serially (``serial``, see ``stepping.SERIAL_MAX_BALLS``) is also timed stepped in
     parallel, one launch per step, as the baseline (``serial_speedup``).
     With ``shuffled`` the balls are numbered in a random order, as balls given in no spatial order
     are, and the same pile kept in that order (no reordering, see ``CollisionSolver.reorder``) is
@@ -131,7 +131,7 @@ def bench_collide(
             sim.solver = CollisionSolver(sim.model, serial=False if parallel else None, reorder=reorder)
         return sim
 
-    # a serial pile relists in its kernel or is built between launches (solver.RELIST_MAX_BALLS): the
+    # a serial pile relists in its kernel or is built between launches (stepping.RELIST_MAX_BALLS): the
     # warm-up's serial pile is of the same kind
     serial_warm = 64 if relists_in_kernel(n, serial) else RELIST_MAX_BALLS + 1
     for floor in (False, True) if terrain else (False,):  # compile every kernel before timing
@@ -194,7 +194,7 @@ def bench_collide(
         "contacts_per_ball": 2 * touching / n,
         "deepest_overlap": 0.0 if deepest is None else deepest.fraction,  # share of a radius, after the timed steps
         "list_rebuilds": rebuilds,
-        "serial": serial,  # stepped serially, many steps per launch (few balls; see solver.SERIAL_MAX_BALLS)
+        "serial": serial,  # stepped serially, many steps per launch (few balls; see stepping.SERIAL_MAX_BALLS)
         "floor": "terrain" if terrain else "plane",
         "asleep": asleep,
         "shuffled": shuffled,

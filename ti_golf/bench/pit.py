@@ -62,7 +62,7 @@ PIT_BALLS = 100_000
 WARM_UP_BALLS = 8192
 """Balls of the warm-up pour that compiles the kernels: enough for the parallel step stored in
 the grid's order, as the full pour is; a smaller pour warms up with its own number of balls,
-which are stepped as it is (serially or in parallel: ``solver.SERIAL_MAX_BALLS``)."""
+which are stepped as it is (serially or in parallel: ``stepping.SERIAL_MAX_BALLS``)."""
 
 
 def pit_scene(n: int | None = None, overrides: Sequence[str] = ()) -> tuple[Scene, float]:

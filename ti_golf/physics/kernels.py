@@ -280,8 +280,9 @@ def zero_f32_table(a: vec4f_table):
 
 @kernel
 def copy_ints(source: int_array, target: int_array):
-    """``target[i] = source[i]`` for every entry of ``source`` (``target`` at least as long; as ``Ndarray.copy_from``, which
-    launches Taichi's own kernel: its loop stays parallel in :func:`ti_golf.one_thread.in_one_thread`)."""
+    """``target[i] = source[i]`` for every entry of ``source`` (``target`` at least as long): as
+    ``Ndarray.copy_from``, whose own kernel's loop stays parallel in
+    :func:`ti_golf.one_thread.in_one_thread`."""
     for i in range(source.shape[0]):
         target[i] = source[i]
 

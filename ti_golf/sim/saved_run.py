@@ -38,7 +38,7 @@ from ti_golf.sim import run_checks
 from ti_golf.solvers import CollisionSolver, record
 from ti_golf.solvers.record import SolverRecord
 from ti_golf.solvers.record_checks import RecordError, Taker, read_record
-from ti_golf.solvers.solver import relists_in_kernel
+from ti_golf.solvers.stepping import relists_in_kernel
 from ti_golf.solvers.surface_rows import scene_surface_columns
 
 FORMAT = 2

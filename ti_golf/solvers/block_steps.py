@@ -80,7 +80,9 @@ def gauss_seidel_steps(
     t = t0
     ti.loop_config(serialize=True)
     for step in range(steps):
-        if step == 0:  # (the blocks hold until the lists are built again, after the launch)
+        if (
+            step == 0
+        ):  # (inside the serial loop: a loop of its own would be a parallel one; the blocks hold for the launch)
             colour_walk(blocks, walk)
         if scratch.flag[0] != 0 or (skip_still != 0 and not any_in_play(state.status)):
             break

@@ -34,7 +34,7 @@ from ti_golf.runtime import (
 from ti_golf.scene.schema import Scene
 from ti_golf.solvers import apart, grid, links, sort, surfaces
 from ti_golf.solvers.record import Recorded, SolverRecord
-from ti_golf.solvers.stepping import Stepping
+from ti_golf.solvers.stepping import Stepping, relists_in_kernel, steps_serially
 from ti_golf.solvers.storage_order import store_in_grid_order
 from ti_golf.solvers.surface_rows import (
     every_ball_a_row,
@@ -44,17 +44,6 @@ from ti_golf.solvers.surface_rows import (
     table_fits,
     table_for,
 )
-
-SERIAL_MAX_BALLS = 4096
-"""Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
-(``serial`` in ``collide.collision_step``): for so few balls a parallel step is mostly launch and
-thread-pool overhead (see the docs' performance page, "Design measurements")."""
-
-RELIST_MAX_BALLS = 512
-"""Up to this many balls, the serial launch also rebuilds the lists itself, by testing every pair
-in tables n − 1 wide (time and memory that grow as n²); beyond, it stops when the lists must be
-rebuilt, and they are built through the grid between launches (:attr:`CollisionSolver.relists`)."""
-
 
 REORDER_MIN_BALLS = 8192
 """From this many balls on, the parallel step stores the balls in grid order (see
@@ -83,18 +72,6 @@ COLLECT_EVERY = 64
 ``REORDER_MIN_BALLS`` or more: Taichi's kernel launches leave reference cycles that only a full
 collection frees, and while a pour lands the lists are rebuilt at every step (what they hold and
 what a collection costs: the docs' performance page, "Design measurements")."""
-
-
-def relists_in_kernel(n: int, serial: bool) -> bool:
-    """Whether a solver of ``n`` balls that steps ``serial`` or not rebuilds its lists in the
-    serial kernel (``RELIST_MAX_BALLS``) and sweeps its balls in storage order."""
-    return serial and n <= RELIST_MAX_BALLS
-
-
-def steps_serially(n: int) -> bool:
-    """Whether :class:`CollisionSolver` steps ``n`` balls serially by default: few balls, on the CPU
-    (a GPU would run the serial loop on one slow thread)."""
-    return n <= SERIAL_MAX_BALLS and on_cpu()
 
 
 class CollisionSolver(Recorded, Stepping):
@@ -130,7 +107,7 @@ class CollisionSolver(Recorded, Stepping):
         still_steps: how many steps were so skipped (for benchmarks and tests).
         far_owners: how many balls own pairs that the Gauss–Seidel colours leave to
             ``colour.far_pairs`` (0 with the Jacobi sweeps).
-        serial: whether steps run serially, many per launch (default: :func:`steps_serially`; CPU
+        serial: whether steps run serially, many per launch (default: :func:`.stepping.steps_serially`; CPU
             backends only); else one parallel launch per step. Both give the same lists, and
             bit-identical steps with the Jacobi sweeps, and with the Gauss–Seidel sweeps when the
             lists are not rebuilt in the kernel (``relists``).
@@ -454,24 +431,23 @@ class CollisionSolver(Recorded, Stepping):
         assert self._hash is not None, "the lists are built before the grid is read"
         scalars = (self.cell, self.mask, self.skin, self._model.dt, int(fast), self.v_cut, self.r_cut, self.n_apart)
         key = (scalars, *(tuple(v.to_list()) for v in self._hash))
-        if (
-            self._grid_struct is None or self._grid_struct[0] != key
-        ):  # (a struct costs more to make than a build's launch)
-            params = GridParams(
-                inv_cell=1.0 / self.cell,
-                mask=self.mask,
-                origin=self._hash[0],
-                stride=self._hash[1],
-                skin=self.skin,
-                h=self._model.dt,
-                fast=int(fast),
-                v_cut=self.v_cut,
-                r_cut=self.r_cut,
-                n_apart=self.n_apart,
-                scan_apart=int(self.n_apart > 0 and on_cpu()),
-            )
-            self._grid_struct = (key, params)
-        return self._grid_struct[1]
+        if self._grid_struct is not None and self._grid_struct[0] == key:
+            return self._grid_struct[1]  # (kept: a struct costs more to make than a build's launch)
+        params = GridParams(
+            inv_cell=1.0 / self.cell,
+            mask=self.mask,
+            origin=self._hash[0],
+            stride=self._hash[1],
+            skin=self.skin,
+            h=self._model.dt,
+            fast=int(fast),
+            v_cut=self.v_cut,
+            r_cut=self.r_cut,
+            n_apart=self.n_apart,
+            scan_apart=int(self.n_apart > 0 and on_cpu()),
+        )
+        self._grid_struct = (key, params)
+        return params
 
     def _grid_scratch(self) -> Any:
         """The grid's :data:`~ti_golf.physics.types.GridScratch`: its buckets' starts and the balls
@@ -590,7 +566,7 @@ class CollisionSolver(Recorded, Stepping):
     @classmethod
     def sweeps_by_blocks(cls, scene: Scene, relists: bool) -> bool:
         """Whether a solver of this kind for ``scene``, relisting in the serial kernel (``relists``:
-        :func:`relists_in_kernel`) or not, sweeps the balls by blocks of grid columns (the
+        `.stepping.relists_in_kernel`) or not, sweeps the balls by blocks of grid columns (the
         Gauss–Seidel sweeps' column layout), whose order its record keeps (``col_ids``,
         ``col_colour``, ``col_start``, ``col_chunk``)."""
         return False

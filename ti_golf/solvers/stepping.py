@@ -15,10 +15,32 @@ from ti_golf.physics.kernels import int_at
 from ti_golf.physics.model import Model
 from ti_golf.physics.packs import Packs
 from ti_golf.physics.state import State
-from ti_golf.runtime import plain_compile
+from ti_golf.runtime import on_cpu, plain_compile
 from ti_golf.signals import whole_steps
 from ti_golf.solvers import apart, collide, grid
 from ti_golf.solvers.surface_rows import every_ball_a_row, surface_columns
+
+SERIAL_MAX_BALLS = 4096
+"""Up to this many balls (on the CPU), steps run one ball after another, many in one kernel launch
+(``serial`` in ``collide.collision_step``): for so few balls a parallel step is mostly launch and
+thread-pool overhead (see the docs' performance page, "Design measurements")."""
+
+RELIST_MAX_BALLS = 512
+"""Up to this many balls, the serial launch also rebuilds the lists itself, by testing every pair
+in tables n − 1 wide (time and memory that grow as n²); beyond, it stops when the lists must be
+rebuilt, and they are built through the grid between launches (:attr:`Stepping.relists`)."""
+
+
+def relists_in_kernel(n: int, serial: bool) -> bool:
+    """Whether a solver of ``n`` balls that steps ``serial`` or not rebuilds its lists in the
+    serial kernel (``RELIST_MAX_BALLS``) and sweeps its balls in storage order."""
+    return serial and n <= RELIST_MAX_BALLS
+
+
+def steps_serially(n: int) -> bool:
+    """Whether a collision solver steps ``n`` balls serially by default: few balls, on the CPU (a
+    GPU would run the serial loop on one slow thread)."""
+    return n <= SERIAL_MAX_BALLS and on_cpu()
 
 
 class Stepping:
