@@ -632,6 +632,29 @@ def test_surface_types_have_their_own_restitution(tmp_path, collide):
     assert first_peak(yb) == pytest.approx(0.3**2 * H, abs=2e-3)
 
 
+@pytest.mark.parametrize("collide", [False, True], ids=["advance", "collision_step"])
+def test_a_turf_surface_bounces_as_turf_with_contact_turf_off(tmp_path, collide):
+    # the kernels hold the turf impact's code only when a scene may use it (Kinds.turf): a
+    # [[surfaces]] entry with turf = true needs it as much as contact.turf = true does. A ball
+    # dropped onto the "rough" plateau, turf there alone, bounces exactly as with contact.turf =
+    # true (which the rough takes as its default), and not as without turf
+    def heights(contact_turf: bool, rough: dict) -> np.ndarray:
+        sc = scene(
+            contact={"e": 0.5, "mu": 0.3, "turf": contact_turf},
+            terrain=_two_plateaus(tmp_path),
+            surfaces=[{"name": "green"}, {"name": "rough", **rough}],
+        )
+        x = [[10.0, 0.5 + R + 1.0, 0.0], [-10.0, R + 1.0, 0.0]]  # the second on the green
+        sim = tg.Simulation(sc, x=x if collide else x[:1], v=[[2.0, -3.0, 0.0]] * (2 if collide else 1))
+        assert (sim.solver is not None) == collide
+        return np.asarray(sim.run(t=1.0, record_every=10).x)[:, 0, :]
+
+    turf_here = heights(False, {"turf": True})
+    np.testing.assert_array_equal(turf_here, heights(True, {}))
+    no_turf = heights(False, {})
+    assert np.max(np.abs(turf_here[:, 1] - no_turf[:, 1])) > 0.05  # the rebounds differ [m]
+
+
 def test_surface_defaults_come_from_contact_and_levels_are_checked(tmp_path):
     from ti_golf.physics.model import Model
 

@@ -255,23 +255,26 @@ def turf_tilt(v_n, u, speed):
 
 
 @ti.func
-def surface_impulse(n, gap, v, w, radius, lam, contact, v_inelastic, h):
+def surface_impulse(n, gap, v, w, radius, lam, contact, v_inelastic, h, kinds: ti.template()):
     """A ball's impulse per unit mass [m/s] from a static surface (a plane, or the terrain's patch)
     with normal n̂ and surface gap ``gap`` [m]: :func:`pair_impulse` against a body of infinite
     mass, with ``contact``'s restitution, or with ``contact.turf`` in the turf frame of
-    :func:`turf_impact`. With the report's friction (``contact.friction``) the friction is
-    :func:`centre_friction`, bounded by μ times the normal impulse. Returns (P, λ, touching, n̂'),
-    n̂' the normal the impulse was solved along (its contact point is −R·n̂', see :func:`plane_jolt`)."""
+    :func:`turf_impact` (built only with ``kinds.turf``: the scene's
+    :class:`ti_golf.physics.kinds.Kinds`). With the report's friction (``kinds.friction``) the
+    friction is :func:`centre_friction`, bounded by μ times the normal impulse. Returns (P, λ,
+    touching, n̂'), n̂' the normal the impulse was solved along (its contact point is −R·n̂', see
+    :func:`plane_jolt`)."""
     n_eff, e = n, contact.e
-    if contact.turf != 0:
-        n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
+    if ti.static(kinds.turf):
+        if contact.turf != 0:
+            n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
     mu = contact.mu
-    if contact.friction == CENTRE_FRICTION:
+    if ti.static(kinds.friction == CENTRE_FRICTION):
         mu = 0.0  # (added below)
     P, lam_new, touching, _ = pair_impulse(
         n_eff, gap, v, w, radius, 1.0, zero3(), zero3(), 0.0, 0.0, lam, e, mu, v_inelastic, h
     )
-    if contact.friction == CENTRE_FRICTION:
+    if ti.static(kinds.friction == CENTRE_FRICTION):
         j_n = P.dot(n_eff)  # the normal impulse per unit mass (P is j_n·n̂' so far)
         if j_n > 0.0:
             P += centre_friction(n_eff, v, 1.0, contact.mu * j_n)
@@ -279,31 +282,32 @@ def surface_impulse(n, gap, v, w, radius, lam, contact, v_inelastic, h):
 
 
 @ti.func
-def plane_impulse(x, v, w, radius, p, n, contact, v_inelastic, h):
-    """Velocity and spin of a ball after its contact with the plane (p, n̂). Returns (v, ω, touching)."""
+def plane_impulse(x, v, w, radius, p, n, contact, v_inelastic, h, kinds: ti.template()):
+    """Velocity and spin of a ball after its contact with the plane (p, n̂) (``kinds``: the scene's
+    kinds of code). Returns (v, ω, touching)."""
     gap = (x - p).dot(n) - radius
-    P, lam, touching, n_eff = surface_impulse(n, gap, v, w, radius, 0.0, contact, v_inelastic, h)
+    P, lam, touching, n_eff = surface_impulse(n, gap, v, w, radius, 0.0, contact, v_inelastic, h, kinds)
     if touching != 0 and P.dot(n) > 0.0:
-        v, w = plane_jolt(P, lam, v, w, radius, n_eff, contact.mu_roll, contact.friction)
+        v, w = plane_jolt(P, lam, v, w, radius, n_eff, contact.mu_roll, kinds.friction)
     return v, w, touching
 
 
 @ti.func
-def plane_jolt(P, lam, v, w, radius, n, mu_roll, friction):
+def plane_jolt(P, lam, v, w, radius, n, mu_roll, friction: ti.template()):
     """Apply a plane's impulse per unit mass P [m/s] to a ball and, when it is a resting impulse
     (it added ``lam`` > 0), rolling resistance bounded by μ_roll·P·n̂ and the like resistance to
     spin about the normal (:func:`pivot_resistance`). With the report's friction (``friction`` =
-    :data:`CENTRE_FRICTION`) the spin is left as it is. Returns (v, ω)."""
-    spin = friction != CENTRE_FRICTION
+    :data:`CENTRE_FRICTION`, a compile-time value) the spin is left as it is. Returns (v, ω)."""
+    spin = ti.static(friction != CENTRE_FRICTION)
     v_new = v + P
     w_new = w
-    if spin:
+    if ti.static(spin):
         w_new = w + spin_jolt(P, n, radius, 1.0)
     if lam > 0.0:
         j_n = P.dot(n)
         dv, dw = rolling_resistance(v_new, radius, mu_roll, j_n, n)
         v_new += dv
-        if spin:
+        if ti.static(spin):
             w_new += dw + pivot_resistance(w_new, radius, mu_roll, j_n, n)
     return v_new, w_new
 
@@ -337,14 +341,17 @@ projection (B.18) is still pushing them apart, so it is not at rest (see :func:`
 
 
 @ti.func
-def rest_update(touching, v, w, radius, rest_time, h, v_rest, t_rest, friction):
+def rest_update(touching, v, w, radius, rest_time, h, v_rest, t_rest, friction: ti.template()):
     """Status and rest timer of a ball after a step: a touching ball (``touching`` 1; not
     ``PRESSED``) whose speed and R|ω| stay below ``v_rest`` [m/s] for ``t_rest`` [s] is put at
-    rest. With the report's friction (``friction`` = :data:`CENTRE_FRICTION`) the spin is not
-    asked: no contact changes it, so a ball that stopped sliding would otherwise never rest.
-    Returns (status, rest_time)."""
+    rest. With the report's friction (``friction`` = :data:`CENTRE_FRICTION`, a compile-time
+    value) the spin is not asked: no contact changes it, so a ball that stopped sliding would
+    otherwise never rest. Returns (status, rest_time)."""
     rt = 0.0
-    if touching == 1 and v.norm() < v_rest and (radius * w.norm() < v_rest or friction == CENTRE_FRICTION):
+    slow = v.norm() < v_rest
+    if ti.static(friction != CENTRE_FRICTION):
+        slow = slow and radius * w.norm() < v_rest
+    if touching == 1 and slow:
         rt = rest_time + h
     st = ROLLING if touching != 0 else FLYING
     if rt >= t_rest and touching != 0:

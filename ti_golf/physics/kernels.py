@@ -203,7 +203,7 @@ def advance(
                 touching = 0
                 for p in range(model.plane_p.shape[0]):
                     v1, w1, t = plane_impulse(
-                        xi, v1, w1, r, model.plane_p[p], model.plane_n[p], contact, v_inelastic, h
+                        xi, v1, w1, r, model.plane_p[p], model.plane_n[p], contact, v_inelastic, h, kinds
                     )
                     touching |= t
                 pt, nt = zero3(), vec(0.0, 1.0, 0.0)
@@ -212,7 +212,7 @@ def advance(
                     ct = surface_contact(
                         contact, model.surface_table, model.terrain_cells, model.heights, terrain, x_free
                     )
-                    v1, w1, t = plane_impulse(xi, v1, w1, r, pt, nt, ct, v_inelastic, h)
+                    v1, w1, t = plane_impulse(xi, v1, w1, r, pt, nt, ct, v_inelastic, h, kinds)
                     touching |= t
                 x1 = x_free + h * (v1 - v_free)
                 for p in range(model.plane_p.shape[0]):
@@ -223,7 +223,7 @@ def advance(
                     x1 = plane_position(xi, x_free, x1, v_free, v1, r, pt, nt, contact.k_p, h)
                     x1 = terrain_position(xi, x1, pt, nt, r, model.heights, terrain)
                 xi, vi, wi = x1, v1, w1
-                st, rt = rest_update(touching, vi, wi, r, rt, h, params.v_rest, params.t_rest, contact.friction)
+                st, rt = rest_update(touching, vi, wi, r, rt, h, params.v_rest, params.t_rest, kinds.friction)
                 if ti.static(kinds.terrain):
                     if outside(model.heights, terrain, xi):
                         st = OUT_OF_BOUNDS

@@ -1,5 +1,5 @@
-"""The scene's choices of code: which integrator, air model, wind profile, ground and contact solver
-the kernels run.
+"""The scene's choices of code: which integrator, air model, wind profile, ground, contact solver,
+friction model and turf impacts the kernels run.
 
 Each choice selects code rather than a number, so the kernels take them as one compile-time
 argument (``ti.template()``), :class:`Kinds`, and test them with ``ti.static``: a kernel is built
@@ -15,6 +15,7 @@ from typing import Any, NamedTuple
 
 from ti_golf.physics.aero import AIR_MODEL_CODES, WIND_PROFILE_CODES
 from ti_golf.physics.integrate import INTEGRATOR_CODES
+from ti_golf.scene.schema import FRICTION_MODELS
 
 
 class Kinds(NamedTuple):
@@ -30,7 +31,16 @@ class Kinds(NamedTuple):
     terrain: bool
     """Whether the scene has a height field (``[terrain]``)."""
     gauss_seidel: bool
-    """Whether ``contact.solver`` is ``"gauss_seidel"`` (the serial step's sweeps and projection)."""
+    """Whether ``contact.solver`` is ``"gauss_seidel"`` (its sweeps, projection and sleeping, else
+    the Jacobi sweeps')."""
+    friction: int
+    """:data:`~ti_golf.scene.schema.FRICTION_MODELS` index of ``contact.friction_model`` (the
+    report's friction at the centres, :data:`~ti_golf.physics.contact.CENTRE_FRICTION`, or at the
+    contact point with spin)."""
+    turf: bool
+    """Whether some surface may take impacts as on turf (``contact.turf``, or a ``[[surfaces]]``
+    entry's ``turf``): the turf impact's code is built, and each contact's ``turf`` value says
+    whether it applies."""
 
 
 def kinds_of(scene: Any) -> Kinds:
@@ -49,4 +59,6 @@ def kinds_of(scene: Any) -> Kinds:
         wind_profile=WIND_PROFILE_CODES[scene.air.wind_profile],
         terrain=scene.terrain is not None,
         gauss_seidel=scene.contact.solver == "gauss_seidel",
+        friction=FRICTION_MODELS.index(scene.contact.friction_model),
+        turf=bool(scene.contact.turf) or any(bool(sf.turf) for sf in scene.surfaces),
     )

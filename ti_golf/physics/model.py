@@ -33,7 +33,8 @@ class Model:
         air, contact: kernel-argument structs (AirParams, ContactParams).
         gravity: g [m/s²], vec3.
         kinds: the scene's choices of code, the kernels' compile-time argument
-            (:class:`~ti_golf.physics.kinds.Kinds`: integrator, air model, wind profile, terrain).
+            (:class:`~ti_golf.physics.kinds.Kinds`: integrator, air model, wind profile, terrain,
+            contact solver, friction model, turf impacts).
         plane_p, plane_n: points on and unit normals of the impenetrable planes (the ground
             included), numpy (P, 3); passed to kernels directly.
         terrain: the scene's height field (:class:`ti_golf.scene.terrain.Terrain`, numpy) or ``None``.

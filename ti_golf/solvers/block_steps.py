@@ -75,7 +75,7 @@ def gauss_seidel_steps(
     steps: see ``CollisionSolver.skip_still``); returns the steps taken. ``walk`` (n entries) is
     its scratch: the balls colour after colour (:func:`colour_walk`)."""
     air, contact, terrain, params = scalars_of(scalars)
-    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, air=air, flight=flight))
+    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, kinds=kinds, air=air, flight=flight))
     taken = 0
     t = t0
     ti.loop_config(serialize=True)

@@ -53,7 +53,6 @@ import taichi as ti
 
 from ti_golf.physics.aero import V, W, X, coefficients, column
 from ti_golf.physics.contact import (
-    GAUSS_SEIDEL,
     plane_position,
     rest_update,
 )
@@ -158,7 +157,7 @@ def collision_step(
     ``lists.surface_impulse`` then has a column more than there are planes) a ball that leaves the grid's
     extent or falls below ``terrain.kill`` is put out of bounds (velocities zeroed)."""
     air, contact, terrain, params = scalars_of(scalars)
-    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, air=air, flight=flight))
+    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, kinds=kinds, air=air, flight=flight))
     result = 0
     if ti.static(serial == PARALLEL):
         if ti.static(warm):
@@ -246,16 +245,17 @@ def start_step(t0, kinds: ti.template(), v_inelastic, bits, s: ti.template()):
     last step's resting impulses (ball pairs, planes and terrain) applied again, so a stack starts
     the step supported (see the module's docstring)."""
     contact, model, lists, state, scratch = ti.static((s.contact, s.model, s.lists, s.state, s.scratch))
-    for i in range(state.x.shape[0]):  # a ball asleep in a Gauss–Seidel pile wakes when a moving ball touches it
-        if stands_firm(contact, state.status[i]):
-            if touched_by_moving(i, state.status, state.rest_time, lists, bits):
-                state.status[i] = ROLLING
+    if ti.static(s.kinds.gauss_seidel):  # a ball asleep in a Gauss–Seidel pile wakes when a moving ball touches it
+        for i in range(state.x.shape[0]):
+            if stands_firm(s.kinds, state.status[i]):
+                if touched_by_moving(i, state.status, state.rest_time, lists, bits):
+                    state.status[i] = ROLLING
     for i in range(state.x.shape[0]):
         x1, v1, w1 = fly(i, t0, kinds, s)
         scratch.x_free[i], scratch.v_free[i] = x1, v1
-        scratch.clear[i] = rounded_down(surface_clearance(i, x1, s.terrain, model, lists, state))
-        dv, dw, scratch.calm[i] = warm_start(i, bits, contact.solver == GAUSS_SEIDEL, region_hop(contact, s.params), s)
-        if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET and not stands_firm(contact, state.status[i]):
+        scratch.clear[i] = rounded_down(surface_clearance(i, x1, s.kinds.terrain, s.terrain, model, lists, state))
+        dv, dw, scratch.calm[i] = warm_start(i, bits, s.kinds.gauss_seidel, region_hop(s.kinds, s.params), s)
+        if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET and not stands_firm(s.kinds, state.status[i]):
             v1 += dv
             w1 += dw
             v1, w1 = surface_impulses(i, warm=True, vi=v1, wi=w1, h=s.params.h, v_inelastic=v_inelastic, s=s)
@@ -302,18 +302,20 @@ def sweep(v_inelastic, bits, s: ti.template(), last: ti.template()):
     (:func:`ball_sweep`). Between the two, when the pairs marked impacts (``flag[1]``), every ball
     finds its first impact (:func:`impact_keys`, :func:`matched`).
     A quiet ball gets no impulse (its pairs are skipped) and stays where it is; the last pair pass
-    still visits its pairs, for the projections its awake neighbours gather."""
-    contact, state, scratch = ti.static((s.contact, s.state, s.scratch))
-    scratch.flag[1] = 0
-    for i in range(state.x.shape[0]):
-        if contact.solver != GAUSS_SEIDEL:  # (its sweeps are done and leave each pair's gap in J: all it needs)
+    still visits its pairs, for the projections its awake neighbours gather. With the
+    Gauss–Seidel sweeps (``s.kinds.gauss_seidel``) only the ball loop is built: their sweeps are
+    done, and leave each pair's gap in J, all that the ball loop reads of the pairs."""
+    state, scratch = ti.static((s.state, s.scratch))
+    if ti.static(not s.kinds.gauss_seidel):
+        scratch.flag[1] = 0
+        for i in range(state.x.shape[0]):
             if ti.static(last) or scratch.calm[i] != QUIET:
                 owned_pairs(i, last, s.params.h, v_inelastic, s)
-    for i in range(state.x.shape[0]):
-        if scratch.flag[1] != 0:  # (a loop inside the test would not run in parallel)
-            impact_keys(i, bits, s.lists, scratch)
+        for i in range(state.x.shape[0]):
+            if scratch.flag[1] != 0:  # (a loop inside the test would not run in parallel)
+                impact_keys(i, bits, s.lists, scratch)
     pressed = 0.01  # the overlap [share of a radius] that keeps a ball awake
-    if contact.solver == GAUSS_SEIDEL:
+    if ti.static(s.kinds.gauss_seidel):
         pressed = ASLEEP_OVERLAP
     for i in range(state.x.shape[0]):
         if scratch.calm[i] == QUIET:
@@ -332,12 +334,12 @@ def ball_sweep(i, last: ti.template(), pressed, v_inelastic, bits, s: ti.templat
     it awake). The ``last`` sweep then finishes the step (:func:`finish`)."""
     contact, state = ti.static((s.contact, s.state))
     dv, dw, dx, touching = zero3(), zero3(), zero3(), 0
-    if contact.solver == GAUSS_SEIDEL:  # (only its last launch comes here)
+    if ti.static(s.kinds.gauss_seidel):  # (only its last launch comes here)
         touching = touching_by_gaps(i, of_ball(s.model.radius, i), bits, contact.k_p, pressed, s.lists, s.scratch)
     else:
         dv, dw, dx, touching = gather(i, last, bits, contact.k_p, pressed, s)
     v_new, w_new = state.v[i] + dv, state.w[i] + dw
-    if contact.solver != GAUSS_SEIDEL:  # (its sweeps are done)
+    if ti.static(not s.kinds.gauss_seidel):  # (its sweeps are done)
         v_new, w_new = surface_impulses(i, warm=False, vi=v_new, wi=w_new, h=s.params.h, v_inelastic=v_inelastic, s=s)
     if ti.static(not last):
         state.v[i], state.w[i] = v_new, w_new
@@ -360,7 +362,7 @@ def finish(i, v_final, w_final, dx, touching, s: ti.template()):
     st = state.status[i]
     xi, ri = state.x[i], of_ball(model.radius, i)
     x1, touching = end_position(i, v_final, touching, s)
-    if contact.solver != GAUSS_SEIDEL:  # (Gauss–Seidel projects after the step: colour.project_sweep)
+    if ti.static(not s.kinds.gauss_seidel):  # (Gauss–Seidel projects after the step: colour.project_sweep)
         x1 += dx  # position projection k_p·m_red·Δx·n̂ of the ball overlaps (B.18)
     if st == AT_REST and (v_final.norm() > 0.0 or w_final.norm() > 0.0):
         st = FLYING  # woken by an impulse
@@ -370,18 +372,19 @@ def finish(i, v_final, w_final, dx, touching, s: ti.template()):
         # together and fall asleep in the same step, and a ball pressed by a moving one stays
         # awake (asleep, it would feel no gravity and the balls above it would keep rocking)
         st, state.rest_time[i] = rest_update(
-            touching, v_final, w_final, ri, scratch.calm[i], h, params.v_rest, params.t_rest, friction=contact.friction
+            touching, v_final, w_final, ri, scratch.calm[i], h, params.v_rest, params.t_rest, friction=s.kinds.friction
         )
         if st == AT_REST:
             v_final, w_final = zero3(), zero3()
             x1 = xi
-    if terrain.on != 0 and outside(model.heights, terrain, x1):
-        st = OUT_OF_BOUNDS
-        v_final, w_final = zero3(), zero3()
+    if ti.static(s.kinds.terrain):
+        if outside(model.heights, terrain, x1):
+            st = OUT_OF_BOUNDS
+            v_final, w_final = zero3(), zero3()
     state.status[i] = st
     scratch.x_free[i] = x1
     state.v[i], state.w[i] = v_final, w_final
-    if contact.solver != GAUSS_SEIDEL:  # (the Gauss–Seidel steps test the pairs after the projection: see stale)
+    if ti.static(not s.kinds.gauss_seidel):  # (the Gauss–Seidel steps test the pairs after the projection: see stale)
         if moved_past(x1, s.lists.x_at_build[i], 2.0 * h * v_final.norm(), params.half_skin):
             scratch.flag[0] = 1
 
@@ -400,7 +403,7 @@ def end_position(i, v_final, touching, s: ti.template()):
     # no plane or terrain patch within reach of the flight or the end point (see surface_clearance)
     moved = ti.max((x_free - xi).norm_sqr(), (x1 - xi).norm_sqr())
     far = False
-    if terrain.on == 0:
+    if ti.static(not s.kinds.terrain):
         far = beyond_reach(scratch.clear[i], ri, moved)
     else:
         far = beyond_reach(scratch.clear[i], ri, 4.0 * moved) and same_cell(model.heights, terrain, xi, x1)
@@ -413,10 +416,11 @@ def end_position(i, v_final, touching, s: ti.template()):
         )
         if (x1 - model.plane_p[p]).dot(model.plane_n[p]) - ri < 0.01 * ri:
             touching = ti.max(touching, 1)
-    if terrain.on != 0 and not far:
-        pt, nt = surface(model.heights, terrain, x_free)
-        x1 = plane_position(xi, x_free, x1, v_free, v_final, ri, pt, nt, k_p=contact.k_p, h=h)
-        x1 = terrain_position(xi, x1, pt, nt, ri, model.heights, terrain)
-        if (x1 - pt).dot(nt) - ri < 0.01 * ri:
-            touching = ti.max(touching, 1)
+    if ti.static(s.kinds.terrain):
+        if not far:
+            pt, nt = surface(model.heights, terrain, x_free)
+            x1 = plane_position(xi, x_free, x1, v_free, v_final, ri, pt, nt, k_p=contact.k_p, h=h)
+            x1 = terrain_position(xi, x1, pt, nt, ri, model.heights, terrain)
+            if (x1 - pt).dot(nt) - ri < 0.01 * ri:
+                touching = ti.max(touching, 1)
     return x1, touching

@@ -29,7 +29,6 @@ step to step; each ball meets its planes and the terrain right after its pairs
 
 import taichi as ti
 
-from ti_golf.physics.contact import GAUSS_SEIDEL
 from ti_golf.physics.types import (
     BallState,
     BlockOrder,
@@ -100,12 +99,12 @@ def in_play(status):
 
 
 @ti.func
-def region_hop(contact: ti.template(), params: ti.template()):
+def region_hop(kinds: ti.template(), params: ti.template()):
     """What each contact nearer a moving ball takes off how long a ball counts as calm [s]
-    (``pairs.island_calm``): t_rest / ``REGION_HOPS`` with the Gauss–Seidel sweeps, else 0 (the
-    Jacobi sweeps put islands to sleep)."""
+    (``pairs.island_calm``): t_rest / ``REGION_HOPS`` with the Gauss–Seidel sweeps
+    (``kinds.gauss_seidel``), else 0 (the Jacobi sweeps put islands to sleep)."""
     hop = 0.0
-    if contact.solver == GAUSS_SEIDEL:
+    if ti.static(kinds.gauss_seidel):
         hop = params.t_rest / REGION_HOPS
     return hop
 
@@ -197,6 +196,7 @@ def gauss_seidel_sweep(
     any_far: ti.i32,
     inv_cell: float,
     tasks: ti.i32,
+    kinds: ti.template(),
     scalars: float_array,
     model: ModelArrays,
     lists: NeighbourLists,
@@ -209,9 +209,9 @@ def gauss_seidel_sweep(
     docstring; ``blocks`` from :func:`column_order`), meet the pairs they own (but, when
     ``any_far``, those whose other ball was not beside them at the build), then their planes and
     the terrain (:func:`sweep_ball`), with the parameters in ``scalars``
-    (:func:`ti_golf.physics.types.scalars_of`)."""
+    (:func:`ti_golf.physics.types.scalars_of`) and the scene's ``kinds`` of code."""
     _, contact, terrain, params = scalars_of(scalars)
-    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch))
+    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, kinds=kinds))
     block_sweep(phase, project=False, any_far=any_far, inv_cell=inv_cell, tasks=tasks, blocks=blocks, s=s)
 
 
@@ -267,6 +267,7 @@ def ball_pass(i, phase, project: ti.template(), any_far, inv_cell, s: ti.templat
 def far_pairs(
     phase: ti.i32,
     inv_cell: float,
+    kinds: ti.template(),
     scalars: float_array,
     model: ModelArrays,
     lists: NeighbourLists,
@@ -274,9 +275,9 @@ def far_pairs(
     scratch: StepScratch,
 ):
     """The pairs the colours left out (their balls were farther apart than beside each other at the
-    build), one ball after another in storage order."""
+    build), one ball after another in storage order (``kinds``: the scene's kinds of code)."""
     _, contact, terrain, params = scalars_of(scalars)
-    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch))
+    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, kinds=kinds))
     ti.loop_config(serialize=True)
     for i in range(state.x.shape[0]):
         if phase == Phase.PROJECT:
@@ -336,7 +337,7 @@ def sweep_ball(i, phase, far_only, any_far, inv_cell, s: ti.template()):
         k = sweep_constants(contact, s.params)
         xi, vi, wi = state.x[i], state.v[i], state.w[i]
         ri, inv_mi = of_ball(model.radius, i), 1.0 / of_ball(model.mass, i)
-        firm = stands_firm(contact, state.status[i])
+        firm = stands_firm(s.kinds, state.status[i])
         if firm:
             inv_mi = 0.0
         col = column_of(lists.x_at_build[i], inv_cell)

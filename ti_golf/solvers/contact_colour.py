@@ -98,7 +98,7 @@ def colour_pair(p, phase, s: ti.template(), tables: ti.template()):
     if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
         if phase != Phase.BOUNCE or scratch.impact[i] != 0:
             ri, inv_mi = of_ball(model.radius, i), 1.0 / of_ball(model.mass, i)
-            if stands_firm(contact, state.status[i]):
+            if stands_firm(s.kinds, state.status[i]):
                 inv_mi = 0.0
             j = lists.upper[i, p - lists.first[i]]
             a = body(state.v[i], state.w[i], ri, inv_mi)
@@ -116,7 +116,7 @@ def surface_ball(i, phase, s: ti.template()):
     state, scratch = ti.static((s.state, s.scratch))
     if phase == Phase.FIRST:
         scratch.impact[i] = 0
-    firm = stands_firm(s.contact, state.status[i])
+    firm = stands_firm(s.kinds, state.status[i])
     if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET and not firm:
         v_inelastic = inelastic_speed(s.contact, s.params)
         vi, wi = surface_impulses(
@@ -129,6 +129,7 @@ def surface_ball(i, phase, s: ti.template()):
 def colour_pass(
     phase: ti.i32,
     c0: ti.i32,
+    kinds: ti.template(),
     scalars: float_array,
     model: ModelArrays,
     lists: NeighbourLists,
@@ -146,9 +147,9 @@ def colour_pass(
     parallel loop per colour, a thread per pair (:func:`colour_pair` or
     :func:`project_colour_pair`), each loop's bounds read from ``tables.start`` on the device;
     with ``tail``, the overflow set after, one pair after another, and in a projection each
-    ball's planes last (:func:`.sequential.project_planes`)."""
+    ball's planes last (:func:`.sequential.project_planes`). ``kinds``: the scene's kinds of code."""
     _, contact, terrain, params = scalars_of(scalars)
-    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch))
+    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, kinds=kinds))
     if ti.static(head and not project):
         for i in range(state.x.shape[0]):
             surface_ball(i, phase, s)
@@ -244,44 +245,26 @@ class ContactColours(PairColouring):
         return loops
 
 
-def gauss_seidel_step(
-    colours: ContactColours, iterations: int, scalars: Any, model: Any, lists: Any, state: Any, scratch: Any
-) -> None:
+def gauss_seidel_step(colours: ContactColours, iterations: int, arguments: tuple) -> None:
     """A step's Gauss–Seidel sweeps (``iterations`` of them and the restitution pass,
     :func:`.colour.step_phases`) laid out by contact colours, from the warm start to the end of the
-    sweeps (:func:`colour_pass`: one launch a sweep on GPU backends). The caller finishes the
-    step (``collide.collision_step``) and then calls :func:`project`."""
-    passes(
-        colours,
-        step_phases(iterations),
-        proj=False,
-        scalars=scalars,
-        model=model,
-        lists=lists,
-        state=state,
-        scratch=scratch,
-    )
+    sweeps (:func:`colour_pass`: one launch a sweep on GPU backends; ``arguments``: those of
+    ``collide.collision_step``, ``CollisionSolver._arguments``). The caller finishes the step
+    (``collide.collision_step``) and then calls :func:`project`."""
+    passes(colours, step_phases(iterations), proj=False, arguments=arguments)
 
 
-def project(colours: ContactColours, scalars: Any, model: Any, lists: Any, state: Any, scratch: Any) -> None:
+def project(colours: ContactColours, arguments: tuple) -> None:
     """The ``PROJECTIONS`` passes of the position projection at the end of a step, laid out as the
     sweeps are: the colours, the overflow set, then each ball's planes."""
-    passes(
-        colours,
-        [Phase.FIRST] * PROJECTIONS,
-        proj=True,
-        scalars=scalars,
-        model=model,
-        lists=lists,
-        state=state,
-        scratch=scratch,
-    )
+    passes(colours, [Phase.FIRST] * PROJECTIONS, proj=True, arguments=arguments)
 
 
-def passes(
-    colours: ContactColours, phases: Any, proj: bool, scalars: Any, model: Any, lists: Any, state: Any, scratch: Any
-) -> None:
-    """A pass of :func:`colour_pass` for each of ``phases`` (with ``proj``: of the projection)."""
+def passes(colours: ContactColours, phases: Any, proj: bool, arguments: tuple) -> None:
+    """A pass of :func:`colour_pass` for each of ``phases`` (with ``proj``: of the projection),
+    with the step's scalars, kinds, model, lists, state and scratch from ``arguments`` (see
+    :func:`gauss_seidel_step`)."""
+    scalars, _, _, _, kinds, model, lists, state, _, scratch = arguments
     t, spans = colours.tables, colours.spans(proj)
     with plain_compile(vulkan=True):  # see runtime.plain_compile
         for phase in phases:
@@ -289,6 +272,7 @@ def passes(
                 colour_pass(
                     phase,
                     c0,
+                    kinds,
                     scalars,
                     model,
                     lists,

@@ -164,11 +164,11 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
         step, then ``colour.PROJECTIONS`` passes of the position projection. Returns whether the
         lists must be rebuilt (``stale.lists_stale``)."""
         collide.launch(arguments, serial=collide.PARALLEL, warm=True, sweeps=0, last=False)
-        scalars, _, _, _, _, model, lists, state, _, scratch = arguments
+        scalars, _, _, _, kinds, model, lists, state, _, scratch = arguments
         if self.colours is not None:  # the contacts layout (contact_colour)
-            contact_colour.gauss_seidel_step(self.colours, iterations, scalars, model, lists, state, scratch)
+            contact_colour.gauss_seidel_step(self.colours, iterations, arguments)
             collide.launch(arguments, serial=collide.PARALLEL, warm=False, sweeps=0, last=True)
-            contact_colour.project(self.colours, scalars, model, lists, state, scratch)
+            contact_colour.project(self.colours, arguments)
             return stale.lists_stale(scalars, *self.last_grid(), model, lists, state, scratch)
         any_far, inv_cell, tasks, blocks = self._block_order()
         for phase in colour.step_phases(iterations):
@@ -178,6 +178,7 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
                     any_far,
                     inv_cell,
                     tasks,
+                    kinds,
                     scalars,
                     model=model,
                     lists=lists,
@@ -186,11 +187,11 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
                     blocks=blocks,
                 )
             if any_far:
-                colour.far_pairs(phase, inv_cell, scalars, model, lists, state, scratch)
+                colour.far_pairs(phase, inv_cell, kinds, scalars, model, lists, state, scratch)
         collide.launch(arguments, serial=collide.PARALLEL, warm=False, sweeps=0, last=True)
         for _ in range(colour.PROJECTIONS):
             if any_far:
-                colour.far_pairs(Phase.PROJECT, inv_cell, scalars, model, lists, state, scratch)
+                colour.far_pairs(Phase.PROJECT, inv_cell, kinds, scalars, model, lists, state, scratch)
             colour.project_sweep(
                 any_far, inv_cell, tasks, scalars, model, lists=lists, state=state, scratch=scratch, blocks=blocks
             )

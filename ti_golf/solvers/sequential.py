@@ -11,7 +11,6 @@ import taichi as ti
 
 from ti_golf.physics.contact import (
     CENTRE_FRICTION,
-    GAUSS_SEIDEL,
     centre_friction,
     clamp_friction,
     friction_impulse,
@@ -45,7 +44,7 @@ def static_surface():
 
 
 @ti.func
-def pair_step(phase, n, gap, v_n0, a, b, lam, F, e, mu, v_inelastic, h, friction=0):
+def pair_step(phase, n, gap, v_n0, a, b, lam, F, e, mu, v_inelastic, h, friction: ti.template() = 0):
     """One Gauss–Seidel update of a contact (``contact.solver = "gauss_seidel"``): (the impulse P
     [N·s] on body a, −P on b; the contact's new accumulated normal impulse λ [N·s] and friction
     impulse F [N·s] on a). ``n``: unit normal from b to a; ``gap``: surface gap [m] at the start
@@ -68,8 +67,9 @@ def pair_step(phase, n, gap, v_n0, a, b, lam, F, e, mu, v_inelastic, h, friction
     closing its gap exactly within the step (the next step stops it, touching): v_n = 0 would stop
     it short, up to h·|v_n0| apart. With e > 0 such a pair bounces from where it is, up to
     h·|v_n0| before touching, as with the speculative contacts of other engines: moving it to the
-    contact first would take speed from the bounce. ``friction`` = :data:`ti_golf.physics.contact.CENTRE_FRICTION`: the friction stops the centres' tangential
-    velocity instead (:func:`ti_golf.physics.contact.centre_friction`)."""
+    contact first would take speed from the bounce. ``friction`` = :data:`ti_golf.physics.contact.CENTRE_FRICTION` (a
+    compile-time value): the friction stops the centres' tangential velocity instead
+    (:func:`ti_golf.physics.contact.centre_friction`)."""
     v_a, w_a, r_a, inv_m_a = a.v, a.w, a.r, a.inv_m
     v_b, w_b, r_b, inv_m_b = b.v, b.w, b.r, b.inv_m
     m_eff = 1.0 / (inv_m_a + inv_m_b)
@@ -85,7 +85,7 @@ def pair_step(phase, n, gap, v_n0, a, b, lam, F, e, mu, v_inelastic, h, friction
     if phase != Phase.BOUNCE:
         F_new = zero3()  # |F| ≤ μ·λ: a contact that presses no more holds no friction
         if lam_new > 0.0:
-            if friction == CENTRE_FRICTION:
+            if ti.static(friction == CENTRE_FRICTION):
                 F_new = F + centre_friction(n, v_a - v_b, m_eff, 1e30)
             else:
                 F_new = F + friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_eff=m_eff, bound=1e30)
@@ -95,17 +95,19 @@ def pair_step(phase, n, gap, v_n0, a, b, lam, F, e, mu, v_inelastic, h, friction
 
 
 @ti.func
-def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, h):
+def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, h, kinds: ti.template()):
     """:func:`pair_step` of a ball against a static surface (a plane, or the terrain's patch) with
     normal n̂, per unit mass [m/s] (``v0``: the ball's velocity before the step's contacts; ``F``:
     the friction impulse applied so far), with
-    ``contact``'s restitution, or with ``contact.turf`` in the turf frame of :func:`ti_golf.physics.contact.turf_impact`.
+    ``contact``'s restitution, or with ``contact.turf`` in the turf frame of :func:`ti_golf.physics.contact.turf_impact`
+    (built only with ``kinds.turf``: the scene's :class:`ti_golf.physics.kinds.Kinds`).
     In the ``BOUNCE`` pass a pressed ball also meets rolling resistance and the resistance to spin
     about the normal, bounded by μ_roll·λ (once per step, as :func:`ti_golf.physics.contact.plane_jolt` does). With the
-    report's friction (``contact.friction``) the spin is left as it is. Returns (v, ω, λ, F)."""
+    report's friction (``kinds.friction``) the spin is left as it is. Returns (v, ω, λ, F)."""
     n_eff, e = n, contact.e
-    if contact.turf != 0:
-        n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
+    if ti.static(kinds.turf):
+        if contact.turf != 0:
+            n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
     ball = body(v, w, radius, 1.0)
     P, lam_new, F_new = pair_step(
         phase,
@@ -120,27 +122,31 @@ def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, 
         mu=contact.mu,
         v_inelastic=v_inelastic,
         h=h,
-        friction=contact.friction,
+        friction=kinds.friction,
     )
-    spin = contact.friction != CENTRE_FRICTION
+    spin = ti.static(kinds.friction != CENTRE_FRICTION)
     v_new = v + P
     w_new = w
-    if spin:
+    if ti.static(spin):
         w_new = w + spin_jolt(P, n_eff, radius, 1.0)
     if phase == Phase.BOUNCE and lam_new > 0.0:
         dv, dw = rolling_resistance(v_new, radius, contact.mu_roll, lam_new, n_eff)
         v_new += dv
-        if spin:
+        if ti.static(spin):
             w_new += dw + pivot_resistance(w_new, radius, contact.mu_roll, lam_new, n_eff)
     return v_new, w_new, lam_new, F_new
 
 
 @ti.func
-def stands_firm(contact: ti.template(), status_i):
-    """Whether a ball with status ``status_i`` stands firm in a step: with the Gauss–Seidel sweeps, a
-    ball asleep takes no impulse and does not move, and the awake balls touching it meet it as they
-    meet a wall, until a moving ball touches it (:func:`.pairs.touched_by_moving`)."""
-    return contact.solver == GAUSS_SEIDEL and status_i == AT_REST
+def stands_firm(kinds: ti.template(), status_i):
+    """Whether a ball with status ``status_i`` stands firm in a step: with the Gauss–Seidel sweeps
+    (``kinds.gauss_seidel``), a ball asleep takes no impulse and does not move, and the awake balls
+    touching it meet it as they meet a wall, until a moving ball touches it
+    (:func:`.pairs.touched_by_moving`)."""
+    firm = False
+    if ti.static(kinds.gauss_seidel):
+        firm = status_i == AT_REST
+    return firm
 
 
 @ti.func
@@ -199,7 +205,7 @@ def meet_pair(i, j, p, phase, n, a, k, s: ti.template()):
     vi, wi, ri, inv_mi = a.v, a.w, a.r, a.inv_m
     approached = 0
     rj, inv_mj = of_ball(model.radius, j), 1.0 / of_ball(model.mass, j)
-    if stands_firm(contact, state.status[j]):
+    if stands_firm(s.kinds, state.status[j]):
         inv_mj = 0.0
     F = ti.cast(lists.friction[p], float)
     lam = ti.cast(lists.lam[p], float)

@@ -120,30 +120,50 @@ def stale_near(
     :data:`ti_golf.physics.types.GridParams`; ``start``, ``sorted_ids``: its buckets, see
     :func:`.grid.list_neighbours` for ``stored_sorted``): the balls of the ``REACH_CELLS`` cells
     around ball i's at the build, and the balls listed apart (every ball, for a ball listed apart),
-    as the build tested them."""
+    as the build tested them. The candidates come in runs (:func:`candidate_run`), all tested by
+    one call site of :func:`unlisted_within_reach`, which Taichi's front end inlines once."""
+    every = g.scan_apart != 0 and set_apart(i, apart_ids, g.n_apart)
+    c = cell_of(ti.cast(lists.x_at_build[i], float), g.inv_cell)
+    runs = 1 if every else 2 * COLUMNS + 1
     stale = False
-    if g.scan_apart != 0 and set_apart(i, apart_ids, g.n_apart):
-        stale = stale_by_every_ball(i, used_i, g.h, radius, lists, x1, v)
-    else:
-        c = cell_of(ti.cast(lists.x_at_build[i], float), g.inv_cell)
-        span = 2 * REACH_CELLS + 1
-        for q in range(span * span):  # the columns of cells around c, each a run of buckets
-            row = c + ti.Vector([q % span - REACH_CELLS, -REACH_CELLS, q // span - REACH_CELLS])
-            b = bucket_of(row, g.mask, g.origin, g.stride)
-            for part in range(2):
-                lo, hi = start[b], start[ti.min(b + span, g.mask + 1)]
-                if part == 1:  # the run wraps around the table's end
-                    lo, hi = start[0], start[ti.max(b + span - (g.mask + 1), 0)]
-                for k in range(lo, hi):
-                    j = k
-                    if ti.static(not stored_sorted):
-                        j = sorted_ids[k]
-                    if unlisted_within_reach(i, j, used_i, g.h, radius, lists, x1, v):
-                        stale = True
-        for f in range(g.n_apart * g.scan_apart):
-            if unlisted_within_reach(i, apart_ids[f], used_i, g.h, radius, lists, x1, v):
+    for q in range(runs):
+        lo, hi = candidate_run(q, every, c, g, start, x1.shape[0])
+        for k in range(lo, hi):
+            j = k  # every ball, or the grid's k-th
+            if q == 2 * COLUMNS:  # the balls listed apart
+                j = apart_ids[k]
+            elif not every:
+                if ti.static(not stored_sorted):
+                    j = sorted_ids[k]
+            if unlisted_within_reach(i, j, used_i, g.h, radius, lists, x1, v):
                 stale = True
     return stale
+
+
+COLUMNS = (2 * REACH_CELLS + 1) ** 2
+"""The columns of cells around a ball's cell that :func:`stale_near` searches."""
+
+
+@ti.func
+def candidate_run(q, every, c, g: ti.template(), start: ti.template(), n):
+    """Run q of :func:`stale_near`'s candidates, as a range [lo, hi): with ``every`` (a ball
+    listed apart) the n balls; else run 2·m + part, for m < ``COLUMNS``, the part (the second where
+    it wraps around the table's end) of the buckets of column m of cells around cell ``c`` (from
+    the grid ``g`` and its bucket starts ``start``), and run 2·``COLUMNS`` the balls listed apart
+    (``apart_ids``' first ``g.n_apart`` with ``g.scan_apart``)."""
+    span = 2 * REACH_CELLS + 1
+    lo, hi = 0, n
+    if not every:
+        if q == 2 * COLUMNS:
+            hi = g.n_apart * g.scan_apart
+        else:
+            m, part = q // 2, q % 2
+            row = c + ti.Vector([m % span - REACH_CELLS, -REACH_CELLS, m // span - REACH_CELLS])
+            b = bucket_of(row, g.mask, g.origin, g.stride)
+            lo, hi = start[b], start[ti.min(b + span, g.mask + 1)]
+            if part == 1:  # the run wraps around the table's end
+                lo, hi = start[0], start[ti.max(b + span - (g.mask + 1), 0)]
+    return lo, hi
 
 
 @ti.func

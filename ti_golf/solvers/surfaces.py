@@ -18,7 +18,6 @@ import taichi as ti
 
 from ti_golf.physics.contact import (
     CENTRE_FRICTION,
-    GAUSS_SEIDEL,
     centre_friction,
     clamp_friction,
     plane_jolt,
@@ -56,7 +55,13 @@ NEAR = -1.0  # the surface clearance of a ball resting on a plane or the terrain
 
 @ti.func
 def surface_clearance(
-    i, x_free_i, terrain: ti.template(), model: ti.template(), lists: ti.template(), state: ti.template()
+    i,
+    x_free_i,
+    with_terrain: ti.template(),
+    terrain: ti.template(),
+    model: ti.template(),
+    lists: ti.template(),
+    state: ti.template(),
 ):
     """The least surface gap [m] of ball i to the planes at the start of the step and, with a
     terrain, a lower bound on its gap to the terrain less its free-flight displacement (see
@@ -72,7 +77,7 @@ def surface_clearance(
         c = ti.min(c, (state.x[i] - model.plane_p[p]).dot(model.plane_n[p]) - of_ball(model.radius, i))
         if row >= 0 and lists.surface_impulse[row, p][LAMBDA] > 0.0:
             c = NEAR
-    if terrain.on != 0:
+    if ti.static(with_terrain):
         if row >= 0 and lists.surface_impulse[row, model.plane_n.shape[0]][LAMBDA] > 0.0:
             c = NEAR
         elif c != NEAR:
@@ -134,17 +139,18 @@ def surface_impulses(i, warm: ti.template(), vi, wi, h, v_inelastic, s: ti.templ
         vi, wi = surface_contact_step(
             i, row, p, n, gap, vi, wi, r, contact=contact, h=h, v_inelastic=v_inelastic, s=s, warm=warm, phase=phase
         )
-    if terrain.on != 0 and not far:
-        q = model.plane_n.shape[0]
-        if ti.static(not warm) or lists.surface_impulse[row, q][LAMBDA] > 0.0:  # (warm: row ≥ 0)
-            pt, n = surface(model.heights, terrain, scratch.x_free[i])
-            ct = surface_contact(
-                contact, model.surface_table, model.terrain_cells, model.heights, terrain, scratch.x_free[i]
-            )
-            gap = (state.x[i] - pt).dot(n) - r
-            vi, wi = surface_contact_step(
-                i, row, q, n, gap, vi, wi, r, contact=ct, h=h, v_inelastic=v_inelastic, s=s, warm=warm, phase=phase
-            )
+    if ti.static(s.kinds.terrain):
+        if not far:
+            q = model.plane_n.shape[0]
+            if ti.static(not warm) or lists.surface_impulse[row, q][LAMBDA] > 0.0:  # (warm: row ≥ 0)
+                pt, n = surface(model.heights, terrain, scratch.x_free[i])
+                ct = surface_contact(
+                    contact, model.surface_table, model.terrain_cells, model.heights, terrain, scratch.x_free[i]
+                )
+                gap = (state.x[i] - pt).dot(n) - r
+                vi, wi = surface_contact_step(
+                    i, row, q, n, gap, vi, wi, r, contact=ct, h=h, v_inelastic=v_inelastic, s=s, warm=warm, phase=phase
+                )
     return vi, wi
 
 
@@ -160,7 +166,7 @@ def surface_contact_step(
     carried impulse, and with nothing kept from one sweep to the next; the lists are then rebuilt
     before the next step (``s``: the step's :class:`.step.Step`; ``contact``: the surface's
     contact parameters). Returns (v, ω)."""
-    lists, scratch = ti.static((s.lists, s.scratch))
+    lists, scratch, kinds = ti.static((s.lists, s.scratch, s.kinds))
     lam0, F0 = 0.0, zero3()
     if row >= 0:  # f32 in the table (see surface_impulses)
         kept = lists.surface_impulse[row, column]
@@ -168,25 +174,25 @@ def surface_contact_step(
         F0 = ti.cast(ti.Vector([kept[1], kept[2], kept[3]]), float)
     if ti.static(warm):
         if lam0 > 0.0:
-            if contact.solver == GAUSS_SEIDEL:  # the normal and friction impulses carried from the last step
+            if ti.static(kinds.gauss_seidel):  # the normal and friction impulses carried from the last step
                 P = lam0 * n + clamp_friction(F0, n, contact.mu * lam0)
                 vi += P
-                if contact.friction != CENTRE_FRICTION:
+                if ti.static(kinds.friction != CENTRE_FRICTION):
                     wi += spin_jolt(P, n, r, 1.0)
             else:
                 P = zero3()
-                if contact.friction == CENTRE_FRICTION:
+                if ti.static(kinds.friction == CENTRE_FRICTION):
                     P = lam0 * n + centre_friction(n, vi, 1.0, contact.mu * lam0)
                 else:
                     P = warm_impulse(
                         n, vi, wi, r, v_b=zero3(), w_b=zero3(), r_b=0.0, m_eff=1.0, lam=lam0, mu=contact.mu
                     )
-                vi, wi = plane_jolt(P, lam0, vi, wi, r, n, contact.mu_roll, contact.friction)
+                vi, wi = plane_jolt(P, lam0, vi, wi, r, n, contact.mu_roll, kinds.friction)
     elif gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam0 > 0.0:  # else no impulse (pair_impulse)
         lam_p = 0.0
         if row < 0:  # an impulse the lists did not foresee (see list_surfaces): rebuild them
             scratch.flag[0] = 1
-        if phase != Phase.JACOBI:
+        if ti.static(kinds.gauss_seidel):  # (phase: that of the sweep, else Phase.JACOBI)
             F = F0
             if phase == Phase.FIRST:  # what the warm start applied
                 F = clamp_friction(F, n, contact.mu * lam0)
@@ -203,15 +209,16 @@ def surface_contact_step(
                 contact=contact,
                 v_inelastic=v_inelastic,
                 h=h,
+                kinds=kinds,
             )
             if row >= 0:
                 lists.surface_impulse[row, column] = ti.Vector([lam_p, F[0], F[1], F[2]], dt=ti.f32)
         else:
             P, lam_p, _, n_eff = surface_impulse(
-                n, gap, vi, wi, r, lam=lam0, contact=contact, v_inelastic=v_inelastic, h=h
+                n, gap, vi, wi, r, lam=lam0, contact=contact, v_inelastic=v_inelastic, h=h, kinds=kinds
             )
             if P.dot(n) != 0.0:
-                vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, contact.mu_roll, contact.friction)
+                vi, wi = plane_jolt(P, lam_p - lam0, vi, wi, r, n_eff, contact.mu_roll, kinds.friction)
             if row >= 0:
                 lists.surface_impulse[row, column][LAMBDA] = ti.cast(lam_p, ti.f32)
         if lam_p > 0.0:
