@@ -39,7 +39,7 @@ def read_back(scalars: float_array, out: float_array):
     air, contact, terrain, params = scalars_of(scalars)
     out[0], out[1], out[2] = air.rho, ti.cast(air.gamma, float), air.spin_decay
     out[3], out[4], out[5] = air.wind[0], air.wind[1], air.wind[2]
-    out[6], out[7] = contact.e, ti.cast(contact.friction, float)
+    out[6], out[7] = contact.e, ti.cast(contact.turf, float)
     out[8], out[9], out[10] = ti.cast(terrain.on, float), terrain.origin[2], terrain.kill
     out[11], out[12], out[13] = params.gravity[0], params.h, params.r_cut
 
@@ -52,7 +52,7 @@ NAMED = [
     (0, "wind", 1),
     (0, "wind", 2),
     (1, "e", None),
-    (1, "friction", None),
+    (1, "turf", None),
     (2, "on", None),
     (2, "origin", 2),
     (2, "kill", None),

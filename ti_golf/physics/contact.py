@@ -37,11 +37,8 @@ from ti_golf.scene.schema import AT_REST, FLYING, FRICTION_MODELS, ROLLING
 
 _TINY = 1e-12
 
-GAUSS_SEIDEL = 1
-"""``ContactParams.solver`` of the Gauss–Seidel sweeps (:mod:`ti_golf.solvers.colour`; 0: the Jacobi sweeps)."""
-
 CENTRE_FRICTION = FRICTION_MODELS.index("report")
-"""``ContactParams.friction`` of the report's friction from the centre's velocity (0: at the contact point)."""
+"""``Kinds.friction`` of the report's friction from the centre's velocity (0: at the contact point)."""
 
 
 @ti.func

@@ -11,7 +11,7 @@ from ti_golf.physics.aero import air_params
 from ti_golf.physics.kinds import kinds_of
 from ti_golf.physics.types import ContactParams, TerrainParams, vec3
 from ti_golf.runtime import np_float
-from ti_golf.scene.schema import FRICTION_MODELS, SOLVERS, Scene, Surface, Vec3
+from ti_golf.scene.schema import Scene, Surface, Vec3
 from ti_golf.scene.terrain import build_terrain
 
 
@@ -111,8 +111,6 @@ class Model:
             relax=c.relax,
             v_bounce=c.v_bounce,
             turf=int(c.turf),
-            solver=SOLVERS.index(c.solver),
-            friction=FRICTION_MODELS.index(c.friction_model),
         )
         self.gravity = vec3(*w.gravity)
         self.kinds = kinds_of(scene)

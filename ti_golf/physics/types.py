@@ -184,9 +184,7 @@ ContactParams: TypeAlias = Deferred(
         mu_roll=float,  # rolling resistance: deceleration μ_roll·g_n while rolling
         relax=float,  # Jacobi relaxation of resting ball–ball impulses
         v_bounce=float,  # approach speeds below v_bounce + 2|g|h are inelastic [m/s]
-        turf=ti.i32,  # 1: ground impacts as on turf (contact.turf_impact); 0: restitution e
-        solver=ti.i32,  # the sweeps: 0 Jacobi, 1 Gauss–Seidel (scene.schema.SOLVERS)
-        friction=ti.i32,  # ball–surface friction: 0 at the contact point (spin), 1 the report's (contact.CENTRE)
+        turf=ti.i32,  # 1: ground impacts as on turf (contact.turf_impact, built with Kinds.turf); 0: restitution e
     ),
     "ContactParams",
 )
