@@ -254,7 +254,7 @@ def start_step(t0, kinds: ti.template(), v_inelastic, bits, s: ti.template()):
         x1, v1, w1 = fly(i, t0, kinds, s)
         scratch.x_free[i], scratch.v_free[i] = x1, v1
         scratch.clear[i] = rounded_down(surface_clearance(i, x1, s.kinds.terrain, s.terrain, model, lists, state))
-        dv, dw, scratch.calm[i] = warm_start(i, bits, s.kinds.gauss_seidel, region_hop(s.kinds, s.params), s)
+        dv, dw, scratch.calm[i] = warm_start(i, bits, region_hop(s.kinds, s.params), s)
         if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET and not stands_firm(s.kinds, state.status[i]):
             v1 += dv
             w1 += dw

@@ -161,13 +161,13 @@ def quiet_ball(
 
 
 @ti.func
-def warm_start(i, bits, carried: ti.template(), hop, s: ti.template()):
+def warm_start(i, bits, hop, s: ti.template()):
     """Δv [m/s] and Δω [rad/s] of ball i (``s``: the step's :class:`.step.Step`; the arrays below
     are its model's, lists', state's and scratch's; μ its contact's; ``bits``: see
     :func:`.links.slot_bits`) from last step's resting impulses λ of its ball pairs, each
     along the pair's normal at the start of the step, summed in id order (lower then upper). A
-    normal impulse gives no spin; friction is left to the sweeps, but with ``carried`` (compile
-    time: the Gauss–Seidel sweeps), where each pair's friction impulse F from the last step is applied too,
+    normal impulse gives no spin; friction is left to the sweeps, but with the Gauss–Seidel sweeps
+    (``s.kinds.gauss_seidel``), where each pair's friction impulse F from the last step is applied too,
     in the pair's tangent plane and at most μ·λ (:func:`ti_golf.physics.contact.clamp_friction`: the same on both
     balls, bit for bit). Also stores the geometry of the pairs
     ball i owns for the sweeps in their rows first[i] + k of J: 1/|x_i − x_j| (``INV``, positive:
@@ -195,7 +195,7 @@ def warm_start(i, bits, carried: ti.template(), hop, s: ti.template()):
             inv, gap = pair_geometry(x, radius, i, j)
             n = pair_normal(xi, x[j], inv)
             P += resting_impulse(status, i, j, n, lam[p])
-            if ti.static(carried):
+            if ti.static(s.kinds.gauss_seidel):
                 F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
                 P -= F
                 T += n.cross(F)
@@ -210,7 +210,7 @@ def warm_start(i, bits, carried: ti.template(), hop, s: ti.template()):
         if not quiet:
             n = pair_normal(xi, x[j], inv)
             P += resting_impulse(status, i, j, n, lam[p])
-            if ti.static(carried):
+            if ti.static(s.kinds.gauss_seidel):
                 F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
                 P += F
                 T -= n.cross(F)

@@ -128,9 +128,10 @@ def stale_near(
     stale = False
     for q in range(runs):
         lo, hi = candidate_run(q, every, c, g, start, x1.shape[0])
+        apart_run = q == 2 * COLUMNS  # the balls listed apart
         for k in range(lo, hi):
             j = k  # every ball, or the grid's k-th
-            if q == 2 * COLUMNS:  # the balls listed apart
+            if apart_run:
                 j = apart_ids[k]
             elif not every:
                 if ti.static(not stored_sorted):
@@ -140,8 +141,11 @@ def stale_near(
     return stale
 
 
-COLUMNS = (2 * REACH_CELLS + 1) ** 2
-"""The columns of cells around a ball's cell that :func:`stale_near` searches."""
+SPAN = 2 * REACH_CELLS + 1
+"""Cells along each axis of the box around a ball's cell that :func:`stale_near` searches."""
+
+COLUMNS = SPAN * SPAN
+"""The columns of cells, each ``SPAN`` cells tall, around a ball's cell that :func:`stale_near` searches."""
 
 
 @ti.func
@@ -151,18 +155,17 @@ def candidate_run(q, every, c, g: ti.template(), start: ti.template(), n):
     it wraps around the table's end) of the buckets of column m of cells around cell ``c`` (from
     the grid ``g`` and its bucket starts ``start``), and run 2·``COLUMNS`` the balls listed apart
     (``apart_ids``' first ``g.n_apart`` with ``g.scan_apart``)."""
-    span = 2 * REACH_CELLS + 1
     lo, hi = 0, n
     if not every:
         if q == 2 * COLUMNS:
             hi = g.n_apart * g.scan_apart
         else:
             m, part = q // 2, q % 2
-            row = c + ti.Vector([m % span - REACH_CELLS, -REACH_CELLS, m // span - REACH_CELLS])
+            row = c + ti.Vector([m % SPAN - REACH_CELLS, -REACH_CELLS, m // SPAN - REACH_CELLS])
             b = bucket_of(row, g.mask, g.origin, g.stride)
-            lo, hi = start[b], start[ti.min(b + span, g.mask + 1)]
+            lo, hi = start[b], start[ti.min(b + SPAN, g.mask + 1)]
             if part == 1:  # the run wraps around the table's end
-                lo, hi = start[0], start[ti.max(b + span - (g.mask + 1), 0)]
+                lo, hi = start[0], start[ti.max(b + SPAN - (g.mask + 1), 0)]
     return lo, hi
 
 
