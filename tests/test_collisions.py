@@ -1581,6 +1581,43 @@ def test_deepest_overlap_names_the_pair_on_the_current_positions(serial):
     assert sim.deepest_overlap() is None
 
 
+def _deepest_by_every_pair(x, r):
+    """(i, j, depth [m]) of the pair that overlaps most as a fraction of the smaller radius, over
+    every pair of balls (an O(n²) search independent of the neighbour lists), or None."""
+    i, j = np.triu_indices(len(x), 1)
+    depth = r[i] + r[j] - np.linalg.norm(x[i] - x[j], axis=1)
+    k = int(np.argmax(depth / np.minimum(r[i], r[j])))
+    return (int(i[k]), int(j[k]), float(depth[k])) if depth[k] > 0 else None
+
+
+@SERIAL_OR_PARALLEL
+@pytest.mark.parametrize("solver", ["jacobi", "gauss_seidel"])
+def test_deepest_overlap_after_steps_builds_lists_only_when_a_pair_may_be_missing(serial, solver):
+    # a 3×3×3 lattice of balls (r = 2 cm, 1 cm apart) moving together at 2 m/s, 1 mm a 0.5 ms
+    # step, and one ball 0.5 mm into a corner ball: each step asks for new lists (2h·|v| is more
+    # than half the 2 mm skin), but no two balls have closed on each other by the skin, so the
+    # lists still hold every overlapping pair and measuring builds none
+    lattice = 0.05 * np.stack(np.meshgrid(*[np.arange(3)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    x = np.vstack([lattice, lattice[26] + [0.0395, 0.0, 0.0]]) + [0.0, 2.0, 0.0]
+    sim = tg.Simulation(scene(f"contact.solver={solver}"), x=x, v=np.tile([0.0, -2.0, 0.0], (len(x), 1)))
+    sim.solver = solver_ = CollisionSolver(sim.model, serial=serial)
+    sim.step(3)
+    assert solver_.lists_due and 2 * 2.0 * sim.model.dt > solver_.skin / 2
+    builds = solver_.rebuilds
+    d = sim.deepest_overlap()
+    assert solver_.rebuilds == builds
+    assert (d.i, d.j, d.depth) == _deepest_by_every_pair(sim.x, sim.model.radius_np)
+    assert (d.i, d.j) == (26, 27)
+    # ball 0 shifted 15 mm, into ball 9, as a step could move it (no edit between steps that would
+    # ask for new lists): now a pair may be missing, and the lists are built
+    x = sim.x
+    x[0] = x[9] - [0.035, 0.0, 0.0]
+    sim.state.write("x", x)
+    d = sim.deepest_overlap()
+    assert solver_.rebuilds == builds + 1
+    assert (d.i, d.j, d.depth) == _deepest_by_every_pair(x, sim.model.radius_np) and (d.i, d.j) == (0, 9)
+
+
 @pytest.mark.slow
 @SERIAL_OR_PARALLEL
 @pytest.mark.parametrize("solver", ["jacobi", "gauss_seidel"])

@@ -215,6 +215,7 @@ class CollisionSolver(Recorded, Stepping):
         self.far_owners = 0
         self._valid = False
         self._rebuild = True
+        self.edited = True  # balls moved or the model retuned since the last build (Stepping.invalidate)
         self._ids: ti.Ndarray | None = None  # the state's storage order at the last build (see pairs)
         self._hash: tuple[Any, ...] | None = (
             None  # the grid hash's (origin, stride) at the last build (grid.hash_strides)

@@ -55,6 +55,7 @@ class Stepping:
     skip_still: bool
     lists_valid: bool
     rebuild_due: bool
+    edited: bool
     r_ref: float
     skin: float
     h: float
@@ -62,6 +63,7 @@ class Stepping:
     r_cut: float
     flag: Any
     upper: Any
+    x_at_build: Any
     x_free: Any
     surface_start: Any
     surface_impulse: Any
@@ -76,20 +78,45 @@ class Stepping:
         """Build the neighbour lists for the balls of ``state`` (the solver's own)."""
         raise NotImplementedError
 
+    @property
+    def lists_due(self) -> bool:
+        """Whether the lists are to be built before the next step: none built yet, balls moved between
+        steps (:meth:`invalidate`), or the last step asked for it (the serial kernel's flag, or
+        ``rebuild_due``)."""
+        return not self.lists_valid or (int_at(self.flag, 0) != 0 if self.serial else self.rebuild_due)
+
     def ensure_lists(self, state: State) -> None:
         """Build the neighbour lists for the current positions unless they still hold every pair in
         reach: before the first step, after balls were moved (:meth:`invalidate`), or when the last
         step asked for a rebuild. The next step then starts from these lists, as it would have
         built them itself (same lists, same step)."""
-        stale = not self.lists_valid or (int_at(self.flag, 0) != 0 if self.serial else self.rebuild_due)
-        if not stale:
+        if not self.lists_due:
             return
         if self.relists:
             self.capacity = max(self.capacity, state.n - 1, 1)
         with in_one_thread(self.serial):  # (a serial solver's balls are few: see one_thread)
             self.build(state)
             grid.clear(self.flag)  # build() left the longest lists there
-        self.rebuild_due = False
+        self.rebuild_due = self.edited = False
+
+    def ensure_overlaps_listed(self, state: State) -> None:
+        """Make the lists hold every pair of balls that overlap now, building them only when they may
+        not (:meth:`ensure_lists`). A pair a build left out had a surface gap of at least the skin.
+        Since, the gap shrank by at most |Δx_a − Δx_b| ≤ |Δx_a − c| + |Δx_b − c| for any c, the balls'
+        displacements Δx taken here relative to their median c (balls that fall together close no
+        gap). While no two balls sum to the skin so, the lists hold every overlapping pair, even when
+        the next step is due to rebuild them (its test counts the step ahead too): measuring after a
+        run's last step builds nothing. Balls moved or the model retuned between steps
+        (:meth:`invalidate`) build them."""
+        if self.lists_valid and not self.edited and state.n >= 2:
+            x_build = self.x_at_build.to_numpy().astype(np.float64)
+            moved = state.x.to_numpy() - x_build
+            moved -= np.median(moved, axis=0)
+            # as links.distance_from_build: the f32 position's rounding, at most |x|·2^-24, counted twice
+            shift = np.linalg.norm(moved, axis=1) + np.linalg.norm(x_build, axis=1) * 2.0**-23
+            if np.partition(shift, -2)[-2:].sum() <= self.skin:
+                return
+        self.ensure_lists(state)
 
     def retune(self, model: Model) -> None:
         """Take the model's parameters as changed between steps (``Model.set_parameters``): a new
@@ -112,7 +139,7 @@ class Stepping:
     def invalidate(self) -> None:
         """Rebuild the neighbour lists before the next step (balls were moved between steps), each
         pair that stays listed keeping its accumulated impulse."""
-        self.rebuild_due = True
+        self.rebuild_due = self.edited = True
         self.flag.from_numpy(np.array([1, 0], dtype=np.int32))  # the serial kernel's request
 
     def advance(self, model: Model, state: State, steps: int) -> None:
@@ -133,6 +160,8 @@ class Stepping:
                         break
                     if came:  # Ctrl-C or SIGTERM: stop after this whole step
                         break
+        if steps > 0:  # every kind of step builds the lists first when balls were edited (invalidate)
+            self.edited = False
 
     def _advance_serially(self, model: Model, state: State, steps: int) -> None:
         """``steps`` steps in one serial launch that rebuilds the lists itself (``relists``)."""
