@@ -18,7 +18,7 @@ def test_the_faster_front_end_is_installed_on_the_taichi_that_ti_golf_requires()
     assert front_end.install()  # (runtime.init installed it already in this process: still True)
 
 
-def test_source_positions_made_once_are_the_messages_taichi_makes_each_time():
+def test_source_positions_are_taichis_first_line_and_on_an_error_its_whole_message():
     import ast
     import inspect
     import textwrap
@@ -28,8 +28,8 @@ def test_source_positions_made_once_are_the_messages_taichi_makes_each_time():
 
     from ti_golf.physics import aero, integrate
 
-    memoised = ASTTransformerContext.get_pos_info
-    plain = memoised.__wrapped__
+    ours = ASTTransformerContext.get_pos_info
+    plain = ours.__wrapped__
     nodes = 0
     for func in (aero.rates, integrate.step_free, integrate.track_flight):  # ti.funcs with blocks, long lines
         original = func.func.func  # the Python function under ti.func
@@ -42,26 +42,39 @@ def test_source_positions_made_once_are_the_messages_taichi_makes_each_time():
             indent=0,
             src=src,
         )
-        for _ in range(2):  # the second pass meets every position again: the messages come from the memo
-            for node in ast.walk(ast.parse(textwrap.dedent("\n".join(src)))):
-                if isinstance(node, (ast.stmt, ast.expr)):
-                    assert memoised(ctx, node) == plain(ctx, node)
-                    nodes += 1
-    assert nodes > 1000
+        for node in ast.walk(ast.parse(textwrap.dedent("\n".join(src)))):
+            if isinstance(node, (ast.stmt, ast.expr)):
+                whole = plain(ctx, node)
+                assert "^" in whole and ours(ctx, node) == whole.split("\n", 1)[0] + "\n"  # building: the IR's line
+                try:
+                    raise ValueError("(the front end reports an error)")
+                except ValueError:
+                    assert ours(ctx, node) == whole
+                nodes += 1
+    assert nodes > 500
 
 
-def test_wrapped_lines_made_once_are_the_lines_taichis_wrapper_makes():
-    import textwrap
+def test_an_error_in_a_kernels_source_is_shown_under_its_line():
+    import taichi as ti
 
-    from taichi.lang.ast import ast_transformer_utils
+    from ti_golf.runtime import ensure_init
 
-    lines = ["", "x = 1", "    y = a + b  # " + "long " * 30, "\tz = f(x)", " " * 12 + "^" * 70, "^" * 200]
-    for _ in range(2):  # the second pass comes from the memo
-        for line in lines:
-            wrapped = ast_transformer_utils.TextWrapper(width=80).wrap(line)
-            assert wrapped == textwrap.TextWrapper(width=80).wrap(line), line
-            wrapped.append("changed by a caller")  # a caller's list is its own
-    assert ast_transformer_utils.TextWrapper(width=40).wrap(lines[2]) == textwrap.wrap(lines[2], width=40)
+    ensure_init()
+
+    @ti.func
+    def add_unknown(a):
+        return a + not_defined  # noqa: F821
+
+    @ti.kernel
+    def with_error(x: ti.types.ndarray()):
+        for i in x:
+            x[i] = add_unknown(x[i])
+
+    with pytest.raises(ti.TaichiNameError) as error:
+        with_error(ti.ndarray(ti.f64, 2))
+    message = str(error.value)
+    assert "        return a + not_defined  # noqa: F821\n" + " " * 19 + "^" * 11 + "\n" in message
+    assert "in add_unknown:" in message and "x[i] = add_unknown(x[i])" in message
 
 
 def test_vector_reductions_are_the_sums_taichi_makes_in_the_same_order():

@@ -6,16 +6,14 @@ the compiled kernel then comes from the offline cache, and it inlines a ``ti.fun
 transforming its source again at every call site. Much of that work repeats:
 
 * **source positions**: for every AST node Taichi formats a message of the file, the line and a
-  ``^^^`` marker under the node (``ASTTransformerContext.get_pos_info``, for error messages and
-  the IR's debug information), wrapping each line with :class:`textwrap.TextWrapper`. A
-  ``ti.func`` inlined at twenty call sites formats the same messages twenty times. Here each
-  message is made once per source position and reused: the same text, so the kernels' IR and
-  Taichi's cache keys are unchanged.
+  ``^^^`` marker under the node, wrapped at 80 columns (``ASTTransformerContext.get_pos_info``),
+  and the IR keeps it as the node's debug information. Here the IR keeps the message's first line
+  (file, line and function), and the whole message is made only when the front end reports an
+  error in a kernel's source. A run-time error of Taichi's debug mode then names the line
+  without quoting it; the IR differs from Taichi's own in that text, so the cache keys differ too.
 * **source lookup**: Taichi reads every function's source with :func:`inspect.getsourcelines`
   (which tokenises the file's lines) and expands the tabs of each line with :func:`textwrap.fill`
   at every call site. Here each function's source is read, and each line expanded, once.
-* **wrapped lines**: each message wraps the node's source line at 80 columns, so a line with
-  twenty nodes is wrapped twenty times; here each text is wrapped once (the same lines).
 * **vector reductions**: ``v.dot(u)``, ``v.norm()``, ``v.norm_sqr()``, ``v.sum()`` and
   ``v.cross(u)`` are Taichi ``ti.func`` bodies nested up to three deep, transformed at each of
   some 260 call sites of the collision step; here they are built by Python as the same sums and
@@ -46,7 +44,7 @@ from collections.abc import Callable
 from typing import Any
 
 PLAIN_ENV = "TI_GOLF_PLAIN_FRONT_END"
-"""Set to 1 to run Taichi's front end as it comes (no memoised source positions or lookups)."""
+"""Set to 1 to run Taichi's front end as it comes (whole source positions, no memoised lookups)."""
 
 _VERSIONS = ((1, 7),)
 """The Taichi (major, minor) versions whose front end :func:`install` knows."""
@@ -77,14 +75,12 @@ def install() -> bool:
         (kernel_impl, "textwrap"),
         (kernel_impl, "_inside_class"),
         (kernel_impl, "_KERNEL_CLASS_STACKFRAME_STMT_RES"),
-        (ast_transformer_utils, "TextWrapper"),
         *((matrix_ops, name) for name in ("sum", "dot", "norm_sqr", "norm", "cross")),
         (impl, "subscript"),
     )
     if not all(hasattr(m, a) for m, a in needed):
         return False
-    context.get_pos_info = _memoised_positions(context.get_pos_info)
-    ast_transformer_utils.TextWrapper = _MemoisedWrapper
+    context.get_pos_info = _position_lines(context.get_pos_info)
     _inline_reductions()
     inside_class = _statement_test(kernel_impl._KERNEL_CLASS_STACKFRAME_STMT_RES)
     inside_class.__wrapped__ = kernel_impl._inside_class  # type: ignore[attr-defined]
@@ -96,21 +92,6 @@ def install() -> bool:
     )
     _installed = True
     return True
-
-
-class _MemoisedWrapper(textwrap.TextWrapper):
-    """Taichi's ``TextWrapper(width=80)`` of the source-position messages, each text wrapped once:
-    a message wraps its source line again for every node on the line."""
-
-    _wrapped: dict[tuple[int, str], list[str]] = {}
-
-    def wrap(self, text: str) -> list[str]:
-        """The lines of ``text`` wrapped, as :meth:`textwrap.TextWrapper.wrap` makes them."""
-        key = (self.width, text)
-        lines = self._wrapped.get(key)
-        if lines is None:
-            lines = self._wrapped[key] = super().wrap(text)
-        return list(lines)
 
 
 def _inline_reductions() -> None:
@@ -186,31 +167,16 @@ def _statement_test(patterns: list[Any]) -> Callable[[int], bool]:
     return inside_class
 
 
-def _memoised_positions(get_pos_info: Callable[[Any, ast.AST], str]) -> Callable[[Any, ast.AST], str]:
-    """``get_pos_info`` that makes each message once per source position: its text depends only
-    on the function's file, source and first line, and on the node's kind and span (and, for a
-    block, the first line of its body)."""
-    messages: dict[tuple[Any, ...], str] = {}
+def _position_lines(get_pos_info: Callable[[Any, ast.AST], str]) -> Callable[[Any, ast.AST], str]:
+    """``get_pos_info`` that, while Taichi builds a kernel, gives only the first line of its
+    message (``File "...", line N, in FUNC:``), which the IR keeps as the node's debug information;
+    and, while an exception is being handled (the front end reporting an error in a kernel's
+    source), Taichi's whole message, with the source line and ``^^^`` under the node."""
 
-    def pos_info(ctx: Any, node: ast.AST) -> str:
-        body = getattr(node, "body", None)
-        first_of_body = body[0].lineno if isinstance(body, list) and body else None
-        key = (
-            ctx.file,
-            ctx.func.func,
-            ctx.lineno_offset,
-            ctx.indent,
-            type(node),
-            getattr(node, "lineno", None),
-            getattr(node, "end_lineno", None),
-            getattr(node, "col_offset", None),
-            getattr(node, "end_col_offset", None),
-            first_of_body,
-        )
-        message = messages.get(key)
-        if message is None:
-            message = messages[key] = get_pos_info(ctx, node)
-        return message
+    def pos_info(ctx: Any, node: Any) -> str:  # (node: an ast.stmt or ast.expr)
+        if sys.exc_info()[1] is not None:
+            return get_pos_info(ctx, node)
+        return f'File "{ctx.file}", line {node.lineno + ctx.lineno_offset}, in {ctx.func.func.__name__}:\n'
 
     pos_info.__wrapped__ = get_pos_info  # type: ignore[attr-defined]
     return pos_info
