@@ -73,6 +73,12 @@ def read_csv(path: Path) -> tuple[list[str], list[dict[str, float]]]:
 # ----------------------------------------------------------------------------------------------
 # scenes, keys, --help, unknown subcommand
 # ----------------------------------------------------------------------------------------------
+def test_version_prints_the_pyproject_version():
+    proc = ok(run_cli("--version"))
+    version = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]["version"]
+    assert proc.stdout == f"ti-golf {version}\n" and ti_golf.__version__ == version
+
+
 def test_scenes_lists_every_scene_with_its_description():
     proc = ok(run_cli("scenes"))
     lines = [ln for ln in proc.stdout.splitlines() if ln.strip()]

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import os
 from importlib import import_module
-from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Any
 
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
@@ -49,6 +48,9 @@ import until one is used (``ti-golf keys`` starts in a fraction of a second)."""
 
 
 def __getattr__(name: str) -> Any:
+    if name == "__version__":
+        globals()[name] = value = _version()
+        return value
     if name in _LAZY:
         value = getattr(import_module(_LAZY[name]), name)
         globals()[name] = value  # (found directly from now on)
@@ -74,8 +76,13 @@ __all__ = [
     "sweep",
 ]
 
-try:
-    __version__ = version("ti-golf")
-    """The installed distribution's version (``version`` in pyproject.toml, the one place it is set)."""
-except PackageNotFoundError:  # a source tree on sys.path, not installed
-    __version__ = "0+unknown"
+
+def _version() -> str:
+    """The installed distribution's version (``version`` in pyproject.toml, the one place it is
+    set), read on first use of ``ti_golf.__version__`` (importlib.metadata costs some 20 ms)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("ti-golf")
+    except PackageNotFoundError:  # a source tree on sys.path, not installed
+        return "0+unknown"

@@ -12,13 +12,12 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import rich.console
-import rich.progress
-
 from ti_golf.errors import ConfigError
 from ti_golf.files import PLOT_FORMATS_HELP, plot_format
 
 if TYPE_CHECKING:
+    import rich.progress
+
     from ti_golf.sim.simulation import Simulation
 
 
@@ -190,6 +189,9 @@ class Progress:
             text += f"; {k:,} of {n:,} balls {what}"
         if self.tty:
             if self._bar is None:
+                import rich.console  # (on first use: some 25 ms of every command's start otherwise)
+                import rich.progress
+
                 self._bar = rich.progress.Progress(
                     rich.progress.BarColumn(),
                     rich.progress.TaskProgressColumn(),

@@ -14,6 +14,7 @@ import sys
 import threading
 from collections.abc import Callable, Sequence
 from types import ModuleType
+from typing import Any
 
 from ti_golf.cli._common import Parser, StartupStatus
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
@@ -52,14 +53,22 @@ def _command(command: str) -> Callable[[argparse.Namespace], int]:
     return getattr(_module(command), COMMANDS[command][1])
 
 
+class _Version(argparse.Action):
+    """``--version``: the package's version, read only when asked for (see ``ti_golf.__version__``)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, *args: Any) -> None:
+        from ti_golf import __version__
+
+        print(f"ti-golf {__version__}")
+        parser.exit()
+
+
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     """The argument parser of ``ti-golf``: with ``argv`` that names a command, that command's parser
     alone (only its module is imported: ``ti-golf keys`` imports neither Taichi nor the plotting
     libraries); else every command's."""
-    from ti_golf import __version__
-
     p = Parser(prog="ti-golf", description="Golf-ball physics on Taichi: flights, sweeps, collisions.")
-    p.add_argument("--version", action="version", version=f"ti-golf {__version__}")
+    p.add_argument("--version", action=_Version, nargs=0, help="show the version and exit")
     sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
     named = argv[0] if argv and argv[0] in COMMANDS else None
     modules = [COMMANDS[named][0]] if named else list(dict.fromkeys(m for m, _ in COMMANDS.values()))
