@@ -100,6 +100,9 @@ class CollisionSolver(Recorded, Stepping):
         pair_capacity: entries of the pair tables (resting and friction impulses, the sweep's
             entries): the pairs listed, laid out ball after ball (``first``), plus room to grow.
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
+        edited: whether balls were moved or the model retuned between steps since the lists were
+            last built (``invalidate``): the lists may then miss pairs that overlap now
+            (:meth:`ensure_overlaps_listed`); a fresh or restored solver counts as edited.
         skip_still: whether a parallel step in which no ball is awake and in play is skipped, the
             time advanced alone (default: with the Gauss–Seidel sweeps, under which such a step
             changes nothing, see ``colour.moving_balls``): a pile asleep then costs one pass over
@@ -215,7 +218,7 @@ class CollisionSolver(Recorded, Stepping):
         self.far_owners = 0
         self._valid = False
         self._rebuild = True
-        self.edited = True  # balls moved or the model retuned since the last build (Stepping.invalidate)
+        self.edited = True
         self._ids: ti.Ndarray | None = None  # the state's storage order at the last build (see pairs)
         self._hash: tuple[Any, ...] | None = (
             None  # the grid hash's (origin, stride) at the last build (grid.hash_strides)
