@@ -108,9 +108,11 @@ class Stepping:
         the next step is due to rebuild them (its test counts the step ahead too): measuring after a
         run's last step builds nothing. Balls moved or the model retuned between steps
         (:meth:`invalidate`) build them."""
+        if not self.lists_due:
+            return
         if self.lists_valid and not self.edited and state.n >= 2:
-            x_build = self.x_at_build.to_numpy().astype(np.float64)
-            moved = state.x.to_numpy() - x_build
+            x_build = self.x_at_build.to_numpy()  # (f32)
+            moved = np.subtract(state.x.to_numpy(), x_build, dtype=np.float64)
             moved -= np.median(moved, axis=0)
             # as links.distance_from_build: the f32 position's rounding, at most |x|·2^-24, counted twice
             shift = np.linalg.norm(moved, axis=1) + np.linalg.norm(x_build, axis=1) * 2.0**-23
