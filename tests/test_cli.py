@@ -685,8 +685,9 @@ def test_bench_pit_profile_counts_every_launch_of_the_step(background_runs):
     # Taichi's kernel profiler on: each kernel's seconds and launches, in all and per stretch. The
     # step's launches are the solver's: per step 2 of collision_step (the free flight with the
     # warm start, and the last part), one Gauss–Seidel sweep per phase of colour.step_phases and
-    # colour.PROJECTIONS projection passes; one list build per rebuild the steps made (more balls
-    # than SERIAL_MAX_BALLS: the parallel step)
+    # colour.PROJECTIONS projection passes; one or two listings per rebuild the steps made (more
+    # balls than SERIAL_MAX_BALLS: the parallel step; a build lists again once it has widened the
+    # table that a list overflowed, CollisionSolver._list_balls)
     from ti_golf.solvers.colour import PROJECTIONS, step_phases
 
     proc = ok(background_runs.result("bench-pit-profile")[0])
@@ -696,7 +697,7 @@ def test_bench_pit_profile_counts_every_launch_of_the_step(background_runs):
     assert kernels["collision_step"]["launches"] == 2 * steps
     assert kernels["gauss_seidel_sweep"]["launches"] == len(step_phases(4)) * steps
     assert kernels["project_sweep"]["launches"] == PROJECTIONS * steps
-    assert 1 <= kernels["list_neighbours"]["launches"] <= sum(row["rebuilds"] for row in result["timeline"])
+    assert 1 <= kernels["list_neighbours"]["launches"] <= 2 * sum(row["rebuilds"] for row in result["timeline"])
     total = result["kernel_profiler"]["kernel_s"]
     assert total == pytest.approx(sum(k["s"] for k in kernels.values()), rel=1e-4)
     assert 0.0 < total < result["wall_s"] and result["kernel_profiler"]["host_s"] == pytest.approx(
