@@ -37,8 +37,6 @@ from ti_golf.sim.changes import (
     refuse_unread,
 )
 from ti_golf.sim.results import Flight
-from ti_golf.sim.saved_run import read_run, restore_run, write_run
-from ti_golf.solvers import CollisionSolver
 
 
 class RunProgress(Protocol):
@@ -181,6 +179,8 @@ class Simulation:
         self.solver = None
         """The CollisionSolver when balls can collide (several balls and ``world.collisions``)."""
         if n > 1 and scene.world.collisions:
+            from ti_golf.solvers import CollisionSolver  # (imported when balls collide: a flight alone needs none)
+
             self.solver = CollisionSolver(self.model, **(solver_flags or {}))
 
     @classmethod
@@ -198,6 +198,8 @@ class Simulation:
         would have given (on the same backend and precision). :meth:`reset` goes back to the
         run's t0. Raises :class:`ConfigError` naming the file when it cannot be continued (a
         file written before runs could be resumed, another precision)."""
+        from ti_golf.sim.saved_run import read_run, restore_run  # (imported when a run is read or saved)
+
         saved = read_run(path)
         sim = cls.__new__(cls)
         initial = saved.initial()
@@ -267,6 +269,8 @@ class Simulation:
         if self.n == 1 or not scene.world.collisions:
             self.solver = None
         elif self.solver is None or scene.contact.solver != old.contact.solver:
+            from ti_golf.solvers import CollisionSolver
+
             flags = self._solver_flags()
             self.solver = None
             self.solver = CollisionSolver(self.model, **(flags or {}))
@@ -526,6 +530,8 @@ class Simulation:
         before the time it was asked to reach; and all that :meth:`load` needs to continue the
         run bit for bit (the scene, the step count, the flight records, the sleeping timers, the
         collision solver's lists and carried impulses, the balls at t0; see the docs' lab page)."""
+        from ti_golf.sim.saved_run import write_run
+
         write_run(self, path, recording, partial)
 
 
