@@ -252,19 +252,28 @@ def turf_tilt(v_n, u, speed):
 
 
 @ti.func
-def surface_impulse(n, gap, v, w, radius, lam, contact, v_inelastic, h, kinds: ti.template()):
-    """A ball's impulse per unit mass [m/s] from a static surface (a plane, or the terrain's patch)
-    with normal n̂ and surface gap ``gap`` [m]: :func:`pair_impulse` against a body of infinite
-    mass, with ``contact``'s restitution, or with ``contact.turf`` in the turf frame of
-    :func:`turf_impact` (built only with ``kinds.turf``: the scene's
-    :class:`ti_golf.physics.kinds.Kinds`). With the report's friction (``kinds.friction``) the
-    friction is :func:`centre_friction`, bounded by μ times the normal impulse. Returns (P, λ,
-    touching, n̂'), n̂' the normal the impulse was solved along (its contact point is −R·n̂', see
-    :func:`plane_jolt`)."""
+def impact_frame(n, gap, v, lam, contact, v_inelastic, h, kinds: ti.template()):
+    """(n̂', e'): the normal and restitution of a ball's contact with a static surface of normal
+    n̂ (``contact``: the surface's contact parameters): n̂ and ``contact.e``, or with
+    ``contact.turf`` the turf frame of :func:`turf_impact`, whose code is built only with
+    ``kinds.turf`` (the scene's :class:`ti_golf.physics.kinds.Kinds`)."""
     n_eff, e = n, contact.e
     if ti.static(kinds.turf):
         if contact.turf != 0:
             n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
+    return n_eff, e
+
+
+@ti.func
+def surface_impulse(n, gap, v, w, radius, lam, contact, v_inelastic, h, kinds: ti.template()):
+    """A ball's impulse per unit mass [m/s] from a static surface (a plane, or the terrain's patch)
+    with normal n̂ and surface gap ``gap`` [m]: :func:`pair_impulse` against a body of infinite
+    mass, with ``contact``'s restitution, or with ``contact.turf`` in the turf frame of
+    :func:`turf_impact` (:func:`impact_frame`). With the report's friction (``kinds.friction``) the
+    friction is :func:`centre_friction`, bounded by μ times the normal impulse. Returns (P, λ,
+    touching, n̂'), n̂' the normal the impulse was solved along (its contact point is −R·n̂', see
+    :func:`plane_jolt`)."""
+    n_eff, e = impact_frame(n, gap, v, lam, contact, v_inelastic, h, kinds)
     mu = contact.mu
     if ti.static(kinds.friction == CENTRE_FRICTION):
         mu = 0.0  # (added below)

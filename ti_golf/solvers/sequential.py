@@ -14,13 +14,13 @@ from ti_golf.physics.contact import (
     centre_friction,
     clamp_friction,
     friction_impulse,
+    impact_frame,
     inverse_inertia,
     kinetic_change,
     pivot_impulse,
     pivot_resistance,
     rolling_resistance,
     spin_jolt,
-    turf_impact,
 )
 from ti_golf.physics.types import GAP, INV, of_ball, zero3
 from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
@@ -100,14 +100,11 @@ def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, 
     normal n̂, per unit mass [m/s] (``v0``: the ball's velocity before the step's contacts; ``F``:
     the friction impulse applied so far), with
     ``contact``'s restitution, or with ``contact.turf`` in the turf frame of :func:`ti_golf.physics.contact.turf_impact`
-    (built only with ``kinds.turf``: the scene's :class:`ti_golf.physics.kinds.Kinds`).
+    (:func:`ti_golf.physics.contact.impact_frame`).
     In the ``BOUNCE`` pass a pressed ball also meets rolling resistance and the resistance to spin
     about the normal, bounded by μ_roll·λ (once per step, as :func:`ti_golf.physics.contact.plane_jolt` does). With the
     report's friction (``kinds.friction``) the spin is left as it is. Returns (v, ω, λ, F)."""
-    n_eff, e = n, contact.e
-    if ti.static(kinds.turf):
-        if contact.turf != 0:
-            n_eff, e = turf_impact(n, v, lam, gap, v_inelastic, h)
+    n_eff, e = impact_frame(n, gap, v, lam, contact, v_inelastic, h, kinds)
     ball = body(v, w, radius, 1.0)
     P, lam_new, F_new = pair_step(
         phase,
