@@ -107,9 +107,9 @@ _VULKAN_COLOURS = textwrap.dedent("""
     s = sim.solver
     t = s.colours.tables
     arrays = {name: t[name].to_numpy() for name in ("colour", "pairs", "start")}
-    first = s.first.to_numpy()
+    first, x_first = s.first.to_numpy(), sim.x
     sim.run(steps=4)
-    np.savez(sys.argv[2], first=first, x=sim.x, **arrays)
+    np.savez(sys.argv[2], first=first, x_first=x_first, x=sim.x, **arrays)
 """)
 
 
@@ -127,10 +127,13 @@ background.declare("vulkan-colours", _vulkan_colours, timeout=600)
 @pytest.mark.background("vulkan-colours")
 def test_a_gpu_backend_colours_and_sweeps_the_pairs_as_the_cpu_does(background_runs):
     # The colouring and its layout are integer work: a GPU backend must make them exactly as the
-    # CPU does, and then take the same steps up to round-off (SPIR-V lets a driver fuse a multiply
+    # CPU does, and then take the same step up to round-off (SPIR-V lets a driver fuse a multiply
     # and an add). Taichi's Vulkan backend once added up a thread's loop of integer atomics to at
     # most 2: the layout's counts per colour came out a few pairs each, and the sweeps left all
     # but a few dozen of the 12,000 pairs of a 5,000-ball pile out (overlaps of 20 % R).
+    # Later steps of this jammed start part by more than round-off wherever a contact's decision
+    # sits on the edge (a velocity of 1e-34 m/s or 0): four steps on, the sets of seeds 1 to 5
+    # kept 83-100 % of the balls within 1e-6 m and none more than 0.65 mm apart.
     _, workdir = background_runs.succeeded("vulkan-colours", NO_VULKAN_BACKEND)
     gpu = np.load(workdir / "run.npz")
     x = np.random.default_rng(1).uniform(0.02, 0.28, (1000, 3))
@@ -141,9 +144,11 @@ def test_a_gpu_backend_colours_and_sweeps_the_pairs_as_the_cpu_does(background_r
     np.testing.assert_array_equal(gpu["first"], sim.solver.first.to_numpy())
     np.testing.assert_array_equal(gpu["colour"][:pairs], listed[:, 2])
     _assert_valid_layout(listed, gpu["pairs"][:pairs], gpu["start"])
+    d = np.linalg.norm(gpu["x_first"] - sim.x, axis=1)
+    assert d.max() < 1e-9, d.max()
     sim.run(steps=4)
     d = np.linalg.norm(gpu["x"] - sim.x, axis=1)
-    assert d.max() < 1e-6, d.max()
+    assert np.mean(d < 1e-6) > 0.5 and d.max() < 2e-3, (np.mean(d < 1e-6), d.max())
 
 
 @pytest.mark.slow
