@@ -596,6 +596,11 @@ def test_bench_pit_pours_the_scene_and_reports_the_piles_quality():
     # the pile's arrays: a few hundred bytes a ball (docs: about 400), not nothing, not megabytes
     assert result["peak_rss_bytes"] >= result["bytes_per_ball_above_baseline"] * 1000
     assert result["bytes_per_ball_above_baseline"] < 5000  # (the warm-up compiled the pour's kernels, as it steps)
+    # the tables' room beside what they hold: the pairs of the last build fit in the pair tables
+    # and in the neighbour table's rows, a ball's row as wide as the longest list
+    assert 0 < result["pairs_listed"] <= result["pair_table_room"]
+    assert result["neighbour_table_width"] >= 1
+    assert result["pairs_listed"] <= 1000 * result["neighbour_table_width"]
     assert result["outside_bin"] == 0
     # still falling at 0.05 s: dropped at 1 ± 0.3 m/s per component, plus g·t
     assert 1.0 < result["p99_speed_mps"] < 1.0 + 0.3 * 3**0.5 + 9.81 * 0.05 + 1e-9

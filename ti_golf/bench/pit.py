@@ -41,6 +41,7 @@ import taichi as ti
 from ti_golf.bench.collide import bare_gather_rate
 from ti_golf.bench.common import _peak_rss_bytes, _restart_peak_rss, _rss_bytes
 from ti_golf.bench.kernel_times import FOLD_EVERY, KernelTimes, profiling
+from ti_golf.physics.kernels import int_at
 from ti_golf.physics.types import LAUNCHES, NeighbourLists, StepScratch, kernel
 from ti_golf.runtime import ensure_init, release_freed_memory
 from ti_golf.scene.loader import load_scene
@@ -173,6 +174,7 @@ def bench_pit(
         "step_cost_in_bare_gathers": gather_rate / ball_steps_per_s,
     }
     result.update(solver_launches(sim))
+    result.update(pair_tables(sim))
     if times is None and steps > 0 and sim.solver is not None:
         result.update(host_share(sim, wall_s, steps))
     if every is not None:
@@ -302,6 +304,23 @@ def _timed_steps(sim: Simulation, k: int, times: KernelTimes | None) -> tuple[fl
     except KeyboardInterrupt:
         return wall, True
     return wall, False
+
+
+def pair_tables(sim: Simulation) -> dict[str, Any]:
+    """What the collision solver's tables hold at the end of a pour beside the room they were made
+    with: the pairs listed, the room of the pair tables (made for the pairs of a build that outgrew
+    them plus 1/``PAIR_ROOM`` of them, ``CollisionSolver._fit_pair_tables``) and the width of the
+    neighbour table (the longest list of pairs a ball owns). A pile that outgrew its tables once
+    more as it settled holds about 1/16 of its pairs more room, and so more bytes a ball; nothing
+    without a collision solver."""
+    solver = sim.solver
+    if solver is None or solver.first is None:
+        return {}
+    return {
+        "pairs_listed": int_at(solver.first, solver.first.shape[0] - 1),
+        "pair_table_room": int(solver.pair_capacity),
+        "neighbour_table_width": int(solver.capacity),
+    }
 
 
 def solver_launches(sim: Simulation) -> dict[str, Any]:
