@@ -314,7 +314,7 @@ def pair_tables(sim: Simulation) -> dict[str, Any]:
     more as it settled holds about 1/16 of its pairs more room, and so more bytes a ball; nothing
     without a collision solver."""
     solver = sim.solver
-    if solver is None or solver.first is None:
+    if solver is None:
         return {}
     return {
         "pairs_listed": int_at(solver.first, solver.first.shape[0] - 1),
