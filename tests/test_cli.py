@@ -1161,6 +1161,17 @@ def test_the_kernel_log_times_each_instances_front_end_and_compilation():
     assert entry.instances == 2 and len(set(entry.instance_names)) == 2
     assert all(name.startswith("scaled_c") for name in entry.instance_names)
     assert entry.front_end_s > 0 and entry.compile_s > 0 and log.busy is None
+    # once compiled, the rest of a first launch is the kernel's own work, not its compilation
+    from ti_golf.kernel_log import _TimedProgram
+
+    class Program:
+        def compile_kernel(self, *args):
+            assert log.busy is None  # (the launch wrapper says "compile": not made here)
+            return "compiled"
+
+    entry = log.kernels[next(k.name for k in log.table() if k.name.endswith(".scaled"))]
+    assert _TimedProgram(Program(), entry, log).compile_kernel() == "compiled"
+    assert log.busy is not None and log.busy[:2] == ("first launch", entry.name)
     np.testing.assert_array_equal(a.to_numpy(), [0, 3, 6, 9])
     line = "[D 11/28/26 14:49:03.602 23182] [kernel_compilation_manager.cpp:try_load_cached_kernel@224] "
     assert cache_hits(line + "Create kernel 'scaled_c80_0' from cache (key='T2a43')") == {"scaled_c80_0"}
@@ -1187,6 +1198,9 @@ def test_a_long_start_says_what_taichi_is_doing():
     status._said = -math.inf
     log.busy = ("compile", "ti_golf.physics.kernels.advance", status.start - 1.0)
     assert "compiling the kernel advance (or loading it from its cache)" in (status.line() or "")
+    status._said = -math.inf
+    log.busy = ("first launch", "ti_golf.physics.kernels.fly_to_landing", status.start - 1.0)
+    assert "running the kernel fly_to_landing (its first launch, compiled)" in (status.line() or "")
     log.busy = None
     status._said = -math.inf
     assert status.line() is None  # nothing prepared now: nothing to say

@@ -8,7 +8,9 @@ instance), in two steps:
    every instance, even when the compiled kernel then comes from the offline cache, because the
    cache's key is a hash of that IR;
 2. the **compilation** (``Program.compile_kernel``, at the first launch): the IR optimised and
-   compiled by LLVM, or, when the offline cache holds the kernel, loaded from it.
+   compiled by LLVM, or, when the offline cache holds the kernel, loaded from it. The rest of that
+   first launch (on LLVM backends the machine code made from the compiled module, then the
+   kernel's work itself) is not counted as compilation.
 
 :class:`KernelLog` wraps both (for as long as it is installed) and keeps, per kernel, the instances
 prepared (by the names Taichi gives them) and the seconds of each step. Which instances came from
@@ -61,8 +63,9 @@ class KernelTimes:
 class KernelLog:
     """Times each kernel's front end and compilation while :meth:`installed` (see the module).
 
-    ``busy`` says what Taichi is doing now (``("front end" or "compile", kernel name, since)``,
-    ``None`` between kernels), for a status line read from another thread."""
+    ``busy`` says what Taichi is doing now (``("front end", "compile" or "first launch", kernel
+    name, since)``, ``None`` between kernels), for a status line read from another thread: a
+    first launch runs the kernel once it is compiled, so a long one is the kernel's work."""
 
     def __init__(self) -> None:
         self.kernels: dict[str, KernelTimes] = {}
@@ -120,7 +123,7 @@ class KernelLog:
             runtime = impl.get_runtime()
             program = runtime.prog
             with log._step("compile", kernel) as entry:
-                runtime.prog = _TimedProgram(program, entry)
+                runtime.prog = _TimedProgram(program, entry, log)
                 try:
                     return launch(kernel, t_kernel, *args)
                 finally:
@@ -134,16 +137,20 @@ class KernelLog:
 
 
 class _TimedProgram:
-    """Taichi's program, with ``compile_kernel`` timed into a :class:`KernelTimes` (the rest passed on)."""
+    """Taichi's program, with ``compile_kernel`` timed into a :class:`KernelTimes` (the rest passed
+    on); once it has compiled, ``log.busy`` says the kernel's first launch goes on."""
 
-    def __init__(self, program: Any, entry: KernelTimes) -> None:
+    def __init__(self, program: Any, entry: KernelTimes, log: KernelLog) -> None:
         self._program = program
         self._entry = entry
+        self._log = log
 
     def compile_kernel(self, *args: Any) -> Any:
         start = time.perf_counter()
         compiled = self._program.compile_kernel(*args)
-        self._entry.compile_s += time.perf_counter() - start
+        end = time.perf_counter()
+        self._entry.compile_s += end - start
+        self._log.busy = ("first launch", self._entry.name, end)
         return compiled
 
     def __getattr__(self, name: str) -> Callable[..., Any]:
