@@ -207,3 +207,26 @@ def test_unwritable_outputs_are_refused_before_anything_runs(argv, path):
     assert code == 2, (argv, path, err)
     last = err.strip().splitlines()[-1]
     assert last.startswith(f"ti-golf: error: {argv[-1]}") and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize(
+    "argv, allowed",
+    [
+        (["run", "break_shot", "--out", "run.csv"], ".npz"),
+        (["run", "break_shot", "--gif", "run.mp4"], ".gif"),
+        (["sweep", "lab_vacuum", "--out", "s.parquet"], ".csv"),
+        (["dispersion", "tour_shot", "--out", "d.txt"], ".csv or .npz"),
+        (["render", "break_shot", "--out", "p.jpg"], ".png"),
+        (["schema", "--out", "s.yaml"], ".json"),
+        (["play", "putting_green", "--out", "round.npz"], ".csv"),
+    ],
+    ids=lambda a: " ".join(a) if isinstance(a, list) else a,
+)
+def test_an_output_named_for_another_format_is_refused(argv, allowed, tmp_path):
+    # an output is written in one format: a name that says another (run --out x.csv wrote x.csv.npz,
+    # play --out r.npz wrote CSV text) is refused before anything runs, naming the option
+    argv = argv[:-1] + [str(tmp_path / argv[-1])]
+    code, err = run_cli(argv)
+    assert code == 2, (argv, err)
+    assert err.strip().splitlines()[-1] == f"ti-golf: error: {argv[-2]}: must end in {allowed} (got {argv[-1]!r})"
+    assert list(tmp_path.iterdir()) == []

@@ -88,9 +88,10 @@ def set_option(p: argparse.ArgumentParser, help: str) -> None:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE", help=help)
 
 
-def check_writable(path: str | None, option: str) -> None:
+def check_writable(path: str | None, option: str, suffixes: tuple[str, ...] = ()) -> None:
     """Fail before a long computation rather than lose its result to an unwritable output path
-    (``None``: the option was not given)."""
+    (``None``: the option was not given), or write a format its name does not say: with
+    ``suffixes`` (such as ``(".npz",)``), the file's name must end in one of them."""
     if path is None:
         return
     if not path.strip():
@@ -105,6 +106,8 @@ def check_writable(path: str | None, option: str) -> None:
             pass
     except OSError as exc:
         raise ConfigError(option, None, f"cannot write {path!r}: {exc.strerror or exc}") from None
+    if suffixes and Path(path).suffix.lower() not in suffixes:
+        raise ConfigError(option, None, f"must end in {' or '.join(suffixes)} (got {path!r})")
 
 
 def check_plot(path: str | None, option: str = "--plot") -> None:

@@ -6,7 +6,6 @@ import argparse
 import json
 import math
 import time
-from pathlib import Path
 
 from ti_golf.cli._common import Progress, check_plot, check_writable, plot_help, runtime_options, scene_options
 from ti_golf.cli.shot import LAUNCH_OPTIONS, launch_line, launch_options, read_launch, units_option
@@ -78,9 +77,7 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
     if args.flight_dt is not None and not FLIGHT_DT_RANGE[0] <= args.flight_dt <= FLIGHT_DT_RANGE[1]:
         lo, hi = FLIGHT_DT_RANGE
         raise ConfigError("--flight-dt", None, f"must be in [{lo:g}, {hi:g}] s (got {args.flight_dt})")
-    if args.out and Path(args.out).suffix.lower() not in (".csv", ".npz"):
-        raise ConfigError("--out", None, f"must end in .csv or .npz (got {args.out!r})")
-    check_writable(args.out, "--out")
+    check_writable(args.out, "--out", (".csv", ".npz"))
     check_plot(args.plot)
     scene = load_scene(args.scene, args.overrides)
     mean = read_launch(args, scene, units)

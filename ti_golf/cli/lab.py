@@ -74,7 +74,7 @@ def cmd_lab(args: argparse.Namespace) -> int:
         raise ConfigError("--t", None, f"must be a number of seconds >= 0 (got {args.t!r})")
     if args.t and not args.screenshot:
         raise ConfigError("--t", None, "goes with --screenshot (the window runs the scene with Start)")
-    check_writable(args.screenshot, "--screenshot")
+    check_writable(args.screenshot, "--screenshot", (".png",))
     load_scene(args.scene, args.overrides)  # a bad scene is refused before any window opens
     check_display(on_screen=not args.screenshot)
     lab = Lab(args.scene, args.overrides, speed=args.speed or None)

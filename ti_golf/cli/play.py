@@ -85,7 +85,7 @@ def seed_value(text: str) -> int:
 
 def cmd_play(args: argparse.Namespace) -> int:
     """Play a round of ``args.scene``; 0 when it ends (holed, out of bounds, no strokes or input left)."""
-    check_writable(args.out, "--out")
+    check_writable(args.out, "--out", (".csv",))
     check_plot(args.plot)
     seed = args.seed if args.seed is not None else secrets.randbelow(2**31)  # (said, so a round can be played again)
     game = GolfGame(load_scene(args.scene, args.overrides), seed=seed)

@@ -74,9 +74,9 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
     """Run ``args.scene`` (or continue the saved run ``--resume``) for ``--t`` / ``--steps`` or
     ``--until`` its balls are done; save the run (``--out``), its plot, frames and GIF; 0, or
     ``KeyboardInterrupt`` raised again after saving what was simulated."""
-    check_writable(args.out, "--out")
+    check_writable(args.out, "--out", (".npz",))
     check_plot(args.plot)
-    check_writable(args.gif, "--gif")
+    check_writable(args.gif, "--gif", (".gif",))
     if args.frames is not None and not args.frames.strip():
         raise ConfigError("--frames", None, "needs a folder name (got an empty path)")
     if args.t is not None and not args.t > 0:
@@ -179,7 +179,7 @@ class _Frames:
     def __init__(self, args: argparse.Namespace, sim: Simulation) -> None:
         if args.frames_every < 0:
             raise ConfigError("--frames-every", None, f"must be >= 0 (got {args.frames_every})")
-        check_writable(args.gif, "--gif")
+        check_writable(args.gif, "--gif", (".gif",))
         duration = args.t if args.t is not None else (args.steps or 0) * sim.dt or sim.scene.world.t_end
         self.every = args.frames_every or max(1, int(round(duration / sim.dt / 100)))  # ~100 frames
         self.size = args.size

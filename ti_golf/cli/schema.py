@@ -27,7 +27,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def cmd_schema(args: argparse.Namespace) -> int:
     """Print or write (atomically) the scene files' JSON Schema."""
-    check_writable(args.out, "--out")
+    check_writable(args.out, "--out", (".json",))
     schema = study_json_schema() if args.study else json_schema()
     text = json.dumps(schema, indent=2, ensure_ascii=False) + "\n"
     if args.out is None:

@@ -49,7 +49,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     """Fly a ball per launch condition of ``args.scene`` (``--angles``, ``--speeds``, ``--spins`` or
     the scene's [sweep]) in one launch, print the best carry, and write the table (``--out``)
     and its plot (``--plot``); 0."""
-    check_writable(args.out, "--out")
+    check_writable(args.out, "--out", (".csv",))
     check_plot(args.plot)
     scene = load_scene(args.scene, args.overrides)
     if args.to_rest and not has_ground(scene):
