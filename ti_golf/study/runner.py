@@ -60,7 +60,8 @@ def run_study(
     """Run the tasks of ``study`` (a study file, a bundled study's name, or a loaded spec) not
     finished in its folder ``out``, on a local Dask cluster of ``workers`` processes or on the
     scheduler at ``address``; returns the table. Ctrl-C (``KeyboardInterrupt``) stops it after
-    writing the finished rows, and is raised again."""
+    writing the finished rows, and is raised again. Local workers are new processes that import
+    the calling script again: a script calls this under ``if __name__ == "__main__":``."""
     spec = study if isinstance(study, StudySpec) else load_study(study, overrides)
     folder = Path(out) if out is not None else default_folder(spec)
     if folder.exists() and not folder.is_dir():
