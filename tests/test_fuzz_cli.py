@@ -230,3 +230,19 @@ def test_an_output_named_for_another_format_is_refused(argv, allowed, tmp_path):
     assert code == 2, (argv, err)
     assert err.strip().splitlines()[-1] == f"ti-golf: error: {argv[-2]}: must end in {allowed} (got {argv[-1]!r})"
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    "argv, usage, last",
+    [
+        (["sweep", "lab_vacuum", "--plto", "x.png"], "usage: ti-golf sweep", "--plto x.png (did you mean '--plot'?)"),
+        (["run", "tour_shot", "--unitl", "rest"], "usage: ti-golf run", "--unitl rest (did you mean '--until'?)"),
+        (["bench", "pit", "--evry=1"], "usage: ti-golf bench pit", "--evry=1 (did you mean '--every'?)"),
+        (["run", "tour_shot", "--bogus"], "usage: ti-golf run", "--bogus"),
+        (["keys", "extra"], "usage: ti-golf keys", "extra"),
+    ],
+)
+def test_a_mistyped_option_gets_its_commands_usage_and_the_likely_option(argv, usage, last):
+    code, err = run_cli(argv)
+    assert code == 2
+    assert err.startswith(usage) and err.strip().splitlines()[-1] == f"ti-golf: error: unrecognized arguments: {last}"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import difflib
 import math
 import signal
 import sys
@@ -27,6 +28,34 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # type: ignore[override]
         self.print_usage(sys.stderr)
         self.exit(2, f"ti-golf: error: {message}\n")
+
+    def parse_command_line(self, argv: list[str]) -> argparse.Namespace:
+        """``parse_args``, but arguments that no parser took are reported by the (sub)command's
+        parser they were given to, with its usage, and with the option it most likely meant:
+        argparse's own reports them with the top-level usage alone."""
+        args, extra = self.parse_known_args(argv)
+        if extra:
+            parser = self._command_parser(args)
+            names = [o[2:] for action in parser._actions for o in action.option_strings if o.startswith("--")]
+            guesses = [
+                difflib.get_close_matches(a.split("=", 1)[0].lstrip("-"), names, n=1, cutoff=0.7)
+                for a in extra
+                if a.startswith("-")
+            ]
+            near = [f"'--{g[0]}'" for g in guesses if g]
+            hint = f" (did you mean {', '.join(near)}?)" if near else ""
+            parser.error(f"unrecognized arguments: {' '.join(extra)}{hint}")
+        return args
+
+    def _command_parser(self, args: argparse.Namespace) -> argparse.ArgumentParser:
+        """The innermost parser of the (sub)commands ``args`` names."""
+        parser: argparse.ArgumentParser = self
+        while True:
+            sub = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+            name = getattr(args, sub[0].dest, None) if sub else None
+            if name is None:
+                return parser
+            parser = sub[0].choices[name]
 
 
 def runtime_options(p: argparse.ArgumentParser) -> None:

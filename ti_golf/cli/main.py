@@ -63,7 +63,7 @@ class _Version(argparse.Action):
         parser.exit()
 
 
-def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+def build_parser(argv: Sequence[str] | None = None) -> Parser:
     """The argument parser of ``ti-golf``: with ``argv`` that names a command, that command's parser
     alone (only its module is imported: ``ti-golf keys`` imports neither Taichi nor the plotting
     libraries); else every command's."""
@@ -111,7 +111,7 @@ def main(argv: Sequence[str] | None = None, status: bool = False) -> int:
     (the console command) a start that waits on Taichi's kernels says what it is doing
     (:class:`~ti_golf.cli._common.StartupStatus`)."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    args = build_parser(argv).parse_args(argv)
+    args = build_parser(argv).parse_command_line(argv)
     on_main_thread = threading.current_thread() is threading.main_thread()
     if on_main_thread:  # a kill stops as Ctrl-C does, keeping what was done (signals reach the main thread only)
         previous = signal.signal(signal.SIGTERM, _interrupt)
