@@ -246,3 +246,19 @@ def test_a_mistyped_option_gets_its_commands_usage_and_the_likely_option(argv, u
     code, err = run_cli(argv)
     assert code == 2
     assert err.startswith(usage) and err.strip().splitlines()[-1] == f"ti-golf: error: unrecognized arguments: {last}"
+
+
+@pytest.mark.parametrize(
+    "argv, dest, value",
+    [
+        (["sweep", "lab_vacuum", "--angles", "-10,45"], "angles", "-10,45"),
+        (["sweep", "lab_vacuum", "--angles", "-10:10:5"], "angles", "-10:10:5"),
+        (["shot", "tour_shot", "--hla", "-.5"], "hla", -0.5),
+        (["run", "lab_vacuum", "--set", "air.wind=[-5,0,0]"], "overrides", ["air.wind=[-5,0,0]"]),
+    ],
+)
+def test_a_value_that_starts_with_a_negative_number_is_a_value(argv, dest, value):
+    # argparse took "-10,45" for an unknown option ("expected one argument") and asked for --angles=-10,45
+    from ti_golf.cli import build_parser
+
+    assert getattr(build_parser(argv).parse_command_line(argv), dest) == value

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import difflib
 import math
+import re
 import signal
 import sys
 import tempfile
@@ -23,7 +24,13 @@ if TYPE_CHECKING:
 
 
 class Parser(argparse.ArgumentParser):
-    """argparse that reports usage errors as one line with exit code 2 (its default code)."""
+    """argparse that reports usage errors as one line with exit code 2 (its default code), and
+    takes a value that starts with a negative number as a value: ``--angles -10,45`` and
+    ``--angles -10:10:5`` as ``--angles -10``, where argparse took them for unknown options."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-\.?\d")  # (no option of ti-golf starts with a digit)
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.print_usage(sys.stderr)
