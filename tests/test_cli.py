@@ -1041,6 +1041,21 @@ def test_a_run_until_rest_that_reaches_its_time_limit_says_so_and_names_the_ball
     assert "time limit" not in capsys.readouterr().out  # landed before it
 
 
+def test_a_run_until_rest_that_reaches_the_scenes_length_says_it_counts_from_the_resume(tmp_path, capsys):
+    # the default length of a run, world.t_end, counts from where a resumed run starts: at t = 4.5 s a
+    # line that named "world.t_end = 4 s" alone read as a contradiction
+    first = tmp_path / "a.npz"
+    assert main(["run", "lab_vacuum", "--t", "0.5", "--out", str(first)]) == 0
+    capsys.readouterr()
+    assert main(["run", "--resume", str(first), "--set", "world.t_end=1", "--until", "landed"]) == 0
+    out = capsys.readouterr().out
+    assert "t = 1.5 s (resumed at t = 0.5 s)" in out
+    assert (
+        "stopped at the time limit (world.t_end = 1 s, the default length of a run from where it resumed) "
+        "before every ball was landed: 1 still in flight (ball 0)" in out
+    )
+
+
 def test_a_render_until_rest_that_reaches_its_time_limit_says_so(tmp_path, capsys):
     png = tmp_path / "p.png"
     args = ["render", "lab_vacuum", "--until", "rest", "--out", str(png), "--size", "64x48", "--backend", "matplotlib"]

@@ -187,7 +187,8 @@ def say_unfinished(sim: Simulation, args: argparse.Namespace) -> None:
     if args.t is not None or args.steps is not None:
         limit = "--t" if args.t is not None else "--steps"
     else:
-        limit = f"world.t_end = {sim.scene.world.t_end:g} s"
+        since = " from where it resumed" if getattr(args, "resume", None) else ""
+        limit = f"world.t_end = {sim.scene.world.t_end:g} s, the default length of a run{since}"
     ids = ", ".join(str(i) for i in left[:10]) + (f" and {left.size - 10:,} more" if left.size > 10 else "")
     moving = "still moving" if args.until == "rest" else "still in flight"
     print(
