@@ -43,7 +43,9 @@ FIGURES: dict[str, Figure] = {
     ),
     "pile_height": Figure("pile_height_m", ("run",), "top of the highest ball in play above the lowest ball's bottom"),
     "repose_angle": Figure(
-        "repose_angle_deg", ("run",), "angle of repose: the slope of the heap's top surface (see repose_angle)"
+        "repose_angle_deg",
+        ("run",),
+        "angle of repose: the slope of the heap's top surface, NaN without a flank (see repose_angle)",
     ),
     "deepest_overlap": Figure("deepest_overlap", _PILE, "deepest overlap of two balls, a fraction of a radius"),
     "p99_speed": Figure("p99_speed_mps", _PILE, "99th percentile of the balls' speeds at the end"),
