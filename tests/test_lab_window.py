@@ -38,6 +38,14 @@ def test_lab_refuses_bad_input_before_opening_a_window(args, needle, capsys):
     assert needle in capsys.readouterr().err
 
 
+def test_lab_offers_the_cpu_backend_alone(capsys):
+    # GGUI draws with the CPU backend only: --help offered cuda, vulkan and gpu, which each ended in an error
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["lab", "--arch", "vulkan"])
+    assert stop.value.code == 2
+    assert "argument --arch: invalid choice: 'vulkan' (choose from 'cpu')" in capsys.readouterr().err
+
+
 def test_lab_needs_a_display_and_says_how_to_get_a_picture_without_one(capsys, monkeypatch):
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)

@@ -136,9 +136,14 @@ def init(
             )
         return _info
     front_end.install()  # the same kernels, with less of Taichi's front end repeated per call site
+    start_arch = want_arch
+    if want_arch != "cpu" and not backend_found(want_arch):
+        start_arch = "cpu"
+        wanted = "GPU" if want_arch == "gpu" else want_arch
+        print(f"ti-golf: Taichi finds no {wanted} backend on this machine; running on the CPU", file=sys.stderr)
     banner = io.StringIO()
     with contextlib.redirect_stdout(banner):  # Taichi prints "Starting on arch=..." on stdout
-        ti.init(**init_options(want_arch, want_prec, debug, profile, cpu_threads))
+        ti.init(**init_options(start_arch, want_prec, debug, profile, cpu_threads))
     for line in banner.getvalue().splitlines():  # keep stdout clean for JSON; pass on anything unusual
         if not line.startswith("[Taichi] Starting on arch"):
             print(line, file=sys.stderr)
@@ -154,6 +159,21 @@ def init(
             file=sys.stderr,
         )
     return _info
+
+
+def backend_found(arch: str) -> bool:
+    """Whether Taichi finds the backend ``arch`` (one of :data:`ARCHES`; ``gpu``: any GPU backend)
+    on this machine, asked with Taichi's log quiet: its own probe, in ``ti.init``, prints a raw
+    warning for each library it misses and then falls back to the CPU with another."""
+    from taichi._logging import set_logging_level
+    from taichi.lang.misc import is_arch_supported
+
+    wanted = ti.gpu if arch == "gpu" else [getattr(ti, arch)]
+    set_logging_level("error")
+    try:
+        return any(is_arch_supported(a) for a in wanted)
+    finally:
+        set_logging_level("info")  # (ti.init sets it again from its own settings)
 
 
 def free_every_ndarray() -> None:

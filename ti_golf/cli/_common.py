@@ -65,11 +65,15 @@ class Parser(argparse.ArgumentParser):
             parser = sub[0].choices[name]
 
 
-def runtime_options(p: argparse.ArgumentParser) -> None:
-    """``--arch`` and ``--precision``: the Taichi backend and float type of a command that simulates."""
+def runtime_options(p: argparse.ArgumentParser, cpu_only: bool = False) -> None:
+    """``--arch`` and ``--precision``: the Taichi backend and float type of a command that simulates
+    (``cpu_only``: a command that draws in a GGUI window, which runs on the CPU backend alone)."""
     from ti_golf.runtime import ARCHES, PRECISIONS  # (imports Taichi: not for the commands without these options)
 
-    p.add_argument("--arch", choices=ARCHES, default=None, help="Taichi backend (default: $TI_GOLF_ARCH or cpu)")
+    if cpu_only:
+        p.add_argument("--arch", choices=("cpu",), default=None, help="Taichi backend: cpu (GGUI draws with it alone)")
+    else:
+        p.add_argument("--arch", choices=ARCHES, default=None, help="Taichi backend (default: $TI_GOLF_ARCH or cpu)")
     p.add_argument(
         "--precision", choices=PRECISIONS, default=None, help="float precision (default: $TI_GOLF_PRECISION or f64)"
     )

@@ -251,7 +251,7 @@ def window_problem(on_screen: bool = True) -> str | None:
     display. GGUI draws on the CPU backend only (see :func:`non_cpu_arch`) and needs Vulkan."""
     arch = non_cpu_arch()
     if arch:
-        return f"draws with the CPU backend only (this process runs on {arch}); leave out --arch"
+        return f"draws with the CPU backend only (this process runs on {arch}); leave out --arch and TI_GOLF_ARCH"
     if on_screen and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         return NO_DISPLAY
     problem = ggui_problem()
