@@ -133,6 +133,8 @@ BAD_VALUES = {
     "nan_in_sweep_list": ("sweep", "angles", "[36, nan]", "sweep.angles", ["finite"]),
     # out of range
     "mass_zero": ("ball", "mass", "0", "ball.mass", ["> 0", "0.0"]),
+    "dt_negative_with_its_unit": ("world", "dt", "-1", "world.dt", ["must be > 0 s (got -1.0)"]),
+    "altitude_with_its_unit": ("air", "altitude", "6000", "air.altitude", ["must be in [-500, 5000] m (got 6000.0)"]),
     "mass_negative": ("ball", "mass", "-0.045", "ball.mass", ["> 0", "-0.045"]),
     "radius_zero": ("ball", "radius", "0.0", "ball.radius", ["> 0"]),
     "radius_negative": ("ball", "radius", "-0.02", "ball.radius", ["> 0", "-0.02"]),
@@ -145,7 +147,8 @@ BAD_VALUES = {
     "dt_negative": ("world", "dt", "-0.01", "world.dt", ["> 0", "-0.01"]),
     "gamma_3": ("air", "gamma", "3", "air.gamma", ["1, 2", "3"]),
     "gamma_0": ("air", "gamma", "0", "air.gamma", ["1, 2"]),
-    "angle_above_90": ("launch", "angle_deg", "100", "launch.angle_deg", ["[-90, 90]"]),
+    "angle_above_90": ("launch", "angle_deg", "100", "launch.angle_deg", ["[-90, 90] degrees"]),
+    "e_has_no_unit": ("contact", "e", "2", "contact.e", ["must be in [0, 1] (got 2.0)"]),
     "sweep_range_backwards": ("sweep", "angles", '"36:30:0.1"', "sweep.angles", ["STOP must be >= START"]),
     "sweep_range_step_zero": ("sweep", "angles", '"36:37:0"', "sweep.angles", ["STEP must be > 0"]),
     # the hole: a position is required, the cup has a size

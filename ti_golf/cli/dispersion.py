@@ -33,7 +33,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "scene's ground, and report the spread and the 68 % and 95 % landing ellipses.",
     )
     scene_options(d)
-    d.add_argument("--n", type=int, default=10_000, help=f"shots (default 10000, at most {MAX_SHOTS})")
+    d.add_argument("--n", type=int, default=10_000, help=f"shots, 2 to {MAX_SHOTS} (default 10000)")
     d.add_argument("--seed", type=int, default=0, help="seed of the draw (default 0): a seed gives the same shots")
     launch_options(d)
     g = d.add_argument_group("spread (standard deviations, in the units of the launch options)")

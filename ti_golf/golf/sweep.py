@@ -121,13 +121,16 @@ def launch_grid(
     spin_mag = float(np.linalg.norm(spin_vec))
     axis = spin_vec / spin_mag if spin_mag > 0 else np.asarray(backspin_axis(L.direction_deg))
     spins_ = np.asarray(spins if spins is not None else (scene.sweep.spins or (spin_mag,)), float)
-    for name, arr, lo, hi in (
-        ("angles", angles, -90, 90),
-        ("speeds", speeds_, 0, math.inf),
-        ("spins", spins_, -math.inf, math.inf),
+    for name, arr, lo, hi, allowed in (
+        ("angles", angles, -90, 90, "finite and in [-90, 90] deg"),
+        ("speeds", speeds_, 0, math.inf, "finite and >= 0 m/s"),
+        ("spins", spins_, -math.inf, math.inf, "finite (rad/s)"),
     ):
-        if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr < lo) or np.any(arr > hi):
-            raise ConfigError(f"--{name}", None, f"values must be finite and in [{lo}, {hi}]")
+        if arr.size == 0:
+            raise ConfigError(f"--{name}", None, "needs at least one value")
+        bad = arr[~(np.isfinite(arr) & (arr >= lo) & (arr <= hi))]
+        if bad.size:
+            raise ConfigError(f"--{name}", None, f"values must be {allowed} (got {bad[0]:g})")
     sp, sn, an = np.meshgrid(speeds_, spins_, angles, indexing="ij")
     an, sp, sn = an.ravel(), sp.ravel(), sn.ravel()
     n = an.size

@@ -21,7 +21,7 @@ else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 from ti_golf.errors import ConfigError
-from ti_golf.scene.checks import parse_range, raise_config
+from ti_golf.scene.checks import Interval, parse_range, raise_config
 from ti_golf.scene.keys import Key, read_when_text
 from ti_golf.scene.schema import (
     ARRAY_SCHEMA,
@@ -80,11 +80,19 @@ def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
         value = _coerce_numbers(value, key, source, dotted)
     elif kind == "range":
         value = parse_range(value if isinstance(value, (list, tuple)) else str(value), source, dotted)
-    if key.check is not None:
-        problem = key.check(value)
-        if problem:
-            raise_config(source, dotted, f"{problem} (got {value!r})")
+    problem = _problem(key, value)
+    if problem:
+        raise_config(source, dotted, f"{problem} (got {value!r})")
     return value
+
+
+def _problem(key: Key, value: Any) -> str | None:
+    """Why ``value`` fails the key's check (``None``: it passes, or the key has none), with the
+    key's unit after an interval that names none: ``must be in [-500, 5000] m``."""
+    problem = key.check(value) if key.check is not None else None
+    if problem and isinstance(key.check, Interval) and not key.check.unit_word and key.unit not in ("-", ""):
+        problem += f" {key.unit}"
+    return problem
 
 
 def _coerce_number(value: Any, key: Key, source: str, dotted: str) -> int | float:
@@ -95,8 +103,9 @@ def _coerce_number(value: Any, key: Key, source: str, dotted: str) -> int | floa
     if key.kind == "int":
         if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
             raise_config(source, dotted, f"must be an integer (got {value!r})")
-        if key.check is not None and key.check(value):
-            raise_config(source, dotted, f"{key.check(value)} (got {value!r})")
+        problem = _problem(key, value)
+        if problem:
+            raise_config(source, dotted, f"{problem} (got {value!r})")
         return int(value)
     number = float(value)
     if not math.isfinite(number):
