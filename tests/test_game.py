@@ -363,7 +363,7 @@ def test_the_first_prompt_offers_the_clubs_and_a_club_name_gives_its_stroke(gree
         ("0 5\n", "shots.txt:1: a stroke is 'direction speed loft [spin]' or 'direction club'"),
         ("0 spoon\n", "shots.txt:1: a stroke is 'direction speed loft [spin]' or 'direction club'"),
         ("\n0 fast 0\n", "shots.txt:2: key 'speed' must be a number in [0, 350] km/h (got 'fast')"),
-        (b"0 5 \xff\n", "shots.txt' is not UTF-8 text (byte 4)"),
+        (b"0 5 \xff\n", "shots.txt: is not UTF-8 text (byte 4)"),
     ],
 )
 def test_play_rejects_a_bad_shots_file_naming_the_line_and_field(green_file, tmp_path, capsys, content, needle):
@@ -375,6 +375,14 @@ def test_play_rejects_a_bad_shots_file_naming_the_line_and_field(green_file, tmp
     assert cli.main(["play", str(green_file), "--shots", str(shots)]) == 2
     err = capsys.readouterr().err
     assert needle in err and "Traceback" not in err
+
+
+def test_a_missing_shots_file_is_worded_as_every_missing_file(green_file, tmp_path, capsys):
+    missing = tmp_path / "nothere.txt"
+    assert cli.main(["play", str(green_file), "--shots", str(missing)]) == 2
+    assert capsys.readouterr().err.strip() == f"ti-golf: error: {missing}: file not found"
+    assert cli.main(["run", str(tmp_path / "nothere.npz")]) == 2  # (as a scene or a saved run: the same words)
+    assert capsys.readouterr().err.strip() == f"ti-golf: error: {tmp_path / 'nothere.npz'}: file not found"
 
 
 @pytest.mark.parametrize(

@@ -219,12 +219,16 @@ def _field_value(f: Field, text: str, default: float | None, game: GolfGame, sou
 
 def file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
     """The shots of a ``--shots`` file, checked line by line (errors name the file, line and field)."""
-    try:
+    try:  # (worded as for the other files read: scenes, saved runs, studies)
         lines = Path(path).read_text(encoding="utf-8").splitlines()
+    except FileNotFoundError:
+        raise ConfigError(path, None, "file not found") from None
+    except IsADirectoryError:
+        raise ConfigError(path, None, "is a directory, not a file of shots") from None
     except OSError as exc:
-        raise ConfigError("--shots", None, f"cannot read {path!r}: {exc.strerror}") from None
+        raise ConfigError(path, None, f"cannot be read ({exc.strerror or exc})") from None
     except UnicodeDecodeError as exc:
-        raise ConfigError("--shots", None, f"{path!r} is not UTF-8 text (byte {exc.start})") from None
+        raise ConfigError(path, None, f"is not UTF-8 text (byte {exc.start})") from None
     parsed = []
     for number, line in enumerate(lines, 1):
         text = line.split("#", 1)[0].replace(",", " ").split()

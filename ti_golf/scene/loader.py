@@ -219,7 +219,7 @@ def resolve_scene_path(name: str | os.PathLike[str], folder: Path | None = None)
     ``folder``: the bundled studies'); a :class:`ConfigError` suggesting the closest name there
     when there is none."""
     p = Path(name)
-    if p.exists() or p.suffix == ".toml" and p.parent != Path("."):
+    if p.exists() or p.suffix == ".toml" and ("/" in str(name) or os.sep in str(name)):  # (./x.toml: a path)
         return p
     look_in = scenes_dir() if folder is None else folder
     for cand in (look_in / p, look_in / f"{p}.toml"):
