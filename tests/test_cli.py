@@ -230,6 +230,30 @@ def test_sweep_csv_columns_and_rows(turbulent_sweep):
         assert r["landing_angle_deg"] > r["angle_deg"] and r["landing_speed_mps"] < r["speed_mps"]
 
 
+def test_sweep_csv_ends_its_lines_as_every_table_written(turbulent_sweep):
+    # the dispersion's table (numpy) ends its lines with LF; the sweep's, the round's and the
+    # study's (Python's csv module) ended them with CRLF
+    csv_path = turbulent_sweep[3].with_suffix(".csv")
+    assert b"\r" not in csv_path.read_bytes()
+    assert "best angle is the" not in turbulent_sweep[0].stdout  # 36.66 deg lies inside 36 to 37.4
+
+
+def test_sweep_says_when_its_best_angle_is_an_end_of_the_angles_and_speaks_the_units_asked(capsys):
+    assert main(["sweep", "lab_vacuum", "--angles", "30:40:5"]) == 0
+    out = capsys.readouterr().out
+    assert "lab_vacuum: 3 launch conditions" in out
+    assert "the best angle is the highest swept: the longest carry may lie beyond it" in out
+    assert main(["sweep", "lab_vacuum", "--angles", "50:60:5"]) == 0
+    assert "the best angle is the lowest swept" in capsys.readouterr().out
+    assert main(["sweep", "lab_vacuum", "--angles", "45", "--speeds", "44.704"]) == 0
+    out = capsys.readouterr().out
+    assert "lab_vacuum: 1 launch condition, 1 landed" in out and "best angle is the" not in out
+    assert main(["sweep", "tour_shot", "--angles", "16", "--speeds", "44.704", "--units", "imperial"]) == 0
+    header, row = capsys.readouterr().out.splitlines()[-2:]
+    assert header.split()[:6] == ["angle", "[deg]", "speed", "[mph]", "spin", "[rpm]"]
+    assert row.split()[:2] == ["16", "100"]  # 44.704 m/s is 100 mph
+
+
 def test_sweep_csv_has_one_column_per_quantity_each_with_its_unit(turbulent_sweep):
     # one apex (above the launch point), no total or roll without --to-rest (they would be NaN
     # throughout), every column named with its unit, and every column described on the docs' page

@@ -277,7 +277,7 @@ CSV_COLUMNS = (
 def write_csv(strokes: list[Stroke], path: str) -> None:
     """The round as CSV, one row per stroke (:data:`CSV_COLUMNS`), written whole or not at all."""
     with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
-        out = csv.writer(f)
+        out = csv.writer(f, lineterminator="\n")
         out.writerow(CSV_COLUMNS)
         for s in strokes:
             out.writerow(

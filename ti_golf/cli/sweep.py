@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import time
 
+import numpy as np
+
 from ti_golf.cli._common import HeldInterrupt, check_plot, check_writable, plot_help, runtime_options, scene_options
 from ti_golf.cli.shot import golfer_table
 from ti_golf.errors import ConfigError
@@ -68,7 +70,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     n = res.angle_deg.size
     landed = int(res.flight.landed.sum())
     print(
-        f"{scene.name}: {n} launch conditions, {landed} landed, {elapsed:.2f} s "
+        f"{scene.name}: {n} launch condition{'s' if n != 1 else ''}, {landed} landed, {elapsed:.2f} s "
         f"({scene.world.integrator}, dt = {scene.world.dt:g} s)"
     )
     if landed == 0:
@@ -81,13 +83,21 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             f" -> carry {f.carry[b]:.4f} m (apex {f.apex[b] - launch_position(scene)[1]:.2f} m, "
             f"flight {f.flight_time[b]:.3f} s, lands at {f.landing_angle[b]:.1f} deg, {f.landing_speed[b]:.2f} m/s)"
         )
+        edge = edge_of_angles(res.angle_deg, res.angle_deg[b])
+        if edge:
+            print(f"the best angle is the {edge} swept: the longest carry may lie beyond it")
     if args.to_rest and res.shots is not None and int(res.shots.at_rest.sum()) < landed:
         print(
             f"{landed - int(res.shots.at_rest.sum())} of the {landed} balls landed were still moving at "
             f"world.t_max = {scene.world.t_max:g} s: no total or roll for them (NaN)"
         )
     if args.units and res.shots is not None:
-        first = {"angle [deg]": res.angle_deg, "speed [m/s]": res.speed_mps, "spin [rad/s]": res.spin_radps}
+        u = UNITS[args.units]
+        first = {
+            "angle [deg]": res.angle_deg,
+            f"speed [{u.speed_label}]": np.round(res.speed_mps / u.speed, 1),
+            f"spin [{u.spin_label}]": np.round(res.spin_radps / u.spin),
+        }
         print("\n".join(golfer_table(res.shots, UNITS[args.units], first)))
     if args.out:
         res.to_csv(args.out)
@@ -104,3 +114,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             + (f" and is saved in {kept}" if kept else "")
         )
     return 0
+
+
+def edge_of_angles(angles: np.ndarray, best: float) -> str | None:
+    """``"highest"`` or ``"lowest"`` when the best launch angle ``best`` [deg] is an end of the
+    ``angles`` swept (more than one), where the carry may still grow beyond the range; else ``None``."""
+    values = np.unique(angles)
+    if values.size < 2:
+        return None
+    return "highest" if best == values[-1] else "lowest" if best == values[0] else None

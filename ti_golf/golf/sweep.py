@@ -95,7 +95,7 @@ class SweepResult:
         all)."""
         cols = self.columns()
         with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
-            out = csv.writer(fh)
+            out = csv.writer(fh, lineterminator="\n")
             out.writerow(cols)
             for row in zip(*cols.values()):
                 out.writerow([f"{v:.10g}" for v in row])

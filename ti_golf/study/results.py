@@ -113,7 +113,7 @@ def write_table(folder: str | os.PathLike[str], columns: Sequence[str], rows: Se
     with atomic_path(folder / TABLE_PARQUET) as tmp:
         pq.write_table(table, tmp)
     with atomic_path(folder / TABLE_CSV) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
-        writer = csv.writer(fh)
+        writer = csv.writer(fh, lineterminator="\n")
         writer.writerow(columns)
         for row in rows:
             writer.writerow([_cell(row.get(name)) for name in columns])
