@@ -60,8 +60,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     how.add_argument(
         "--shots",
         metavar="FILE",
-        help="play the strokes in FILE, one per line: direction speed loft spin "
-        "(deg, km/h, deg, rpm; 'hole' aims at the hole)",
+        help="play the strokes in FILE, one per line: 'direction speed loft [spin]' (deg, km/h, deg, rpm) or "
+        "'direction club' (a club's speed, loft and spin); 'hole' aims at the hole, # starts a comment",
     )
     how.add_argument(
         "--gui", action="store_true", help="play in a window: the course in 3-D, clubs and sliders, a camera to move"
@@ -90,6 +90,9 @@ def cmd_play(args: argparse.Namespace) -> int:
     seed = args.seed if args.seed is not None else secrets.randbelow(2**31)  # (said, so a round can be played again)
     game = GolfGame(load_scene(args.scene, args.overrides), seed=seed)
     if args.gui:
+        from ti_golf.game.window import check_display  # (GGUI and matplotlib: only for a window)
+
+        check_display()  # (before the round's seed: no round is played without a window)
         _say_seed(game, seed)
         return _play_in_window(game, args)
     shots = file_shots(args.shots, game) if args.shots else _asked_shots(game, input, sys.stdin.isatty())
@@ -131,9 +134,8 @@ def _say_seed(game: GolfGame, seed: int) -> None:
 
 def _play_in_window(game: GolfGame, args: argparse.Namespace) -> int:
     """The round in a window (:mod:`.game_gui`), then the same summary and files as in the console."""
-    from ti_golf.game.window import GolfWindow, check_display  # (GGUI and matplotlib: only for a window)
+    from ti_golf.game.window import GolfWindow  # (GGUI and matplotlib: only for a window)
 
-    check_display()
     ended = "window closed"
     try:
         GolfWindow(game, on_stroke=lambda _: write_csv(game.strokes, args.out) if args.out else None).run()
