@@ -21,6 +21,8 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
+import numpy as np
+
 import ti_golf
 from ti_golf import ConfigError
 from ti_golf.scene.schema import parse_range
@@ -491,3 +493,45 @@ def test_cli_bad_range_exits_2(option, value, fragment):
     proc = run_cli("sweep", "lab_turbulent", f"{option}={value}")
     assert_short_cli_error(proc, option, fragment)
     assert proc.stdout.strip() == ""
+
+
+@pytest.mark.parametrize(
+    "text, key, fragment",
+    [
+        ('[[blocks]]\nkind = "random"\nnumber = 3\nseed = -1\n', "blocks[0].seed", "must be >= 0 (got -1)"),
+        (
+            '[[blocks]]\nkind = "random"\nnumber = 10\nbox_min = [-1e200, 0, -1e200]\nbox_max = [1e200, 1, 1e200]\n',
+            "blocks[0].box_min",
+            "must lie within ±1,000,000 m on every axis",
+        ),
+        ('[[blocks]]\nkind = "lattice"\ncount = [2, 2, 2]\nspacing = 1e308\n', "blocks[0].spacing", "spans more than"),
+        ("[terrain]\nseed = -1\n", "terrain.seed", "must be >= 0 (got -1)"),
+        ("[terrain]\nslope = [1e308, 0]\n", "terrain.slope", "must be in [-100, 100] on both axes"),
+        ("[terrain]\namplitude = 1e308\n", "terrain.amplitude", "must be in [0, 10000] m"),
+    ],
+)
+def test_a_value_past_what_the_floats_hold_is_refused_before_anything_runs(tmp_path, text, key, fragment):
+    # each of these ended in a traceback (a negative seed in numpy, a box whose volume overflowed,
+    # a terrain of NaN heights), or hung (a box of 1e200 m: its spacing overflowed to inf)
+    path = write_scene(tmp_path, "[world]\nground = true\n" + text)
+    with pytest.raises(ConfigError) as info:
+        ti_golf.Simulation(ti_golf.load_scene(path))
+    assert info.value.key == key and fragment in str(info.value), str(info.value)
+
+
+@pytest.mark.parametrize("normal", ["[0, 1e-170, 0]", "[0, 1e300, 0]", "[0, 2, 0]"])
+def test_a_plane_normal_too_small_or_too_large_to_square_is_still_its_direction(tmp_path, normal):
+    # |n|² of 1e-170 underflows to 0 (a ZeroDivisionError) and of 1e300 overflows (a zero normal)
+    path = write_scene(tmp_path, f"[world]\nground = false\n[[planes]]\npoint = [0, 0, 0]\nnormal = {normal}\n")
+    assert ti_golf.load_scene(path).planes[0].normal == (0.0, 1.0, 0.0)
+
+
+def test_a_heights_file_that_is_empty_or_too_high_is_refused(tmp_path):
+    empty, high = tmp_path / "empty.npy", tmp_path / "high.npy"
+    empty.write_bytes(b"")
+    np.save(high, np.full((4, 4), 1e308))
+    for path, fragment in ((empty, "cannot be read as a .npy array (No data left in file)"), (high, "beyond ±10000 m")):
+        text = f'[terrain]\nkind = "file"\nfile = "{path.name}"\nsize = [10, 10]\n'
+        with pytest.raises(ConfigError) as info:
+            ti_golf.load_scene(write_scene(tmp_path, text))
+        assert info.value.key == "terrain.file" and fragment in str(info.value), str(info.value)

@@ -65,6 +65,17 @@ class Parser(argparse.ArgumentParser):
             parser = sub[0].choices[name]
 
 
+def seed_value(text: str) -> int:
+    """A ``--seed``: a whole number, 0 or more; argparse turns the error into a usage line (exit code 2)."""
+    try:
+        seed = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, 0 or more (got {text!r})") from None
+    if seed < 0:
+        raise argparse.ArgumentTypeError(f"must be a whole number, 0 or more (got {seed})")
+    return seed
+
+
 def runtime_options(p: argparse.ArgumentParser, cpu_only: bool = False) -> None:
     """``--arch`` and ``--precision``: the Taichi backend and float type of a command that simulates
     (``cpu_only``: a command that draws in a GGUI window, which runs on the CPU backend alone)."""

@@ -7,7 +7,15 @@ import json
 import math
 import time
 
-from ti_golf.cli._common import Progress, check_plot, check_writable, plot_help, runtime_options, scene_options
+from ti_golf.cli._common import (
+    Progress,
+    check_plot,
+    check_writable,
+    plot_help,
+    runtime_options,
+    scene_options,
+    seed_value,
+)
 from ti_golf.cli.shot import LAUNCH_OPTIONS, launch_line, launch_options, read_launch, units_option
 from ti_golf.errors import ConfigError
 from ti_golf.golf.dispersion import MAX_SHOTS, PLAYER_SPREAD, dispersion
@@ -34,7 +42,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     scene_options(d)
     d.add_argument("--n", type=int, default=10_000, help=f"shots, 2 to {MAX_SHOTS} (default 10000)")
-    d.add_argument("--seed", type=int, default=0, help="seed of the draw (default 0): a seed gives the same shots")
+    d.add_argument(
+        "--seed", type=seed_value, default=0, help="seed of the draw (default 0): a seed gives the same shots"
+    )
     launch_options(d)
     g = d.add_argument_group("spread (standard deviations, in the units of the launch options)")
     g.add_argument("--sd-speed", type=float, help="of ball speed [mph; m/s with --units metric] (default 1.5 mph)")

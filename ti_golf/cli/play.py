@@ -17,7 +17,7 @@ import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-from ti_golf.cli._common import check_plot, check_writable, plot_help, runtime_options, scene_options
+from ti_golf.cli._common import check_plot, check_writable, plot_help, runtime_options, scene_options, seed_value
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.game.rules import (
@@ -70,17 +70,6 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--plot", help=plot_help("a map of the course with every stroke's path at the end"))
     runtime_options(p)
     return p
-
-
-def seed_value(text: str) -> int:
-    """A ``--seed``: a whole number, 0 or more; argparse turns the error into a usage line (exit code 2)."""
-    try:
-        seed = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, 0 or more (got {text!r})") from None
-    if seed < 0:
-        raise argparse.ArgumentTypeError(f"must be a whole number, 0 or more (got {seed})")
-    return seed
 
 
 def cmd_play(args: argparse.Namespace) -> int:

@@ -518,10 +518,30 @@ def _ball_spec(values: dict[str, Any], source: str, i: int) -> BallSpec:
     return BallSpec(**values)
 
 
+BLOCK_REACH = 1e6
+"""The farthest a block of balls reaches [m]: its corners within ±1,000 km of the origin, a lattice
+at most as long (far past any course, and far from the floats' limits that a box's volume or a
+lattice's sites would overflow)."""
+
+
 def _block(values: dict[str, Any], source: str, i: int) -> Block:
     block = Block(**values)
     if block.kind == "random" and any(lo >= hi for lo, hi in zip(block.box_min, block.box_max)):
         raise_config(source, f"blocks[{i}].box_max", "must exceed box_min on every axis")
+    corners = ("box_min", "box_max") if block.kind == "random" else ("origin",)
+    for name in corners:
+        if any(abs(c) > BLOCK_REACH for c in getattr(block, name)):
+            raise_config(
+                source,
+                f"blocks[{i}].{name}",
+                f"must lie within ±{BLOCK_REACH:,.0f} m on every axis (got {getattr(block, name)})",
+            )
+    if block.kind == "lattice" and (block.spacing or 0.0) * max(block.count) > BLOCK_REACH:
+        raise_config(
+            source,
+            f"blocks[{i}].spacing",
+            f"spans more than {BLOCK_REACH:,.0f} m with count {[int(c) for c in block.count]}",
+        )
     if (block.speed is None) != (block.angle_deg is None):
         raise_config(source, f"blocks[{i}].speed", "shots need both speed and angle_deg ([min, max] each)")
     return block
@@ -555,6 +575,10 @@ def _plane(values: dict[str, Any]) -> Plane:
     length = math.sqrt(sum(c * c for c in n))
     if abs(length - 1.0) <= UNIT_LENGTH_ULPS * sys.float_info.epsilon:
         return plane  # already a unit normal: dividing again could move its last bit (see scene.document)
+    if not 0.0 < length < math.inf:  # |n|² under- or overflowed (1e-170, 1e300): scaled first (n ≠ 0: NonZero)
+        big = max(abs(c) for c in n)
+        n = (n[0] / big, n[1] / big, n[2] / big)
+        length = math.sqrt(sum(c * c for c in n))
     return Plane(point=plane.point, normal=(n[0] / length, n[1] / length, n[2] / length))
 
 

@@ -65,6 +65,13 @@ FRICTION_MODELS = ("spin", "report")
 """Friction of the ball–surface contacts (``contact.friction_model``): at the contact point, coupled
 to the spin, or the report's, from the centre's velocity alone (see :mod:`ti_golf.physics.contact`)."""
 
+HEIGHT_LIMIT = 10_000.0
+"""The largest height [m] of a terrain, above or below 0 (generated amplitudes and the heights of a
+file): 10 km, past any golf course, so that the slopes and normals stay finite numbers."""
+
+SLOPE_LIMIT = 100.0
+"""The steepest tilt (dh/dx, dh/dz) of ``terrain.slope``: 89.4°."""
+
 
 # -- the scene's tables -------------------------------------------------------------------------
 @dataclass(frozen=True)
@@ -268,10 +275,16 @@ class TerrainConfig:
         0,
         "-",
         "random seed of generated terrain (the same seed gives the same heights everywhere)",
+        NON_NEGATIVE,
         read_when=("kind", ("generated",)),
     )
     amplitude: float = key(
-        "float", 1.0, "m", "generated heights lie within ±amplitude", NON_NEGATIVE, read_when=("kind", ("generated",))
+        "float",
+        1.0,
+        "m",
+        "generated heights lie within ±amplitude",
+        Interval(0.0, HEIGHT_LIMIT),
+        read_when=("kind", ("generated",)),
     )
     roughness: float = key(
         "float",
@@ -293,6 +306,7 @@ class TerrainConfig:
         (0.0, 0.0),
         "-",
         "tilt [dh/dx, dh/dz] added to the heights of either kind (an incline: amplitude 0 and a slope)",
+        Each(Interval(-SLOPE_LIMIT, SLOPE_LIMIT)),
     )
     kill_height: float | None = key(
         "float",
@@ -481,7 +495,7 @@ class Block:
         "float", 0.0, "-", "relative spread of radii: R·(1 ± jitter)", Interval(0.0, 0.5, hi_open=True)
     )
     mass: float | None = key("float", None, "kg", "mass (default ball.mass; scaled with R³ when radii vary)", POSITIVE)
-    seed: int = key("int", 0, "-", "random seed (the same seed gives the same balls everywhere)")
+    seed: int = key("int", 0, "-", "random seed (the same seed gives the same balls everywhere)", NON_NEGATIVE)
 
 
 @dataclass(frozen=True)

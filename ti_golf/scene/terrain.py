@@ -28,7 +28,7 @@ from functools import lru_cache
 import numpy as np
 
 from ti_golf.scene.checks import raise_config
-from ti_golf.scene.schema import TerrainConfig
+from ti_golf.scene.schema import HEIGHT_LIMIT, TerrainConfig
 
 
 @dataclass(frozen=True)
@@ -100,7 +100,8 @@ class Terrain:
 
 
 def load_heights_file(path: str | os.PathLike[str], source: str = "") -> np.ndarray:
-    """Read and check a .npy array of heights: 2-D, at least 2 points per axis, finite real numbers.
+    """Read and check a .npy array of heights: 2-D, at least 2 points per axis, finite real numbers
+    within ±:data:`~ti_golf.scene.schema.HEIGHT_LIMIT`.
 
     Raises ConfigError naming ``terrain.file``.
     """
@@ -112,8 +113,8 @@ def load_heights_file(path: str | os.PathLike[str], source: str = "") -> np.ndar
         raise_config(source, key, f"is a directory, not a .npy file: {p}")
     try:
         a = np.load(p, allow_pickle=False)
-    except (OSError, ValueError) as exc:
-        raise_config(source, key, f"cannot be read as a .npy array ({exc}): {p}")
+    except (OSError, ValueError, EOFError) as exc:  # (EOFError: an empty file)
+        raise_config(source, key, f"cannot be read as a .npy array ({exc or 'empty file'}): {p}")
     if not isinstance(a, np.ndarray) or a.dtype.kind not in "iuf":
         raise_config(
             source, key, f"must hold a numeric array of heights in m (got {getattr(a, 'dtype', type(a))}): {p}"
@@ -126,6 +127,8 @@ def load_heights_file(path: str | os.PathLike[str], source: str = "") -> np.ndar
         raise_config(
             source, key, f"holds NaN or infinite heights ({int(np.count_nonzero(~np.isfinite(a)))} of them): {p}"
         )
+    if np.max(np.abs(a)) > HEIGHT_LIMIT:
+        raise_config(source, key, f"holds heights beyond ±{HEIGHT_LIMIT:g} m (got {float(np.max(np.abs(a))):g}): {p}")
     return np.asarray(a, dtype=np.float64)
 
 
