@@ -262,3 +262,21 @@ def test_a_value_that_starts_with_a_negative_number_is_a_value(argv, dest, value
     from ti_golf.cli import build_parser
 
     assert getattr(build_parser(argv).parse_command_line(argv), dest) == value
+
+
+@pytest.mark.parametrize(
+    "argv, last",
+    [
+        (["run", "lab_vacuum", "--t", "inf"], "--t: must be a finite number > 0 seconds (got inf)"),
+        (
+            ["render", "lab_vacuum", "--t", "inf", "--out", "r.png"],
+            "--t: must be a finite number >= 0 seconds (got inf)",
+        ),
+        (["dispersion", "tour_shot", "--seed", "-1"], "argument --seed: must be a whole number, 0 or more (got -1)"),
+    ],
+)
+def test_an_infinite_time_or_a_negative_seed_is_one_error(argv, last, tmp_path):
+    # --t inf ended in an OverflowError (its steps counted as an integer), a negative seed in numpy's ValueError
+    argv = [str(tmp_path / a) if a.endswith(".png") else a for a in argv]
+    code, err = run_cli(argv)
+    assert code == 2 and err.strip().splitlines()[-1] == f"ti-golf: error: {last}", err

@@ -59,8 +59,8 @@ def cmd_render(args: argparse.Namespace) -> int:
     """Run ``args.scene`` (or the saved run ``--resume``) for ``--t`` / ``--steps`` (default: not at
     all) and write ``--out``."""
     check_writable(args.out, "--out", (".png",))
-    if args.t is not None and not args.t >= 0:
-        raise ConfigError("--t", None, f"must be >= 0 seconds (got {args.t})")
+    if args.t is not None and not (math.isfinite(args.t) and args.t >= 0):
+        raise ConfigError("--t", None, f"must be a finite number >= 0 seconds (got {args.t})")
     if args.steps is not None and args.steps < 0:
         raise ConfigError("--steps", None, f"must be >= 0 (got {args.steps})")
     w, h = args.size

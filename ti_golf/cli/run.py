@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import tempfile
 import time
 from pathlib import Path
@@ -79,8 +80,8 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
     check_writable(args.gif, "--gif", (".gif",))
     if args.frames is not None and not args.frames.strip():
         raise ConfigError("--frames", None, "needs a folder name (got an empty path)")
-    if args.t is not None and not args.t > 0:
-        raise ConfigError("--t", None, f"must be > 0 seconds (got {args.t})")
+    if args.t is not None and not (math.isfinite(args.t) and args.t > 0):
+        raise ConfigError("--t", None, f"must be a finite number > 0 seconds (got {args.t})")
     if args.steps is not None and args.steps <= 0:
         raise ConfigError("--steps", None, f"must be > 0 (got {args.steps})")
     if args.record_every < 0:

@@ -483,6 +483,8 @@ class Simulation:
             raise ValueError(f"until must be None, 'rest' or 'landed' (got {until!r})")
         if steps is None:
             duration = self.scene.world.t_end if t is None else float(t)
+            if not math.isfinite(duration):
+                raise ValueError(f"t must be a finite number of seconds (got {t!r})")
             steps = int(math.ceil(duration / self.dt - 1e-9))
         steps = int(steps)
         rec = Recording()
