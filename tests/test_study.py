@@ -472,3 +472,54 @@ def test_tasks_that_ask_for_a_gpu_go_to_the_worker_that_has_one(tmp_path):
         result = run_study(spec, out=tmp_path / "out", address=client.scheduler.address, log=lambda line: None)
     assert result.failed == 0 and len(result.rows) == 4
     assert {row["worker"] for row in result.rows} == set(with_gpu)
+
+
+GOOD_ROW = {"id": "a1", "carry_m": 150.5, "status": "ok", "error": "", "wall_s": 1.5, "host": "h", "run_path": ""}
+
+
+@pytest.mark.parametrize(
+    "line, problem",
+    [
+        ("[1, 2]", "is not a task's row (an object with a string 'id')"),
+        (json.dumps({**GOOD_ROW, "status": "done"}), "task a1: 'status' must be 'ok' or 'failed' (got 'done')"),
+        (json.dumps({**GOOD_ROW, "carry_m": "abc"}), "task a1: 'carry_m' must be a number (got 'abc')"),
+        (json.dumps({**GOOD_ROW, "wall_s": True}), "task a1: 'wall_s' must be a number (got True)"),
+        (json.dumps({**GOOD_ROW, "host": 3}), "task a1: 'host' must be text (got 3)"),
+    ],
+)
+def test_a_manifest_edited_into_something_else_is_one_error_naming_its_line(tmp_path, line, problem):
+    # a study run again reads its manifest: a row it cannot have written ended in a TypeError or in
+    # pyarrow's ArrowTypeError once every task had run; a line cut short is still skipped (run again)
+    from ti_golf.study.results import MANIFEST, Manifest
+
+    path = tmp_path / MANIFEST
+    path.write_text(json.dumps(GOOD_ROW) + "\n" + line + "\n" + '{"id": "b2", "sta' + "\n")
+    with pytest.raises(ConfigError) as info:
+        Manifest(tmp_path)
+    assert str(info.value) == f"{path}:2: {problem}; remove the line (or the file) to run its tasks again"
+    path.write_text(json.dumps(GOOD_ROW) + "\n" + '{"id": "b2", "sta' + "\n")
+    assert list(Manifest(tmp_path).rows) == ["a1"]
+    path.write_bytes(b"\xff\xfe\n")
+    with pytest.raises(ConfigError, match="is not UTF-8 text"):
+        Manifest(tmp_path)
+
+
+@pytest.mark.parametrize(
+    "options, env, message",
+    [
+        (["--address", "zzz"], {}, "--address: no Dask scheduler reached through the address 'zzz' (ValueError: "),
+        ([], {"TI_GOLF_SCHEDULER": "zzz"}, "TI_GOLF_SCHEDULER: no Dask scheduler reached through the address 'zzz'"),
+        (["--address", "EMPTY.json"], {}, "holds no scheduler's address (JSON with an 'address')"),
+        (["--workers", "100000"], {}, "--workers: must be in [1, "),
+    ],
+)
+def test_a_bad_scheduler_address_or_worker_count_is_one_error(tmp_path, options, env, message):
+    # a malformed address ended in distributed's traceback; 100,000 local workers were started
+    spec = write(tmp_path, "flight.toml", FLIGHT_STUDY)
+    (tmp_path / "EMPTY.json").write_text("")
+    options = [str(tmp_path / o) if o.endswith(".json") else o for o in options]
+    proc = run_cli("study", str(spec), "--out", str(tmp_path / "out"), *options, env=env)
+    assert proc.returncode == 2, proc.stderr
+    last = proc.stderr.strip().splitlines()[-1]
+    assert last.startswith("ti-golf: error: ") and message in last, proc.stderr
+    assert "Traceback" not in proc.stderr

@@ -10,6 +10,7 @@ dashboard. ``address`` (or :data:`ADDRESS_ENV`) joins a running scheduler instea
 from __future__ import annotations
 
 import contextlib
+import json
 import logging
 import os
 import shutil
@@ -62,6 +63,12 @@ def local_gpus() -> int:
     return sum(1 for line in out.splitlines() if line.startswith("GPU "))
 
 
+WORKERS_PER_CORE = 4
+"""The most local workers a core: each worker is a process with its own Taichi, one task at a
+time, so more than one a core only queues tasks (a bound, so that a mistyped count does not try
+to start a hundred thousand processes)."""
+
+
 @contextlib.contextmanager
 def study_client(
     address: str | None = None,
@@ -83,12 +90,26 @@ def study_client(
     if address:
         if workers is not None:
             raise ConfigError("--workers", None, "starts a local cluster: leave it out with --address")
+        given = "--address" if os.environ.get(ADDRESS_ENV) != address else ADDRESS_ENV
         if Path(address).suffix == ".json":
             if not Path(address).is_file():
-                raise ConfigError("--address", None, f"scheduler file {address!r} not found")
-            client = Client(scheduler_file=address, timeout="30s")
-        else:
-            client = Client(address, timeout="30s")
+                raise ConfigError(given, None, f"scheduler file {address!r} not found")
+            try:
+                json.loads(Path(address).read_text(encoding="utf-8"))["address"]
+            except (OSError, ValueError, KeyError, TypeError):
+                raise ConfigError(
+                    given, None, f"scheduler file {address!r} holds no scheduler's address (JSON with an 'address')"
+                ) from None
+        try:
+            if Path(address).suffix == ".json":
+                client = Client(scheduler_file=address, timeout="30s")
+            else:
+                client = Client(address, timeout="30s")
+        except (OSError, ValueError, KeyError) as exc:  # (a malformed address or file, or no scheduler there)
+            what = "scheduler file" if Path(address).suffix == ".json" else "address"
+            raise ConfigError(
+                given, None, f"no Dask scheduler reached through the {what} {address!r} ({type(exc).__name__}: {exc})"
+            ) from None
         try:
             if need_gpu and not any(
                 w.get("resources", {}).get("GPU") for w in client.scheduler_info()["workers"].values()
@@ -104,8 +125,10 @@ def study_client(
             client.close()
         return
     n = cores() if workers is None else workers
-    if n < 1:
-        raise ConfigError("--workers", None, f"must be >= 1 (got {n})")
+    if not 1 <= n <= WORKERS_PER_CORE * cores():
+        raise ConfigError(
+            "--workers", None, f"must be in [1, {WORKERS_PER_CORE * cores()}] ({WORKERS_PER_CORE} a core here; got {n})"
+        )
     if gpus is None:
         gpus = local_gpus() if need_gpu else 0
     if need_gpu and gpus < 1:

@@ -20,6 +20,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 
 MANIFEST = "manifest.jsonl"
@@ -32,22 +33,34 @@ BOOKKEEPING = ("status", "error", "wall_s", "host", "worker", "run_path")
 
 
 class Manifest:
-    """The rows finished so far in a study folder, by task id (the last row of a task wins)."""
+    """The rows finished so far in a study folder, by task id (the last row of a task wins).
+
+    The file is read as input: a line cut short (the machine went down while writing it) is
+    skipped, so its task runs again; a file that is not UTF-8 text, or a line that is JSON but not
+    a task's row as :meth:`add` writes it, is a :class:`~ti_golf.errors.ConfigError` naming the
+    file and the line."""
 
     def __init__(self, folder: str | os.PathLike[str]) -> None:
         self.path = Path(folder) / MANIFEST
         self.rows: dict[str, dict[str, Any]] = {}
-        if self.path.is_file():
-            with open(self.path, encoding="utf-8") as fh:
-                for line in fh:
-                    line = line.strip()
-                    if not line:
-                        continue
-                    try:
-                        row = json.loads(line)
-                    except json.JSONDecodeError:  # a line cut short when the machine went down: that task runs again
-                        continue
-                    self.rows[row["id"]] = row
+        if not self.path.is_file():
+            return
+        try:
+            text = self.path.read_bytes().decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ConfigError(str(self.path), None, f"is not UTF-8 text (byte {exc.start}); {_REDO}") from None
+        for number, line in enumerate(text.splitlines(), 1):
+            line = line.strip()
+            if not line:
+                continue
+            try:
+                row = json.loads(line)
+            except json.JSONDecodeError:  # a line cut short when the machine went down: that task runs again
+                continue
+            problem = _row_problem(row)
+            if problem:
+                raise ConfigError(f"{self.path}:{number}", None, f"{problem}; {_REDO}")
+            self.rows[row["id"]] = row
 
     def finished(self, task_id: str) -> bool:
         """Whether the task has a row that says ``ok``."""
@@ -60,6 +73,26 @@ class Manifest:
             fh.write(json.dumps(row, default=_plain) + "\n")
             fh.flush()
             os.fsync(fh.fileno())
+
+
+_REDO = "remove the line (or the file) to run its tasks again"
+
+
+def _row_problem(row: Any) -> str | None:
+    """Why ``row`` (a manifest line's JSON) is not a finished task's row, or ``None``: an object
+    with a string ``id``, a ``status`` of ``ok`` or ``failed``, the bookkeeping as text or numbers
+    (``wall_s``), and every other entry, a figure, a number or null."""
+    if not isinstance(row, dict) or not isinstance(row.get("id"), str):
+        return "is not a task's row (an object with a string 'id')"
+    if row.get("status") not in ("ok", "failed"):
+        return f"task {row['id']}: 'status' must be 'ok' or 'failed' (got {row.get('status')!r})"
+    for name, value in row.items():
+        if name == "wall_s" or name not in ("id", *BOOKKEEPING):
+            if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))):
+                return f"task {row['id']}: {name!r} must be a number (got {value!r})"
+        elif name != "id" and value is not None and not isinstance(value, str):
+            return f"task {row['id']}: {name!r} must be text (got {value!r})"
+    return None
 
 
 def _plain(value: Any) -> Any:
