@@ -146,8 +146,9 @@ CASES = {
     ),
     "zero mass": (_poke("mass", 0, 0.0), "mass", "ball 0 holds 0.0; expects the balls' masses [kg], finite and > 0"),
     "negative rest timer": (_poke("rest_time", 0, -1.0), "rest_time", "ball 0 holds -1.0"),
-    "negative time": (_set("t", np.float64(-5.0)), "t", "is -5.0 s; expects a finite time >= 0 [s]"),
-    "NaN time": (_set("t", np.float64(np.nan)), "t", "is nan s; expects a finite time >= 0 [s]"),
+    "negative time": (_set("t", np.float64(-5.0)), "t", "is -5.0 s; expects a time in [0, 1e+09] s"),
+    "NaN time": (_set("t", np.float64(np.nan)), "t", "is nan s; expects a time in [0, 1e+09] s"),
+    "time so late a step no longer moves it": (_set("t", np.float64(1e300)), "t", "is 1e+300 s; expects a time in"),
     "infinite time": (_set("t", np.float64(np.inf)), "t", "is inf s"),
     "two times": (_set("t", np.zeros(2)), "t", "shape (2,); expects one number"),
     "text velocities": (_set("v", lambda v: v.astype(str)), "v", "dtype <U"),
@@ -220,6 +221,21 @@ CASES = {
         lambda d, m: m["solver"].update(scratch={}),
         "run",
         "solver scratch 'impulse' is missing; a record of lists that were built gives its shape",
+    ),
+    "radii a million times the scene's": (
+        _set("radius", lambda r: r * 1e6),
+        "radius",
+        "ball 0 holds 20000 m but the run's scene gives it 0.02 m (4 balls differ)",
+    ),
+    "an entry a run does not hold": (
+        lambda d, m: d.update(junk=np.zeros(3)),
+        "junk",
+        "is not an entry of a saved run, so it would have no effect",
+    ),
+    "the solver's record dropped": (
+        lambda d, m: m.update(solver=None),
+        "run",
+        "'solver' is null, but the run's balls collide: its carried impulses are missing",
     ),
     "no grid hash": (
         lambda d, m: m["solver"]["values"].update(hash=None),
@@ -324,3 +340,33 @@ def test_the_scene_of_a_saved_run_is_checked_as_a_scene_file(base, tmp_path):
     path = edited(base, tmp_path, lambda data, meta: meta["scene"]["air"].update(rho=-1.0))
     with pytest.raises(tg.ConfigError, match=r"edited\.npz: entry 'run', its scene: key 'air\.rho' must be >= 0"):
         tg.Simulation.load(path)
+
+
+def test_a_run_whose_scene_makes_other_balls_or_another_ground_is_refused(tmp_path, capsys):
+    # the balls and the ground come from the run's scene: 16 balls where it makes 1 went on, and so
+    # did a run whose heights file was edited after it was saved (it then ended elsewhere)
+    one = tmp_path / "one.npz"
+    tg.Simulation(tg.load_scene("lab_vacuum")).save(one)
+    data, meta = read_saved_run(one)
+    for name, a in list(data.items()):
+        if name != "run" and np.ndim(a) >= 1 and a.shape[0] == 1:
+            data[name] = np.concatenate([a, a])
+    two = tmp_path / "two.npz"
+    write_saved_run(two, data, meta)
+    assert refused(two, capsys) == "entry 'x': holds 2 balls but the run's scene (entry 'run') makes 1"
+
+    heights = tmp_path / "ground.npy"
+    np.save(heights, np.zeros((5, 5)))
+    scene = tmp_path / "ground.toml"
+    scene.write_text(
+        '[world]\nground = false\n[terrain]\nkind = "file"\nfile = "ground.npy"\nsize = [10, 10]\n'
+        "[[balls]]\nposition = [5, 0.5, 5]\n"
+    )
+    run = tmp_path / "run.npz"
+    assert main(["run", str(scene), "--t", "0.05", "--out", str(run)]) == 0
+    np.save(heights, np.full((5, 5), 0.5))
+    message = refused(run, capsys)
+    assert (
+        message
+        == f"entry 'terrain_heights': differ from the heights of the run's terrain (its file {str(heights)!r} changed since)"
+    )

@@ -18,7 +18,7 @@ import numpy as np
 
 from ti_golf.errors import ConfigError
 from ti_golf.physics.integrate import IN_FLIGHT, LANDED, NOT_TRACKED
-from ti_golf.scene.schema import STATUS_NAMES
+from ti_golf.scene.schema import STATUS_NAMES, Scene
 
 Check = Callable[[np.ndarray], np.ndarray]
 """Which values of an array are allowed (a boolean array of its shape)."""
@@ -88,9 +88,34 @@ def check_description(source: str, meta: Any) -> None:
             fail(source, "run", f"'{key}' is {_short(meta[key])}; expects {what}")
 
 
+T_MAX = 1e9
+"""The latest time [s] a saved run may hold (some 32 years): past about 1e12 s a step of a
+millisecond no longer moves the time on in f64."""
+
+ENTRIES = (
+    *BALLS,
+    *FLIGHT,
+    "status",
+    "t",
+    "partial",
+    "landed",
+    "order",
+    "terrain_heights",
+    "terrain_origin",
+    "terrain_spacing",
+    "run",
+)
+"""The entries a saved run may hold, besides the ``solver.*``, ``initial.*`` and ``traj_*`` ones (a
+recording, for its readers)."""
+
+
 def check_entries(source: str, data: dict[str, np.ndarray], meta: dict[str, Any]) -> int:
     """The arrays a simulation is set up from and continued with (see the module); returns the
-    number of balls."""
+    number of balls. An entry that a saved run does not hold (:data:`ENTRIES`) is refused: it
+    would have no effect."""
+    for name in data:
+        if name not in ENTRIES and not name.startswith(("solver.", "initial.", "traj_")):
+            fail(source, name, "is not an entry of a saved run, so it would have no effect")
     n = _ball_count(source, data)
     for name, (what, shape, allowed, words) in BALLS.items():
         _numbers(source, data, name, what, (n, *shape), allowed, words)
@@ -178,8 +203,8 @@ def _time(source: str, data: dict[str, np.ndarray]) -> None:
     _kind(source, "t", t, "fiu")
     if t.shape != ():
         fail(source, "t", f"shape {t.shape}; expects one number, shape ()")
-    if not (math.isfinite(float(t)) and float(t) >= 0):
-        fail(source, "t", f"is {float(t)!r} s; expects a finite time >= 0 [s]")
+    if not (math.isfinite(float(t)) and 0 <= float(t) <= T_MAX):
+        fail(source, "t", f"is {float(t)!r} s; expects a time in [0, {T_MAX:g}] s")
 
 
 def _order(source: str, order: np.ndarray, n: int) -> None:
@@ -229,3 +254,54 @@ def _short(v: Any) -> str:
     """``v`` written out, cut to 60 characters."""
     text = repr(v)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def check_against_scene(
+    source: str, data: dict[str, np.ndarray], meta: dict[str, Any], scene: Scene, initial: dict[str, Any] | None
+) -> None:
+    """The run's balls and ground are those its scene sets up, as the simulation that saved it
+    had them: as many balls, the same radii and masses (the scene's, or those given at t0,
+    ``initial``; not checked for a run that did not keep its t0, whose balls may have been given
+    as arrays), the terrain's heights as the scene's ``[terrain]`` makes them now (a heights
+    file changed since would continue another run), and a collision solver's record wherever the
+    balls collide (without it the carried impulses would start from zero)."""
+    from ti_golf.scene.balls import ball_count, build_balls  # (numpy only)
+    from ti_golf.scene.terrain import build_terrain
+
+    n = int(data["x"].shape[0])
+    given = initial or {}
+    radius: Any
+    mass: Any
+    if not meta["initial_kept"]:
+        radius = mass = None
+    elif given.get("x") is None:
+        made = ball_count(scene)
+        if made != n:
+            fail(source, "x", f"holds {n} balls but the run's scene (entry 'run') makes {made}")
+        balls = build_balls(scene)
+        radius, mass = balls.radius, balls.mass
+    else:
+        radius, mass = scene.ball.radius, scene.ball.mass
+    radius = radius if given.get("radius") is None else given["radius"]
+    mass = mass if given.get("mass") is None else given["mass"]
+    for name, expected, unit in (("radius", radius, "m"), ("mass", mass, "kg")) if radius is not None else ():
+        expected = np.broadcast_to(np.asarray(expected, float), (n,))
+        saved = data[name].astype(float)
+        off = np.flatnonzero(~np.isclose(saved, expected, rtol=1e-6, atol=0.0))
+        if off.size:
+            b = int(off[0])
+            fail(
+                source,
+                name,
+                f"ball {b} holds {saved[b]:g} {unit} but the run's scene gives it {expected[b]:g} {unit} "
+                f"({off.size} ball{'s' if off.size > 1 else ''} differ)",
+            )
+    if scene.terrain is not None:
+        if "terrain_heights" not in data:
+            fail(source, "terrain_heights", "is missing; the run's scene has a terrain")
+        heights = build_terrain(scene.terrain, source).heights
+        if not np.array_equal(np.asarray(data["terrain_heights"], float), heights):
+            where = f" (its file {scene.terrain.file!r} changed since)" if scene.terrain.kind == "file" else ""
+            fail(source, "terrain_heights", f"differ from the heights of the run's terrain{where}")
+    if meta["solver"] is None and n >= 2 and scene.world.collisions:
+        fail(source, "run", "'solver' is null, but the run's balls collide: its carried impulses are missing")

@@ -186,7 +186,10 @@ def read_run(path: str | os.PathLike[str]) -> SavedRun:
         raise ConfigError(f"{source}: entry 'run', its scene", exc.key, exc.reason) from None
     scene = dataclasses.replace(scene, name=meta["scene_name"], path=meta["scene_path"])
     n = run_checks.check_entries(source, data, meta)
-    return SavedRun(source, scene, data, meta, _solver_record(source, data, meta, scene, n))
+    saved = SavedRun(source, scene, data, meta)
+    run_checks.check_against_scene(source, data, meta, scene, saved.initial())
+    saved.record = _solver_record(source, data, meta, scene, n)
+    return saved
 
 
 def _solver_record(
