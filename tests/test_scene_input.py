@@ -9,6 +9,7 @@ Scene files are written into ``tmp_path`` from a copy of ``scenes/lab_turbulent.
 from __future__ import annotations
 
 import dataclasses
+import os
 import re
 import subprocess
 from pathlib import Path
@@ -535,3 +536,15 @@ def test_a_heights_file_that_is_empty_or_too_high_is_refused(tmp_path):
         with pytest.raises(ConfigError) as info:
             ti_golf.load_scene(write_scene(tmp_path, text))
         assert info.value.key == "terrain.file" and fragment in str(info.value), str(info.value)
+
+
+def test_a_scene_or_heights_file_that_is_a_fifo_is_refused_at_once(tmp_path):
+    # reading a FIFO waits for a writer: the run waited for ever
+    fifo = tmp_path / "pipe.toml"
+    os.mkfifo(fifo)
+    with pytest.raises(ConfigError, match="is not a regular file"):
+        ti_golf.load_scene(fifo)
+    os.mkfifo(tmp_path / "pipe.npy")
+    text = '[terrain]\nkind = "file"\nfile = "pipe.npy"\nsize = [10, 10]\n'
+    with pytest.raises(ConfigError, match="is not a regular file"):
+        ti_golf.load_scene(write_scene(tmp_path, text))

@@ -210,6 +210,8 @@ def _field_value(f: Field, text: str, default: float | None, game: GolfGame, sou
 
 def file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
     """The shots of a ``--shots`` file, checked line by line (errors name the file, line and field)."""
+    if Path(path).exists() and not Path(path).is_file() and not Path(path).is_dir():
+        raise ConfigError(path, None, "is not a regular file")  # (a FIFO or a device: it could wait for ever)
     try:  # (worded as for the other files read: scenes, saved runs, studies)
         lines = Path(path).read_text(encoding="utf-8").splitlines()
     except FileNotFoundError:

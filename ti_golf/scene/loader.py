@@ -201,6 +201,8 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise ConfigError(str(p), None, "file not found")
     if p.is_dir():
         raise ConfigError(str(p), None, "is a directory, not a scene file")
+    if not p.is_file():  # (a FIFO or a device: reading it could wait for ever)
+        raise ConfigError(str(p), None, "is not a regular file")
     try:
         text = p.read_bytes().decode("utf-8")
     except OSError as exc:

@@ -111,6 +111,8 @@ def load_heights_file(path: str | os.PathLike[str], source: str = "") -> np.ndar
         raise_config(source, key, f"file not found: {p}")
     if os.path.isdir(p):
         raise_config(source, key, f"is a directory, not a .npy file: {p}")
+    if not os.path.isfile(p):  # (a FIFO or a device: reading it could wait for ever)
+        raise_config(source, key, f"is not a regular file: {p}")
     try:
         a = np.load(p, allow_pickle=False)
     except (OSError, ValueError, EOFError) as exc:  # (EOFError: an empty file)
