@@ -280,3 +280,22 @@ def test_an_infinite_time_or_a_negative_seed_is_one_error(argv, last, tmp_path):
     argv = [str(tmp_path / a) if a.endswith(".png") else a for a in argv]
     code, err = run_cli(argv)
     assert code == 2 and err.strip().splitlines()[-1] == f"ti-golf: error: {last}", err
+
+
+@pytest.mark.parametrize(
+    "argv, last",
+    [
+        (["run", "lab_vacuum", "--record-every", "1"], "--record-every: has no effect without --out or --plot"),
+        (["run", "lab_vacuum", "--camera", "top"], "--camera: has no effect without --frames or --gif"),
+        (["run", "lab_vacuum", "--size", "320x200"], "--size: has no effect without --frames or --gif"),
+        (["run", "lab_vacuum", "--follow"], "--follow: has no effect without --frames or --gif"),
+        (["run", "lab_vacuum", "--frames-every", "2"], "--frames-every: has no effect without --frames or --gif"),
+        (["sweep", "lab_vacuum", "--trajectories", "5"], "--trajectories: has no effect without --plot"),
+        (["study", "bag_weather", "--figure", "carry_m"], "--figure: has no effect without --plot"),
+        (["study", "bag_weather", "--lines"], "--lines: has no effect without --plot"),
+    ],
+)
+def test_an_option_without_the_option_it_serves_is_refused(argv, last):
+    # a key without effect is an error: each of these ran and quietly did nothing with it
+    code, err = run_cli(argv)
+    assert code == 2 and err.strip().splitlines()[-1].startswith(f"ti-golf: error: {last}"), err

@@ -161,6 +161,17 @@ def check_writable(path: str | None, option: str, suffixes: tuple[str, ...] = ()
         raise ConfigError(option, None, f"must end in {' or '.join(suffixes)} (got {path!r})")
 
 
+def refuse_without(
+    args: argparse.Namespace, parser_defaults: dict[str, Any], options: dict[str, str], needs: str
+) -> None:
+    """A key without effect is an error: each option of ``options`` (``dest`` → its flag) given
+    another value than its default (``parser_defaults``) while none of what it ``needs`` (words
+    naming the options, which the caller found absent) is given."""
+    for dest, flag in options.items():
+        if getattr(args, dest) != parser_defaults[dest]:
+            raise ConfigError(flag, None, f"has no effect without {needs}")
+
+
 def check_plot(path: str | None, option: str = "--plot") -> None:
     """:func:`check_writable`, and the plot's format from its extension (:data:`PLOT_FORMATS_HELP`;
     none: PNG): a one-line error naming ``option`` and the allowed extensions for any other."""

@@ -17,6 +17,7 @@ from ti_golf.cli._common import (
     check_writable,
     parse_size,
     plot_help,
+    refuse_without,
     resume_option,
     runtime_options,
     say_unfinished,
@@ -27,6 +28,16 @@ from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.scene.schema import STATUS_NAMES
 from ti_golf.sim.simulation import Simulation
+
+RUN_DEFAULTS: dict[str, Any] = {
+    "record_every": 0,
+    "frames_every": 0,
+    "camera": "iso",
+    "follow": False,
+    "size": (640, 360),
+}
+"""The defaults of the options that need another (``--record-every`` needs ``--out`` or ``--plot``;
+the frames' options, ``--frames`` or ``--gif``): given otherwise, they are refused."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -46,19 +57,31 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--t", type=float, help="simulated time [s] (default: world.t_end); more time with --resume")
     g.add_argument("--steps", type=int, help="number of time steps")
     r.add_argument("--until", choices=("rest", "landed"), help="stop early once every ball is at rest / has landed")
-    r.add_argument("--record-every", type=int, default=0, metavar="K", help="record positions and spins every K steps")
+    r.add_argument(
+        "--record-every",
+        type=int,
+        default=RUN_DEFAULTS["record_every"],
+        metavar="K",
+        help="record positions and spins every K steps (kept by --out, drawn by --plot)",
+    )
     r.add_argument(
         "--out",
         help="write an .npz with x, v, w (N, 3), t, status (and traj_* when recording), which --resume continues",
     )
     r.add_argument("--plot", help=plot_help("trajectory and |ω| vs time (records automatically)"))
-    r.add_argument("--frames-every", type=int, default=0, metavar="K", help="render a frame every K steps")
+    r.add_argument(
+        "--frames-every",
+        type=int,
+        default=RUN_DEFAULTS["frames_every"],
+        metavar="K",
+        help="render a frame every K steps",
+    )
     r.add_argument("--frames", metavar="DIR", help="write the frames as DIR/frame_00000.png, …")
     r.add_argument("--gif", help="write the frames as an animated GIF (Pillow)")
     r.add_argument(
         "--camera",
         choices=("side", "top", "iso", "follow"),
-        default="iso",
+        default=RUN_DEFAULTS["camera"],
         help="camera of the frames (default iso); side, top and iso hold still, framing all that the run shows; "
         "follow chases ball 0",
     )
@@ -67,7 +90,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="the side, top or iso camera follows the balls instead: framed anew on them at every frame",
     )
-    r.add_argument("--size", type=parse_size, default=(640, 360), metavar="WxH", help="frame size (default 640x360)")
+    r.add_argument(
+        "--size", type=parse_size, default=RUN_DEFAULTS["size"], metavar="WxH", help="frame size (default 640x360)"
+    )
     runtime_options(r)
 
 
@@ -78,6 +103,13 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
     check_writable(args.out, "--out", (".npz",))
     check_plot(args.plot)
     check_writable(args.gif, "--gif", (".gif",))
+    if not (args.out or args.plot):
+        refuse_without(
+            args, RUN_DEFAULTS, {"record_every": "--record-every"}, "--out or --plot (which keep the record)"
+        )
+    if not (args.frames or args.gif):
+        frame_options = {"frames_every": "--frames-every", "camera": "--camera", "follow": "--follow", "size": "--size"}
+        refuse_without(args, RUN_DEFAULTS, frame_options, "--frames or --gif (which the frames are drawn for)")
     if args.frames is not None and not args.frames.strip():
         raise ConfigError("--frames", None, "needs a folder name (got an empty path)")
     if args.t is not None and not (math.isfinite(args.t) and args.t > 0):

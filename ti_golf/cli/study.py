@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 
-from ti_golf.cli._common import check_plot, plot_help, set_option
+from ti_golf.cli._common import check_plot, plot_help, refuse_without, set_option
 from ti_golf.errors import ConfigError
 from ti_golf.study.cluster import ADDRESS_ENV, require_dask
 
@@ -46,11 +46,17 @@ def cmd_study(args: argparse.Namespace) -> int:
     from ti_golf.study.spec import load_study
 
     check_plot(args.plot)
+    if not args.plot:
+        refuse_without(args, {"figure": None, "lines": False}, {"figure": "--figure", "lines": "--lines"}, "--plot")
     if args.workers is not None and args.workers < 1:
         raise ConfigError("--workers", None, f"must be >= 1 (got {args.workers})")
     if args.gpus is not None and args.gpus < 0:
         raise ConfigError("--gpus", None, f"must be >= 0 (got {args.gpus})")
     spec = load_study(args.study, args.overrides)  # bad input before anything starts
+    if args.lines and len(spec.keys) != 2:
+        raise ConfigError(
+            "--lines", None, f"draws one line per value of a second varied key; {spec.name} varies {len(spec.keys)}"
+        )
     require_dask()
     result = run_study(spec, out=args.out, workers=args.workers, address=args.address, gpus=args.gpus)
     print(

@@ -7,7 +7,15 @@ import time
 
 import numpy as np
 
-from ti_golf.cli._common import HeldInterrupt, check_plot, check_writable, plot_help, runtime_options, scene_options
+from ti_golf.cli._common import (
+    HeldInterrupt,
+    check_plot,
+    check_writable,
+    plot_help,
+    refuse_without,
+    runtime_options,
+    scene_options,
+)
 from ti_golf.cli.shot import golfer_table
 from ti_golf.errors import ConfigError
 from ti_golf.golf.rollout import has_ground
@@ -16,6 +24,9 @@ from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import UNITS
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import parse_range
+
+TRAJECTORIES = 21
+"""The trajectories ``--plot`` draws by default."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -27,7 +38,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--spins", help="spin magnitudes [rad/s] along the scene's spin axis: START:STOP:STEP or a,b,c")
     s.add_argument("--out", help="write one CSV row per launch condition")
     s.add_argument("--plot", help=plot_help("trajectories (side view) and carry vs angle"))
-    s.add_argument("--trajectories", type=int, default=21, help="trajectories drawn in --plot (default 21)")
+    s.add_argument(
+        "--trajectories", type=int, default=TRAJECTORIES, help=f"trajectories drawn in --plot (default {TRAJECTORIES})"
+    )
     s.add_argument(
         "--to-rest",
         action="store_true",
@@ -52,6 +65,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     the scene's [sweep]) in one launch, print the best carry, and write the table (``--out``)
     and its plot (``--plot``); 0."""
     check_writable(args.out, "--out", (".csv",))
+    if args.trajectories < 0:
+        raise ConfigError("--trajectories", None, f"must be >= 0 (got {args.trajectories})")
+    if not args.plot:
+        refuse_without(
+            args, {"trajectories": TRAJECTORIES}, {"trajectories": "--trajectories"}, "--plot (which draws them)"
+        )
     check_plot(args.plot)
     scene = load_scene(args.scene, args.overrides)
     if args.to_rest and not has_ground(scene):
