@@ -1297,3 +1297,31 @@ def test_bench_startup_kernels_reports_each_kernels_front_end_and_what_was_compi
         ok(run_cli("bench", "startup", "--kernels", "lab_vacuum", "--cache", "warm", "--json")).stdout.splitlines()[-1]
     )
     assert warm["compiled"] == 0 and warm["instances"] == report["instances"]
+
+
+@pytest.mark.parametrize(
+    "env, last",
+    [
+        ({"TI_GOLF_PLAIN_FRONT_END": "zzz"}, "TI_GOLF_PLAIN_FRONT_END: must be 1 (on) or 0 (off), not 'zzz'"),
+        ({"TI_GOLF_PLAIN_LAUNCH": "maybe"}, "TI_GOLF_PLAIN_LAUNCH: must be 1 (on) or 0 (off), not 'maybe'"),
+        ({"TI_GOLF_SCENES": "/no/such/folder"}, "TI_GOLF_SCENES: must name a folder of scene files"),
+    ],
+)
+def test_a_mistyped_environment_switch_is_one_error_naming_it(env, last):
+    # a switch other than 1 or 0 was quietly off, and a missing scenes folder listed no scenes with exit code 0
+    proc = run_cli("run", "lab_vacuum", "--steps", "1", env=env)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.strip().splitlines()[-1].startswith(f"ti-golf: error: {last}"), proc.stderr
+
+
+def test_the_task_threads_variable_is_a_count(monkeypatch):
+    from ti_golf.errors import ConfigError, env_count
+
+    monkeypatch.delenv("TI_GOLF_TASK_THREADS", raising=False)
+    assert env_count("TI_GOLF_TASK_THREADS") is None
+    for bad in ("abc", "0", "-3"):
+        monkeypatch.setenv("TI_GOLF_TASK_THREADS", bad)
+        with pytest.raises(ConfigError, match=f"TI_GOLF_TASK_THREADS: must be a whole number >= 1, not '{bad}'"):
+            env_count("TI_GOLF_TASK_THREADS")
+    monkeypatch.setenv("TI_GOLF_TASK_THREADS", "4")
+    assert env_count("TI_GOLF_TASK_THREADS") == 4

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 
 def one_line(text: str) -> str:
     r"""``text`` on one line: line breaks and other control characters (from the user's input,
@@ -37,3 +39,23 @@ class SimulationError(TiGolfError):
     def __init__(self, message: str, balls: list[int] | None = None) -> None:
         self.balls = list(balls or [])
         super().__init__(message)
+
+
+def env_switch(name: str) -> bool:
+    """Whether the on/off environment variable ``name`` is on: ``1`` on; ``0`` or unset (or empty)
+    off; any other value a :class:`ConfigError` naming it, so that a mistyped switch is not quietly off."""
+    value = os.environ.get(name, "")
+    if value not in ("", "0", "1"):
+        raise ConfigError(name, None, f"must be 1 (on) or 0 (off), not {value!r}")
+    return value == "1"
+
+
+def env_count(name: str) -> int | None:
+    """The whole number >= 1 in the environment variable ``name``, or ``None`` when it is unset or
+    empty; any other value a :class:`ConfigError` naming it."""
+    value = os.environ.get(name, "")
+    if not value:
+        return None
+    if not value.strip().isdigit() or int(value) < 1:
+        raise ConfigError(name, None, f"must be a whole number >= 1, not {value!r}")
+    return int(value)

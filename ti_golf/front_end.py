@@ -36,12 +36,13 @@ from __future__ import annotations
 import ast
 import functools
 import linecache
-import os
 import sys
 import textwrap
 import types
 from collections.abc import Callable
 from typing import Any
+
+from ti_golf.errors import env_switch
 
 PLAIN_ENV = "TI_GOLF_PLAIN_FRONT_END"
 """Set to 1 to run Taichi's front end as it comes (whole source positions, no memoised lookups)."""
@@ -58,7 +59,7 @@ def install() -> bool:
     global _installed
     if _installed:
         return True
-    if os.environ.get(PLAIN_ENV, "") not in ("", "0"):
+    if env_switch(PLAIN_ENV):
         return False
     try:
         import taichi as ti

@@ -26,11 +26,12 @@ they are set (``ArgPack.__setitem__``) and at the first call.
 from __future__ import annotations
 
 import inspect
-import os
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+
+from ti_golf.errors import env_switch
 
 PLAIN_ENV = "TI_GOLF_PLAIN_LAUNCH"
 """Set to 1 to call every kernel through Taichi's own call (see the module's docstring)."""
@@ -54,7 +55,7 @@ _MISSING = object()
 
 def enabled() -> bool:
     """Whether kernels are called through :class:`FastCall` (a known Taichi version, not turned off)."""
-    if os.environ.get(PLAIN_ENV, "") not in ("", "0"):
+    if env_switch(PLAIN_ENV):
         return False
     try:
         import taichi as ti

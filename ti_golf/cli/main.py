@@ -111,7 +111,11 @@ def main(argv: Sequence[str] | None = None, status: bool = False) -> int:
     (the console command) a start that waits on Taichi's kernels says what it is doing
     (:class:`~ti_golf.cli._common.StartupStatus`)."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    args = build_parser(argv).parse_command_line(argv)
+    try:
+        args = build_parser(argv).parse_command_line(argv)
+    except ConfigError as exc:  # (a switch read as the command's modules are imported: TI_GOLF_PLAIN_FRONT_END)
+        print(f"ti-golf: error: {exc}", file=sys.stderr)
+        return 2
     on_main_thread = threading.current_thread() is threading.main_thread()
     if on_main_thread:  # a kill stops as Ctrl-C does, keeping what was done (signals reach the main thread only)
         previous = signal.signal(signal.SIGTERM, _interrupt)

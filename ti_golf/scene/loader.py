@@ -248,6 +248,8 @@ def scenes_dir() -> Path:
     variable ``TI_GOLF_SCENES`` overrides both)."""
     env = os.environ.get("TI_GOLF_SCENES")
     if env:
+        if not Path(env).is_dir():
+            raise ConfigError("TI_GOLF_SCENES", None, f"must name a folder of scene files ({env!r} is none)")
         return Path(env)
     checkout = Path(__file__).resolve().parents[2]
     if (checkout / "pyproject.toml").is_file() and (checkout / "scenes").is_dir():

@@ -20,7 +20,7 @@ import time
 import traceback
 from typing import Any
 
-from ti_golf.errors import TiGolfError, one_line
+from ti_golf.errors import TiGolfError, env_count, one_line
 
 THREADS_ENV = "TI_GOLF_TASK_THREADS"
 """The CPU threads of each task's Taichi runtime (the local cluster sets it: its cores / workers)."""
@@ -34,9 +34,9 @@ def task_arch(task: dict[str, Any]) -> tuple[str, str]:
 
 
 def _threads() -> int:
-    given = os.environ.get(THREADS_ENV)
-    if given:
-        return max(1, int(given))
+    given = env_count(THREADS_ENV)
+    if given is not None:
+        return given
     try:
         from distributed import get_worker
 
