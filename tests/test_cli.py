@@ -956,17 +956,20 @@ def interrupt_mid_run(args: list[str], sig: int = signal.SIGTERM) -> tuple[int, 
 @pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
 def test_an_interrupted_run_keeps_what_it_computed(sig, tmp_path):
-    # a real process, stopped mid-run: it saves the state it reached, marked partial, says so in
-    # one line and exits with code 130
-    out = tmp_path / "run.npz"
-    code, rest = interrupt_mid_run(["run", "terrain_3d", "--t", "100", "--out", str(out)], sig)
+    # a real process, stopped mid-run: it saves the state it reached and the recording so far, marked
+    # partial, draws the plot of what it recorded (it drew none), says so in one line and exits with code 130
+    out, png = tmp_path / "run.npz", tmp_path / "run.png"
+    args = ["run", "terrain_3d", "--t", "100", "--out", str(out), "--plot", str(png), "--record-every", "10"]
+    code, rest = interrupt_mid_run(args, sig)
     assert code == 130, rest
     last = rest.strip().splitlines()[-1]
     assert last.startswith("ti-golf: interrupted at t = ") and "marked partial" in last, rest
+    assert f"kept in {out} and {png}" in last and png.read_bytes().startswith(PNG_SIGNATURE), rest
     assert "Traceback" not in rest
     with np.load(out) as d:
         assert bool(d["partial"]) and 0.0 < float(d["t"]) < 100.0
         assert d["x"].shape == (400, 3) and np.isfinite(d["x"]).all()
+        assert d["traj_t"][-1] <= float(d["t"]) and d["traj_x"].shape == (len(d["traj_t"]), 400, 3)
 
 
 def test_an_interrupted_sweep_keeps_its_results(tmp_path, capsys, monkeypatch):

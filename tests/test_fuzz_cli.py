@@ -219,6 +219,7 @@ def test_unwritable_outputs_are_refused_before_anything_runs(argv, path):
         (["render", "break_shot", "--out", "p.jpg"], ".png"),
         (["schema", "--out", "s.yaml"], ".json"),
         (["play", "putting_green", "--out", "round.npz"], ".csv"),
+        (["run", "break_shot", "--plot", "trajectory"], ".png or .svg or .pdf or .eps"),  # (it wrote trajectory.png)
     ],
     ids=lambda a: " ".join(a) if isinstance(a, list) else a,
 )
@@ -299,3 +300,18 @@ def test_an_option_without_the_option_it_serves_is_refused(argv, last):
     # a key without effect is an error: each of these ran and quietly did nothing with it
     code, err = run_cli(argv)
     assert code == 2 and err.strip().splitlines()[-1].startswith(f"ti-golf: error: {last}"), err
+
+
+def test_frames_into_a_folder_whose_parent_is_missing_or_a_file_are_refused(tmp_path):
+    # --frames made every missing folder on its path, where every other output refuses a missing folder
+    (tmp_path / "a_file").write_text("")
+    for frames, last in (
+        (
+            tmp_path / "no" / "sub",
+            f"cannot make '{tmp_path / 'no' / 'sub'}': folder '{tmp_path / 'no'}' does not exist",
+        ),
+        (tmp_path / "a_file", f"'{tmp_path / 'a_file'}' is a file, not a folder"),
+    ):
+        code, err = run_cli(["run", "lab_vacuum", "--steps", "2", "--frames", str(frames)])
+        assert code == 2 and err.strip().splitlines()[-1] == f"ti-golf: error: --frames: {last}", err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"]

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ti_golf.errors import ConfigError
-from ti_golf.files import PLOT_FORMATS_HELP, plot_format
+from ti_golf.files import PLOT_FORMATS, PLOT_FORMATS_HELP, plot_format
 
 if TYPE_CHECKING:
     import rich.progress
@@ -178,6 +178,9 @@ def check_plot(path: str | None, option: str = "--plot") -> None:
     check_writable(path, option)
     if path is not None:
         plot_format(path, option)
+        if not Path(path).suffix:  # (the plotting API adds .png, as matplotlib does: the CLI says what it writes)
+            allowed = " or ".join(f".{f}" for f in PLOT_FORMATS)
+            raise ConfigError(option, None, f"must end in {allowed} (got {path!r})")
 
 
 def plot_help(what: str) -> str:

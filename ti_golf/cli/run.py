@@ -27,7 +27,7 @@ from ti_golf.cli._common import (
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.scene.schema import STATUS_NAMES
-from ti_golf.sim.simulation import Simulation
+from ti_golf.sim.simulation import Recording, Simulation
 
 RUN_DEFAULTS: dict[str, Any] = {
     "record_every": 0,
@@ -112,6 +112,11 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
         refuse_without(args, RUN_DEFAULTS, frame_options, "--frames or --gif (which the frames are drawn for)")
     if args.frames is not None and not args.frames.strip():
         raise ConfigError("--frames", None, "needs a folder name (got an empty path)")
+    if args.frames is not None and Path(args.frames).exists() and not Path(args.frames).is_dir():
+        raise ConfigError("--frames", None, f"{args.frames!r} is a file, not a folder")
+    if args.frames is not None and not Path(args.frames).resolve().parent.is_dir():
+        parent = str(Path(args.frames).resolve().parent)
+        raise ConfigError("--frames", None, f"cannot make {args.frames!r}: folder {parent!r} does not exist")
     if args.t is not None and not (math.isfinite(args.t) and args.t > 0):
         raise ConfigError("--t", None, f"must be a finite number > 0 seconds (got {args.t})")
     if args.steps is not None and args.steps <= 0:
@@ -127,12 +132,12 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
     frames = _Frames(args, sim) if (args.frames or args.gif) else None
     progress = Progress()
     t0 = time.perf_counter()
-    rec = None
+    rec = Recording()  # (filled as the run goes: what was sampled is kept if it is interrupted)
     partial = False
     try:
         if frames is not None:
             frames(sim)
-        rec = sim.run(
+        sim.run(
             t=args.t,
             steps=args.steps,
             until=args.until,
@@ -140,17 +145,21 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
             progress=progress,
             every=frames.every if frames else 0,
             on_every=frames,
+            recording=rec,
         )
     except KeyboardInterrupt:  # Ctrl-C, or SIGTERM (see cli.main)
         partial = True
-        saved = f"; what was simulated is saved in {args.out} (marked partial)" if args.out and sim.t > 0 else ""
+        kept = [p for p in (args.out, args.plot if len(rec.t) > 1 else None) if p and sim.t > 0]
+        saved = f"; what was simulated is kept in {' and '.join(kept)} (marked partial)" if kept else ""
         raise KeyboardInterrupt(f"at t = {sim.t:.4g} s{saved}") from None
     finally:
         progress.close()
         if frames is not None:
             frames.close()  # the frames rendered so far are kept, and the GIF is written from them
-        if args.out and (rec is not None or sim.t > 0):
+        if args.out and sim.t > 0:
             sim.save(args.out, rec, partial=partial)  # save what was simulated even if the run stopped early
+        if partial and args.plot and len(rec.t) > 1:
+            _plot(rec, args.plot, sim)
     elapsed = time.perf_counter() - t0
     counts = sim.counts()
     resumed = "" if resumed_at is None else f" (resumed at t = {resumed_at:.4g} s)"
@@ -193,12 +202,17 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
             )
     if args.out:
         print(f"wrote {args.out}")
-    if args.plot and rec is not None:
-        from ti_golf.render.plots import plot_run  # (matplotlib: imported only to plot)
-
-        plot_run(rec, args.plot, title=sim.scene.description or sim.scene.name)
+    if args.plot:
+        _plot(rec, args.plot, sim)
         print(f"wrote {args.plot}")
     return 0
+
+
+def _plot(rec: Recording, path: str, sim: Simulation) -> None:
+    """Draw the run's trajectory and spin (:func:`ti_golf.render.plots.plot_run`) to ``path``."""
+    from ti_golf.render.plots import plot_run  # (matplotlib: imported only to plot)
+
+    plot_run(rec, path, title=sim.scene.description or sim.scene.name)
 
 
 class _Frames:
@@ -227,7 +241,7 @@ class _Frames:
         self._tmp = None
         if args.frames:
             self.folder = Path(args.frames)
-            self.folder.mkdir(parents=True, exist_ok=True)
+            self.folder.mkdir(exist_ok=True)  # (its folder exists: checked, as every output's is)
         else:
             self._tmp = tempfile.TemporaryDirectory()
             self.folder = Path(self._tmp.name)

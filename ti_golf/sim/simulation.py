@@ -469,6 +469,7 @@ class Simulation:
         progress: RunProgress | None = None,
         every: int = 0,
         on_every: Callable[["Simulation"], None] | None = None,
+        recording: Recording | None = None,
     ) -> Recording:
         """Advance by ``t`` seconds or ``steps`` steps (default: the scene's ``world.t_end``).
 
@@ -477,7 +478,9 @@ class Simulation:
         ``progress(t_done, t_total)`` is called between chunks, and with ``until`` also given
         ``finished=(k, n, what)``: k of the n balls are finished (``what``: "at rest or out of
         bounds", "landed"), since such a run ends when all are, often long before ``t_total``.
-        ``on_every(sim)`` is called every ``every`` steps (e.g. to render a frame).
+        ``on_every(sim)`` is called every ``every`` steps (e.g. to render a frame). The samples go
+        into ``recording`` when given (a caller's, which keeps what was sampled if the run is
+        interrupted), else into a new :class:`Recording`; either is returned.
         """
         if until not in (None, "rest", "landed"):
             raise ValueError(f"until must be None, 'rest' or 'landed' (got {until!r})")
@@ -487,7 +490,7 @@ class Simulation:
                 raise ValueError(f"t must be a finite number of seconds (got {t!r})")
             steps = int(math.ceil(duration / self.dt - 1e-9))
         steps = int(steps)
-        rec = Recording()
+        rec = Recording() if recording is None else recording
         if record_every:
             rec.t.append(self.t)
             rec.x.append(self.x)
