@@ -274,6 +274,10 @@ def test_a_value_that_starts_with_a_negative_number_is_a_value(argv, dest, value
             "--t: must be a finite number >= 0 seconds (got inf)",
         ),
         (["dispersion", "tour_shot", "--seed", "-1"], "argument --seed: must be a whole number, 0 or more (got -1)"),
+        (
+            ["run", "lab_vacuum", "--set", "air.rho=1", "--set", "air.rho=2"],
+            "--set: key 'air.rho' is given twice: give it once",
+        ),
     ],
 )
 def test_an_infinite_time_or_a_negative_seed_is_one_error(argv, last, tmp_path):

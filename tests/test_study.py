@@ -117,6 +117,17 @@ BAD = [
     ),
     ('scene = "lab_turbulent"\n[random.uniform]\n"air.C_D" = [1, 0]\n', "random.uniform.air.C_D", "low <= high"),
     ('scene = "lab_turbulent"\n[[points]]\n"air.model" = "magic"\n', "points[0].air.model", "must be one of"),
+    ('scene = "lab_turbulent"\n[grid]\n"air.C_D" = [0.2, 0.3, 0.2]\n', "grid.air.C_D", "holds the value 0.2 twice"),
+    (
+        'scene = "lab_turbulent"\nset = ["air.C_D=0.25"]\n[grid]\n"air.C_D" = [0.2, 0.3]\n',
+        "set: air.C_D",
+        "is varied by the study's [grid]: a value set for every task would have no effect",
+    ),
+    (
+        'scene = "lab_turbulent"\nset = ["air.C_D=0.25", "air.C_D=0.3"]\n',
+        "set: air.C_D",
+        "is given twice: give it once",
+    ),
 ]
 
 
@@ -523,3 +534,17 @@ def test_a_bad_scheduler_address_or_worker_count_is_one_error(tmp_path, options,
     last = proc.stderr.strip().splitlines()[-1]
     assert last.startswith("ti-golf: error: ") and message in last, proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+def test_the_command_lines_set_replaces_the_files_and_may_not_set_a_varied_key(tmp_path):
+    from ti_golf.study.spec import load_study
+
+    text = 'scene = "lab_turbulent"\nset = ["air.C_D=0.25"]\n[grid]\n"air.rho" = [1.1, 1.2]\n'
+    spec = write(tmp_path, "s.toml", text)
+    (task,) = {t.changes[:1] for t in load_study(spec, ["air.C_D=0.3"]).tasks}
+    assert task == ("air.C_D=0.3",)  # the file's 0.25 replaced, not given twice
+    with pytest.raises(ConfigError) as info:
+        load_study(spec, ["air.rho=1.0"])
+    assert (info.value.source, info.value.key) == ("--set", "air.rho") and "is varied by the study's [grid]" in str(
+        info.value
+    )

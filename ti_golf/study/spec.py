@@ -262,7 +262,10 @@ def load_study(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> S
     if len(given) > 1:
         raise_config(source, given[1], f"give one of [grid], [[points]] and [random], not {given[0]} and {given[1]}")
     base = _base_scene(study, task, p)
-    fixed = tuple(study.set) + tuple(scene_overrides)
+    cli_keys = {
+        parse_override(text)[0] for text in scene_overrides
+    }  # (the command line's --set wins over the file's set)
+    fixed = tuple(t for t in study.set if parse_override(t)[0] not in cli_keys) + tuple(scene_overrides)
     file_keys = frozenset(parse_override(text)[0] for text in study.set)
     points = _points(doc, given[0] if given else None, source)
     seeds = _seeds(study, task, source)
@@ -279,8 +282,14 @@ def load_study(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> S
     task_dict = {k: getattr(task, k) for k in TASK_KEYS if k != "figures"}
     tasks = []
     keys: list[str] = []
+    fixed_keys = {parse_override(text)[0] for text in fixed}
     for point in points:
         for dotted in point:
+            if dotted in fixed_keys:  # the point's value would replace it: the set value would have no effect
+                where = (source, f"set: {dotted}") if dotted in file_keys - cli_keys else ("--set", dotted)
+                raise_config(
+                    *where, f"is varied by the study's [{given[0]}]: a value set for every task would have no effect"
+                )
             if dotted not in keys:
                 keys.append(dotted)
         changes = fixed + tuple(f"{k}={_toml(v)}" for k, v in point.items())
@@ -355,6 +364,11 @@ def _points(doc: Mapping[str, Any], how: str | None, source: str) -> list[dict[s
                 source, "grid", "must be a table of scene keys, each with its values (a list or START:STOP:STEP)"
             )
         axes = {name: _values(name, value, source) for name, value in table.items()}
+        for name, values in axes.items():
+            seen = [repr(v) for v in values]
+            twice = next((v for v, r in zip(values, seen) if seen.count(r) > 1), None)
+            if twice is not None:  # (the same task twice)
+                raise_config(source, f"grid.{name}", f"holds the value {_toml(twice)} twice")
         return [dict(zip(axes, combo)) for combo in itertools.product(*axes.values())]
     if how == "points":
         if not isinstance(table, list) or not table or not all(isinstance(t, dict) for t in table):
