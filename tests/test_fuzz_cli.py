@@ -319,3 +319,27 @@ def test_frames_into_a_folder_whose_parent_is_missing_or_a_file_are_refused(tmp_
         code, err = run_cli(["run", "lab_vacuum", "--steps", "2", "--frames", str(frames)])
         assert code == 2 and err.strip().splitlines()[-1] == f"ti-golf: error: --frames: {last}", err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"]
+
+
+@pytest.mark.parametrize(
+    "argv, last",
+    [
+        (
+            ["sweep", "lab_vacuum", "--angles", "10", "--set", "sweep.angles=[20,30]"],
+            "'sweep.angles' has no effect with --angles",
+        ),
+        (
+            ["sweep", "lab_vacuum", "--speeds", "50", "--set", "launch.speed=60"],
+            "'launch.speed' has no effect with --speeds",
+        ),
+        (
+            ["shot", "tour_shot", "--speed", "100", "--set", "launch.speed=10"],
+            "'launch.speed' has no effect with --speed",
+        ),
+        (["tour", "--set", "launch.speed=10"], "'launch.speed' has no effect with the tour's rows"),
+    ],
+)
+def test_a_set_key_that_an_option_replaces_is_refused(argv, last):
+    # the option won and the --set did nothing, silently
+    code, err = run_cli(argv)
+    assert code == 2 and err.strip().splitlines()[-1].startswith(f"ti-golf: error: --set: key {last}"), err

@@ -172,6 +172,15 @@ def refuse_without(
             raise ConfigError(flag, None, f"has no effect without {needs}")
 
 
+def refuse_replaced(overrides: list[str] | None, replaced: dict[str, str]) -> None:
+    """A ``--set`` of a key that the command replaces has no effect, so it is refused: ``replaced``
+    maps each such key to what replaces it (an option given, or the command's own values)."""
+    for text in overrides or ():
+        key = text.split("=", 1)[0].strip()
+        if key in replaced:
+            raise ConfigError("--set", key, f"has no effect with {replaced[key]}")
+
+
 def check_plot(path: str | None, option: str = "--plot") -> None:
     """:func:`check_writable`, and the plot's format from its extension (:data:`PLOT_FORMATS_HELP`;
     none: PNG): a one-line error naming ``option`` and the allowed extensions for any other."""

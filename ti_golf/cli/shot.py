@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from ti_golf.cli._common import runtime_options, scene_options
+from ti_golf.cli._common import refuse_replaced, runtime_options, scene_options
 from ti_golf.errors import ConfigError
 from ti_golf.golf.rollout import has_ground
 from ti_golf.golf.shots import shots
@@ -58,8 +58,19 @@ def launch_options(p: argparse.ArgumentParser) -> None:
     )
 
 
+def refuse_replaced_launch(args: argparse.Namespace) -> None:
+    """A ``--set`` of a ``[launch]`` key that the launch options given replace (see
+    :func:`read_launch`) is refused: it would have no effect."""
+    keys = {"speed": "launch.speed", "vla": "launch.angle_deg", "hla": "launch.direction_deg"}
+    replaced = {key: f"--{option}" for option, key in keys.items() if getattr(args, option) is not None}
+    if args.spin is not None and args.axis is not None:
+        replaced["launch.spin"] = "--spin with --axis"
+    refuse_replaced(args.overrides, replaced)
+
+
 def read_launch(args: argparse.Namespace, scene: Scene, units: Units) -> MonitorLaunch:
     """The launch of the options given, the scene's launch for the others, checked (SI)."""
+    refuse_replaced_launch(args)
     if scene.launch is None:
         for option in ("--speed", "--vla", "--spin"):
             if getattr(args, option[2:]) is None:

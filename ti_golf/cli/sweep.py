@@ -12,6 +12,7 @@ from ti_golf.cli._common import (
     check_plot,
     check_writable,
     plot_help,
+    refuse_replaced,
     refuse_without,
     runtime_options,
     scene_options,
@@ -72,6 +73,14 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             args, {"trajectories": TRAJECTORIES}, {"trajectories": "--trajectories"}, "--plot (which draws them)"
         )
     check_plot(args.plot)
+    replaced = {}
+    if args.angles is not None:
+        replaced.update({"sweep.angles": "--angles", "launch.angle_deg": "--angles"})
+    if args.speeds is not None:
+        replaced.update({"sweep.speeds": "--speeds", "launch.speed": "--speeds"})
+    if args.spins is not None:
+        replaced["sweep.spins"] = "--spins"
+    refuse_replaced(args.overrides, replaced)
     scene = load_scene(args.scene, args.overrides)
     if args.to_rest and not has_ground(scene):
         raise ConfigError(

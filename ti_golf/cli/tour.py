@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from ti_golf.cli._common import check_plot, plot_help, runtime_options, scene_options
+from ti_golf.cli._common import check_plot, plot_help, refuse_replaced, runtime_options, scene_options
 from ti_golf.errors import ConfigError
 from ti_golf.golf.aero_fit import FIT_PARAMETERS, START, bounds, fit
 from ti_golf.golf.tour import fly_tour, within_tolerance_text
@@ -44,6 +44,8 @@ def cmd_tour(args: argparse.Namespace) -> int:
     """Fly the TrackMan tour-average shots (``--rows``) in ``args.scene`` and print them beside the
     published figures (and plot them with ``--plot``); 0."""
     check_plot(args.plot)
+    rows = "the tour's rows, which give every launch (only launch.position is the scene's)"
+    refuse_replaced(args.overrides, {f"launch.{k}": rows for k in ("speed", "angle_deg", "direction_deg", "spin")})
     scene = load_scene(args.scene, args.overrides)
     if scene.launch is None:  # the rows launch from the scene's launch point
         raise ConfigError(scene.path, "launch", "the tour rows need a [launch] table in the scene")
