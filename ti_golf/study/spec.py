@@ -293,7 +293,8 @@ def load_study(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> S
             if dotted not in keys:
                 keys.append(dotted)
         changes = fixed + tuple(f"{k}={_toml(v)}" for k, v in point.items())
-        scene_doc = _check_scene(base, changes, source, point, given[0] if given else "set", task, file_keys)
+        how = given[0] if given else "set"
+        scene_doc = _check_scene(base, changes, source, point, how, task, file_keys, seeded=study.seeds is not None)
         for seed in seeds:
             ident = _task_id(scene_doc, seed, task_dict, figures)
             tasks.append(TaskSpec(ident, dict(point), seed, base, changes, task_dict, tuple(figures)))
@@ -461,6 +462,7 @@ def _check_scene(
     how: str,
     task: Task,
     file_keys: frozenset[str] = frozenset(),
+    seeded: bool = False,
 ):
     """The task's scene as a document (for its id), built now so that a bad value fails before
     anything runs; the scene loader's error is given again naming the study file and its table
@@ -479,6 +481,11 @@ def _check_scene(
         raise ConfigError(source, "scene", str(exc)) from None
     if task.kind in ("shot", "dispersion") and scene.launch is None:
         raise_config(source, "scene", f"task.kind = {task.kind!r} flies the scene's [launch]: {scene.name!r} has none")
+    random_blocks = sum(b.kind == "random" for b in scene.blocks)
+    if task.kind == "run" and task.balls is not None and random_blocks != 1:
+        raise_config(source, "task.balls", f"scales a scene's one random block; {scene.name!r} has {random_blocks}")
+    if task.kind == "run" and seeded and not random_blocks:
+        raise_config(source, "seeds", f"replace the seeds of the scene's random blocks; {scene.name!r} has none")
     return scene_document(scene)
 
 
