@@ -507,6 +507,11 @@ def test_cli_bad_range_exits_2(option, value, fragment):
         ),
         ('[[blocks]]\nkind = "lattice"\ncount = [2, 2, 2]\nspacing = 1e308\n', "blocks[0].spacing", "spans more than"),
         ("[terrain]\nseed = -1\n", "terrain.seed", "must be >= 0 (got -1)"),
+        (
+            '[[blocks]]\nkind = "random"\nnumber = 3\nbackspin = [1, 2]\n',
+            "blocks[0].backspin",
+            "is read only for shots (a block with speed and angle_deg)",
+        ),
         ("[terrain]\nslope = [1e308, 0]\n", "terrain.slope", "must be in [-100, 100] on both axes"),
         ("[terrain]\namplitude = 1e308\n", "terrain.amplitude", "must be in [0, 10000] m"),
     ],

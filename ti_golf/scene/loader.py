@@ -560,6 +560,9 @@ def _block(values: dict[str, Any], source: str, i: int) -> Block:
         )
     if (block.speed is None) != (block.angle_deg is None):
         raise_config(source, f"blocks[{i}].speed", "shots need both speed and angle_deg ([min, max] each)")
+    for name in ("direction_deg", "backspin"):
+        if name in values and block.speed is None:
+            raise_config(source, f"blocks[{i}].{name}", "is read only for shots (a block with speed and angle_deg)")
     return block
 
 
