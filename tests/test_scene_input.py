@@ -516,9 +516,10 @@ def test_cli_bad_range_exits_2(option, value, fragment):
         ("[terrain]\namplitude = 1e308\n", "terrain.amplitude", "must be in [0, 10000] m"),
     ],
 )
-def test_a_value_past_what_the_floats_hold_is_refused_before_anything_runs(tmp_path, text, key, fragment):
+def test_a_block_or_terrain_value_that_a_run_cannot_use_is_refused_before_it_starts(tmp_path, text, key, fragment):
     # each of these ended in a traceback (a negative seed in numpy, a box whose volume overflowed,
-    # a terrain of NaN heights), or hung (a box of 1e200 m: its spacing overflowed to inf)
+    # a terrain of NaN heights), hung (a box of 1e200 m: its spacing overflowed to inf), or was
+    # quietly without effect (a backspin for balls that are not shots)
     path = write_scene(tmp_path, "[world]\nground = true\n" + text)
     with pytest.raises(ConfigError) as info:
         ti_golf.Simulation(ti_golf.load_scene(path))
