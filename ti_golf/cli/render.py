@@ -75,6 +75,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     rec = None
     interrupted = False
     progress = Progress()
+    t_run = time.perf_counter()
     try:
         if steps > 0:
             rec = sim.run(
@@ -88,6 +89,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     finally:
         progress.close()
     t0 = time.perf_counter()
+    ran = f"simulated in {t0 - t_run:.2f} s, " if steps > 0 else ""
     used = render(
         sim,
         args.out,
@@ -98,7 +100,9 @@ def cmd_render(args: argparse.Namespace) -> int:
         fov=args.fov,
         backend=args.backend,
     )
-    print(f"wrote {args.out} ({used}, {sim.n} ball(s) at t = {sim.t:.4g} s, {time.perf_counter() - t0:.2f} s)")
+    print(
+        f"wrote {args.out} ({used}, {sim.n} ball(s) at t = {sim.t:.4g} s; {ran}drawn in {time.perf_counter() - t0:.2f} s)"
+    )
     if args.until and steps > 0 and not interrupted:
         say_unfinished(sim, args)
     if interrupted:
