@@ -89,7 +89,9 @@ SCENES = {
 }
 
 
-def short_run(self, t=None, steps=None, until=None, record_every=0, progress=None, every=0, on_every=None):
+def short_run(
+    self, t=None, steps=None, until=None, record_every=0, progress=None, every=0, on_every=None, recording=None
+):
     return Simulation._real_run(
         self,
         steps=2,
@@ -98,6 +100,7 @@ def short_run(self, t=None, steps=None, until=None, record_every=0, progress=Non
         progress=progress,
         every=min(every, 1),
         on_every=on_every,
+        recording=recording,
     )
 
 

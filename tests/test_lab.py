@@ -56,7 +56,7 @@ def test_stop_change_C_D_continue_then_reset_t0_is_the_initial_state_bit_for_bit
     [
         ("contact.e", 1.5, "contact.e: must be in [0, 1] (got 1.5)"),
         ("air.C_D", -0.1, "air.C_D: must be >= 0 (got -0.1)"),
-        ("world.dt", 0.0, "world.dt: must be > 0 (got 0.0)"),
+        ("world.dt", 0.0, "world.dt: must be > 0 s (got 0.0)"),
         ("launch.angle_deg", 120.0, "launch.angle_deg: must be in [-90, 90] degrees (got 120.0)"),
         ("air.gamma", 3, "air.gamma: must be one of 1, 2 (got 3)"),
         ("air.wind", [1.0, 2.0], "air.wind: must be a list of 3 numbers in m/s"),

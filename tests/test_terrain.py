@@ -556,7 +556,7 @@ BAD_TABLES = {
     "resolution_1": ("resolution = [1, 10]", "terrain.resolution", ">= 2"),
     "resolution_fraction": ("resolution = [2.5, 10]", "terrain.resolution", "whole numbers"),
     "roughness_1": ("roughness = 1.0", "terrain.roughness", "(0, 1)"),
-    "amplitude_negative": ("amplitude = -1.0", "terrain.amplitude", ">= 0"),
+    "amplitude_negative": ("amplitude = -1.0", "terrain.amplitude", "must be in [0, 10000] m (got -1.0)"),
     "kind": ('kind = "mesh"', "terrain.kind", "'generated', 'file'"),
     "unknown": ("hieght = 1.0", "terrain.hieght", "allowed in [terrain]"),
     "kill_nan": ("kill_height = nan", "terrain.kill_height", "finite"),

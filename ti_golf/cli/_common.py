@@ -134,9 +134,23 @@ def scene_or_saved_run(args: argparse.Namespace, command: str) -> Simulation:
     return sim
 
 
+class _SetOnce(argparse.Action):
+    """``--set KEY=VALUE`` appended to the list ``dest``; the same KEY twice is a
+    :class:`ConfigError` (the first value would have no effect)."""
+
+    def __call__(
+        self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, value: Any, option: Any = None
+    ) -> None:
+        given = list(getattr(namespace, self.dest) or [])
+        key = str(value).split("=", 1)[0].strip()
+        if key and any(text.split("=", 1)[0].strip() == key for text in given):
+            raise ConfigError("--set", key, "is given twice: give it once")
+        setattr(namespace, self.dest, [*given, value])
+
+
 def set_option(p: argparse.ArgumentParser, help: str) -> None:
-    """``--set KEY=VALUE`` (repeatable) into ``args.overrides``."""
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE", help=help)
+    """``--set KEY=VALUE`` (repeatable, each key once) into ``args.overrides``."""
+    p.add_argument("--set", dest="overrides", action=_SetOnce, default=[], metavar="KEY=VALUE", help=help)
 
 
 def check_writable(path: str | None, option: str, suffixes: tuple[str, ...] = ()) -> None:

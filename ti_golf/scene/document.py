@@ -14,7 +14,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from ti_golf.scene.keys import Key, is_read
-from ti_golf.scene.loader import load_scene, parse_overrides
+from ti_golf.scene.loader import load_scene, parse_override
 from ti_golf.scene.schema import ARRAY_SCHEMA, SCHEMA, TOP_LEVEL, Scene
 from ti_golf.scene.weather import WEATHER_KEYS, air_from_weather
 
@@ -78,7 +78,7 @@ def with_changes(scene: Scene, changes: Mapping[str, Any] | Iterable[str]) -> Sc
     the changes leave unread goes back to its default (``air.C_D`` once ``air.model`` is
     ``spin_ratio``, ``contact.relax`` once ``contact.solver`` is ``gauss_seidel``), as it would
     have no effect. The name and path stay the scene's."""
-    items = dict(changes) if isinstance(changes, Mapping) else parse_overrides(changes)
+    items = dict(changes) if isinstance(changes, Mapping) else dict(parse_override(text) for text in changes)
     doc = scene_document(scene)
     _drop_unread(doc, items)
     changed = load_scene(scene.path or None, items, data=doc)

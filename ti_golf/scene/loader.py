@@ -163,18 +163,6 @@ def parse_override(text: str) -> tuple[str, Any]:
     return dotted, value
 
 
-def parse_overrides(texts: Iterable[str]) -> dict[str, Any]:
-    """``KEY=VALUE`` texts (:func:`parse_override`) as ``{dotted key: value}``; a key given twice is
-    a :class:`ConfigError` (the first value would have no effect)."""
-    items: dict[str, Any] = {}
-    for text in texts:
-        dotted, value = parse_override(text)
-        if dotted in items:
-            raise ConfigError("--set", dotted, "is given twice: give it once")
-        items[dotted] = value
-    return items
-
-
 def _apply_override(data: dict[str, Any], dotted: str, value: Any) -> None:
     """Set ``dotted`` in the scene document ``data`` to ``value``, or clear it (``None``: the key
     takes its default; a table the scene does not have is not made)."""
@@ -298,7 +286,7 @@ def load_scene(
         source = str(path) if path else "<scene>"
     doc: dict[str, Any] = {k: (dict(v) if isinstance(v, dict) else v) for k, v in raw.items()}
     if overrides:
-        items = (overrides if isinstance(overrides, Mapping) else parse_overrides(overrides)).items()
+        items = overrides.items() if isinstance(overrides, Mapping) else (parse_override(o) for o in overrides)
         for dotted, value in items:
             _apply_override(doc, dotted, value)
     return _build(doc, source, p.stem)

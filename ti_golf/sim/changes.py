@@ -19,7 +19,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from ti_golf.errors import ConfigError
-from ti_golf.scene.loader import parse_override, parse_overrides
+from ti_golf.scene.loader import parse_override
 
 SOURCE = "--set"
 """The source that errors about changed keys name (as the scene loader names overrides)."""
@@ -51,7 +51,7 @@ def as_changes(changes: Mapping[str, Any] | Iterable[str] | str, value: Any) -> 
         raise TypeError("set(key, value) takes a value only with a single key")
     if isinstance(changes, Mapping):
         return dict(changes)
-    return parse_overrides(changes)
+    return dict(parse_override(text) for text in changes)
 
 
 class _Unset:

@@ -262,11 +262,7 @@ def load_study(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> S
     if len(given) > 1:
         raise_config(source, given[1], f"give one of [grid], [[points]] and [random], not {given[0]} and {given[1]}")
     base = _base_scene(study, task, p)
-    cli_keys = {
-        parse_override(text)[0] for text in scene_overrides
-    }  # (the command line's --set wins over the file's set)
-    fixed = tuple(t for t in study.set if parse_override(t)[0] not in cli_keys) + tuple(scene_overrides)
-    file_keys = frozenset(parse_override(text)[0] for text in study.set)
+    fixed, file_keys, cli_keys = _fixed_changes(study.set, scene_overrides, source)
     points = _points(doc, given[0] if given else None, source)
     seeds = _seeds(study, task, source)
     n = len(points) * len(seeds)
@@ -435,6 +431,20 @@ def _one(name: str, value: Any, source: str, where: str) -> Any:
         value = int(value)
     checked = check_value(value, k, source, where)
     return list(checked) if isinstance(checked, tuple) else checked
+
+
+def _fixed_changes(
+    file_set: Sequence[str], cli_set: Sequence[str], source: str
+) -> tuple[tuple[str, ...], frozenset[str], frozenset[str]]:
+    """The changes every task makes (the study file's ``set``, each key once, then the command
+    line's ``--set``, which replaces the file's value of a key it gives), with the keys each gave."""
+    file_keys = [parse_override(text)[0] for text in file_set]
+    twice = next((key for i, key in enumerate(file_keys) if key in file_keys[:i]), None)
+    if twice is not None:
+        raise_config(source, f"set: {twice}", "is given twice: give it once")
+    cli_keys = frozenset(parse_override(text)[0] for text in cli_set)
+    fixed = tuple(t for t, key in zip(file_set, file_keys) if key not in cli_keys) + tuple(cli_set)
+    return fixed, frozenset(file_keys), cli_keys
 
 
 def _seeds(study: Study, task: Task, source: str) -> list[int | None]:
