@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 
 import background
 import numpy as np
@@ -305,3 +306,47 @@ def test_every_public_name_is_in_the_api_reference():
         obj = getattr(tg, name)
         if callable(obj):
             assert (obj.__doc__ or "").strip(), name
+
+
+@pytest.mark.parametrize(
+    "call, error, message",
+    [
+        (lambda s: s.run(steps=2, record_every=-1), ValueError, "record_every must be a whole number >= 0 (got -1)"),
+        (lambda s: s.run(steps=2, record_every=0.5), ValueError, "record_every must be a whole number >= 0 (got 0.5)"),
+        (lambda s: s.run(steps=2, every=-1, on_every=print), ValueError, "every must be a whole number >= 0"),
+        (lambda s: s.run(steps=2, on_every=print), ValueError, "every and on_every go together"),
+        (lambda s: s.run(t=0.1, steps=3), ValueError, "give t or steps, not both"),
+        (lambda s: s.run(t=-1), ValueError, "t must be a number of seconds >= 0 (got -1)"),
+        (lambda s: s.run(steps=2.5), ValueError, "steps must be a whole number >= 0 (got 2.5)"),
+        (lambda s: s.step(-3), ValueError, "n must be a whole number >= 0 (got -3)"),
+        (lambda s: s.step(1.5), ValueError, "n must be a whole number >= 0 (got 1.5)"),
+        (lambda s: s.step("2"), ValueError, "n must be a whole number >= 0 (got '2')"),
+    ],
+)
+def test_a_count_or_time_a_run_cannot_take_is_refused_and_changes_nothing(call, error, message):
+    # negative or fractional counts hung the run (a chunk of 0 steps) or moved the clock without a step
+    sim = tg.Simulation("lab_magnus")
+    sim.step(2)
+    with pytest.raises(error, match=re.escape(message)):
+        call(sim)
+    assert (sim.step_count, sim.t) == (2, pytest.approx(2 * sim.dt))
+
+
+def test_balls_and_their_arrays_are_checked_against_each_other(tmp_path):
+    scene = tg.load_scene("lab_magnus")
+    with pytest.raises(ValueError, match="v given without x: the scene's balls come with their own"):
+        tg.Simulation(scene, v=np.zeros((1, 3)))
+    with pytest.raises(ValueError, match=re.escape("radius must be one number or one per ball, shape (2,)")):
+        tg.Simulation(scene, x=np.zeros((2, 3)), radius=[0.02, 0.03, 0.04])
+    with pytest.raises(ValueError, match=re.escape("x must have shape (N, 3) (got (0, 3))")):
+        tg.Simulation(scene, x=np.zeros((0, 3)))
+    with pytest.raises(TypeError, match="scene must be a Scene, a scene file's path or a bundled scene's name"):
+        tg.Simulation(None)
+    assert tg.Simulation("lab_magnus").scene == scene  # a name loads the scene
+    sim = tg.Simulation(scene)
+    with pytest.raises(ValueError, match="it is a folder"):
+        sim.save(tmp_path)
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        sim.save(tmp_path / "no" / "run.npz")
+    sim.save(tmp_path / "run")  # (.npz added, as numpy does) ...
+    assert tg.Simulation.load(tmp_path / "run").t == sim.t  # ... and found again by the same name

@@ -108,8 +108,14 @@ def write_run(sim: Any, path: str | os.PathLike[str], recording: Any, partial: b
     }
     data["run"] = np.array(json.dumps(meta))
     target = Path(path)
+    if target.is_dir():
+        raise ValueError(f"cannot save the run to {str(path)!r}: it is a folder; give a file name")
     if target.suffix != ".npz":
         target = target.with_name(target.name + ".npz")  # as np.savez names it
+    if not target.resolve().parent.is_dir():
+        raise FileNotFoundError(
+            f"cannot save the run to {str(target)!r}: folder {str(target.resolve().parent)!r} does not exist"
+        )
     with atomic_path(target) as tmp, open(tmp, "wb") as fh:
         np.savez(fh, **data)
 
@@ -171,6 +177,8 @@ def read_run(path: str | os.PathLike[str]) -> SavedRun:
     :mod:`~ti_golf.solvers.record_checks`), or a :class:`ConfigError` naming the file (and the
     entry at fault) that says why it cannot be continued."""
     source = str(path)
+    if not Path(source).exists() and Path(source).suffix != ".npz" and Path(source + ".npz").is_file():
+        source += ".npz"  # (as save() names it: .npz added to a path without it)
     data, meta = _read(source)
     precision = ensure_init().precision
     if meta["precision"] != precision:

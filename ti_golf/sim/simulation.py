@@ -100,15 +100,16 @@ class Simulation:
     """Many balls under the scene's air, gravity and ground, advanced by data-parallel kernels.
 
     Args:
-        scene: a validated :class:`~ti_golf.scene.schema.Scene`.
-        x: initial positions [m], (N, 3). Default, with ``v`` and ``w``: one ball launched as the
-            scene's ``[launch]`` table says.
-        v: initial velocities [m/s], (N, 3).
-        w: initial spins (angular velocities) [rad/s], (N, 3).
+        scene: a validated :class:`~ti_golf.scene.schema.Scene`, or a scene file's path or a
+            bundled scene's name (loaded with :func:`~ti_golf.scene.loader.load_scene`).
+        x: initial positions [m], (N, 3). Default: the balls the scene makes (its ``[launch]``,
+            ``[[balls]]`` and ``[[blocks]]``), with their velocities and spins.
+        v: initial velocities [m/s], (N, 3), with ``x`` only (default: at rest).
+        w: initial spins (angular velocities) [rad/s], (N, 3), with ``x`` only (default: none).
         radius: per-ball radius [m], a scalar or (N,). Default: the scene's ball.
         mass: per-ball mass [kg], a scalar or (N,). Default: the scene's ball.
-        track: which balls get landing detection (carry, apex ...); default all. When no ball is
-            tracked (a pile), no flight record is kept at all (``State.tracking``).
+        track: which balls get landing detection (carry, apex ...), a bool or (N,), with ``x``
+            only; default all. When no ball is tracked (a pile), no flight record is kept at all.
         keep_initial: keep a copy of the balls given (``x``, ``v``, ``w``, ``radius``, ``mass``) for
             :meth:`reset`; ``False`` saves their memory (24 bytes per ball and array in f64) for a
             big pile that is never reset, and :meth:`reset` is then refused.
@@ -131,6 +132,16 @@ class Simulation:
         keep_initial: bool = True,
     ) -> None:
         ensure_init()
+        if isinstance(scene, (str, os.PathLike)):
+            scene = load_scene(scene)
+        if not isinstance(scene, Scene):
+            raise TypeError(f"scene must be a Scene, a scene file's path or a bundled scene's name (got {scene!r:.60})")
+        if x is None:
+            extra = [name for name, a in (("v", v), ("w", w)) if a is not None] + (
+                ["track"] if track is not True else []
+            )
+            if extra:
+                raise ValueError(f"{', '.join(extra)} given without x: the scene's balls come with their own")
         given = x is not None or radius is not None or mass is not None
         self.initial = InitialBalls.copy_of(x, v, w, radius, mass, track) if given and keep_initial else None
         """The balls at t0 as given to the constructor (:meth:`reset` goes back to them), or ``None``
@@ -187,7 +198,9 @@ class Simulation:
     def from_scene(
         cls, path: str | os.PathLike[str], overrides: Mapping[str, Any] | Iterable[str] | None = None, **kwargs: Any
     ) -> "Simulation":
-        """Load a TOML scene (path or bundled name) with optional overrides and build a simulation."""
+        """Load a TOML scene (a path or a bundled scene's name) with ``overrides`` (as
+        :func:`~ti_golf.scene.loader.load_scene` takes them) and build a simulation of it;
+        ``kwargs`` go to :class:`Simulation` (``x``, ``v``, ``radius`` …, ``keep_initial``)."""
         return cls(load_scene(path, overrides), **kwargs)
 
     @classmethod
@@ -426,7 +439,11 @@ class Simulation:
 
     # -- stepping ---------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
-        """Advance ``n`` time steps; raises SimulationError naming the balls that went non-finite."""
+        """Advance ``n`` time steps (a whole number >= 0); raises SimulationError naming the balls
+        that went non-finite."""
+        n = _count(n, "n")
+        if n == 0:
+            return
         m, s = self.model, self.state
         if self.solver is not None:
             self.solver.advance(m, s, int(n))
@@ -484,6 +501,15 @@ class Simulation:
         """
         if until not in (None, "rest", "landed"):
             raise ValueError(f"until must be None, 'rest' or 'landed' (got {until!r})")
+        if t is not None and steps is not None:
+            raise ValueError("give t or steps, not both")
+        if t is not None and not (isinstance(t, (int, float)) and not isinstance(t, bool) and t >= 0):
+            raise ValueError(f"t must be a number of seconds >= 0 (got {t!r})")
+        if steps is not None:
+            steps = _count(steps, "steps")
+        record_every, every = _count(record_every, "record_every"), _count(every, "every")
+        if every and on_every is None or on_every is not None and not every:
+            raise ValueError("every and on_every go together: on_every(sim) is called every `every` steps")
         if steps is None:
             duration = self.scene.world.t_end if t is None else float(t)
             if not math.isfinite(duration):
@@ -569,10 +595,15 @@ def check_memory(scene: Scene) -> None:
 
 
 def _as_vectors(a: Any, name: str, n: int | None = None) -> np.ndarray:
-    arr = np.asarray(a, dtype=np.float64)
+    """``a`` as N vectors of 3 finite numbers, (N, 3) (one vector (3,) for one ball), N >= 1 (or
+    ``n``), or a ValueError naming ``name``."""
+    try:
+        arr = np.asarray(a, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be numbers, shape (N, 3) (got {a!r:.60})") from None
     if arr.ndim == 1 and arr.shape == (3,):
         arr = arr[None, :]
-    if arr.ndim != 2 or arr.shape[1] != 3 or (n is not None and arr.shape[0] != n):
+    if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] < 1 or (n is not None and arr.shape[0] != n):
         want = f"({n}, 3)" if n is not None else "(N, 3)"
         raise ValueError(f"{name} must have shape {want} (got {arr.shape})")
     if not np.all(np.isfinite(arr)):
@@ -580,10 +611,22 @@ def _as_vectors(a: Any, name: str, n: int | None = None) -> np.ndarray:
     return arr
 
 
+def _count(value: Any, name: str) -> int:
+    """``value`` as a whole number >= 0 (a float with no fraction, such as 2.0, is one), or a
+    ValueError naming ``name``: a negative or fractional count moved the clock without stepping."""
+    number = isinstance(value, (int, np.integer, float)) and not isinstance(value, bool)
+    if not number or not math.isfinite(value) or value < 0 or value != int(value):
+        raise ValueError(f"{name} must be a whole number >= 0 (got {value!r})")
+    return int(value)
+
+
 def _per_ball(a: Any, n: int, name: str) -> np.ndarray:
     """Per-ball values (N,) from a scalar or an array, read-only: one number broadcast, when it is
     one, takes no memory per ball (the model copies what it keeps)."""
-    arr = np.broadcast_to(np.asarray(a, dtype=np.float64), (n,))
+    given = np.asarray(a, dtype=np.float64)
+    if given.shape not in ((), (n,)):
+        raise ValueError(f"{name} must be one number or one per ball, shape ({n},) (got shape {given.shape})")
+    arr = np.broadcast_to(given, (n,))
     if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
         raise ValueError(f"{name} must be finite and > 0 for every ball")
     return arr
