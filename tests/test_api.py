@@ -350,3 +350,23 @@ def test_balls_and_their_arrays_are_checked_against_each_other(tmp_path):
         sim.save(tmp_path / "no" / "run.npz")
     sim.save(tmp_path / "run")  # (.npz added, as numpy does) ...
     assert tg.Simulation.load(tmp_path / "run").t == sim.t  # ... and found again by the same name
+
+
+def test_python_callers_get_the_checks_the_command_line_has(tmp_path):
+    from ti_golf.golf.shots import shots
+    from ti_golf.scene.launch_monitor import MonitorLaunch
+    from ti_golf.study import run_study
+
+    tour = tg.load_scene("tour_shot")
+    with pytest.raises(ValueError, match=re.escape("launch speed must be in [0, 150] m/s (got -50)")):
+        shots(tour, MonitorLaunch(-50.0, 16.1, 0.0, 700.0, 0.0))
+    with pytest.raises(ValueError, match=re.escape("flight_dt must be in [1e-05, 0.05] s (got 0)")):
+        shots(tour, MonitorLaunch(50.0, 16.1, 0.0, 700.0, 0.0), flight_dt=0)  # (it hung)
+    res = tg.sweep("lab_turbulent", angles_deg=[30, 40], overrides={"world.t_max": 0.5})
+    with pytest.raises(ValueError, match="no ball of the sweep landed"):
+        res.best()  # (it was 0, a ball that never landed)
+    assert tg.load_scene("lab_magnus", "air.C_D=0.3").air.C_D == 0.3  # one text, not its characters
+    assert tg.load_scene("lab_magnus", {"air.wind": np.array([1.0, 0.0, 0.0])}).air.wind == (1.0, 0.0, 0.0)
+    with pytest.raises(tg.ConfigError, match=re.escape("--workers: must be a whole number in [1, ")):
+        run_study("bag_weather", out=tmp_path / "out", workers=0)
+    assert not (tmp_path / "out").exists()  # refused before its folder was made

@@ -20,15 +20,13 @@ from ti_golf.cli.shot import LAUNCH_OPTIONS, launch_line, launch_options, read_l
 from ti_golf.errors import ConfigError
 from ti_golf.golf.dispersion import MAX_SHOTS, PLAYER_SPREAD, dispersion
 from ti_golf.golf.rollout import has_ground
+from ti_golf.golf.shots import FLIGHT_DT_RANGE
 from ti_golf.scene.launch_monitor import UNITS, MonitorLaunch, Units, check_launch
 from ti_golf.scene.loader import load_scene
 
 SPREAD = PLAYER_SPREAD
 SPREAD_OPTIONS = {name: f"--sd-{option[2:]}" for name, option in LAUNCH_OPTIONS.items()}
 """The option of each standard deviation."""
-
-FLIGHT_DT_RANGE = (1e-5, 0.05)
-"""Allowed flight steps [s]."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

@@ -11,7 +11,7 @@ import argparse
 
 from ti_golf.cli._common import check_plot, plot_help, refuse_without, set_option
 from ti_golf.errors import ConfigError
-from ti_golf.study.cluster import ADDRESS_ENV, require_dask
+from ti_golf.study.cluster import ADDRESS_ENV, check_workers, require_dask
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -48,8 +48,8 @@ def cmd_study(args: argparse.Namespace) -> int:
     check_plot(args.plot)
     if not args.plot:
         refuse_without(args, {"figure": None, "lines": False}, {"figure": "--figure", "lines": "--lines"}, "--plot")
-    if args.workers is not None and args.workers < 1:
-        raise ConfigError("--workers", None, f"must be >= 1 (got {args.workers})")
+    if args.workers is not None:
+        check_workers(args.workers)
     if args.gpus is not None and args.gpus < 0:
         raise ConfigError("--gpus", None, f"must be >= 0 (got {args.gpus})")
     spec = load_study(args.study, args.overrides)  # bad input before anything starts

@@ -19,7 +19,7 @@ import numpy as np
 
 from ti_golf.files import atomic_path
 from ti_golf.golf.shots import shots
-from ti_golf.scene.launch_monitor import MPH, RPM, MonitorLaunch, Units
+from ti_golf.scene.launch_monitor import LAUNCH_LIMITS, MPH, RPM, MonitorLaunch, Units
 from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import Shots
 from ti_golf.sim.simulation import RunProgress
@@ -35,12 +35,13 @@ spin 300 rpm, spin axis 3°, about a consistent player's iron."""
 def draw_launches(mean: MonitorLaunch, sd: MonitorLaunch, n: int, seed: int) -> MonitorLaunch:
     """``n`` launches, each value normal about ``mean`` with standard deviation ``sd``, independent,
     from ``numpy.random.default_rng(seed)`` (one (5, n) block of standard normals, fields in order);
-    ball speed and spin are kept ≥ 0. Returns arrays of shape (n,)."""
+    each kept within :data:`~ti_golf.scene.launch_monitor.LAUNCH_LIMITS` (ball speed and spin ≥ 0,
+    angles within ±90°). Returns arrays of shape (n,)."""
     z = np.random.default_rng(seed).standard_normal((5, int(n)))
     out = {}
     for row, f in enumerate(fields(MonitorLaunch)):
         value = float(getattr(mean, f.name)) + float(getattr(sd, f.name)) * z[row]
-        out[f.name] = np.maximum(value, 0.0) if f.name in ("speed", "spin") else value
+        out[f.name] = np.clip(value, *LAUNCH_LIMITS[f.name])
     return MonitorLaunch(**out)
 
 

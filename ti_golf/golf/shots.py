@@ -17,7 +17,7 @@ import numpy as np
 from ti_golf.golf.rollout import shots_from_landing
 from ti_golf.golf.sweep import fly
 from ti_golf.scene.balls import launch_position
-from ti_golf.scene.launch_monitor import MonitorLaunch
+from ti_golf.scene.launch_monitor import LAUNCH_LIMITS, MonitorLaunch
 from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import Shots
 from ti_golf.sim.simulation import RunProgress
@@ -44,9 +44,33 @@ def fly_shots(
     which the contacts need); ``progress(t_done, t_total)`` follows the roll-out.
     """
     x0 = np.asarray(x0, dtype=float)
+    if flight_dt is not None and not FLIGHT_DT_RANGE[0] <= flight_dt <= FLIGHT_DT_RANGE[1]:
+        lo, hi = FLIGHT_DT_RANGE
+        raise ValueError(f"flight_dt must be in [{lo:g}, {hi:g}] s (got {flight_dt!r})")
     flown = scene if flight_dt is None else replace(scene, world=replace(scene.world, dt=float(flight_dt)))
     raw = fly(flown, x0, v0, w0)
     return shots_from_landing(scene, x0, raw, to_rest, progress)
+
+
+FLIGHT_DT_RANGE = (1e-5, 0.05)
+"""The flight steps [s] a shot's flight may take (``flight_dt``): down to 10 µs, up to 50 ms."""
+
+LAUNCH_UNITS = {"speed": "m/s", "vla_deg": "deg", "hla_deg": "deg", "spin": "rad/s", "axis_deg": "deg"}
+"""The unit of each launch-monitor value, as :class:`MonitorLaunch` holds it."""
+
+
+def check_launches(launch: MonitorLaunch) -> None:
+    """Every launch of ``launch`` (floats, or arrays of one shape) finite and within
+    :data:`~ti_golf.scene.launch_monitor.LAUNCH_LIMITS`, or a ValueError naming the field, the
+    allowed range and the first value outside it."""
+    shapes = {np.shape(getattr(launch, name)) for name in LAUNCH_LIMITS} - {()}
+    if len(shapes) > 1:
+        raise ValueError(f"the launch's arrays must share one shape (got {sorted(shapes)})")
+    for name, (lo, hi) in LAUNCH_LIMITS.items():
+        a = np.atleast_1d(np.asarray(getattr(launch, name), dtype=float))
+        bad = ~(np.isfinite(a) & (a >= lo) & (a <= hi))
+        if np.any(bad):
+            raise ValueError(f"launch {name} must be in [{lo:g}, {hi:g}] {LAUNCH_UNITS[name]} (got {a[bad][0]:g})")
 
 
 def shots(
@@ -65,6 +89,7 @@ def shots(
         >>> fade = MonitorLaunch(123 * MPH, 16.1, 0.0, 7124 * RPM, 5.0)         # doctest: +SKIP
         >>> s = shots(load_scene("tour_shot"), fade); s.carry, s.offline        # doctest: +SKIP
     """
+    check_launches(launch)
     v0, w0 = launch.vectors(target_direction(scene))
     x0 = np.tile(np.asarray(launch_position(scene), float), (len(v0), 1))
     return fly_shots(scene, x0, v0, w0, to_rest=to_rest, flight_dt=flight_dt, progress=progress)

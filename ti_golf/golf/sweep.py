@@ -57,7 +57,10 @@ class SweepResult:
         return self.flight.carry
 
     def best(self) -> int:
-        """Index of the longest carry (ignoring balls that did not land)."""
+        """Index of the longest carry (ignoring balls that did not land); a ValueError when no
+        ball landed (within ``world.t_max``)."""
+        if not np.any(self.flight.landed):
+            raise ValueError("no ball of the sweep landed (within world.t_max): it has no best launch")
         c = np.where(self.flight.landed, self.flight.carry, -np.inf)
         return int(np.argmax(c))
 

@@ -54,7 +54,7 @@ def plot_sweep(res: "SweepResult", path: str | os.PathLike[str], title: str | No
     """Side view of the recorded trajectories (as the report's Figures 3.1-1 to 3.1-4) and carry vs angle."""
     fig = Figure(figsize=(12, 4.5))
     ax1, ax2 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.6, 1]})
-    best = res.best()
+    best = res.best() if np.any(res.flight.landed) else None  # (none: no ball landed within world.t_max)
     x0 = np.asarray(launch_position(res.scene))
     if res.traj is not None and res.traj_index is not None:
         cmap = matplotlib.colormaps.get_cmap("viridis")
@@ -87,17 +87,19 @@ def plot_sweep(res: "SweepResult", path: str | os.PathLike[str], title: str | No
             ms=3,
             label=f"{s:g} m/s, {w:g} rad/s" if len(groups) > 1 else None,
         )
-    ax2.plot(
-        [res.angle_deg[best]],
-        [res.carry[best]],
-        "r*",
-        ms=12,
-        label=f"best {res.angle_deg[best]:.4g}°: {res.carry[best]:.3f} m",
-    )
+    if best is not None:
+        ax2.plot(
+            [res.angle_deg[best]],
+            [res.carry[best]],
+            "r*",
+            ms=12,
+            label=f"best {res.angle_deg[best]:.4g}°: {res.carry[best]:.3f} m",
+        )
     ax2.set_xlabel("launch angle [deg]")
     ax2.set_ylabel("carry [m]")
     ax2.grid(alpha=0.3)
-    ax2.legend(fontsize=7)
+    if ax2.get_legend_handles_labels()[0]:  # (nothing to label when no ball landed)
+        ax2.legend(fontsize=7)
     fig.tight_layout()
     save_figure(fig, path, dpi=120)
 

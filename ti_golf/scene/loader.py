@@ -15,6 +15,8 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - Python 3.10
@@ -98,6 +100,8 @@ def _problem(key: Key, value: Any) -> str | None:
 def _coerce_number(value: Any, key: Key, source: str, dotted: str) -> int | float:
     """A ``float`` key's value as a finite float, an ``int`` key's as an int (a whole number, within
     the key's check: the check sees the value as given)."""
+    if isinstance(value, (np.integer, np.floating)):  # (a numpy number from Python)
+        value = value.item()
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise_config(source, dotted, f"must be a number{_unit(key)} (got {value!r})")
     if key.kind == "int":
@@ -116,6 +120,8 @@ def _coerce_number(value: Any, key: Key, source: str, dotted: str) -> int | floa
 def _coerce_numbers(value: Any, key: Key, source: str, dotted: str) -> tuple[float, ...]:
     """The value of a key of a fixed-length list kind (:data:`_LISTS`) as a tuple of finite floats."""
     count, shape = _LISTS[key.kind]
+    if isinstance(value, np.ndarray) and value.ndim == 1 and value.dtype.kind in "iuf":  # (a numpy vector)
+        value = value.tolist()
     if (
         not isinstance(value, (list, tuple))
         or len(value) != count
@@ -267,8 +273,9 @@ def load_scene(
 
     Args:
         path: a TOML file, or a bundled scene's name (``"lab_turbulent"``); ``None`` with ``data``.
-        overrides: ``{"air.C_D": 0.25}`` or ``["air.C_D=0.25", ...]`` (``--set`` syntax); a value
-            ``None`` (``"game.start="``) clears the key, back to its default.
+        overrides: ``{"air.C_D": 0.25}``, ``["air.C_D=0.25", ...]`` (``--set`` syntax) or one such
+            text; a value ``None`` (``"game.start="``) clears the key, back to its default; a
+            list value may be a numpy vector.
         data: an already-parsed TOML document (used instead of reading ``path``).
 
     Raises:
@@ -285,6 +292,8 @@ def load_scene(
         p = Path(path) if path else Path("<scene>")
         source = str(path) if path else "<scene>"
     doc: dict[str, Any] = {k: (dict(v) if isinstance(v, dict) else v) for k, v in raw.items()}
+    if isinstance(overrides, str):  # one KEY=VALUE text, not its characters
+        overrides = [overrides]
     if overrides:
         items = overrides.items() if isinstance(overrides, Mapping) else (parse_override(o) for o in overrides)
         for dotted, value in items:

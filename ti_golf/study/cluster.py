@@ -69,6 +69,19 @@ time, so more than one a core only queues tasks (a bound, so that a mistyped cou
 to start a hundred thousand processes)."""
 
 
+def check_workers(workers: Any) -> int:
+    """``workers``, the local worker processes asked for: a whole number in [1, WORKERS_PER_CORE ×
+    cores], or a ConfigError naming ``--workers`` (the option, and ``run_study``'s argument)."""
+    most = WORKERS_PER_CORE * cores()
+    if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= most:
+        raise ConfigError(
+            "--workers",
+            None,
+            f"must be a whole number in [1, {most}], {WORKERS_PER_CORE} a core here (got {workers!r})",
+        )
+    return workers
+
+
 @contextlib.contextmanager
 def study_client(
     address: str | None = None,
@@ -124,11 +137,7 @@ def study_client(
         finally:
             client.close()
         return
-    n = cores() if workers is None else workers
-    if not 1 <= n <= WORKERS_PER_CORE * cores():
-        raise ConfigError(
-            "--workers", None, f"must be in [1, {WORKERS_PER_CORE * cores()}] ({WORKERS_PER_CORE} a core here; got {n})"
-        )
+    n = cores() if workers is None else check_workers(workers)
     if gpus is None:
         gpus = local_gpus() if need_gpu else 0
     if need_gpu and gpus < 1:

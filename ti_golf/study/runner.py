@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ti_golf.errors import ConfigError
-from ti_golf.study.cluster import study_client
+from ti_golf.study.cluster import check_workers, study_client
 from ti_golf.study.results import RUNS, Manifest, table_rows, write_table
 from ti_golf.study.spec import StudySpec, TaskSpec, load_study
 
@@ -62,6 +62,8 @@ def run_study(
     scheduler at ``address``; returns the table. Ctrl-C (``KeyboardInterrupt``) stops it after
     writing the finished rows, and is raised again. Local workers are new processes that import
     the calling script again: a script calls this under ``if __name__ == "__main__":``."""
+    if workers is not None:
+        check_workers(workers)  # (before the study's folder is made)
     spec = study if isinstance(study, StudySpec) else load_study(study, overrides)
     folder = Path(out) if out is not None else default_folder(spec)
     if folder.exists() and not folder.is_dir():
