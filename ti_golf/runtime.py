@@ -111,12 +111,25 @@ def init(
     profile: bool = False,
     cpu_threads: int | None = None,
 ) -> RuntimeInfo:
-    """Initialise Taichi once per process (``cpu_threads``: the CPU backend's threads, default one
-    per core; a second call does not change them).
+    """Initialise Taichi once per process.
+
+    Args:
+        arch: the backend, one of :data:`ARCHES` (``cpu``, ``cuda``, ``vulkan``, ``gpu``: the first GPU
+            backend Taichi finds); default ``$TI_GOLF_ARCH`` or ``cpu``. One Taichi does not find runs
+            on the CPU, with a one-line note.
+        precision: ``f64`` or ``f32`` (:data:`PRECISIONS`); default ``$TI_GOLF_PRECISION`` or ``f64``.
+        debug: Taichi's debug mode (bounds-checked arrays; slow).
+        profile: Taichi's kernel profiler (every launch timed, and waited for).
+        cpu_threads: the CPU backend's threads, default one per core; a second call does not
+            change them.
+
+    Returns:
+        The :class:`RuntimeInfo`: the backend asked for and the one running, and the precision.
 
     A second call with the same (or no) request returns the existing runtime; a second call that
-    asks for a different backend or precision raises, because Taichi cannot switch in-process
-    (run another process instead).
+    asks for a different backend or precision raises RuntimeError, because Taichi cannot switch
+    in-process (run another process instead). A value outside the allowed ones is a
+    :class:`~ti_golf.errors.ConfigError` naming ``--arch`` or the environment variable.
     """
     global _info
     want_arch, want_prec = _resolve(arch, precision)

@@ -364,7 +364,8 @@ class Simulation:
         return self.model.terrain
 
     def counts(self) -> dict[str, int]:
-        """How many balls are flying, rolling, at rest and out of bounds."""
+        """How many balls are in each status: ``{"flying": …, "rolling": …, "at_rest": …,
+        "out_of_bounds": …}``."""
         s = self.status
         return {name: int(np.count_nonzero(s == code)) for code, name in STATUS_NAMES.items()}
 
@@ -488,7 +489,8 @@ class Simulation:
         on_every: Callable[["Simulation"], None] | None = None,
         recording: Recording | None = None,
     ) -> Recording:
-        """Advance by ``t`` seconds or ``steps`` steps (default: the scene's ``world.t_end``).
+        """Advance by ``t`` seconds (rounded up to whole steps of ``dt``) or ``steps`` steps, not
+        both (default: the scene's ``world.t_end``).
 
         ``until="rest"`` stops early once every ball is at rest or out of bounds; ``until="landed"``
         once every tracked ball has landed. ``record_every=K`` samples x and ω every K steps.
