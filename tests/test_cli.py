@@ -842,7 +842,13 @@ def test_bench_collide_with_a_boulder_times_the_pile_alone_too(background_runs):
 
 BAD_BENCH_OPTIONS = [
     (("collide", "--iterations", "0"), "[1, 100]"),
-    (("collide", "--steps", "0"), "> 0 steps"),
+    (("collide", "--steps", "0"), "[1, 1,000,000]"),
+    (("collide", "--steps", "999999999999"), "[1, 1,000,000]"),  # (it ran on, deaf to Ctrl-C)
+    (("sweep", "--n", "99999999999999"), "[1, 10,000,000]"),  # (numpy's allocation error)
+    (("sweep", "--dt", "inf"), "[1e-05, 1] s"),  # (it printed Infinity into the JSON)
+    (("sweep", "--repeats", "0"), "[1, 100]"),
+    (("render", "--frames", "0"), "[1, 1000]"),
+    (("pit", "--t", "0.02", "--n", "500", "--set", "world.dt=1e-9"), "20,000,000 steps; at most 10,000,000"),
     (("collide", "--n", "1"), ">= 2 balls"),
     (("collide", "--boulder", "-0.1"), "[0, 10] m"),
     (("collide", "--boulder", "nan"), "[0, 10] m"),

@@ -41,6 +41,7 @@ import taichi as ti
 from ti_golf.bench.collide import bare_gather_rate
 from ti_golf.bench.common import _peak_rss_bytes, _restart_peak_rss, _rss_bytes
 from ti_golf.bench.kernel_times import FOLD_EVERY, KernelTimes, profiling
+from ti_golf.errors import ConfigError
 from ti_golf.physics.kernels import int_at
 from ti_golf.physics.types import LAUNCHES, NeighbourLists, StepScratch, kernel
 from ti_golf.runtime import ensure_init, release_freed_memory
@@ -107,6 +108,11 @@ def pile_quality(sim: Simulation, side: float) -> dict[str, Any]:
     }
 
 
+MAX_STEPS = 10_000_000
+"""The most steps a pour may take (10 s at 1 µs): a step count held in one launch cannot be
+interrupted, so a mistyped ``world.dt`` would run for hours."""
+
+
 def bench_pit(
     n: int | None = None,
     t: float = 4.0,
@@ -121,6 +127,12 @@ def bench_pit(
     info = ensure_init()
     scene, side = pit_scene(n, overrides)
     n_balls = scene.blocks[0].number
+    if t / scene.world.dt > MAX_STEPS:
+        raise ConfigError(
+            "--t",
+            None,
+            f"{t:g} s at world.dt = {scene.world.dt:g} s is {t / scene.world.dt:,.0f} steps; at most {MAX_STEPS:,}",
+        )
     t0 = time.perf_counter()
     warm_scene, _ = pit_scene(min(n_balls, WARM_UP_BALLS), overrides)  # (stepped as the pour is)
     warm = Simulation(warm_scene)

@@ -167,6 +167,13 @@ def cmd_startup(args: argparse.Namespace) -> int:
     return 0
 
 
+MAX_N = 10_000_000
+"""The most balls, launches or shots a benchmark takes (ten times the million-ball pour)."""
+
+MAX_STEPS = 1_000_000
+"""The most steps ``bench collide`` times: its steps run in launches that hold Ctrl-C."""
+
+
 def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per bench and per option checked)
     """Run the benchmark ``args.bench`` (sweep, collide, pit, render, dispersion, startup, study) after
     checking its options; print its summary, or its JSON with ``--json``; 0."""
@@ -174,8 +181,8 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
         return cmd_startup(args)
     if args.bench == "study":
         return _bench_study(args)
-    if args.n <= 0:
-        raise ConfigError("--n", None, f"must be > 0 (got {args.n})")
+    if not 0 < args.n <= MAX_N:
+        raise ConfigError("--n", None, f"must be in [1, {MAX_N:,}] (got {args.n})")
     if args.bench == "dispersion":
         if not 0 <= args.rest <= args.n:
             raise ConfigError("--rest", None, f"must be in [0, --n] shots (got {args.rest})")
@@ -183,7 +190,9 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
             raise ConfigError("--flight-dt", None, f"must be in [1e-05, 0.05] s (got {args.flight_dt})")
         result = bench_dispersion(n=args.n, rest=args.rest, flight_dt=args.flight_dt)
     elif args.bench == "render":
-        result = bench_render(n=args.n, frames=max(1, args.frames))
+        if not 1 <= args.frames <= 1000:
+            raise ConfigError("--frames", None, f"must be in [1, 1000] (got {args.frames})")
+        result = bench_render(n=args.n, frames=args.frames)
     elif args.bench == "pit":
         if not 0.0 < args.t <= 60.0:  # (also false for NaN)
             raise ConfigError("--t", None, f"must be in (0, 60] s (got {args.t})")
@@ -193,8 +202,10 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
             raise ConfigError("--every", None, f"must be in (0, --t] s (got {args.every})")
         result = bench_pit(n=args.n, t=args.t, overrides=args.overrides, every=args.every)
     elif args.bench == "collide":
-        if args.n < 2 or args.steps <= 0:
-            raise ConfigError("--n" if args.n < 2 else "--steps", None, "must be >= 2 balls and > 0 steps")
+        if args.n < 2:
+            raise ConfigError("--n", None, f"must be >= 2 balls (got {args.n})")
+        if not 1 <= args.steps <= MAX_STEPS:
+            raise ConfigError("--steps", None, f"must be in [1, {MAX_STEPS:,}] (got {args.steps})")
         if not 1 <= args.iterations <= 100:
             raise ConfigError("--iterations", None, f"must be in [1, 100] (got {args.iterations})")
         if not 0.0 <= args.boulder <= 10.0:  # (also false for NaN)
@@ -209,9 +220,11 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
             boulder=args.boulder,
         )
     else:
-        if not args.dt > 0:
-            raise ConfigError("--dt", None, f"must be > 0 (got {args.dt})")
-        result = bench_sweep(n=args.n, dt=args.dt, repeats=max(1, args.repeats))
+        if not 1e-5 <= args.dt <= 1.0:  # (also false for NaN)
+            raise ConfigError("--dt", None, f"must be in [1e-05, 1] s (got {args.dt})")
+        if not 1 <= args.repeats <= 100:
+            raise ConfigError("--repeats", None, f"must be in [1, 100] (got {args.repeats})")
+        result = bench_sweep(n=args.n, dt=args.dt, repeats=args.repeats)
     if args.json:
         print(to_json(result))
     if result.get("interrupted"):
