@@ -848,6 +848,9 @@ BAD_BENCH_OPTIONS = [
     (("sweep", "--dt", "inf"), "[1e-05, 1] s"),  # (it printed Infinity into the JSON)
     (("sweep", "--repeats", "0"), "[1, 100]"),
     (("render", "--frames", "0"), "[1, 1000]"),
+    (("startup", "--scenes", ","), "names no scene"),  # (it timed every scene)
+    (("startup", "--top", "3", "--cache", "warm"), "has no effect without --kernels"),
+    (("startup", "--repeats", "2", "--kernels", "lab_vacuum"), "has no effect with --kernels"),
     (("pit", "--t", "0.02", "--n", "500", "--set", "world.dt=1e-9"), "20,000,000 steps; at most 10,000,000"),
     (("collide", "--n", "1"), ">= 2 balls"),
     (("collide", "--boulder", "-0.1"), "[0, 10] m"),

@@ -114,8 +114,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     bu.add_argument(
         "--cache",
         choices=("warm", "cold", "both"),
-        default="both",
-        help="warm: Taichi's kernel cache holds the kernels; cold: an empty temporary one (default both)",
+        default=None,
+        help="warm: Taichi's kernel cache holds the kernels; cold: an empty temporary one (default both; "
+        "with --kernels, warm)",
     )
     bu.add_argument(
         "--scenes", metavar="A,B,...", help="the bundled scenes whose `run --steps 1` is timed (default: all)"
@@ -140,15 +141,25 @@ def cmd_startup(args: argparse.Namespace) -> int:
     if args.top is not None and args.top < 1:
         raise ConfigError("--top", None, f"must be >= 1 kernels (got {args.top})")
     if args.kernels:
+        refuse_without_kernels = {"scenes": "--scenes", "repeats": "--repeats"}
+        for dest, flag in refuse_without_kernels.items():
+            if getattr(args, dest) != {"scenes": None, "repeats": 1}[dest]:
+                raise ConfigError(flag, None, "has no effect with --kernels (one profiled run of its scene)")
+        args.cache = args.cache or "warm"
         if args.cache == "both":
             raise ConfigError("--cache", None, "with --kernels: warm or cold (one profiled run)")
         load_scene(args.kernels)  # a bad scene is refused here, in one line, not in the profiled process
         result = start_profile(args.kernels, cold=args.cache == "cold", arch=arch, precision=precision)
         print("\n".join(profile_lines(result, args.top)))
     else:
+        if args.top is not None:
+            raise ConfigError("--top", None, "has no effect without --kernels")
         if args.repeats < 1:
             raise ConfigError("--repeats", None, f"must be >= 1 (got {args.repeats})")
-        scenes = [s.strip() for s in args.scenes.split(",") if s.strip()] if args.scenes else None
+        scenes = [s.strip() for s in args.scenes.split(",") if s.strip()] if args.scenes is not None else None
+        if scenes == []:
+            raise ConfigError("--scenes", None, f"names no scene (got {args.scenes!r}); leave it out for all")
+        args.cache = args.cache or "both"
         unknown = sorted(set(scenes or ()) - set(scene_names()))
         if unknown:
             raise ConfigError(
