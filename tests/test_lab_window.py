@@ -61,6 +61,9 @@ def test_lab_needs_a_display_and_says_how_to_get_a_picture_without_one(capsys, m
         (["--t", "1"], "--t: goes with --screenshot"),
         (["--screenshot", "lab.png", "--t", "-1"], "--t: must be a number of seconds >= 0"),
         (["--screenshot", "no/such/folder/lab.png"], "--screenshot: cannot write 'no/such/folder/lab.png'"),
+        (["--screenshot", "lab.png", "--t", "30"], "--t: must be at most the scene's world.t_end = 20 s (got 30)"),
+        (["--screenshot", "lab.png", "--speed", "5"], "--speed: has no effect without a window"),
+        (["--screenshot", "lab.png", "--out", "/tmp"], "--out: has no effect without a window"),
     ],
 )
 def test_lab_refuses_a_bad_screenshot_request(args, needle, capsys):

@@ -9,7 +9,7 @@ import argparse
 import math
 from pathlib import Path
 
-from ti_golf.cli._common import check_writable, parse_size, runtime_options, scene_options
+from ti_golf.cli._common import check_writable, parse_size, refuse_without, runtime_options, scene_options
 from ti_golf.errors import ConfigError
 from ti_golf.lab.app import DEFAULT_SCENE, Lab
 from ti_golf.lab.window import LabWindow, check_display
@@ -75,7 +75,15 @@ def cmd_lab(args: argparse.Namespace) -> int:
     if args.t and not args.screenshot:
         raise ConfigError("--t", None, "goes with --screenshot (the window runs the scene with Start)")
     check_writable(args.screenshot, "--screenshot", (".png",))
-    load_scene(args.scene, args.overrides)  # a bad scene is refused before any window opens
+    if args.screenshot:  # (no window runs: the window's pace and its Save folder would have no effect)
+        refuse_without(
+            args, {"speed": 1.0, "out": "."}, {"speed": "--speed", "out": "--out"}, "a window (leave out --screenshot)"
+        )
+    scene = load_scene(args.scene, args.overrides)  # a bad scene is refused before any window opens
+    if args.t > scene.world.t_end:
+        raise ConfigError(
+            "--t", None, f"must be at most the scene's world.t_end = {scene.world.t_end:g} s (got {args.t:g})"
+        )
     check_display(on_screen=not args.screenshot)
     lab = Lab(args.scene, args.overrides, speed=args.speed or None)
     if args.screenshot:
