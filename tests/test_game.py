@@ -390,6 +390,8 @@ def test_a_missing_shots_file_is_worded_as_every_missing_file(green_file, tmp_pa
     [
         (["--set", "hole.position=[30, 0]"], "key 'hole.position' must lie on the terrain (x in [-2, 8] m"),
         (["--set", "game.start=[0, 9]"], "key 'game.start' must lie on the terrain"),
+        (["--set", "game.start=[1e9, 0]"], "; got [1e+09, 0])"),  # (numpy's np.float64(...) reprs were shown)
+        (["--set", "game.start=[3.01, 0]"], "key 'game.start' must lie outside the cup"),  # (holed before a stroke)
         (["--set", "game.max_strokes=0"], "key 'game.max_strokes' must be in [1, 1000]"),
     ],
 )

@@ -195,7 +195,7 @@ class GolfGame:
             raise ConfigError(
                 source,
                 "hole.position",
-                f"must lie on the terrain (x in {self._span(0)}, z in {self._span(2)}; got {list(hole)})",
+                f"must lie on the terrain (x in {self._span(0)}, z in {self._span(2)}; got {_point(hole)})",
             )
         self.cup = self._on_ground(hole)
         if scene.game.start is not None:
@@ -204,7 +204,11 @@ class GolfGame:
                 raise ConfigError(
                     source,
                     "game.start",
-                    f"must lie on the terrain (x in {self._span(0)}, z in {self._span(2)}; got {list(start)})",
+                    f"must lie on the terrain (x in {self._span(0)}, z in {self._span(2)}; got {_point(start)})",
+                )
+            if np.hypot(*(start - hole)) <= self.hole.radius:
+                raise ConfigError(
+                    source, "game.start", f"must lie outside the cup (within {self.hole.radius:g} m of {_point(hole)})"
                 )
         else:
             start = self._random_start(hole)
@@ -351,3 +355,8 @@ def _carry(path: np.ndarray, low: np.ndarray) -> float:
     down = np.flatnonzero(low[up[0] :])
     k = up[0] + down[0] if down.size else len(path) - 1
     return float(np.hypot(*(path[k] - path[0])[[0, 2]]))
+
+
+def _point(p: np.ndarray) -> str:
+    """A point (x, z) [m] as the error messages write it: ``[130, 4]``."""
+    return "[" + ", ".join(f"{float(c):g}" for c in p) + "]"
