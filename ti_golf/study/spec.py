@@ -55,6 +55,8 @@ class _Figures:
     allowed = " | ".join(FIGURES)
 
     def __call__(self, v: Sequence[str]) -> str | None:
+        if not v:
+            return "names no figure (leave it out for every figure of the kind)"
         bad = [name for name in v if name not in FIGURES]
         if bad:
             return f"names no figure {bad[0]!r}; allowed: {', '.join(FIGURES)}"
@@ -375,6 +377,8 @@ def _points(doc: Mapping[str, Any], how: str | None, source: str) -> list[dict[s
             if not point:
                 raise_config(source, f"points[{i}]", "names no scene key")
             out.append({name: _one(name, value, source, f"points[{i}].{name}") for name, value in point.items()})
+            if out[-1] in out[:-1]:  # (the same task twice)
+                raise_config(source, f"points[{i}]", f"is points[{out.index(out[-1])}] again")
         return out
     if not isinstance(table, dict):
         raise_config(source, "random", "must be a table [random] with samples, seed and [random.uniform]")
