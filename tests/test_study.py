@@ -120,7 +120,11 @@ BAD = [
     ('scene = "lab_turbulent"\n[grid]\n"air.C_D" = [0.2, 0.3, 0.2]\n', "grid.air.C_D", "holds the value 0.2 twice"),
     ('scene = "lab_vacuum"\n[task]\nkind = "run"\nballs = 100\n', "task.balls", "'lab_vacuum' has 0"),
     ('scene = "lab_turbulent"\n[task]\nfigures = []\n', "task.figures", "names no figure"),
-    ('scene = "lab_turbulent"\n[[points]]\n"air.C_D" = 0.2\n[[points]]\n"air.C_D" = 0.2\n', "points[1]", "is points[0] again"),
+    (
+        'scene = "lab_turbulent"\n[[points]]\n"air.C_D" = 0.2\n[[points]]\n"air.C_D" = 0.2\n',
+        "points[1]",
+        "is points[0] again",
+    ),
     ('scene = "lab_vacuum"\nseeds = [1, 2]\n[task]\nkind = "run"\n', "seeds", "'lab_vacuum' has none"),
     (
         'scene = "lab_turbulent"\nset = ["air.C_D=0.25"]\n[grid]\n"air.C_D" = [0.2, 0.3]\n',

@@ -352,34 +352,43 @@ def _base_scene(study: Study, task: Task, path: Path) -> str:
     return str(found.resolve())
 
 
+def _grid_points(table: Any, source: str) -> list[dict[str, Any]]:
+    """The points of a ``[grid]``: every combination of its keys' values (no value twice: the
+    same task twice)."""
+    if not isinstance(table, dict) or not table:
+        raise_config(source, "grid", "must be a table of scene keys, each with its values (a list or START:STOP:STEP)")
+    axes = {name: _values(name, value, source) for name, value in table.items()}
+    for name, values in axes.items():
+        seen = [repr(v) for v in values]
+        twice = next((v for v, r in zip(values, seen) if seen.count(r) > 1), None)
+        if twice is not None:
+            raise_config(source, f"grid.{name}", f"holds the value {_toml(twice)} twice")
+    return [dict(zip(axes, combo)) for combo in itertools.product(*axes.values())]
+
+
+def _listed_points(table: Any, source: str) -> list[dict[str, Any]]:
+    """The points of ``[[points]]``, each given once (a point given again is the same task twice)."""
+    if not isinstance(table, list) or not table or not all(isinstance(t, dict) for t in table):
+        raise_config(source, "points", "must be an array of tables [[points]], each a scene key = value per key")
+    out: list[dict[str, Any]] = []
+    for i, point in enumerate(table):
+        if not point:
+            raise_config(source, f"points[{i}]", "names no scene key")
+        out.append({name: _one(name, value, source, f"points[{i}].{name}") for name, value in point.items()})
+        if out[-1] in out[:-1]:
+            raise_config(source, f"points[{i}]", f"is points[{out.index(out[-1])}] again")
+    return out
+
+
 def _points(doc: Mapping[str, Any], how: str | None, source: str) -> list[dict[str, Any]]:
     """The points of the study: dicts of dotted scene key -> value."""
     if how is None:
         return [{}]
     table = doc[how]
     if how == "grid":
-        if not isinstance(table, dict) or not table:
-            raise_config(
-                source, "grid", "must be a table of scene keys, each with its values (a list or START:STOP:STEP)"
-            )
-        axes = {name: _values(name, value, source) for name, value in table.items()}
-        for name, values in axes.items():
-            seen = [repr(v) for v in values]
-            twice = next((v for v, r in zip(values, seen) if seen.count(r) > 1), None)
-            if twice is not None:  # (the same task twice)
-                raise_config(source, f"grid.{name}", f"holds the value {_toml(twice)} twice")
-        return [dict(zip(axes, combo)) for combo in itertools.product(*axes.values())]
+        return _grid_points(table, source)
     if how == "points":
-        if not isinstance(table, list) or not table or not all(isinstance(t, dict) for t in table):
-            raise_config(source, "points", "must be an array of tables [[points]], each a scene key = value per key")
-        out = []
-        for i, point in enumerate(table):
-            if not point:
-                raise_config(source, f"points[{i}]", "names no scene key")
-            out.append({name: _one(name, value, source, f"points[{i}].{name}") for name, value in point.items()})
-            if out[-1] in out[:-1]:  # (the same task twice)
-                raise_config(source, f"points[{i}]", f"is points[{out.index(out[-1])}] again")
-        return out
+        return _listed_points(table, source)
     if not isinstance(table, dict):
         raise_config(source, "random", "must be a table [random] with samples, seed and [random.uniform]")
     uniform = table.get("uniform")
