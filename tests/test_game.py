@@ -471,3 +471,17 @@ def test_the_game_window_plays_a_stroke_and_draws_the_course(background_runs):
     panel = mpimg.imread(workdir / "after.png")[40:200, 20:200, :3]  # (ImGui lays it out in the first frame)
     assert panel.mean() < 0.35  # the panel: dark, with its text and buttons
     assert not (workdir / "imgui.ini").exists()  # (its folder: Dear ImGui's settings go elsewhere)
+
+
+def test_enter_at_the_direction_prompt_aims_as_hole_does(green_file, tmp_path, capsys, monkeypatch):
+    # Enter took the bearing as the prompt rounds it (-7.0 for -7.0306 deg), so the ball went
+    # elsewhere than with 'hole', though the game page says Enter aims at the hole
+    rounds = []
+    for direction in ("", "hole"):
+        monkeypatch.setattr("sys.stdin", io.StringIO(f"{direction}\n5\n0\n\n"))
+        out = tmp_path / f"round{len(rounds)}.csv"
+        args = ["play", str(green_file), "--seed", "1", "--set", "game.start=[0, 0.37]", "--out", str(out)]
+        assert cli.main(args) == 0
+        assert "Enter: at the hole, -7.0]" in capsys.readouterr().out
+        rounds.append(out.read_text())
+    assert rounds[0] == rounds[1] and ",-7.03" in rounds[0]  # (the stroke's direction_deg, to its digits)

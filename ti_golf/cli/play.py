@@ -170,6 +170,8 @@ def _asked_shots(game: GolfGame, ask: Callable[[str], str], interactive: bool) -
                 break  # (a club gave the rest)
             default = _default(f.name, game, last)
             hint = f", Enter: {default:g}" if default is not None else ""
+            if f.name == "direction" and default is not None:
+                hint = f", Enter: at the hole, {default:.1f}"
             words = ", or a club" if f.name == "speed" else ", or 'hole'" if f.name == "direction" else ""
             while True:
                 try:
@@ -192,9 +194,10 @@ def _asked_shots(game: GolfGame, ask: Callable[[str], str], interactive: bool) -
 
 
 def _default(name: str, game: GolfGame, last: dict[str, float]) -> float | None:
-    """What Enter means at a prompt: at the hole for the direction, no spin, else the last stroke's."""
+    """What Enter means at a prompt: at the hole for the direction (exactly, as 'hole' does; the
+    prompt shows it rounded), no spin, else the last stroke's."""
     if name == "direction":
-        return round(game.to_hole()[1], 1)
+        return game.to_hole()[1]
     return last.get(name, PROMPT_DEFAULTS.get(name))
 
 
