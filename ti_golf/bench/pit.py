@@ -113,6 +113,19 @@ MAX_STEPS = 10_000_000
 interrupted, so a mistyped ``world.dt`` would run for hours."""
 
 
+def _scaled_simulation(scene: Scene, n: int | None) -> Simulation:
+    """The simulation of a pit ``scene`` scaled to ``n`` balls; a scaled bin whose box cannot hold
+    them is a ConfigError naming ``--n`` (the scene file's block says nothing the user gave)."""
+    try:
+        return Simulation(scene)
+    except ConfigError as exc:
+        if n is None or not (exc.key or "").startswith("blocks[0]"):
+            raise
+        raise ConfigError(
+            "--n", None, f"{n:,} balls do not fit the pit's bin scaled to them ({exc.reason}); try another count"
+        ) from None
+
+
 def bench_pit(
     n: int | None = None,
     t: float = 4.0,
@@ -135,7 +148,7 @@ def bench_pit(
         )
     t0 = time.perf_counter()
     warm_scene, _ = pit_scene(min(n_balls, WARM_UP_BALLS), overrides)  # (stepped as the pour is)
-    warm = Simulation(warm_scene)
+    warm = _scaled_simulation(warm_scene, n)
     warm.run(steps=3)
     if warm.solver is not None and warm.solver.skip_still:  # (the pour's steps asleep count the balls awake)
         moving_balls(warm.state.status)
@@ -146,7 +159,7 @@ def bench_pit(
     base_rss = _rss_bytes()
     log(f"{scene.name}: {n_balls:,} balls into a {side:.2f} m bin, {t:g} s at dt = {scene.world.dt:g} s ...")
     t1 = time.perf_counter()
-    sim = Simulation(scene)
+    sim = _scaled_simulation(scene, n)
     setup_s = time.perf_counter() - t1
     times = KernelTimes() if profiling() else None
     LAUNCHES.on, LAUNCHES.calls, LAUNCHES.inside_s = times is None, 0, 0.0
