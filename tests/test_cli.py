@@ -859,7 +859,10 @@ BAD_BENCH_OPTIONS = [
     (("pit", "--every", "5"), "(0, --t]"),  # longer than the pour (--t 4)
     (("pit", "--every", "nan"), "(0, --t]"),
     (("pit", "--t", "0"), "(0, 60]"),
-    (("pit", "--n", "101", "--t", "0.01"), "101 balls do not fit the pit's bin scaled to them"),  # (named ball_pit.toml)
+    (
+        ("pit", "--n", "101", "--t", "0.01"),
+        "101 balls do not fit the pit's bin scaled to them",
+    ),  # (named ball_pit.toml)
 ]
 """(bench and one bad option, a fragment of the allowed range the error must name)."""
 

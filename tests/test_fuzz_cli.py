@@ -346,3 +346,12 @@ def test_a_set_key_that_an_option_replaces_is_refused(argv, last):
     # the option won and the --set did nothing, silently
     code, err = run_cli(argv)
     assert code == 2 and err.strip().splitlines()[-1].startswith(f"ti-golf: error: --set: key {last}"), err
+
+
+def test_trails_without_a_time_to_simulate_are_refused(tmp_path):
+    # the picture came out as it does without --trails: nothing was simulated, so no path was drawn
+    code, err = run_cli(["render", "lab_vacuum", "--out", str(tmp_path / "p.png"), "--trails"])
+    assert code == 2 and err.strip().endswith(
+        "--trails: has no effect without a time to simulate (--t, --steps or --until)"
+    )
+    assert not (tmp_path / "p.png").exists()

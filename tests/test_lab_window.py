@@ -31,6 +31,7 @@ pytestmark = ON_VULKAN  # one worker draws with GGUI at a time (conftest)
         (["lab", "--speed", "nan"], "--speed: must be a number >= 0"),
         (["lab", "--out", ""], "--out: needs a folder name (got an empty path)"),
         (["lab", "--out", "/proc"], "--out: cannot write '/proc/lab.npz'"),
+        (["lab", "--out", __file__], f"--out: {__file__!r} is a file, not a folder"),
     ],
 )
 def test_lab_refuses_bad_input_before_opening_a_window(args, needle, capsys):

@@ -65,6 +65,8 @@ def cmd_lab(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if not args.out.strip():
         raise ConfigError("--out", None, "needs a folder name (got an empty path)")
+    if out.exists() and not out.is_dir():
+        raise ConfigError("--out", None, f"{args.out!r} is a file, not a folder (Save writes several files into it)")
     if not out.is_dir():
         raise ConfigError("--out", None, f"folder {args.out!r} does not exist (Save writes several files into it)")
     check_writable(str(out / "lab.npz"), "--out")
