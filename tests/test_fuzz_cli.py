@@ -355,3 +355,11 @@ def test_trails_without_a_time_to_simulate_are_refused(tmp_path):
         "--trails: has no effect without a time to simulate (--t, --steps or --until)"
     )
     assert not (tmp_path / "p.png").exists()
+
+
+def test_a_set_for_a_saved_run_drawn_as_it_is_is_refused(tmp_path):
+    # a saved run takes only the keys that act on its next steps: drawn without a step, the --set did nothing
+    run = tmp_path / "a.npz"
+    assert run_cli(["run", "lab_vacuum", "--steps", "2", "--out", str(run)])[0] == 0
+    code, err = run_cli(["render", "--resume", str(run), "--set", "air.rho=1", "--out", str(tmp_path / "p.png")])
+    assert code == 2 and "--set: has no effect on a saved run drawn as it is" in err, err

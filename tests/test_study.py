@@ -530,6 +530,7 @@ def test_a_manifest_edited_into_something_else_is_one_error_naming_its_line(tmp_
         ([], {"TI_GOLF_SCHEDULER": "zzz"}, "TI_GOLF_SCHEDULER: no Dask scheduler reached through the address 'zzz'"),
         (["--address", "EMPTY.json"], {}, "holds no scheduler's address (JSON with an 'address')"),
         (["--workers", "100000"], {}, "--workers: must be a whole number in [1, "),
+        (["--gpus", "1"], {}, "--gpus: has no effect: the tasks of flight ask for no GPU"),  # (it ran, exit 0)
     ],
 )
 def test_a_bad_scheduler_address_or_worker_count_is_one_error(tmp_path, options, env, message):

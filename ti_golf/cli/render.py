@@ -72,6 +72,8 @@ def cmd_render(args: argparse.Namespace) -> int:
     else:  # default: the initial state, or up to world.t_end with --until
         duration = args.t if args.t is not None else (sim.scene.world.t_end if args.until else 0.0)
         steps = int(math.ceil(duration / sim.dt - 1e-9))
+    if steps == 0 and args.resume and args.overrides:  # (a saved run takes only keys that act on its next steps)
+        raise ConfigError("--set", None, "has no effect on a saved run drawn as it is: give --t, --steps or --until")
     if steps == 0 and args.trails:  # (nothing is simulated: no path to draw)
         raise ConfigError("--trails", None, "has no effect without a time to simulate (--t, --steps or --until)")
     rec = None

@@ -53,6 +53,8 @@ def cmd_study(args: argparse.Namespace) -> int:
     if args.gpus is not None and args.gpus < 0:
         raise ConfigError("--gpus", None, f"must be >= 0 (got {args.gpus})")
     spec = load_study(args.study, args.overrides)  # bad input before anything starts
+    if args.gpus and not spec.gpu:
+        raise ConfigError("--gpus", None, f"has no effect: the tasks of {spec.name} ask for no GPU (task.gpu = false)")
     if args.lines and len(spec.keys) != 2:
         raise ConfigError(
             "--lines", None, f"draws one line per value of a second varied key; {spec.name} varies {len(spec.keys)}"
