@@ -15,15 +15,13 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 from ti_golf.errors import ConfigError
-from ti_golf.scene.checks import Interval, parse_range, raise_config
+from ti_golf.scene.checks import raise_config
 from ti_golf.scene.keys import Key, read_when_text
 from ti_golf.scene.schema import (
     ARRAY_SCHEMA,
@@ -45,6 +43,7 @@ from ti_golf.scene.schema import (
     World,
 )
 from ti_golf.scene.terrain import load_heights_file
+from ti_golf.scene.values import coerce
 from ti_golf.scene.weather import WEATHER_KEYS, air_from_weather
 
 _SECTION_TYPES = {"air": Air, "ball": Ball, "launch": Launch, "world": World, "contact": Contact, "game": GameConfig}
@@ -53,96 +52,6 @@ _SECTION_TYPES = {"air": Air, "ball": Ball, "launch": Launch, "world": World, "c
 def _suggest(name: str, candidates: Iterable[str]) -> str:
     close = difflib.get_close_matches(name, list(candidates), n=1)
     return f" (did you mean '{close[0]}'?)" if close else ""
-
-
-_LISTS = {
-    "vec3": (3, "a list of 3 numbers{unit}, e.g. [0, 0, 0]"),
-    "vec2": (2, "a list of 2 numbers{unit}, e.g. [1, 1]"),
-    "list2": (2, "a list [min, max] of 2 numbers{unit}"),
-}
-"""Schema kinds that are fixed-length lists of finite numbers: (length, how the error describes them)."""
-
-
-def _coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
-    """Check the type of one value against its schema entry and return it normalised."""
-    kind = key.kind
-    if kind == "float" or kind == "int":
-        value = _coerce_number(value, key, source, dotted)
-    elif kind == "bool":
-        if not isinstance(value, bool):
-            raise_config(source, dotted, f"must be true or false (got {value!r})")
-    elif kind in ("str", "text"):
-        if not isinstance(value, str):
-            raise_config(source, dotted, f"must be a string (got {value!r})")
-    elif kind == "strs":
-        if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
-            raise_config(source, dotted, f"must be a list of strings (got {value!r})")
-        value = tuple(value)
-    elif kind in _LISTS:
-        value = _coerce_numbers(value, key, source, dotted)
-    elif kind == "range":
-        value = parse_range(value if isinstance(value, (list, tuple)) else str(value), source, dotted)
-    problem = _problem(key, value)
-    if problem:
-        raise_config(source, dotted, f"{problem} (got {value!r})")
-    return value
-
-
-def _problem(key: Key, value: Any) -> str | None:
-    """Why ``value`` fails the key's check (``None``: it passes, or the key has none), with the
-    key's unit after an interval that names none: ``must be in [-500, 5000] m``."""
-    problem = key.check(value) if key.check is not None else None
-    if problem and isinstance(key.check, Interval) and not key.check.unit_word and key.unit not in ("-", ""):
-        problem += f" {key.unit}"
-    return problem
-
-
-def _coerce_number(value: Any, key: Key, source: str, dotted: str) -> int | float:
-    """A ``float`` key's value as a finite float, an ``int`` key's as an int (a whole number, within
-    the key's check: the check sees the value as given)."""
-    if isinstance(value, (np.integer, np.floating)):  # (a numpy number from Python)
-        value = value.item()
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise_config(source, dotted, f"must be a number{_unit(key)} (got {value!r})")
-    if key.kind == "int":
-        if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
-            raise_config(source, dotted, f"must be an integer (got {value!r})")
-        problem = _problem(key, value)
-        if problem:
-            raise_config(source, dotted, f"{problem} (got {value!r})")
-        return int(value)
-    number = float(value)
-    if not math.isfinite(number):
-        raise_config(source, dotted, f"must be a finite number (got {number!r})")
-    return number
-
-
-def _coerce_numbers(value: Any, key: Key, source: str, dotted: str) -> tuple[float, ...]:
-    """The value of a key of a fixed-length list kind (:data:`_LISTS`) as a tuple of finite floats."""
-    count, shape = _LISTS[key.kind]
-    if isinstance(value, np.ndarray) and value.ndim == 1 and value.dtype.kind in "iuf":  # (a numpy vector)
-        value = value.tolist()
-    if (
-        not isinstance(value, (list, tuple))
-        or len(value) != count
-        or any(isinstance(c, bool) or not isinstance(c, (int, float)) for c in value)
-    ):
-        raise_config(source, dotted, f"must be {shape.format(unit=_unit(key))} (got {value!r})")
-    numbers = tuple(float(c) for c in value)
-    if not all(math.isfinite(c) for c in numbers):
-        raise_config(source, dotted, f"must hold finite numbers (got {list(numbers)!r})")
-    return numbers
-
-
-def check_value(value: Any, key: Key, source: str, dotted: str) -> Any:
-    """``value`` of the key ``key`` (named ``dotted`` in ``source``) checked and normalised as a
-    scene file's value is (the same one-line errors): for other files declared with the same keys,
-    such as study files (:mod:`ti_golf.study.spec`)."""
-    return _coerce(value, key, source, dotted)
-
-
-def _unit(key: Key) -> str:
-    return f" in {key.unit}" if key.unit not in ("-", "") else ""
 
 
 def parse_override(text: str) -> tuple[str, Any]:
@@ -334,7 +243,7 @@ def _build_top_level(doc: dict[str, Any], source: str, kwargs: dict[str, Any]) -
     for top, value in doc.items():
         if top in TOP_LEVEL:
             src, value = _with_source(value, source)
-            kwargs[top] = _coerce(value, TOP_LEVEL[top], src, top)
+            kwargs[top] = coerce(value, TOP_LEVEL[top], src, top)
             continue
         if top in ARRAY_SCHEMA:
             continue
@@ -361,7 +270,7 @@ def _build_section(
         src, value = _with_source(value, source)
         if name not in keys:
             raise_config(src, dotted, f"is unknown{_suggest(name, keys)}; allowed in [{section}]: " + ", ".join(keys))
-        values[name] = _coerce(value, keys[name], src, dotted)
+        values[name] = coerce(value, keys[name], src, dotted)
         sources[name] = src
     if section == "terrain" and "file" in values and "kind" not in values:
         values["kind"] = "file"  # a heights file names the kind of terrain it is
@@ -425,7 +334,7 @@ def _array_tables(value: Any, name: str, source: str, doc: Mapping[str, Any]) ->
                 raise_config(
                     source, dotted, f"is unknown{_suggest(k, keys)}; allowed in [[{name}]]: " + ", ".join(keys)
                 )
-            values[k] = _coerce(v, keys[k], source, dotted)
+            values[k] = coerce(v, keys[k], source, dotted)
         _refuse_unread(values, keys, f"{name}[{i}]", {}, source, doc)
         out.append(values)
     return out

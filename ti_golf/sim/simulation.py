@@ -15,13 +15,13 @@ from typing import Any, Protocol
 import numpy as np
 import taichi as ti
 
-from ti_golf.errors import ConfigError, SimulationError
+from ti_golf.errors import SimulationError
 from ti_golf.physics import kernels
 from ti_golf.physics.model import Model
 from ti_golf.physics.packs import Packs
 from ti_golf.physics.state import State
-from ti_golf.runtime import available_memory, ensure_init, np_float
-from ti_golf.scene.balls import ball_count, block_size, build_balls
+from ti_golf.runtime import ensure_init, np_float
+from ti_golf.scene.balls import build_balls
 from ti_golf.scene.document import with_changes
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, STATUS_NAMES, Scene
@@ -36,6 +36,7 @@ from ti_golf.sim.changes import (
     refuse_for_given_balls,
     refuse_unread,
 )
+from ti_golf.sim.given import as_vectors, check_memory, per_ball, whole_number
 from ti_golf.sim.results import Flight
 
 
@@ -172,12 +173,12 @@ class Simulation:
             radius = balls.radius if radius is None else radius
             mass = balls.mass if mass is None else mass
             track = balls.track
-        x = _as_vectors(x, "x")
+        x = as_vectors(x, "x")
         n = len(x)
-        v = None if v is None else _as_vectors(v, "v", n)  # None: at rest (no numpy zeros of a big pile)
-        w = None if w is None else _as_vectors(w, "w", n)
-        radius = _per_ball(scene.ball.radius if radius is None else radius, n, "radius")
-        mass = _per_ball(scene.ball.mass if mass is None else mass, n, "mass")
+        v = None if v is None else as_vectors(v, "v", n)  # None: at rest (no numpy zeros of a big pile)
+        w = None if w is None else as_vectors(w, "w", n)
+        radius = per_ball(scene.ball.radius if radius is None else radius, n, "radius")
+        mass = per_ball(scene.ball.mass if mass is None else mass, n, "mass")
         tracking = bool(np.any(track))  # else no flight record is kept (a pile: 96 bytes per ball less in f64)
         self.solver = None  # the old one's arrays go before the new ones are made
         self.model = Model(scene, radius, mass, launch_height=x[:, 1] if tracking else np.zeros(1))
@@ -329,7 +330,7 @@ class Simulation:
 
     def _assign(self, name: str, value: np.ndarray) -> None:
         """Overwrite x, v or w; a changed velocity or spin wakes balls at rest."""
-        arr = _as_vectors(value, name, self.n).astype(np_float())
+        arr = as_vectors(value, name, self.n).astype(np_float())
         if name != "x":
             self._wake()
         self.state.write(name, arr)
@@ -427,7 +428,7 @@ class Simulation:
             arr = np.asarray(value, dtype=np.float64)
             if arr.shape == (3,):
                 arr = np.broadcast_to(arr, (ids.size, 3))
-            arr = _as_vectors(arr, f"{name} of balls {ids.tolist()}", ids.size)
+            arr = as_vectors(arr, f"{name} of balls {ids.tolist()}", ids.size)
             values = self._vectors(name)
             values[ids] = arr
             self.state.write(name, values.astype(np_float()))
@@ -442,7 +443,7 @@ class Simulation:
     def step(self, n: int = 1) -> None:
         """Advance ``n`` time steps (a whole number >= 0); raises SimulationError naming the balls
         that went non-finite."""
-        n = _count(n, "n")
+        n = whole_number(n, "n")
         if n == 0:
             return
         m, s = self.model, self.state
@@ -508,8 +509,8 @@ class Simulation:
         if t is not None and not (isinstance(t, (int, float)) and not isinstance(t, bool) and t >= 0):
             raise ValueError(f"t must be a number of seconds >= 0 (got {t!r})")
         if steps is not None:
-            steps = _count(steps, "steps")
-        record_every, every = _count(record_every, "record_every"), _count(every, "every")
+            steps = whole_number(steps, "steps")
+        record_every, every = whole_number(record_every, "record_every"), whole_number(every, "every")
         if every and on_every is None or on_every is not None and not every:
             raise ValueError("every and on_every go together: on_every(sim) is called every `every` steps")
         if steps is None:
@@ -570,65 +571,3 @@ class Simulation:
 
 UNTIL_DONE = {"rest": "at rest or out of bounds", "landed": "landed"}
 """What a ball is once a run with ``until`` no longer waits for it."""
-
-
-BYTES_PER_BALL = 2048
-"""Peak memory [bytes] a ball of a scene's blocks takes while the simulation is set up and run
-(the balls made in numpy, then the solver's arrays), bounded from the ball pit's (see the docs'
-performance page)."""
-
-
-def check_memory(scene: Scene) -> None:
-    """Refuse a scene whose balls would not fit in the memory available, before making any,
-    naming the scene's file, the balls and the bytes they would need against what there is."""
-    n = ball_count(scene)
-    need = n * BYTES_PER_BALL
-    avail = available_memory()
-    if avail is None or need <= avail:
-        return
-    sizes = [block_size(b) for b in scene.blocks]
-    key = f"blocks[{sizes.index(max(sizes))}]" if sizes else None  # the biggest block
-    raise ConfigError(
-        scene.path or scene.name,
-        key,
-        f"the scene's {n:,} balls would need about {need / 2**30:.1f} GiB of memory "
-        f"({BYTES_PER_BALL} bytes per ball); this machine has {avail / 2**30:.1f} GiB available",
-    )
-
-
-def _as_vectors(a: Any, name: str, n: int | None = None) -> np.ndarray:
-    """``a`` as N vectors of 3 finite numbers, (N, 3) (one vector (3,) for one ball), N >= 1 (or
-    ``n``), or a ValueError naming ``name``."""
-    try:
-        arr = np.asarray(a, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be numbers, shape (N, 3) (got {a!r:.60})") from None
-    if arr.ndim == 1 and arr.shape == (3,):
-        arr = arr[None, :]
-    if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] < 1 or (n is not None and arr.shape[0] != n):
-        want = f"({n}, 3)" if n is not None else "(N, 3)"
-        raise ValueError(f"{name} must have shape {want} (got {arr.shape})")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} holds NaN or infinite values")
-    return arr
-
-
-def _count(value: Any, name: str) -> int:
-    """``value`` as a whole number >= 0 (a float with no fraction, such as 2.0, is one), or a
-    ValueError naming ``name``: a negative or fractional count moved the clock without stepping."""
-    number = isinstance(value, (int, np.integer, float)) and not isinstance(value, bool)
-    if not number or not math.isfinite(value) or value < 0 or value != int(value):
-        raise ValueError(f"{name} must be a whole number >= 0 (got {value!r})")
-    return int(value)
-
-
-def _per_ball(a: Any, n: int, name: str) -> np.ndarray:
-    """Per-ball values (N,) from a scalar or an array, read-only: one number broadcast, when it is
-    one, takes no memory per ball (the model copies what it keeps)."""
-    given = np.asarray(a, dtype=np.float64)
-    if given.shape not in ((), (n,)):
-        raise ValueError(f"{name} must be one number or one per ball, shape ({n},) (got shape {given.shape})")
-    arr = np.broadcast_to(given, (n,))
-    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-        raise ValueError(f"{name} must be finite and > 0 for every ball")
-    return arr

@@ -39,8 +39,9 @@ from ti_golf.scene.checks import POSITIVE, Interval, OneOf, parse_range, raise_c
 from ti_golf.scene.document import scene_document
 from ti_golf.scene.jsonschema import DIALECT, key_schema
 from ti_golf.scene.keys import Key, key, keys_of, read_when_text
-from ti_golf.scene.loader import check_value, load_scene, parse_override, read_toml, resolve_scene_path, scenes_dir
+from ti_golf.scene.loader import load_scene, parse_override, read_toml, resolve_scene_path, scenes_dir
 from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
+from ti_golf.scene.values import check_value
 from ti_golf.study.figures import FIGURES, KINDS, default_figures
 
 MAX_TASKS = 100_000

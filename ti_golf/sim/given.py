@@ -1,0 +1,76 @@
+"""What a :class:`~ti_golf.sim.simulation.Simulation` is given, checked before anything is made:
+the memory a scene's balls need, the balls' vectors and per-ball numbers, and step counts. Each
+refusal names the argument (a ValueError) or the scene's file and block (a ConfigError)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ti_golf.errors import ConfigError
+from ti_golf.runtime import available_memory
+from ti_golf.scene.balls import ball_count, block_size
+from ti_golf.scene.schema import Scene
+
+BYTES_PER_BALL = 2048
+"""Peak memory [bytes] a ball of a scene's blocks takes while the simulation is set up and run
+(the balls made in numpy, then the solver's arrays), bounded from the ball pit's (see the docs'
+performance page)."""
+
+
+def check_memory(scene: Scene) -> None:
+    """Refuse a scene whose balls would not fit in the memory available, before making any,
+    naming the scene's file, the balls and the bytes they would need against what there is."""
+    n = ball_count(scene)
+    need = n * BYTES_PER_BALL
+    avail = available_memory()
+    if avail is None or need <= avail:
+        return
+    sizes = [block_size(b) for b in scene.blocks]
+    key = f"blocks[{sizes.index(max(sizes))}]" if sizes else None  # the biggest block
+    raise ConfigError(
+        scene.path or scene.name,
+        key,
+        f"the scene's {n:,} balls would need about {need / 2**30:.1f} GiB of memory "
+        f"({BYTES_PER_BALL} bytes per ball); this machine has {avail / 2**30:.1f} GiB available",
+    )
+
+
+def as_vectors(a: Any, name: str, n: int | None = None) -> np.ndarray:
+    """``a`` as N vectors of 3 finite numbers, (N, 3) (one vector (3,) for one ball), N >= 1 (or
+    ``n``), or a ValueError naming ``name``."""
+    try:
+        arr = np.asarray(a, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be numbers, shape (N, 3) (got {a!r:.60})") from None
+    if arr.ndim == 1 and arr.shape == (3,):
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] < 1 or (n is not None and arr.shape[0] != n):
+        want = f"({n}, 3)" if n is not None else "(N, 3)"
+        raise ValueError(f"{name} must have shape {want} (got {arr.shape})")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} holds NaN or infinite values")
+    return arr
+
+
+def whole_number(value: Any, name: str) -> int:
+    """``value`` as a whole number >= 0 (a float with no fraction, such as 2.0, is one), or a
+    ValueError naming ``name``: a negative or fractional count moved the clock without stepping."""
+    number = isinstance(value, (int, np.integer, float)) and not isinstance(value, bool)
+    if not number or not math.isfinite(value) or value < 0 or value != int(value):
+        raise ValueError(f"{name} must be a whole number >= 0 (got {value!r})")
+    return int(value)
+
+
+def per_ball(a: Any, n: int, name: str) -> np.ndarray:
+    """Per-ball values (N,) from a scalar or an array, read-only: one number broadcast, when it is
+    one, takes no memory per ball (the model copies what it keeps)."""
+    given = np.asarray(a, dtype=np.float64)
+    if given.shape not in ((), (n,)):
+        raise ValueError(f"{name} must be one number or one per ball, shape ({n},) (got shape {given.shape})")
+    arr = np.broadcast_to(given, (n,))
+    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise ValueError(f"{name} must be finite and > 0 for every ball")
+    return arr
