@@ -134,6 +134,11 @@ def scene_or_saved_run(args: argparse.Namespace, command: str) -> Simulation:
     return sim
 
 
+def set_key(text: str) -> str:
+    """The KEY of a ``--set KEY=VALUE`` text, as the scene loader reads it."""
+    return text.split("=", 1)[0].strip()
+
+
 class _SetOnce(argparse.Action):
     """``--set KEY=VALUE`` appended to the list ``dest``; the same KEY twice is a
     :class:`ConfigError` (the first value would have no effect)."""
@@ -142,8 +147,8 @@ class _SetOnce(argparse.Action):
         self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, value: Any, option: Any = None
     ) -> None:
         given = list(getattr(namespace, self.dest) or [])
-        key = str(value).split("=", 1)[0].strip()
-        if key and any(text.split("=", 1)[0].strip() == key for text in given):
+        key = set_key(str(value))
+        if key and any(set_key(text) == key for text in given):
             raise ConfigError("--set", key, "is given twice: give it once")
         setattr(namespace, self.dest, [*given, value])
 
@@ -181,16 +186,22 @@ def refuse_without(
     """A key without effect is an error: each option of ``options`` (``dest`` → its flag) given
     another value than its default (``parser_defaults``) while none of what it ``needs`` (words
     naming the options, which the caller found absent) is given."""
+    refuse_given(args, parser_defaults, options, f"without {needs}")
+
+
+def refuse_given(args: argparse.Namespace, parser_defaults: dict[str, Any], options: dict[str, str], why: str) -> None:
+    """Each option of ``options`` (``dest`` → its flag) given another value than its default
+    (``parser_defaults``) is refused: it "has no effect ``why``"."""
     for dest, flag in options.items():
         if getattr(args, dest) != parser_defaults[dest]:
-            raise ConfigError(flag, None, f"has no effect without {needs}")
+            raise ConfigError(flag, None, f"has no effect {why}")
 
 
 def refuse_replaced(overrides: list[str] | None, replaced: dict[str, str]) -> None:
     """A ``--set`` of a key that the command replaces has no effect, so it is refused: ``replaced``
     maps each such key to what replaces it (an option given, or the command's own values)."""
     for text in overrides or ():
-        key = text.split("=", 1)[0].strip()
+        key = set_key(text)
         if key in replaced:
             raise ConfigError("--set", key, f"has no effect with {replaced[key]}")
 

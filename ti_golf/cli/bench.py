@@ -12,7 +12,7 @@ from ti_golf.bench.pit import PIT_BALLS, bench_pit
 from ti_golf.bench.render import bench_render
 from ti_golf.bench.startup import bench_startup, profile_lines, scene_names, start_profile
 from ti_golf.bench.sweep import bench_sweep
-from ti_golf.cli._common import Parser, runtime_options, set_option
+from ti_golf.cli._common import Parser, refuse_given, runtime_options, set_option
 from ti_golf.errors import ConfigError
 from ti_golf.scene.loader import load_scene
 
@@ -141,10 +141,8 @@ def cmd_startup(args: argparse.Namespace) -> int:
     if args.top is not None and args.top < 1:
         raise ConfigError("--top", None, f"must be >= 1 kernels (got {args.top})")
     if args.kernels:
-        refuse_without_kernels = {"scenes": "--scenes", "repeats": "--repeats"}
-        for dest, flag in refuse_without_kernels.items():
-            if getattr(args, dest) != {"scenes": None, "repeats": 1}[dest]:
-                raise ConfigError(flag, None, "has no effect with --kernels (one profiled run of its scene)")
+        unused = {"scenes": "--scenes", "repeats": "--repeats"}
+        refuse_given(args, {"scenes": None, "repeats": 1}, unused, "with --kernels (one profiled run of its scene)")
         args.cache = args.cache or "warm"
         if args.cache == "both":
             raise ConfigError("--cache", None, "with --kernels: warm or cold (one profiled run)")
