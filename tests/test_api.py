@@ -282,12 +282,12 @@ def test_outputs_are_written_whole_or_not_at_all(tmp_path, monkeypatch):
 def test_a_scene_too_big_for_the_memory_is_refused_before_any_ball_is_made(tmp_path, monkeypatch):
     # 27 million balls at 2 KiB each need 51.5 GiB: refused naming the file, the block, the bytes
     # needed and the bytes available, before numpy or Taichi allocate anything
-    from ti_golf.sim import simulation
+    from ti_golf.sim import given, simulation
 
     path = tmp_path / "big.toml"
     path.write_text("[[blocks]]\ncount = [300, 300, 300]\n[world]\ncollisions = true\n", encoding="utf-8")
     scene = tg.load_scene(path)
-    monkeypatch.setattr(simulation, "available_memory", lambda: 24 * 2**30)
+    monkeypatch.setattr(given, "available_memory", lambda: 24 * 2**30)
     monkeypatch.setattr(simulation, "build_balls", lambda s: pytest.fail("balls made"))
     with pytest.raises(tg.ConfigError) as err:
         tg.Simulation(scene)
