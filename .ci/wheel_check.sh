@@ -12,6 +12,7 @@ wheel="$(ls "$work"/dist/ti_golf-*.whl)"
 # writer's broken pipe would fail the check on a wheel that is fine.
 "$python" -m zipfile -l "$wheel" > "$work/wheel.txt"
 grep -q "ti_golf/scene/data/ball_pit.toml" "$work/wheel.txt" || { echo "wheel-check: no scenes in $wheel"; exit 1; }
+grep -q "ti_golf/scene/data/studies/repose.toml" "$work/wheel.txt" || { echo "wheel-check: no studies in $wheel"; exit 1; }
 "$python" -m venv "$work/venv"
 "$work/venv/bin/pip" install --quiet "$wheel"
 cd "$work"  # outside the checkout: nothing of it is importable from here
