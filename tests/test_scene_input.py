@@ -58,6 +58,19 @@ def edit_scene(section: str, key: str, value: str, text: str | None = None) -> s
     return "\n".join(lines) + "\n"
 
 
+def toml_text(doc: dict) -> str:
+    """A scene document of top-level strings, tables and arrays of tables as TOML text."""
+    from ti_golf.scene.keys import toml_value
+
+    lines = [f"{k} = {toml_value(v)}" for k, v in doc.items() if not isinstance(v, (dict, list))]
+    for name, value in doc.items():
+        tables = [(f"[{name}]", value)] if isinstance(value, dict) else []
+        tables += [(f"[[{name}]]", t) for t in value] if isinstance(value, list) else []
+        for header, table in tables:
+            lines += [header] + [f"{k} = {toml_value(v)}" for k, v in table.items()]
+    return "\n".join(lines) + "\n"
+
+
 def write_scene(tmp_path: Path, text: str, name: str = "scene.toml") -> Path:
     path = tmp_path / name
     path.write_text(text, encoding="utf-8")
@@ -223,6 +236,70 @@ def test_every_key_that_its_setting_leaves_unread_is_refused(tmp_path):
             ti_golf.load_scene("s.toml", data=doc)
         text = str(err.value)
         assert err.value.key == where and "is only read when" in text and other.split(".")[-1] in text, text
+
+
+def test_keys_read_under_other_tables_are_refused_where_those_leave_them_unread(tmp_path):
+    # world.ground_height places the ground plane, measures the log wind's heights and rests a
+    # launched ball on the ground; with none of the three it does nothing. contact.turf shapes
+    # impacts on a ground, and does nothing without one.
+    balls = [{"position": [0.0, 1.0, 0.0]}, {"position": [1.0, 1.0, 0.0]}]
+    unread = {
+        "world.ground_height": {"world": {"ground": False, "ground_height": 1.0}, "balls": balls},
+        "world.ground_height ": {
+            "world": {"ground_height": 1.0},
+            "planes": [{"point": [0.0, 0.0, 0.0], "normal": [0.0, 1.0, 0.0]}],
+            "launch": {"position": [0.0, 0.1, 0.0]},
+        },
+        "contact.turf": {"world": {"ground": False}, "contact": {"turf": True}, "balls": balls},
+    }
+    for dotted, doc in unread.items():
+        path = write_scene(tmp_path, toml_text({"description": "t", **doc}))
+        with pytest.raises(ConfigError) as err:
+            ti_golf.load_scene(path)
+        assert err.value.key == dotted.strip() and "is only read when" in str(err.value), str(err.value)
+        assert err.value.source == str(path)
+    read = [
+        {"world": {"ground_height": 1.0}, "balls": balls},  # the ground plane
+        {"world": {"ground": False, "ground_height": 1.0}, "air": {"wind_profile": "log"}, "balls": balls},
+        {"world": {"ground": False, "ground_height": 1.0}, "launch": {"speed": 10.0}},  # rests on it
+        {
+            "world": {"ground": False},
+            "contact": {"turf": True},
+            "balls": balls,
+            "planes": [{"point": [0.0, 0.0, 0.0], "normal": [0.0, 1.0, 0.0]}],
+        },
+    ]
+    for doc in read:
+        ti_golf.load_scene("s.toml", data={"description": "t", **doc})
+    # the command line's --set is named as the source, and exits with code 2
+    path = write_scene(tmp_path, toml_text({"description": "t", "world": {"ground": False}, "balls": balls}))
+    with pytest.raises(ConfigError) as err:
+        ti_golf.load_scene(path, ["world.ground_height=2"])
+    assert err.value.source == "--set" and err.value.key == "world.ground_height"
+    res = run_cli("run", str(path), "--steps", "1", "--set", "contact.turf=true")
+    assert res.returncode == 2 and "contact.turf" in res.stderr and "Traceback" not in res.stderr
+
+
+def test_a_change_that_leaves_a_key_read_across_tables_unread_drops_it():
+    # the launched ball rests on the ground at ground_height; once it is placed, the key is read by
+    # nothing (no ground plane, no log wind), so a change that places it takes the key back to its
+    # default, as changes do with the keys a read_when setting leaves unread
+    from ti_golf.scene.document import scene_document, with_changes
+
+    scene = ti_golf.load_scene(
+        "s.toml", data={"description": "t", "world": {"ground": False, "ground_height": 1.5}, "launch": {}}
+    )
+    assert scene.world.ground_height == 1.5 and scene_document(scene)["world"]["ground_height"] == 1.5
+    placed = with_changes(scene, {"launch.position": [0.0, 3.0, 0.0]})
+    assert placed.world.ground_height == 0.0 and "ground_height" not in scene_document(placed)["world"]
+    kept = with_changes(scene, {"launch.speed": 20.0})  # still resting on the ground: kept
+    assert kept.world.ground_height == 1.5
+    from ti_golf.lab.params import parameters  # the lab shows it unread, so it cannot be changed
+
+    def shown_read(s):
+        return next(p.read for p in parameters(s) if p.key == "world.ground_height")
+
+    assert shown_read(scene) and not shown_read(placed)
 
 
 @pytest.mark.parametrize("case", list(BAD_VALUES), ids=list(BAD_VALUES))

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ti_golf.scene.across import read_across
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.checks import Interval, OneOf
 from ti_golf.scene.keys import Key, help_text, is_read
@@ -211,7 +212,7 @@ def _parameter(scene: Scene, table: str, obj: Any, k: Key) -> Parameter:
         help_text(k),
         k.allowed,
         value,
-        is_read(k, obj, scene),
+        is_read(k, obj, scene) and read_across(dotted, scene),
         at_t0(dotted),
         choices,
         low,

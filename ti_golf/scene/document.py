@@ -13,6 +13,7 @@ import os
 from collections.abc import Iterable, Mapping
 from typing import Any
 
+from ti_golf.scene.across import READ_ACROSS, read_across
 from ti_golf.scene.keys import Key, is_read
 from ti_golf.scene.loader import load_scene, parse_override
 from ti_golf.scene.schema import ARRAY_SCHEMA, SCHEMA, TOP_LEVEL, Scene
@@ -37,7 +38,7 @@ def scene_document(scene: Scene) -> dict[str, Any]:
         table = getattr(scene, section)
         if table is None:
             continue
-        values = _table(table, keys, scene)
+        values = _table(table, keys, scene, section)
         if section == "world":
             values["ground"] = scene.world.ground
         if section == "air":
@@ -49,7 +50,7 @@ def scene_document(scene: Scene) -> dict[str, Any]:
     for name, keys in ARRAY_SCHEMA.items():
         tables = getattr(scene, name)
         if tables:
-            doc[name] = [_table(t, keys, scene) for t in tables]
+            doc[name] = [_table(t, keys, scene, name) for t in tables]
     return doc
 
 
@@ -81,8 +82,27 @@ def with_changes(scene: Scene, changes: Mapping[str, Any] | Iterable[str]) -> Sc
     items = dict(changes) if isinstance(changes, Mapping) else dict(parse_override(text) for text in changes)
     doc = scene_document(scene)
     _drop_unread(doc, items)
+    kept = _set_across(doc, items)
     changed = load_scene(scene.path or None, items, data=doc)
+    if kept:  # each put back where the changed scene still reads it (their reading never depends on them)
+        for dotted, value in kept.items():
+            if read_across(dotted, changed):
+                table, name = dotted.split(".")
+                doc[table][name] = value
+        changed = load_scene(scene.path or None, items, data=doc)
     return dataclasses.replace(changed, name=scene.name, path=scene.path)
+
+
+def _set_across(doc: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
+    """Take out of ``doc`` and return each key of :data:`~ti_golf.scene.across.READ_ACROSS` that it
+    sets and ``changes`` do not, by dotted name: the changes may leave it unread."""
+    kept = {}
+    for dotted in READ_ACROSS:
+        table, name = dotted.split(".")
+        given = doc.get(table)
+        if dotted not in changes and isinstance(given, dict) and name in given:
+            kept[dotted] = given.pop(name)
+    return kept
 
 
 def _drop_unread(doc: dict[str, Any], changes: dict[str, Any]) -> None:
@@ -107,12 +127,15 @@ def _drop_unread(doc: dict[str, Any], changes: dict[str, Any]) -> None:
                 del table[name]
 
 
-def _table(obj: Any, keys: dict[str, Key], scene: Scene) -> dict[str, Any]:
-    """The keys of one table (a dataclass of ``keys``) that are set and read."""
+def _table(obj: Any, keys: dict[str, Key], scene: Scene, section: str) -> dict[str, Any]:
+    """The keys of one table (a dataclass of ``keys``, the table ``section`` of the scene) that are
+    set and read (:func:`~ti_golf.scene.keys.is_read`, :func:`~ti_golf.scene.across.read_across`)."""
     out = {}
     for name, key in keys.items():
         value = getattr(obj, name)
-        if value is None or (value == key.default and not key.required) or not is_read(key, obj, scene):
+        if value is None or (value == key.default and not key.required):
+            continue
+        if not (is_read(key, obj, scene) and read_across(f"{section}.{name}", scene)):
             continue
         out[name] = _plain(value)
     return out

@@ -21,6 +21,7 @@ else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 from ti_golf.errors import ConfigError
+from ti_golf.scene.across import READ_ACROSS, read_across, unread_text
 from ti_golf.scene.checks import raise_config
 from ti_golf.scene.keys import Key, read_when_text
 from ti_golf.scene.schema import (
@@ -226,7 +227,20 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
     if (kwargs["planes"] or kwargs.get("terrain") is not None) and "ground" not in doc.get("world", {}):
         world = kwargs.get("world", World())
         kwargs["world"] = World(**{**world.__dict__, "ground": False})
-    return Scene(**kwargs)
+    scene = Scene(**kwargs)
+    _refuse_unread_across(doc, scene, source)
+    return scene
+
+
+def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str) -> None:
+    """Refuse each key of :data:`~ti_golf.scene.across.READ_ACROSS` that the document sets and
+    the ``scene`` built from it leaves unread (``world.ground_height`` without a ground plane,
+    log wind or a launch resting on the ground): a key never silently does nothing."""
+    for dotted in READ_ACROSS:
+        table, name = dotted.split(".")
+        given = doc.get(table)
+        if isinstance(given, dict) and name in given and not read_across(dotted, scene):
+            raise_config(_with_source(given[name], source)[0], dotted, unread_text(dotted))
 
 
 def _with_source(value: Any, source: str) -> tuple[str, Any]:

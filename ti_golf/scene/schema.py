@@ -125,7 +125,13 @@ class World:
     collisions: bool = key(
         "bool", True, "-", "ball–ball collisions (hash grid + impulses) when there are several balls"
     )
-    ground_height: float = key("float", 0.0, "m", "height of the ground plane")
+    ground_height: float = key(
+        "float",
+        0.0,
+        "m",
+        "height of the ground plane, of a [launch] ball resting on the ground and of the log wind "
+        "profile's zero (read only when one of the three is in the scene)",
+    )
     v_rest: float = key(
         "float",
         0.01,
