@@ -122,7 +122,8 @@ def test_keys_prints_every_schema_key_with_its_unit(keys_output):
     # spot checks against the SI units the scenes are written in
     assert rows["air.C_D"][1] == "-"
     assert rows["contact.k_p"][1] == "-" and rows["contact.k_p"][3] == "[0, 1]"
-    assert rows["world.dt"][1] == "s" and rows["world.dt"][3] == "> 0"
+    assert rows["world.dt"][1] == "s" and rows["world.dt"][3] == "(0, 1]"
+    assert rows["air.wind"][3] == "each in [-1000, 1000]"
     assert rows["ball.mass"][1] == "kg"
     assert rows["air.wind"][1] == "m/s" and rows["air.wind"][2] == "`[0, 0, 0]`"
     assert rows["air.gamma"][3] == "1 or 2"

@@ -167,7 +167,7 @@ CASES = {
     "a bad scene key": (
         lambda d, m: m["scene"]["world"].update(dt=-1.0),
         "run",
-        "its scene: key 'world.dt' must be > 0",
+        "its scene: key 'world.dt' must be in (0, 1] s",
     ),
     "upper too wide": (
         _set("solver.upper", lambda a: np.zeros((a.shape[0], a.shape[1] + 1), np.int32)),
@@ -338,7 +338,9 @@ def test_the_console_command_refuses_a_cut_file_in_one_line(base, tmp_path):
 
 def test_the_scene_of_a_saved_run_is_checked_as_a_scene_file(base, tmp_path):
     path = edited(base, tmp_path, lambda data, meta: meta["scene"]["air"].update(rho=-1.0))
-    with pytest.raises(tg.ConfigError, match=r"edited\.npz: entry 'run', its scene: key 'air\.rho' must be >= 0"):
+    with pytest.raises(
+        tg.ConfigError, match=r"edited\.npz: entry 'run', its scene: key 'air\.rho' must be in \[0, 1000\] kg"
+    ):
         tg.Simulation.load(path)
 
 

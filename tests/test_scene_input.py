@@ -148,19 +148,19 @@ BAD_VALUES = {
     "nan_gamma": ("air", "gamma", "nan", "air.gamma", ["integer"]),
     "nan_in_sweep_list": ("sweep", "angles", "[36, nan]", "sweep.angles", ["finite"]),
     # out of range
-    "mass_zero": ("ball", "mass", "0", "ball.mass", ["> 0", "0.0"]),
-    "dt_negative_with_its_unit": ("world", "dt", "-1", "world.dt", ["must be > 0 s (got -1.0)"]),
+    "mass_zero": ("ball", "mass", "0", "ball.mass", [">= 1e-06 kg", "0.0"]),
+    "dt_negative_with_its_unit": ("world", "dt", "-1", "world.dt", ["must be in (0, 1] s (got -1.0)"]),
     "altitude_with_its_unit": ("air", "altitude", "6000", "air.altitude", ["must be in [-500, 5000] m (got 6000.0)"]),
-    "mass_negative": ("ball", "mass", "-0.045", "ball.mass", ["> 0", "-0.045"]),
-    "radius_zero": ("ball", "radius", "0.0", "ball.radius", ["> 0"]),
-    "radius_negative": ("ball", "radius", "-0.02", "ball.radius", ["> 0", "-0.02"]),
+    "mass_negative": ("ball", "mass", "-0.045", "ball.mass", [">= 1e-06 kg", "-0.045"]),
+    "radius_zero": ("ball", "radius", "0.0", "ball.radius", ["in (0, 10] m"]),
+    "radius_negative": ("ball", "radius", "-0.02", "ball.radius", ["in (0, 10] m", "-0.02"]),
     "e_above_1": ("contact", "e", "1.5", "contact.e", ["[0, 1]", "1.5"]),
     "e_negative": ("contact", "e", "-0.1", "contact.e", ["[0, 1]", "-0.1"]),
     "mu_negative": ("contact", "mu", "-0.1", "contact.mu", [">= 0", "-0.1"]),
     "k_p_negative": ("contact", "k_p", "-0.01", "contact.k_p", ["[0, 1]"]),
     "k_p_above_1": ("contact", "k_p", "1.01", "contact.k_p", ["[0, 1]", "1.01"]),
-    "dt_zero": ("world", "dt", "0.0", "world.dt", ["> 0"]),
-    "dt_negative": ("world", "dt", "-0.01", "world.dt", ["> 0", "-0.01"]),
+    "dt_zero": ("world", "dt", "0.0", "world.dt", ["in (0, 1] s"]),
+    "dt_negative": ("world", "dt", "-0.01", "world.dt", ["in (0, 1] s", "-0.01"]),
     "gamma_3": ("air", "gamma", "3", "air.gamma", ["1, 2", "3"]),
     "gamma_0": ("air", "gamma", "0", "air.gamma", ["1, 2"]),
     "angle_above_90": ("launch", "angle_deg", "100", "launch.angle_deg", ["[-90, 90] degrees"]),
@@ -278,6 +278,44 @@ def test_keys_read_under_other_tables_are_refused_where_those_leave_them_unread(
     assert err.value.source == "--set" and err.value.key == "world.ground_height"
     res = run_cli("run", str(path), "--steps", "1", "--set", "contact.turf=true")
     assert res.returncode == 2 and "contact.turf" in res.stderr and "Traceback" not in res.stderr
+
+
+OVERFLOWING = {
+    "launch.speed": 1e200,
+    "launch.spin": [0.0, 0.0, 1e200],
+    "air.wind": [1e200, 0.0, 0.0],
+    "air.rho": 1e200,
+    "air.C_D": 1e200,
+    "world.gravity": [0.0, -1e200, 0.0],
+    "world.dt": 1e200,
+    "ball.mass": 1e-200,
+    "ball.radius": 1e200,
+}
+"""Values that the keys' old bounds (>= 0, > 0, none) allowed and that overflowed in the first
+steps, each ending the run with "went non-finite" (exit code 3) instead of naming the key."""
+
+
+def test_values_that_overflow_the_arithmetic_are_refused_and_the_limits_themselves_fly():
+    for dotted, value in OVERFLOWING.items():
+        with pytest.raises(ConfigError) as err:
+            ti_golf.load_scene("lab_magnus", {dotted: value})
+        assert err.value.key == dotted and "must be" in str(err.value), str(err.value)
+    res = run_cli("run", "lab_magnus", "--steps", "1", "--set", "launch.speed=1e200")
+    assert res.returncode == 2 and "launch.speed" in res.stderr and "[0, 1000] m/s" in res.stderr, res.stderr
+    # at a limit, alone, the ball flies with finite numbers (larger steps still blow up, as any
+    # explicit step does: that is world.dt's error, "went non-finite; try a smaller world.dt")
+    from ti_golf.scene.checks import GRAVITY_LIMIT, SPEED_LIMIT, SPIN_LIMIT
+
+    at_limits = {
+        "launch.speed": SPEED_LIMIT,
+        "launch.spin": [SPIN_LIMIT, -SPIN_LIMIT, SPIN_LIMIT],
+        "air.wind": [-SPEED_LIMIT, SPEED_LIMIT, SPEED_LIMIT],
+        "world.gravity": [GRAVITY_LIMIT, -GRAVITY_LIMIT, GRAVITY_LIMIT],
+    }
+    for dotted, value in at_limits.items():
+        sim = ti_golf.Simulation(ti_golf.load_scene("lab_magnus", {dotted: value, "world.dt": 1e-4}))
+        sim.step(20)
+        assert np.isfinite(sim.x).all() and np.isfinite(sim.v).all(), dotted
 
 
 def test_a_change_that_leaves_a_key_read_across_tables_unread_drops_it():

@@ -314,7 +314,8 @@ def test_every_process_of_the_local_cluster_listens_on_127_0_0_1_only():
 def test_a_failing_task_records_its_error_and_the_others_go_on(tmp_path):
     text = (
         'scene = "lab_turbulent"\n[task]\nkind = "run"\nuntil = "landed"\nfigures = ["carry"]\n'
-        '[[points]]\n"launch.speed" = 40.0\n[[points]]\n"launch.speed" = 1e200\n[[points]]\n"launch.speed" = 50.0\n'
+        '[[points]]\n"launch.speed" = 40.0\n[[points]]\n"launch.speed" = 45.0\n"air.rho" = 1000.0\n"air.C_D" = 100.0\n'
+        '[[points]]\n"launch.speed" = 50.0\n'
     )
     path = write(tmp_path, "fails.toml", text)
     done = run_cli("study", str(path), "--out", str(tmp_path / "out"), "--workers", "2")

@@ -48,7 +48,9 @@ def cmd_tour(args: argparse.Namespace) -> int:
     refuse_replaced(args.overrides, {f"launch.{k}": rows for k in ("speed", "angle_deg", "direction_deg", "spin")})
     scene = load_scene(args.scene, args.overrides)
     if scene.launch is None:  # the rows launch from the scene's launch point
-        raise ConfigError(scene.path, "launch", "is required: the tour rows are launched as the scene's [launch] table says")
+        raise ConfigError(
+            scene.path, "launch", "is required: the tour rows are launched as the scene's [launch] table says"
+        )
     t0 = time.perf_counter()
     flight = fly_tour(scene, ROWS[args.rows])
     elapsed = time.perf_counter() - t0
@@ -72,7 +74,9 @@ def cmd_fit_aero(args: argparse.Namespace) -> int:
     print them (as scene keys too) and the fitted model on every row; 0."""
     scene = load_scene(args.scene, args.overrides)
     if scene.launch is None:
-        raise ConfigError(scene.path, "launch", "is required: the tour rows are launched as the scene's [launch] table says")
+        raise ConfigError(
+            scene.path, "launch", "is required: the tour rows are launched as the scene's [launch] table says"
+        )
     if scene.air.gamma != 2:
         raise ConfigError(scene.path, "air.gamma", 'must be 2 to fit air.model = "spin_reynolds" (turbulent drag)')
     air = scene.air

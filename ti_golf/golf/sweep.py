@@ -116,7 +116,9 @@ def launch_grid(
     scene's spin is zero). Returns (angle_deg, speed, spin, x0, v0, w0), the last three (N, 3).
     """
     if scene.launch is None:
-        raise ConfigError(scene.path, "launch", "is required: a sweep launches its balls as the scene's [launch] table says")
+        raise ConfigError(
+            scene.path, "launch", "is required: a sweep launches its balls as the scene's [launch] table says"
+        )
     L = scene.launch
     angles = np.asarray(angles_deg if angles_deg is not None else (scene.sweep.angles or (L.angle_deg,)), float)
     speeds_ = np.asarray(speeds if speeds is not None else (scene.sweep.speeds or (L.speed,)), float)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ti_golf.scene.checks import NON_NEGATIVE, POSITIVE, UNIT_INTERVAL, Interval, OneOf
+from ti_golf.scene.checks import NON_NEGATIVE, POSITIVE, UNIT_INTERVAL, VELOCITY, Interval, OneOf
 from ti_golf.scene.keys import key
 
 Vec3 = tuple[float, float, float]
@@ -34,13 +34,18 @@ class Air:
         "kg/m^3",
         "air density ρ (set from the weather instead when a weather key is given: air.temperature, "
         "air.pressure, air.altitude, air.humidity)",
-        NON_NEGATIVE,
+        Interval(0.0, 1000.0),
     )
     gamma: int = key(
         "int", 2, "-", "flow type γ: 1 laminar (drag ∝ v), 2 turbulent (drag ∝ v²)", OneOf((1, 2)), "1 or 2"
     )
     C_D: float = key(
-        "float", 0.3, "-", "drag coefficient; k_D = ½ρA·C_D (L.22)", NON_NEGATIVE, read_when=("model", ("lab",))
+        "float",
+        0.3,
+        "-",
+        "drag coefficient; k_D = ½ρA·C_D (L.22)",
+        Interval(0.0, 100.0),
+        read_when=("model", ("lab",)),
     )
     C_M: float = key(
         "float",
@@ -71,6 +76,7 @@ class Air:
         (0.0, 0.0, 0.0),
         "m/s",
         "the wind (with wind_profile = log: at the height wind_height); forces use v_rel = v − wind (L.21–L.23)",
+        VELOCITY,
     )
     wind_profile: str = key(
         "str",

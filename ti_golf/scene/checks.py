@@ -100,7 +100,9 @@ class Each:
 
     @property
     def allowed(self) -> str:
-        """The allowed values of each number: ``[> 0, > 0]``."""
+        """The allowed values of each number: ``[> 0, > 0]``; of a vector, ``each in [-1, 1]``."""
+        if self.n == 3:
+            return f"each in {self.interval.allowed}"
         return "[" + ", ".join([self.interval.allowed] * self.n) + "]"
 
     def json_schema(self) -> dict[str, Any]:
@@ -179,12 +181,26 @@ class NonZero:
         return {}
 
 
+SPEED_LIMIT = 1000.0
+"""The largest speed [m/s] a scene may give a ball or the wind, on each axis: about three times the
+speed of sound (a driven golf ball leaves at 70–80 m/s), where the drag and lift laws, all for
+subsonic flight, have long stopped holding; far larger speeds overflow the drag."""
+SPIN_LIMIT = 1.0e5
+"""The largest spin [rad/s] a scene may give a ball, on each axis: ten times the fastest a golf
+ball is ever spun (a wedge's 10,000 rpm is about 1,050 rad/s)."""
+GRAVITY_LIMIT = 1000.0
+"""The largest gravitational acceleration [m/s²] on each axis: about 100 g."""
+
 POSITIVE = Interval(0.0, lo_open=True)
 """v > 0"""
 NON_NEGATIVE = Interval(0.0)
 """v ≥ 0"""
 UNIT_INTERVAL = Interval(0.0, 1.0)
 """0 ≤ v ≤ 1"""
+VELOCITY = Each(Interval(-SPEED_LIMIT, SPEED_LIMIT), 3)
+"""A velocity [m/s] within :data:`SPEED_LIMIT` on each axis."""
+SPIN = Each(Interval(-SPIN_LIMIT, SPIN_LIMIT), 3)
+"""An angular velocity [rad/s] within :data:`SPIN_LIMIT` on each axis."""
 
 
 def angle(limit: float) -> Interval:

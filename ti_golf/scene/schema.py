@@ -35,9 +35,13 @@ from ti_golf.scene.air import (
     Air as Air,
 )
 from ti_golf.scene.checks import (
+    GRAVITY_LIMIT,
     NON_NEGATIVE,
     POSITIVE,
+    SPEED_LIMIT,
+    SPIN,
     UNIT_INTERVAL,
+    VELOCITY,
     Each,
     Interval,
     MinMax,
@@ -50,6 +54,13 @@ from ti_golf.scene.checks import parse_range as parse_range  # re-exported: the 
 from ti_golf.scene.keys import REQUIRED, Key, key, keys_of
 
 Vec3 = tuple[float, float, float]
+
+MASS = Interval(1.0e-6)
+"""A ball's mass [kg]: at least a milligram (a golf ball is 45.93 g at most); far lighter balls
+overflow the drag's acceleration."""
+RADIUS = Interval(0.0, 10.0, lo_open=True)
+"""A ball's radius [m]: up to a boulder's 10 m (a golf ball's is 21.3 mm); far larger radii
+overflow the drag's cross-section."""
 
 #: Ball status codes stored per ball (``State.status``).
 FLYING, ROLLING, AT_REST, OUT_OF_BOUNDS = 0, 1, 2, 3
@@ -78,19 +89,19 @@ SLOPE_LIMIT = 100.0
 class Ball:
     """Properties of the default ball [kg, m]."""
 
-    mass: float = key("float", 0.045, "kg", "ball mass m", POSITIVE)
-    radius: float = key("float", 0.02, "m", "ball radius R (cross-section A = πR²)", POSITIVE)
+    mass: float = key("float", 0.045, "kg", "ball mass m", MASS)
+    radius: float = key("float", 0.02, "m", "ball radius R (cross-section A = πR²)", RADIUS)
 
 
 @dataclass(frozen=True)
 class Launch:
     """One launched ball: speed [m/s], elevation and azimuth [deg], spin [rad/s], position [m]."""
 
-    speed: float = key("float", 80.0, "m/s", "launch speed |v0|", NON_NEGATIVE)
+    speed: float = key("float", 80.0, "m/s", "launch speed |v0|", Interval(0.0, SPEED_LIMIT))
     angle_deg: float = key("float", 45.0, "deg", "elevation above the horizontal", angle(90))
     direction_deg: float = key("float", 0.0, "deg", "azimuth, from +x toward +z", angle(360))
     spin: Vec3 = key(
-        "vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity ω0 (+z is backspin for a shot toward +x)"
+        "vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity ω0 (+z is backspin for a shot toward +x)", SPIN
     )
     position: Vec3 | None = key(
         "vec3",
@@ -105,8 +116,14 @@ class Launch:
 class World:
     """Time stepping, gravity and the ground plane."""
 
-    dt: float = key("float", 0.001, "s", "time step h", POSITIVE)
-    gravity: Vec3 = key("vec3", (0.0, -9.81, 0.0), "m/s^2", "gravitational acceleration g")
+    dt: float = key("float", 0.001, "s", "time step h", Interval(0.0, 1.0, lo_open=True))
+    gravity: Vec3 = key(
+        "vec3",
+        (0.0, -9.81, 0.0),
+        "m/s^2",
+        "gravitational acceleration g",
+        Each(Interval(-GRAVITY_LIMIT, GRAVITY_LIMIT), 3),
+    )
     integrator: str = key(
         "str",
         "semi_implicit",
@@ -425,10 +442,10 @@ class BallSpec:
     """One ball listed in a ``[[balls]]`` table (radius and mass default to the scene's ball)."""
 
     position: Vec3 = key("vec3", REQUIRED, "m", "centre of the ball (required)")
-    velocity: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "initial velocity")
-    spin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity")
-    radius: float | None = key("float", None, "m", "radius (default ball.radius)", POSITIVE)
-    mass: float | None = key("float", None, "kg", "mass (default ball.mass)", POSITIVE)
+    velocity: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "initial velocity", VELOCITY)
+    spin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity", SPIN)
+    radius: float | None = key("float", None, "m", "radius (default ball.radius)", RADIUS)
+    mass: float | None = key("float", None, "kg", "mass (default ball.mass)", MASS)
 
 
 @dataclass(frozen=True)
@@ -479,10 +496,12 @@ class Block:
     box_max: Vec3 = key(
         "vec3", (1.0, 1.0, 1.0), "m", "upper corner of a random block's box", read_when=("kind", ("random",))
     )
-    velocity: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "initial velocity of every ball")
-    velocity_jitter: float = key("float", 0.0, "m/s", "uniform random velocity added per component", NON_NEGATIVE)
+    velocity: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "initial velocity of every ball", VELOCITY)
+    velocity_jitter: float = key(
+        "float", 0.0, "m/s", "uniform random velocity added per component", Interval(0.0, SPEED_LIMIT)
+    )
     speed: tuple[float, float] | None = key(
-        "list2", None, "m/s", "launch speeds [min, max]: the block's balls are shots", MinMax(0.0)
+        "list2", None, "m/s", "launch speeds [min, max]: the block's balls are shots", MinMax(0.0, SPEED_LIMIT)
     )
     angle_deg: tuple[float, float] | None = key(
         "list2", None, "deg", "launch elevations [min, max] of shots", MinMax(-90.0, 90.0)
@@ -495,12 +514,12 @@ class Block:
         MinMax(-360.0, 360.0),
     )
     backspin: tuple[float, float] = key("list2", (0.0, 0.0), "rad/s", "backspin [min, max] of shots", MinMax(-1e5, 1e5))
-    spin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity of every ball")
-    radius: float | None = key("float", None, "m", "radius (default ball.radius)", POSITIVE)
+    spin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity of every ball", SPIN)
+    radius: float | None = key("float", None, "m", "radius (default ball.radius)", RADIUS)
     radius_jitter: float = key(
         "float", 0.0, "-", "relative spread of radii: R·(1 ± jitter)", Interval(0.0, 0.5, hi_open=True)
     )
-    mass: float | None = key("float", None, "kg", "mass (default ball.mass; scaled with R³ when radii vary)", POSITIVE)
+    mass: float | None = key("float", None, "kg", "mass (default ball.mass; scaled with R³ when radii vary)", MASS)
     seed: int = key("int", 0, "-", "random seed (the same seed gives the same balls everywhere)", NON_NEGATIVE)
 
 

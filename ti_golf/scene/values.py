@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ti_golf.scene.checks import Interval, parse_range, raise_config
+from ti_golf.scene.checks import Each, Interval, parse_range, raise_config
 from ti_golf.scene.keys import Key
 
 _LISTS = {
@@ -50,8 +50,11 @@ def _problem(key: Key, value: Any) -> str | None:
     """Why ``value`` fails the key's check (``None``: it passes, or the key has none), with the
     key's unit after an interval that names none: ``must be in [-500, 5000] m``."""
     problem = key.check(value) if key.check is not None else None
-    if problem and isinstance(key.check, Interval) and not key.check.unit_word and key.unit not in ("-", ""):
-        problem += f" {key.unit}"
+    if problem and key.unit not in ("-", ""):
+        if isinstance(key.check, Interval) and not key.check.unit_word:
+            problem += f" {key.unit}"
+        elif isinstance(key.check, Each):  # must be in [-1000, 1000] m/s on all axes
+            problem = problem.replace(" on ", f" {key.unit} on ", 1)
     return problem
 
 
