@@ -302,6 +302,10 @@ def test_values_that_overflow_the_arithmetic_are_refused_and_the_limits_themselv
         assert err.value.key == dotted and "must be" in str(err.value), str(err.value)
     res = run_cli("run", "lab_magnus", "--steps", "1", "--set", "launch.speed=1e200")
     assert res.returncode == 2 and "launch.speed" in res.stderr and "[0, 1000] m/s" in res.stderr, res.stderr
+    with pytest.raises(ConfigError, match=r"sweep.speeds' must each be in \[0, 1000\] m/s"):
+        ti_golf.load_scene("lab_magnus", {"sweep.speeds": [10.0, 2000.0]})
+    res = run_cli("sweep", "lab_magnus", "--angles", "30", "--speeds", "1e200")  # ("no ball landed" before)
+    assert res.returncode == 2 and "--speeds" in res.stderr and "[0, 1000] m/s" in res.stderr, res.stderr
     # at a limit, alone, the ball flies with finite numbers (larger steps still blow up, as any
     # explicit step does: that is world.dt's error, "went non-finite; try a smaller world.dt")
     from ti_golf.scene.checks import GRAVITY_LIMIT, SPEED_LIMIT, SPIN_LIMIT

@@ -20,6 +20,7 @@ from ti_golf.physics.kinds import kinds_of
 from ti_golf.physics.types import vec3
 from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile
 from ti_golf.scene.balls import launch_position
+from ti_golf.scene.checks import SPEED_LIMIT, SPIN_LIMIT
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene, backspin_axis
 from ti_golf.sim.results import CSV_COLUMNS, ROLLED_CSV_COLUMNS, Flight, Shots
@@ -128,8 +129,8 @@ def launch_grid(
     spins_ = np.asarray(spins if spins is not None else (scene.sweep.spins or (spin_mag,)), float)
     for name, arr, lo, hi, allowed in (
         ("angles", angles, -90, 90, "finite and in [-90, 90] deg"),
-        ("speeds", speeds_, 0, math.inf, "finite and >= 0 m/s"),
-        ("spins", spins_, -math.inf, math.inf, "finite (rad/s)"),
+        ("speeds", speeds_, 0, SPEED_LIMIT, f"in [0, {SPEED_LIMIT:g}] m/s"),
+        ("spins", spins_, -SPIN_LIMIT, SPIN_LIMIT, f"in [{-SPIN_LIMIT:g}, {SPIN_LIMIT:g}] rad/s"),
     ):
         if arr.size == 0:
             raise ConfigError(f"--{name}", None, "needs at least one value")

@@ -87,7 +87,8 @@ class OneOf:
 
 @dataclass(frozen=True)
 class Each:
-    """A list of ``n`` numbers, each inside ``interval`` (``[size_x, size_z]`` > 0)."""
+    """A list of ``n`` numbers, each inside ``interval`` (``[size_x, size_z]`` > 0); ``n`` = 0: a
+    list of any length (a range of launch speeds)."""
 
     interval: Interval
     n: int = 2
@@ -96,12 +97,14 @@ class Each:
         """``None`` when ``v`` is allowed, else the reason it is not (``must be …``)."""
         if all(self.interval(c) is None for c in v):
             return None
+        if self.n == 0:
+            return f"must each be {self.interval.text}"
         return f"must be {self.interval.text} on {'both' if self.n == 2 else 'all'} axes"
 
     @property
     def allowed(self) -> str:
-        """The allowed values of each number: ``[> 0, > 0]``; of a vector, ``each in [-1, 1]``."""
-        if self.n == 3:
+        """The allowed values of each number: ``[> 0, > 0]``; of a vector or list, ``each in [-1, 1]``."""
+        if self.n != 2:
             return f"each in {self.interval.allowed}"
         return "[" + ", ".join([self.interval.allowed] * self.n) + "]"
 
@@ -197,10 +200,14 @@ NON_NEGATIVE = Interval(0.0)
 """v ≥ 0"""
 UNIT_INTERVAL = Interval(0.0, 1.0)
 """0 ≤ v ≤ 1"""
+SPEEDS = Each(Interval(0.0, SPEED_LIMIT), 0)
+"""A list of speeds [m/s] in [0, :data:`SPEED_LIMIT`]."""
 VELOCITY = Each(Interval(-SPEED_LIMIT, SPEED_LIMIT), 3)
 """A velocity [m/s] within :data:`SPEED_LIMIT` on each axis."""
 SPIN = Each(Interval(-SPIN_LIMIT, SPIN_LIMIT), 3)
 """An angular velocity [rad/s] within :data:`SPIN_LIMIT` on each axis."""
+SPINS = Each(Interval(-SPIN_LIMIT, SPIN_LIMIT), 0)
+"""A list of spins [rad/s] within :data:`SPIN_LIMIT`."""
 
 
 def angle(limit: float) -> Interval:

@@ -36,7 +36,12 @@ def key_schema(k: Key) -> dict[str, Any]:
     bounds = getattr(k.check, "json_schema", None)
     if bounds is not None:
         extra = bounds()
-        if "items" in extra:  # bounds on each number of a list
+        if "items" in extra and "anyOf" in out:  # a range: the bounds hold for its list (its text is parsed)
+            out["anyOf"] = [
+                {**b, "items": {**b["items"], **extra["items"]}} if "items" in b else b for b in out["anyOf"]
+            ]
+            del extra["items"]
+        elif "items" in extra:  # bounds on each number of a list
             out["items"] = {**out["items"], **extra.pop("items")}
         out.update(extra)
     if k.default is not None:

@@ -39,7 +39,9 @@ from ti_golf.scene.checks import (
     NON_NEGATIVE,
     POSITIVE,
     SPEED_LIMIT,
+    SPEEDS,
     SPIN,
+    SPINS,
     UNIT_INTERVAL,
     VELOCITY,
     Each,
@@ -530,9 +532,9 @@ class SweepDefaults:
     angles: tuple[float, ...] | None = key(
         "range", None, "deg", "default elevation angles of `ti-golf sweep` (START:STOP:STEP or list)"
     )
-    speeds: tuple[float, ...] | None = key("range", None, "m/s", "default launch speeds of `ti-golf sweep`")
+    speeds: tuple[float, ...] | None = key("range", None, "m/s", "default launch speeds of `ti-golf sweep`", SPEEDS)
     spins: tuple[float, ...] | None = key(
-        "range", None, "rad/s", "default spin magnitudes of `ti-golf sweep` (along the scene's spin axis)"
+        "range", None, "rad/s", "default spin magnitudes of `ti-golf sweep` (along the scene's spin axis)", SPINS
     )
 
 

@@ -42,6 +42,9 @@ def coerce(value: Any, key: Key, source: str, dotted: str) -> Any:
         value = parse_range(value if isinstance(value, (list, tuple)) else str(value), source, dotted)
     problem = _problem(key, value)
     if problem:
+        check = key.check
+        if kind == "range" and isinstance(check, Each):  # the first value refused, not the whole list
+            value = next(v for v in value if check.interval(v) is not None)
         raise_config(source, dotted, f"{problem} (got {value!r})")
     return value
 
@@ -53,8 +56,10 @@ def _problem(key: Key, value: Any) -> str | None:
     if problem and key.unit not in ("-", ""):
         if isinstance(key.check, Interval) and not key.check.unit_word:
             problem += f" {key.unit}"
-        elif isinstance(key.check, Each):  # must be in [-1000, 1000] m/s on all axes
+        elif isinstance(key.check, Each) and key.check.n:  # must be in [-1000, 1000] m/s on all axes
             problem = problem.replace(" on ", f" {key.unit} on ", 1)
+        elif isinstance(key.check, Each):  # must each be in [0, 1000] m/s
+            problem += f" {key.unit}"
     return problem
 
 
