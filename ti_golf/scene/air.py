@@ -11,6 +11,10 @@ from ti_golf.scene.keys import key
 
 Vec3 = tuple[float, float, float]
 
+COEFFICIENT = Interval(0.0, 100.0)
+"""An aerodynamic coefficient (C_D, C_M, C_ω): a golf ball's are below 1; far larger ones overflow
+the forces."""
+
 AIR_MODELS = ("lab", "spin_ratio", "spin_reynolds")
 """Aerodynamic models (``air.model``): the report's laws, coefficients of the spin ratio, or of the
 spin ratio and the Reynolds number."""
@@ -44,7 +48,7 @@ class Air:
         0.3,
         "-",
         "drag coefficient; k_D = ½ρA·C_D (L.22)",
-        Interval(0.0, 100.0),
+        COEFFICIENT,
         read_when=("model", ("lab",)),
     )
     C_M: float = key(
@@ -52,7 +56,7 @@ class Air:
         0.0,
         "-",
         "Magnus coefficient; k_M = ½ρA·C_M/ω_M (L.2, L.21)",
-        NON_NEGATIVE,
+        COEFFICIENT,
         read_when=("model", ("lab",)),
     )
     omega_M: float = key(
@@ -60,7 +64,7 @@ class Air:
         1.0,
         "1/s",
         "reference angular velocity ω_M of the Magnus law (L.2)",
-        POSITIVE,
+        Interval(1.0e-3),
         read_when=("model", ("lab",)),
     )
     C_omega: float = key(
@@ -68,7 +72,7 @@ class Air:
         0.0,
         "-",
         "spin-decay coefficient; k_ω = ½ρA·C_ω/m (L.17, L.23)",
-        NON_NEGATIVE,
+        COEFFICIENT,
         read_when=("model", ("lab", "spin_ratio")),
     )
     wind: Vec3 = key(
