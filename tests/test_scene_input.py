@@ -309,6 +309,9 @@ def test_values_that_overflow_the_arithmetic_are_refused_and_the_limits_themselv
         ti_golf.load_scene("lab_magnus", {"sweep.speeds": [10.0, 2000.0]})
     res = run_cli("sweep", "lab_magnus", "--angles", "30", "--speeds", "1e200")  # ("no ball landed" before)
     assert res.returncode == 2 and "--speeds" in res.stderr and "[0, 1000] m/s" in res.stderr, res.stderr
+    with pytest.raises(ConfigError) as err:  # from Python, the error names the argument, not the option
+        ti_golf.sweep("lab_magnus", speeds=[2000.0])
+    assert err.value.source == "speeds" and "[0, 1000] m/s" in str(err.value)
     # at a limit, alone, the ball flies with finite numbers (larger steps still blow up, as any
     # explicit step does: that is world.dt's error, "went non-finite; try a smaller world.dt")
     from ti_golf.scene.checks import GRAVITY_LIMIT, SPEED_LIMIT, SPIN_LIMIT

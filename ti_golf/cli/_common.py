@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import difflib
 import math
 import re
@@ -11,6 +12,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -178,6 +180,19 @@ def check_writable(path: str | None, option: str, suffixes: tuple[str, ...] = ()
         raise ConfigError(option, None, f"cannot write {path!r}: {exc.strerror or exc}") from None
     if suffixes and Path(path).suffix.lower() not in suffixes:
         raise ConfigError(option, None, f"must end in {' or '.join(suffixes)} (got {path!r})")
+
+
+@contextlib.contextmanager
+def options_named(options: dict[str, str]) -> Iterator[None]:
+    """Name the command line's option in a :class:`ConfigError` that a Python function raised
+    naming its argument: ``options`` maps each argument (``"angles_deg"``) to its option
+    (``"--angles"``)."""
+    try:
+        yield
+    except ConfigError as exc:
+        if exc.source not in options:
+            raise
+        raise ConfigError(options[exc.source], exc.key, exc.reason) from None
 
 
 def refuse_without(

@@ -11,6 +11,7 @@ from ti_golf.cli._common import (
     HeldInterrupt,
     check_plot,
     check_writable,
+    options_named,
     plot_help,
     refuse_replaced,
     refuse_without,
@@ -27,6 +28,9 @@ from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import parse_range
 
 TRAJECTORIES = 21
+
+SWEEP_OPTIONS = {"angles_deg": "--angles", "speeds": "--speeds", "spins": "--spins"}
+"""The option of each argument of :func:`ti_golf.golf.sweep.sweep` that ``ti-golf sweep`` gives."""
 """The trajectories ``--plot`` draws by default."""
 
 
@@ -90,7 +94,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     speeds = _parse_opt_range(args.speeds, "--speeds")
     spins = _parse_opt_range(args.spins, "--spins")
     t0 = time.perf_counter()
-    with HeldInterrupt() as interrupt:  # one kernel launch: an interrupt takes effect once its results are kept
+    with HeldInterrupt() as interrupt, options_named(SWEEP_OPTIONS):  # one launch: an interrupt waits for it
         res = sweep(
             scene, angles, speeds, spins, trajectories=args.trajectories if args.plot else 0, to_rest=args.to_rest
         )

@@ -128,15 +128,15 @@ def launch_grid(
     axis = spin_vec / spin_mag if spin_mag > 0 else np.asarray(backspin_axis(L.direction_deg))
     spins_ = np.asarray(spins if spins is not None else (scene.sweep.spins or (spin_mag,)), float)
     for name, arr, lo, hi, allowed in (
-        ("angles", angles, -90, 90, "finite and in [-90, 90] deg"),
+        ("angles_deg", angles, -90, 90, "finite and in [-90, 90] deg"),
         ("speeds", speeds_, 0, SPEED_LIMIT, f"in [0, {SPEED_LIMIT:g}] m/s"),
         ("spins", spins_, -SPIN_LIMIT, SPIN_LIMIT, f"in [{-SPIN_LIMIT:g}, {SPIN_LIMIT:g}] rad/s"),
     ):
         if arr.size == 0:
-            raise ConfigError(f"--{name}", None, "needs at least one value")
+            raise ConfigError(name, None, "needs at least one value")
         bad = arr[~(np.isfinite(arr) & (arr >= lo) & (arr <= hi))]
         if bad.size:
-            raise ConfigError(f"--{name}", None, f"values must be {allowed} (got {bad[0]:g})")
+            raise ConfigError(name, None, f"values must be {allowed} (got {bad[0]:g})")
     sp, sn, an = np.meshgrid(speeds_, spins_, angles, indexing="ij")
     an, sp, sn = an.ravel(), sp.ravel(), sn.ravel()
     n = an.size
