@@ -1236,7 +1236,8 @@ def test_the_kernel_log_times_each_instances_front_end_and_compilation():
     (entry,) = [k for k in log.table() if k.name.endswith(".scaled")]
     assert entry.instances == 2 and len(set(entry.instance_names)) == 2
     assert all(name.startswith("scaled_c") for name in entry.instance_names)
-    assert entry.front_end_s > 0 and entry.compile_s > 0 and log.busy is None
+    assert entry.front_end_s > 0 and entry.compile_s > 0 and entry.first_launch_s > 0 and log.busy is None
+    assert log.totals()[3] >= entry.first_launch_s
     # once compiled, the rest of a first launch is the kernel's own work, not its compilation
     from ti_golf.kernel_log import _TimedProgram
 
@@ -1308,6 +1309,9 @@ def test_bench_startup_kernels_reports_each_kernels_front_end_and_what_was_compi
     assert "ti_golf.physics.kernels.advance" in names or "ti_golf.physics.kernels.fly_to_landing" in names, names
     front = [k["front_end_s"] for k in report["kernels"]]
     assert front == sorted(front, reverse=True) and sum(front) == pytest.approx(report["front_end_s"], rel=1e-3)
+    first = [k["first_launch_s"] for k in report["kernels"]]
+    assert min(first) > 0 and sum(first) == pytest.approx(report["first_launch_s"], rel=1e-3)
+    assert sum(first) < report["stages"]["first_step_s"] + report["stages"]["setup_s"]  # (launches in both)
     assert set(report["stages"]) == {"import_s", "init_s", "setup_s", "first_step_s", "total_s"}
     ok(run_cli("run", "lab_vacuum", "--steps", "1"))  # the default cache now holds them
     warm = json.loads(
