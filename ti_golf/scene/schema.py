@@ -390,7 +390,7 @@ class GameConfig:
         "m/s",
         "each stroke's wind blows level from a random direction at a random speed up to this (0: the "
         "scene's air.wind throughout)",
-        NON_NEGATIVE,
+        Interval(0.0, SPEED_LIMIT),
         read_when=("[hole]", (True,)),
     )
     max_strokes: int = key(
