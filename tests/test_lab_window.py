@@ -25,7 +25,7 @@ pytestmark = ON_VULKAN  # one worker draws with GGUI at a time (conftest)
     "args, needle",
     [
         (["lab", "no_such_scene"], "no_such_scene: file not found"),
-        (["lab", "--set", "air.C_D=-1"], "--set: key 'air.C_D' must be >= 0"),
+        (["lab", "--set", "air.C_D=-1"], "--set: key 'air.C_D' must be in [0, 100]"),
         (["lab", "--out", "no/such/folder"], "--out: folder 'no/such/folder' does not exist"),
         (["lab", "--speed", "-1"], "--speed: must be a number >= 0"),
         (["lab", "--speed", "nan"], "--speed: must be a number >= 0"),

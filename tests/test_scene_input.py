@@ -328,6 +328,23 @@ def test_values_that_overflow_the_arithmetic_are_refused_and_the_limits_themselv
         assert np.isfinite(sim.x).all() and np.isfinite(sim.v).all(), dotted
 
 
+def test_a_set_setting_that_leaves_a_key_of_the_file_unread_drops_that_key():
+    # across places the command line wins: flying tour_shot without its ground leaves the file's
+    # contact.turf unread, and switching lab_magnus to the spin_ratio air its C_D and C_M
+    flight = ti_golf.load_scene("tour_shot", ["world.ground=false"])
+    assert ti_golf.load_scene("tour_shot").contact.turf and not flight.contact.turf
+    assert not flight.world.ground
+    air = ti_golf.load_scene("lab_magnus", ["air.model=spin_ratio"]).air
+    assert air.model == "spin_ratio" and air.C_D == 0.3 and air.C_M == 0.0  # (the defaults)
+    # but a key given on the command line, or in a file that its own settings leave unread, is refused
+    with pytest.raises(ConfigError) as err:
+        ti_golf.load_scene("tour_shot", ["world.ground=false", "contact.turf=true"])
+    assert err.value.source == "--set" and err.value.key == "contact.turf"
+    with pytest.raises(ConfigError) as err:
+        ti_golf.load_scene("lab_magnus", ["air.model=spin_ratio", "air.C_D=0.2"])
+    assert err.value.source == "--set" and err.value.key == "air.C_D"
+
+
 def test_a_change_that_leaves_a_key_read_across_tables_unread_drops_it():
     # the launched ball rests on the ground at ground_height; once it is placed, the key is read by
     # nothing (no ground plane, no log wind), so a change that places it takes the key back to its

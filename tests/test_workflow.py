@@ -435,7 +435,7 @@ def test_run_resume_with_set_changes_the_continuation(tmp_path, capsys):
     capsys.readouterr()
     cases = (
         (["--set", "launch.speed=5"], "key 'launch.speed' sets up the balls or the ground at t0"),
-        (["--set", "air.C_D=-1"], "key 'air.C_D' must be >= 0"),
+        (["--set", "air.C_D=-1"], "key 'air.C_D' must be in [0, 100]"),
         (["lab_turbulent"], "--resume: takes the scene from"),
     )
     for extra, message in cases:

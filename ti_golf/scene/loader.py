@@ -6,6 +6,7 @@ dotted key and what is allowed. No Taichi import here.
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import importlib.resources
 import math
@@ -227,20 +228,52 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
     if (kwargs["planes"] or kwargs.get("terrain") is not None) and "ground" not in doc.get("world", {}):
         world = kwargs.get("world", World())
         kwargs["world"] = World(**{**world.__dict__, "ground": False})
-    scene = Scene(**kwargs)
-    _refuse_unread_across(doc, scene, source)
-    return scene
+    return _refuse_unread_across(doc, Scene(**kwargs), source)
 
 
-def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str) -> None:
+def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str) -> Scene:
     """Refuse each key of :data:`~ti_golf.scene.across.READ_ACROSS` that the document sets and
     the ``scene`` built from it leaves unread (``world.ground_height`` without a ground plane,
-    log wind or a launch resting on the ground): a key never silently does nothing."""
+    log wind or a launch resting on the ground): a key never silently does nothing. A key of the
+    file that the file's scene reads, and ``--set`` keys leave unread (``--set world.ground=false``
+    on a scene with ``contact.turf``), goes back to its default: the command line wins. Returns
+    the scene."""
+    file_scene: Scene | None = None
     for dotted in READ_ACROSS:
         table, name = dotted.split(".")
         given = doc.get(table)
-        if isinstance(given, dict) and name in given and not read_across(dotted, scene):
-            raise_config(_with_source(given[name], source)[0], dotted, unread_text(dotted))
+        if not isinstance(given, dict) or name not in given or read_across(dotted, scene):
+            continue
+        where, _value = _with_source(given[name], source)
+        if where != "--set" and _has_overrides(doc):
+            file_scene = file_scene or _build(_file_part(doc), source, scene.name)
+            if read_across(dotted, file_scene):
+                default = SCHEMA[table][name].default
+                scene = dataclasses.replace(
+                    scene, **{table: dataclasses.replace(getattr(scene, table), **{name: default})}
+                )
+                continue
+        raise_config(where, dotted, unread_text(dotted))
+    return scene
+
+
+def _has_overrides(doc: Mapping[str, Any]) -> bool:
+    """Whether the document holds a ``--set`` value (stored as ``("--set", value)``)."""
+    values = [v for t in doc.values() for v in (t.values() if isinstance(t, dict) else [t])]
+    return any(isinstance(v, tuple) and len(v) == 2 and v[0] == "--set" for v in values)
+
+
+def _file_part(doc: Mapping[str, Any]) -> dict[str, Any]:
+    """The document without its ``--set`` values: what the file alone says."""
+
+    def of_file(v: Any) -> bool:
+        return not (isinstance(v, tuple) and len(v) == 2 and v[0] == "--set")
+
+    return {
+        k: ({n: x for n, x in v.items() if of_file(x)} if isinstance(v, dict) else v)
+        for k, v in doc.items()
+        if of_file(v)
+    }
 
 
 def _with_source(value: Any, source: str) -> tuple[str, Any]:
@@ -363,12 +396,15 @@ def _refuse_unread(
     doc: Mapping[str, Any],
 ) -> None:
     """Refuse each key of one table that its setting would leave unread (``Key.read_when``): a key
-    never silently does nothing."""
-    for name in values:
+    never silently does nothing. Across places the command line wins, as everywhere: a key of the
+    file that a ``--set`` setting leaves unread is dropped from ``values`` (``--set air.model =
+    "spin_ratio"`` on a file with ``air.C_D``), not refused."""
+    for name in list(values):
         key = keys[name]
         if key.read_when is None:
             continue
         other, allowed = key.read_when
+        setting_set = False  # whether the setting comes from the command line
         if other.startswith("["):  # a table the scene must have
             read = other.strip("[]") in doc
         elif "." in other:  # a key of another table, as given (its value is checked there) or its default
@@ -376,14 +412,17 @@ def _refuse_unread(
             given = doc.get(table, {})
             current = given.get(other_key, SCHEMA[table][other_key].default) if isinstance(given, dict) else None
             if isinstance(current, tuple) and len(current) == 2 and current[0] == "--set":
-                current = current[1]
+                current, setting_set = current[1], True
             read = current in allowed
         else:
             read = values.get(other, keys[other].default) in allowed
-        if not read:
-            raise_config(
-                sources.get(name, source), f"{prefix}.{name}", f"is only read when {read_when_text(key, prefix)}"
-            )
+            setting_set = sources.get(other) == "--set"
+        if read:
+            continue
+        if setting_set and sources.get(name, source) != "--set":
+            del values[name]
+            continue
+        raise_config(sources.get(name, source), f"{prefix}.{name}", f"is only read when {read_when_text(key, prefix)}")
 
 
 def _air(values: dict[str, Any], sources: dict[str, str], source: str) -> dict[str, Any]:
