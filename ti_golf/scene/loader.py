@@ -205,17 +205,20 @@ def load_scene(
     doc: dict[str, Any] = {k: (dict(v) if isinstance(v, dict) else v) for k, v in raw.items()}
     if isinstance(overrides, str):  # one KEY=VALUE text, not its characters
         overrides = [overrides]
+    file_doc = None
     if overrides:
+        file_doc = {k: (dict(v) if isinstance(v, dict) else v) for k, v in doc.items()}
         items = overrides.items() if isinstance(overrides, Mapping) else (parse_override(o) for o in overrides)
         for dotted, value in items:
             _apply_override(doc, dotted, value)
-    return _build(doc, source, p.stem)
+    return _build(doc, source, p.stem, file_doc)
 
 
-def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
+def _build(doc: dict[str, Any], source: str, name: str, file_doc: dict[str, Any] | None = None) -> Scene:
     """The :class:`Scene` of a scene document (the file's tables with the overrides applied), every
     key checked: the top-level keys and table names, then each table in :data:`SCHEMA`'s order,
-    then the ``[[...]]`` arrays."""
+    then the ``[[...]]`` arrays (``file_doc``: the file's document before the overrides, when
+    there are any; see :func:`_refuse_unread_across`)."""
     kwargs: dict[str, Any] = {"name": name, "path": source}
     _build_top_level(doc, source, kwargs)
     for section, keys in SCHEMA.items():
@@ -228,16 +231,16 @@ def _build(doc: dict[str, Any], source: str, name: str) -> Scene:
     if (kwargs["planes"] or kwargs.get("terrain") is not None) and "ground" not in doc.get("world", {}):
         world = kwargs.get("world", World())
         kwargs["world"] = World(**{**world.__dict__, "ground": False})
-    return _refuse_unread_across(doc, Scene(**kwargs), source)
+    return _refuse_unread_across(doc, Scene(**kwargs), source, file_doc)
 
 
-def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str) -> Scene:
+def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str, file_doc: dict[str, Any] | None) -> Scene:
     """Refuse each key of :data:`~ti_golf.scene.across.READ_ACROSS` that the document sets and
     the ``scene`` built from it leaves unread (``world.ground_height`` without a ground plane,
     log wind or a launch resting on the ground): a key never silently does nothing. A key of the
     file that the file's scene reads, and ``--set`` keys leave unread (``--set world.ground=false``
-    on a scene with ``contact.turf``), goes back to its default: the command line wins. Returns
-    the scene."""
+    on a scene with ``contact.turf``), goes back to its default: the command line wins (``file_doc``:
+    the file's document, ``None`` without overrides). Returns the scene."""
     file_scene: Scene | None = None
     for dotted in READ_ACROSS:
         table, name = dotted.split(".")
@@ -245,8 +248,8 @@ def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str) -> 
         if not isinstance(given, dict) or name not in given or read_across(dotted, scene):
             continue
         where, _value = _with_source(given[name], source)
-        if where != "--set" and _has_overrides(doc):
-            file_scene = file_scene or _build(_file_part(doc), source, scene.name)
+        if where != "--set" and file_doc is not None:
+            file_scene = file_scene or _build(file_doc, source, scene.name)
             if read_across(dotted, file_scene):
                 default = SCHEMA[table][name].default
                 scene = dataclasses.replace(
@@ -255,25 +258,6 @@ def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str) -> 
                 continue
         raise_config(where, dotted, unread_text(dotted))
     return scene
-
-
-def _has_overrides(doc: Mapping[str, Any]) -> bool:
-    """Whether the document holds a ``--set`` value (stored as ``("--set", value)``)."""
-    values = [v for t in doc.values() for v in (t.values() if isinstance(t, dict) else [t])]
-    return any(isinstance(v, tuple) and len(v) == 2 and v[0] == "--set" for v in values)
-
-
-def _file_part(doc: Mapping[str, Any]) -> dict[str, Any]:
-    """The document without its ``--set`` values: what the file alone says."""
-
-    def of_file(v: Any) -> bool:
-        return not (isinstance(v, tuple) and len(v) == 2 and v[0] == "--set")
-
-    return {
-        k: ({n: x for n, x in v.items() if of_file(x)} if isinstance(v, dict) else v)
-        for k, v in doc.items()
-        if of_file(v)
-    }
 
 
 def _with_source(value: Any, source: str) -> tuple[str, Any]:
