@@ -148,12 +148,12 @@ BAD_VALUES = {
     "nan_gamma": ("air", "gamma", "nan", "air.gamma", ["integer"]),
     "nan_in_sweep_list": ("sweep", "angles", "[36, nan]", "sweep.angles", ["finite"]),
     # out of range
-    "mass_zero": ("ball", "mass", "0", "ball.mass", [">= 1e-06 kg", "0.0"]),
+    "mass_zero": ("ball", "mass", "0", "ball.mass", ["in [1e-06, 1000000] kg", "0.0"]),
     "dt_negative_with_its_unit": ("world", "dt", "-1", "world.dt", ["must be in (0, 1] s (got -1.0)"]),
     "altitude_with_its_unit": ("air", "altitude", "6000", "air.altitude", ["must be in [-500, 5000] m (got 6000.0)"]),
-    "mass_negative": ("ball", "mass", "-0.045", "ball.mass", [">= 1e-06 kg", "-0.045"]),
-    "radius_zero": ("ball", "radius", "0.0", "ball.radius", ["in (0, 10] m"]),
-    "radius_negative": ("ball", "radius", "-0.02", "ball.radius", ["in (0, 10] m", "-0.02"]),
+    "mass_negative": ("ball", "mass", "-0.045", "ball.mass", ["in [1e-06, 1000000] kg", "-0.045"]),
+    "radius_zero": ("ball", "radius", "0.0", "ball.radius", ["in [0.0001, 10] m"]),
+    "radius_negative": ("ball", "radius", "-0.02", "ball.radius", ["in [0.0001, 10] m", "-0.02"]),
     "e_above_1": ("contact", "e", "1.5", "contact.e", ["[0, 1]", "1.5"]),
     "e_negative": ("contact", "e", "-0.1", "contact.e", ["[0, 1]", "-0.1"]),
     "mu_negative": ("contact", "mu", "-0.1", "contact.mu", [">= 0", "-0.1"]),
@@ -326,6 +326,34 @@ def test_values_that_overflow_the_arithmetic_are_refused_and_the_limits_themselv
         sim = ti_golf.Simulation(ti_golf.load_scene("lab_magnus", {dotted: value, "world.dt": 1e-4}))
         sim.step(20)
         assert np.isfinite(sim.x).all() and np.isfinite(sim.v).all(), dotted
+
+
+def test_balls_too_small_for_how_far_they_are_spread_stop_with_a_message():
+    # the grid's cells are the largest diameter (plus the skin) wide, and their coordinates i32:
+    # two 0.1 mm balls a thousand kilometres apart lie 4.5e9 cells apart (a Python OverflowError
+    # deep in the grid's set-up before, for a block of balls of radius 1e-200 m)
+    scene = ti_golf.load_scene(
+        "s.toml",
+        data={
+            "description": "t",
+            "world": {"ground": False},
+            "ball": {"radius": 1e-4},
+            "balls": [{"position": [0.0, 0.0, 0.0]}, {"position": [1e6, 0.0, 0.0]}],
+        },
+    )
+    sim = ti_golf.Simulation(scene)
+    with pytest.raises(ti_golf.SimulationError, match="grid cells from the origin"):
+        sim.step(1)
+    near = ti_golf.load_scene(
+        "s.toml",
+        data={
+            "description": "t",
+            "world": {"ground": False},
+            "ball": {"radius": 1e-4},
+            "balls": [{"position": [0.0, 0.0, 0.0]}, {"position": [1.0, 0.0, 0.0]}],
+        },
+    )
+    ti_golf.Simulation(near).step(1)  # a metre apart: 4,500 cells
 
 
 def test_a_set_setting_that_leaves_a_key_of_the_file_unread_drops_that_key():

@@ -57,12 +57,13 @@ from ti_golf.scene.keys import REQUIRED, Key, key, keys_of
 
 Vec3 = tuple[float, float, float]
 
-MASS = Interval(1.0e-6)
-"""A ball's mass [kg]: at least a milligram (a golf ball is 45.93 g at most); far lighter balls
-overflow the drag's acceleration."""
-RADIUS = Interval(0.0, 10.0, lo_open=True)
-"""A ball's radius [m]: up to a boulder's 10 m (a golf ball's is 21.3 mm); far larger radii
-overflow the drag's cross-section."""
+MASS = Interval(1.0e-6, 1.0e6)
+"""A ball's mass [kg]: from a milligram to a thousand tonnes (a golf ball is 45.93 g at most);
+far lighter balls overflow the drag's acceleration, far heavier ones the impulses."""
+RADIUS = Interval(1.0e-4, 10.0)
+"""A ball's radius [m]: from a grain of sand's 0.1 mm to a boulder's 10 m (a golf ball's is
+21.3 mm); far larger radii overflow the drag's cross-section, and far smaller ones the grid's
+cell coordinates."""
 
 #: Ball status codes stored per ball (``State.status``).
 FLYING, ROLLING, AT_REST, OUT_OF_BOUNDS = 0, 1, 2, 3

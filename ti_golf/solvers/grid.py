@@ -27,6 +27,7 @@ for the rest.
 
 import taichi as ti
 
+from ti_golf.errors import SimulationError
 from ti_golf.physics.types import (
     GridParams,
     GridScratch,
@@ -93,6 +94,12 @@ def cell_bounds(x: vec3_array, inv_cell: float) -> ti.types.vector(6, ti.i32):
     return ti.Vector([lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]])
 
 
+CELL_REACH = 2**30
+"""Grid cell coordinates of the balls must lie within ±CELL_REACH: their i32 arithmetic (a
+ball's cell and those around it, the hash) never overflows. Beyond the range of i32, the cast of
+a position to a cell gives no cell at all."""
+
+
 def hash_strides(bounds, buckets: int) -> tuple[tuple[int, int, int], tuple[int, int, int]]:
     """(origin, stride) of the grid's hash for balls in the cells ``bounds`` (:func:`cell_bounds`).
 
@@ -105,6 +112,12 @@ def hash_strides(bounds, buckets: int) -> tuple[tuple[int, int, int], tuple[int,
     (``colour.column_order``), read memory in runs. Else (balls spread far apart) the cells are
     hashed with ``SCATTERED_HASH``, still linear in y."""
     lo, hi = [int(b) for b in bounds[:3]], [int(b) for b in bounds[3:]]
+    if min(lo) <= -CELL_REACH or max(hi) >= CELL_REACH:
+        raise SimulationError(
+            f"a ball lies more than {CELL_REACH:,} grid cells from the origin, beyond what the grid's 32-bit "
+            "cell coordinates hold: the balls are too small for how far they are spread (the cells are "
+            "the largest ball's diameter and the skin wide)"
+        )
     ext = [h - lo_ + 3 for lo_, h in zip(lo, hi)]
     if ext[0] * ext[1] * ext[2] <= buckets:
         return (lo[0] - 1, lo[1] - 1, lo[2] - 1), (ext[1], 1, ext[0] * ext[1])
