@@ -293,6 +293,8 @@ OVERFLOWING = {
     "world.dt": 1e200,
     "ball.mass": 1e-200,
     "ball.radius": 1e200,
+    "launch.position": [1e200, 0.0, 0.0],
+    "terrain.origin": [0.0, 0.0, 1e200],
 }
 """Values that the keys' old bounds (>= 0, > 0, none) allowed and that overflowed in the first
 steps, each ending the run with "went non-finite" (exit code 3) instead of naming the key."""

@@ -191,6 +191,10 @@ subsonic flight, have long stopped holding; far larger speeds overflow the drag.
 SPIN_LIMIT = 1.0e5
 """The largest spin [rad/s] a scene may give a ball, on each axis: ten times the fastest a golf
 ball is ever spun (a wedge's 10,000 rpm is about 1,050 rad/s)."""
+REACH = 1.0e6
+"""The farthest from the origin [m] a scene may place anything, on each axis: 1,000 km, far past
+any course, and far from the floats' limits (and the grid's cell coordinates) that positions
+beyond would overflow."""
 GRAVITY_LIMIT = 1000.0
 """The largest gravitational acceleration [m/s²] on each axis: about 100 g."""
 
@@ -200,6 +204,8 @@ NON_NEGATIVE = Interval(0.0)
 """v ≥ 0"""
 UNIT_INTERVAL = Interval(0.0, 1.0)
 """0 ≤ v ≤ 1"""
+POSITION = Each(Interval(-REACH, REACH), 3)
+"""A point [m] within :data:`REACH` of the origin on each axis."""
 SPEEDS = Each(Interval(0.0, SPEED_LIMIT), 0)
 """A list of speeds [m/s] in [0, :data:`SPEED_LIMIT`]."""
 VELOCITY = Each(Interval(-SPEED_LIMIT, SPEED_LIMIT), 3)

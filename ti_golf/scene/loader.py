@@ -23,7 +23,7 @@ else:  # pragma: no cover - Python 3.10
 
 from ti_golf.errors import ConfigError
 from ti_golf.scene.across import READ_ACROSS, read_across, unread_text
-from ti_golf.scene.checks import raise_config
+from ti_golf.scene.checks import REACH, raise_config
 from ti_golf.scene.keys import Key, read_when_text
 from ti_golf.scene.schema import (
     ARRAY_SCHEMA,
@@ -477,7 +477,7 @@ def _ball_spec(values: dict[str, Any], source: str, i: int) -> BallSpec:
     return BallSpec(**values)
 
 
-BLOCK_REACH = 1e6
+BLOCK_REACH = REACH
 """The farthest a block of balls reaches [m]: its corners within ±1,000 km of the origin, a lattice
 at most as long (far past any course, and far from the floats' limits that a box's volume or a
 lattice's sites would overflow)."""

@@ -37,6 +37,7 @@ from ti_golf.scene.air import (
 from ti_golf.scene.checks import (
     GRAVITY_LIMIT,
     NON_NEGATIVE,
+    POSITION,
     POSITIVE,
     SPEED_LIMIT,
     SPEEDS,
@@ -112,6 +113,7 @@ class Launch:
         "m",
         "launch point of the ball's centre (default: resting on the ground, [0, ground_height + radius, 0], "
         "or on the terrain at x = z = 0)",
+        POSITION,
     )
 
 
@@ -280,7 +282,9 @@ class TerrainConfig:
         "folder; from the current folder for --set)",
         read_when=("kind", ("file",)),
     )
-    origin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m", "the grid's first corner [x, y, z]; heights are added to its y")
+    origin: Vec3 = key(
+        "vec3", (0.0, 0.0, 0.0), "m", "the grid's first corner [x, y, z]; heights are added to its y", POSITION
+    )
     size: tuple[float, float] = key(
         "vec2",
         (100.0, 100.0),
@@ -430,7 +434,7 @@ class Surface:
 class Plane:
     """An impenetrable plane: ``point`` [m] on it, unit ``normal`` out of the solid side."""
 
-    point: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m", "a point on the plane")
+    point: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m", "a point on the plane", POSITION)
     normal: Vec3 = key(
         "vec3",
         (0.0, 1.0, 0.0),
@@ -444,7 +448,7 @@ class Plane:
 class BallSpec:
     """One ball listed in a ``[[balls]]`` table (radius and mass default to the scene's ball)."""
 
-    position: Vec3 = key("vec3", REQUIRED, "m", "centre of the ball (required)")
+    position: Vec3 = key("vec3", REQUIRED, "m", "centre of the ball (required)", POSITION)
     velocity: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "initial velocity", VELOCITY)
     spin: Vec3 = key("vec3", (0.0, 0.0, 0.0), "rad/s", "initial angular velocity", SPIN)
     radius: float | None = key("float", None, "m", "radius (default ball.radius)", RADIUS)
