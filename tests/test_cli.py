@@ -1277,7 +1277,9 @@ def test_a_long_start_says_what_taichi_is_doing():
     assert "compiling the kernel advance (or loading it from its cache)" in (status.line() or "")
     status._said = -math.inf
     log.busy = ("first launch", "ti_golf.physics.kernels.fly_to_landing", status.start - 1.0)
-    assert "running the kernel fly_to_landing (its first launch, compiled)" in (status.line() or "")
+    assert "making machine code for the kernel fly_to_landing and running it (its first launch)" in (
+        status.line() or ""
+    )
     log.busy = None
     status._said = -math.inf
     assert status.line() is None  # nothing prepared now: nothing to say

@@ -343,7 +343,7 @@ class StartupStatus:
     STEPS = {
         "front end": "reading the kernel {name} (its front end runs in every new process, even for cached kernels)",
         "compile": "compiling the kernel {name} (or loading it from its cache)",
-        "first launch": "running the kernel {name} (its first launch, compiled)",
+        "first launch": "making machine code for the kernel {name} and running it (its first launch)",
     }
 
     def __init__(self, log: Any, after_s: float = 1.0, every_s: float = 5.0, poll_s: float = 0.25) -> None:
