@@ -334,28 +334,15 @@ def test_balls_too_small_for_how_far_they_are_spread_stop_with_a_message():
     # the grid's cells are the largest diameter (plus the skin) wide, and their coordinates i32:
     # two 0.1 mm balls a thousand kilometres apart lie 4.5e9 cells apart (a Python OverflowError
     # deep in the grid's set-up before, for a block of balls of radius 1e-200 m)
-    scene = ti_golf.load_scene(
-        "s.toml",
-        data={
-            "description": "t",
-            "world": {"ground": False},
-            "ball": {"radius": 1e-4},
-            "balls": [{"position": [0.0, 0.0, 0.0]}, {"position": [1e6, 0.0, 0.0]}],
-        },
-    )
-    sim = ti_golf.Simulation(scene)
+    def two_grains(apart: float) -> ti_golf.Simulation:
+        balls = [{"position": [0.0, 0.0, 0.0]}, {"position": [apart, 0.0, 0.0]}]
+        doc = {"description": "t", "world": {"ground": False}, "ball": {"radius": 1e-4}, "balls": balls}
+        return ti_golf.Simulation(ti_golf.load_scene("s.toml", data=doc))
+
+    far = two_grains(1e6)
     with pytest.raises(ti_golf.SimulationError, match="grid cells from the origin"):
-        sim.step(1)
-    near = ti_golf.load_scene(
-        "s.toml",
-        data={
-            "description": "t",
-            "world": {"ground": False},
-            "ball": {"radius": 1e-4},
-            "balls": [{"position": [0.0, 0.0, 0.0]}, {"position": [1.0, 0.0, 0.0]}],
-        },
-    )
-    ti_golf.Simulation(near).step(1)  # a metre apart: 4,500 cells
+        far.step(1)
+    two_grains(1.0).step(1)  # a metre apart: 4,500 cells
 
 
 def test_a_set_setting_that_leaves_a_key_of_the_file_unread_drops_that_key():

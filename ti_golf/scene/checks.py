@@ -204,6 +204,15 @@ NON_NEGATIVE = Interval(0.0)
 """v ≥ 0"""
 UNIT_INTERVAL = Interval(0.0, 1.0)
 """0 ≤ v ≤ 1"""
+MASS = Interval(1.0e-6, 1.0e6)
+"""A ball's mass [kg]: from a milligram to a thousand tonnes (a golf ball is 45.93 g at most);
+far lighter balls overflow the drag's acceleration, far heavier ones the impulses."""
+RADIUS = Interval(1.0e-4, 10.0)
+"""A ball's radius [m]: from a grain of sand's 0.1 mm to a boulder's 10 m (a golf ball's is
+21.3 mm); far larger radii overflow the drag's cross-section, and far smaller ones the grid's
+cell coordinates."""
+GRAVITY = Each(Interval(-GRAVITY_LIMIT, GRAVITY_LIMIT), 3)
+"""A gravitational acceleration [m/s²] within :data:`GRAVITY_LIMIT` on each axis."""
 POSITION = Each(Interval(-REACH, REACH), 3)
 """A point [m] within :data:`REACH` of the origin on each axis."""
 SPEEDS = Each(Interval(0.0, SPEED_LIMIT), 0)

@@ -35,10 +35,12 @@ from ti_golf.scene.air import (
     Air as Air,
 )
 from ti_golf.scene.checks import (
-    GRAVITY_LIMIT,
+    GRAVITY,
+    MASS,
     NON_NEGATIVE,
     POSITION,
     POSITIVE,
+    RADIUS,
     SPEED_LIMIT,
     SPEEDS,
     SPIN,
@@ -58,13 +60,6 @@ from ti_golf.scene.keys import REQUIRED, Key, key, keys_of
 
 Vec3 = tuple[float, float, float]
 
-MASS = Interval(1.0e-6, 1.0e6)
-"""A ball's mass [kg]: from a milligram to a thousand tonnes (a golf ball is 45.93 g at most);
-far lighter balls overflow the drag's acceleration, far heavier ones the impulses."""
-RADIUS = Interval(1.0e-4, 10.0)
-"""A ball's radius [m]: from a grain of sand's 0.1 mm to a boulder's 10 m (a golf ball's is
-21.3 mm); far larger radii overflow the drag's cross-section, and far smaller ones the grid's
-cell coordinates."""
 
 #: Ball status codes stored per ball (``State.status``).
 FLYING, ROLLING, AT_REST, OUT_OF_BOUNDS = 0, 1, 2, 3
@@ -122,13 +117,7 @@ class World:
     """Time stepping, gravity and the ground plane."""
 
     dt: float = key("float", 0.001, "s", "time step h", Interval(0.0, 1.0, lo_open=True))
-    gravity: Vec3 = key(
-        "vec3",
-        (0.0, -9.81, 0.0),
-        "m/s^2",
-        "gravitational acceleration g",
-        Each(Interval(-GRAVITY_LIMIT, GRAVITY_LIMIT), 3),
-    )
+    gravity: Vec3 = key("vec3", (0.0, -9.81, 0.0), "m/s^2", "gravitational acceleration g", GRAVITY)
     integrator: str = key(
         "str",
         "semi_implicit",
