@@ -330,6 +330,18 @@ def test_values_that_overflow_the_arithmetic_are_refused_and_the_limits_themselv
         assert np.isfinite(sim.x).all() and np.isfinite(sim.v).all(), dotted
 
 
+def test_a_flight_that_ctrl_c_could_not_stop_is_refused():
+    # a sweep flies every ball to landing in one kernel launch, which holds Ctrl-C: world.t_max /
+    # world.dt steps of a ball that never lands (no gravity) ran for days
+    from ti_golf.golf.sweep import FLIGHT_STEPS_MAX
+
+    scene = ti_golf.load_scene("lab_vacuum", {"world.dt": 1e-7, "world.gravity": [0.0, 0.0, 0.0]})
+    with pytest.raises(ConfigError) as err:
+        ti_golf.sweep(scene, angles_deg=[30.0])
+    assert err.value.key == "world.t_max" and f"at most {FLIGHT_STEPS_MAX:.0e}" in str(err.value)
+    assert "6e+08 steps" in str(err.value)
+
+
 def test_balls_too_small_for_how_far_they_are_spread_stop_with_a_message():
     # the grid's cells are the largest diameter (plus the skin) wide, and their coordinates i32:
     # two 0.1 mm balls a thousand kilometres apart lie 4.5e9 cells apart (a Python OverflowError

@@ -18,6 +18,7 @@ from ti_golf.cli._common import (
 )
 from ti_golf.errors import ConfigError
 from ti_golf.render import BACKENDS, CAMERAS, COLOR_BY, render
+from ti_golf.scene.checks import TIME_LIMIT
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -59,8 +60,8 @@ def cmd_render(args: argparse.Namespace) -> int:
     """Run ``args.scene`` (or the saved run ``--resume``) for ``--t`` / ``--steps`` (default: not at
     all) and write ``--out``."""
     check_writable(args.out, "--out", (".png",))
-    if args.t is not None and not (math.isfinite(args.t) and args.t >= 0):
-        raise ConfigError("--t", None, f"must be a finite number >= 0 seconds (got {args.t})")
+    if args.t is not None and not (math.isfinite(args.t) and 0 <= args.t <= TIME_LIMIT):
+        raise ConfigError("--t", None, f"must be in [0, {TIME_LIMIT:g}] seconds (got {args.t})")
     if args.steps is not None and args.steps < 0:
         raise ConfigError("--steps", None, f"must be >= 0 (got {args.steps})")
     w, h = args.size

@@ -26,6 +26,7 @@ from ti_golf.cli._common import (
 )
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
+from ti_golf.scene.checks import TIME_LIMIT
 from ti_golf.scene.schema import STATUS_NAMES
 from ti_golf.sim.simulation import Recording, Simulation
 
@@ -117,13 +118,19 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
     if args.frames is not None and not Path(args.frames).resolve().parent.is_dir():
         parent = str(Path(args.frames).resolve().parent)
         raise ConfigError("--frames", None, f"cannot make {args.frames!r}: folder {parent!r} does not exist")
-    if args.t is not None and not (math.isfinite(args.t) and args.t > 0):
-        raise ConfigError("--t", None, f"must be a finite number > 0 seconds (got {args.t})")
+    if args.t is not None and not (math.isfinite(args.t) and 0 < args.t <= TIME_LIMIT):
+        raise ConfigError("--t", None, f"must be in (0, {TIME_LIMIT:g}] seconds (got {args.t})")
     if args.steps is not None and args.steps <= 0:
         raise ConfigError("--steps", None, f"must be > 0 (got {args.steps})")
     if args.record_every < 0:
         raise ConfigError("--record-every", None, f"must be >= 0 (got {args.record_every})")
     sim = scene_or_saved_run(args, "run")
+    if args.steps is not None and args.steps * sim.dt > TIME_LIMIT:
+        raise ConfigError(
+            "--steps",
+            None,
+            f"must be at most {TIME_LIMIT / sim.dt:.3g} steps of {sim.dt:g} s ({TIME_LIMIT:g} s; got {args.steps})",
+        )
     resumed_at = sim.t if args.resume else None
     record_every = args.record_every
     if args.plot and not record_every:

@@ -155,6 +155,12 @@ def default_lanes() -> int:
     return 8 if ensure_init().precision == "f64" else 16
 
 
+FLIGHT_STEPS_MAX = 1e8
+"""The most steps a flight to landing may take (``world.t_max`` / ``world.dt``): :func:`fly` is one
+kernel launch, which an interrupt cannot stop, and a ball that never lands (no gravity toward the
+ground) takes them all; 1e8 steps of one ball take seconds."""
+
+
 def fly(
     scene: Scene,
     x0: np.ndarray,
@@ -172,6 +178,15 @@ def fly(
     (N,), t_land (N,), the landing point land_x, velocity land_v and spin land_w (N, 3) and, when
     recording, traj (N, n_samples, 3).
     """
+    steps = scene.world.t_max / scene.world.dt
+    if steps > FLIGHT_STEPS_MAX:
+        raise ConfigError(
+            scene.path,
+            "world.t_max",
+            f"allows {steps:.3g} steps of world.dt = {scene.world.dt:g} s to a landing, in one kernel launch that "
+            f"Ctrl-C cannot stop; at most {FLIGHT_STEPS_MAX:.0e} (world.t_max / world.dt): a shorter "
+            "world.t_max or a longer world.dt",
+        )
     ensure_init()
     lanes = default_lanes() if lanes is None else int(lanes)
     f = np_float()

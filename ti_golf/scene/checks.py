@@ -195,6 +195,9 @@ REACH = 1.0e6
 """The farthest from the origin [m] a scene may place anything, on each axis: 1,000 km, far past
 any course, and far from the floats' limits (and the grid's cell coordinates) that positions
 beyond would overflow."""
+TIME_LIMIT = 1.0e9
+"""The latest simulated time [s] a run may reach (some 32 years): past about 1e12 s a step of a
+millisecond no longer moves the time on in f64."""
 GRAVITY_LIMIT = 1000.0
 """The largest gravitational acceleration [m/s²] on each axis: about 100 g."""
 
@@ -211,6 +214,8 @@ RADIUS = Interval(1.0e-4, 10.0)
 """A ball's radius [m]: from a grain of sand's 0.1 mm to a boulder's 10 m (a golf ball's is
 21.3 mm); far larger radii overflow the drag's cross-section, and far smaller ones the grid's
 cell coordinates."""
+DURATION = Interval(0.0, TIME_LIMIT, lo_open=True)
+"""A simulated duration [s]: > 0, at most :data:`TIME_LIMIT`."""
 GRAVITY = Each(Interval(-GRAVITY_LIMIT, GRAVITY_LIMIT), 3)
 """A gravitational acceleration [m/s²] within :data:`GRAVITY_LIMIT` on each axis."""
 POSITION = Each(Interval(-REACH, REACH), 3)

@@ -35,6 +35,7 @@ from ti_golf.scene.air import (
     Air as Air,
 )
 from ti_golf.scene.checks import (
+    DURATION,
     GRAVITY,
     MASS,
     NON_NEGATIVE,
@@ -125,8 +126,8 @@ class World:
         "semi_implicit (the report's leapfrog-style Euler) or rk4 (4th order, for flights)",
         OneOf(INTEGRATORS),
     )
-    t_end: float = key("float", 20.0, "s", "default duration of `ti-golf run`", POSITIVE)
-    t_max: float = key("float", 60.0, "s", "longest flight a sweep integrates before giving up on a ball", POSITIVE)
+    t_end: float = key("float", 20.0, "s", "default duration of `ti-golf run`", DURATION)
+    t_max: float = key("float", 60.0, "s", "longest flight a sweep integrates before giving up on a ball", DURATION)
     ground: bool = key(
         "bool",
         True,

@@ -18,6 +18,7 @@ import numpy as np
 
 from ti_golf.errors import ConfigError
 from ti_golf.physics.integrate import IN_FLIGHT, LANDED, NOT_TRACKED
+from ti_golf.scene.checks import TIME_LIMIT
 from ti_golf.scene.schema import STATUS_NAMES, Scene
 
 Check = Callable[[np.ndarray], np.ndarray]
@@ -88,9 +89,8 @@ def check_description(source: str, meta: Any) -> None:
             fail(source, "run", f"'{key}' is {_short(meta[key])}; expects {what}")
 
 
-T_MAX = 1e9
-"""The latest time [s] a saved run may hold (some 32 years): past about 1e12 s a step of a
-millisecond no longer moves the time on in f64."""
+T_MAX = TIME_LIMIT
+"""The latest time [s] a saved run may hold (:data:`~ti_golf.scene.checks.TIME_LIMIT`)."""
 
 ENTRIES = (
     *BALLS,
