@@ -317,6 +317,8 @@ def test_every_public_name_is_in_the_api_reference():
         (lambda s: s.run(steps=2, on_every=print), ValueError, "every and on_every go together"),
         (lambda s: s.run(t=0.1, steps=3), ValueError, "give t or steps, not both"),
         (lambda s: s.run(t=-1), ValueError, "t must be a number of seconds >= 0 (got -1)"),
+        (lambda s: s.run(t=1e300), ValueError, "t must be at most 1e+09 s (got 1e+300)"),  # (it ran on for ever)
+        (lambda s: s.run(steps=10**14), ValueError, "steps must be at most 1e+11, 1e+09 s of steps"),
         (lambda s: s.run(steps=2.5), ValueError, "steps must be a whole number >= 0 (got 2.5)"),
         (lambda s: s.step(-3), ValueError, "n must be a whole number >= 0 (got -3)"),
         (lambda s: s.step(1.5), ValueError, "n must be a whole number >= 0 (got 1.5)"),

@@ -12,6 +12,7 @@ import numpy as np
 from ti_golf.errors import ConfigError
 from ti_golf.runtime import available_memory
 from ti_golf.scene.balls import ball_count, block_size
+from ti_golf.scene.checks import TIME_LIMIT
 from ti_golf.scene.schema import Scene
 
 BYTES_PER_BALL = 2048
@@ -74,3 +75,23 @@ def per_ball(a: Any, n: int, name: str) -> np.ndarray:
     if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
         raise ValueError(f"{name} must be finite and > 0 for every ball")
     return arr
+
+
+def steps_to_run(t: Any, steps: Any, dt: float, t_end: float) -> int:
+    """The steps of ``dt`` [s] that a run of ``t`` seconds or ``steps`` steps takes (neither given:
+    ``t_end`` [s]), each checked: a number of seconds >= 0 or a whole number of steps, and at most
+    :data:`~ti_golf.scene.checks.TIME_LIMIT` of simulated time (past it a step no longer moves the
+    time on)."""
+    if t is not None and steps is not None:
+        raise ValueError("give t or steps, not both")
+    if steps is not None:
+        steps = whole_number(steps, "steps")
+        if steps * dt > TIME_LIMIT:
+            raise ValueError(f"steps must be at most {TIME_LIMIT / dt:.3g}, {TIME_LIMIT:g} s of steps (got {steps})")
+        return steps
+    if t is not None and not (isinstance(t, (int, float)) and not isinstance(t, bool) and t >= 0):
+        raise ValueError(f"t must be a number of seconds >= 0 (got {t!r})")
+    duration = t_end if t is None else float(t)
+    if not (math.isfinite(duration) and duration <= TIME_LIMIT):
+        raise ValueError(f"t must be at most {TIME_LIMIT:g} s (got {t!r})")
+    return int(math.ceil(duration / dt - 1e-9))

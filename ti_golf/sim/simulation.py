@@ -36,7 +36,7 @@ from ti_golf.sim.changes import (
     refuse_for_given_balls,
     refuse_unread,
 )
-from ti_golf.sim.given import as_vectors, check_memory, per_ball, whole_number
+from ti_golf.sim.given import as_vectors, check_memory, per_ball, steps_to_run, whole_number
 from ti_golf.sim.results import Flight
 
 
@@ -504,21 +504,10 @@ class Simulation:
         """
         if until not in (None, "rest", "landed"):
             raise ValueError(f"until must be None, 'rest' or 'landed' (got {until!r})")
-        if t is not None and steps is not None:
-            raise ValueError("give t or steps, not both")
-        if t is not None and not (isinstance(t, (int, float)) and not isinstance(t, bool) and t >= 0):
-            raise ValueError(f"t must be a number of seconds >= 0 (got {t!r})")
-        if steps is not None:
-            steps = whole_number(steps, "steps")
+        steps = steps_to_run(t, steps, self.dt, self.scene.world.t_end)
         record_every, every = whole_number(record_every, "record_every"), whole_number(every, "every")
         if every and on_every is None or on_every is not None and not every:
             raise ValueError("every and on_every go together: on_every(sim) is called every `every` steps")
-        if steps is None:
-            duration = self.scene.world.t_end if t is None else float(t)
-            if not math.isfinite(duration):
-                raise ValueError(f"t must be a finite number of seconds (got {t!r})")
-            steps = int(math.ceil(duration / self.dt - 1e-9))
-        steps = int(steps)
         rec = Recording() if recording is None else recording
         if record_every:
             rec.t.append(self.t)
