@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from ti_golf.errors import ConfigError
-from ti_golf.scene.checks import POSITIVE, Interval, OneOf, parse_range, raise_config
+from ti_golf.scene.checks import DURATION, Interval, OneOf, parse_range, raise_config
 from ti_golf.scene.document import scene_document
 from ti_golf.scene.jsonschema import DIALECT, key_schema
 from ti_golf.scene.keys import Key, key, keys_of, read_when_text
@@ -113,7 +113,7 @@ class Task:
         None,
         "s",
         "simulated time (default: the scene's world.t_end; the pit: 4 s)",
-        POSITIVE,
+        DURATION,
         read_when=("kind", ("run", "pit")),
     )
     steps: int | None = key(
