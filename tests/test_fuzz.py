@@ -70,6 +70,46 @@ def test_fuzzed_table_keys_load_or_are_refused(edits):
     loads_or_refuses(doc)
 
 
+SETTINGS = [
+    "world.ground=false",
+    "world.ground=true",
+    'air.model="spin_ratio"',
+    'air.model="lab"',
+    'air.wind_profile="log"',
+    'contact.solver="jacobi"',
+    "world.collisions=false",
+    'terrain.kind="flat"',
+    "launch.position=[0, 1, 0]",
+    "contact.turf=true",
+    "world.ground_height=0.5",
+    "air.C_D=",
+]
+"""Overrides of the settings that decide whether other keys are read (and of two such keys)."""
+
+
+def _plausible(section: str, key: str) -> st.SearchStrategy:
+    """A key's default, a value of its kind that it allows, or any value."""
+    decl = (SCHEMA[section] if section else TOP_LEVEL)[key]
+    default = list(decl.default) if isinstance(decl.default, tuple) else decl.default
+    choices = list(getattr(decl.check, "choices", ()))
+    return st.one_of(st.sampled_from([default, *choices]), values)
+
+
+@FUZZ
+@given(
+    st.lists(st.sampled_from(KEYS).flatmap(lambda k: st.tuples(st.just(k), _plausible(*k))), max_size=4),
+    st.lists(st.sampled_from(SETTINGS), min_size=1, max_size=3, unique=True),
+)
+def test_fuzzed_files_with_setting_overrides_load_or_are_refused(edits, overrides):
+    # a --set setting may leave keys of the file unread (they are dropped: the command line wins)
+    doc = {k: dict(v) if isinstance(v, dict) else v for k, v in BASE.items()}
+    for (section, key), value in edits:
+        table = doc.setdefault(section, {}) if section else None
+        if isinstance(table, dict):
+            table[key] = value
+    loads_or_refuses(doc, overrides)
+
+
 @FUZZ
 @given(
     st.sampled_from(sorted(ARRAY_SCHEMA)),
