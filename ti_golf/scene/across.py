@@ -10,7 +10,9 @@ as a document leaves it out. Plain Python, no Taichi.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
+from typing import Any
 
 from ti_golf.scene.schema import Scene
 
@@ -48,6 +50,13 @@ def read_across(dotted: str, scene: Scene) -> bool:
     tables decide; ``True`` for a key not in :data:`READ_ACROSS`."""
     rule = READ_ACROSS.get(dotted)
     return rule is None or rule[0](scene)
+
+
+def with_value(scene: Scene, dotted: str, value: Any) -> Scene:
+    """``scene`` with its key ``dotted`` (``"contact.turf"``) set to ``value``, a value already
+    checked: a key of :data:`READ_ACROSS` changes no other key's reading, so nothing else is."""
+    table, name = dotted.split(".")
+    return dataclasses.replace(scene, **{table: dataclasses.replace(getattr(scene, table), **{name: value})})
 
 
 def unread_text(dotted: str) -> str:

@@ -13,7 +13,7 @@ import os
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from ti_golf.scene.across import READ_ACROSS, read_across
+from ti_golf.scene.across import READ_ACROSS, read_across, with_value
 from ti_golf.scene.keys import Key, is_read
 from ti_golf.scene.loader import load_scene, parse_override
 from ti_golf.scene.schema import ARRAY_SCHEMA, SCHEMA, TOP_LEVEL, Scene
@@ -82,27 +82,26 @@ def with_changes(scene: Scene, changes: Mapping[str, Any] | Iterable[str]) -> Sc
     items = dict(changes) if isinstance(changes, Mapping) else dict(parse_override(text) for text in changes)
     doc = scene_document(scene)
     _drop_unread(doc, items)
-    kept = _set_across(doc, items)
+    kept = _take_across(doc, items)
     changed = load_scene(scene.path or None, items, data=doc)
-    if kept:  # each put back where the changed scene still reads it (their reading never depends on them)
-        for dotted, value in kept.items():
-            if read_across(dotted, changed):
-                table, name = dotted.split(".")
-                doc[table][name] = value
-        changed = load_scene(scene.path or None, items, data=doc)
+    for dotted in kept:  # each put back where the changed scene still reads it (as it was: checked)
+        if read_across(dotted, changed):
+            table, name = dotted.split(".")
+            changed = with_value(changed, dotted, getattr(getattr(scene, table), name))
     return dataclasses.replace(changed, name=scene.name, path=scene.path)
 
 
-def _set_across(doc: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
-    """Take out of ``doc`` and return each key of :data:`~ti_golf.scene.across.READ_ACROSS` that it
-    sets and ``changes`` do not, by dotted name: the changes may leave it unread."""
-    kept = {}
+def _take_across(doc: dict[str, Any], changes: dict[str, Any]) -> list[str]:
+    """Take out of ``doc`` each key of :data:`~ti_golf.scene.across.READ_ACROSS` that it sets and
+    ``changes`` do not (the changes may leave it unread), and return their dotted names."""
+    taken = []
     for dotted in READ_ACROSS:
         table, name = dotted.split(".")
         given = doc.get(table)
         if dotted not in changes and isinstance(given, dict) and name in given:
-            kept[dotted] = given.pop(name)
-    return kept
+            del given[name]
+            taken.append(dotted)
+    return taken
 
 
 def _drop_unread(doc: dict[str, Any], changes: dict[str, Any]) -> None:

@@ -6,7 +6,6 @@ dotted key and what is allowed. No Taichi import here.
 
 from __future__ import annotations
 
-import dataclasses
 import difflib
 import importlib.resources
 import math
@@ -22,7 +21,7 @@ else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 from ti_golf.errors import ConfigError
-from ti_golf.scene.across import READ_ACROSS, read_across, unread_text
+from ti_golf.scene.across import READ_ACROSS, read_across, unread_text, with_value
 from ti_golf.scene.checks import REACH, raise_config
 from ti_golf.scene.keys import Key, read_when_text
 from ti_golf.scene.schema import (
@@ -251,10 +250,7 @@ def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str, fil
         if where != "--set" and file_doc is not None:
             file_scene = file_scene or _build(file_doc, source, scene.name)
             if read_across(dotted, file_scene):
-                default = SCHEMA[table][name].default
-                scene = dataclasses.replace(
-                    scene, **{table: dataclasses.replace(getattr(scene, table), **{name: default})}
-                )
+                scene = with_value(scene, dotted, SCHEMA[table][name].default)
                 continue
         raise_config(where, dotted, unread_text(dotted))
     return scene
