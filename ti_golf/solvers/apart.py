@@ -14,7 +14,6 @@ from ti_golf.physics.types import (
     vec3,
     vec3_array,
 )
-from ti_golf.solvers.sort import REDUCTION_SPAN, reduction_ball, reduction_threads
 
 APART_MAX = 32
 """Most balls set *apart* (see :func:`apart_balls`: much faster or bigger than the rest), which
@@ -58,27 +57,19 @@ def apart_balls(v: vec3_array, radius: float_array, v_cut: float, r_cut: float, 
     apart): the balls faster than ``v_cut`` or bigger than ``r_cut`` (see
     :func:`is_apart`). The indices of the first ``apart_ids.shape[0] − 1`` of them go to
     ``apart_ids`` in no particular order, their count to its last entry (integer atomics; float
-    atomic maxima, one a thread of ``REDUCTION_SPAN`` balls: the same on every thread order)."""
+    atomic maxima, the same on every thread order)."""
     s2, rest2 = 0.0, 0.0
     last = apart_ids.shape[0] - 1
     apart_ids[last] = 0
-    n = v.shape[0]
-    threads = reduction_threads(n)
-    for t in range(threads):
-        s2_t, rest2_t = 0.0, 0.0
-        for m in range(REDUCTION_SPAN):
-            i = reduction_ball(t, m, threads)
-            if i < n:
-                q = v[i].norm_sqr()
-                s2_t = ti.max(s2_t, q)
-                if q > v_cut * v_cut or of_ball(radius, i) > r_cut:  # as :func:`is_apart` tests it
-                    k = ti.atomic_add(apart_ids[last], 1)
-                    if k < last:
-                        apart_ids[k] = i
-                else:
-                    rest2_t = ti.max(rest2_t, q)
-        ti.atomic_max(s2, s2_t)
-        ti.atomic_max(rest2, rest2_t)
+    for i in range(v.shape[0]):
+        q = v[i].norm_sqr()
+        ti.atomic_max(s2, q)
+        if q > v_cut * v_cut or of_ball(radius, i) > r_cut:  # as :func:`is_apart` tests it
+            k = ti.atomic_add(apart_ids[last], 1)
+            if k < last:
+                apart_ids[k] = i
+        else:
+            ti.atomic_max(rest2, q)
     return ti.Vector([ti.sqrt(s2), ti.sqrt(rest2), ti.cast(apart_ids[last], float)])
 
 

@@ -40,7 +40,7 @@ from ti_golf.physics.types import (
     vec3_array,
 )
 from ti_golf.solvers.apart import is_apart
-from ti_golf.solvers.sort import REDUCTION_SPAN, bucket_of, cell_of, counting_sort, reduction_ball, reduction_threads
+from ti_golf.solvers.sort import bucket_of, cell_of, counting_sort
 
 SCATTERED_HASH = (19349663, 1, 83492791)
 
@@ -85,19 +85,12 @@ pairs, and ``CollisionSolver.build`` stops the run instead."""
 @kernel
 def cell_bounds(x: vec3_array, inv_cell: float) -> ti.types.vector(6, ti.i32):
     """The least (first three) and greatest (last three) cell coordinates of the balls (integer
-    atomics, one a thread of ``REDUCTION_SPAN`` balls: the same on every thread order)."""
+    atomics: the same on every thread order)."""
     lo, hi = ti.Vector([2147483647] * 3), ti.Vector([-2147483647] * 3)
-    n = x.shape[0]
-    threads = reduction_threads(n)
-    for k in range(threads):
-        lo_k, hi_k = ti.Vector([2147483647] * 3), ti.Vector([-2147483647] * 3)
-        for m in range(REDUCTION_SPAN):
-            i = reduction_ball(k, m, threads)
-            if i < n:
-                c = cell_of(x[i], inv_cell)
-                lo_k, hi_k = ti.min(lo_k, c), ti.max(hi_k, c)
-        ti.atomic_min(lo, lo_k)
-        ti.atomic_max(hi, hi_k)
+    for i in range(x.shape[0]):
+        c = cell_of(x[i], inv_cell)
+        ti.atomic_min(lo, c)
+        ti.atomic_max(hi, c)
     return ti.Vector([lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]])
 
 

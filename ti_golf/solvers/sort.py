@@ -18,31 +18,6 @@ def cell_of(x, inv_cell):
     return ti.cast(ti.floor(x * inv_cell), ti.i32)
 
 
-REDUCTION_SPAN = 16
-"""Balls each thread of a reduction (the least and greatest cells, the greatest speed) folds into
-its own minimum and maximum before its one atomic on the kernel's result: atomics from every ball
-on the same few addresses queue up (on an H200 a build's two reductions of 100,000 balls took
-8 ms a rebuild that way)."""
-
-
-@ti.func
-def reduction_threads(n):
-    """Threads of a reduction over ``n`` balls (see ``REDUCTION_SPAN``)."""
-    return (n + REDUCTION_SPAN - 1) // REDUCTION_SPAN
-
-
-@ti.func
-def reduction_ball(k, m, threads):
-    """The ball that thread ``k`` of ``threads`` takes in its ``m``-th turn of a reduction
-    (m < ``REDUCTION_SPAN``; it may be past the last ball): interleaved on a GPU, so that
-    neighbouring threads read neighbouring balls, a run of balls a thread on the CPU (whose
-    threads each take runs of the loop's iterations)."""
-    i = k + m * threads
-    if ti.static(on_cpu()):
-        i = k * REDUCTION_SPAN + m
-    return i
-
-
 CPU_TASK_ITEMS = 512
 """Iterations in one task of a parallel loop on Taichi's CPU backend (1.7.4) whose bounds are
 known only at run time: the backend's adaptive block size, which neither
