@@ -58,11 +58,11 @@ figure cuda_cold_compile 60 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --n 
 # Its kernels are the pour's: keep them, so that the pours below do not compile them again.
 mkdir -p "$TI_OFFLINE_CACHE_FILE_PATH" && cp -r "$cold"/. "$TI_OFFLINE_CACHE_FILE_PATH"/
 rm -rf "$cold"
-# The long kernels compiled without Taichi's advanced IR passes, as on the CPU and Vulkan
-# (runtime.plain_compile), from an empty cache of their own: the compile time, then the pour's first
-# second, to set beside the first second of cuda_pit_100k (its timeline).
+# The long kernels compiled with Taichi's advanced IR passes (runtime.plain_compile leaves them out
+# by default), from an empty cache of their own: the compile time, then the pour's first second, to
+# set beside the first second of cuda_pit_100k (its timeline).
 cold=$(mktemp -d)
-figure cuda_pit_100k_plain 70 TI_GOLF_PLAIN_COMPILE=cuda TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --t 1 --every 0.25 --arch "$GPU_ARCH"
+figure cuda_pit_100k_passes 90 TI_GOLF_CUDA_PASSES=1 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --t 1 --every 0.25 --arch "$GPU_ARCH"
 rm -rf "$cold"
 figure cuda_pit_100k 120 -- bench pit --every 0.25 --arch "$GPU_ARCH"
 figure cuda_pit_1m 60 -- bench pit --n 1000000 --every 0.25 --arch "$GPU_ARCH"

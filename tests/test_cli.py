@@ -918,14 +918,14 @@ def test_bogus_arch_env_error_names_the_variable(bogus_arch):
     assert "TI_GOLF_ARCH" in bogus_arch.stderr, bogus_arch.stderr
 
 
-def test_a_bad_plain_compile_switch_exits_2_naming_the_variable(monkeypatch):
-    # TI_GOLF_PLAIN_COMPILE (runtime.PLAIN_COMPILE_ENV) takes 'cuda' or nothing: any other value is
+def test_a_bad_cuda_passes_switch_exits_2_naming_the_variable(monkeypatch):
+    # TI_GOLF_CUDA_PASSES (runtime.CUDA_PASSES_ENV) takes 1, 0 or nothing: any other value is
     # refused before anything runs, as a bad TI_GOLF_ARCH is
-    monkeypatch.setenv("TI_GOLF_PLAIN_COMPILE", "gpu")
+    monkeypatch.setenv("TI_GOLF_CUDA_PASSES", "yes")
     proc = cli_main_process(["sweep", "lab_turbulent", "--angles", "36"])
     assert proc.returncode == 2, proc.stderr
-    assert proc.stderr.strip() == "ti-golf: error: TI_GOLF_PLAIN_COMPILE: must be 'cuda' or empty, not 'gpu'"
-    monkeypatch.setenv("TI_GOLF_PLAIN_COMPILE", "cuda")  # (on the CPU it changes nothing)
+    assert proc.stderr.strip() == "ti-golf: error: TI_GOLF_CUDA_PASSES: must be 1, 0 or empty, not 'yes'"
+    monkeypatch.setenv("TI_GOLF_CUDA_PASSES", "1")  # (on the CPU it changes nothing)
     assert cli_main_process(["sweep", "lab_turbulent", "--angles", "36"]).returncode == 0
 
 
