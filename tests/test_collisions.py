@@ -1143,6 +1143,33 @@ def test_serial_launches_skip_the_steps_of_a_pile_asleep_as_the_parallel_steps_d
     assert skipped[0] == skipped[1] and skipped[0][0] > 20 and skipped[0][1] > 20 and skipped[2] == (0, 0)
 
 
+@pytest.mark.skipif(not ON_CPU, reason="serial stepping runs on the CPU only")
+@pytest.mark.parametrize("solver", ["jacobi", "gauss_seidel"])
+def test_a_relisting_solver_lists_in_its_kernel_what_the_grid_lists(solver, monkeypatch):
+    # a serial solver of a few balls (RELIST_MAX_BALLS) makes its lists in its kernel: the first
+    # ones too, and those asked for between steps (balls moved), in a launch of no steps, without
+    # the grid's kernels; they are the lists a build through the grid makes on the same positions,
+    # pairs, links and carried impulses alike
+    sc = tg.load_scene("break_shot", [f'contact.solver="{solver}"'])
+    sim = tg.Simulation(sc)
+    solver_ = sim.solver
+    assert solver_.relists
+    listed = []
+    real = grid.list_neighbours
+    monkeypatch.setattr(grid, "list_neighbours", lambda *a, **k: listed.append(1) or real(*a, **k))
+    sim.step(40)
+    assert solver_.rebuilds > 0 and len(solver_.pairs()) > 0
+    solver_.invalidate()  # (as balls moved between steps would)
+    solver_.ensure_lists(sim.state)
+    assert listed == [] and int(solver_.flag.to_numpy()[0]) == 0
+    names = ["upper", "first", "lower", "lower_first", "lam", "friction"]
+    in_kernel = {name: getattr(solver_, name).to_numpy() for name in names}
+    solver_.build(sim.state)  # the same positions, through the grid
+    assert listed == [1]
+    for name in names:
+        np.testing.assert_array_equal(getattr(solver_, name).to_numpy(), in_kernel[name], err_msg=name)
+
+
 @pytest.mark.parametrize(
     "name, steps",
     [

@@ -177,25 +177,27 @@ def serial_steps(t0, dt, steps, kinds: ti.template(), s: ti.template(), relist: 
     start of a step, with ``relist`` they are rebuilt in the kernel by testing every pair
     (:func:`~ti_golf.solvers.links.relist_all_pairs`), and it returns how many times they were;
     without, the launch stops there, and it returns the steps it took, for the caller to build
-    them through the grid (``CollisionSolver.build``) and launch again."""
+    them through the grid (``CollisionSolver.build``) and launch again. A launch of no steps
+    with ``relist`` only rebuilds the lists when asked to (``CollisionSolver.relist``)."""
     result = 0
     t = t0
     ti.loop_config(serialize=True)
-    for _ in range(steps):
+    for k in range(ti.max(steps, 1)):  # (no steps: a turn for the lists alone)
         if s.scratch.flag[0] != 0:
             if ti.static(not relist):
                 break
             relist_all_pairs(s.params, kinds.gauss_seidel, s.contact.mu, s.model, s.lists, s.state, s.scratch)
             result += 1
             s.scratch.flag[0] = 0
-        step_balls(ti.cast(t, float), kinds, s, serial=True, warm=True, sweeps=sweeps, last=True)
-        if ti.static(kinds.gauss_seidel):
-            serial_projection(s)
-        for i in range(s.state.x.shape[0]):
-            s.state.x[i] = s.scratch.x_free[i]
-        t += dt
-        if ti.static(not relist):
-            result += 1
+        if k < steps:
+            step_balls(ti.cast(t, float), kinds, s, serial=True, warm=True, sweeps=sweeps, last=True)
+            if ti.static(kinds.gauss_seidel):
+                serial_projection(s)
+            for i in range(s.state.x.shape[0]):
+                s.state.x[i] = s.scratch.x_free[i]
+            t += dt
+            if ti.static(not relist):
+                result += 1
     return result
 
 

@@ -311,16 +311,46 @@ class CollisionSolver(Recorded, Stepping):
         stashed = None
         if not self.relists:  # (relisting in the kernel: a row for every ball, see surface_rows.every_ball_a_row)
             self._list_surface_rows(state, carried, v_max)
-        if self.impulse is None or self.impulse.shape[0] != self.lam.shape[0]:
-            dropped = watch(self.impulse)
-            self.impulse = None  # free the old table (the stash) before allocating
-            free_dropped_arrays(dropped)
-            # each pair's inverse distance, gap or projection, and (Jacobi) impulse in a sweep (pairs.owned_pairs)
-            self.impulse = ti.ndarray(float, (self.lam.shape[0], pair_columns(self.gauss_seidel)))
+        self._fit_sweep_table()
         self.rebuilds += 1
         if n >= REORDER_MIN_BALLS and self.rebuilds % COLLECT_EVERY == 0:
             free_dropped_arrays()  # (the cycles that Taichi's launches leave: see COLLECT_EVERY)
         self._valid = True
+
+    def make_room_to_relist(self, state: State) -> None:
+        """Make the tables of a solver that rebuilds its lists in its kernel (``relists``) for the
+        balls of ``state``, no lists in them yet, and ask the kernel for lists: its next launch
+        lists every pair at the start of its first step (``links.relist_all_pairs``), the lists a
+        build through the grid would make, bit for bit, without launching the grid's kernels (the
+        first launches of a small scene's build were about a third of its start)."""
+        self._last_grid = None
+        self._ids = state.ids
+        self._size_cells(state)  # (the grid a build would size, kept as a saved run keeps it: see record)
+        self._new_neighbour_table(state)
+        self.first.fill(0)  # (nothing to carry over)
+        self._fit_pair_tables(state, state.n * self.capacity, 0)
+        self._fit_sweep_table()
+        self.flag.from_numpy(np.array([1, 0], dtype=np.int32))
+        self._valid = True
+
+    def _fit_sweep_table(self) -> None:
+        """Make the sweeps' table (each pair's inverse distance, gap or projection, and, for Jacobi,
+        its impulse in a sweep: ``pairs.owned_pairs``) as long as the pair tables, the old one
+        freed first."""
+        if self.impulse is None or self.impulse.shape[0] != self.lam.shape[0]:
+            dropped = watch(self.impulse)
+            self.impulse = None  # free the old table (the stash) before allocating
+            free_dropped_arrays(dropped)
+            self.impulse = ti.ndarray(float, (self.lam.shape[0], pair_columns(self.gauss_seidel)))
+
+    def _new_neighbour_table(self, state: State) -> None:
+        """Make the neighbour table ``capacity`` wide when it is not, the old one freed first."""
+        if self.upper is None or self.upper.shape[1] != self.capacity:
+            self._packs.clear()  # (their references would keep the narrower table in memory)
+            dropped = watch(self.upper)
+            self.upper = None
+            free_dropped_arrays(dropped)
+            self.upper = ti.ndarray(ti.i32, (state.n, self.capacity))
 
     def _size_cells(self, state: State) -> tuple[bool, float]:
         """Size the grid's cells and hash for a build (``grid.cell_size``, ``grid.hash_strides``),
@@ -356,12 +386,7 @@ class CollisionSolver(Recorded, Stepping):
         :meth:`_size_cells`), the neighbour table widened to the longest list and the balls listed
         again while one overflows it. Returns what ``grid.list_neighbours`` returns."""
         while True:
-            if self.upper is None or self.upper.shape[1] != self.capacity:
-                self._packs.clear()  # (their references would keep the narrower table in memory)
-                dropped = watch(self.upper)
-                self.upper = None
-                free_dropped_arrays(dropped)
-                self.upper = ti.ndarray(ti.i32, (state.n, self.capacity))
+            self._new_neighbour_table(state)
             params, scratch = self._grid_params(fast), self._grid_scratch()
             with plain_compile(vulkan=True):  # (see runtime.plain_compile)
                 longest = grid.list_neighbours(

@@ -47,6 +47,7 @@ class Stepping:
     """The steps of a collision solver (:class:`.solver.CollisionSolver`, which builds the lists
     and holds the arrays named below) and the schedule of its list builds."""
 
+    _model: Model
     serial: bool
     relists: bool
     capacity: int
@@ -78,6 +79,11 @@ class Stepping:
         """Build the neighbour lists for the balls of ``state`` (the solver's own)."""
         raise NotImplementedError
 
+    def make_room_to_relist(self, state: State) -> None:
+        """Make the tables for the balls of ``state`` and ask the relisting kernel for lists (the
+        solver's own)."""
+        raise NotImplementedError
+
     @property
     def lists_due(self) -> bool:
         """Whether the lists are to be built before the next step: none built yet, balls moved between
@@ -94,10 +100,35 @@ class Stepping:
             return
         if self.relists:
             self.capacity = max(self.capacity, state.n - 1, 1)
-        with in_one_thread(self.serial):  # (a serial solver's balls are few: see one_thread)
-            self.build(state)
-            grid.clear(self.flag)  # build() left the longest lists there
+        if self.relists and (not self.lists_valid or self.upper.shape[1] >= self.capacity):
+            self.relist(state)
+        else:  # (through the grid; also to carry lists into wider tables)
+            with in_one_thread(self.serial):  # (a serial solver's balls are few: see one_thread)
+                self.build(state)
+                grid.clear(self.flag)  # build() left the longest lists there
         self.rebuild_due = self.edited = False
+
+    def relist(self, state: State) -> None:
+        """Rebuild the lists of a solver that ``relists`` in its kernel, in a launch of no steps
+        (the tables made first when none were built: :meth:`make_room_to_relist`): the lists of a
+        build through the grid, bit for bit, without launching the grid's kernels."""
+        if not self.lists_valid:
+            with in_one_thread():  # (see one_thread)
+                self.make_room_to_relist(state)
+        else:
+            self.flag.from_numpy(np.array([1, 0], dtype=np.int32))  # the kernel's request
+        self._launch_relisting(self._model, state, 0)
+
+    def _launch_relisting(self, model: Model, state: State, steps: int) -> None:
+        """One serial launch of ``steps`` steps that rebuilds the lists itself (``relists``)."""
+        with plain_compile():  # see runtime.plain_compile
+            self.rebuilds += collide.launch(
+                self._arguments(model, state, steps),
+                serial=collide.SERIAL_RELISTS,
+                warm=True,
+                sweeps=model.scene.contact.iterations - 1,
+                last=True,
+            )
 
     def ensure_overlaps_listed(self, state: State) -> None:
         """Make the lists hold every pair of balls that overlap now, building them only when they may
@@ -171,16 +202,12 @@ class Stepping:
         if not self.lists_valid or self.upper.shape[1] < width:  # first step, or lists built narrower since
             self.capacity = width
             with in_one_thread():  # (see one_thread)
-                self.build(state)
-                grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
-        with plain_compile():  # see runtime.plain_compile
-            self.rebuilds += collide.launch(
-                self._arguments(model, state, steps),
-                serial=collide.SERIAL_RELISTS,
-                warm=True,
-                sweeps=model.scene.contact.iterations - 1,
-                last=True,
-            )
+                if steps > 0 and not self.lists_valid:  # the launch lists the balls (nothing to carry over)
+                    self.make_room_to_relist(state)
+                else:  # (lists to carry over into wider tables)
+                    self.build(state)
+                    grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
+        self._launch_relisting(model, state, steps)
         self._advance_time(model, state, steps)
 
     def _advance_serially_between_builds(self, model: Model, state: State, steps: int, came: list[int]) -> None:
