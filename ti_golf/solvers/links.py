@@ -8,6 +8,7 @@ resting impulse is stashed by (owner, neighbour) and carried into the new lists
 scene inside a serial kernel by testing every pair.
 """
 
+import numpy as np
 import taichi as ti
 
 from ti_golf.physics.types import (
@@ -20,10 +21,12 @@ from ti_golf.physics.types import (
     is_f64,
     kernel,
     of_ball,
+    pair_columns,
     pair_table,
     vec3_array,
     vec3f_array,
 )
+from ti_golf.runtime import np_float
 from ti_golf.solvers.apart import APART_MAX, is_apart
 from ti_golf.solvers.grid import owns, pair_reach
 from ti_golf.solvers.sort import bucket_starts
@@ -31,6 +34,17 @@ from ti_golf.solvers.sort import bucket_starts
 ID_EXACT_F32 = 2**24
 """Balls an f32 run can hold: :func:`stash_ball` keeps the neighbours' ids in the float type, exact
 below 2^24 in f32 (below 2^53 in f64)."""
+
+
+def table_bytes(n: int, width: int, pairs: int, gauss_seidel: bool) -> int:
+    """Bytes of the neighbour and pair tables of ``n`` balls with upper lists ``width`` wide and
+    room for ``pairs`` pairs: per upper-list entry a neighbour (4 bytes); per pair its link in the
+    other ball's lower list (4 bytes), its resting impulse (f32), its row of the sweep's table
+    (:func:`ti_golf.physics.types.pair_columns` floats), and with the Gauss–Seidel sweeps its friction impulse
+    (3 f32)."""
+    f = np.dtype(np_float()).itemsize
+    per_pair = 4 + 4 + pair_columns(gauss_seidel) * f + (12 if gauss_seidel else 0)
+    return n * width * 4 + pairs * per_pair
 
 
 @ti.func

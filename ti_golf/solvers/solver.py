@@ -33,6 +33,7 @@ from ti_golf.runtime import (
 )
 from ti_golf.scene.schema import Scene
 from ti_golf.solvers import apart, grid, links, sort, surfaces
+from ti_golf.solvers.links import table_bytes
 from ti_golf.solvers.record import Recorded, SolverRecord
 from ti_golf.solvers.stepping import Stepping, relists_in_kernel, steps_serially
 from ti_golf.solvers.storage_order import store_in_grid_order
@@ -48,17 +49,6 @@ from ti_golf.solvers.surface_rows import (
 REORDER_MIN_BALLS = 8192
 """From this many balls on, the parallel step stores the balls in grid order (see
 :attr:`CollisionSolver.reorder`): smaller piles stay in the CPU's caches whatever their order."""
-
-
-def table_bytes(n: int, width: int, pairs: int, gauss_seidel: bool) -> int:
-    """Bytes of the neighbour and pair tables of ``n`` balls with upper lists ``width`` wide and
-    room for ``pairs`` pairs: per upper-list entry a neighbour (4 bytes); per pair its link in the
-    other ball's lower list (4 bytes), its resting impulse (f32), its row of the sweep's table
-    (:func:`ti_golf.physics.types.pair_columns` floats), and with the Gauss–Seidel sweeps its friction impulse
-    (3 f32)."""
-    f = np.dtype(np_float()).itemsize
-    per_pair = 4 + 4 + pair_columns(gauss_seidel) * f + (12 if gauss_seidel else 0)
-    return n * width * 4 + pairs * per_pair
 
 
 PAIR_ROOM = 16
@@ -318,11 +308,9 @@ class CollisionSolver(Recorded, Stepping):
         self._valid = True
 
     def make_room_to_relist(self, state: State) -> None:
-        """Make the tables of a solver that rebuilds its lists in its kernel (``relists``) for the
-        balls of ``state``, no lists in them yet, and ask the kernel for lists: its next launch
-        lists every pair at the start of its first step (``links.relist_all_pairs``), the lists a
-        build through the grid would make, bit for bit, without launching the grid's kernels (the
-        first launches of a small scene's build were about a third of its start)."""
+        """Make the tables of a solver that ``relists`` in its kernel, empty, for the balls of
+        ``state``, and ask the kernel for lists: its next launch lists every pair first
+        (``links.relist_all_pairs``), as a build through the grid would, bit for bit."""
         self._last_grid = None
         self._ids = state.ids
         self._size_cells(state)  # (the grid a build would size, kept as a saved run keeps it: see record)
