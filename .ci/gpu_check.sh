@@ -54,7 +54,7 @@ PY
 nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader >"$OUT_DIR/gpu.txt" 2>&1 || true
 cold=$(mktemp -d)
 # The pour's kernels compiled from an empty cache (a pour of a few thousand balls: compile time is reported apart).
-figure cuda_cold_compile 60 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --n 8192 --t 0.05 --arch "$GPU_ARCH"
+figure cuda_cold_compile 50 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --n 8192 --t 0.05 --arch "$GPU_ARCH"
 # Its kernels are the pour's: keep them, so that the pours below do not compile them again.
 mkdir -p "$TI_OFFLINE_CACHE_FILE_PATH" && cp -r "$cold"/. "$TI_OFFLINE_CACHE_FILE_PATH"/
 rm -rf "$cold"
@@ -64,7 +64,12 @@ rm -rf "$cold"
 cold=$(mktemp -d)
 figure cuda_pit_100k_passes 90 TI_GOLF_CUDA_PASSES=1 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --t 1 --every 0.25 --arch "$GPU_ARCH"
 rm -rf "$cold"
-figure cuda_pit_100k 120 -- bench pit --every 0.25 --arch "$GPU_ARCH"
+# All 32 colours in one launch (one host call a sweep's pass instead of nine): from an empty cache, its
+# compile time and the launches a step.
+cold=$(mktemp -d)
+figure cuda_colours_32 60 TI_GOLF_COLOURS_PER_LAUNCH=32 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --n 8192 --t 0.05 --arch "$GPU_ARCH"
+rm -rf "$cold"
+figure cuda_pit_100k 100 -- bench pit --every 0.25 --arch "$GPU_ARCH"
 figure cuda_pit_1m 60 -- bench pit --n 1000000 --every 0.25 --arch "$GPU_ARCH"
 # Where a GPU step's time goes while the balls land: each kernel's seconds and launches against the wall.
 figure cuda_pit_profile 50 -- bench pit --t 0.3 --profile --arch "$GPU_ARCH"
