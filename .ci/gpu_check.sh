@@ -22,7 +22,10 @@ RESULT="$OUT_DIR/gpu_check.json"
 echo "{}" >"$RESULT"
 
 # figure NAME LIMIT_S [ENV=VALUE ...] -- ARGS...: run `ti-golf ARGS --json` under LIMIT_S seconds and keep its
-# JSON line as RESULT[NAME] (or its exit status and last error line when it printed none).
+# JSON line as RESULT[NAME] (or its exit status and last error line when it printed none). Where nvidia-smi
+# answers, the card's memory in use is sampled every 0.2 s meanwhile: gpu_memory_before_mib (the first
+# sample, before the process starts) and gpu_memory_peak_mib (the process's CUDA context, Taichi's memory
+# pool and the arrays together: an upper bound on what the arrays take).
 figure() {
   local name=$1 limit=$2
   shift 2
@@ -32,16 +35,27 @@ figure() {
   shift
   local log="$OUT_DIR/$name.log" start end
   echo "== $name (limit ${limit} s): ti-golf $*" >&2
+  : >"$log.mem"
+  local sampler=""
+  if command -v nvidia-smi >/dev/null 2>&1; then
+    nvidia-smi --query-gpu=memory.used --format=csv,noheader,nounits -lms 200 >"$log.mem" 2>/dev/null &
+    sampler=$!
+    sleep 0.3
+  fi
   start=$(date +%s.%N)
   env "${envs[@]}" timeout -s INT -k 20 "$limit" "$PY" -m ti_golf "$@" --json >"$log.out" 2>"$log"
   local rc=$?
   end=$(date +%s.%N)
-  "$PY" - "$RESULT" "$name" "$log.out" "$log" "$rc" "$start" "$end" "$*" <<'PY'
+  [ -n "$sampler" ] && kill "$sampler" 2>/dev/null && wait "$sampler" 2>/dev/null
+  "$PY" - "$RESULT" "$name" "$log.out" "$log" "$rc" "$start" "$end" "$*" "$log.mem" <<'PY'
 import json, os, sys
-result, name, out, err, rc, start, end, args = sys.argv[1:]
+result, name, out, err, rc, start, end, args, mem = sys.argv[1:]
 lines = [l for l in open(out).read().splitlines() if l.startswith("{")]
 entry = json.loads(lines[-1]) if lines else {"error": (open(err).read().strip().splitlines() or ["(nothing)"])[-1]}
 entry.update(exit_status=int(rc), process_wall_s=round(float(end) - float(start), 2), command="ti-golf " + args + " --json")
+used = [int(s) for s in open(mem).read().split() if s.isdigit()]
+if used:
+    entry.update(gpu_memory_before_mib=used[0], gpu_memory_peak_mib=max(used))
 data = json.load(open(result))
 data[name] = entry
 tmp = result + ".tmp"
