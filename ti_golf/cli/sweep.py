@@ -28,10 +28,10 @@ from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import parse_range
 
 TRAJECTORIES = 21
+"""The trajectories ``--plot`` draws by default."""
 
 SWEEP_OPTIONS = {"angles_deg": "--angles", "speeds": "--speeds", "spins": "--spins"}
 """The option of each argument of :func:`ti_golf.golf.sweep.sweep` that ``ti-golf sweep`` gives."""
-"""The trajectories ``--plot`` draws by default."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

@@ -202,7 +202,7 @@ class Stepping:
         if not self.lists_valid or self.upper.shape[1] < width:  # first step, or lists built narrower since
             self.capacity = width
             with in_one_thread():  # (see one_thread)
-                if steps > 0 and not self.lists_valid:  # the launch lists the balls (nothing to carry over)
+                if not self.lists_valid:  # the launch lists the balls (nothing to carry over)
                     self.make_room_to_relist(state)
                 else:  # (lists to carry over into wider tables)
                     self.build(state)
