@@ -9,9 +9,11 @@ instance), in two steps:
    cache's key is a hash of that IR;
 2. the **compilation** (``Program.compile_kernel``, at the first launch): the IR optimised and
    compiled by LLVM, or, when the offline cache holds the kernel, loaded from it;
-3. the rest of that **first launch**: on the CPU, LLVM's O3 passes and its machine code for the
-   compiled module (which the cache does not keep, so every process pays them), then the
-   kernel's first run.
+3. the rest of that **first launch**: on the CPU, the machine code for the compiled module, then
+   the kernel's first run. The cache keeps the module as LLVM IR text, already through LLVM's O3
+   passes; every process parses it and has LLVM's JIT select instructions and allocate registers
+   for it again, a cost that grows with the IR's length (loops the O3 passes unrolled or
+   vectorised, and each ``ti.func`` inlined at every call site, count as often as they appear).
 
 :class:`KernelLog` wraps both (for as long as it is installed) and keeps, per kernel, the instances
 prepared (by the names Taichi gives them) and the seconds of each step. Which instances came from

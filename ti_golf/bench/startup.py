@@ -279,8 +279,8 @@ def profile_lines(result: dict[str, Any], top: int | None = None) -> list[str]:
         f"kernels: {result['instances']} instances prepared, {result['compiled']} compiled and "
         f"{result['instances'] - result['compiled']} loaded from the cache; Taichi's front end "
         f"{result['front_end_s']:.2f} s, compile or load {result['compile_s']:.2f} s, first launches "
-        f"{result['first_launch_s']:.2f} s (LLVM's O3 passes and machine code, which the cache does not keep, "
-        "and the kernels' first runs)",
+        f"{result['first_launch_s']:.2f} s (the machine code LLVM makes from the cached IR, which the cache does "
+        "not keep, and the kernels' first runs)",
         f"{'front end [s]':>13}  {'compile [s]':>11}  {'first launch [s]':>16}  {'instances':>9}  {'compiled':>8}  kernel",
     ]
     for k in result["kernels"][:top]:

@@ -154,16 +154,16 @@ def sort_bucket(b, x: ti.template(), start: ti.template(), sorted_ids: ti.templa
     g apart for the gaps g = …, 40, 13, 4 (Knuth's, (3^k − 1)/2, the largest below a third of its
     balls first: a Shell sort), so that the last insertion sort moves each id a few places, not
     past a quarter of the others. ``stored_after`` is a strict total order (ties broken by id), so
-    either way the order is the same."""
+    either way the order is the same. One loop over the gaps, the last 1, so that the kernel holds
+    one copy of the insertion pass (its machine code is made at every start)."""
     lo, hi = start[b], start[b + 1]
+    gap = 1
     if hi - lo > SHELL_MIN:
-        gap = 1
         while gap < (hi - lo) // 3:
             gap = 3 * gap + 1
-        while gap > 1:
-            insertion_pass(lo, hi, gap, x, sorted_ids)
-            gap //= 3
-    insertion_pass(lo, hi, 1, x, sorted_ids)
+    while gap >= 1:
+        insertion_pass(lo, hi, gap, x, sorted_ids)
+        gap //= 3
 
 
 @ti.func
