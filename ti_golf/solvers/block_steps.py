@@ -23,9 +23,9 @@ from ti_golf.physics.types import (
     scalars_of,
 )
 from ti_golf.solvers.collide import step_balls
-from ti_golf.solvers.colour import COLOURS, PROJECTIONS, in_play, phase_of_sweep, project_ball, sweep_ball
+from ti_golf.solvers.colour import COLOURS, PROJECTIONS, phase_of_sweep, project_ball, sweep_ball
 from ti_golf.solvers.phases import Phase
-from ti_golf.solvers.stale import flag_stale_lists
+from ti_golf.solvers.stale import flag_stale_lists, in_play
 from ti_golf.solvers.step import Step
 
 
@@ -106,7 +106,7 @@ def gauss_seidel_steps(
 
 @ti.func
 def any_in_play(status: ti.template()):
-    """Whether some ball of ``status`` is awake and in play (:func:`.colour.in_play`), in the
+    """Whether some ball of ``status`` is awake and in play (:func:`.stale.in_play`), in the
     calling (serial) thread."""
     moving = 0
     for i in range(status.shape[0]):

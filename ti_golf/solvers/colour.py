@@ -56,7 +56,7 @@ from ti_golf.solvers.sequential import (
     sweep_pair,
 )
 from ti_golf.solvers.sort import bucket_in_turn, cell_of, counting_sort, sort_bucket, spread_turns, task_stride
-from ti_golf.solvers.stale import flag_stale_lists
+from ti_golf.solvers.stale import flag_stale_lists, in_play
 from ti_golf.solvers.step import Step
 from ti_golf.solvers.surfaces import surface_impulses
 
@@ -90,12 +90,6 @@ def moving_balls(status: int_array) -> ti.i32:
     for i in range(status.shape[0]):
         moving += in_play(status[i])  # (an integer sum: the same on every thread order)
     return moving
-
-
-@ti.func
-def in_play(status):
-    """1 for a ball of ``status`` awake and in play (neither ``AT_REST`` nor ``OUT_OF_BOUNDS``), else 0."""
-    return ti.cast(status != AT_REST and status != OUT_OF_BOUNDS, ti.i32)
 
 
 @ti.func

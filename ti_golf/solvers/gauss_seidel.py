@@ -158,18 +158,19 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
             )
         )
 
-    def _sweep(self, iterations: int, arguments: tuple) -> int:
+    def _sweep(self, iterations: int, arguments: tuple) -> tuple[bool, bool | None]:
         """One parallel step: the free flight and warm start, ``iterations`` coloured sweeps and
         the restitution pass (``colour.step_phases``), the last sweep, which only finishes the
         step, then ``colour.PROJECTIONS`` passes of the position projection. Returns whether the
-        lists must be rebuilt (``stale.lists_stale``)."""
+        lists must be rebuilt and whether some ball is awake and in play, from one readback
+        (:meth:`_after_step`)."""
         collide.launch(arguments, serial=collide.PARALLEL, warm=True, sweeps=0, last=False)
         scalars, _, _, _, kinds, model, lists, state, _, scratch = arguments
         if self.colours is not None:  # the contacts layout (contact_colour)
             contact_colour.gauss_seidel_step(self.colours, iterations, arguments)
             collide.launch(arguments, serial=collide.PARALLEL, warm=False, sweeps=0, last=True)
             contact_colour.project(self.colours, arguments)
-            return stale.lists_stale(scalars, *self.last_grid(), model, lists, state, scratch)
+            return self._after_step(arguments)
         any_far, inv_cell, tasks, blocks = self._block_order()
         for phase in colour.step_phases(iterations):
             with plain_compile():  # see runtime.plain_compile
@@ -195,4 +196,11 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
             colour.project_sweep(
                 any_far, inv_cell, tasks, scalars, model, lists=lists, state=state, scratch=scratch, blocks=blocks
             )
-        return stale.lists_stale(scalars, *self.last_grid(), model, lists, state, scratch)
+        return self._after_step(arguments)
+
+    def _after_step(self, arguments: tuple) -> tuple[bool, bool]:
+        """Whether the lists must be rebuilt after a parallel step, and whether some ball is awake
+        and in play (``stale.lists_stale``, one readback)."""
+        scalars, _, _, _, _, model, lists, state, _, scratch = arguments
+        answer = int(stale.lists_stale(scalars, *self.last_grid(), model, lists, state, scratch))
+        return bool(answer & stale.LISTS_STALE), bool(answer & stale.BALLS_AWAKE)

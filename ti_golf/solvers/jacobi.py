@@ -34,8 +34,8 @@ class JacobiSolver(CollisionSolver, kind="jacobi"):
 
     gauss_seidel = False
 
-    def _sweep(self, iterations: int, arguments: tuple) -> int:
+    def _sweep(self, iterations: int, arguments: tuple) -> tuple[bool, bool | None]:
         rebuild = 0
         for warm, sweeps, last in sweep_launches(iterations):
             rebuild = collide.launch(arguments, serial=collide.PARALLEL, warm=warm, sweeps=sweeps, last=last)
-        return rebuild
+        return bool(rebuild), None

@@ -33,9 +33,18 @@ from ti_golf.physics.types import (
     of_ball,
     scalars_of,
 )
+from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
 from ti_golf.solvers.links import distance_from_build, listed
 from ti_golf.solvers.sort import bucket_of, cell_of
 from ti_golf.solvers.step import Step
+
+LISTS_STALE = 1
+"""Bit of :func:`lists_stale`'s answer: the lists must be rebuilt before the next step."""
+
+BALLS_AWAKE = 2
+"""Bit of :func:`lists_stale`'s answer: some ball is awake and in play after the step
+(:func:`in_play`), so that the next step is not to be skipped (``colour.moving_balls``, asked of
+the balls without a readback of its own)."""
 
 REACH_CELLS = 2
 """Cells on each side of a ball's cell (at the build) in which :func:`stale_near` looks for the
@@ -229,11 +238,22 @@ def lists_stale(
     state: BallState,
     scratch: StepScratch,
 ) -> ti.i32:
-    """Whether the lists must be rebuilt after a parallel Gauss–Seidel step (its projection done):
-    :func:`flag_stale_lists` with the grid of the last build (``g``, ``grid``, ``apart_ids`` and
-    ``stored_sorted`` as :func:`.grid.list_neighbours` had them) and the step's scalars
-    (:func:`ti_golf.physics.types.scalars_of`). Returns ``scratch.flag[0]``."""
+    """What the host needs after a parallel Gauss–Seidel step (its projection done), in one
+    readback: ``LISTS_STALE`` when the lists must be rebuilt (:func:`flag_stale_lists` with the
+    grid of the last build, ``g``, ``grid``, ``apart_ids`` and ``stored_sorted`` as
+    :func:`.grid.list_neighbours` had them, and the step's scalars,
+    :func:`ti_golf.physics.types.scalars_of`), plus ``BALLS_AWAKE`` when some ball is awake and
+    in play."""
     _air, contact, terrain, params = scalars_of(scalars)
     s = ti.static(Step(contact, terrain, params, model, lists, state, scratch))
     flag_stale_lists(s, serial=False, g=g, grid=grid, apart_ids=apart_ids, stored_sorted=stored_sorted)
-    return scratch.flag[0]
+    moving = 0
+    for i in range(state.status.shape[0]):
+        moving += in_play(state.status[i])  # (an integer sum: the same on every thread order)
+    return LISTS_STALE * ti.min(scratch.flag[0], 1) + BALLS_AWAKE * ti.min(moving, 1)
+
+
+@ti.func
+def in_play(status):
+    """1 for a ball of ``status`` awake and in play (neither ``AT_REST`` nor ``OUT_OF_BOUNDS``), else 0."""
+    return ti.cast(status != AT_REST and status != OUT_OF_BOUNDS, ti.i32)

@@ -187,8 +187,10 @@ class Stepping:
                     self._advance_serially_between_builds(model, state, int(steps), came)
                 self.rebuild_due = bool(int_at(self.flag, 0))  # (the serial kernels' request, for a saved run)
             else:
+                awake: bool | None = None  # whether a ball is awake and in play: asked of the balls at first
                 for k in range(int(steps)):
-                    if not self._step_in_parallel(model, state):  # skipped: so would every step after it be
+                    taken, awake = self._step_in_parallel(model, state, awake)
+                    if not taken:  # skipped: so would every step after it be
                         self._skip_still_steps(model, state, int(steps) - k - 1)
                         break
                     if came:  # Ctrl-C or SIGTERM: stop after this whole step
@@ -236,21 +238,23 @@ class Stepping:
             state.t += model.dt  # as one step at a time adds it, to the same round-off
         state.steps += steps
 
-    def _step_in_parallel(self, model: Model, state: State) -> bool:
+    def _step_in_parallel(self, model: Model, state: State, awake: bool | None) -> tuple[bool, bool | None]:
         """One parallel step, the lists built first when due; or, with ``skip_still`` and no ball
-        awake and in play, the time advanced alone (the step would change nothing). Returns
-        whether the step was taken."""
+        awake and in play, the time advanced alone (the step would change nothing). ``awake``:
+        whether some ball is, as the step before reported it (``None``: not known, so the balls
+        are asked). Returns whether the step was taken, and whether some ball is awake after it
+        (``None`` when the kind of sweeps does not say)."""
         if not self.lists_valid or self.rebuild_due:
             self.build(state)
-        elif self.skip_still and self._all_still(state):
+        elif self.skip_still and (not awake if awake is not None else self._all_still(state)):
             self._skip_still_steps(model, state, 1)
-            return False
-        rebuild = self._sweep(model.scene.contact.iterations, self._arguments(model, state, 1))
+            return False, False
+        rebuild, awake = self._sweep(model.scene.contact.iterations, self._arguments(model, state, 1))
         state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
         state.t += model.dt
         state.steps += 1
-        self.rebuild_due = bool(rebuild)
-        return True
+        self.rebuild_due = rebuild
+        return True, awake
 
     def _skip_still_steps(self, model: Model, state: State, steps: int) -> None:
         """Skip ``steps`` steps in which no ball is awake and in play (``skip_still``): none would
@@ -264,10 +268,11 @@ class Stepping:
         kinds whose sweeps leave such a step unchanged say so)."""
         return False
 
-    def _sweep(self, iterations: int, arguments: tuple) -> int:
+    def _sweep(self, iterations: int, arguments: tuple) -> tuple[bool, bool | None]:
         """One parallel step's launches, from the free flight to the new positions in ``x_free``,
         with ``iterations`` sweeps; ``arguments``: :meth:`_arguments`. Returns whether the lists
-        must be rebuilt before the next step."""
+        must be rebuilt before the next step, and whether some ball is awake and in play after
+        it (``None`` from a kind that does not say: :meth:`_all_still` is then asked)."""
         raise NotImplementedError
 
     def _serial_steps(self, iterations: int, arguments: tuple) -> int:
