@@ -1254,6 +1254,32 @@ def test_the_kernel_log_times_each_instances_front_end_and_compilation():
     assert cache_hits(line + "Create kernel 'scaled_c80_0' from cache (key='T2a43')") == {"scaled_c80_0"}
 
 
+def test_the_keys_and_module_lengths_of_cached_kernels_are_read_from_the_log_and_the_cache(tmp_path):
+    import struct
+
+    from ti_golf.kernel_log import cache_keys, cached_module_lines
+
+    log = "\n".join(
+        [
+            "[D 11/28/26 14:49:03.602 23182] [kernel_compilation_manager.cpp:try_load_cached_kernel@224] "
+            "Create kernel 'scaled_c80_0' from cache (key='T2a43')",
+            "[D 11/28/26 14:49:03.700 23182] [kernel_compilation_manager.cpp:compile_and_cache_kernel@242] "
+            "Cache kernel 'sweep_c82_1' (key='T9f00')",
+            "[D 11/28/26 14:49:03.800 23182] Create KernelCompilationManager with offline_cache_file_path = /x",
+        ]
+    )
+    assert cache_keys(log) == {"scaled_c80_0": "T2a43", "sweep_c82_1": "T9f00"}
+    metadata, module = b'{"args":[]}', b"; ModuleID = 'kernel'\ndefine void @f() {\n  ret void\n}\n"
+    good = tmp_path / "T2a43.tic"
+    good.write_bytes(b"TIC\0\0\0\0\0" + struct.pack("<QQ", len(metadata), len(module)) + metadata + module + b"\n\n")
+    assert cached_module_lines(good) == 4  # the module's lines, not the metadata's or the checksum's
+    truncated = tmp_path / "T9f00.tic"
+    truncated.write_bytes(good.read_bytes()[:40])
+    (tmp_path / "other.tic").write_bytes(b"not a cache file")
+    assert cached_module_lines(truncated) is None and cached_module_lines(tmp_path / "other.tic") is None
+    assert cached_module_lines(tmp_path / "missing.tic") is None
+
+
 def test_a_long_start_says_what_taichi_is_doing():
     from ti_golf.cli._common import StartupStatus
 
@@ -1315,11 +1341,14 @@ def test_bench_startup_kernels_reports_each_kernels_front_end_and_what_was_compi
     assert min(first) > 0 and sum(first) == pytest.approx(report["first_launch_s"], rel=1e-3)
     assert sum(first) < report["stages"]["first_step_s"] + report["stages"]["setup_s"]  # (launches in both)
     assert set(report["stages"]) == {"import_s", "init_s", "setup_s", "first_step_s", "total_s"}
+    lines = {k["kernel"]: k["module_lines"] for k in report["kernels"]}  # each module, found in the cache
+    assert all(n > 0 for n in lines.values()) and sum(lines.values()) == report["module_lines"]
     ok(run_cli("run", "lab_vacuum", "--steps", "1"))  # the default cache now holds them
-    warm = json.loads(
-        ok(run_cli("bench", "startup", "--kernels", "lab_vacuum", "--cache", "warm", "--json")).stdout.splitlines()[-1]
-    )
+    warm_run = ok(run_cli("bench", "startup", "--kernels", "lab_vacuum", "--cache", "warm", "--json"))
+    warm = json.loads(warm_run.stdout.splitlines()[-1])
     assert warm["compiled"] == 0 and warm["instances"] == report["instances"]
+    assert {k["kernel"]: k["module_lines"] for k in warm["kernels"]} == lines  # the same modules, loaded
+    assert f"the modules {report['module_lines']:,} lines" in warm_run.stdout
 
 
 @pytest.mark.parametrize(

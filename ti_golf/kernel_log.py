@@ -25,11 +25,13 @@ table; the CLI reads the log to say what it is doing while a start takes long.
 from __future__ import annotations
 
 import re
+import struct
 import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from taichi.lang import impl
@@ -42,6 +44,39 @@ CACHE_HIT = re.compile(r"Create kernel '([^']+)' from cache")
 def cache_hits(log: str) -> set[str]:
     """The names of the kernel instances that Taichi's debug ``log`` says it loaded from the cache."""
     return set(CACHE_HIT.findall(log))
+
+
+CACHE_KEY = re.compile(r"(?:Create kernel '([^']+)' from cache|Cache kernel '([^']+)') \(key='(\w+)'\)")
+"""Taichi's debug-log lines that give an instance's key in the offline cache: loaded from it, or
+compiled into it (the file is written when the process ends)."""
+
+
+def cache_keys(log: str) -> dict[str, str]:
+    """Each kernel instance's key in the offline cache, by the instance's name, from Taichi's debug
+    ``log``: its module lies in the cache folder as ``KEY.tic``."""
+    return {loaded or cached: key for loaded, cached, key in CACHE_KEY.findall(log)}
+
+
+CACHE_FILE_MAGIC = b"TIC\0"
+"""The first bytes of a file of Taichi 1.7's offline cache: then a version, the lengths of the
+metadata and of the module's source (two little-endian 64-bit integers), the metadata (JSON), the
+source (on the CPU and CUDA, LLVM IR text) and a checksum."""
+
+
+def cached_module_lines(path: Path) -> int | None:
+    """Lines of the compiled module that the offline-cache file ``path`` holds: its length, which
+    the machine code made from it at every first launch grows with (LLVM IR text on the CPU);
+    ``None`` when the file is missing or not of the form :data:`CACHE_FILE_MAGIC` describes."""
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None
+    if len(data) < 24 or not data.startswith(CACHE_FILE_MAGIC):
+        return None
+    metadata, source = struct.unpack_from("<QQ", data, 8)
+    if 24 + metadata + source > len(data):
+        return None
+    return data.count(b"\n", 24 + metadata, 24 + metadata + source)
 
 
 @dataclass

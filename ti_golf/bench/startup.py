@@ -28,9 +28,10 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
-from ti_golf.kernel_log import cache_hits
+from ti_golf.kernel_log import cache_hits, cache_keys, cached_module_lines
 from ti_golf.scene.balls import ball_count
 from ti_golf.scene.loader import load_scene, scenes_dir
 
@@ -202,6 +203,8 @@ def profile_in_process(scene: str, start: float) -> dict[str, Any]:
     """The stages and kernels of one run's start in this (fresh) process: imports (since
     ``start``, the script's first line), ``ti.init``, the simulation's set-up and its first step,
     with every kernel's front end and compilation timed (:class:`~ti_golf.kernel_log.KernelLog`)."""
+    from taichi.lang import impl
+
     from ti_golf import runtime
     from ti_golf.kernel_log import KernelLog
     from ti_golf.sim.simulation import Simulation
@@ -225,6 +228,7 @@ def profile_in_process(scene: str, start: float) -> dict[str, Any]:
         "scene": scene,
         "arch": info.arch,
         "precision": info.precision,
+        "cache_path": impl.current_cfg().offline_cache_file_path,
         "stages": stages,
         "load_average": load,
         "instances": instances,
@@ -250,22 +254,33 @@ def start_profile(
 ) -> dict[str, Any]:
     """:func:`profile_in_process` in a fresh process, with the kernel cache as it is or, with
     ``cold``, empty (a temporary folder); each kernel's ``compiled`` instances are those its debug
-    log does not say it loaded from the cache (:func:`~ti_golf.kernel_log.cache_hits`)."""
+    log does not say it loaded from the cache (:func:`~ti_golf.kernel_log.cache_hits`), and its
+    ``module_lines`` the lines of its instances' compiled modules in the cache
+    (:func:`~ti_golf.kernel_log.cached_module_lines`; ``None`` where one is not found there)."""
     with tempfile.TemporaryDirectory(prefix="ti-golf-cold-cache-") as cache:
         env = {**_env(arch, precision, cache if cold else None), "TI_LOG_LEVEL": "debug"}
         proc = subprocess.run(
             [sys.executable, "-c", PROFILE_SCRIPT, scene], capture_output=True, text=True, env=env, timeout=timeout
         )
-    if proc.returncode != 0:
-        last = (proc.stderr.strip().splitlines() or ["(no message)"])[-1]
-        raise RuntimeError(f"the profiled run of {scene} failed (exit code {proc.returncode}): {last}")
-    result = json.loads(proc.stdout.strip().splitlines()[-1])
-    result["cache"] = "cold" if cold else "warm"
-    hits = cache_hits(proc.stderr)
-    for k in result["kernels"]:
-        k["compiled"] = sum(name not in hits for name in k.pop("instance_names"))
+        if proc.returncode != 0:
+            last = (proc.stderr.strip().splitlines() or ["(no message)"])[-1]
+            raise RuntimeError(f"the profiled run of {scene} failed (exit code {proc.returncode}): {last}")
+        result = json.loads(proc.stdout.strip().splitlines()[-1])
+        result["cache"] = "cold" if cold else "warm"
+        hits, keys, folder = cache_hits(proc.stderr), cache_keys(proc.stderr), Path(result.pop("cache_path"))
+        for k in result["kernels"]:
+            names = k.pop("instance_names")
+            k["compiled"] = sum(name not in hits for name in names)
+            lines = [cached_module_lines(folder / f"{keys[name]}.tic") if name in keys else None for name in names]
+            k["module_lines"] = _total(lines)
     result["compiled"] = sum(k["compiled"] for k in result["kernels"])
+    result["module_lines"] = _total([k["module_lines"] for k in result["kernels"]])
     return result
+
+
+def _total(counts: Sequence[int | None]) -> int | None:
+    """The sum of ``counts``, or ``None`` when one of them is not known."""
+    return None if None in counts else sum(n for n in counts if n is not None)
 
 
 def profile_lines(result: dict[str, Any], top: int | None = None) -> list[str]:
@@ -279,16 +294,22 @@ def profile_lines(result: dict[str, Any], top: int | None = None) -> list[str]:
         f"kernels: {result['instances']} instances prepared, {result['compiled']} compiled and "
         f"{result['instances'] - result['compiled']} loaded from the cache; Taichi's front end "
         f"{result['front_end_s']:.2f} s, compile or load {result['compile_s']:.2f} s, first launches "
-        f"{result['first_launch_s']:.2f} s (the machine code LLVM makes from the cached IR, which the cache does "
-        "not keep, and the kernels' first runs)",
-        f"{'front end [s]':>13}  {'compile [s]':>11}  {'first launch [s]':>16}  {'instances':>9}  {'compiled':>8}  kernel",
+        f"{result['first_launch_s']:.2f} s (the machine code made from the compiled modules, which the cache "
+        f"does not keep, and the kernels' first runs); the modules {_lines(result['module_lines'])} lines",
+        f"{'front end [s]':>13}  {'compile [s]':>11}  {'first launch [s]':>16}  {'module lines':>12}  "
+        f"{'instances':>9}  {'compiled':>8}  kernel",
     ]
     for k in result["kernels"][:top]:
         lines.append(
-            f"{k['front_end_s']:13.3f}  {k['compile_s']:11.3f}  {k['first_launch_s']:16.3f}  {k['instances']:9d}  "
-            f"{k['compiled']:8d}  {k['kernel']}"
+            f"{k['front_end_s']:13.3f}  {k['compile_s']:11.3f}  {k['first_launch_s']:16.3f}  "
+            f"{_lines(k['module_lines']):>12}  {k['instances']:9d}  {k['compiled']:8d}  {k['kernel']}"
         )
     return lines
+
+
+def _lines(count: int | None) -> str:
+    """A count of lines for people, ``?`` when it is not known."""
+    return "?" if count is None else f"{count:,}"
 
 
 def scene_names() -> list[str]:
