@@ -56,7 +56,7 @@ from ti_golf.solvers.sequential import (
     sweep_pair,
 )
 from ti_golf.solvers.sort import bucket_in_turn, cell_of, counting_sort, sort_bucket, spread_turns, task_stride
-from ti_golf.solvers.stale import flag_stale_lists, in_play
+from ti_golf.solvers.stale import balls_in_play, flag_stale_lists
 from ti_golf.solvers.step import Step
 from ti_golf.solvers.surfaces import surface_impulses
 
@@ -86,10 +86,7 @@ def moving_balls(status: int_array) -> ti.i32:
     """How many balls are awake and in play: neither asleep (``AT_REST``) nor out of bounds. With
     the Gauss–Seidel sweeps, a step in which none is changes nothing (:func:`stands_firm`: a ball
     asleep takes no impulse and does not move, and only a moving ball wakes it)."""
-    moving = 0
-    for i in range(status.shape[0]):
-        moving += in_play(status[i])  # (an integer sum: the same on every thread order)
-    return moving
+    return balls_in_play(status)
 
 
 @ti.func

@@ -247,10 +247,18 @@ def lists_stale(
     _air, contact, terrain, params = scalars_of(scalars)
     s = ti.static(Step(contact, terrain, params, model, lists, state, scratch))
     flag_stale_lists(s, serial=False, g=g, grid=grid, apart_ids=apart_ids, stored_sorted=stored_sorted)
+    return LISTS_STALE * ti.min(scratch.flag[0], 1) + BALLS_AWAKE * ti.min(balls_in_play(state.status), 1)
+
+
+@ti.func
+def balls_in_play(status: ti.template()):
+    """How many balls of ``status`` are awake and in play (:func:`in_play`): a loop of its own at
+    a kernel's top level, else in the calling thread. An integer sum: the same on every thread
+    order."""
     moving = 0
-    for i in range(state.status.shape[0]):
-        moving += in_play(state.status[i])  # (an integer sum: the same on every thread order)
-    return LISTS_STALE * ti.min(scratch.flag[0], 1) + BALLS_AWAKE * ti.min(moving, 1)
+    for i in range(status.shape[0]):
+        moving += in_play(status[i])
+    return moving
 
 
 @ti.func
