@@ -23,7 +23,7 @@ from typing import NoReturn
 import numpy as np
 import taichi as ti
 
-from ti_golf import front_end
+from ti_golf import front_end, kernel_cache
 from ti_golf.errors import ConfigError
 
 ARCHES = ("cpu", "cuda", "vulkan", "gpu")
@@ -166,7 +166,10 @@ def init(
     _info = RuntimeInfo(
         requested_arch=want_arch, arch=str(actual).split(".")[-1], precision=want_prec, plain_on_cuda=_plain_on_cuda()
     )
-    if announce_first_compile and not kernels_cached():
+    first_run = not kernels_cached()
+    kernel_cache.open_cache()  # (the cache's metadata read in this process's turn: see kernel_cache)
+    atexit.register(reset_runtime)  # (run before the interpreter's teardown, after later handlers)
+    if announce_first_compile and first_run:
         print(
             "ti-golf: first run on this machine: Taichi compiles the kernels as they are first used "
             f"(up to a minute in all) and keeps them in {ti.lang.impl.current_cfg().offline_cache_file_path}",
@@ -235,12 +238,24 @@ def exit_process(code: int) -> NoReturn:
     performance page, "Design measurements")."""
     try:
         atexit._run_exitfuncs()
-        if _info is not None:
-            ti.reset()
+        reset_runtime()
     finally:
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(code)
+
+
+def reset_runtime() -> None:
+    """End Taichi's runtime, which writes the kernels compiled in this process to the offline
+    cache, in this process's turn at the cache (:func:`ti_golf.kernel_cache.taking_turns`), where
+    other processes that share it wait; a later :func:`ensure_init` starts a new one. Registered
+    by :func:`init` to run at exit (before the interpreter's own teardown)."""
+    global _info
+    if _info is None:
+        return
+    with kernel_cache.taking_turns():
+        ti.reset()
+    _info = None
 
 
 def available_memory() -> int | None:
