@@ -6,8 +6,8 @@ cache clean' ..."). It takes that lock twice: when the process first compiles a 
 reads which kernels the cache holds; without them it compiles every kernel again, seconds where a
 load takes milliseconds) and when its runtime ends (it then writes every kernel it compiled or
 loaded, and with them the metadata). Two ``ti-golf`` commands at once, the workers of a study on
-one machine, or the two workers of the test suite often meet there, since one process's writes
-last longer than another's 0.2 s of tries.
+one machine, or the two workers of the test suite meet there now and then, and one process's
+writes can last longer than another's 0.2 s of tries.
 
 :func:`taking_turns` is a lock of the operating system's (``flock``) on a file in the cache
 folder, which a process holds while Taichi takes its own: the others wait for their turn, as
