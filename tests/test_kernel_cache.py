@@ -62,7 +62,7 @@ def test_the_runtime_ends_in_its_turn_at_the_cache(tmp_path, monkeypatch):
     calls = []
     monkeypatch.setattr(runtime, "_info", object())
     monkeypatch.setattr(runtime.ti, "reset", lambda: calls.append(_turn_held()))
-    monkeypatch.setenv("TI_OFFLINE_CACHE_FILE_PATH", str(tmp_path))
+    monkeypatch.setattr(kernel_cache, "cache_folder", lambda: tmp_path)
     runtime.reset_runtime()
     assert calls == [True] and runtime._info is None
     runtime.reset_runtime()  # (ended: nothing more to do)

@@ -18,7 +18,6 @@ first kernel of the process compiles (:func:`open_cache`), and the end of the ru
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -41,9 +40,9 @@ that stopped while holding the lock frees it as it ends, so only a hung one is w
 
 
 def cache_folder() -> Path:
-    """The folder of Taichi's offline kernel cache (``TI_OFFLINE_CACHE_FILE_PATH``, else Taichi's
-    default), as ``ti.init`` will take it."""
-    return Path(os.environ.get("TI_OFFLINE_CACHE_FILE_PATH") or ti.lang.impl.default_cfg().offline_cache_file_path)
+    """The folder of Taichi's offline kernel cache, as ``ti.init`` settled it (from
+    ``TI_OFFLINE_CACHE_FILE_PATH``, else Taichi's default)."""
+    return Path(ti.lang.impl.current_cfg().offline_cache_file_path)
 
 
 @contextmanager

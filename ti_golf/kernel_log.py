@@ -37,24 +37,20 @@ from typing import Any
 from taichi.lang import impl
 from taichi.lang.kernel_impl import Kernel
 
-CACHE_HIT = re.compile(r"Create kernel '([^']+)' from cache")
-"""Taichi's debug-log line for an instance loaded from the offline cache (``TI_LOG_LEVEL=debug``)."""
+CACHE_LINE = re.compile(r"(?:Create kernel '([^']+)' from cache|Cache kernel '([^']+)') \(key='(\w+)'\)")
+"""Taichi's debug-log lines (``TI_LOG_LEVEL=debug``) for an instance loaded from the offline cache
+or compiled into it (the file is written when the process ends): its name, and its key there."""
 
 
 def cache_hits(log: str) -> set[str]:
     """The names of the kernel instances that Taichi's debug ``log`` says it loaded from the cache."""
-    return set(CACHE_HIT.findall(log))
-
-
-CACHE_KEY = re.compile(r"(?:Create kernel '([^']+)' from cache|Cache kernel '([^']+)') \(key='(\w+)'\)")
-"""Taichi's debug-log lines that give an instance's key in the offline cache: loaded from it, or
-compiled into it (the file is written when the process ends)."""
+    return {loaded for loaded, _, _ in CACHE_LINE.findall(log) if loaded}
 
 
 def cache_keys(log: str) -> dict[str, str]:
     """Each kernel instance's key in the offline cache, by the instance's name, from Taichi's debug
-    ``log``: its module lies in the cache folder as ``KEY.tic``."""
-    return {loaded or cached: key for loaded, cached, key in CACHE_KEY.findall(log)}
+    ``log`` (loaded or compiled): its module lies in the cache folder as ``KEY.tic``."""
+    return {loaded or cached: key for loaded, cached, key in CACHE_LINE.findall(log)}
 
 
 CACHE_FILE_MAGIC = b"TIC\0"
