@@ -65,6 +65,11 @@ print(f"   exit {rc}, {float(end) - float(start):.1f} s", file=sys.stderr)
 PY
 }
 
+# ran NAME: whether figure NAME ran and ended well (exit status 0 in RESULT).
+ran() {
+  "$PY" -c 'import json, sys; sys.exit(json.load(open(sys.argv[1])).get(sys.argv[2], {}).get("exit_status", 1) != 0)' "$RESULT" "$1"
+}
+
 nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader >"$OUT_DIR/gpu.txt" 2>&1 || true
 cold=$(mktemp -d)
 # The pour's kernels compiled from an empty cache (a pour of a few thousand balls: compile time is reported apart).
@@ -72,21 +77,18 @@ figure cuda_cold_compile 50 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --n 
 # Its kernels are the pour's: keep them, so that the pours below do not compile them again.
 mkdir -p "$TI_OFFLINE_CACHE_FILE_PATH" && cp -r "$cold"/. "$TI_OFFLINE_CACHE_FILE_PATH"/
 rm -rf "$cold"
-# The long kernels compiled with Taichi's advanced IR passes (runtime.plain_compile leaves them out
-# by default), from an empty cache of their own: the compile time, then the pour's first second, to
-# set beside the first second of cuda_pit_100k (its timeline).
-cold=$(mktemp -d)
-figure cuda_pit_100k_passes 90 TI_GOLF_CUDA_PASSES=1 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --t 1 --every 0.25 --arch "$GPU_ARCH"
-rm -rf "$cold"
 # All 32 colours in one launch (one host call a sweep's pass instead of nine): from an empty cache, its
-# compile time and the launches a step.
+# compile time and the launches a step; its kernels are kept for the pour after it, whose first second
+# sets beside the first second of cuda_pit_100k (its timeline).
 cold=$(mktemp -d)
 figure cuda_colours_32 60 TI_GOLF_COLOURS_PER_LAUNCH=32 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --n 8192 --t 0.05 --arch "$GPU_ARCH"
+cp -r "$cold"/. "$TI_OFFLINE_CACHE_FILE_PATH"/
 rm -rf "$cold"
+ran cuda_colours_32 && figure cuda_pit_100k_colours_32 60 TI_GOLF_COLOURS_PER_LAUNCH=32 -- bench pit --t 1 --every 0.25 --arch "$GPU_ARCH"
 figure cuda_pit_100k 100 -- bench pit --every 0.25 --arch "$GPU_ARCH"
 figure cuda_pit_1m 60 -- bench pit --n 1000000 --every 0.25 --arch "$GPU_ARCH"
 # Where a GPU step's time goes while the balls land: each kernel's seconds and launches against the wall.
-figure cuda_pit_profile 50 -- bench pit --t 0.3 --profile --arch "$GPU_ARCH"
+figure cuda_pit_profile 40 -- bench pit --t 0.3 --profile --arch "$GPU_ARCH"
 # How the CPU backend scales: the same stretch of the 20,000-ball pour (its first half second, the balls
 # landing) on 16 threads and on 2.
 figure cpu16_pit_20k 30 TI_CPU_MAX_NUM_THREADS=16 -- bench pit --n 20000 --t 0.5 --arch cpu
