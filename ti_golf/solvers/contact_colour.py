@@ -37,7 +37,7 @@ from ti_golf.physics.types import (
     of_ball,
     scalars_of,
 )
-from ti_golf.runtime import on_cpu, plain_compile
+from ti_golf.runtime import ensure_init, on_cpu, plain_compile
 from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
 from ti_golf.solvers.colour import PROJECTIONS, step_phases
 from ti_golf.solvers.edge_colouring import COLOURS, OVERFLOW, ColourTables, PairColouring
@@ -56,12 +56,16 @@ from ti_golf.solvers.step import Step
 from ti_golf.solvers.surfaces import surface_impulses
 
 SPAN = 4
-"""Colours a launch of :func:`colour_pass` takes, one parallel loop each: the pair update is
-compiled once per colour of a launch, so a launch of all ``COLOURS`` costs a host call a pass
-instead of nine, but took 2.6 times as long to compile on the CPU (a fresh cache's first step,
-with every other kernel: 251 s against 97 s on a loaded 2-core machine), and LLVM's full
-optimisation of it did not end within 15 minutes. ``TI_GOLF_COLOURS_PER_LAUNCH`` (a divisor of
-``COLOURS``) sets another span, to measure it on a GPU (``make gpu-check``)."""
+"""Colours a launch of :func:`colour_pass` takes, one parallel loop each, on backends other than
+CUDA: the pair update is compiled once per colour of a launch, so a launch of all ``COLOURS``
+costs a host call a pass instead of nine, but took 2.6 times as long to compile on the CPU (a
+fresh cache's first step, with every other kernel: 251 s against 97 s on a loaded 2-core
+machine). On CUDA a launch takes all ``COLOURS`` (``CUDA_SPAN``)."""
+
+CUDA_SPAN = COLOURS
+"""Colours a launch takes on CUDA: all of them, one host call a pass. Measured on an H200
+(``make gpu-check``), against ``SPAN``: the 100,000-ball pour's first second in 23.1 s against 45.1 s,
+the same pile; the pour's kernels compiled from an empty cache in 19.3 s against 8.5 s."""
 
 SPAN_ENV = "TI_GOLF_COLOURS_PER_LAUNCH"
 """The environment variable that sets the colours a launch takes (see ``SPAN``)."""
@@ -77,10 +81,14 @@ def resolve_layout(layout: str) -> str:
 
 
 def colours_per_launch() -> int:
-    """Colours a launch of :func:`colour_pass` takes (``SPAN``, or ``TI_GOLF_COLOURS_PER_LAUNCH``)."""
+    """Colours a launch of :func:`colour_pass` takes: ``TI_GOLF_COLOURS_PER_LAUNCH`` (a divisor of
+    ``COLOURS``) when set, else ``CUDA_SPAN`` on CUDA and ``SPAN`` elsewhere (and on CUDA with
+    Taichi's advanced IR passes, ``TI_GOLF_CUDA_PASSES=1``, under which a launch of all the colours
+    did not compile within 200 s)."""
     text = os.environ.get(SPAN_ENV, "")
     if not text:
-        return SPAN
+        runtime = ensure_init()
+        return CUDA_SPAN if runtime.arch == "cuda" and runtime.plain_on_cuda else SPAN
     allowed = [k for k in range(1, COLOURS + 1) if COLOURS % k == 0]
     if not text.isdigit() or int(text) not in allowed:
         raise ConfigError(SPAN_ENV, None, f"must be one of {', '.join(map(str, allowed))}, not {text!r}")
