@@ -18,7 +18,7 @@ def stored(x: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
     n, buckets = len(x), 1 << 12
     xs = ti.ndarray(vec3.get(), n)
     xs.from_numpy(x)
-    bounds = grid.cell_bounds(xs, 1.0 / cell)
+    bounds = grid.cell_bounds(xs, 1.0 / cell, ti.ndarray(ti.i32, 6), sort.fold_in_array())
     origin, stride = (ti.Vector(v, dt=ti.i32) for v in grid.hash_strides(bounds, buckets))
     rank, ids = ti.ndarray(ti.i32, n), ti.ndarray(ti.i32, n)
     start, chunks = ti.ndarray(ti.i32, buckets + 1), ti.ndarray(ti.i32, sort.scan_chunks(buckets))
@@ -44,11 +44,15 @@ def test_each_bucket_is_sorted_by_y_then_z_then_x_then_id(cell):
         np.testing.assert_array_equal(bucket, expected)
 
 
-@pytest.mark.parametrize("n", [1, 15, 17, 1000])
-def test_reductions_take_every_ball_once(n):
+@pytest.mark.parametrize("folded", [False, True], ids=["own_variables", "folded_in_array"])
+@pytest.mark.parametrize("n", [1, 15, 17, 1000, 4099])
+def test_reductions_take_every_ball_once(n, folded):
     """The least and greatest cells (``grid.cell_bounds``) and the speeds and balls set apart
     (``apart.apart_balls``), reduced on the device with atomics, are numpy's over every ball; the
-    extremes sit at random balls, so a ball skipped shows."""
+    extremes sit at random balls, so a ball skipped shows. Both ways of meeting (``folded``: CUDA's,
+    ``sort.fold_in_array``), on the CPU, and on CUDA (Vulkan compiles only the first)."""
+    if folded and ensure_init().arch == "vulkan":
+        pytest.skip("Taichi 1.7.4's Vulkan backend does not compile the folded loop (sort.fold_in_array)")
     from ti_golf.solvers import apart
 
     ensure_init()
@@ -58,14 +62,16 @@ def test_reductions_take_every_ball_once(n):
     xs, vs, rs = ti.ndarray(vec3.get(), n), ti.ndarray(vec3.get(), n), ti.ndarray(float, n)
     xs.from_numpy(x), vs.from_numpy(v), rs.from_numpy(radius)
     cells = np.floor(x / 0.1).astype(int)
-    bounds = grid.cell_bounds(xs, 1.0 / 0.1).to_numpy()
+    bounds = grid.cell_bounds(xs, 1.0 / 0.1, ti.ndarray(ti.i32, 6), folded).to_numpy()
     np.testing.assert_array_equal(bounds, np.concatenate([cells.min(axis=0), cells.max(axis=0)]))
 
     ids = ti.ndarray(ti.i32, apart.APART_MAX + 1)
     speed = np.linalg.norm(v, axis=1)
     v_cut, r_cut = float(np.quantile(speed, 0.9)), 0.028
     apart_now = (speed**2 > v_cut**2) | (radius > r_cut)
-    fastest, fastest_rest, count = apart.apart_balls(vs, rs, v_cut, r_cut, ids).to_numpy()
+    fastest, fastest_rest, count = apart.apart_balls(
+        vs, rs, v_cut, r_cut, ids, ti.ndarray(ti.i64, 2), folded
+    ).to_numpy()
     assert fastest == pytest.approx(speed.max(), rel=1e-15) and count == apart_now.sum()
     assert fastest_rest == pytest.approx(speed[~apart_now].max() if (~apart_now).any() else 0.0, rel=1e-15)
     listed = ids.to_numpy()[: min(int(count), apart.APART_MAX)]

@@ -235,6 +235,8 @@ def pair_columns(gauss_seidel: bool) -> int:
 
 # Types that do not depend on the precision.
 int_array: TypeAlias = ti.types.ndarray(dtype=ti.i32, ndim=1)
+i64_array: TypeAlias = ti.types.ndarray(dtype=ti.i64, ndim=1)
+"""1-D i64 array (the bits of non-negative f64 values, maximised with integer atomics)."""
 int_grid: TypeAlias = ti.types.ndarray(dtype=ti.i32, ndim=2)
 """2-D int array (terrain cell surface types)."""
 vec3f: TypeAlias = ti.types.vector(3, ti.f32)

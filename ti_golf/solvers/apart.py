@@ -8,12 +8,14 @@ import taichi as ti
 
 from ti_golf.physics.types import (
     float_array,
+    i64_array,
     int_array,
     kernel,
     of_ball,
     vec3,
     vec3_array,
 )
+from ti_golf.solvers.sort import FOLD, fold_threads
 
 APART_MAX = 32
 """Most balls set *apart* (see :func:`apart_balls`: much faster or bigger than the rest), which
@@ -52,25 +54,65 @@ def fast_speed(r_ref: float, skin: float, h: float) -> float:
 
 
 @kernel
-def apart_balls(v: vec3_array, radius: float_array, v_cut: float, r_cut: float, apart_ids: int_array) -> vec3:
+def apart_balls(
+    v: vec3_array,
+    radius: float_array,
+    v_cut: float,
+    r_cut: float,
+    apart_ids: int_array,
+    speeds: i64_array,
+    folded: ti.template(),
+) -> vec3:
     """(the greatest speed [m/s], the greatest speed of the balls not set apart, how many are set
     apart): the balls faster than ``v_cut`` or bigger than ``r_cut`` (see
     :func:`is_apart`). The indices of the first ``apart_ids.shape[0] − 1`` of them go to
-    ``apart_ids`` in no particular order, their count to its last entry (integer atomics; float
-    atomic maxima, the same on every thread order)."""
-    s2, rest2 = 0.0, 0.0
+    ``apart_ids`` in no particular order, their count to its last entry (integer atomics). The
+    squared speeds' maxima are float atomics on the kernel's own variables (the same on every
+    thread order), or with ``folded`` (``sort.fold_in_array``) meet in ``speeds`` (2,) as in
+    ``grid.cell_bounds``: each thread folds ``sort.FOLD`` balls, then takes an integer atomic
+    maximum of the f64 value's bits, which order as the non-negative values do (exact; a NaN is
+    left out)."""
     last = apart_ids.shape[0] - 1
     apart_ids[last] = 0
-    for i in range(v.shape[0]):
-        q = v[i].norm_sqr()
-        ti.atomic_max(s2, q)
-        if q > v_cut * v_cut or of_ball(radius, i) > r_cut:  # as :func:`is_apart` tests it
-            k = ti.atomic_add(apart_ids[last], 1)
-            if k < last:
-                apart_ids[k] = i
-        else:
-            ti.atomic_max(rest2, q)
+    s2, rest2 = 0.0, 0.0
+    if ti.static(not folded):
+        for i in range(v.shape[0]):
+            q = v[i].norm_sqr()
+            ti.atomic_max(s2, q)
+            if not set_apart(q, v_cut, radius, i, r_cut, apart_ids):
+                ti.atomic_max(rest2, q)
+    else:
+        speeds[0], speeds[1] = 0, 0
+        threads = fold_threads(v.shape[0])
+        for t in range(threads):
+            top, rest = ti.i64(0), ti.i64(0)  # (the bits of the squared speeds, folded as integers)
+            for f in range(FOLD):
+                i = t + f * threads
+                if i < v.shape[0]:
+                    q = v[i].norm_sqr()
+                    bits = ti.bit_cast(ti.cast(q, ti.f64), ti.i64)
+                    if q == q:  # (not NaN)
+                        top = ti.max(top, bits)
+                    apart = set_apart(q, v_cut, radius, i, r_cut, apart_ids)
+                    if not apart and q == q:
+                        rest = ti.max(rest, bits)
+            ti.atomic_max(speeds[0], top)
+            ti.atomic_max(speeds[1], rest)
+        s2, rest2 = ti.cast(ti.bit_cast(speeds[0], ti.f64), float), ti.cast(ti.bit_cast(speeds[1], ti.f64), float)
     return ti.Vector([ti.sqrt(s2), ti.sqrt(rest2), ti.cast(apart_ids[last], float)])
+
+
+@ti.func
+def set_apart(q, v_cut, radius: ti.template(), i, r_cut, apart_ids: ti.template()):
+    """Whether ball i, of squared speed ``q`` [m²/s²], is set apart (as :func:`is_apart` tests it);
+    if so, its index goes to ``apart_ids`` (see :func:`apart_balls`)."""
+    apart = q > v_cut * v_cut or of_ball(radius, i) > r_cut
+    if apart:
+        last = apart_ids.shape[0] - 1
+        k = ti.atomic_add(apart_ids[last], 1)
+        if k < last:
+            apart_ids[k] = i
+    return apart
 
 
 @ti.func

@@ -98,7 +98,7 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
         blocks of the box around the balls numbered one after another when there are no more of
         them than there are balls, else hashed; and count the balls with pairs that the colours
         leave to ``colour.far_pairs`` (``far_owners``)."""
-        bounds = grid.cell_bounds(state.x, 0.5 / self.cell)  # in blocks of 2 x 2 columns
+        bounds = grid.cell_bounds(state.x, 0.5 / self.cell, self.bounds, sort.fold_in_array())  # in 2 x 2 columns
         lo, hi = [int(b) for b in bounds[:3]], [int(b) for b in bounds[3:]]
         ext_x, ext_z = hi[0] - lo[0] + 3, hi[2] - lo[2] + 3
         n = self._model.n

@@ -196,6 +196,8 @@ class CollisionSolver(Recorded, Stepping):
         self.surface_impulse, self.surface_impulse_back = surface_table(1, surface_columns(model)), None
         self.flag = ti.ndarray(ti.i32, 2)
         self.apart_ids = ti.ndarray(ti.i32, apart.APART_MAX + 1)  # the balls listed apart (apart.apart_balls), count
+        # where the threads of the build's reductions meet: the cells' bounds and the squared speeds' bits
+        self.bounds, self.top_speeds = ti.ndarray(ti.i32, 6), ti.ndarray(ti.i64, 2)
         self.n_apart = 0
         # the loop iterations after which a thread stops its loops without a word (grid.LOOP_CAP)
         self.loop_cap = grid.LOOP_CAP if ensure_init().arch == "vulkan" else None
@@ -346,9 +348,9 @@ class CollisionSolver(Recorded, Stepping):
         with :attr:`reorder` store the balls in the grid's order. Returns (whether pairs are listed
         by their closing speed too, the fastest ball's speed [m/s])."""
         h = self._model.dt
-        v_max, v_rest, n_apart = (
-            float(s) for s in apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
-        )
+        folded = sort.fold_in_array()
+        set_apart = (state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids, self.top_speeds, folded)
+        v_max, v_rest, n_apart = (float(s) for s in apart.apart_balls(*set_apart))
         self.n_apart = int(n_apart) if n_apart <= apart.APART_MAX else 0  # a few own no pair with the others
         scan_apart = self.n_apart > 0 and on_cpu()  # and are listed apart (see apart.APART_MAX)
         # the cells hold every pair of the other balls; fast: their pairs are listed by closing speed too
@@ -356,7 +358,7 @@ class CollisionSolver(Recorded, Stepping):
             self.cell, fast = grid.cell_size(self.r_ref, self.skin, h, v_rest)
         else:
             self.cell, fast = grid.cell_size(self.r_max, self.skin, h, v_max)
-        bounds = grid.cell_bounds(state.x, 1.0 / self.cell)
+        bounds = grid.cell_bounds(state.x, 1.0 / self.cell, self.bounds, folded)
         strides = grid.hash_strides(bounds, self.mask + 1)
         if self._hash is None or [v.to_list() for v in self._hash] != [list(v) for v in strides]:
             self._hash = tuple(ti.Vector(v, dt=ti.i32) for v in strides)  # (kept while it holds: see _grid_params)
@@ -366,7 +368,7 @@ class CollisionSolver(Recorded, Stepping):
                 state, self._model, (*grid_order, self.sorted_ids), [self.v_free, self.calm, self.rank]
             )
             if scan_apart:  # their new indices
-                apart.apart_balls(state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids)
+                apart.apart_balls(*set_apart)
         return fast, v_max
 
     def _list_balls(self, state: State, fast: bool) -> Any:

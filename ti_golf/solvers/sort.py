@@ -9,7 +9,7 @@ from ti_golf.physics.types import (
     kernel,
     vec3_array,
 )
-from ti_golf.runtime import cpu_threads, on_cpu
+from ti_golf.runtime import cpu_threads, ensure_init, on_cpu
 
 
 @ti.func
@@ -24,6 +24,26 @@ known only at run time: the backend's adaptive block size, which neither
 ``ti.loop_config(block_dim=...)`` nor ``ti.init(cpu_block_dim_adaptive=False)`` changes
 (measured). A loop of up to 512 iterations therefore runs on one thread, however much each
 iteration does: a loop over a few hundred blocks of a pile must be spread (:func:`spread_turns`)."""
+
+FOLD = 16
+"""Balls a thread of a reduction over the balls (``grid.cell_bounds``, ``apart.apart_balls``) folds
+before it meets the other threads in the reduction's array with atomics: thread t takes balls
+t, t + T, t + 2T, ... (T the threads, so neighbouring threads read neighbouring balls)."""
+
+
+def fold_in_array() -> bool:
+    """Whether the reductions over the balls (``grid.cell_bounds``, ``apart.apart_balls``) fold
+    ``FOLD`` balls a thread and meet in an array: on CUDA. Elsewhere the threads meet in the
+    kernel's own variables, which Taichi's CPU backend folds in a copy per thread first, and
+    which Taichi 1.7.4's Vulkan backend compiles (it refuses the folded loop: "Not supported")."""
+    return ensure_init().arch == "cuda"
+
+
+@ti.func
+def fold_threads(n):
+    """Threads of a reduction over ``n`` balls, each folding up to ``FOLD`` of them (see ``FOLD``)."""
+    return (n + FOLD - 1) // FOLD
+
 
 TASKS_PER_THREAD = 8
 """Tasks per CPU thread of a loop over buckets spread by :func:`spread_turns`: the threads take
