@@ -12,8 +12,8 @@ order in which the pairs meet differs.
 **A sweep** (:func:`colour_pass`): each ball meets its planes and the terrain (a thread per ball:
 :func:`surface_ball`), then the colours follow one another (a parallel loop per colour, a thread
 per pair: :func:`colour_pair`, its bounds read from ``start`` on the device), then the overflow
-set: ``SPAN`` colours a launch (the first with the surfaces), the overflow set a launch of its
-own, or all in one launch when the span is ``COLOURS`` (:meth:`ContactColours.spans`). A sweep's
+set: all in one launch on CUDA (``CUDA_SPAN``), elsewhere ``SPAN`` colours a launch (the first
+with the surfaces) and the overflow set a launch of its own (:meth:`ContactColours.spans`). A sweep's
 parallel loops therefore each hold a ball per thread, or a pair per thread: work in proportion to
 the balls. The position projection (B.18) is laid out the same way, its planes last
 (:func:`project_colour_pair`).

@@ -313,9 +313,9 @@ def list_nearby(
     # no pair the cells list is farther apart than a cell's side (see cell_size): the square of
     # that side, with room for the rounding of 1/inv_cell and of the pair's reach
     cell_sqr = (1.0 + 1e-4) / (g.inv_cell * g.inv_cell)
-    for d in ti.static(ti.grouped(ti.ndrange((-1, 2), (-1, 2)))):
+    for m in range(9):  # (a loop, not unrolled: one copy of the listing in the kernel)
         # the column of three cells c + (dx, −1…1, dz): consecutive buckets, one range unless it wraps
-        row = c + ti.Vector([d[0], -1, d[1]])
+        row = c + ti.Vector([m // 3 - 1, -1, m % 3 - 1])
         b = bucket_of(row, g.mask, g.origin, g.stride)
         for part in range(2):
             lo, hi = scratch.start[b], scratch.start[ti.min(b + 3, g.mask + 1)]
