@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # `make gpu-check`: every GPU figure of docs/performance.md in one command, on a machine with an NVIDIA GPU.
 #
-# Each benchmark runs under its own time limit (the whole script at most about 8 minutes) and its JSON line is
+# Each benchmark runs under its own time limit (the whole script at most about 7 minutes) and its JSON line is
 # collected into $GPU_CHECK_OUT/gpu_check.json, one object keyed by the figure's name, written as each
 # one ends (so a script stopped early keeps what it measured). Taichi's kernel cache is kept in
 # $TI_OFFLINE_CACHE_FILE_PATH (default: .ticache/ in the checkout, which git ignores), so a second run
@@ -65,11 +65,6 @@ print(f"   exit {rc}, {float(end) - float(start):.1f} s", file=sys.stderr)
 PY
 }
 
-# ran NAME: whether figure NAME ran and ended well (exit status 0 in RESULT).
-ran() {
-  "$PY" -c 'import json, sys; sys.exit(json.load(open(sys.argv[1])).get(sys.argv[2], {}).get("exit_status", 1) != 0)' "$RESULT" "$1"
-}
-
 nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader >"$OUT_DIR/gpu.txt" 2>&1 || true
 cold=$(mktemp -d)
 # The pour's kernels compiled from an empty cache (a pour of a few thousand balls: compile time is reported apart).
@@ -77,14 +72,9 @@ figure cuda_cold_compile 50 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --n 
 # Its kernels are the pour's: keep them, so that the pours below do not compile them again.
 mkdir -p "$TI_OFFLINE_CACHE_FILE_PATH" && cp -r "$cold"/. "$TI_OFFLINE_CACHE_FILE_PATH"/
 rm -rf "$cold"
-# All 32 colours in one launch (one host call a sweep's pass instead of nine): from an empty cache, its
-# compile time and the launches a step; its kernels are kept for the pour after it, whose first second
-# sets beside the first second of cuda_pit_100k (its timeline).
-cold=$(mktemp -d)
-figure cuda_colours_32 60 TI_GOLF_COLOURS_PER_LAUNCH=32 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --n 8192 --t 0.05 --arch "$GPU_ARCH"
-cp -r "$cold"/. "$TI_OFFLINE_CACHE_FILE_PATH"/
-rm -rf "$cold"
-ran cuda_colours_32 && figure cuda_pit_100k_colours_32 60 TI_GOLF_COLOURS_PER_LAUNCH=32 -- bench pit --t 1 --every 0.25 --arch "$GPU_ARCH"
+# Four colours a launch (nine host calls a sweep's pass; the CPU's span) against CUDA's default of all
+# 32 in one: the pour's first second, to set beside the first second of cuda_pit_100k (its timeline).
+figure cuda_pit_100k_span_4 70 TI_GOLF_COLOURS_PER_LAUNCH=4 -- bench pit --t 1 --every 0.25 --arch "$GPU_ARCH"
 figure cuda_pit_100k 100 -- bench pit --every 0.25 --arch "$GPU_ARCH"
 figure cuda_pit_1m 60 -- bench pit --n 1000000 --every 0.25 --arch "$GPU_ARCH"
 # Where a GPU step's time goes while the balls land: each kernel's seconds and launches against the wall.
