@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # `make gpu-check`: every GPU figure of docs/performance.md in one command, on a machine with an NVIDIA GPU.
 #
-# Each benchmark runs under its own time limit (the whole script at most about 7 minutes) and its JSON line is
+# Each benchmark runs under its own time limit (the whole script at most about 8 minutes) and its JSON line is
 # collected into $GPU_CHECK_OUT/gpu_check.json, one object keyed by the figure's name, written as each
 # one ends (so a script stopped early keeps what it measured). Taichi's kernel cache is kept in
 # $TI_OFFLINE_CACHE_FILE_PATH (default: .ticache/ in the checkout, which git ignores), so a second run
@@ -72,6 +72,8 @@ figure cuda_cold_compile 50 TI_OFFLINE_CACHE_FILE_PATH="$cold" -- bench pit --n 
 # Its kernels are the pour's: keep them, so that the pours below do not compile them again.
 mkdir -p "$TI_OFFLINE_CACHE_FILE_PATH" && cp -r "$cold"/. "$TI_OFFLINE_CACHE_FILE_PATH"/
 rm -rf "$cold"
+# The build's reductions over 100,000 balls, both ways their threads can meet (bench reductions).
+figure cuda_reductions 30 -- bench reductions --arch "$GPU_ARCH"
 # Four colours a launch (nine host calls a sweep's pass; the CPU's span) against CUDA's default of all
 # 32 in one: the pour's first second, to set beside the first second of cuda_pit_100k (its timeline).
 figure cuda_pit_100k_span_4 70 TI_GOLF_COLOURS_PER_LAUNCH=4 -- bench pit --t 1 --every 0.25 --arch "$GPU_ARCH"

@@ -588,6 +588,26 @@ def test_bench_sweep_json():
     assert baselines["scipy_solve_ivp_dop853"] < 0.2 * baselines["numpy_rk4_vectorised"]
 
 
+def test_bench_reductions_times_both_ways_and_checks_them_against_numpy():
+    # in this process: the two reductions of a build, both ways their threads meet, beside a loop
+    # that reduces nothing; the CLI's JSON names the way this backend takes
+    from ti_golf.bench.reductions import bench_reductions
+    from ti_golf.solvers.sort import fold_in_array
+
+    lines = []
+    result = bench_reductions(n=3001, repeats=2, log=lines.append)
+    assert result["n"] == 3001 and result["repeats"] == 2
+    assert result["chosen"] == ("in_array" if fold_in_array() else "own_variables")
+    for way in ("own_variables", "in_array"):
+        figures = result[way]
+        assert figures["agree_with_numpy"], way
+        assert figures["cell_bounds_ms"] > 0 and figures["apart_balls_ms"] > 0
+    assert result["baselines"]["one_cell_a_ball_ms"] > 0
+    assert any("(the default here)" in line for line in lines)
+    json.loads(json.dumps(result))
+    assert main(["bench", "reductions", "--repeats", "0"]) == 2  # (refused before anything runs)
+
+
 @pytest.mark.slow
 def test_bench_pit_pours_the_scene_and_reports_the_piles_quality():
     # the bundled pour scaled down (the bin narrowed so the pile is as deep), in this process

@@ -9,6 +9,7 @@ from ti_golf.bench.collide import bench_collide
 from ti_golf.bench.common import to_json
 from ti_golf.bench.dispersion import bench_dispersion
 from ti_golf.bench.pit import PIT_BALLS, bench_pit
+from ti_golf.bench.reductions import bench_reductions
 from ti_golf.bench.render import bench_render
 from ti_golf.bench.startup import bench_startup, profile_lines, scene_names, start_profile
 from ti_golf.bench.sweep import bench_sweep
@@ -106,6 +107,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     br.add_argument("--frames", type=int, default=3, help="timed frames (default 3)")
     br.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(br)
+    bx = bsub.add_parser(
+        "reductions",
+        help="a list build's reductions over N balls, both ways their threads can meet, against a loop "
+        "that reduces nothing",
+    )
+    bx.add_argument("--n", type=int, default=100_000, help="balls (default 100000)")
+    bx.add_argument("--repeats", type=int, default=50, help="timed calls of each (default 50)")
+    bx.add_argument("--json", action="store_true", help="end with one line of JSON")
+    runtime_options(bx)
     bu = bsub.add_parser(
         "startup",
         help="seconds to start and end commands in fresh processes (warm and cold kernel cache) against the "
@@ -184,7 +194,7 @@ MAX_STEPS = 1_000_000
 
 
 def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per bench and per option checked)
-    """Run the benchmark ``args.bench`` (sweep, collide, pit, render, dispersion, startup, study) after
+    """Run the benchmark ``args.bench`` (sweep, collide, pit, reductions, render, dispersion, startup, study) after
     checking its options; print its summary, or its JSON with ``--json``; 0."""
     if args.bench == "startup":
         return cmd_startup(args)
@@ -198,6 +208,10 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
         if not 1e-5 <= args.flight_dt <= 0.05:  # (also false for NaN)
             raise ConfigError("--flight-dt", None, f"must be in [1e-05, 0.05] s (got {args.flight_dt})")
         result = bench_dispersion(n=args.n, rest=args.rest, flight_dt=args.flight_dt)
+    elif args.bench == "reductions":
+        if not 1 <= args.repeats <= 10_000:
+            raise ConfigError("--repeats", None, f"must be in [1, 10,000] (got {args.repeats})")
+        result = bench_reductions(n=args.n, repeats=args.repeats)
     elif args.bench == "render":
         if not 1 <= args.frames <= 1000:
             raise ConfigError("--frames", None, f"must be in [1, 1000] (got {args.frames})")
