@@ -201,19 +201,19 @@ class _GGUIDraw:
         self.scene.particles(vbo_info, True, True, (0.5, 0.5, 0.5), float(vbo[:, 3].max()), len(vbo), 0)
 
 
-FIRST_PICTURE_PASSES = 4
-"""Most passes of a window's first picture (see :func:`_draw_ggui`)."""
+FIRST_PICTURE_PASSES = 8
+"""Most passes of a window's first picture after its discarded first pass (see :func:`_draw_ggui`)."""
 
 
 def _draw_ggui(frame: _Frame, path: str) -> None:
-    # The first picture of a window is drawn again until two passes agree (at most
-    # FIRST_PICTURE_PASSES): in CI, with other processes using the Vulkan driver, the first picture
-    # of a process came out now and then without its mesh (the ground), once also with its trail
-    # bent, and a second pass alone did not always mend it; alone it never happened.
+    # A window's first picture is drawn once and discarded, then again until two passes agree (at
+    # most FIRST_PICTURE_PASSES): in CI, with other processes using the Vulkan driver, the first
+    # picture of a process came out now and then without its mesh (the ground) and with its trail
+    # bent, and two or four passes until two agreed did not always mend it; alone it never happened.
     first = _ggui.window is None
     window = _ggui_window(frame.view.size)
     rgba, before = None, None
-    for _ in range(FIRST_PICTURE_PASSES if first else 1):
+    for k in range(1 + FIRST_PICTURE_PASSES if first else 1):
         draw = draw_scene(frame, _ggui.scene, _ggui.camera)
         _ggui.canvas.set_background_color(BACKGROUND_COLOR)
         _ggui.canvas.scene(_ggui.scene)
@@ -221,7 +221,7 @@ def _draw_ggui(frame: _Frame, path: str) -> None:
         draw.keep.clear()
         if before is not None and np.array_equal(rgba, before):
             break
-        before = rgba
+        before = rgba if k > 0 else None  # (the first pass of a first picture is not compared)
     assert rgba is not None  # (one pass at least)
     write_png(rgba, path)
 
