@@ -152,12 +152,21 @@ def quiet_ball(
     quiet = status[i] == AT_REST
     if quiet:
         for m in range(lower_first[i], lower_first[i + 1]):
-            j, _ = owner_slot(lower[m], bits)
-            quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
+            if not still(status, owner_slot(lower[m], bits)[0]):
+                quiet = False
+                break  # (an early exit: also keeps LLVM from vectorising a loop of a few pairs)
+    if quiet:
         for k in range(listed(first, i)):
-            j = upper[i, k]
-            quiet &= status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
+            if not still(status, upper[i, k]):
+                quiet = False
+                break
     return quiet
+
+
+@ti.func
+def still(status: ti.template(), j):
+    """Whether ball j is at rest or out of bounds: it cannot touch a ball asleep this step."""
+    return status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
 
 
 @ti.func
@@ -255,12 +264,22 @@ def touched_by_moving(i, status: ti.template(), rest_time: ti.template(), lists:
     out-of-bounds status, which waking does not change."""
     moving = False
     for m in range(lists.lower_first[i], lists.lower_first[i + 1]):
-        j, _ = owner_slot(lists.lower[m], bits)
-        moving |= rest_time[j] == 0.0 and status[j] != OUT_OF_BOUNDS
-    for k in range(listed(lists.first, i)):
-        j = lists.upper[i, k]
-        moving |= rest_time[j] == 0.0 and status[j] != OUT_OF_BOUNDS
+        if moved(status, rest_time, owner_slot(lists.lower[m], bits)[0]):
+            moving = True
+            break  # (an early exit: also keeps LLVM from vectorising a loop of a few pairs)
+    if not moving:
+        for k in range(listed(lists.first, i)):
+            if moved(status, rest_time, lists.upper[i, k]):
+                moving = True
+                break
     return moving
+
+
+@ti.func
+def moved(status: ti.template(), rest_time: ti.template(), j):
+    """Whether ball j moved faster than ``v_rest`` in the last step or flew (its rest timer is 0)
+    and is not out of bounds."""
+    return rest_time[j] == 0.0 and status[j] != OUT_OF_BOUNDS
 
 
 @ti.func

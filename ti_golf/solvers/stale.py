@@ -67,9 +67,12 @@ def pair_listed(i, j, lists: ti.template()):
     for k in range(listed(lists.first, i)):
         if lists.upper[i, k] == j:
             found = True
-    for k in range(listed(lists.first, j)):
-        if lists.upper[j, k] == i:
-            found = True
+            break  # (an early exit: also keeps LLVM from vectorising a loop of a few pairs)
+    if not found:
+        for k in range(listed(lists.first, j)):
+            if lists.upper[j, k] == i:
+                found = True
+                break
     return found
 
 
@@ -98,6 +101,7 @@ def set_apart(i, apart_ids: ti.template(), n_apart):
     for f in range(n_apart):
         if apart_ids[f] == i:
             found = True
+            break
     return found
 
 
@@ -108,6 +112,7 @@ def stale_by_every_ball(i, used_i, h, radius: ti.template(), lists: ti.template(
     for j in range(x1.shape[0]):
         if unlisted_within_reach(i, j, used_i, h, radius, lists, x1, v):
             stale = True
+            break
     return stale
 
 
@@ -147,6 +152,9 @@ def stale_near(
                     j = sorted_ids[k]
             if unlisted_within_reach(i, j, used_i, g.h, radius, lists, x1, v):
                 stale = True
+                break
+        if stale:
+            break
     return stale
 
 

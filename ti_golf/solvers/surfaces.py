@@ -248,6 +248,7 @@ def near_a_surface(i, xi, reach, terrain: ti.template(), model: ti.template()):
     for p in range(model.plane_n.shape[0]):
         if (xi - model.plane_p[p]).dot(model.plane_n[p]) - r < reach:
             near = True
+            break  # (an early exit: also keeps LLVM from vectorising a loop of a few planes)
     if terrain.on != 0 and not near:
         if terrain_clearance(model.heights, terrain, xi, xi, r) < 2.0 * reach:
             near = True
@@ -306,6 +307,7 @@ def list_surfaces(
             for c in range(old_impulse.shape[1]):
                 if old_impulse[old, c][LAMBDA] > 0.0:
                     listed = True
+                    break
         start[i + 1] = 0
         if listed:
             start[i + 1] = 1
