@@ -143,3 +143,16 @@ def test_runs_built_by_taichis_own_front_end_equal_those_of_the_faster_one(tmp_p
         for key in ("x", "v", "w"):
             np.testing.assert_array_equal(runs[0][key], runs[1][key], err_msg=f"{solver} {key}")
         assert np.abs(runs[0]["v"]).max() > 0.1  # the break: balls moved and collided
+
+
+def test_expanded_functions_are_taichis_own_funcs_with_its_plain_front_end(monkeypatch):
+    # the small functions Python builds at each call site (front_end.expanded) are plain ti.funcs
+    # when Taichi's own front end is asked for; the runs above compare the two builds
+    from taichi.lang.kernel_impl import Func
+
+    def twice(x):
+        return 2 * x
+
+    assert not isinstance(front_end.expanded(twice).func, Func)
+    monkeypatch.setenv(front_end.PLAIN_ENV, "1")
+    assert isinstance(front_end.expanded(twice).func, Func)

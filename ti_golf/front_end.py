@@ -25,6 +25,12 @@ transforming its source again at every call site. Much of that work repeats:
   read from :mod:`linecache` (the same line). This part is installed when
   :mod:`ti_golf.physics.types` is imported, before the kernel modules' decorators run.
 
+* **small functions**: a ``ti.func`` call, however small the function, costs Taichi a parse of its
+  source, a scope and a copy of every argument (a whole matrix for a row of it); the package's
+  smallest, most called functions of one expression (a per-ball entry, a struct member of the
+  scalar array, a row of a lane matrix) are :func:`expanded` instead: Python runs their body at
+  each call site on Taichi's expressions, as for the vector reductions.
+
 Together they take about two thirds of the front end's time off (``ti-golf bench startup --kernels
 SCENE`` shows each kernel's front end). They are installed by :func:`install` (called by
 :func:`ti_golf.runtime.init`) only on the Taichi versions whose internals they were written
@@ -93,6 +99,63 @@ def install() -> bool:
     )
     _installed = True
     return True
+
+
+def knows_taichi() -> bool:
+    """Whether the Taichi at hand is one whose internals this module was written against, and the
+    faster front end is wanted (not ``TI_GOLF_PLAIN_FRONT_END=1``)."""
+    import taichi as ti
+
+    return tuple(ti.__version__[:2]) in _VERSIONS and not env_switch(PLAIN_ENV)
+
+
+def expanded(fn: Callable[..., Any]) -> Any:
+    """``ti.func`` for a small function of one expression, built by Python at each call site
+    instead: Taichi calls it as it calls its own functions inside a kernel, with the caller's
+    expressions, so its front end neither parses the function's source nor copies its arguments.
+    The body must read arrays and matrices through :func:`element` and make vectors with
+    :func:`float_vector` (what Taichi's front end calls for ``a[i]`` and ``ti.Vector``), take
+    compile-time values as plain Python values, and use each argument once (an argument is an
+    expression, not a copy, so each use evaluates it). A plain ``ti.func`` where the Taichi is
+    not one this module knows, or with ``TI_GOLF_PLAIN_FRONT_END=1``."""
+    if not knows_taichi():
+        import taichi as ti
+
+        return ti.func(fn)
+    return _called_as_taichis_own(fn)
+
+
+def _called_as_taichis_own(fn: Callable[..., Any]) -> Any:
+    """``fn`` marked as Taichi marks its functions, so that its front end calls it inside a kernel
+    without the warning it gives a Python function (which it could not tell from a mistake)."""
+
+    @functools.wraps(fn)
+    def at_call_site(*args: Any, **kwargs: Any) -> Any:
+        return fn(*args, **kwargs)
+
+    at_call_site._is_taichi_function = True  # type: ignore[attr-defined]
+    at_call_site.func = types.SimpleNamespace(has_print=False)  # type: ignore[attr-defined] # (read after the call)
+    return at_call_site
+
+
+def _element(array: Any, *indices: Any) -> Any:
+    """``array[indices]`` inside a kernel (an ndarray, or a vector or matrix): what Taichi's front
+    end builds for the subscript, for the bodies of :func:`expanded` functions."""
+    from taichi.lang import impl
+
+    return impl.subscript(None, array, *indices)
+
+
+def _float_vector(*values: Any) -> Any:
+    """The vector of ``values`` in the chosen float type inside a kernel: what Taichi's front end
+    builds for ``ti.Vector([...], dt=float)``, for the bodies of :func:`expanded` functions."""
+    from taichi.lang import matrix
+
+    return matrix.make_matrix(list(values), dt=float)
+
+
+element = _called_as_taichis_own(_element)
+float_vector = _called_as_taichis_own(_float_vector)
 
 
 def _inline_reductions() -> None:

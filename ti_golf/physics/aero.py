@@ -49,6 +49,7 @@ from typing import Any
 
 import taichi as ti
 
+from ti_golf import front_end
 from ti_golf.physics.types import AirParams, log, vec, vec3
 
 LAB, SPIN_RATIO, SPIN_REYNOLDS = 0, 1, 2
@@ -66,16 +67,18 @@ X, V, W, SPIN = 0, 3, 6, 9
 ROWS = 10
 
 
-@ti.func
+@front_end.expanded
 def row(S, i: ti.template()):
     """Row ``i`` of a matrix as a vector over its columns (lanes)."""
-    return ti.Vector([S[i, l] for l in ti.static(range(S.m))])
+    return front_end.float_vector(*[front_end.element(S, i, l) for l in ti.static(range(S.m))])
 
 
-@ti.func
+@front_end.expanded
 def column(S, first: ti.template(), lane: ti.template()):
     """The 3-vector in rows first..first+2 of column ``lane`` (e.g. the velocity of one ball)."""
-    return vec(S[first, lane], S[first + 1, lane], S[first + 2, lane])
+    return vec(
+        front_end.element(S, first, lane), front_end.element(S, first + 1, lane), front_end.element(S, first + 2, lane)
+    )
 
 
 def air_params(air: Any, ground_height: float) -> Any:

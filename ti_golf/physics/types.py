@@ -134,16 +134,16 @@ def log(x):
     return y
 
 
-@ti.func
+@front_end.expanded
 def vec(a, b, c):
     """The 3-vector (a, b, c) in the chosen float type, inside kernels."""
-    return ti.Vector([a, b, c], dt=float)
+    return front_end.float_vector(a, b, c)
 
 
-@ti.func
+@front_end.expanded
 def zero3():
     """The zero 3-vector in the chosen float type, inside kernels."""
-    return ti.Vector([0.0, 0.0, 0.0], dt=float)
+    return front_end.float_vector(0.0, 0.0, 0.0)
 
 
 real: TypeAlias = Deferred(lambda: ti.f64 if is_f64() else ti.f32, "real")
@@ -316,25 +316,25 @@ def scalar_runs() -> list[tuple[Any, int]]:
     return runs
 
 
-@ti.func
+@front_end.expanded
 def scalar_member(s: ti.template(), k: ti.template(), width: ti.template(), integer: ti.template()):
     """The struct member at offset ``k`` of the scalar array ``s``: a vector of ``width`` floats, an
     integer or a float."""
     if ti.static(width > 0):
-        return ti.Vector([s[k + c] for c in ti.static(range(width))], dt=float)
+        return front_end.float_vector(*[front_end.element(s, k + c) for c in ti.static(range(width))])
     elif ti.static(integer):
-        return ti.cast(s[k], ti.i32)
+        return ti.cast(front_end.element(s, k), ti.i32)
     else:
-        return s[k]
+        return front_end.element(s, k)
 
 
-@ti.func
+@front_end.expanded
 def struct_at(kind: ti.template(), s: ti.template(), base: ti.template()):
     """The struct of type ``kind`` whose members start at offset ``base`` of the scalar array ``s``."""
     return kind(*[scalar_member(s, base + k, w, i) for _, k, w, i in ti.static(scalar_slots(kind))])
 
 
-@ti.func
+@front_end.expanded
 def scalars_of(s: ti.template()):
     """The air, contact, terrain and step parameters (:data:`SCALAR_STRUCTS`) from the scalar array
     ``s`` that :func:`scalar_values` filled. The kernels of a step take them as one array rather
@@ -432,11 +432,11 @@ StepScratch: TypeAlias = Deferred(
 """Per-step work arrays of the collision solver."""
 
 
-@ti.func
+@front_end.expanded
 def of_ball(a: ti.template(), i):
     """Entry ``i`` of a per-ball array of shape (N,), or its only entry when every ball shares the
     value (shape (1,): the radius and mass of balls all alike, see ``Model``)."""
-    return a[ti.min(i, a.shape[0] - 1)]
+    return front_end.element(a, ti.min(i, a.shape[0] - 1))
 
 
 GridParams: TypeAlias = Deferred(
