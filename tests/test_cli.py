@@ -1344,7 +1344,26 @@ def test_bench_startup_times_commands_in_fresh_processes_against_the_targets():
         assert row["warm_pass"] == (row["warm_s"] <= row["warm_target_s"])
         assert "cold_s" not in row
     assert result["passed"] + result["failed"] == 3
+    assert isinstance(result["bytecode_stale"], list)  # (make setup compiled them: see the test below)
     assert "ti-golf keys" in proc.stdout.splitlines()[2] and "target 0.5 s" in proc.stdout
+
+
+def test_bench_startup_names_the_modules_whose_bytecode_python_compiles_at_every_start(tmp_path):
+    import compileall
+    import os
+
+    from ti_golf.bench.startup import stale_bytecode
+
+    package = tmp_path / "pkg"
+    (package / "sub").mkdir(parents=True)
+    for name in ("__init__.py", "a.py", "sub/__init__.py", "sub/b.py"):
+        (package / name).write_text("X = 1\n")
+    assert stale_bytecode(package) == ["pkg/__init__.py", "pkg/a.py", "pkg/sub/__init__.py", "pkg/sub/b.py"]
+    assert compileall.compile_dir(str(package), quiet=1)
+    assert stale_bytecode(package) == []
+    later = (package / "a.py").stat().st_mtime + 10
+    os.utime(package / "a.py", (later, later))  # edited after it was compiled
+    assert stale_bytecode(package) == ["pkg/a.py"]
 
 
 @pytest.mark.slow  # a cold compile in a subprocess
