@@ -60,6 +60,7 @@ def list_surface_rows(solver: Any, state: State, carry: bool, v_max: float) -> t
         copy_ints(solver.surface_start, solver.stash_first)
     old = (int(carry), solver.stash_first, solver.surface_impulse, int(solver.reorder), solver.sorted_ids)
     rows = surfaces.list_surfaces(
+        model.terrain is not None,
         model.terrain_params,
         solver.packs.model(model),
         state.x,

@@ -236,26 +236,28 @@ def surface_row(start: ti.template(), i):
 
 
 @ti.func
-def near_a_surface(i, xi, reach, terrain: ti.template(), model: ti.template()):
+def near_a_surface(i, xi, reach, with_terrain: ti.template(), terrain: ti.template(), model: ti.template()):
     """Whether ball i at ``xi`` [m] may touch a plane or the terrain before the neighbour lists are
     rebuilt, when it moves no farther than ``reach`` [m] until then (see :func:`list_surfaces`). A
     plane is within reach when its surface gap is below it; the terrain when its clearance
     (:func:`ti_golf.physics.terrain.terrain_clearance`, at least the gap to any patch of the cell under the ball)
     is below twice the reach, since a patch taken under a moved point is nearer by up to twice the
-    move, or when a move of the reach can take the ball over another cell."""
+    move, or when a move of the reach can take the ball over another cell (``with_terrain``: the
+    scene has one, so that a kernel without holds no terrain code)."""
     r = of_ball(model.radius, i)
     near = False
     for p in range(model.plane_n.shape[0]):
         if (xi - model.plane_p[p]).dot(model.plane_n[p]) - r < reach:
             near = True
             break  # (an early exit: also keeps LLVM from vectorising a loop of a few planes)
-    if terrain.on != 0 and not near:
-        if terrain_clearance(model.heights, terrain, xi, xi, r) < 2.0 * reach:
-            near = True
-        for corner in ti.static(range(4)):
-            dx = ti.Vector([reach if corner % 2 else -reach, 0.0, reach if corner // 2 else -reach])
-            if not same_cell(model.heights, terrain, xi, xi + dx):
+    if ti.static(with_terrain):  # (a static `if` of its own: Taichi builds both sides of an `and`)
+        if not near:
+            if terrain_clearance(model.heights, terrain, xi, xi, r) < 2.0 * reach:
                 near = True
+            for corner in ti.static(range(4)):
+                dx = ti.Vector([reach if corner % 2 else -reach, 0.0, reach if corner // 2 else -reach])
+                if not same_cell(model.heights, terrain, xi, xi + dx):
+                    near = True
     return near
 
 
@@ -273,6 +275,7 @@ def old_row(i, carry, old_start: ti.template(), reorder, old_index: ti.template(
 
 @kernel
 def list_surfaces(
+    with_terrain: ti.template(),
     terrain: TerrainParams,
     model: ModelArrays,
     x: vec3_array,
@@ -291,7 +294,8 @@ def list_surfaces(
     impulse back only as the ball moves away, and the warm start applies it again); ball i's row is
     ``start[i]`` when ``start[i + 1] > start[i]`` (see :func:`surface_row`), the rows numbered in
     ball order by the grid's chunked scan (``chunk_start``: its scratch, see
-    ``links.pair_starts``). Returns the rows in all.
+    ``links.pair_starts``). Returns the rows in all. ``with_terrain``: whether the scene has a
+    terrain (``terrain.on``), a compile-time choice.
 
     ``reach`` [m] bounds how far a ball moves before the next rebuild: the skin between rebuilds
     with the Gauss–Seidel sweeps (``stale.flag_stale_lists``), half of it with the Jacobi sweeps
@@ -301,7 +305,7 @@ def list_surfaces(
     step still meets the surface (see :func:`surface_contact_step`), and has then used more than
     the skin: the lists are rebuilt before the next step."""
     for i in range(x.shape[0]):
-        listed = near_a_surface(i, x[i], reach, terrain, model)
+        listed = near_a_surface(i, x[i], reach, with_terrain, terrain, model)
         old = old_row(i, carry, old_start, reorder, old_index)
         if old >= 0 and not listed:
             for c in range(old_impulse.shape[1]):
