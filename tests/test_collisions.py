@@ -17,7 +17,7 @@ import ti_golf as tg
 from ti_golf.bench.collide import pile_scene
 from ti_golf.bench.pit import pit_scene
 from ti_golf.scene.schema import AT_REST, Plane
-from ti_golf.solvers import CollisionSolver, apart, grid, links, sort
+from ti_golf.solvers import CollisionSolver, apart, grid, links, sort, stepping
 from ti_golf.solvers.stepping import RELIST_MAX_BALLS
 
 # no gravity, air, walls or friction unless a test says otherwise
@@ -1619,7 +1619,7 @@ def _deepest_by_every_pair(x, r):
 
 @SERIAL_OR_PARALLEL
 @pytest.mark.parametrize("solver", ["jacobi", "gauss_seidel"])
-def test_deepest_overlap_after_steps_builds_lists_only_when_a_pair_may_be_missing(serial, solver):
+def test_deepest_overlap_after_steps_measures_the_pairs_the_lists_may_miss(serial, solver, monkeypatch):
     # a 3×3×3 lattice of balls (r = 2 cm, 1 cm apart) moving together at 2 m/s, 1 mm a 0.5 ms
     # step, and one ball 0.5 mm into a corner ball: each step asks for new lists (2h·|v| is more
     # than half the 2 mm skin), but no two balls have closed on each other by the skin, so the
@@ -1636,13 +1636,18 @@ def test_deepest_overlap_after_steps_builds_lists_only_when_a_pair_may_be_missin
     assert (d.i, d.j, d.depth) == _deepest_by_every_pair(sim.x, sim.model.radius_np)
     assert (d.i, d.j) == (26, 27)
     # ball 0 shifted 15 mm, into ball 9, as a step could move it (no edit between steps that would
-    # ask for new lists): now a pair may be missing, and the lists are built
+    # ask for new lists): now a pair may be missing, ball 0's with any ball, and those are measured
+    # without a build; with room for none of them, the lists are built
     x = sim.x
     x[0] = x[9] - [0.035, 0.0, 0.0]
     sim.state.write("x", x)
     d = sim.deepest_overlap()
-    assert solver_.rebuilds == builds + 1
+    assert solver_.rebuilds == builds
     assert (d.i, d.j, d.depth) == _deepest_by_every_pair(x, sim.model.radius_np) and (d.i, d.j) == (0, 9)
+    monkeypatch.setattr(stepping, "MOVED_PAIRS_MAX", len(x) - 1)
+    d = sim.deepest_overlap()
+    assert solver_.rebuilds == builds + 1
+    assert (d.i, d.j, d.depth) == _deepest_by_every_pair(x, sim.model.radius_np)
 
 
 @pytest.mark.slow

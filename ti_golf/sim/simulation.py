@@ -374,12 +374,11 @@ class Simulation:
         """The pair of balls that overlap the most now, or ``None`` when no two balls overlap (or
         the balls do not collide: one ball, or ``world.collisions`` off). Balls out of bounds are
         left out (frozen, nothing pushes them apart). Every pair close enough to touch is in the
-        neighbour lists, so only listed pairs are measured (the lists are built first when they may
-        miss an overlapping pair: see ``ensure_overlaps_listed`` of the solver)."""
+        neighbour lists, so only listed pairs are measured, with the pairs of the balls that moved far
+        since the lists were built (see ``pairs_that_may_overlap`` of the solver)."""
         if self.solver is None:
             return None
-        self.solver.ensure_overlaps_listed(self.state)
-        i, j = self.solver.pairs().T
+        i, j = self.solver.pairs_that_may_overlap(self.state).T
         status = self.status
         keep = (status[i] != OUT_OF_BOUNDS) & (status[j] != OUT_OF_BOUNDS)
         i, j = i[keep], j[keep]

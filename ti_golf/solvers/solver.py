@@ -92,7 +92,7 @@ class CollisionSolver(Recorded, Stepping):
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
         edited: whether balls were moved or the model retuned between steps since the lists were
             last built (``invalidate``): the lists may then miss pairs that overlap now
-            (:meth:`ensure_overlaps_listed`); a fresh or restored solver counts as edited.
+            (:meth:`pairs_that_may_overlap`); a fresh or restored solver counts as edited.
         skip_still: whether a parallel step in which no ball is awake and in play is skipped, the
             time advanced alone (default: with the Gauss–Seidel sweeps, under which such a step
             changes nothing, see ``colour.moving_balls``): a pile asleep then costs one pass over

@@ -25,6 +25,10 @@ SERIAL_MAX_BALLS = 4096
 (``serial`` in ``collide.collision_step``): for so few balls a parallel step is mostly launch and
 thread-pool overhead (see the docs' performance page, "Design measurements")."""
 
+MOVED_PAIRS_MAX = 200_000
+"""Most pairs of balls that moved far with every other ball that :meth:`Stepping.pairs_that_may_overlap`
+takes (measured in numpy at a fraction of a microsecond each) before it builds the lists instead."""
+
 RELIST_MAX_BALLS = 512
 """Up to this many balls, the serial launch also rebuilds the lists itself, by testing every pair
 in tables n − 1 wide (time and memory that grow as n²); beyond, it stops when the lists must be
@@ -130,26 +134,47 @@ class Stepping:
                 last=True,
             )
 
-    def ensure_overlaps_listed(self, state: State) -> None:
-        """Make the lists hold every pair of balls that overlap now, building them only when they may
-        not (:meth:`ensure_lists`). A pair a build left out had a surface gap of at least the skin.
-        Since, the gap shrank by at most |Δx_a − Δx_b| ≤ |Δx_a − c| + |Δx_b − c| for any c, the balls'
-        displacements Δx taken here relative to their median c (balls that fall together close no
-        gap). While no two balls sum to the skin so, the lists hold every overlapping pair, even when
-        the next step is due to rebuild them (its test counts the step ahead too): measuring after a
-        run's last step builds nothing. Balls moved or the model retuned between steps
-        (:meth:`invalidate`) build them."""
-        if not self.lists_due:
-            return
-        if self.lists_valid and not self.edited and state.n >= 2:
-            x_build = self.x_at_build.to_numpy()  # (f32)
-            moved = np.subtract(state.x.to_numpy(), x_build, dtype=np.float64)
-            moved -= np.median(moved, axis=0)
-            # as links.distance_from_build: the f32 position's rounding, at most |x|·2^-24, counted twice
-            shift = np.linalg.norm(moved, axis=1) + np.linalg.norm(x_build, axis=1) * 2.0**-23
-            if np.partition(shift, -2)[-2:].sum() <= self.skin:
-                return
-        self.ensure_lists(state)
+    def pairs(self) -> np.ndarray:
+        """The listed pairs by ball id (the solver's own)."""
+        raise NotImplementedError
+
+    def pairs_that_may_overlap(self, state: State) -> np.ndarray:
+        """Every pair of balls that may overlap now, by ball id (i < j; int array of shape (pairs, 2)):
+        the listed pairs (:meth:`pairs`), then, without a build, the pairs a build could add that may
+        overlap: each ball that moved far since the build with every other ball (a pair may so come
+        twice). A pair the build left out had a surface gap of at least the skin; since, the gap shrank
+        by at most |Δx_a − Δx_b| ≤ |Δx_a − c| + |Δx_b − c| for any c, the balls' displacements Δx
+        taken here relative to their median c (balls that fall together close no gap). So only a pair
+        whose two shifts sum to more than the skin can be missing: a pair of a ball whose shift and the
+        largest other shift do. The lists are built first (:meth:`ensure_lists`) when they do not
+        stand for the balls (never built, balls moved or the model retuned between steps:
+        :meth:`invalidate`), or when those pairs would be more than ``MOVED_PAIRS_MAX``."""
+        moved = self._moved_far(state) if self.lists_due else np.zeros(0, np.int64)
+        if moved is None or moved.size * state.n > MOVED_PAIRS_MAX:
+            self.ensure_lists(state)
+            moved = np.zeros(0, np.int64)
+        pairs = self.pairs()
+        if moved.size:
+            ids = state.order  # (storage index to ball id; None: the same)
+            far = moved if ids is None else ids[moved]
+            others = np.arange(state.n)
+            lo, hi = np.minimum(far[:, None], others).ravel(), np.maximum(far[:, None], others).ravel()
+            pairs = np.concatenate([pairs, np.stack([lo, hi], axis=1)[lo != hi]])
+        return pairs
+
+    def _moved_far(self, state: State) -> np.ndarray | None:
+        """The storage indices of the balls that may have closed a gap the last build left out (see
+        :meth:`pairs_that_may_overlap`), or None when the lists do not stand for the balls."""
+        if not self.lists_valid or self.edited or state.n < 2:
+            return None
+        x_build = self.x_at_build.to_numpy()  # (f32)
+        moved = np.subtract(state.x.to_numpy(), x_build, dtype=np.float64)
+        moved -= np.median(moved, axis=0)
+        # as links.distance_from_build: the f32 position's rounding, at most |x|·2^-24, counted twice
+        shift = np.linalg.norm(moved, axis=1) + np.linalg.norm(x_build, axis=1) * 2.0**-23
+        first, second = np.partition(shift, -2)[-2:][::-1]
+        largest_other = np.where(shift == first, second, first)
+        return np.flatnonzero(shift + largest_other > self.skin)
 
     def retune(self, model: Model) -> None:
         """Take the model's parameters as changed between steps (``Model.set_parameters``): a new
