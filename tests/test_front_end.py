@@ -156,3 +156,21 @@ def test_expanded_functions_are_taichis_own_funcs_with_its_plain_front_end(monke
     assert not isinstance(front_end.expanded(twice).func, Func)
     monkeypatch.setenv(front_end.PLAIN_ENV, "1")
     assert isinstance(front_end.expanded(twice).func, Func)
+
+
+def test_the_frame_line_taichis_import_reads_is_the_one_inspect_gives():
+    import functools
+    import inspect
+
+    frame = sys._getframe()
+    quick = functools.partial(front_end._frame_line, plain=inspect.getframeinfo)
+    for context in (1, 3):
+        assert tuple(quick(frame, context)) == tuple(inspect.getframeinfo(frame, context))
+    # in a fresh process, `import ti_golf` before Taichi: Taichi imports with it, then all is as before
+    code = (
+        "import inspect, sys, ti_golf, taichi; from taichi.lang import kernel_impl; "
+        "print(inspect.getframeinfo.__module__, any(type(f).__name__ == '_TaichiImport' for f in sys.meta_path))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split()[-2:] == ["inspect", "False"]

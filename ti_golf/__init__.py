@@ -21,12 +21,14 @@ import os
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
+from ti_golf import front_end
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
 
 # Taichi reads these when it is imported, by whichever module imports it first: its banner would
 # spoil standard output (JSON), and its notes below warnings would be noise
 os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")
 os.environ.setdefault("TI_LOG_LEVEL", "warn")
+front_end.quicken_taichi_import()  # (its own decorators' method test, while Taichi is imported)
 
 if TYPE_CHECKING:  # pragma: no cover
     from ti_golf.golf.sweep import SweepResult, sweep
