@@ -25,7 +25,7 @@ from ti_golf.physics.types import (
 from ti_golf.solvers.collide import step_balls
 from ti_golf.solvers.colour import COLOURS, PROJECTIONS, phase_of_sweep, project_ball, sweep_ball
 from ti_golf.solvers.phases import Phase
-from ti_golf.solvers.stale import balls_in_play, flag_stale_lists
+from ti_golf.solvers.stale import flag_stale_lists, in_play
 from ti_golf.solvers.step import Step
 
 
@@ -107,8 +107,13 @@ def gauss_seidel_steps(
 @ti.func
 def any_in_play(status: ti.template()):
     """Whether some ball of ``status`` is awake and in play (:func:`.stale.in_play`), in the
-    calling (serial) thread."""
-    return balls_in_play(status) > 0
+    calling (serial) thread, which stops at the first."""
+    found = False
+    for i in range(status.shape[0]):
+        if in_play(status[i]) != 0:
+            found = True
+            break
+    return found
 
 
 @ti.func

@@ -355,8 +355,13 @@ def touching_by_gaps(i, r, bits, k_p, pressed, lists: ti.template(), scratch: ti
     for m in range(lower_first[i], lower_first[i + 1]):
         j, k = owner_slot(lower[m], bits)
         touching = ti.max(touching, gap_state(J[first[j] + k, GAP], r, k_p, pressed))
-    for k in range(listed(first, i)):
-        touching = ti.max(touching, gap_state(J[first[i] + k, GAP], r, k_p, pressed))
+        if touching == PRESSED:
+            break  # (the most it can be: an early exit, which also keeps LLVM from vectorising the loop)
+    if touching != PRESSED:
+        for k in range(listed(first, i)):
+            touching = ti.max(touching, gap_state(J[first[i] + k, GAP], r, k_p, pressed))
+            if touching == PRESSED:
+                break
     return touching
 
 
