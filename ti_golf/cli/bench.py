@@ -181,7 +181,7 @@ def cmd_startup(args: argparse.Namespace) -> int:
             else ""
         )
         print(f"{result['passed']} of {result['passed'] + result['failed']} targets met ({arch}, {precision}{load})")
-        if result["bytecode_stale"]:
+        if result.get("bytecode_stale"):
             print(
                 f"note: {len(result['bytecode_stale'])} of ti_golf's modules have no current compiled bytecode, so "
                 "every start compiled them (`python -m compileall ti_golf`, or `make setup`, compiles them)"
