@@ -603,6 +603,7 @@ def test_bench_reductions_times_both_ways_and_checks_them_against_numpy():
         assert figures["agree_with_numpy"], way
         assert figures["cell_bounds_ms"] > 0 and figures["apart_balls_ms"] > 0
     assert result["baselines"]["one_cell_a_ball_ms"] > 0
+    assert result["probes"]["agree_with_numpy"] and result["probes"]["i32_sum_ms"] > 0
     assert any("(the default here)" in line for line in lines)
     json.loads(json.dumps(result))
     assert main(["bench", "reductions", "--repeats", "0"]) == 2  # (refused before anything runs)

@@ -3,7 +3,11 @@
 own variables, or folded ``sort.FOLD`` balls a thread and met in an array (``sort.fold_in_array``
 picks the second on CUDA only). The baseline, timed in the same run, is a loop over the same balls
 that writes a cell per ball and reduces nothing. Each call's result is read back (so the device
-has finished it) and checked against numpy's over every ball."""
+has finished it) and checked against numpy's over every ball. Two probes beside them reduce into
+one integer variable of the kernel's own, as other kernels of a step do (``stale.balls_in_play``'s
+``+=``, ``grid.list_neighbours``' greatest loop count): an i32 sum and an i32 maximum, each a ball's
+cell height, to tell whether the cost of the kernels' own variables on CUDA is in their number, in
+the vectors, or in the float maxima."""
 
 import functools
 import time
@@ -29,6 +33,24 @@ def one_cell_a_ball(x: vec3_array, inv_cell: float, out: int_array) -> ti.i32:
     for i in range(x.shape[0]):
         out[i] = cell_of(x[i], inv_cell)[1]
     return out[0]
+
+
+@kernel
+def i32_sum(x: vec3_array, inv_cell: float) -> ti.i32:
+    """The probe of a sum: the balls' cell heights added into one i32 of the kernel's own."""
+    total = 0
+    for i in range(x.shape[0]):
+        total += cell_of(x[i], inv_cell)[1]
+    return total
+
+
+@kernel
+def i32_max(x: vec3_array, inv_cell: float) -> ti.i32:
+    """The probe of a maximum: the balls' greatest cell height in one i32 of the kernel's own."""
+    most = -(2**30)
+    for i in range(x.shape[0]):
+        ti.atomic_max(most, cell_of(x[i], inv_cell)[1])
+    return most
 
 
 def _per_call_s(call: Callable[[], Any], repeats: int) -> tuple[float, Any]:
@@ -81,6 +103,13 @@ def bench_reductions(n: int = 100_000, repeats: int = 50, log: Callable[[str], N
                 np.array_equal(got_bounds, want_bounds) and np.isclose(got_speeds[0], want_speed, rtol=rtol, atol=0.0)
             ),
         }
+    sum_s, got_sum = _per_call_s(lambda: i32_sum(x, 1.0 / CELL), repeats)
+    max_s, got_max = _per_call_s(lambda: i32_max(x, 1.0 / CELL), repeats)
+    probes = {
+        "i32_sum_ms": sum_s * 1e3,
+        "i32_max_ms": max_s * 1e3,
+        "agree_with_numpy": bool(got_sum == int(cells[:, 1].sum()) and got_max == int(cells[:, 1].max())),
+    }
     chosen = "in_array" if fold_in_array() else "own_variables"
     result = {
         "benchmark": "reductions",
@@ -90,6 +119,7 @@ def bench_reductions(n: int = 100_000, repeats: int = 50, log: Callable[[str], N
         "repeats": repeats,
         **ways,
         "chosen": chosen,
+        "probes": probes,
         "baselines": {"one_cell_a_ball_ms": baseline_s * 1e3},
     }
     for way, figures in ways.items():
@@ -98,5 +128,9 @@ def bench_reductions(n: int = 100_000, repeats: int = 50, log: Callable[[str], N
             f"apart_balls {figures['apart_balls_ms']:.3f} ms a call over {n:,} balls"
             f"{'' if figures['agree_with_numpy'] else ' (NOT numpy results)'}"
         )
+    log(
+        f"probes, one i32 of the kernel's own: a sum {probes['i32_sum_ms']:.3f} ms, a maximum "
+        f"{probes['i32_max_ms']:.3f} ms{'' if probes['agree_with_numpy'] else ' (NOT numpy results)'}"
+    )
     log(f"baseline one_cell_a_ball: {baseline_s * 1e3:.3f} ms a call ({info.arch})")
     return result
