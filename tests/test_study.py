@@ -431,7 +431,9 @@ def test_a_scheduler_and_two_workers_started_by_hand_share_the_tasks(flight_stud
 
 @pytest.mark.slow
 def test_ctrl_c_keeps_the_finished_rows_and_a_rerun_completes_the_study(tmp_path):
+    # 18 tasks of a tenth of the time step, so that the signal after the second finds most to do
     text = FLIGHT_STUDY.replace('"air.C_D" = "0.2:0.3:0.1"', '"air.C_D" = "0.1:0.5:0.05"')
+    text = text.replace('scene = "lab_turbulent"', 'scene = "lab_turbulent"\nset = ["world.dt=0.0001"]')
     path = write(tmp_path, "long.toml", text)
     out = tmp_path / "out"
     proc = subprocess.Popen(
