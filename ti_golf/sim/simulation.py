@@ -6,7 +6,6 @@ them and simulate again.
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
@@ -493,8 +492,10 @@ class Simulation:
         both (default: the scene's ``world.t_end``).
 
         ``until="rest"`` stops early once every ball is at rest or out of bounds; ``until="landed"``
-        once every tracked ball has landed. ``record_every=K`` samples x and ω every K steps.
-        ``progress(t_done, t_total)`` is called between chunks, and with ``until`` also given
+        once every tracked ball has landed, at the first check that finds it (every
+        ``UNTIL_CHECK_S`` of simulated time, whatever the run records). ``record_every=K`` samples
+        x and ω every K steps. ``progress(t_done, t_total)`` is called at each check and at the
+        end, and with ``until`` also given
         ``finished=(k, n, what)``: k of the n balls are finished (``what``: "at rest or out of
         bounds", "landed"), since such a run ends when all are, often long before ``t_total``.
         ``on_every(sim)`` is called every ``every`` steps (e.g. to render a frame). The samples go
@@ -512,12 +513,12 @@ class Simulation:
             rec.t.append(self.t)
             rec.x.append(self.x)
             rec.w.append(self.w)
-        chunk = int(record_every) if record_every else max(1, min(steps, int(round(0.05 / self.dt)) or 1))
-        if every and on_every is not None:
-            chunk = math.gcd(chunk, int(every)) if record_every else int(every)
+        check = max(1, min(steps, int(round(UNTIL_CHECK_S / self.dt)) or 1))  # (until and progress)
         done = 0
         while done < steps:
-            k = min(chunk, steps - done)
+            # a launch runs to the next step that records, calls on_every or checks: the steps at
+            # which a run with `until` may stop do not depend on what it records
+            k = min(steps, *((done // c + 1) * c for c in (record_every, every, check) if c)) - done
             self.step(k)
             done += k
             if record_every and done % record_every == 0:
@@ -526,6 +527,8 @@ class Simulation:
                 rec.w.append(self.w)
             if every and on_every is not None and done % every == 0:
                 on_every(self)
+            if done % check and done < steps:
+                continue
             left = self.unfinished(until).size if until is not None else 0
             if progress is not None and until is not None:
                 progress(done * self.dt, steps * self.dt, finished=(self.n - left, self.n, UNTIL_DONE[until]))
@@ -556,6 +559,10 @@ class Simulation:
 
         write_run(self, path, recording, partial)
 
+
+UNTIL_CHECK_S = 0.05
+"""Simulated seconds between a run's checks of ``until`` (and its progress reports): the steps at
+which a run may stop, whatever it records or renders."""
 
 UNTIL_DONE = {"rest": "at rest or out of bounds", "landed": "landed"}
 """What a ball is once a run with ``until`` no longer waits for it."""
