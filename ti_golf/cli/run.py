@@ -63,7 +63,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         type=int,
         default=RUN_DEFAULTS["record_every"],
         metavar="K",
-        help="record positions and spins every K steps (kept by --out, drawn by --plot)",
+        help="record positions and spins every K steps (kept by --out, drawn by --plot; default 0: "
+        "none, or about 400 samples for --plot)",
     )
     r.add_argument(
         "--out",
@@ -75,7 +76,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         type=int,
         default=RUN_DEFAULTS["frames_every"],
         metavar="K",
-        help="render a frame every K steps",
+        help="render a frame every K steps (default 0: about 100 frames over the run)",
     )
     r.add_argument("--frames", metavar="DIR", help="write the frames as DIR/frame_00000.png, …")
     r.add_argument("--gif", help="write the frames as an animated GIF (Pillow)")
