@@ -25,6 +25,7 @@ from ti_golf.physics.types import (
 )
 from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
 from ti_golf.solvers.links import listed, owner_slot
+from ti_golf.solvers.stale import in_play
 
 QUIET = -1.0  # the calm time of a quiet ball (see warm_start): below any rest timer
 
@@ -152,21 +153,15 @@ def quiet_ball(
     quiet = status[i] == AT_REST
     if quiet:
         for m in range(lower_first[i], lower_first[i + 1]):
-            if not still(status, owner_slot(lower[m], bits)[0]):
+            if in_play(status[owner_slot(lower[m], bits)[0]]) != 0:
                 quiet = False
                 break  # (an early exit: also keeps LLVM from vectorising a loop of a few pairs)
     if quiet:
         for k in range(listed(first, i)):
-            if not still(status, upper[i, k]):
+            if in_play(status[upper[i, k]]) != 0:
                 quiet = False
                 break
     return quiet
-
-
-@ti.func
-def still(status: ti.template(), j):
-    """Whether ball j is at rest or out of bounds: it cannot touch a ball asleep this step."""
-    return status[j] == AT_REST or status[j] == OUT_OF_BOUNDS
 
 
 @ti.func
