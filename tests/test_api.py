@@ -378,15 +378,17 @@ def test_python_callers_get_the_checks_the_command_line_has(tmp_path):
 def test_a_run_until_rest_stops_at_the_same_step_whatever_it_records():
     # the checks of `until` fall every UNTIL_CHECK_S of simulated time: a run that records every 7
     # or 13 steps, or calls on_every, ends at the step and in the state of one that records nothing
-    # (it stopped at the end of its recording chunk, so the saved state changed with --record-every)
+    # (it stopped at the end of its recording chunk, so the saved state changed with --record-every),
+    # at the same time to the last bit, and with the same landing time (each launch summed n·dt,
+    # 19.35000000000014 s against 19.350000000000563 s)
     runs = []
     for record_every, every in ((0, 0), (7, 0), (13, 5)):
         sim = tg.Simulation.from_scene("lab_spin_decay")
         hook = {"every": every, "on_every": lambda s: None} if every else {}
         rec = sim.run(until="rest", record_every=record_every, **hook)
         assert len(rec.t) == (sim.step_count // record_every + 1 if record_every else 0)
-        runs.append((sim.step_count, sim.x, sim.w, sim.status))
-    assert runs[0][0] % round(UNTIL_CHECK_S / sim.dt) == 0 and (runs[0][3] == tg.AT_REST).all()
+        runs.append((sim.step_count, sim.t, sim.flight().flight_time, sim.x, sim.w, sim.status))
+    assert runs[0][0] % round(UNTIL_CHECK_S / sim.dt) == 0 and (runs[0][5] == tg.AT_REST).all()
     for other in runs[1:]:
         assert other[0] == runs[0][0]
         for a, b in zip(other[1:], runs[0][1:]):

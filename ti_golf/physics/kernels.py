@@ -155,6 +155,7 @@ def advance(
     # Model:
     scalars: float_array,
     t0: ti.f64,
+    dt: ti.f64,
     steps: ti.i32,
     kinds: ti.template(),
     model: ModelArrays,
@@ -162,7 +163,9 @@ def advance(
     state: BallState,
     flight: FlightRecord,
 ):
-    """Advance every active ball by ``steps`` steps of ``params.h`` [s] from ``t0`` [s]; balls do not meet
+    """Advance every active ball by ``steps`` steps of ``params.h`` [s] from ``t0`` [s], the time of
+    step k being ``t0`` plus ``dt`` [s] added k times in f64 (as :meth:`.state.State.advance_clock`
+    adds it, so that a run's times do not depend on how its steps are split into launches); balls do not meet
     each other, only the planes and the terrain (one thread per ball runs all the steps). The air,
     contact, terrain and step parameters come in one array, ``scalars`` (:func:`.types.scalars_of`).
 
@@ -173,7 +176,7 @@ def advance(
     not touched.
     """
     air, contact, terrain, params = scalars_of(scalars)
-    h, t_start = params.h, ti.cast(t0, float)
+    h = params.h
     v_inelastic = contact.v_bounce + 2.0 * params.gravity.norm() * h
     tracking = flight.landed.shape[0] == state.x.shape[0]  # else no ball is tracked: one-entry flight records, not read
     for i in range(state.x.shape[0]):
@@ -193,11 +196,12 @@ def advance(
                     flight.land_v[i],
                     model.launch_height[i],
                 )
-            for k in range(steps):
+            t_step = t0  # (f64: the time at the start of each step)
+            for _k in range(steps):
                 S1 = step_free(lane_state(xi, vi, wi), h, kinds, coef, air, params.gravity)
                 x_free, v_free, w1 = column(S1, X, 0), column(S1, V, 0), column(S1, W, 0)
                 fl, top, tl, lx, lv = track_flight(
-                    xi, vi, x_free, v_free, h, t_start + k * h, level, fl, top, tl, lx, lv
+                    xi, vi, x_free, v_free, h, ti.cast(t_step, float), level, fl, top, tl, lx, lv
                 )
                 v1 = v_free
                 touching = 0
@@ -223,6 +227,7 @@ def advance(
                     x1 = plane_position(xi, x_free, x1, v_free, v1, r, pt, nt, contact.k_p, h)
                     x1 = terrain_position(xi, x1, pt, nt, r, model.heights, terrain)
                 xi, vi, wi = x1, v1, w1
+                t_step += dt
                 st, rt = rest_update(touching, vi, wi, r, rt, h, params.v_rest, params.t_rest, kinds.friction)
                 if ti.static(kinds.terrain):
                     if outside(model.heights, terrain, xi):

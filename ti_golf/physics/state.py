@@ -126,6 +126,14 @@ class State:
         self.t = 0.0
         self.steps = 0
 
+    def advance_clock(self, dt: float, steps: int) -> None:
+        """Count ``steps`` steps of ``dt`` [s] on the clock: ``dt`` added to :attr:`t` once a step,
+        as the kernels add it to the time of each step, so that the time after a run's steps is the
+        same however they were split into launches (or skipped, as a pile asleep skips them)."""
+        for _ in range(int(steps)):
+            self.t += dt
+        self.steps += int(steps)
+
     def numpy(self) -> dict[str, np.ndarray]:
         """Copies of all per-ball arrays as numpy by ball id (float64 for floats)."""
         out = {}

@@ -453,14 +453,14 @@ class Simulation:
             kernels.advance(
                 self._packs.step_scalars(m),
                 s.t,
+                m.dt,
                 int(n),
                 m.kinds,
                 self._packs.model(m),
                 self._packs.state(s),
                 self._packs.flight(s),
             )
-            s.t += n * m.dt
-            s.steps += int(n)
+            s.advance_clock(m.dt, n)
         self.check_finite()
 
     def check_finite(self) -> None:

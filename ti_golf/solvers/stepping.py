@@ -235,7 +235,7 @@ class Stepping:
                     self.build(state)
                     grid.clear(self.flag)  # build() left the longest lists there; from now on the kernel rebuilds
         self._launch_relisting(model, state, steps)
-        self._advance_time(model, state, steps)
+        state.advance_clock(model.dt, steps)
 
     def _advance_serially_between_builds(self, model: Model, state: State, steps: int, came: list[int]) -> None:
         """``steps`` steps in serial launches, each until a step asks for new lists, which are built
@@ -251,17 +251,10 @@ class Stepping:
                 return
             with plain_compile():  # see runtime.plain_compile
                 taken = self._serial_steps(model.scene.contact.iterations, self._arguments(model, state, steps))
-            self._advance_time(model, state, taken)
+            state.advance_clock(model.dt, taken)
             steps -= taken
             if came:
                 break
-
-    @staticmethod
-    def _advance_time(model: Model, state: State, steps: int) -> None:
-        """Count ``steps`` steps on the state's clock, taken in one launch or skipped."""
-        for _ in range(steps):
-            state.t += model.dt  # as one step at a time adds it, to the same round-off
-        state.steps += steps
 
     def _step_in_parallel(self, model: Model, state: State, awake: bool | None) -> tuple[bool, bool | None]:
         """One parallel step, the lists built first when due; or, with ``skip_still`` and no ball
@@ -276,8 +269,7 @@ class Stepping:
             return False, False
         rebuild, awake = self._sweep(model.scene.contact.iterations, self._arguments(model, state, 1))
         state.x, self.x_free = self.x_free, state.x  # the kernel left the new positions in x_free
-        state.t += model.dt
-        state.steps += 1
+        state.advance_clock(model.dt, 1)
         self.rebuild_due = rebuild
         return True, awake
 
@@ -286,7 +278,7 @@ class Stepping:
         change anything, so neither would the next, and only the time advances (counted in
         ``still_steps``)."""
         self.still_steps += steps
-        self._advance_time(model, state, steps)
+        state.advance_clock(model.dt, steps)
 
     def _all_still(self, state: State) -> bool:
         """Whether no ball is awake and in play, so that a step would change nothing (only the
