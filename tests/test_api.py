@@ -11,6 +11,7 @@ import pytest
 from conftest import ROOT, SCENES, cli
 
 import ti_golf as tg
+from ti_golf.cli.main import main
 from ti_golf.sim.simulation import UNTIL_CHECK_S
 
 
@@ -370,9 +371,23 @@ def test_python_callers_get_the_checks_the_command_line_has(tmp_path):
         res.best()  # (it was 0, a ball that never landed)
     assert tg.load_scene("lab_magnus", "air.C_D=0.3").air.C_D == 0.3  # one text, not its characters
     assert tg.load_scene("lab_magnus", {"air.wind": np.array([1.0, 0.0, 0.0])}).air.wind == (1.0, 0.0, 0.0)
-    with pytest.raises(tg.ConfigError, match=re.escape("--workers: must be a whole number in [1, ")):
+    with pytest.raises(tg.ConfigError, match=re.escape("workers: must be a whole number in [1, ")):
         run_study("bag_weather", out=tmp_path / "out", workers=0)
     assert not (tmp_path / "out").exists()  # refused before its folder was made
+
+
+def test_python_errors_name_the_arguments_and_the_command_line_its_options(capsys):
+    # a Python caller gave overrides=, arch=, workers=: the errors name those, not --set, --arch
+    # or --workers, which `ti-golf` names for the same mistakes
+    with pytest.raises(tg.ConfigError) as info:
+        tg.Simulation.from_scene("lab_magnus", overrides={"air.C_DD": 0.3})
+    assert str(info.value).startswith("overrides: key 'air.C_DD' is not a scene key (did you mean 'air.C_D'?)")
+    with pytest.raises(tg.ConfigError, match="^arch: unknown backend 'tpu'"):
+        tg.init(arch="tpu")
+    assert main(["run", "lab_magnus", "--steps", "1", "--set", "air.C_DD=0.3"]) == 2
+    assert "ti-golf: error: --set: key 'air.C_DD' is not a scene key" in capsys.readouterr().err
+    assert main(["study", "bag_weather", "--workers", "0"]) == 2
+    assert "ti-golf: error: --workers: must be a whole number in [1, " in capsys.readouterr().err
 
 
 def test_a_run_until_rest_stops_at_the_same_step_whatever_it_records():

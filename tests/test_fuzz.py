@@ -1,9 +1,9 @@
-"""Fuzzed scene input: every generated scene and --set either loads or is refused in one line.
+"""Fuzzed scene input: every generated scene and override either loads or is refused in one line.
 
 Property-based (hypothesis), generated from the key table: wrong types, out-of-range and
 non-finite numbers, wrong vector lengths, unknown keys, tables given as values, broken override
 text. A case must load, or raise ``ConfigError`` with one line naming the source (file or
-``--set``); any other exception, or a multi-line message, is a defect. Examples are derandomised
+the overrides, ``--set`` on the command line); any other exception, or a multi-line message, is a defect. Examples are derandomised
 (the same cases in every run) and bounded, so CI time is fixed; ``@example`` keeps the cases that
 once failed as regression cases.
 """
@@ -50,7 +50,7 @@ def loads_or_refuses(doc=None, overrides=None) -> None:
     except ConfigError as exc:
         text = str(exc)
         assert "\n" not in text, text
-        assert text.startswith(SOURCE) or text.startswith("--set"), text
+        assert text.startswith(SOURCE) or text.startswith("overrides: "), text
 
 
 @FUZZ
@@ -139,7 +139,7 @@ def test_fuzzed_set_overrides_parse_or_are_refused(text):
     try:
         parse_override(text)
     except ConfigError as exc:
-        assert "\n" not in str(exc) and str(exc).startswith("--set"), str(exc)
+        assert "\n" not in str(exc) and str(exc).startswith("overrides: "), str(exc)
         return
     loads_or_refuses(overrides=[text])
 

@@ -275,7 +275,7 @@ def test_keys_read_under_other_tables_are_refused_where_those_leave_them_unread(
     path = write_scene(tmp_path, toml_text({"description": "t", "world": {"ground": False}, "balls": balls}))
     with pytest.raises(ConfigError) as err:
         ti_golf.load_scene(path, ["world.ground_height=2"])
-    assert err.value.source == "--set" and err.value.key == "world.ground_height"
+    assert err.value.source == "overrides" and err.value.key == "world.ground_height"
     res = run_cli("run", str(path), "--steps", "1", "--set", "contact.turf=true")
     assert res.returncode == 2 and "contact.turf" in res.stderr and "Traceback" not in res.stderr
 
@@ -368,10 +368,10 @@ def test_a_set_setting_that_leaves_a_key_of_the_file_unread_drops_that_key():
     # but a key given on the command line, or in a file that its own settings leave unread, is refused
     with pytest.raises(ConfigError) as err:
         ti_golf.load_scene("tour_shot", ["world.ground=false", "contact.turf=true"])
-    assert err.value.source == "--set" and err.value.key == "contact.turf"
+    assert err.value.source == "overrides" and err.value.key == "contact.turf"
     with pytest.raises(ConfigError) as err:
         ti_golf.load_scene("lab_magnus", ["air.model=spin_ratio", "air.C_D=0.2"])
-    assert err.value.source == "--set" and err.value.key == "air.C_D"
+    assert err.value.source == "overrides" and err.value.key == "air.C_D"
 
 
 def test_a_change_that_leaves_a_key_read_across_tables_unread_drops_it():
@@ -595,10 +595,10 @@ def test_bad_set_names_set_and_key(case):
     override, want_key, fragments = BAD_SETS[case]
     with pytest.raises(ConfigError) as info:
         ti_golf.load_scene(BASE_SCENE, [override])
-    assert info.value.source == "--set"
+    assert info.value.source == "overrides"
     assert info.value.key == want_key
     msg = str(info.value)
-    assert msg.startswith("--set") and f"'{want_key}'" in msg
+    assert msg.startswith("overrides: ") and f"'{want_key}'" in msg
     for frag in fragments:
         assert frag in msg, (frag, msg)
 

@@ -557,6 +557,6 @@ def test_the_command_lines_set_replaces_the_files_and_may_not_set_a_varied_key(t
     assert task == ("air.C_D=0.3",)  # the file's 0.25 replaced, not given twice
     with pytest.raises(ConfigError) as info:
         load_study(spec, ["air.rho=1.0"])
-    assert (info.value.source, info.value.key) == ("--set", "air.rho") and "is varied by the study's [grid]" in str(
+    assert (info.value.source, info.value.key) == ("overrides", "air.rho") and "is varied by the study's [grid]" in str(
         info.value
     )

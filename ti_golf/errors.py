@@ -19,7 +19,9 @@ class ConfigError(TiGolfError):
     """Bad scene or command-line input.
 
     Attributes:
-        source: where the input came from: a file path, ``"--set"`` or ``"--angles"``.
+        source: where the input came from: a file path, or the Python argument that gave it
+            (``OVERRIDES``, ``"angles_deg"``), which the command line names by its option
+            (``--set``, ``--angles``).
         key: the dotted scene key (``"air.gamma"``) or option at fault, or ``None`` for the whole file.
         reason: what is wrong and what is allowed.
     """
@@ -31,6 +33,12 @@ class ConfigError(TiGolfError):
         where = f"{self.source}: " if self.source else ""
         what = f"key '{key}' " if key else ""
         super().__init__(one_line(f"{where}{what}{reason}"))
+
+
+OVERRIDES = "overrides"
+"""The source of an error about a scene key given beside the scene file rather than in it: the
+``overrides`` of ``load_scene``, ``Simulation.from_scene`` and ``run_study``, and the changes of
+``Simulation.set`` (``--set`` on the command line, which names it so)."""
 
 
 class SimulationError(TiGolfError):

@@ -63,8 +63,8 @@ def _plain_on_cuda() -> bool:
 
 
 def _resolve(arch: str | None, precision: str | None) -> tuple[str, str]:
-    arch_from = "--arch" if arch else "TI_GOLF_ARCH"
-    prec_from = "--precision" if precision else "TI_GOLF_PRECISION"
+    arch_from = "arch" if arch else "TI_GOLF_ARCH"
+    prec_from = "precision" if precision else "TI_GOLF_PRECISION"
     arch = (arch or os.environ.get("TI_GOLF_ARCH") or "cpu").lower()
     precision = (precision or os.environ.get("TI_GOLF_PRECISION") or "f64").lower()
     if arch not in ARCHES:

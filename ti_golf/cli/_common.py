@@ -16,7 +16,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ti_golf.errors import ConfigError
+from ti_golf.errors import OVERRIDES, ConfigError
 from ti_golf.files import PLOT_FORMATS, PLOT_FORMATS_HELP, plot_format
 
 if TYPE_CHECKING:
@@ -180,6 +180,18 @@ def check_writable(path: str | None, option: str, suffixes: tuple[str, ...] = ()
         raise ConfigError(option, None, f"cannot write {path!r}: {exc.strerror or exc}") from None
     if suffixes and Path(path).suffix.lower() not in suffixes:
         raise ConfigError(option, None, f"must end in {' or '.join(suffixes)} (got {path!r})")
+
+
+API_OPTIONS = {
+    OVERRIDES: "--set",
+    "arch": "--arch",
+    "precision": "--precision",
+    "workers": "--workers",
+    "address": "--address",
+    "out": "--out",
+}
+"""The option of each Python argument that the package's errors name and every command that has
+the option gives it (``ti-golf`` names its option instead: :func:`options_named`)."""
 
 
 @contextlib.contextmanager

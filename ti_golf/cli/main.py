@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from types import ModuleType
 from typing import Any
 
-from ti_golf.cli._common import Parser, StartupStatus
+from ti_golf.cli._common import API_OPTIONS, Parser, StartupStatus, options_named
 from ti_golf.errors import ConfigError, SimulationError, TiGolfError
 
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -106,6 +106,24 @@ def _interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
 
+def _run_command(args: argparse.Namespace, status: bool) -> int:
+    """Run the parsed command, Taichi started first unless the command needs none (with
+    ``status``, the start's waits said on standard error: :class:`StartupStatus`)."""
+    if args.command not in NO_RUNTIME and not getattr(args, "no_runtime", False):  # notice before output
+        from ti_golf import runtime
+
+        runtime.announce_first_compile = True
+        runtime.init(
+            getattr(args, "arch", None), getattr(args, "precision", None), profile=getattr(args, "profile", False)
+        )
+        if status:
+            from ti_golf.kernel_log import KernelLog
+
+            with KernelLog().installed() as log, StartupStatus(log):
+                return _command(args.command)(args)
+    return _command(args.command)(args)
+
+
 def main(argv: Sequence[str] | None = None, status: bool = False) -> int:
     """Entry point of ``ti-golf`` and ``python -m ti_golf``; returns the exit code. With ``status``
     (the console command) a start that waits on Taichi's kernels says what it is doing
@@ -120,19 +138,8 @@ def main(argv: Sequence[str] | None = None, status: bool = False) -> int:
     if on_main_thread:  # a kill stops as Ctrl-C does, keeping what was done (signals reach the main thread only)
         previous = signal.signal(signal.SIGTERM, _interrupt)
     try:
-        if args.command not in NO_RUNTIME and not getattr(args, "no_runtime", False):  # notice before output
-            from ti_golf import runtime
-
-            runtime.announce_first_compile = True
-            runtime.init(
-                getattr(args, "arch", None), getattr(args, "precision", None), profile=getattr(args, "profile", False)
-            )
-            if status:
-                from ti_golf.kernel_log import KernelLog
-
-                with KernelLog().installed() as log, StartupStatus(log):
-                    return _command(args.command)(args)
-        return _command(args.command)(args)
+        with options_named(API_OPTIONS):  # (the package's errors name its Python arguments)
+            return _run_command(args, status)
     except BrokenPipeError:  # (an OSError) the reader of standard output left: see run_cli
         raise
     except ConfigError as exc:

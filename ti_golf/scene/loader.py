@@ -20,7 +20,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-from ti_golf.errors import ConfigError
+from ti_golf.errors import OVERRIDES, ConfigError
 from ti_golf.scene.across import READ_ACROSS, read_across, unread_text, with_value
 from ti_golf.scene.checks import REACH, raise_config
 from ti_golf.scene.keys import Key, read_when_text
@@ -60,11 +60,11 @@ def parse_override(text: str) -> tuple[str, Any]:
     paths (letters, digits and ``_-./~``) are strings. An empty VALUE (``KEY=``) is ``None``: the
     key is cleared, back to its default (``game.start=``: a random start)."""
     if "=" not in text:
-        raise ConfigError("--set", text, "must be KEY=VALUE, e.g. --set air.wind=[-5,0,0]")
+        raise ConfigError(OVERRIDES, text, "must be KEY=VALUE, e.g. air.wind=[-5,0,0]")
     dotted, raw = text.split("=", 1)
     dotted, raw = dotted.strip(), raw.strip()
     if not dotted:
-        raise ConfigError("--set", None, f"missing KEY in {text!r} (expected KEY=VALUE)")
+        raise ConfigError(OVERRIDES, None, f"missing KEY in {text!r} (expected KEY=VALUE)")
     if not raw:
         return dotted, None
     try:
@@ -74,7 +74,7 @@ def parse_override(text: str) -> tuple[str, Any]:
             value = raw  # a bare word such as rk4, or a path such as data/hills.npy
         else:
             raise ConfigError(
-                "--set", dotted, f'value {raw!r} is not valid TOML (numbers, [x, y, z], true/false, "text")'
+                OVERRIDES, dotted, f'value {raw!r} is not valid TOML (numbers, [x, y, z], true/false, "text")'
             ) from None
     return dotted, value
 
@@ -85,25 +85,25 @@ def _apply_override(data: dict[str, Any], dotted: str, value: Any) -> None:
     parts = dotted.split(".")
     if len(parts) == 1:
         if parts[0] not in TOP_LEVEL:
-            raise ConfigError("--set", dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
+            raise ConfigError(OVERRIDES, dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
         if value is None:
             data.pop(parts[0], None)
         else:
-            data[parts[0]] = ("--set", value)
+            data[parts[0]] = (OVERRIDES, value)
         return
     if len(parts) != 2:
-        raise ConfigError("--set", dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
+        raise ConfigError(OVERRIDES, dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
     section, name = parts
     if section not in SCHEMA or name not in SCHEMA[section]:
-        raise ConfigError("--set", dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
+        raise ConfigError(OVERRIDES, dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
     if value is None:
         if isinstance(data.get(section), dict):
             data[section].pop(name, None)
         return
     table = data.setdefault(section, {})
     if not isinstance(table, dict):
-        raise ConfigError("--set", dotted, f"cannot be set: '{section}' is not a table in the scene")
-    table[name] = ("--set", value)
+        raise ConfigError(OVERRIDES, dotted, f"cannot be set: '{section}' is not a table in the scene")
+    table[name] = (OVERRIDES, value)
 
 
 def _all_keys() -> list[str]:
@@ -247,7 +247,7 @@ def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str, fil
         if not isinstance(given, dict) or name not in given or read_across(dotted, scene):
             continue
         where, _value = _with_source(given[name], source)
-        if where != "--set" and file_doc is not None:
+        if where != OVERRIDES and file_doc is not None:
             file_scene = file_scene or _build(file_doc, source, scene.name)
             if read_across(dotted, file_scene):
                 scene = with_value(scene, dotted, SCHEMA[table][name].default)
@@ -258,8 +258,8 @@ def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str, fil
 
 def _with_source(value: Any, source: str) -> tuple[str, Any]:
     """A value of the document and where it came from: ``--set`` for an override's (stored as
-    ``("--set", value)``), else ``source``."""
-    if isinstance(value, tuple) and len(value) == 2 and value[0] == "--set":
+    ``(OVERRIDES, value)``), else ``source``."""
+    if isinstance(value, tuple) and len(value) == 2 and value[0] == OVERRIDES:
         return value[0], value[1]
     return source, value
 
@@ -391,15 +391,15 @@ def _refuse_unread(
             table, other_key = other.split(".")
             given = doc.get(table, {})
             current = given.get(other_key, SCHEMA[table][other_key].default) if isinstance(given, dict) else None
-            if isinstance(current, tuple) and len(current) == 2 and current[0] == "--set":
+            if isinstance(current, tuple) and len(current) == 2 and current[0] == OVERRIDES:
                 current, setting_set = current[1], True
             read = current in allowed
         else:
             read = values.get(other, keys[other].default) in allowed
-            setting_set = sources.get(other) == "--set"
+            setting_set = sources.get(other) == OVERRIDES
         if read:
             continue
-        if setting_set and sources.get(name, source) != "--set":
+        if setting_set and sources.get(name, source) != OVERRIDES:
             del values[name]
             continue
         raise_config(sources.get(name, source), f"{prefix}.{name}", f"is only read when {read_when_text(key, prefix)}")
@@ -418,7 +418,7 @@ def _air(values: dict[str, Any], sources: dict[str, str], source: str) -> dict[s
     must exceed its roughness length.
     """
     values = dict(values)
-    cli = {k for k in values if sources.get(k) == "--set"}
+    cli = {k for k in values if sources.get(k) == OVERRIDES}
 
     def drop_file(*names: str) -> None:
         for name in names:
@@ -520,7 +520,7 @@ def _terrain(values: dict[str, Any], sources: dict[str, str], source: str) -> Te
                 'is required when terrain.kind = "file" (a .npy array of heights [m], shape (nx, nz))',
             )
         path = Path(cfg.file).expanduser()
-        if not path.is_absolute() and src != "--set":
+        if not path.is_absolute() and src != OVERRIDES:
             path = Path(source).parent / path
         load_heights_file(path, src)
         cfg = TerrainConfig(**{**cfg.__dict__, "file": str(path)})

@@ -18,10 +18,10 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from ti_golf.errors import ConfigError
+from ti_golf.errors import OVERRIDES, ConfigError
 from ti_golf.scene.loader import parse_override
 
-SOURCE = "--set"
+SOURCE = OVERRIDES
 """The source that errors about changed keys name (as the scene loader names overrides)."""
 
 AT_T0 = ("launch", "ball", "terrain")

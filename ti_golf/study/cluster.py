@@ -71,11 +71,11 @@ to start a hundred thousand processes)."""
 
 def check_workers(workers: Any) -> int:
     """``workers``, the local worker processes asked for: a whole number in [1, WORKERS_PER_CORE ×
-    cores], or a ConfigError naming ``--workers`` (the option, and ``run_study``'s argument)."""
+    cores], or a ConfigError naming ``workers`` (``run_study``'s argument; ``--workers`` on the command line)."""
     most = WORKERS_PER_CORE * cores()
     if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= most:
         raise ConfigError(
-            "--workers",
+            "workers",
             None,
             f"must be a whole number in [1, {most}], {WORKERS_PER_CORE} a core here (got {workers!r})",
         )
@@ -102,8 +102,8 @@ def study_client(
     logging.getLogger("distributed").setLevel(logging.ERROR)
     if address:
         if workers is not None:
-            raise ConfigError("--workers", None, "starts a local cluster: leave it out with --address")
-        given = "--address" if os.environ.get(ADDRESS_ENV) != address else ADDRESS_ENV
+            raise ConfigError("workers", None, "starts a local cluster: give it or a scheduler's address, not both")
+        given = "address" if os.environ.get(ADDRESS_ENV) != address else ADDRESS_ENV
         if Path(address).suffix == ".json":
             if not Path(address).is_file():
                 raise ConfigError(given, None, f"scheduler file {address!r} not found")
@@ -128,7 +128,7 @@ def study_client(
                 w.get("resources", {}).get("GPU") for w in client.scheduler_info()["workers"].values()
             ):
                 raise ConfigError(
-                    "--address",
+                    "address",
                     None,
                     f"the study's tasks ask for a GPU (task.gpu = true) and no worker of {address} has one: start "
                     "workers with `dask worker ... --resources GPU=1`",

@@ -67,7 +67,7 @@ def run_study(
     spec = study if isinstance(study, StudySpec) else load_study(study, overrides)
     folder = Path(out) if out is not None else default_folder(spec)
     if folder.exists() and not folder.is_dir():
-        raise ConfigError("--out", None, f"{str(folder)!r} is a file, not a folder")
+        raise ConfigError("out", None, f"{str(folder)!r} is a file, not a folder")
     (folder / RUNS).mkdir(parents=True, exist_ok=True)
     manifest = Manifest(folder)
     todo = [t for t in spec.tasks if not manifest.finished(t.id)]

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ti_golf.errors import ConfigError
+from ti_golf.errors import OVERRIDES, ConfigError
 from ti_golf.scene.checks import DURATION, Interval, OneOf, parse_range, raise_config
 from ti_golf.scene.document import scene_document
 from ti_golf.scene.jsonschema import DIALECT, key_schema
@@ -256,7 +256,7 @@ def load_study(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> S
         dotted, value = parse_override(text)
         if dotted.startswith("task."):
             if dotted[5:] not in TASK_KEYS:
-                raise_config("--set", dotted, f"is not a task key; allowed: {', '.join(TASK_KEYS)}")
+                raise_config(OVERRIDES, dotted, f"is not a task key; allowed: {', '.join(TASK_KEYS)}")
             task_doc[dotted[5:]] = value
         else:
             scene_overrides.append(text)
@@ -285,7 +285,7 @@ def load_study(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> S
     for point in points:
         for dotted in point:
             if dotted in fixed_keys:  # the point's value would replace it: the set value would have no effect
-                where = (source, f"set: {dotted}") if dotted in file_keys - cli_keys else ("--set", dotted)
+                where = (source, f"set: {dotted}") if dotted in file_keys - cli_keys else (OVERRIDES, dotted)
                 raise_config(
                     *where, f"is varied by the study's [{given[0]}]: a value set for every task would have no effect"
                 )
@@ -497,10 +497,10 @@ def _check_scene(
         if exc.key in point:
             table = {"grid": "grid", "points": "points", "random": "random.uniform"}[how]
             raise ConfigError(source, f"{table}.{exc.key}", f"{exc.reason} (at {_point_text(point)})") from None
-        if exc.source == "--set":
+        if exc.source == OVERRIDES:
             in_file = exc.key in file_keys
             raise ConfigError(
-                source if in_file else "--set", f"set: {exc.key}" if in_file else exc.key, exc.reason
+                source if in_file else OVERRIDES, f"set: {exc.key}" if in_file else exc.key, exc.reason
             ) from None
         raise ConfigError(source, "scene", str(exc)) from None
     if task.kind in ("shot", "dispersion") and scene.launch is None:
