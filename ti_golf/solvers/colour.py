@@ -58,7 +58,7 @@ from ti_golf.solvers.sequential import (
 from ti_golf.solvers.sort import bucket_in_turn, cell_of, counting_sort, sort_bucket, spread_turns, task_stride
 from ti_golf.solvers.stale import balls_in_play, flag_stale_lists
 from ti_golf.solvers.step import Step
-from ti_golf.solvers.surfaces import surface_impulses
+from ti_golf.solvers.surfaces import beyond_reach, surface_impulses
 
 PROJECTIONS = 3
 """Passes of the position projection (B.18, :func:`project_sweep`) at the end of a Gauss–Seidel
@@ -324,7 +324,10 @@ def sweep_ball(i, phase, far_only, any_far, inv_cell, s: ti.template()):
     inelastic speed; the restitution pass (``BOUNCE``), which changes no other pair, visits only
     the pairs of the balls so marked."""
     contact, model, lists, state, scratch = ti.static((s.contact, s.model, s.lists, s.state, s.scratch))
-    if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
+    if alone_and_clear(i, s.params.h * s.params.h * state.v[i].norm_sqr(), s):
+        if phase == Phase.FIRST and not far_only:
+            scratch.impact[i] = 0  # (none of its pairs approached: it has none)
+    elif state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
         k = sweep_constants(contact, s.params)
         xi, vi, wi = state.x[i], state.v[i], state.w[i]
         ri, inv_mi = of_ball(model.radius, i), 1.0 / of_ball(model.mass, i)
@@ -373,7 +376,8 @@ def project_ball(i, far_only, any_far, inv_cell, s: ti.template()):
     in :func:`sweep_ball`. Moves only positions: the velocities, and so the energy, are untouched."""
     model, lists, state, scratch = ti.static((s.model, s.lists, s.state, s.scratch))
     k_p = s.contact.k_p
-    if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
+    moved = (scratch.x_free[i] - state.x[i]).norm_sqr()
+    if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET and not alone_and_clear(i, moved, s):
         xi, ri = scratch.x_free[i], of_ball(model.radius, i)
         inv_mi = 0.0
         if state.status[i] != AT_REST:
@@ -386,3 +390,19 @@ def project_ball(i, far_only, any_far, inv_cell, s: ti.template()):
         if not far_only and inv_mi > 0.0:
             xi = project_planes(xi, ri, k_p, model)
         scratch.x_free[i] = xi
+
+
+@ti.func
+def alone_and_clear(i, reach_sqr, s: ti.template()):
+    """Whether a sweep or a projection pass leaves ball i as it is, so that it need not be read
+    (``s``: the step's :class:`.step.Step`): it has no pair in the lists, neither owned nor owned
+    by another ball (``lists.lower_first``), so that only a surface could change it, and its
+    surface clearance (``scratch.clear``) keeps it out of reach of every plane and the terrain
+    while its gaps shrink by sqrt(``reach_sqr``) [m] (:func:`.surfaces.beyond_reach`): in a
+    sweep, h·|v|, the test by which the sweep itself skips the surfaces; in a projection, its
+    move over the step. Most balls of a pour in flight are so: their sweeps would read their
+    state and write it back unchanged."""
+    alone = False
+    if listed(s.lists.first, i) == 0 and s.lists.lower_first[i + 1] == s.lists.lower_first[i]:
+        alone = beyond_reach(s.scratch.clear[i], of_ball(s.model.radius, i), reach_sqr)
+    return alone
