@@ -190,8 +190,8 @@ API_OPTIONS = {
     "address": "--address",
     "out": "--out",
 }
-"""The option of each Python argument that the package's errors name and every command that has
-the option gives it (``ti-golf`` names its option instead: :func:`options_named`)."""
+"""Each Python argument that the package's errors may name, with the option that gives it on the
+command line: ``ti-golf`` names the option instead (:func:`options_named`, around every command)."""
 
 
 @contextlib.contextmanager
