@@ -324,7 +324,7 @@ def sweep_ball(i, phase, far_only, any_far, inv_cell, s: ti.template()):
     inelastic speed; the restitution pass (``BOUNCE``), which changes no other pair, visits only
     the pairs of the balls so marked."""
     contact, model, lists, state, scratch = ti.static((s.contact, s.model, s.lists, s.state, s.scratch))
-    if alone_and_clear(i, s.params.h * s.params.h * state.v[i].norm_sqr(), s):
+    if alone_and_clear(i, project=False, s=s):
         if phase == Phase.FIRST and not far_only:
             scratch.impact[i] = 0  # (none of its pairs approached: it has none)
     elif state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
@@ -376,33 +376,39 @@ def project_ball(i, far_only, any_far, inv_cell, s: ti.template()):
     in :func:`sweep_ball`. Moves only positions: the velocities, and so the energy, are untouched."""
     model, lists, state, scratch = ti.static((s.model, s.lists, s.state, s.scratch))
     k_p = s.contact.k_p
-    moved = (scratch.x_free[i] - state.x[i]).norm_sqr()
-    if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET and not alone_and_clear(i, moved, s):
-        xi, ri = scratch.x_free[i], of_ball(model.radius, i)
-        inv_mi = 0.0
-        if state.status[i] != AT_REST:
-            inv_mi = 1.0 / of_ball(model.mass, i)
-        col = column_of(lists.x_at_build[i], inv_cell)
-        for k in range(listed(lists.first, i)):
-            j = lists.upper[i, k]
-            if in_this_pass(col, j, far_only, any_far, inv_cell, lists):
-                xi = project_pair(j, xi, ri, inv_mi, k_p, model, state, scratch)
-        if not far_only and inv_mi > 0.0:
-            xi = project_planes(xi, ri, k_p, model)
-        scratch.x_free[i] = xi
+    if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
+        if not alone_and_clear(i, project=True, s=s):  # (nested: see alone_and_clear)
+            xi, ri = scratch.x_free[i], of_ball(model.radius, i)
+            inv_mi = 0.0
+            if state.status[i] != AT_REST:
+                inv_mi = 1.0 / of_ball(model.mass, i)
+            col = column_of(lists.x_at_build[i], inv_cell)
+            for k in range(listed(lists.first, i)):
+                j = lists.upper[i, k]
+                if in_this_pass(col, j, far_only, any_far, inv_cell, lists):
+                    xi = project_pair(j, xi, ri, inv_mi, k_p, model, state, scratch)
+            if not far_only and inv_mi > 0.0:
+                xi = project_planes(xi, ri, k_p, model)
+            scratch.x_free[i] = xi
 
 
 @ti.func
-def alone_and_clear(i, reach_sqr, s: ti.template()):
-    """Whether a sweep or a projection pass leaves ball i as it is, so that it need not be read
-    (``s``: the step's :class:`.step.Step`): it has no pair in the lists, neither owned nor owned
-    by another ball (``lists.lower_first``), so that only a surface could change it, and its
-    surface clearance (``scratch.clear``) keeps it out of reach of every plane and the terrain
-    while its gaps shrink by sqrt(``reach_sqr``) [m] (:func:`.surfaces.beyond_reach`): in a
-    sweep, h·|v|, the test by which the sweep itself skips the surfaces; in a projection, its
-    move over the step. Most balls of a pour in flight are so: their sweeps would read their
-    state and write it back unchanged."""
+def alone_and_clear(i, project: ti.template(), s: ti.template()):
+    """Whether a sweep or, with ``project``, a projection pass leaves ball i as it is, so that it
+    need not be read (``s``: the step's :class:`.step.Step`): it has no pair in the lists, neither
+    owned nor owned by another ball (``lists.lower_first``), so that only a surface could change
+    it, and its surface clearance (``scratch.clear``) keeps it out of reach of every plane and the
+    terrain (:func:`.surfaces.beyond_reach`) while its gaps shrink by h·|v| in a sweep (the test
+    by which the sweep itself skips the surfaces), or by its move over the step in a projection.
+    Most balls of a pour in flight are so: their sweeps would read their state and write it back
+    unchanged. The tests are nested, so that a ball with pairs costs one comparison."""
     alone = False
-    if listed(s.lists.first, i) == 0 and s.lists.lower_first[i + 1] == s.lists.lower_first[i]:
-        alone = beyond_reach(s.scratch.clear[i], of_ball(s.model.radius, i), reach_sqr)
+    if listed(s.lists.first, i) == 0:  # (nested: Taichi evaluates both sides of an `and`)
+        if s.lists.lower_first[i + 1] == s.lists.lower_first[i]:
+            reach_sqr = 0.0
+            if ti.static(project):
+                reach_sqr = (s.scratch.x_free[i] - s.state.x[i]).norm_sqr()
+            else:
+                reach_sqr = s.params.h * s.params.h * s.state.v[i].norm_sqr()
+            alone = beyond_reach(s.scratch.clear[i], of_ball(s.model.radius, i), reach_sqr)
     return alone
