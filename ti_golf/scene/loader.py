@@ -257,7 +257,7 @@ def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str, fil
 
 
 def _with_source(value: Any, source: str) -> tuple[str, Any]:
-    """A value of the document and where it came from: ``--set`` for an override's (stored as
+    """A value of the document and where it came from: ``OVERRIDES`` for an override's (stored as
     ``(OVERRIDES, value)``), else ``source``."""
     if isinstance(value, tuple) and len(value) == 2 and value[0] == OVERRIDES:
         return value[0], value[1]

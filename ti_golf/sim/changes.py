@@ -21,9 +21,6 @@ from typing import Any
 from ti_golf.errors import OVERRIDES, ConfigError
 from ti_golf.scene.loader import parse_override
 
-SOURCE = OVERRIDES
-"""The source that errors about changed keys name (as the scene loader names overrides)."""
-
 AT_T0 = ("launch", "ball", "terrain")
 """Tables whose keys set up the balls or the ground at t0."""
 
@@ -77,14 +74,14 @@ def refuse_unread(key: str) -> None:
     """Raise :class:`ConfigError` for a key that no simulation reads."""
     reader = NOT_READ.get(key, NOT_READ.get(table_of(key)))
     if reader is not None:
-        raise ConfigError(SOURCE, key, f"has no effect on a simulation ({reader})")
+        raise ConfigError(OVERRIDES, key, f"has no effect on a simulation ({reader})")
 
 
 def refuse_after_t0(key: str, t: float) -> None:
     """Raise :class:`ConfigError` for a key of :data:`AT_T0` changed at time ``t`` [s] after t0."""
     if at_t0(key):
         raise ConfigError(
-            SOURCE,
+            OVERRIDES,
             key,
             f"sets up the balls or the ground at t0, and this run is at t = {t:.6g} s: start again from t0 "
             "with it (Simulation.reset(changes) in Python; ti-golf run SCENE --set KEY=VALUE)",
@@ -96,7 +93,7 @@ def refuse_for_given_balls(key: str, radius_given: bool, mass_given: bool) -> No
     given = table_of(key) == "launch" or (key == "ball.radius" and radius_given) or (key == "ball.mass" and mass_given)
     if given:
         raise ConfigError(
-            SOURCE,
+            OVERRIDES,
             key,
             "has no effect: this simulation's balls were given as arrays (edit them with x, v, w or set_ball)",
         )
