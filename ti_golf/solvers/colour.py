@@ -324,35 +324,35 @@ def sweep_ball(i, phase, far_only, any_far, inv_cell, s: ti.template()):
     inelastic speed; the restitution pass (``BOUNCE``), which changes no other pair, visits only
     the pairs of the balls so marked."""
     contact, model, lists, state, scratch = ti.static((s.contact, s.model, s.lists, s.state, s.scratch))
-    if alone_and_clear(i, project=False, s=s):
-        if phase == Phase.FIRST and not far_only:
-            scratch.impact[i] = 0  # (none of its pairs approached: it has none)
-    elif state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
-        k = sweep_constants(contact, s.params)
-        xi, vi, wi = state.x[i], state.v[i], state.w[i]
-        ri, inv_mi = of_ball(model.radius, i), 1.0 / of_ball(model.mass, i)
-        firm = stands_firm(s.kinds, state.status[i])
-        if firm:
-            inv_mi = 0.0
-        col = column_of(lists.x_at_build[i], inv_cell)
-        owned = listed(lists.first, i)
-        if phase == Phase.BOUNCE and scratch.impact[i] == 0:
-            owned = 0  # none of its pairs approached fast enough to bounce: the pass changes none
-        approached = 0
-        p0 = lists.first[i]
-        for m in range(owned):
-            j, p = lists.upper[i, m], p0 + m
-            if in_this_pass(col, j, far_only, any_far, inv_cell, lists):
-                vi, wi, hit = sweep_pair(i, j, p, phase, xi, body(vi, wi, ri, inv_mi), k, s)
-                approached = ti.max(approached, hit)
-        if phase == Phase.FIRST:  # the restitution pass visits the pairs of the balls marked here
-            if far_only:
-                scratch.impact[i] = ti.max(scratch.impact[i], approached)  # (after the colours)
-            else:
-                scratch.impact[i] = approached
-        if not far_only and not firm:
-            vi, wi = surface_impulses(i, warm=False, vi=vi, wi=wi, h=k.h, v_inelastic=k.v_inelastic, s=s, phase=phase)
-        state.v[i], state.w[i] = vi, wi
+    if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET:
+        if not alone_and_clear(i, project=False, s=s):  # (nested: see alone_and_clear)
+            k = sweep_constants(contact, s.params)
+            xi, vi, wi = state.x[i], state.v[i], state.w[i]
+            ri, inv_mi = of_ball(model.radius, i), 1.0 / of_ball(model.mass, i)
+            firm = stands_firm(s.kinds, state.status[i])
+            if firm:
+                inv_mi = 0.0
+            col = column_of(lists.x_at_build[i], inv_cell)
+            owned = listed(lists.first, i)
+            if phase == Phase.BOUNCE and scratch.impact[i] == 0:
+                owned = 0  # none of its pairs approached fast enough to bounce: the pass changes none
+            approached = 0
+            p0 = lists.first[i]
+            for m in range(owned):
+                j, p = lists.upper[i, m], p0 + m
+                if in_this_pass(col, j, far_only, any_far, inv_cell, lists):
+                    vi, wi, hit = sweep_pair(i, j, p, phase, xi, body(vi, wi, ri, inv_mi), k, s)
+                    approached = ti.max(approached, hit)
+            if phase == Phase.FIRST:  # the restitution pass visits the pairs of the balls marked here
+                if far_only:
+                    scratch.impact[i] = ti.max(scratch.impact[i], approached)  # (after the colours)
+                else:
+                    scratch.impact[i] = approached
+            if not far_only and not firm:
+                vi, wi = surface_impulses(
+                    i, warm=False, vi=vi, wi=wi, h=k.h, v_inelastic=k.v_inelastic, s=s, phase=phase
+                )
+            state.v[i], state.w[i] = vi, wi
 
 
 @ti.func
@@ -401,7 +401,9 @@ def alone_and_clear(i, project: ti.template(), s: ti.template()):
     terrain (:func:`.surfaces.beyond_reach`) while its gaps shrink by h·|v| in a sweep (the test
     by which the sweep itself skips the surfaces), or by its move over the step in a projection.
     Most balls of a pour in flight are so: their sweeps would read their state and write it back
-    unchanged. The tests are nested, so that a ball with pairs costs one comparison."""
+    unchanged. The tests are nested, so that a ball with pairs costs one comparison. A sweep
+    skipping the ball leaves its impact mark (``scratch.impact``) as it was: the restitution pass
+    reads it only for the ball's own pairs, and it has none."""
     alone = False
     if listed(s.lists.first, i) == 0:  # (nested: Taichi evaluates both sides of an `and`)
         if s.lists.lower_first[i + 1] == s.lists.lower_first[i]:
