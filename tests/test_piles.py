@@ -273,10 +273,13 @@ def test_friction_steepens_the_heap():
 
 
 @pytest.mark.slow
-def test_boulder_pushed_into_a_pile_takes_its_far_pairs_in_turn():
+@pytest.mark.parametrize("reorder", [False, True], ids=["stored_as_given", "stored_in_grid_order"])
+def test_boulder_pushed_into_a_pile_takes_its_far_pairs_in_turn(reorder):
     # a ball five times the size of the rest is set apart (physics.apart): the balls beside it
     # touch it two or three grid columns from its centre, so the colours leave those pairs to a
-    # serial pass (colour.far_pairs); a boulder rolled into a three-layer pile at 1 m/s
+    # serial pass (colour.far_pairs); a boulder rolled into a three-layer pile at 1 m/s. Stored in
+    # the grid's order (as piles of 8,192 balls and more are), the boulder is found again at its
+    # new index after each reorder, else its pairs beyond the next cell went unlisted
     sc = _column_scene()
     r, m = sc.ball.radius, sc.ball.mass
     side = 12
@@ -294,7 +297,7 @@ def test_boulder_pushed_into_a_pile_takes_its_far_pairs_in_turn():
     runs = []
     for _ in range(2):
         sim = tg.Simulation(scene, x=x, v=v, radius=radius, mass=mass)
-        sim.solver = CollisionSolver(sim.model, serial=False)  # (433 balls: the serial step by default)
+        sim.solver = CollisionSolver(sim.model, serial=False, reorder=reorder)  # (433 balls: serial by default)
         far = 0
         for _ in range(10):
             sim.run(t=0.05)

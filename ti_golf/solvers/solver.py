@@ -349,8 +349,8 @@ class CollisionSolver(Recorded, Stepping):
         by their closing speed too, the fastest ball's speed [m/s])."""
         h = self._model.dt
         folded = sort.fold_in_array()
-        set_apart = (state.v, self._model.radius, self.v_cut, self.r_cut, self.apart_ids, self.top_speeds, folded)
-        v_max, v_rest, n_apart = (float(s) for s in apart.apart_balls(*set_apart))
+        set_apart = (self.v_cut, self.r_cut, self.apart_ids, self.top_speeds, folded)
+        v_max, v_rest, n_apart = (float(s) for s in apart.apart_balls(state.v, self._model.radius, *set_apart))
         self.n_apart = int(n_apart) if n_apart <= apart.APART_MAX else 0  # a few own no pair with the others
         scan_apart = self.n_apart > 0 and on_cpu()  # and are listed apart (see apart.APART_MAX)
         # the cells hold every pair of the other balls; fast: their pairs are listed by closing speed too
@@ -367,8 +367,8 @@ class CollisionSolver(Recorded, Stepping):
             self.v_free, self.calm, self.rank = store_in_grid_order(
                 state, self._model, (*grid_order, self.sorted_ids), [self.v_free, self.calm, self.rank]
             )
-            if scan_apart:  # their new indices
-                apart.apart_balls(*set_apart)
+            if scan_apart:  # their new indices (from the arrays in the new order, not the old ones)
+                apart.apart_balls(state.v, self._model.radius, *set_apart)
         return fast, v_max
 
     def _list_balls(self, state: State, fast: bool) -> Any:
