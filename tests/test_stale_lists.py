@@ -1,5 +1,7 @@
-"""When the Gauss–Seidel steps rebuild the neighbour lists (``physics.stale``): only when a pair
-the lists miss may touch in the next step, or a ball has used the whole skin.
+"""When the Gauss–Seidel steps rebuild the neighbour lists (``solvers.stale``): only when a pair
+the lists miss may touch in the next step, or a ball has used more than a search can cover (the
+skin when every ball is tested, about a radius more through the grid), or may touch a surface the
+build found out of its reach.
 
 A pair out of the lists was at least its surface gap apart at the build; it can touch in the next
 step only when its two balls together have used that gap (their distance from the build plus
@@ -53,9 +55,10 @@ def _stale_both_ways(
 def test_the_grid_finds_the_same_missing_pairs_as_testing_every_ball(reorder, boulder):
     # the grid's search (125 cells around the ball's cell at the build, and the balls listed apart)
     # must find exactly the pairs that testing every ball finds, for every ball, whenever no ball
-    # has used more than the skin: a heap of balls, each then moved by up to 0.6 of the skin with
-    # up to 0.4 of it in 2h·|v|, so that many balls come within reach of a ball the lists miss and
-    # many do not
+    # has used more than its searched reach (stale.searched_reach: about a radius more than the
+    # skin): a heap of balls, each then moved by up to 0.6 of its allowance with up to 0.4 of it
+    # in 2h·|v|, the allowance the skin for most balls and the whole reach for one in five, so
+    # that many balls come within reach of a ball the lists miss and many do not
     rng = np.random.default_rng(5)
     r = 0.02
     x = rng.uniform(0.0, 1.0, (800, 3)) * [0.5, 0.3, 0.5]  # a quarter of the volume in balls
@@ -75,11 +78,14 @@ def test_the_grid_finds_the_same_missing_pairs_as_testing_every_ball(reorder, bo
         assert s.n_apart == 1
     x_build = s.x_at_build.to_numpy().astype(float)
     h, skin = sim.dt, s.skin
+    reach = np.maximum(skin, stale.SEARCHED * s.cell - radius)  # (stale.searched_reach)
+    assert np.sum(reach > 10.0 * skin) > n // 2  # (the cells are 2·r + skin wide: a radius and more)
+    allowance = np.where(rng.uniform(size=n) < 0.2, reach, skin)
     direction = rng.normal(size=(n, 3))
     direction /= np.linalg.norm(direction, axis=1)[:, None]
-    moved = x_build + direction * rng.uniform(0.0, 0.6 * skin, (n, 1))
+    moved = x_build + direction * (rng.uniform(0.0, 0.6, n) * allowance)[:, None]
     v = rng.normal(size=(n, 3))
-    v *= (rng.uniform(0.0, 0.4 * skin, n) / (2.0 * h * np.linalg.norm(v, axis=1)))[:, None]
+    v *= (rng.uniform(0.0, 0.4, n) * allowance / (2.0 * h * np.linalg.norm(v, axis=1)))[:, None]
     x1, v1, out = ti.ndarray(vec3.get(), n), ti.ndarray(vec3.get(), n), ti.ndarray(ti.i32, n)
     x1.from_numpy(moved)
     v1.from_numpy(v)
@@ -118,20 +124,26 @@ def _steps_that_rebuild(sim: tg.Simulation, steps: int) -> list[int]:
 @pytest.mark.slow
 @SERIAL_OR_PARALLEL
 @pytest.mark.parametrize("solver", ["jacobi", "gauss_seidel"])
-def test_a_lone_ball_uses_the_whole_skin_under_gauss_seidel_and_half_of_it_under_jacobi(solver, serial):
+def test_a_lone_ball_uses_its_searched_reach_under_gauss_seidel_and_half_the_skin_under_jacobi(solver, serial):
     # a ball gliding at 0.13 m/s (0.13 mm a 1 ms step) with no other ball near: under Gauss–Seidel
-    # no pair can be missing from its lists, so they are rebuilt only once it has used the whole
-    # skin (2 mm), every 14 steps; the Jacobi steps rebuild once it has used half of it, every 6
+    # no pair can be missing from its lists, so they are rebuilt only once it has used as much as
+    # a search covers: through the grid, 0.99 of the cell (2·r + skin, 42 mm) less its radius,
+    # 21.6 mm, every 164 steps; testing every ball (the serial steps that relist two balls
+    # themselves), the whole skin (2 mm), every 14 steps. The Jacobi steps rebuild once it has used
+    # half the skin, every 6 steps
     sc = tg.load_scene(
         "lab_vacuum", ["air.rho=0", "world.gravity=[0,0,0]", "world.dt=0.001", f"contact.solver={solver}"]
     )
     sim = tg.Simulation(sc, x=[[0.1, 0.5, 0.1], [1.1, 0.5, 0.1]], v=[[0.13, 0.0, 0.0], [0.0, 0.0, 0.0]])
     sim.solver = s = CollisionSolver(sim.model, serial=serial)
-    rebuilt = _steps_that_rebuild(sim, 140)
-    allowance = s.skin if solver == "gauss_seidel" else 0.5 * s.skin
-    assert rebuilt == _rebuild_steps(0.13, sim.dt, allowance, 140)
+    rebuilt = _steps_that_rebuild(sim, 400)
+    r = sc.ball.radius
+    allowance = 0.5 * s.skin
+    if solver == "gauss_seidel":
+        allowance = s.skin if serial else stale.SEARCHED * s.cell - r
+    assert rebuilt == _rebuild_steps(0.13, sim.dt, allowance, 400)
     every = np.diff(rebuilt)
-    assert np.all(every == (14 if solver == "gauss_seidel" else 6))  # 0.13 mm a step: 2 mm, or 1 mm, less 0.26
+    assert np.all(every == {0.5 * s.skin: 6, s.skin: 14}.get(allowance, 164))  # 0.13 mm a step, less 0.26
 
 
 @SERIAL_OR_PARALLEL
@@ -152,3 +164,23 @@ def test_two_balls_closing_in_are_listed_before_they_touch(serial):
     rebuilt = _steps_that_rebuild(sim, 30)
     assert rebuilt[:2] == _rebuild_steps(0.13, sim.dt, 0.5 * 0.0025, 30)[:2] == [1, 9]
     np.testing.assert_allclose(sim.v, [[-0.13, 0.0, 0.0], [0.13, 0.0, 0.0]], atol=1e-12)
+
+
+def test_a_ball_without_a_surface_row_rebuilds_before_it_can_reach_a_plane():
+    # a ball 10.5 mm above the ground (beyond the 2 mm skin: the build gives it no row of surface
+    # impulses) falls at 1 m/s, 1 mm a step, with no other ball near: it uses more than the skin
+    # at once, yet no pair can be missing; the lists are rebuilt once the ground is within what it
+    # has used (its distance from the build plus 2h·|v|, the model above with the 10.5 mm gap for the
+    # allowance), so that it meets the ground with its row, and bounces as B.9 has it (e = 1)
+    sc = tg.load_scene(
+        "lab_vacuum",
+        ["air.rho=0", "world.gravity=[0,0,0]", "world.dt=0.001", "contact.e=1", "contact.solver=gauss_seidel"],
+    )
+    r, gap = sc.ball.radius, 0.0105
+    sim = tg.Simulation(sc, x=[[0.1, r + gap, 0.1], [1.1, 0.5, 0.1]], v=[[0.0, -1.0, 0.0], [0.0, 0.0, 0.0]])
+    sim.solver = s = CollisionSolver(sim.model, serial=False)
+    rebuilt = _steps_that_rebuild(sim, 10)
+    assert s.surface_start.to_numpy()[:2].tolist() == [0, 1]  # the falling ball has its row
+    assert rebuilt[:2] == _rebuild_steps(1.0, sim.dt, gap, 10)[:2] == [1, 10]
+    sim.step(10)
+    np.testing.assert_allclose(sim.v[0], [0.0, 1.0, 0.0], atol=1e-9)

@@ -1,7 +1,8 @@
 """The contact solvers: the balls' collisions with one another, the planes and the terrain.
 
 A shared base lists the neighbours and keeps the carried impulses (:mod:`.sort`, :mod:`.grid`,
-:mod:`.apart`, :mod:`.links`, :mod:`.stale`, :mod:`.pairs`, :mod:`.surfaces`, and their driver,
+:mod:`.apart`, :mod:`.links`, :mod:`.stale`, :mod:`.pairs`, :mod:`.surfaces` with
+:mod:`.surface_reach`, and their driver,
 :class:`.solver.CollisionSolver`, with :mod:`.storage_order`, :mod:`.surface_rows`, its steps
 and rebuild schedule, :mod:`.stepping`, and the saved :mod:`.record`); one kernel steps the balls
 (:mod:`.collide`; Gauss–Seidel's serial steps by blocks: :mod:`.block_steps`); each solver's sweeps and driver lie side by side: Jacobi's (:mod:`.jacobi`)

@@ -201,6 +201,6 @@ class GaussSeidelSolver(CollisionSolver, kind="gauss_seidel"):
     def _after_step(self, arguments: tuple) -> tuple[bool, bool]:
         """Whether the lists must be rebuilt after a parallel step, and whether some ball is awake
         and in play (``stale.lists_stale``, one readback)."""
-        scalars, _, _, _, _, model, lists, state, _, scratch = arguments
-        answer = int(stale.lists_stale(scalars, *self.last_grid(), model, lists, state, scratch))
+        scalars, _, _, _, kinds, model, lists, state, _, scratch = arguments
+        answer = int(stale.lists_stale(scalars, *self.last_grid(), kinds, model, lists, state, scratch))
         return bool(answer & stale.LISTS_STALE), bool(answer & stale.BALLS_AWAKE)

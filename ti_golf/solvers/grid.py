@@ -11,8 +11,8 @@ which also carries each pair's accumulated impulse over from the old lists) make
 lists: the slots where the owners store the pairs' impulses, so each ball gathers its impulses
 without float atomics.
 A neighbour list stays valid until some ball has moved, or could move within a step, more than
-half the skin since the build (with the Gauss–Seidel sweeps, until a pair it misses may touch,
-see :mod:`.stale`). A build also lists the pairs that can meet within the step that
+half the skin since the build (with the Gauss–Seidel sweeps, until a pair it misses may touch or
+it has moved about a radius, see :mod:`.stale`). A build also lists the pairs that can meet within the step that
 follows it: a pair is listed when its surface gap is below the larger of the skin and
 h·|v_a − v_b| (:func:`pair_reach`), and the cells are widened for the fastest pair
 (:func:`cell_size`). Otherwise a ball that moves farther than the skin in a step, as fast balls do

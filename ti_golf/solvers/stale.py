@@ -6,12 +6,16 @@ only touch in the next step when its balls together have moved that gap since th
 2h·|v| each for the step ahead: |x_a,b − x_b,b| − r_a − r_b < u_a + u_b, with u the skin a ball has
 *used* (:func:`skin_used`). The Jacobi steps rebuild as soon as one ball has used half the skin
 (:func:`.links.moved_past`), which guarantees that for every pair. The Gauss–Seidel steps test the
-pairs themselves (:func:`flag_stale_lists`): a ball that has used more than half the skin, but not all
-of it, is tested against the balls that were within reach of it at the build, in the 125 grid
-cells around its cell then (a pair out of the lists within 2·r + 2·skin of it lies in them, as the
-cells are at least 2·r + skin wide), and the lists are rebuilt only when such a pair is missing
-from them. So one ball rolling over a settled pile, whose neighbours have not moved, uses the
-whole skin before it forces a rebuild, not half of it.
+pairs themselves (:func:`flag_stale_lists`): a ball that has used more than half the skin is
+tested against the balls that were within reach of it at the build, in the 125 grid cells around
+its cell then, and the lists are rebuilt only when such a pair is missing from them. The cells are
+at least 2·r + skin wide, so those 125 hold every ball within reach of a ball that used up to
+about r + skin, not the skin alone (:func:`searched_reach`): only a ball that used more forces a
+rebuild by itself, or one that may touch a plane or the terrain that the build found out of its
+reach (:func:`surface_unforeseen`). So one ball rolling over a settled pile, whose neighbours
+have not moved, uses the whole skin before it forces a rebuild, not half of it; and a ball that
+bounces over a settling pile at a few metres a second forces one when it comes near a ball the
+lists miss or has moved about a radius since the build, not at every step.
 
 Rebuilt earlier or later, the lists hold every pair that can touch in the step; the steps between
 differ only in which pairs are listed but still apart, which change nothing (see
@@ -37,6 +41,7 @@ from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
 from ti_golf.solvers.links import distance_from_build, listed
 from ti_golf.solvers.sort import bucket_of, cell_of
 from ti_golf.solvers.step import Step
+from ti_golf.solvers.surface_reach import near_a_surface, surface_row
 
 LISTS_STALE = 1
 """Bit of :func:`lists_stale`'s answer: the lists must be rebuilt before the next step."""
@@ -48,8 +53,12 @@ the balls without a readback of its own)."""
 
 REACH_CELLS = 2
 """Cells on each side of a ball's cell (at the build) in which :func:`stale_near` looks for the
-balls it may have come within reach of: a pair within 2·r + 2·skin lies within two cells, which
-are at least 2·r + skin wide."""
+balls it may have come within reach of: every ball whose centre was within two cell sides of it."""
+
+SEARCHED = 0.99
+"""The share of a grid cell, less the ball's radius, that a ball may use of the skin before the lists
+are rebuilt without a search (:func:`searched_reach`); the 1 % spares the f32 positions of the build
+their rounding at a cell's edge."""
 
 
 @ti.func
@@ -187,6 +196,35 @@ def candidate_run(q, every, c, g: ti.template(), start: ti.template(), n):
 
 
 @ti.func
+def searched_reach(i, serial: ti.template(), g: ti.template(), radius: ti.template(), params: ti.template()):
+    """The most skin [m] ball i may use before the lists are rebuilt without a search
+    (:func:`flag_stale_lists`), for the pairs the lists miss, among every ball (``serial``): the
+    skin; among the ``REACH_CELLS`` cells around it (the grid ``g``, of cell side w): w·``SEARCHED``
+    less its radius r_i, and at least the skin (a ball set apart for its size, wider than a cell,
+    searches every ball). A pair the lists miss touches only when r_a + r_b + u_a + u_b exceeds the
+    distance of its centres at the build; with each ball's u below that reach, the distance is under
+    2·w·``SEARCHED``, so the other ball lies in the cells searched."""
+    reach = params.skin
+    if ti.static(not serial):
+        reach = ti.max(params.skin, SEARCHED / g.inv_cell - of_ball(radius, i))
+    return reach
+
+
+@ti.func
+def surface_unforeseen(i, used, s: ti.template()):
+    """Whether ball i, which has used ``used`` [m] of the skin since the build, more than the
+    skin, may touch a plane or the terrain that the build found out of its reach, so that it
+    keeps no row of surface impulses for it (:func:`.surfaces.list_surfaces`, which gives rows
+    to the balls within the skin of a surface): the lists are then rebuilt before the next step
+    (``s``: the step's :class:`.step.Step`)."""
+    unforeseen = False
+    if surface_row(s.lists.surface_start, i) < 0:
+        x_build = ti.cast(s.lists.x_at_build[i], float)
+        unforeseen = near_a_surface(i, x_build, used, ti.static(s.kinds.terrain), s.terrain, s.model)
+    return unforeseen
+
+
+@ti.func
 def flag_stale_lists(
     s: ti.template(),
     serial: ti.template(),
@@ -198,21 +236,26 @@ def flag_stale_lists(
     """Set ``scratch.flag[0]`` when the lists must be rebuilt before the next step of balls now at
     ``scratch.x_free`` [m] with velocities ``state.v`` [m/s] (``s``: the step's
     :class:`.step.Step`, of which the radii, lists, state, scratch and the step's scalars, h and
-    the skin, are read): a ball has used the whole skin, or a pair out of the lists is within reach
-    of a ball that has used more than half of it (see the module's docstring), looked for only
-    when no ball has used the whole skin (as while a pour lands, when most steps rebuild), with the
+    the skin, are read): a ball has used more than the reach of a search (:func:`searched_reach`)
+    or may touch a surface it keeps no row for (:func:`surface_unforeseen`), or a pair out of the
+    lists is within reach of a ball that has used more than half the skin (see the module's
+    docstring), looked for only when no ball has forced a rebuild by itself, with the
     grid of the last build (``g``, ``grid``: its :data:`ti_golf.physics.types.GridParams` and
     :data:`ti_golf.physics.types.GridScratch`, or what holds its ``start`` and ``sorted_ids``;
     ``apart_ids``, ``stored_sorted``: see :func:`stale_near`) or, ``serial``, among every ball (the
-    four are not read). Both find the same pairs."""
+    four are not read, and the reach of a search is the skin)."""
     params, radius, lists, state, scratch = ti.static((s.params, s.model.radius, s.lists, s.state, s.scratch))
     for i in range(scratch.x_free.shape[0]):
-        if skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h) > params.skin:
+        used = skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h)
+        if used > searched_reach(i, serial, g, radius, params):
             scratch.flag[0] = 1
-    for i in range(scratch.x_free.shape[0]):  # (a second loop: no ball searched when one used the skin)
+        elif used > params.skin:  # (only without ``serial``: see searched_reach)
+            if surface_unforeseen(i, used, s):
+                scratch.flag[0] = 1
+    for i in range(scratch.x_free.shape[0]):  # (a second loop: no ball searched when one used its reach)
         if scratch.flag[0] == 0:  # (once the lists must be rebuilt, no other ball need be tested)
             used = skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h)
-            if used > params.half_skin and used <= params.skin:
+            if used > params.half_skin and used <= searched_reach(i, serial, g, radius, params):
                 stale = False
                 if ti.static(serial):
                     stale = stale_by_every_ball(i, used, params.h, radius, lists, scratch.x_free, state.v)
@@ -241,6 +284,7 @@ def lists_stale(
     grid: GridScratch,
     apart_ids: int_array,
     stored_sorted: ti.template(),
+    kinds: ti.template(),
     model: ModelArrays,
     lists: NeighbourLists,
     state: BallState,
@@ -253,7 +297,7 @@ def lists_stale(
     :func:`ti_golf.physics.types.scalars_of`), plus ``BALLS_AWAKE`` when some ball is awake and
     in play."""
     _air, contact, terrain, params = scalars_of(scalars)
-    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch))
+    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, kinds=kinds))
     flag_stale_lists(s, serial=False, g=g, grid=grid, apart_ids=apart_ids, stored_sorted=stored_sorted)
     return LISTS_STALE * ti.min(scratch.flag[0], 1) + BALLS_AWAKE * ti.min(balls_in_play(state.status), 1)
 

@@ -26,7 +26,6 @@ from ti_golf.physics.contact import (
     warm_impulse,
 )
 from ti_golf.physics.terrain import (
-    same_cell,
     surface,
     surface_contact,
     terrain_clearance,
@@ -46,6 +45,7 @@ from ti_golf.physics.types import (
 from ti_golf.solvers.phases import Phase
 from ti_golf.solvers.sequential import surface_step
 from ti_golf.solvers.sort import bucket_starts
+from ti_golf.solvers.surface_reach import near_a_surface, surface_row
 
 LAMBDA = 0
 """The component of a contact's (λ, F) in ``NeighbourLists.surface_impulse`` that holds λ."""
@@ -227,41 +227,6 @@ def surface_contact_step(
 
 
 @ti.func
-def surface_row(start: ti.template(), i):
-    """Ball i's row of surface impulses (see :func:`list_surfaces`), or −1 when it keeps none."""
-    row = start[i]
-    if start[i + 1] == row:
-        row = -1
-    return row
-
-
-@ti.func
-def near_a_surface(i, xi, reach, with_terrain: ti.template(), terrain: ti.template(), model: ti.template()):
-    """Whether ball i at ``xi`` [m] may touch a plane or the terrain before the neighbour lists are
-    rebuilt, when it moves no farther than ``reach`` [m] until then (see :func:`list_surfaces`). A
-    plane is within reach when its surface gap is below it; the terrain when its clearance
-    (:func:`ti_golf.physics.terrain.terrain_clearance`, at least the gap to any patch of the cell under the ball)
-    is below twice the reach, since a patch taken under a moved point is nearer by up to twice the
-    move, or when a move of the reach can take the ball over another cell (``with_terrain``: the
-    scene has one, so that a kernel without holds no terrain code)."""
-    r = of_ball(model.radius, i)
-    near = False
-    for p in range(model.plane_n.shape[0]):
-        if (xi - model.plane_p[p]).dot(model.plane_n[p]) - r < reach:
-            near = True
-            break  # (an early exit: also keeps LLVM from vectorising a loop of a few planes)
-    if ti.static(with_terrain):  # (a static `if` of its own: Taichi builds both sides of an `and`)
-        if not near:
-            if terrain_clearance(model.heights, terrain, xi, xi, r) < 2.0 * reach:
-                near = True
-            for corner in ti.static(range(4)):
-                dx = ti.Vector([reach if corner % 2 else -reach, 0.0, reach if corner // 2 else -reach])
-                if not same_cell(model.heights, terrain, xi, xi + dx):
-                    near = True
-    return near
-
-
-@ti.func
 def old_row(i, carry, old_start: ti.template(), reorder, old_index: ti.template()):
     """Ball i's row in the old tables of surface impulses (see :func:`carry_surfaces`), or −1."""
     old = -1
@@ -298,12 +263,13 @@ def list_surfaces(
     terrain (``terrain.on``), a compile-time choice.
 
     ``reach`` [m] bounds how far a ball moves before the next rebuild: the skin between rebuilds
-    with the Gauss–Seidel sweeps (``stale.flag_stale_lists``), half of it with the Jacobi sweeps
+    with the Gauss–Seidel sweeps (a ball without a row that moves farther and may reach a surface
+    forces a rebuild: ``stale.surface_unforeseen``), half of it with the Jacobi sweeps
     (``links.moved_past``), or in the step right after the build h·|v|, where |v| may be up to the
     fastest ball's speed for a ball that it knocks on; the caller passes max(skin, 2h·v_max), as
     ball pairs are listed within the skin (``grid.pair_reach``). A ball knocked farther within one
-    step still meets the surface (see :func:`surface_contact_step`), and has then used more than
-    the skin: the lists are rebuilt before the next step."""
+    step still meets the surface (see :func:`surface_contact_step`), and the lists are rebuilt
+    before the next step."""
     for i in range(x.shape[0]):
         listed = near_a_surface(i, x[i], reach, with_terrain, terrain, model)
         old = old_row(i, carry, old_start, reorder, old_index)
