@@ -18,6 +18,7 @@ from ti_golf.bench.collide import pile_scene
 from ti_golf.bench.pit import pit_scene
 from ti_golf.scene.schema import AT_REST, Plane
 from ti_golf.solvers import CollisionSolver, apart, grid, links, sort, stepping
+from ti_golf.solvers.pairs import QUIET
 from ti_golf.solvers.stepping import RELIST_MAX_BALLS
 
 # no gravity, air, walls or friction unless a test says otherwise
@@ -1105,6 +1106,44 @@ def test_a_step_with_every_ball_asleep_is_skipped_and_changes_nothing():
     assert runs[0][0] == 10 and woken[0] >= 2  # the column slept, and the tossed ball woke the one below
     assert np.all(runs[0][4] == AT_REST)  # ... and slept again
     assert skipped[0][0] > 20 and skipped[0][1] > 20 and skipped[1] == (0, 0)  # the steps asleep, skipped
+
+
+@SERIAL_OR_PARALLEL
+def test_a_ball_still_quiet_is_not_asked_again_and_the_steps_are_the_same(serial):
+    # with the Gauss–Seidel sweeps a ball quiet at one step (asleep among balls asleep) stays
+    # quiet unless a neighbour wakes in the next step's first loop, which takes its calm time
+    # back (pairs.still_quiet, stir_neighbours); so the step asks it of nothing. A column stepped
+    # so, and stepped with every ball asked at every step (Stepping.forget_quiet before each),
+    # must be the same bit for bit: asleep, then while its top ball, tossed up between steps
+    # (set_ball), lands back and wakes the ball below, which wakes the ball below it: that ball
+    # was quiet, and owns its pair with the ball woken above it (the lower ball owns a pair
+    # along y), so that, were it left quiet, the pair would go unswept and the column would sink
+    sc = tg.load_scene(
+        "lab_vacuum",
+        ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3", 'contact.solver="gauss_seidel"'],
+    )
+    x = np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)])
+    runs, woken, quiet = [], [], []
+    for ask_every_step in (False, True):
+        sim = tg.Simulation(sc, x=x)
+        sim.solver = solver = CollisionSolver(sim.model, serial=serial)
+        solver.skip_still = False  # (every step taken, asleep or not)
+        most_quiet, most_awake = 0, 0
+        for k in range(550):
+            if k == 250:
+                sim.set_ball(9, v=[0.0, 0.3, 0.0])  # it rises 4.6 mm and falls back within 0.07 s
+            if ask_every_step:
+                solver.forget_quiet()
+            sim.step(1)
+            most_quiet = max(most_quiet, int(np.sum(solver.calm.to_numpy() == QUIET)))
+            most_awake = max(most_awake, 10 - sim.counts()["at_rest"]) if k >= 250 else 0
+        runs.append(_outcome(sim, most_quiet, solver.lam.to_numpy(), solver.friction.to_numpy()))
+        woken.append(most_awake)
+        quiet.append(most_quiet)
+    for a, b in zip(*runs):
+        np.testing.assert_array_equal(a, b)
+    assert quiet[0] >= 8 and woken[0] >= 3  # quiet balls, and a wake that went two balls down
+    assert np.all(runs[0][4] == AT_REST)  # ... and the column slept again
 
 
 @pytest.mark.slow

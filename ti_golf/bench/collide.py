@@ -275,6 +275,8 @@ def put_to_sleep(sim: Any) -> None:
     s.w.from_numpy(np.zeros((n, 3), f))
     s.status.from_numpy(np.full(n, AT_REST, np.int32))
     s.rest_time.from_numpy(np.full(n, sim.scene.world.t_rest, f))
+    if sim.solver is not None:  # (the statuses edited between steps: see Stepping.forget_quiet)
+        sim.solver.forget_quiet()
 
 
 def bare_gather_rate(x: np.ndarray, repeats: int = 5) -> float:

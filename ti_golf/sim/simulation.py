@@ -400,6 +400,12 @@ class Simulation:
         s[s == AT_REST] = 0
         self.state.status.from_numpy(s)
         self.state.rest_time.from_numpy(np.zeros(self.n, self.state.rest_time.to_numpy().dtype))
+        self._statuses_edited()
+
+    def _statuses_edited(self) -> None:
+        """Tell the collision solver that balls' statuses or rest timers changed between steps."""
+        if self.solver is not None:
+            self.solver.forget_quiet()
 
     def set_ball(
         self,
@@ -434,6 +440,7 @@ class Simulation:
         status[ids], rest[ids] = FLYING, 0.0
         self.state.write("status", status)
         self.state.write("rest_time", rest)
+        self._statuses_edited()
         if x is not None and self.solver is not None:
             self.solver.invalidate()
 

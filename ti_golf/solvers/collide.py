@@ -21,7 +21,8 @@ The kernel's top-level loops run one after another, each over all balls in paral
    pair's normal and gap, stored for the sweeps (positions do not change during them), and each
    ball's calm time for sleeping, by islands or, with Gauss–Seidel, by regions
    (:func:`.pairs.island_calm`; a *quiet* ball, at rest among balls at rest, is then skipped by
-   the sweeps) and its clearance from the planes and the terrain (the sweeps skip them for a
+   the sweeps, and with Gauss–Seidel a ball still quiet from the step before is skipped by this
+   loop too: :func:`.pairs.still_quiet`) and its clearance from the planes and the terrain (the sweeps skip them for a
    ball that cannot reach one within the step);
 2. ``iterations`` Jacobi sweeps (:func:`sweep`), each a pair loop (:func:`.pairs.owned_pairs`:
    impulses from the velocities of the previous sweep, with the normals and gaps that the first
@@ -85,6 +86,8 @@ from ti_golf.solvers.pairs import (
     gather,
     impact_keys,
     owned_pairs,
+    still_quiet,
+    stir_neighbours,
     touched_by_moving,
     touching_by_gaps,
     warm_start,
@@ -187,6 +190,8 @@ def serial_steps(t0, dt, steps, kinds: ti.template(), s: ti.template(), relist: 
             if ti.static(not relist):
                 break
             relist_all_pairs(s.params, kinds.gauss_seidel, s.contact.mu, s.model, s.lists, s.state, s.scratch)
+            for i in range(s.state.x.shape[0]):  # new neighbours: no ball is still quiet (pairs.still_quiet)
+                s.scratch.calm[i] = 0.0
             result += 1
             s.scratch.flag[0] = 0
         if k < steps:
@@ -246,22 +251,33 @@ def start_step(t0, kinds: ti.template(), v_inelastic, bits, s: ti.template()):
     """1. Free flight of every ball to ``x_free``, ``v_free`` (:func:`fly`), then the warm start:
     last step's resting impulses (ball pairs, planes and terrain) applied again, so a stack starts
     the step supported (see the module's docstring)."""
-    contact, model, lists, state, scratch = ti.static((s.contact, s.model, s.lists, s.state, s.scratch))
+    lists, state, scratch = ti.static((s.lists, s.state, s.scratch))
     if ti.static(s.kinds.gauss_seidel):  # a ball asleep in a Gauss–Seidel pile wakes when a moving ball touches it
         for i in range(state.x.shape[0]):
             if stands_firm(s.kinds, state.status[i]):
-                if touched_by_moving(i, state.status, state.rest_time, lists, bits):
-                    state.status[i] = ROLLING
+                if not still_quiet(i, s):  # (a ball still quiet has no neighbour that moved)
+                    if touched_by_moving(i, state.status, state.rest_time, lists, bits):
+                        state.status[i] = ROLLING
+                        stir_neighbours(i, bits, lists, scratch.calm)
     for i in range(state.x.shape[0]):
-        x1, v1, w1 = fly(i, t0, kinds, s)
-        scratch.x_free[i], scratch.v_free[i] = x1, v1
-        scratch.clear[i] = rounded_down(surface_clearance(i, x1, s.kinds.terrain, s.terrain, model, lists, state))
-        dv, dw, scratch.calm[i] = warm_start(i, bits, region_hop(s.kinds, s.params), s)
-        if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET and not stands_firm(s.kinds, state.status[i]):
-            v1 += dv
-            w1 += dw
-            v1, w1 = surface_impulses(i, warm=True, vi=v1, wi=w1, h=s.params.h, v_inelastic=v_inelastic, s=s)
-        state.v[i], state.w[i] = v1, w1
+        if not still_quiet(i, s):  # (a ball still quiet keeps its calm time; the sweeps skip it)
+            warm_ball(i, t0, kinds, v_inelastic, bits, s)
+
+
+@ti.func
+def warm_ball(i, t0, kinds: ti.template(), v_inelastic, bits, s: ti.template()):
+    """Ball i's part of :func:`start_step`'s second loop: its free flight, surface clearance,
+    calm time and warm start."""
+    model, lists, state, scratch = ti.static((s.model, s.lists, s.state, s.scratch))
+    x1, v1, w1 = fly(i, t0, kinds, s)
+    scratch.x_free[i], scratch.v_free[i] = x1, v1
+    scratch.clear[i] = rounded_down(surface_clearance(i, x1, s.kinds.terrain, s.terrain, model, lists, state))
+    dv, dw, scratch.calm[i] = warm_start(i, bits, region_hop(s.kinds, s.params), s)
+    if state.status[i] != OUT_OF_BOUNDS and scratch.calm[i] != QUIET and not stands_firm(s.kinds, state.status[i]):
+        v1 += dv
+        w1 += dw
+        v1, w1 = surface_impulses(i, warm=True, vi=v1, wi=w1, h=s.params.h, v_inelastic=v_inelastic, s=s)
+    state.v[i], state.w[i] = v1, w1
 
 
 @ti.func

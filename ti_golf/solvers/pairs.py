@@ -165,6 +165,37 @@ def quiet_ball(
 
 
 @ti.func
+def still_quiet(i, s: ti.template()):
+    """Whether ball i is quiet (:func:`quiet_ball`) because it was at the last step's warm start
+    and no neighbour has woken since (``s``: the step's :class:`.step.Step`): with the
+    Gauss–Seidel sweeps (``s.kinds.gauss_seidel``) and ``t_rest`` > 0 its quiet calm time
+    (``scratch.calm[i]``, ``QUIET``) then still holds. In those sweeps a ball asleep stands firm,
+    takes no impulse and keeps its status and rest timer (> 0 at rest, as ``t_rest`` > 0), so the
+    neighbours of a quiet ball stay at rest or out of bounds and none moved (:func:`moved`): it
+    is not woken, and stays quiet unless a neighbour of it wakes in the step's first loop, which
+    then takes its quiet calm time back (:func:`stir_neighbours`). The calm times are forgotten
+    (``Stepping.forget_quiet``) whenever the lists are built or the balls' statuses edited
+    between steps. So a pile asleep is not asked of its neighbours at every step."""
+    quiet = False
+    if ti.static(s.kinds.gauss_seidel):
+        if s.scratch.calm[i] == QUIET:  # (nested: Taichi evaluates both sides of an `and`)
+            if s.state.status[i] == AT_REST:
+                quiet = s.params.t_rest > 0.0
+    return quiet
+
+
+@ti.func
+def stir_neighbours(i, bits, lists: ti.template(), calm: ti.template()):
+    """Take back the quiet calm time (``calm``, see :func:`still_quiet`) of every listed neighbour
+    of ball i, which has just woken: each is then asked of its neighbours again
+    (:func:`quiet_ball`). Several threads may write a neighbour's entry, all the same value."""
+    for m in range(lists.lower_first[i], lists.lower_first[i + 1]):
+        calm[owner_slot(lists.lower[m], bits)[0]] = 0.0
+    for k in range(listed(lists.first, i)):
+        calm[lists.upper[i, k]] = 0.0
+
+
+@ti.func
 def warm_start(i, bits, hop, s: ti.template()):
     """Δv [m/s] and Δω [rad/s] of ball i (``s``: the step's :class:`.step.Step`; the arrays below
     are its model's, lists', state's and scratch's; μ its contact's; ``bits``: see

@@ -266,6 +266,7 @@ class CollisionSolver(Recorded, Stepping):
         self._ids = state.ids
         self._packs = Packs()
         self._last_grid = None
+        self.forget_quiet()  # (the record's calm times may come from code that kept none: see forget_quiet)
 
     def build(self, state: State) -> None:
         """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
@@ -304,6 +305,7 @@ class CollisionSolver(Recorded, Stepping):
         if not self.relists:  # (relisting in the kernel: a row for every ball, see surface_rows.every_ball_a_row)
             self._list_surface_rows(state, carried, v_max)
         self._fit_sweep_table()
+        self.forget_quiet()
         self.rebuilds += 1
         if n >= REORDER_MIN_BALLS and self.rebuilds % COLLECT_EVERY == 0:
             free_dropped_arrays()  # (the cycles that Taichi's launches leave: see COLLECT_EVERY)
@@ -318,6 +320,7 @@ class CollisionSolver(Recorded, Stepping):
         self._size_cells(state)  # (the grid a build would size, kept as a saved run keeps it: see record)
         self._new_neighbour_table(state)
         self.first.fill(0)  # (nothing to carry over)
+        self.forget_quiet()
         self._fit_pair_tables(state, state.n * self.capacity, 0)
         self._fit_sweep_table()
         self.flag.from_numpy(np.array([1, 0], dtype=np.int32))

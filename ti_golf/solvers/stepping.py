@@ -67,6 +67,7 @@ class Stepping:
     v_cut: float
     r_cut: float
     flag: Any
+    calm: Any
     upper: Any
     x_at_build: Any
     x_free: Any
@@ -199,6 +200,15 @@ class Stepping:
         pair that stays listed keeping its accumulated impulse."""
         self.rebuild_due = self.edited = True
         self.flag.from_numpy(np.array([1, 0], dtype=np.int32))  # the serial kernel's request
+        self.forget_quiet()
+
+    def forget_quiet(self) -> None:
+        """Forget which balls were quiet at the last step (``calm``, see ``pairs.still_quiet``), so
+        that the next step asks each ball asleep of its neighbours: after a build of the lists (new
+        neighbours; a reorder also leaves other balls' values in ``calm``), and whenever the balls'
+        statuses or rest timers are edited between steps (``Simulation.set_ball``, waking balls).
+        Always safe: a ball asked comes out quiet or not as the step would have found it."""
+        self.calm.fill(0.0)
 
     def advance(self, model: Model, state: State, steps: int) -> None:
         """Advance all balls by ``steps`` steps of ``model.dt``: serially, many in one launch, or one
