@@ -1071,6 +1071,16 @@ def _outcome(sim, asleep: int, *arrays: np.ndarray) -> tuple:
 
 
 @pytest.mark.slow
+def _gauss_seidel_column() -> tg.Simulation:
+    """A column of 10 touching balls on the ground (e = 0.3, the Gauss–Seidel sweeps, 1 ms steps),
+    no air: it falls asleep by t = 0.2 s."""
+    sc = tg.load_scene(
+        "lab_vacuum",
+        ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3", 'contact.solver="gauss_seidel"'],
+    )
+    return tg.Simulation(sc, x=np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)]))
+
+
 def test_a_step_with_every_ball_asleep_is_skipped_and_changes_nothing():
     # with the Gauss–Seidel sweeps a ball asleep takes no impulse and does not move
     # (colour.stands_firm), and only a moving ball wakes it: a step in which no ball is awake
@@ -1079,14 +1089,9 @@ def test_a_step_with_every_ball_asleep_is_skipped_and_changes_nothing():
     # t = 0.2 s), asleep (the steps skipped), and after its top ball, tossed up between steps
     # (set_ball), lands back on it, wakes the balls below and sleeps with them again: those steps
     # must find every impulse and list as the skipped steps left them
-    sc = tg.load_scene(
-        "lab_vacuum",
-        ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3", 'contact.solver="gauss_seidel"'],
-    )
-    x = np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)])
     runs, skipped, woken = [], [], []
     for skip in (True, False):
-        sim = tg.Simulation(sc, x=x)
+        sim = _gauss_seidel_column()
         sim.solver = solver = CollisionSolver(sim.model, serial=False)
         solver.skip_still = skip
         sim.step(250)
@@ -1118,14 +1123,9 @@ def test_a_ball_still_quiet_is_not_asked_again_and_the_steps_are_the_same(serial
     # (set_ball), lands back and wakes the ball below, which wakes the ball below it: that ball
     # was quiet, and owns its pair with the ball woken above it (the lower ball owns a pair
     # along y), so that, were it left quiet, the pair would go unswept and the column would sink
-    sc = tg.load_scene(
-        "lab_vacuum",
-        ["world.integrator=semi_implicit", "world.dt=0.001", "contact.e=0.3", 'contact.solver="gauss_seidel"'],
-    )
-    x = np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)])
     runs, woken, quiet = [], [], []
     for ask_every_step in (False, True):
-        sim = tg.Simulation(sc, x=x)
+        sim = _gauss_seidel_column()
         sim.solver = solver = CollisionSolver(sim.model, serial=serial)
         solver.skip_still = False  # (every step taken, asleep or not)
         most_quiet, most_awake = 0, 0

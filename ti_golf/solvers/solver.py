@@ -320,7 +320,6 @@ class CollisionSolver(Recorded, Stepping):
         self._size_cells(state)  # (the grid a build would size, kept as a saved run keeps it: see record)
         self._new_neighbour_table(state)
         self.first.fill(0)  # (nothing to carry over)
-        self.forget_quiet()
         self._fit_pair_tables(state, state.n * self.capacity, 0)
         self._fit_sweep_table()
         self.flag.from_numpy(np.array([1, 0], dtype=np.int32))
@@ -569,8 +568,7 @@ class CollisionSolver(Recorded, Stepping):
         return max(0, int(self.capacity - 1).bit_length())
 
     def pairs(self) -> np.ndarray:
-        """The listed neighbour pairs (i, j) by ball id, each once, sorted: int array of shape (n_pairs, 2)
-        with i < j."""
+        """The listed neighbour pairs (i, j), i < j, by ball id, each once, sorted: int array (n_pairs, 2)."""
         upper, count = self.upper.to_numpy(), np.diff(self.first.to_numpy())
         listed = np.arange(upper.shape[1])[None, :] < count[:, None]
         i = np.broadcast_to(np.arange(len(count))[:, None], upper.shape)

@@ -200,13 +200,13 @@ class Stepping:
         pair that stays listed keeping its accumulated impulse."""
         self.rebuild_due = self.edited = True
         self.flag.from_numpy(np.array([1, 0], dtype=np.int32))  # the serial kernel's request
-        self.forget_quiet()
 
     def forget_quiet(self) -> None:
         """Forget which balls were quiet at the last step (``calm``, see ``pairs.still_quiet``), so
         that the next step asks each ball asleep of its neighbours: after a build of the lists (new
-        neighbours; a reorder also leaves other balls' values in ``calm``), and whenever the balls'
-        statuses or rest timers are edited between steps (``Simulation.set_ball``, waking balls).
+        neighbours; a reorder also leaves other balls' values in ``calm``; the serial kernel forgets
+        them itself when it relists, as after :meth:`invalidate`), after a restore, and whenever the
+        balls' statuses or rest timers are edited between steps (``Simulation.set_ball``, waking balls).
         Always safe: a ball asked comes out quiet or not as the step would have found it."""
         self.calm.fill(0.0)
 
