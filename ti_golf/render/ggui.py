@@ -208,8 +208,9 @@ FIRST_PICTURE_PASSES = 8
 def _draw_ggui(frame: _Frame, path: str) -> None:
     # A window's first picture is drawn once and discarded, then again until two passes agree (at
     # most FIRST_PICTURE_PASSES): in CI, with other processes using the Vulkan driver, the first
-    # picture of a process came out now and then without its mesh (the ground) and with its trail
-    # bent, and two or four passes until two agreed did not always mend it; alone it never happened.
+    # picture of a process came out now and then without its mesh (the ground; the camera, balls and
+    # trails in place), and two or four passes until two agreed did not always mend it; alone it
+    # never happened.
     first = _ggui.window is None
     window = _ggui_window(frame.view.size)
     rgba, before = None, None
