@@ -17,7 +17,7 @@ import ti_golf as tg
 from ti_golf.bench.collide import pile_scene
 from ti_golf.bench.pit import pit_scene
 from ti_golf.scene.schema import AT_REST, Plane
-from ti_golf.solvers import CollisionSolver, apart, grid, links, sort, stepping
+from ti_golf.solvers import CollisionSolver, apart, grid, links, sort, stale, stepping
 from ti_golf.solvers.pairs import QUIET
 from ti_golf.solvers.stepping import RELIST_MAX_BALLS
 
@@ -1659,16 +1659,17 @@ def _deepest_by_every_pair(x, r):
 @SERIAL_OR_PARALLEL
 @pytest.mark.parametrize("solver", ["jacobi", "gauss_seidel"])
 def test_deepest_overlap_after_steps_measures_the_pairs_the_lists_may_miss(serial, solver, monkeypatch):
-    # a 3×3×3 lattice of balls (r = 2 cm, 1 cm apart) moving together at 2 m/s, 1 mm a 0.5 ms
-    # step, and one ball 0.5 mm into a corner ball: each step asks for new lists (2h·|v| is more
-    # than half the 2 mm skin), but no two balls have closed on each other by the skin, so the
-    # lists still hold every overlapping pair and measuring builds none
+    # a 3×3×3 lattice of balls (r = 2 cm, 1 cm apart) moving together at 15 m/s, 7.5 mm a 0.5 ms
+    # step, and one ball 0.5 mm into a corner ball: after three steps new lists are due (each ball
+    # has used 37.5 mm, its move plus 2h·|v|: more than the 2 mm skin, and more than a search
+    # through the grid covers, 0.99 of a cell less the radius), but no two balls have closed on
+    # each other, so the lists still hold every overlapping pair and measuring builds none
     lattice = 0.05 * np.stack(np.meshgrid(*[np.arange(3)] * 3, indexing="ij"), -1).reshape(-1, 3)
     x = np.vstack([lattice, lattice[26] + [0.0395, 0.0, 0.0]]) + [0.0, 2.0, 0.0]
-    sim = tg.Simulation(scene(f"contact.solver={solver}"), x=x, v=np.tile([0.0, -2.0, 0.0], (len(x), 1)))
+    sim = tg.Simulation(scene(f"contact.solver={solver}"), x=x, v=np.tile([0.0, -15.0, 0.0], (len(x), 1)))
     sim.solver = solver_ = CollisionSolver(sim.model, serial=serial)
     sim.step(3)
-    assert solver_.lists_due and 2 * 2.0 * sim.model.dt > solver_.skin / 2
+    assert solver_.lists_due and (3 + 2) * 15.0 * sim.model.dt > stale.SEARCHED * solver_.cell - 0.02
     builds = solver_.rebuilds
     d = sim.deepest_overlap()
     assert solver_.rebuilds == builds

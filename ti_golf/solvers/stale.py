@@ -1,21 +1,25 @@
 """Whether the neighbour lists must be rebuilt after a Gauss–Seidel step, pair by pair.
 
-A build lists every pair whose surface gap is below the skin (or the reach of its closing speed,
-see :func:`.grid.pair_reach`). A pair left out was at least its gap at the build apart, so it can
-only touch in the next step when its balls together have moved that gap since the build, counting
-2h·|v| each for the step ahead: |x_a,b − x_b,b| − r_a − r_b < u_a + u_b, with u the skin a ball has
-*used* (:func:`skin_used`). The Jacobi steps rebuild as soon as one ball has used half the skin
-(:func:`.links.moved_past`), which guarantees that for every pair. The Gauss–Seidel steps test the
-pairs themselves (:func:`flag_stale_lists`): a ball that has used more than half the skin is
-tested against the balls that were within reach of it at the build, in the 125 grid cells around
-its cell then, and the lists are rebuilt only when such a pair is missing from them. The cells are
-at least 2·r + skin wide, so those 125 hold every ball within reach of a ball that used up to
-about r + skin, not the skin alone (:func:`searched_reach`): only a ball that used more forces a
-rebuild by itself, or one that may touch a plane or the terrain that the build found out of its
-reach (:func:`surface_unforeseen`). So one ball rolling over a settled pile, whose neighbours
-have not moved, uses the whole skin before it forces a rebuild, not half of it; and a ball that
-bounces over a settling pile at a few metres a second forces one when it comes near a ball the
-lists miss or has moved about a radius since the build, not at every step.
+A build lists every pair whose surface gap is below the skin or h·|v_a − v_b|, the reach of its
+closing speed (:func:`.grid.pair_reach`). A pair left out may touch in the next step when its gap
+now is below 2h·|v_a − v_b|, what it closes in the step ahead at up to twice its relative speed
+(:func:`unlisted_within_reach`): the build's rule, kept between builds, and like it blind to a
+motion the two balls share. The Jacobi steps rebuild as soon as one ball has used half the skin
+(:func:`.links.moved_past`: its distance from the build plus 2h·|v|, the skin it has *used*,
+:func:`skin_used`), which bounds every pair. The Gauss–Seidel steps test the pairs themselves
+(:func:`flag_stale_lists`). A pair out of the lists was more than the skin apart at the build, and
+its gap now, less 2h·|v_a − v_b|, is at least that gap less u_a + u_b: only a pair with a ball
+past half the skin can be stale. Such a ball is tested against the balls within u_a + u_b of it
+at the build, in the 125 grid cells around its cell then, and the lists are rebuilt only when a
+pair within reach is missing from them. The cells are at least 2·r + skin wide, so those 125 hold
+every such ball for a ball that used up to about r + skin, not the skin alone
+(:func:`searched_reach`): only a ball that used more forces a rebuild by itself, or one that may
+touch a plane or the terrain that the build found out of its reach (:func:`surface_unforeseen`).
+So one ball rolling over a settled pile, whose neighbours have not moved, uses the whole skin
+before it forces a rebuild, not half of it; a ball that bounces over a settling pile at a few
+metres a second forces one when it comes near a ball the lists miss or has moved about a radius
+since the build, not at every step; and balls falling together, a cell apart, force none until
+one has moved about a radius.
 
 Rebuilt earlier or later, the lists hold every pair that can touch in the step; the steps between
 differ only in which pairs are listed but still apart, which change nothing (see
@@ -86,18 +90,14 @@ def pair_listed(i, j, lists: ti.template()):
 
 
 @ti.func
-def unlisted_within_reach(
-    i, j, used_i, h, radius: ti.template(), lists: ti.template(), x1: ti.template(), v: ti.template()
-):
-    """Whether balls i and j (j ≠ i) form a pair the lists miss that may touch in the next step:
-    their gap at the build, from the f32 positions, below the skin both have used (``used_i``:
-    ball i's; ``x1``, ``v``: the balls' new positions [m] and velocities [m/s])."""
+def unlisted_within_reach(i, j, h, radius: ti.template(), lists: ti.template(), x1: ti.template(), v: ti.template()):
+    """Whether balls i and j (j ≠ i) form a pair the lists miss that may touch in the next step
+    (``h`` [s]): their surface gap now below 2h·|v_i − v_j| (``x1``, ``v``: the balls' new
+    positions [m] and velocities [m/s])."""
     stale = False
     if j != i:
-        used_j = skin_used(x1[j], lists.x_at_build[j], v[j], h)
-        d = ti.cast(lists.x_at_build[i], float) - ti.cast(lists.x_at_build[j], float)
-        gap = d.norm() - of_ball(radius, i) - of_ball(radius, j)
-        if gap < used_i + used_j:
+        gap = (x1[i] - x1[j]).norm() - of_ball(radius, i) - of_ball(radius, j)
+        if gap < 2.0 * h * (v[i] - v[j]).norm():
             if not pair_listed(i, j, lists):
                 stale = True
     return stale
@@ -115,11 +115,11 @@ def set_apart(i, apart_ids: ti.template(), n_apart):
 
 
 @ti.func
-def stale_by_every_ball(i, used_i, h, radius: ti.template(), lists: ti.template(), x1: ti.template(), v: ti.template()):
+def stale_by_every_ball(i, h, radius: ti.template(), lists: ti.template(), x1: ti.template(), v: ti.template()):
     """Whether ball i has come within reach of a ball the lists miss, every ball tested."""
     stale = False
     for j in range(x1.shape[0]):
-        if unlisted_within_reach(i, j, used_i, h, radius, lists, x1, v):
+        if unlisted_within_reach(i, j, h, radius, lists, x1, v):
             stale = True
             break
     return stale
@@ -128,7 +128,6 @@ def stale_by_every_ball(i, used_i, h, radius: ti.template(), lists: ti.template(
 @ti.func
 def stale_near(
     i,
-    used_i,
     g: ti.template(),
     start: ti.template(),
     sorted_ids: ti.template(),
@@ -159,7 +158,7 @@ def stale_near(
             elif not every:
                 if ti.static(not stored_sorted):
                     j = sorted_ids[k]
-            if unlisted_within_reach(i, j, used_i, g.h, radius, lists, x1, v):
+            if unlisted_within_reach(i, j, g.h, radius, lists, x1, v):
                 stale = True
                 break
         if stale:
@@ -211,16 +210,17 @@ def searched_reach(i, serial: ti.template(), g: ti.template(), radius: ti.templa
 
 
 @ti.func
-def surface_unforeseen(i, used, s: ti.template()):
-    """Whether ball i, which has used ``used`` [m] of the skin since the build, more than the
-    skin, may touch a plane or the terrain that the build found out of its reach, so that it
-    keeps no row of surface impulses for it (:func:`.surfaces.list_surfaces`, which gives rows
-    to the balls within the skin of a surface): the lists are then rebuilt before the next step
-    (``s``: the step's :class:`.step.Step`)."""
+def surface_unforeseen(i, x1, ahead, s: ti.template()):
+    """Whether ball i, now at ``x1`` [m] and past the skin since the build, may touch in the next
+    step, moving no farther than ``ahead`` [m] (2h·|v|, as :func:`skin_used` counts the step
+    ahead), a plane or the terrain that the build found out of its reach, so that it keeps no row
+    of surface impulses for it (:func:`.surfaces.list_surfaces`, which gives rows to the balls
+    within the skin of a surface): the lists are then rebuilt before that step (``s``: the step's
+    :class:`.step.Step`). Asked at every step of such a ball, from where it is, not from where it
+    was at the build: a ball falling past a wall does not force a rebuild for the wall."""
     unforeseen = False
     if surface_row(s.lists.surface_start, i) < 0:
-        x_build = ti.cast(s.lists.x_at_build[i], float)
-        unforeseen = near_a_surface(i, x_build, used, ti.static(s.kinds.terrain), s.terrain, s.model)
+        unforeseen = near_a_surface(i, x1, ahead, ti.static(s.kinds.terrain), s.terrain, s.model)
     return unforeseen
 
 
@@ -250,7 +250,7 @@ def flag_stale_lists(
         if used > searched_reach(i, serial, g, radius, params):
             scratch.flag[0] = 1
         elif used > params.skin:  # (only without ``serial``: see searched_reach)
-            if surface_unforeseen(i, used, s):
+            if surface_unforeseen(i, scratch.x_free[i], 2.0 * params.h * state.v[i].norm(), s):
                 scratch.flag[0] = 1
     for i in range(scratch.x_free.shape[0]):  # (a second loop: no ball searched when one used its reach)
         if scratch.flag[0] == 0:  # (once the lists must be rebuilt, no other ball need be tested)
@@ -258,11 +258,10 @@ def flag_stale_lists(
             if used > params.half_skin and used <= searched_reach(i, serial, g, radius, params):
                 stale = False
                 if ti.static(serial):
-                    stale = stale_by_every_ball(i, used, params.h, radius, lists, scratch.x_free, state.v)
+                    stale = stale_by_every_ball(i, params.h, radius, lists, scratch.x_free, state.v)
                 else:
                     stale = stale_near(
                         i,
-                        used,
                         g,
                         grid.start,
                         grid.sorted_ids,
