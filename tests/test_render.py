@@ -174,9 +174,9 @@ def snapshot(sim, name: str, tmp_path: Path, **kwargs) -> None:
     belong (to the pixel), the rest was background. Such a picture, when the scene has a ground
     to draw, is drawn once more and the second one is compared: a ground that a change to the
     code stops drawing is missing from both and still fails."""
-    out = tmp_path / name
+    out, baseline = tmp_path / name, BASELINES / name
     assert R.render(sim, out, size=SIZE, backend="ggui", **kwargs) == "ggui"
-    if UPDATE or not meshes_dropped(read_png(out), read_png(BASELINES / name)):
+    if UPDATE or not baseline.exists() or not meshes_dropped(read_png(out), read_png(baseline)):
         compare_with_baseline(out, name, tmp_path)
         return
     assert len(sim.model.plane_p) or sim.model.terrain is not None, "a ground to draw"

@@ -191,9 +191,9 @@ def test_balls_moving_together_rebuild_only_as_a_lone_ball_does(serial):
 def test_a_ball_without_a_surface_row_rebuilds_before_it_can_reach_a_plane():
     # a ball 10.5 mm above the ground (beyond the 2 mm skin: the build gives it no row of surface
     # impulses) falls at 1 m/s, 1 mm a step, with no other ball near: it uses more than the skin
-    # at once, yet no pair can be missing; the lists are rebuilt once the ground is within what it
-    # has used (its distance from the build plus 2h·|v|, the model above with the 10.5 mm gap for the
-    # allowance), so that it meets the ground with its row, and bounces as B.9 has it (e = 1)
+    # at once, yet no pair can be missing; the lists are rebuilt once the ground is within 2h·|v|
+    # (2 mm) of where it is, after step 9 (straight down, the model above with the 10.5 mm gap for
+    # the allowance), so that it meets the ground with its row, and bounces as B.9 has it (e = 1)
     sc = tg.load_scene(
         "lab_vacuum",
         ["air.rho=0", "world.gravity=[0,0,0]", "world.dt=0.001", "contact.e=1", "contact.solver=gauss_seidel"],
