@@ -124,7 +124,7 @@ def _pairs_in_rows(path) -> None:
     """Rewrite the solver's arrays of the saved run at ``path`` as solvers saved them until
     2026-11-26: the pair tables with a row per ball as wide as the longest list, each list's
     length in ``n_upper`` (now the pairs lie ball after ball, from ``first``), the sweep's table
-    a 5-vector per pair (now a row of 2 or 5 columns), one table of friction impulses, and a row
+    a 5-vector per pair in f64 (now a row of 5 columns in the float type, or, Gauss–Seidel, 3 in f32), one table of friction impulses, and a row
     of surface impulses for every ball (now only for the balls near a surface, from
     ``surface_start``); and, until 2026-11-27, the lower lists in a table stored by column, as
     wide as the longest, each list's length in ``n_lower`` (now the links lie ball after ball,
@@ -150,7 +150,7 @@ def _pairs_in_rows(path) -> None:
     )
     solver["elements"]["n_upper"] = solver["elements"].pop("first")
     del solver["values"]["pair_capacity"], solver["scratch"]["stash_first"], solver["scratch"]["pair_chunk"]
-    solver["scratch"]["impulse"][:2] = [len(n_upper), width], [5]  # a 5-vector per pair, Jacobi or Gauss–Seidel
+    solver["scratch"]["impulse"] = [[len(n_upper), width], [5], "float64"]  # a 5-vector per pair, in f64 either way
     solver["scratch"].pop("friction_back", None)
     solver["values"].pop("friction_back", None)
     start, impulse = data.pop("solver.surface_start"), data.pop("solver.surface_impulse")

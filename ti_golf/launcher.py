@@ -49,6 +49,9 @@ MADE: list[FastCall] = []
 _SEEN_MAX = 64
 """Identities of packs and their members kept a parameter (see :meth:`FastCall._pack_key`)."""
 
+_ANY_ELEMENT = -1
+"""A pack member's element dimensions when its annotation leaves the element type open."""
+
 _MISSING = object()
 """A parameter without a default that a call did not pass."""
 
@@ -112,7 +115,7 @@ class FastCall:
         if isinstance(annotation, kernel_impl.ArgPackType):
             return _PACK
         if isinstance(annotation, ndarray_type.NdarrayType):
-            return _ARRAY if annotation.dtype is not None and annotation.ndim is not None else None
+            return _ARRAY if annotation.ndim is not None else None  # (its key Taichi's: the type any)
         if id(annotation) in primitive_types.real_type_ids:
             return _FLOAT
         if id(annotation) in primitive_types.integer_type_ids:
@@ -128,19 +131,23 @@ class FastCall:
 
     @staticmethod
     def _pack_arrays(annotation: Any) -> list[tuple[str, int]] | None:
-        """The names of a pack's members, all arrays of a fixed element type and dimension, in
-        order, each with its element's dimensions (0 for scalars, 1 for vectors); ``None`` when a
-        member is anything else (then Taichi's call takes the kernel)."""
+        """The names of a pack's members, all arrays of a fixed dimension, in order, each with its
+        element's dimensions (0 for scalars, 1 for vectors; ``_ANY_ELEMENT`` for an array whose
+        element type the annotation leaves open, such as the sweep's table, f32 or the float type
+        by solver); ``None`` when a member is anything else (then Taichi's call takes the kernel)."""
         from taichi.lang.matrix import MatrixType
         from taichi.types import ndarray_type
 
         members = []
         for name, member in annotation.members.items():
-            if not isinstance(member, ndarray_type.NdarrayType) or member.dtype is None or member.ndim is None:
+            if not isinstance(member, ndarray_type.NdarrayType) or member.ndim is None:
                 return None
             if member.layout != ndarray_type.Layout.AOS:
                 return None
-            members.append((name, member.dtype.ndim if isinstance(member.dtype, MatrixType) else 0))
+            if member.dtype is None:
+                members.append((name, _ANY_ELEMENT))
+            else:
+                members.append((name, member.dtype.ndim if isinstance(member.dtype, MatrixType) else 0))
         return members
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
@@ -239,7 +246,7 @@ class FastCall:
         for name, element_dims in members:
             member = pack[name]
             if isinstance(member, np.ndarray):
-                if not member.flags.c_contiguous:
+                if not member.flags.c_contiguous or element_dims == _ANY_ELEMENT:  # (NumPy's: Taichi's call)
                     return False
                 later.append((int(member.ctypes.data), member.nbytes, member.shape[: member.ndim - element_dims]))
             elif getattr(member, "grad", None) is not None or not hasattr(member, "arr"):

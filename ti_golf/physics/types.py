@@ -208,9 +208,10 @@ float_array: TypeAlias = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndi
 vec3_table: TypeAlias = Deferred(lambda: ti.types.ndarray(dtype=vec3.get(), ndim=2), "vec3_table")
 float_grid: TypeAlias = Deferred(lambda: ti.types.ndarray(dtype=real.get(), ndim=2), "float_grid")
 """2-D float array (terrain heights, tables)."""
-pair_table: TypeAlias = float_grid
-"""The pairs' sweep entries, a row per listed pair (see ``NeighbourLists.first``), ``INV`` to
-``P_Z`` or ``INV`` and ``GAP`` alone (see :func:`pair_columns`)."""
+pair_table: TypeAlias = ti.types.ndarray(ndim=2)
+"""The pairs' sweep entries, a row per listed pair (see ``NeighbourLists.first``): ``INV`` to
+``P_Z`` in the float type with the Jacobi sweeps, ``INV`` to ``FRIC`` in f32 with the
+Gauss–Seidel sweeps (see :func:`pair_columns`, :func:`pair_table_type`)."""
 
 INV, GAP, P_X, P_Y, P_Z = 0, 1, 2, 3, 4
 """Columns of a pair's row in the sweep's table (``StepScratch.J``): its inverse distance [1/m] and
@@ -218,19 +219,28 @@ surface gap [m] (the Gauss–Seidel sweeps read no more), then with the Jacobi s
 [N·s] that the pair's owner takes in the sweep (see ``pairs.owned_pairs``). Between steps a
 rebuild of the lists keeps each pair's resting impulse and neighbour id in the first two (see
 ``links.stash``)."""
+GAP_LOW = 2
+"""The column of the Gauss–Seidel sweeps' f32 table that holds, in f64, the low 32 bits of a pair's
+gap, its high 32 bits in ``GAP`` (see ``pairs.put_gap``)."""
 LAM, ID, FRIC = 0, 1, 2
 """Columns of a stashed pair in the sweep's table during a rebuild (see ``links.stash``): its
-resting impulse, its neighbour's id and, with the Gauss–Seidel sweeps in f32, its friction
-impulse in 32 bits (in f64 those bits share ``ID`` with the id: see ``links.put_stashed``)."""
+resting impulse, its neighbour's id and, with the Gauss–Seidel sweeps, its friction impulse in 32
+bits (see ``links.put_stashed``)."""
 
 
 def pair_columns(gauss_seidel: bool) -> int:
-    """Columns of the sweep's table (see ``INV``): 2 with the Gauss–Seidel sweeps, which apply each
-    pair's impulse at once (3 in f32, for the friction impulse a rebuild stashes: see ``FRIC``),
-    5 with the Jacobi sweeps, whose balls gather the impulses after."""
-    if not gauss_seidel:
-        return 5
-    return 2 if is_f64() else 3
+    """Columns of the sweep's table (see ``INV``): 3 with the Gauss–Seidel sweeps, which apply each
+    pair's impulse at once (the third for the gap's low bits, ``GAP_LOW``, and the friction impulse
+    a rebuild stashes, ``FRIC``), 5 with the Jacobi sweeps, whose balls gather the impulses after."""
+    return 3 if gauss_seidel else 5
+
+
+def pair_table_type(gauss_seidel: bool) -> Any:
+    """The element type of the sweep's table: f32 with the Gauss–Seidel sweeps, 12 bytes a pair
+    (its inverse distance is refined to the float type where it is read, see
+    ``pairs.kept_normal``; its gap keeps every bit of the float type, see ``pairs.put_gap``), and
+    the float type with the Jacobi sweeps (the report's, whose figures do not change)."""
+    return ti.f32 if gauss_seidel else real.get()
 
 
 # Types that do not depend on the precision.
@@ -423,7 +433,7 @@ StepScratch: TypeAlias = Deferred(
         v_free=vec3_array.get(),  # free-flight velocities [m/s], (N,)
         calm=float_array.get(),  # least rest timer of the balls touching each ball [s], (N,)
         clear=f32_array,  # clearance to the nearest plane or terrain [m], (N,)
-        J=pair_table.get(),  # each pair's inverse distance, gap and (Jacobi) impulse in a sweep, (pairs, 2 or 5)
+        J=pair_table,  # each pair's inverse distance, gap and (Jacobi) impulse in a sweep, (pairs, 3 or 5)
         impact=int_array,  # Jacobi: each ball's first impact key; Gauss–Seidel: 1 for a ball to bounce, (N,)
         flag=int_array,  # [0]: rebuild the lists; [1]: the sweep marked impacts, (2,)
     ),

@@ -489,7 +489,7 @@ def _no_stash() -> tuple:
     """Stand-ins for :func:`colour_carry`'s stash arguments when nothing is carried (never read)."""
     global _STAND_INS
     if _STAND_INS is None:
-        _STAND_INS = (ti.ndarray(float, (1, 2)), ti.ndarray(ti.i32, 1))
+        _STAND_INS = (ti.ndarray(ti.f32, (1, 3)), ti.ndarray(ti.i32, 1))  # (the Gauss–Seidel sweeps' table)
     return _STAND_INS
 
 

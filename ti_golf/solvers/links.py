@@ -31,18 +31,14 @@ from ti_golf.solvers.apart import APART_MAX, is_apart
 from ti_golf.solvers.grid import owns, pair_reach
 from ti_golf.solvers.sort import bucket_starts
 
-ID_EXACT_F32 = 2**24
-"""Balls an f32 run can hold: :func:`stash_ball` keeps the neighbours' ids in the float type, exact
-below 2^24 in f32 (below 2^53 in f64)."""
-
 
 def table_bytes(n: int, width: int, pairs: int, gauss_seidel: bool) -> int:
     """Bytes of the neighbour and pair tables of ``n`` balls with upper lists ``width`` wide and
     room for ``pairs`` pairs: per upper-list entry a neighbour (4 bytes); per pair its link in the
     other ball's lower list (4 bytes), its resting impulse (f32), its row of the sweep's table
-    (:func:`ti_golf.physics.types.pair_columns` floats), and with the Gauss–Seidel sweeps its friction impulse
-    (3 f32)."""
-    f = np.dtype(np_float()).itemsize
+    (:func:`ti_golf.physics.types.pair_columns` entries of :func:`~ti_golf.physics.types.pair_table_type`),
+    and with the Gauss–Seidel sweeps its friction impulse (3 f32)."""
+    f = 4 if gauss_seidel else np.dtype(np_float()).itemsize
     per_pair = 4 + 4 + pair_columns(gauss_seidel) * f + (12 if gauss_seidel else 0)
     return n * width * 4 + pairs * per_pair
 
@@ -199,8 +195,8 @@ def stash_ball(
     ``LAM`` and ``ID`` of ``scratch`` (the sweep's table, free between steps) so that the lists
     and the pair tables can be rebuilt in place: in the pair tables' rows of ball i, or with
     ``width`` > 0 in rows i · width onwards, followed by the id −1 when the list is shorter (the
-    serial rebuild, which overwrites ``first`` before it carries the impulses over). The id is
-    exact in f32 as well below 2^24 (``ID_EXACT_F32``). With ``with_friction`` (the Gauss–Seidel
+    serial rebuild, which overwrites ``first`` before it carries the impulses over). With
+    ``with_friction`` (the Gauss–Seidel
     sweeps) each pair's friction impulse from ``friction`` is kept beside them, in
     32 bits (:func:`friction_bits`, from the positions ``x`` and friction coefficient ``mu``), so
     that a rebuild needs no second friction table to carry it into."""
@@ -208,7 +204,7 @@ def stash_ball(
     if width > 0:
         p0 = i * width
         if count < width:
-            scratch[p0 + count, ID] = -1.0
+            put_id(scratch, p0 + count, -1, with_friction)
     for k in range(count):
         j, p = upper[i, k], first[i] + k
         bits = 0
@@ -220,16 +216,24 @@ def stash_ball(
 @ti.func
 def put_stashed(scratch: ti.template(), p, lam, j, bits, with_friction: ti.template()):
     """Write a stashed pair into row p of ``scratch``: its resting impulse ``lam`` into ``LAM``, its
-    neighbour's id j into ``ID`` and, ``with_friction``, the 32 ``bits`` of its friction impulse:
-    in f64 into ``ID`` too, the id in the upper 32 bits of the float's 64 (never read as a
-    number), in f32 into ``FRIC``."""
+    neighbour's id j into ``ID`` (:func:`put_id`) and, ``with_friction``, the 32 ``bits`` of its
+    friction impulse into ``FRIC``."""
     scratch[p, LAM] = lam
-    if ti.static(with_friction and is_f64()):
-        scratch[p, ID] = ti.bit_cast((ti.cast(j, ti.i64) << 32) | ti.cast(ti.cast(bits, ti.u32), ti.i64), ti.f64)
+    put_id(scratch, p, j, with_friction)
+    if ti.static(with_friction):
+        scratch[p, FRIC] = ti.bit_cast(bits, ti.f32)
+
+
+@ti.func
+def put_id(scratch: ti.template(), p, j, with_friction: ti.template()):
+    """Write the ball id j (or −1, a list's end) into column ``ID`` of row p of ``scratch``: in
+    the f32 tables (the Gauss–Seidel sweeps', and every table in f32: ``types.pair_table_type``)
+    its 32 bits, never read as a number, so that any i32 id is kept; in an f64 table its value
+    (exact below 2^53)."""
+    if ti.static(with_friction or not is_f64()):
+        scratch[p, ID] = ti.bit_cast(ti.cast(j, ti.i32), ti.f32)
     else:
         scratch[p, ID] = ti.cast(j, float)
-        if ti.static(with_friction):
-            scratch[p, FRIC] = ti.bit_cast(bits, ti.f32)
 
 
 @ti.func
@@ -237,13 +241,12 @@ def stashed_id_bits(scratch: ti.template(), p, with_friction: ti.template()):
     """(neighbour id, friction bits) of the stashed pair in row p of ``scratch`` (see
     :func:`put_stashed`; the bits are 0 without ``with_friction``)."""
     j, bits = 0, 0
-    if ti.static(with_friction and is_f64()):
-        word = ti.bit_cast(scratch[p, ID], ti.i64)
-        j, bits = ti.cast(word >> 32, ti.i32), ti.cast(word, ti.i32)  # (the cast keeps the low 32 bits)
+    if ti.static(with_friction or not is_f64()):
+        j = ti.bit_cast(scratch[p, ID], ti.i32)
     else:
         j = ti.cast(scratch[p, ID], ti.i32)
-        if ti.static(with_friction):
-            bits = ti.bit_cast(scratch[p, FRIC], ti.i32)
+    if ti.static(with_friction):
+        bits = ti.bit_cast(scratch[p, FRIC], ti.i32)
     return j, bits
 
 

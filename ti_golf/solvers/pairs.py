@@ -16,10 +16,12 @@ from ti_golf.physics.contact import (
 )
 from ti_golf.physics.types import (
     GAP,
+    GAP_LOW,
     INV,
     P_X,
     P_Y,
     P_Z,
+    is_f64,
     of_ball,
     zero3,
 )
@@ -49,6 +51,48 @@ def pair_normal(x_a, x_b, inv):
     from the start-of-step positions, which do not change during them: bit for bit the normal
     that the warm start used."""
     return (x_a - x_b) * inv
+
+
+@ti.func
+def kept_normal(x_a, x_b, inv32):
+    """:func:`pair_normal` from the inverse distance as the Gauss–Seidel sweeps keep it, in f32
+    (``inv32``, see ``types.pair_table_type``; its sign ignored): in f64 refined by a Newton step
+    of 1/√(d·d), y(3 − d·d y²)/2, whose relative error is 3/2 of the square of the f32 value's
+    (at most 2^-24), so 2^-47 (a normal 1 ± 10^-14 long). The warm start and every sweep refine
+    the same f32 value on the same start-of-step positions: the same normal, bit for bit."""
+    d = x_a - x_b
+    y = ti.cast(ti.abs(inv32), float)
+    if ti.static(is_f64()):
+        y = y * (1.5 - 0.5 * d.norm_sqr() * y * y)
+    return d * y
+
+
+@ti.func
+def put_gap(J: ti.template(), p, gap):
+    """Write the surface gap ``gap`` [m] of the pair in row p of the Gauss–Seidel sweeps' f32 table
+    (see ``types.pair_table_type``): in f64 its 64 bits, the high half in ``GAP`` and the low in
+    ``GAP_LOW`` (never read as numbers), so that the sweeps close a gap to the last bit as they
+    would from the positions (rounded to f32, the gaps left balls of a settled pile waking one
+    another for seconds); in f32 into ``GAP``."""
+    if ti.static(is_f64()):
+        bits = ti.bit_cast(gap, ti.i64)
+        J[p, GAP] = ti.bit_cast(ti.cast(bits >> 32, ti.i32), ti.f32)
+        J[p, GAP_LOW] = ti.bit_cast(ti.cast(bits, ti.i32), ti.f32)  # (the cast keeps the low 32 bits)
+    else:
+        J[p, GAP] = gap
+
+
+@ti.func
+def kept_gap(J: ti.template(), p):
+    """The surface gap [m] of the pair in row p of the Gauss–Seidel sweeps' table (:func:`put_gap`)."""
+    gap = 0.0
+    if ti.static(is_f64()):
+        high = ti.cast(ti.bit_cast(J[p, GAP], ti.i32), ti.i64)
+        low = ti.cast(ti.cast(ti.bit_cast(J[p, GAP_LOW], ti.i32), ti.u32), ti.i64)
+        gap = ti.bit_cast((high << 32) | low, ti.f64)
+    else:
+        gap = J[p, GAP]
+    return gap
 
 
 @ti.func
@@ -207,7 +251,8 @@ def warm_start(i, bits, hop, s: ti.template()):
     balls, bit for bit). Also stores the geometry of the pairs
     ball i owns for the sweeps in their rows first[i] + k of J: 1/|x_i − x_j| (``INV``, positive:
     no impact, see :func:`impact_mark`), the surface gap [m] (``GAP``) and, in a table with the
-    Jacobi sweeps' columns, no impulse yet. Reads only
+    Jacobi sweeps' columns, no impulse yet; with the Gauss–Seidel sweeps in f32, their pairs'
+    normals then those of :func:`kept_normal`. Reads only
     what the free-flight loop does not write (start-of-step positions, status, λ, rest timers),
     so it runs inside that loop. Returns (Δv, the calm time [s] of ball i: the least of its rest
     timer and the rest timers of the balls it touches, each plus ``hop`` [s] (:func:`island_calm`),
@@ -229,6 +274,8 @@ def warm_start(i, bits, hop, s: ti.template()):
             p = first[j] + k
             inv, gap = pair_geometry(x, radius, i, j)
             n = pair_normal(xi, x[j], inv)
+            if ti.static(s.kinds.gauss_seidel):  # (the normal of the owner's row, see below, turned)
+                n = kept_normal(xi, x[j], ti.cast(inv, ti.f32))
             P += resting_impulse(status, i, j, n, lam[p])
             if ti.static(s.kinds.gauss_seidel):
                 F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
@@ -239,11 +286,15 @@ def warm_start(i, bits, hop, s: ti.template()):
     for k in range(listed(first, i)):  # (a quiet ball's too: the gaps of its neighbours' lower pairs)
         j, p = upper[i, k], p0 + k
         inv, gap = pair_geometry(x, radius, i, j)
-        J[p, INV], J[p, GAP] = inv, gap
-        if J.shape[1] > P_Z:  # the Jacobi sweeps' table (a quiet ball's pairs keep no impulse: they skip them)
-            J[p, P_X], J[p, P_Y], J[p, P_Z] = 0.0, 0.0, 0.0  # (not the f32 Gauss–Seidel table's 3 columns)
-        if not quiet:
+        n = zero3()
+        if ti.static(s.kinds.gauss_seidel):  # the f32 table: the normal its sweeps will see
+            J[p, INV] = ti.cast(inv, ti.f32)
+            put_gap(J, p, gap)
+            n = kept_normal(xi, x[j], J[p, INV])
+        else:  # the Jacobi sweeps' table, in the float type (a quiet ball's pairs keep no impulse: they skip them)
+            J[p, INV], J[p, GAP], J[p, P_X], J[p, P_Y], J[p, P_Z] = inv, gap, 0.0, 0.0, 0.0
             n = pair_normal(xi, x[j], inv)
+        if not quiet:
             P += resting_impulse(status, i, j, n, lam[p])
             if ti.static(s.kinds.gauss_seidel):
                 F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
@@ -380,12 +431,12 @@ def touching_by_gaps(i, r, bits, k_p, pressed, lists: ti.template(), scratch: ti
     touching = 0
     for m in range(lower_first[i], lower_first[i + 1]):
         j, k = owner_slot(lower[m], bits)
-        touching = ti.max(touching, gap_state(J[first[j] + k, GAP], r, k_p, pressed))
+        touching = ti.max(touching, gap_state(kept_gap(J, first[j] + k), r, k_p, pressed))
         if touching == PRESSED:
             break  # (the most it can be: an early exit, which also keeps LLVM from vectorising the loop)
     if touching != PRESSED:
         for k in range(listed(first, i)):
-            touching = ti.max(touching, gap_state(J[first[i] + k, GAP], r, k_p, pressed))
+            touching = ti.max(touching, gap_state(kept_gap(J, first[i] + k), r, k_p, pressed))
             if touching == PRESSED:
                 break
     return touching

@@ -184,6 +184,8 @@ def from_file(
     shape, element, dtype = scratch.get("impulse", [[0], [], ""])
     if element:  # saved before the sweep's table had a row per pair (until 2026-11-26: a 5-vector per pair)
         scratch["impulse"] = [[shape[0], pair_columns(gauss_seidel)], [], dtype]
+    if gauss_seidel and "impulse" in scratch and scratch["impulse"][2] != "float32":  # saved before 2026-11-30
+        scratch["impulse"] = [[shape[0], pair_columns(gauss_seidel)], [], "float32"]  # (its values: a step's)
     values = dict(meta["values"])
     elements = dict(meta["elements"])
     if meta.get("version", 1) == 1:  # the attributes' names, and arrays that were one another

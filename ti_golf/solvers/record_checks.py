@@ -237,6 +237,7 @@ def _expected_scratch(sizes: Sizes) -> dict[str, tuple[tuple[int, ...], list[int
     """The shape, element shape and type of each scratch array of a solver of ``sizes`` (the
     surface impulses' second table: rows of its own, see :func:`_check_scratch`)."""
     n, f = sizes.n, np.dtype(np_float()).name
+    table = "float32" if sizes.gauss_seidel else f  # (types.pair_table_type)
     return {
         "x_free": ((n,), [3], f),
         "v_free": ((n,), [3], f),
@@ -244,7 +245,7 @@ def _expected_scratch(sizes: Sizes) -> dict[str, tuple[tuple[int, ...], list[int
         "clear": ((n,), [], "float32"),
         "rank": ((n,), [], "int32"),
         "chunk_start": ((scan_chunks(sizes.mask + 1),), [], "int32"),
-        "impulse": ((sizes.pair_capacity, pair_columns(sizes.gauss_seidel)), [], f),
+        "impulse": ((sizes.pair_capacity, pair_columns(sizes.gauss_seidel)), [], table),
         "impact": ((n,), [], "int32"),
         "stash_first": ((n + 1,), [], "int32"),
         "pair_chunk": ((scan_chunks(n),), [], "int32"),

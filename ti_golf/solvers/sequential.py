@@ -22,9 +22,9 @@ from ti_golf.physics.contact import (
     rolling_resistance,
     spin_jolt,
 )
-from ti_golf.physics.types import GAP, INV, of_ball, zero3
+from ti_golf.physics.types import INV, of_ball, zero3
 from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
-from ti_golf.solvers.pairs import QUIET, pair_normal, skip_pair
+from ti_golf.solvers.pairs import QUIET, kept_gap, kept_normal, skip_pair
 from ti_golf.solvers.phases import Phase
 
 
@@ -185,7 +185,7 @@ def sweep_pair(i, j, p, phase, xi, a, k, s: ti.template()):
     if state.status[j] == OUT_OF_BOUNDS:
         lists.lam[p] = ti.f32(0.0)  # a frozen ball no longer supports anything
     elif not skip_pair(state.status, i, j):
-        n = pair_normal(xi, state.x[j], scratch.J[p, INV])
+        n = kept_normal(xi, state.x[j], scratch.J[p, INV])
         if n.norm_sqr() > 0.0:
             vi, wi, approached = meet_pair(i, j, p, phase, n, a, k, s)
     return vi, wi, approached
@@ -223,7 +223,7 @@ def meet_pair(i, j, p, phase, n, a, k, s: ti.template()):
             P, lam_new, F_new = pair_step(
                 phase,
                 n,
-                scratch.J[p, GAP],
+                kept_gap(scratch.J, p),
                 v_n0,
                 a_now,
                 b_now,

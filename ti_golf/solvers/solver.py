@@ -19,13 +19,12 @@ from ti_golf.physics.kernels import copy_ints, zero_f32_vectors
 from ti_golf.physics.model import Model
 from ti_golf.physics.packs import Packs
 from ti_golf.physics.state import State
-from ti_golf.physics.types import GridParams, GridScratch, pair_columns, vec3, vec3f
+from ti_golf.physics.types import GridParams, GridScratch, pair_columns, pair_table_type, vec3, vec3f
 from ti_golf.runtime import (
     available_memory,
     byte_size,
     ensure_init,
     free_dropped_arrays,
-    np_float,
     on_cpu,
     plain_compile,
     release_freed_memory,
@@ -140,11 +139,6 @@ class CollisionSolver(Recorded, Stepping):
         self._model = model
         self._packs = Packs()
         n = model.n
-        if np_float() == np.float32 and n > links.ID_EXACT_F32:
-            raise SimulationError(
-                f"{n:,} balls are more than an f32 run can hold ({links.ID_EXACT_F32:,}: the neighbour lists keep "
-                "ball ids in the float type); run in f64 (--precision f64 or TI_GOLF_PRECISION=f64)"
-            )
         self.r_max = float(model.radius_np.max())
         self.r_cut, self.r_ref = apart.size_cut(model.radius_np)
         self.skin = model.scene.contact.skin * self.r_ref
@@ -333,7 +327,8 @@ class CollisionSolver(Recorded, Stepping):
             dropped = watch(self.impulse)
             self.impulse = None  # free the old table (the stash) before allocating
             free_dropped_arrays(dropped)
-            self.impulse = ti.ndarray(float, (self.lam.shape[0], pair_columns(self.gauss_seidel)))
+            shape = (self.lam.shape[0], pair_columns(self.gauss_seidel))
+            self.impulse = ti.ndarray(pair_table_type(self.gauss_seidel), shape)
 
     def _new_neighbour_table(self, state: State) -> None:
         """Make the neighbour table ``capacity`` wide when it is not, the old one freed first."""
