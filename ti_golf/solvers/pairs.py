@@ -273,9 +273,11 @@ def warm_start(i, bits, hop, s: ti.template()):
             j, k = owner_slot(slot, bits)  # the pair's owner j keeps its λ
             p = first[j] + k
             inv, gap = pair_geometry(x, radius, i, j)
-            n = pair_normal(xi, x[j], inv)
+            n = zero3()
             if ti.static(s.kinds.gauss_seidel):  # (the normal of the owner's row, see below, turned)
                 n = kept_normal(xi, x[j], ti.cast(inv, ti.f32))
+            else:
+                n = pair_normal(xi, x[j], inv)
             P += resting_impulse(status, i, j, n, lam[p])
             if ti.static(s.kinds.gauss_seidel):
                 F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
