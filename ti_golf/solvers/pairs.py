@@ -56,12 +56,13 @@ def pair_normal(x_a, x_b, inv):
 @ti.func
 def kept_normal(x_a, x_b, inv32):
     """:func:`pair_normal` from the inverse distance as the Gauss–Seidel sweeps keep it, in f32
-    (``inv32``, see ``types.pair_table_type``; its sign ignored): in f64 refined by a Newton step
+    (``inv32``, see ``types.pair_table_type``; never marked negative, as the Jacobi sweeps mark
+    an impact: :func:`impact_mark`): in f64 refined by a Newton step
     of 1/√(d·d), y(3 − d·d y²)/2, whose relative error is 3/2 of the square of the f32 value's
     (at most 2^-24), so 2^-47 (a normal 1 ± 10^-14 long). The warm start and every sweep refine
     the same f32 value on the same start-of-step positions: the same normal, bit for bit."""
     d = x_a - x_b
-    y = ti.cast(ti.abs(inv32), float)
+    y = ti.cast(inv32, float)
     if ti.static(is_f64()):
         y = y * (1.5 - 0.5 * d.norm_sqr() * y * y)
     return d * y

@@ -218,12 +218,13 @@ def meet_pair(i, j, p, phase, n, a, k, s: ti.template()):
         vj, wj = state.v[j], state.w[j]
         shocked = inv_a + inv_b != inv_mi + inv_mj  # (the lower ball made to stand firm)
         P, lam_new, F_new = zero3(), lam, F
+        gap = kept_gap(scratch.J, p)  # (once: its two halves joined)
         for attempt in range(2):
             a_now, b_now = body(vi, wi, ri, inv_a), body(vj, wj, rj, inv_b)
             P, lam_new, F_new = pair_step(
                 phase,
                 n,
-                kept_gap(scratch.J, p),
+                gap,
                 v_n0,
                 a_now,
                 b_now,
