@@ -19,8 +19,9 @@ from ti_golf.physics.types import (
     pair_table_type,
     vec3_array,
 )
-from ti_golf.solvers.links import put_stashed, stashed_id_bits
+from ti_golf.solvers.links import put_stashed
 from ti_golf.solvers.pairs import kept_gap, kept_normal, pair_geometry, put_gap
+from ti_golf.solvers.stash import stashed_id_bits
 
 
 @kernel

@@ -37,7 +37,8 @@ import taichi as ti
 
 from ti_golf.physics.types import NeighbourLists, int_array, kernel, pair_table
 from ti_golf.runtime import plain_compile
-from ti_golf.solvers.links import listed, owner_slot, slot_bits, stashed_row
+from ti_golf.solvers.links import listed, owner_slot, slot_bits
+from ti_golf.solvers.stash import stashed_row
 
 COLOURS = 32
 """Colours of the pairs (the bits of a ball's mask): a pair that finds them all taken at its balls

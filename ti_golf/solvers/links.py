@@ -13,7 +13,6 @@ import taichi as ti
 
 from ti_golf.physics.types import (
     FRIC,
-    ID,
     LAM,
     f32_array,
     int_array,
@@ -30,6 +29,7 @@ from ti_golf.runtime import np_float
 from ti_golf.solvers.apart import APART_MAX, is_apart
 from ti_golf.solvers.grid import owns, pair_reach
 from ti_golf.solvers.sort import bucket_starts
+from ti_golf.solvers.stash import put_id, stashed_row
 
 
 def table_bytes(n: int, width: int, pairs: int, gauss_seidel: bool) -> int:
@@ -224,32 +224,6 @@ def put_stashed(scratch: ti.template(), p, lam, j, bits, with_friction: ti.templ
         scratch[p, FRIC] = ti.bit_cast(bits, ti.f32)
 
 
-@ti.func
-def put_id(scratch: ti.template(), p, j, with_friction: ti.template()):
-    """Write the ball id j (or −1, a list's end) into column ``ID`` of row p of ``scratch``: in
-    the f32 tables (the Gauss–Seidel sweeps', and every table in f32: ``types.pair_table_type``)
-    its 32 bits, never read as a number, so that any i32 id is kept; in an f64 table its value
-    (exact below 2^53)."""
-    if ti.static(with_friction or not is_f64()):
-        scratch[p, ID] = ti.bit_cast(ti.cast(j, ti.i32), ti.f32)
-    else:
-        scratch[p, ID] = ti.cast(j, float)
-
-
-@ti.func
-def stashed_id_bits(scratch: ti.template(), p, with_friction: ti.template()):
-    """(neighbour id, friction bits) of the stashed pair in row p of ``scratch`` (see
-    :func:`put_stashed`; the bits are 0 without ``with_friction``)."""
-    j, bits = 0, 0
-    if ti.static(with_friction or not is_f64()):
-        j = ti.bit_cast(scratch[p, ID], ti.i32)
-    else:
-        j = ti.cast(scratch[p, ID], ti.i32)
-    if ti.static(with_friction):
-        bits = ti.bit_cast(scratch[p, FRIC], ti.i32)
-    return j, bits
-
-
 FRICTION_STEPS = 32767
 """Steps of each tangent component of a stashed friction impulse from 0 to its bound μ·λ (a signed
 16-bit integer each, :func:`friction_bits`)."""
@@ -399,23 +373,6 @@ def stashed_impulse(stashed: ti.template(), stash_first: ti.template(), width, a
     if row >= 0:
         found, value, word = 1, stashed[row, LAM], bits
     return found, value, word
-
-
-@ti.func
-def stashed_row(stashed: ti.template(), stash_first: ti.template(), width, a, b, with_friction: ti.template()):
-    """(the row, or −1, and the friction bits) of ball a's stashed pair with ball b (see
-    :func:`stashed_impulse`): with ``width`` 0 the row is the pair's index in the old lists."""
-    row, word = -1, 0
-    lo, hi = a * width, a * width + width
-    if width == 0:
-        lo, hi = stash_first[a], stash_first[a + 1]
-    for p in range(lo, hi):
-        j, bits = stashed_id_bits(stashed, p, with_friction)  # (−1: the list's end)
-        if j < 0 or j > b:
-            break
-        if j == b:
-            row, word = p, bits
-    return row, word
 
 
 @ti.func
