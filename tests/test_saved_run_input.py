@@ -192,6 +192,13 @@ CASES = {
     ),
     "a list start past the pairs": (_poke("solver.first", -1, 10**6), "solver.first", "expects starts from 0 to"),
     "NaN carried impulse": (_poke("solver.lam", 0, np.nan), "solver.lam", "holds NaN or infinite values"),
+    "a negative drift": (_poke("solver.drift", 1, -1e-3), "solver.drift", "holds -0.001; expects distances >= 0"),
+    "drifts of 3 balls": (_set("solver.drift", lambda a: a[:3]), "solver.drift", "but the run has 4 balls"),
+    "amendable as text": (
+        lambda d, m: m["solver"]["values"].update(amendable="yes"),
+        "run",
+        "solver value 'amendable' is 'yes'; expects true or false",
+    ),
     "a colour past the colours": (
         _poke("solver.col_colour", 0, 9),
         "solver.col_colour",
@@ -261,6 +268,20 @@ def test_an_edited_entry_is_named(base, tmp_path, capsys, case):
     message = refused(edited(base, tmp_path, edit), capsys)
     assert message.startswith(f"entry '{entry}'"), message
     assert what in message, message
+
+
+def test_a_run_saved_before_builds_kept_lists_reads_every_list_as_made_at_the_last_build(base, tmp_path):
+    # a run saved without drifts (before a build could keep a ball's list) made every list at
+    # its last build: each ball owes nothing before it, and the next build lists every ball anew
+    def older(data, meta):
+        data.pop("solver.drift")
+        meta["solver"]["elements"].pop("drift")
+        meta["solver"]["values"].pop("amendable")
+
+    resumed = tg.Simulation.load(edited(base, tmp_path, older))
+    np.testing.assert_array_equal(resumed.solver.drift.to_numpy(), np.zeros(4, np.float32))
+    assert not resumed.solver.amendable
+    resumed.run(steps=10)
 
 
 def _cut(content: bytes) -> bytes:

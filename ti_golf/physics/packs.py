@@ -144,6 +144,7 @@ class Packs:
             lower=c.lower,
             lower_first=c.lower_first,
             x_at_build=c.x_at_build,
+            drift=c.drift,
             lam=c.lam,
             surface_start=c.surface_start,
             surface_impulse=c.surface_impulse,

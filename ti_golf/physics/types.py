@@ -406,6 +406,9 @@ NeighbourLists: TypeAlias = Deferred(
         lower=int_array,  # each ball's lower neighbours, as slots of the pairs in their upper lists, ball after ball
         lower_first=int_array,  # where each ball's lower list starts in lower, (N + 1,) (links.link_lower_lists)
         x_at_build=vec3f_array,  # positions when the lists were built [m], f32, (N,)
+        # how far [m] each ball may have moved, before the last build, since its list was made (a build keeps
+        # the lists of the balls that did not move: see grid.list_kept), f32, (N,); 0 for a list the build made
+        drift=f32_array,
         lam=f32_array,  # each pair's accumulated resting impulse [N·s], f32, (pairs,) (see first)
         # ball i has a row of surface impulses, surface_start[i], when surface_start[i + 1] > surface_start[i]
         surface_start=int_array,  # (N + 1,) (see surfaces.list_surfaces)
@@ -466,6 +469,17 @@ GridParams: TypeAlias = Deferred(
     "GridParams",
 )
 """Scalars of a neighbour-list build (see :func:`ti_golf.solvers.grid.list_neighbours`)."""
+
+KeptLists: TypeAlias = Deferred(
+    lambda: ti.types.argpack(
+        marks=vec3_array.get(),  # each ball's (skin owed [m], 1 when its list is made again, 0) at a build, (N,)
+        new_index=int_array,  # each ball's index in the new storage order, by its old index, (N,)
+        stashed=pair_table,  # the old lists' pairs, laid out as their pair tables (links.stash)
+        stash_first=int_array,  # where each ball's old pairs start in stashed, (N + 1,)
+    ),
+    "KeptLists",
+)
+"""What a build that keeps the lists of the balls that did not move reads (``grid.list_neighbours``)."""
 
 GridScratch: TypeAlias = ti.types.argpack(
     rank=int_array,  # each ball's rank within its bucket, (N,)

@@ -23,7 +23,21 @@ bigger than the rest (at most ``APART_MAX``: moving more than a diameter in two 
 apart: they own none of their pairs with the others (:func:`owns`), and on CPU backends they are
 listed apart, each tested against every ball (:func:`list_ball`), so that the cells stay small
 for the rest.
+
+A build may also keep the lists of the balls that did not move (``amend``, with the Gauss–Seidel
+sweeps): while a pour lands, its lists are rebuilt at nearly every step for the few balls that
+land, and most of the pile has not moved. Each ball then *owes* the skin it used since its list
+was made: its distance from where it was then, and before the last build its ``drift``. A ball
+that owes less than half the skin, less 2h·|v| for the step ahead, keeps its list
+(:func:`list_kept`): the pairs of its old list still within reach. The others are listed anew
+(:func:`list_ball`), and own a pair with a ball that keeps its list unless that list holds it. So
+every pair within reach with a ball listed anew is listed, and a pair of two balls that kept
+their lists and were not listed had, at the build before, a gap of at least the skin less what
+the two owed then: ``stale.flag_stale_lists`` counts the drift as skin used, and searches for
+such pairs as it searches for the others.
 """
+
+from typing import Any, NamedTuple
 
 import taichi as ti
 
@@ -31,6 +45,7 @@ from ti_golf.errors import SimulationError
 from ti_golf.physics.types import (
     GridParams,
     GridScratch,
+    KeptLists,
     NeighbourLists,
     float_array,
     int_array,
@@ -41,6 +56,7 @@ from ti_golf.physics.types import (
 )
 from ti_golf.solvers.apart import is_apart
 from ti_golf.solvers.sort import FOLD, bucket_of, cell_of, counting_sort, fold_threads
+from ti_golf.solvers.stash import stashed_id_bits, stashed_row
 
 SCATTERED_HASH = (19349663, 1, 83492791)
 
@@ -159,6 +175,8 @@ def list_neighbours(
     v: vec3_array,
     radius: float_array,
     apart_ids: int_array,
+    amend: ti.i32,
+    kept: KeptLists,
     # Scratch:
     scratch: GridScratch,
     # Out:
@@ -184,6 +202,10 @@ def list_neighbours(
     ``longest[0:2]`` (the upper may exceed the table's width: the caller then rebuilds wider), and a
     bound on the most loop iterations a ball's thread ran (see ``LOOP_CAP``).
 
+    With ``amend`` 1 the balls that ``kept.marks`` marks keep their old lists (see the module's
+    docstring and :func:`list_kept`; no ball is set apart), and each ball's ``drift`` is what it owes
+    of the skin (``kept.marks``), 0 for a ball listed anew.
+
     With ``stored_sorted`` the balls are stored in bucket order already (:func:`storage_order`,
     then every per-ball array gathered into that order): ball p is the p-th of the sort, ``start``
     still holds the buckets' starts, and the sort is skipped (``sorted_ids`` is not read)."""
@@ -201,13 +223,21 @@ def list_neighbours(
             chunk_start=scratch.chunk_start,
             sorted_ids=scratch.sorted_ids,
         )
+    keep = ti.static(Keep(amend, kept, scratch.sorted_ids, stored_sorted))
     for idx in range(x.shape[0]):
         i = idx  # in bucket order: consecutive threads probe the same 27 buckets (cache hits)
         if ti.static(not stored_sorted):
             i = scratch.sorted_ids[idx]
-        n_up, n_low, loops = list_ball(i, x, v, radius, apart_ids, g, scratch, lists.upper, stored_sorted=stored_sorted)
+        n_up, n_low, loops = 0, 0, 0
+        owed = 0.0  # (the skin it owes: see stale.skin_owed)
+        if keeps_list(i, keep):
+            n_up = list_kept(i, x, v, radius, g, keep, lists.upper)
+            owed = kept.marks[i][0]
+        else:
+            n_up, n_low, loops = list_ball(i, x, v, radius, apart_ids, g, scratch, lists.upper, keep)
         lists.first[i + 1] = ti.min(n_up, lists.upper.shape[1])  # its length, until links.pair_starts
         lists.x_at_build[i] = ti.cast(x[i], ti.f32)
+        lists.drift[i] = rounded_up(owed)
         ti.atomic_max(longest[0], n_up)
         ti.atomic_max(longest[1], n_low)
         ti.atomic_max(most_loops, loops)
@@ -224,10 +254,10 @@ def list_ball(
     g: ti.template(),
     scratch: ti.template(),
     upper: ti.template(),
-    stored_sorted: ti.template(),
+    keep: ti.template(),
 ):
     """The neighbours whose pairs ball i owns into its row of ``upper`` in id order (as many as
-    fit; ``g``, ``scratch``, ``stored_sorted``: see :func:`list_neighbours`). Returns how many
+    fit; ``g``, ``scratch``: see :func:`list_neighbours`; ``keep``: :class:`Keep`). Returns how many
     neighbours it has (whose pairs it owns, whose pairs the others own) and a bound on the
     iterations of the thread's loops (see ``LOOP_CAP``).
 
@@ -264,9 +294,10 @@ def list_ball(
                     upper=upper,
                     n_up=n_up,
                     n_low=n_low,
+                    keep=keep,
                 )
     else:
-        n_up, n_low, tested = list_nearby(i, apart_i, x, v, radius, g, scratch, upper, stored_sorted=stored_sorted)
+        n_up, n_low, tested = list_nearby(i, apart_i, x, v, radius, g, scratch, upper, keep)
         for f in range(g.n_apart * g.scan_apart):
             j = apart_ids[f]
             n_up, n_low = list_pair(
@@ -284,6 +315,7 @@ def list_ball(
                 upper=upper,
                 n_up=n_up,
                 n_low=n_low,
+                keep=keep,
             )
         tested += 18 + g.n_apart * g.scan_apart
     # the insertions' shifts: at most n(n − 1)/2 for a list of n (and the lower list's in links.link_lower_lists)
@@ -300,7 +332,7 @@ def list_nearby(
     g: ti.template(),
     scratch: ti.template(),
     upper: ti.template(),
-    stored_sorted: ti.template(),
+    keep: ti.template(),
 ):
     """:func:`list_ball` of ball i among the balls of its own and the 26 adjacent cells (but those
     listed apart, with ``scan_apart``): the column of three cells along y at each of the 3 × 3
@@ -324,7 +356,7 @@ def list_nearby(
             tested += hi - lo
             for k in range(lo, hi):
                 j = k
-                if ti.static(not stored_sorted):
+                if ti.static(not keep.stored_sorted):
                     j = scratch.sorted_ids[k]
                 xj = x[j]
                 # most candidates are out of reach: test that first, the cell and the rest only
@@ -355,6 +387,7 @@ def list_nearby(
                             upper=upper,
                             n_up=n_up,
                             n_low=n_low,
+                            keep=keep,
                         )
     return n_up, n_low, tested
 
@@ -375,23 +408,108 @@ def list_pair(
     upper: ti.template(),
     n_up,
     n_low,
+    keep: ti.template(),
 ):
     """Ball j into ball i's ``upper`` row when ball i owns their pair (:func:`owns`; ``apart_i``,
-    ``apart_j``: whether they are listed apart), or counted in ``n_low`` when j owns it, when
-    their surface gap is below :func:`pair_reach` (the skin when ``fast`` is 0; ``r_sum``:
-    r_i + r_j [m]). Returns the new counts (n_up, n_low); an entry beyond the row's width is
+    ``apart_j``: whether they are listed apart; but a pair that a ball keeping its list keeps is
+    that ball's, see :func:`kept_by_other`), or counted in ``n_low`` when j owns it, when they are
+    :func:`within_reach`. Returns the new counts (n_up, n_low); an entry beyond the row's width is
     counted, not stored."""
-    gap_reach = skin
-    if fast != 0:  # (else pair_reach is the skin for every pair: v not read)
-        gap_reach = pair_reach(skin, h, v[i], v[j])
-    reach = r_sum + gap_reach
-    if (xj - xi).norm_sqr() < reach * reach:
-        if owns(xi, xj, i, j, apart_i, apart_j):
+    if within_reach(i, j, xi, xj, r_sum, skin, v, h, fast):
+        mine = owns(xi, xj, i, j, apart_i, apart_j)
+        if keeps_list(j, keep):  # (nested: Taichi evaluates both sides of an `and`)
+            mine = not kept_by_other(i, j, keep)
+        if mine:
             insert_sorted(upper, i, n_up, upper.shape[1], j)
             n_up += 1
         else:
             n_low += 1
     return n_up, n_low
+
+
+@ti.func
+def within_reach(i, j, xi, xj, r_sum, skin, v: ti.template(), h, fast):
+    """Whether balls i and j, at ``xi`` and ``xj`` [m], are to be listed: their surface gap below
+    :func:`pair_reach` (the skin when ``fast`` is 0; ``r_sum``: r_i + r_j [m]). Symmetric in i
+    and j, bit for bit."""
+    gap_reach = skin
+    if fast != 0:  # (else pair_reach is the skin for every pair: v not read)
+        gap_reach = pair_reach(skin, h, v[i], v[j])
+    reach = r_sum + gap_reach
+    return (xj - xi).norm_sqr() < reach * reach
+
+
+class Keep(NamedTuple):
+    """What a build that keeps the lists of the balls that did not move reads (see
+    :func:`list_neighbours`), bound once in its kernel (as ``solvers.step.Step`` is)."""
+
+    amend: Any
+    """1: the balls ``kept.marks`` marks keep their lists; 0: every ball is listed anew."""
+    kept: Any
+    """The :data:`~ti_golf.physics.types.KeptLists` pack."""
+    sorted_ids: Any
+    """With ``stored_sorted``, each ball's index before the build's reorder (``GridScratch``)."""
+    stored_sorted: bool
+    """Whether the build stored the balls in a new order (see :func:`list_neighbours`)."""
+
+
+@ti.func
+def keeps_list(i, keep: ti.template()):
+    """Whether ball i keeps its old list at this build (:class:`Keep`)."""
+    kept = False
+    if keep.amend != 0:
+        kept = keep.kept.marks[i][1] == 0.0
+    return kept
+
+
+@ti.func
+def old_index(i, keep: ti.template()):
+    """Ball i's index in the old lists: before the build's reorder, if it made one."""
+    o = i
+    if ti.static(keep.stored_sorted):
+        o = keep.sorted_ids[i]
+    return o
+
+
+@ti.func
+def kept_by_other(i, j, keep: ti.template()):
+    """Whether the old list of ball j, which keeps its list, holds its pair with ball i."""
+    row, _bits = stashed_row(keep.kept.stashed, keep.kept.stash_first, 0, old_index(j, keep), old_index(i, keep), True)
+    return row >= 0
+
+
+@ti.func
+def list_kept(
+    i,
+    x: ti.template(),
+    v: ti.template(),
+    radius: ti.template(),
+    g: ti.template(),
+    keep: ti.template(),
+    upper: ti.template(),
+):
+    """Ball i's old list, kept (see the module's docstring): the pairs of its old list (the
+    stash, ``keep.kept``) still :func:`within_reach`, into its row of ``upper`` by their balls'
+    new indices, in order. Returns how many (an entry beyond the row's width is counted, not
+    stored)."""
+    o = old_index(i, keep)
+    xi, ri = x[i], of_ball(radius, i)
+    n_up = 0
+    for e in range(keep.kept.stash_first[o], keep.kept.stash_first[o + 1]):
+        j, _bits = stashed_id_bits(keep.kept.stashed, e, True)
+        if ti.static(keep.stored_sorted):
+            j = keep.kept.new_index[j]
+        if within_reach(i, j, xi, x[j], ri + of_ball(radius, j), g.skin, v, g.h, g.fast):
+            insert_sorted(upper, i, n_up, upper.shape[1], j)
+            n_up += 1
+    return n_up
+
+
+@ti.func
+def rounded_up(d):
+    """The distance ``d`` [m] >= 0 in f32, rounded up (never below ``d``): 2^-22 of it added
+    before the cast to the nearest f32."""
+    return ti.cast(d * (1.0 + 2.0**-22), ti.f32)
 
 
 @ti.func

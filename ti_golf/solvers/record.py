@@ -81,6 +81,7 @@ class Recorded:
         "far_owners": "far_owners",
         "valid": "lists_valid",
         "rebuild": "rebuild_due",
+        "amendable": "amendable",
     }
     """The numbers a saved run keeps (:meth:`record`), by their name in the record: the
     attributes that hold them. (The grid hash, a pair of vectors, is kept as ``hash``.)"""
@@ -89,6 +90,7 @@ class Recorded:
         "sorted_ids",
         "start",
         "x_at_build",
+        "drift",
         "upper",
         "first",
         "lam",
@@ -188,6 +190,9 @@ def from_file(
         scratch["impulse"] = [[shape[0], pair_columns(gauss_seidel)], [], "float32"]  # (its values: a step's)
     values = dict(meta["values"])
     elements = dict(meta["elements"])
+    if "drift" not in arrays:  # saved before a build kept the lists of balls that had not moved (2026-11-30)
+        arrays = {**arrays, "drift": np.zeros(n, np.float32)}  # (every list was made at the last build)
+        elements["drift"] = []
     if meta.get("version", 1) == 1:  # the attributes' names, and arrays that were one another
         values = {name.lstrip("_"): value for name, value in values.items()}
         for name, other in meta.get("same", {}).items():

@@ -176,7 +176,7 @@ _POSITIVE = ("r_cut", "v_cut")
 """Numbers > 0, infinite allowed: the radius [m] and speed [m/s] above which a ball is set apart."""
 _COUNTS = ("rebuilds", "still_steps", "far_owners")
 """Whole numbers >= 0."""
-_FLAGS = ("skip_still", "valid", "rebuild")
+_FLAGS = ("skip_still", "valid", "rebuild", "amendable")
 """True or false."""
 
 
@@ -287,6 +287,7 @@ def _expected_shapes(rec: SolverRecord, sizes: Sizes) -> dict[str, tuple[str, tu
         "sorted_ids": ("int32", (n,), balls),
         "start": ("int32", (sizes.mask + 2,), f"the record's mask is {sizes.mask}"),
         "x_at_build": ("float32", (n, 3), balls),
+        "drift": ("float32", (n,), balls),
         "upper": ("int32", (n, cap), f"{balls} and the record's capacity is {cap}"),
         "first": ("int32", (n + 1,), balls),
         "lam": ("float32", (pairs,), f"the record's pair_capacity is {pairs}"),
@@ -397,6 +398,9 @@ def _check_lists(arrays: dict[str, np.ndarray], sizes: Sizes, n_apart: int) -> N
     _within("sorted_ids", arrays["sorted_ids"], 0, n - 1)
     _offsets("start", arrays["start"], n, "the run's balls")
     _finite("x_at_build", arrays["x_at_build"])
+    _finite("drift", arrays["drift"])
+    if np.any(arrays["drift"] < 0.0):
+        raise RecordError("solver.drift", f"holds {float(arrays['drift'].min()):.4g}; expects distances >= 0")
     first = _offsets("first", arrays["first"], sizes.pair_capacity, "the record's pair_capacity", starts=True)
     count = np.diff(first)
     if count.size and count.max() > sizes.capacity:

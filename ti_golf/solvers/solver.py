@@ -19,7 +19,7 @@ from ti_golf.physics.kernels import copy_ints, zero_f32_vectors
 from ti_golf.physics.model import Model
 from ti_golf.physics.packs import Packs
 from ti_golf.physics.state import State
-from ti_golf.physics.types import GridParams, GridScratch, pair_columns, pair_table_type, vec3, vec3f
+from ti_golf.physics.types import GridParams, GridScratch, KeptLists, pair_columns, pair_table_type, vec3, vec3f
 from ti_golf.runtime import (
     available_memory,
     byte_size,
@@ -31,7 +31,8 @@ from ti_golf.runtime import (
     watch,
 )
 from ti_golf.scene.schema import Scene
-from ti_golf.solvers import apart, grid, links, sort, surfaces
+from ti_golf.solvers import apart, grid, links, sort, stale, surfaces
+from ti_golf.solvers.limits import check_loop_cap, farthest_reaching
 from ti_golf.solvers.links import table_bytes
 from ti_golf.solvers.record import Recorded, SolverRecord
 from ti_golf.solvers.stepping import Stepping, relists_in_kernel, steps_serially
@@ -89,6 +90,9 @@ class CollisionSolver(Recorded, Stepping):
         pair_capacity: entries of the pair tables (resting and friction impulses, the sweep's
             entries): the pairs listed, laid out ball after ball (``first``), plus room to grow.
         rebuilds: how many times the neighbour lists were built (for benchmarks and tests).
+        drift, amendable: each ball's skin used before the last build since its list was made
+            (f32, [m]), and whether the next build may keep the lists of the balls that did not
+            move (:meth:`_may_amend`; see ``grid.list_neighbours``).
         edited: whether balls were moved or the model retuned between steps since the lists were
             last built (``invalidate``): the lists may then miss pairs that overlap now
             (:meth:`pairs_that_may_overlap`); a fresh or restored solver counts as edited.
@@ -166,6 +170,8 @@ class CollisionSolver(Recorded, Stepping):
         self.start = ti.ndarray(ti.i32, self.mask + 2)
         self.chunk_start = ti.ndarray(ti.i32, sort.scan_chunks(self.mask + 1))
         self.x_at_build = ti.ndarray(vec3f, n)  # f32: only tested against the skin (links.distance_from_build)
+        self.drift = ti.ndarray(ti.f32, n)  # the skin used before the last build since each list was made [m]
+        self.drift.fill(0.0)
         self.x_free = ti.ndarray(vec3.get(), n)
         self.v_free = ti.ndarray(vec3.get(), n)
         self.calm = ti.ndarray(float, n)  # least rest timer of each ball and the balls it touches [s]
@@ -202,6 +208,8 @@ class CollisionSolver(Recorded, Stepping):
         if self.relists:
             self.surface_impulse = every_ball_a_row(self.surface_start, model)
         self.far_owners = 0
+        self.amendable = False
+        self._no_stash = ti.ndarray(ti.f32, (1, 3))  # (the stash of a build that keeps no list: see _kept_lists)
         self._valid = False
         self._rebuild = True
         self.edited = True
@@ -263,8 +271,9 @@ class CollisionSolver(Recorded, Stepping):
         self.forget_quiet()  # (the record's calm times may come from code that kept none: see forget_quiet)
 
     def build(self, state: State) -> None:
-        """Sort balls into the hash grid and rebuild every neighbour list in place, carrying each
-        pair's accumulated impulse over (the neighbour tables widen to the longest list when one
+        """Sort balls into the hash grid and rebuild every neighbour list in place (or keep the
+        lists of the balls that did not move, :meth:`_may_amend`), carrying each pair's
+        accumulated impulse over (the neighbour tables widen to the longest list when one
         overflows; the pair tables grow with the pairs listed in all): the old lists stashed, the
         cells sized (:meth:`_size_cells`), the balls listed (:meth:`_list_balls`), then the pair
         tables fitted and linked (:meth:`_link_pairs`)."""
@@ -278,10 +287,13 @@ class CollisionSolver(Recorded, Stepping):
             stashed = self.impulse
             links.stash(self.upper, self.first, self.lam, stashed, self.gauss_seidel, state.x, self.friction, mu)
             copy_ints(self.first, self.stash_first)
+        amend = stashed is not None and self._may_amend()
         fast, v_max = self._size_cells(state)
+        amend = amend and self.n_apart == 0
         self._ids = state.ids
-        longest = self._list_balls(state, fast)
-        self._check_loop_cap(state, int(longest[2]))
+        kept = self._kept_lists(state, stashed if amend else None)
+        longest = self._list_balls(state, fast, int(amend), kept)
+        check_loop_cap(self.loop_cap, self.cell, self._model, state, int(longest[2]))
         if n << self.slot_bits > 2**31:  # the largest slot, (n − 1)·2^bits + 2^bits − 1, must fit an i32
             raise SimulationError(
                 f"{n} balls with up to {self.capacity} neighbours each are more than the "
@@ -300,6 +312,7 @@ class CollisionSolver(Recorded, Stepping):
             self._list_surface_rows(state, carried, v_max)
         self._fit_sweep_table()
         self.forget_quiet()
+        self.amendable = True
         self.rebuilds += 1
         if n >= REORDER_MIN_BALLS and self.rebuilds % COLLECT_EVERY == 0:
             free_dropped_arrays()  # (the cycles that Taichi's launches leave: see COLLECT_EVERY)
@@ -368,9 +381,28 @@ class CollisionSolver(Recorded, Stepping):
                 apart.apart_balls(state.v, self._model.radius, *set_apart)
         return fast, v_max
 
-    def _list_balls(self, state: State, fast: bool) -> Any:
+    def _may_amend(self) -> bool:
+        """Whether the next build may keep the lists of balls that did not move (``grid.list_neighbours``):
+        Gauss–Seidel sweeps built through the grid, no ball set apart at the last build, no edit since."""
+        return self.amendable and self.gauss_seidel and not self.relists and self.n_apart == 0
+
+    def _kept_lists(self, state: State, stashed: Any) -> Any:
+        """The :data:`~ti_golf.physics.types.KeptLists` of a build: with the old lists'
+        ``stashed`` table, each ball marked to keep its list or not (``stale.mark_kept``); without
+        (``None``: every ball listed anew), placeholders."""
+        table = self._no_stash if stashed is None else stashed
+        kept = self._packs.get(
+            KeptLists, marks=self.x_free, new_index=self.impact, stashed=table, stash_first=self.stash_first
+        )
+        if stashed is not None:
+            marks = (self.skin, self._model.dt, self.sorted_ids, self.reorder, kept)
+            stale.mark_kept(state.x, state.v, self._packs.lists(self), *marks)
+        return kept
+
+    def _list_balls(self, state: State, fast: bool, amend: int, kept: Any) -> Any:
         """List every ball's neighbours (``grid.list_neighbours``; ``fast``: see
-        :meth:`_size_cells`), the neighbour table widened to the longest list and the balls listed
+        :meth:`_size_cells`; ``amend``, ``kept``: the balls that keep their lists, see
+        :meth:`_kept_lists`), the neighbour table widened to the longest list and the balls listed
         again while one overflows it. Returns what ``grid.list_neighbours`` returns."""
         while True:
             self._new_neighbour_table(state)
@@ -382,6 +414,8 @@ class CollisionSolver(Recorded, Stepping):
                     state.v,
                     self._model.radius,
                     self.apart_ids,
+                    amend,
+                    kept,
                     scratch=scratch,
                     lists=self._packs.lists(self),  # (not kept: a wider table frees this one's first)
                     longest=self.flag,
@@ -519,41 +553,12 @@ class CollisionSolver(Recorded, Stepping):
         avail = available_memory()
         if avail is None or need <= 0.5 * avail:
             return
-        ball, farthest = self._farthest_reaching(state)
+        ball, farthest = farthest_reaching(self._model, state)
         raise SimulationError(
             f"the neighbour lists would take {byte_size(need)}, more than half the {byte_size(avail)} of memory "
             f"available: {pairs:,} pairs within reach of one step, and a ball with {width:,}, the neighbour table "
             f"as wide as the longest list. {farthest}; lower world.dt, or that ball's speed or radius",
             [ball],
-        )
-
-    def _check_loop_cap(self, state: State, loops: int) -> None:
-        """Raise :class:`SimulationError` when a build ran a thread's loops past ``loop_cap`` (see
-        ``grid.LOOP_CAP``; ``loops``: the bound :func:`grid.list_neighbours` returns): on Taichi's
-        Vulkan backend that thread stopped without a word, and pairs are missing from the lists."""
-        if self.loop_cap is None or loops <= self.loop_cap:
-            return
-        ball, farthest = self._farthest_reaching(state)
-        raise SimulationError(
-            f"listing the neighbours of a ball took up to {loops:,} loop iterations in one thread, and Taichi's "
-            f"Vulkan backend stops a thread's loops after {self.loop_cap:,} without a word: pairs would be "
-            f"missed. The cells are {self.cell:.4g} m wide for the largest ball and the fastest pair. "
-            f"{farthest}; run on the CPU or CUDA backend (--arch), or lower that ball's radius or speed",
-            [ball],
-        )
-
-    def _farthest_reaching(self, state: State) -> tuple[int, str]:
-        """(id, a sentence naming it) of the ball that reaches farthest within a step (r + h·|v|):
-        the one that widens the lists, and on a GPU the cells."""
-        h = self._model.dt
-        speed = np.linalg.norm(state.v.to_numpy(), axis=1)
-        radius = np.broadcast_to(self._model.radius.to_numpy(), speed.shape)  # one entry when all are alike
-        k = int(np.argmax(radius + h * speed))
-        order = state.order
-        ball = int(order[k]) if order is not None else k
-        return ball, (
-            f"Ball {ball} reaches farthest (radius {radius[k]:.4g} m, speed {speed[k]:.4g} m/s: "
-            f"{h * speed[k]:.4g} m per step of {h:g} s)"
         )
 
     @property

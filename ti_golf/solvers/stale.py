@@ -15,6 +15,11 @@ pair within reach is missing from them. The cells are at least 2·r + skin wide,
 every such ball for a ball that used up to about r + skin, not the skin alone
 (:func:`searched_reach`): only a ball that used more forces a rebuild by itself, or one that may
 touch a plane or the terrain that the build found out of its reach (:func:`surface_unforeseen`).
+A ball whose list a build kept (``grid.list_kept``) owes, besides the skin it used since, its
+``drift``: the skin it used before that build since its list was made (:func:`skin_owed`); a pair
+out of the lists has a gap of at least the skin less what its two balls owe, so a ball is searched
+once what it owes and 2h·|v| pass half the skin (the search itself reaches as far as the balls
+moved since the build: the grid is the build's).
 So one ball rolling over a settled pile, whose neighbours have not moved, uses the whole skin
 before it forces a rebuild, not half of it; a ball that bounces over a settling pile at a few
 metres a second forces one when it comes near a ball the lists miss or has moved about a radius
@@ -32,6 +37,7 @@ from ti_golf.physics.types import (
     BallState,
     GridParams,
     GridScratch,
+    KeptLists,
     ModelArrays,
     NeighbourLists,
     StepScratch,
@@ -40,6 +46,7 @@ from ti_golf.physics.types import (
     kernel,
     of_ball,
     scalars_of,
+    vec3_array,
 )
 from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS
 from ti_golf.solvers.links import distance_from_build, listed
@@ -71,6 +78,45 @@ def skin_used(x1, x_build, v, h):
     distance from ``x_build`` (its position at the build, f32, with the rounding margin of
     :func:`.links.distance_from_build`), plus 2h·|v| for the step ahead (``h`` [s])."""
     return distance_from_build(x1, x_build) + 2.0 * h * v.norm()
+
+
+@ti.func
+def skin_owed(x1, x_build, drift):
+    """How much of the skin [m] a ball now at ``x1`` [m] owes: its distance from ``x_build``, its
+    position at the last build (:func:`.links.distance_from_build`), plus its ``drift`` [m], the
+    skin it used before that build since its list was made (0 unless the build kept its list)."""
+    return distance_from_build(x1, x_build) + drift
+
+
+@kernel
+def mark_kept(
+    x: vec3_array,
+    v: vec3_array,
+    lists: NeighbourLists,
+    skin: float,
+    h: float,
+    sorted_ids: int_array,
+    reordered: ti.template(),
+    kept: KeptLists,
+):
+    """Before a build that keeps the lists of the balls that did not move (``amend`` of
+    ``grid.list_neighbours``): each ball's skin owed (:func:`skin_owed`) into ``kept.marks[p][0]``,
+    and 1 into ``kept.marks[p][1]`` when its list is made again: when what it owes and 2h·|v| for
+    the step ahead (``h`` [s]) pass half the ``skin`` [m], as a ball is searched for pairs the
+    lists miss (:func:`flag_stale_lists`); and each ball's new index by its old one into
+    ``kept.new_index``. ``x``, ``v``: the balls' positions [m] and velocities [m/s] in the build's
+    order; ``lists``: the old lists, in the old order; with ``reordered``, ball p of the build's
+    order was ball ``sorted_ids[p]``."""
+    for p in range(x.shape[0]):
+        o = p
+        if ti.static(reordered):
+            o = sorted_ids[p]
+        owed = skin_owed(x[p], lists.x_at_build[o], ti.cast(lists.drift[o], float))
+        anew = 0.0
+        if owed + 2.0 * h * v[p].norm() > 0.5 * skin:
+            anew = 1.0
+        kept.marks[p] = ti.Vector([owed, anew, 0.0])
+        kept.new_index[o] = p
 
 
 @ti.func
@@ -238,8 +284,8 @@ def flag_stale_lists(
     :class:`.step.Step`, of which the radii, lists, state, scratch and the step's scalars, h and
     the skin, are read): a ball has used more than the reach of a search (:func:`searched_reach`)
     or may touch a surface it keeps no row for (:func:`surface_unforeseen`), or a pair out of the
-    lists is within reach of a ball that has used more than half the skin (see the module's
-    docstring), looked for only when no ball has forced a rebuild by itself, with the
+    lists is within reach of a ball that owes more than half the skin, counting 2h·|v| for the
+    step ahead (:func:`skin_owed`; see the module's docstring), looked for only when no ball has forced a rebuild by itself, with the
     grid of the last build (``g``, ``grid``: its :data:`ti_golf.physics.types.GridParams` and
     :data:`ti_golf.physics.types.GridScratch`, or what holds its ``start`` and ``sorted_ids``;
     ``apart_ids``, ``stored_sorted``: see :func:`stale_near`) or, ``serial``, among every ball (the
@@ -255,7 +301,8 @@ def flag_stale_lists(
     for i in range(scratch.x_free.shape[0]):  # (a second loop: no ball searched when one used its reach)
         if scratch.flag[0] == 0:  # (once the lists must be rebuilt, no other ball need be tested)
             used = skin_used(scratch.x_free[i], lists.x_at_build[i], state.v[i], params.h)
-            if used > params.half_skin and used <= searched_reach(i, serial, g, radius, params):
+            owed = used + lists.drift[i]  # (see skin_owed)
+            if owed > params.half_skin and used <= searched_reach(i, serial, g, radius, params):
                 stale = False
                 if ti.static(serial):
                     stale = stale_by_every_ball(i, params.h, radius, lists, scratch.x_free, state.v)

@@ -61,6 +61,8 @@ class Stepping:
     lists_valid: bool
     rebuild_due: bool
     edited: bool
+    amendable: bool
+    drift: Any
     r_ref: float
     skin: float
     h: float
@@ -173,6 +175,7 @@ class Stepping:
         moved -= np.median(moved, axis=0)
         # as links.distance_from_build: the f32 position's rounding, at most |x|·2^-24, counted twice
         shift = np.linalg.norm(moved, axis=1) + np.linalg.norm(x_build, axis=1) * 2.0**-23
+        shift += self.drift.to_numpy()  # (the skin used before the build: see stale.skin_owed)
         first, second = np.partition(shift, -2)[-2:][::-1]
         largest_other = np.where(shift == first, second, first)
         return np.flatnonzero(shift + largest_other > self.skin)
@@ -199,6 +202,7 @@ class Stepping:
         """Rebuild the neighbour lists before the next step (balls were moved between steps), each
         pair that stays listed keeping its accumulated impulse."""
         self.rebuild_due = self.edited = True
+        self.amendable = False  # (the next build lists every ball anew: the skin or the balls may have changed)
         self.flag.from_numpy(np.array([1, 0], dtype=np.int32))  # the serial kernel's request
 
     def forget_quiet(self) -> None:
