@@ -241,6 +241,17 @@ def list_neighbours(
         ti.atomic_max(longest[0], n_up)
         ti.atomic_max(longest[1], n_low)
         ti.atomic_max(most_loops, loops)
+    for idx in range(x.shape[0] * keep.amend):  # the balls promoted in the first pass (amended_owner)
+        i = idx
+        if ti.static(not stored_sorted):
+            i = scratch.sorted_ids[idx]
+        if promoted(i, keep):
+            n_up, n_low, loops = list_ball(i, x, v, radius, apart_ids, g, scratch, lists.upper, keep)
+            lists.first[i + 1] = ti.min(n_up, lists.upper.shape[1])
+            lists.drift[i] = 0.0
+            ti.atomic_max(longest[0], n_up)
+            ti.atomic_max(longest[1], n_low)
+            ti.atomic_max(most_loops, loops)
     return ti.Vector([longest[0], longest[1], most_loops])
 
 
@@ -417,8 +428,8 @@ def list_pair(
     counted, not stored."""
     if within_reach(i, j, xi, xj, r_sum, skin, v, h, fast):
         mine = owns(xi, xj, i, j, apart_i, apart_j)
-        if keeps_list(j, keep):  # (nested: Taichi evaluates both sides of an `and`)
-            mine = not kept_by_other(i, j, keep)
+        if keep.amend != 0:
+            mine = amended_owner(i, j, mine, keep)
         if mine:
             insert_sorted(upper, i, n_up, upper.shape[1], j)
             n_up += 1
@@ -451,6 +462,45 @@ class Keep(NamedTuple):
     """With ``stored_sorted``, each ball's index before the build's reorder (``GridScratch``)."""
     stored_sorted: bool
     """Whether the build stored the balls in a new order (see :func:`list_neighbours`)."""
+
+
+@ti.func
+def amended_owner(i, j, mine, keep: ti.template()):
+    """Whether ball i, listed anew at a build that keeps lists, owns its pair with ball j within
+    reach (``mine``: whether it would by :func:`owns`; :class:`Keep`). Ball j's old list keeps
+    the pair if it held it. Else a pair with a ball that keeps its list goes by :func:`owns`:
+    when ball j would own it, ball i *promotes* j (``kept.marks[j][2]``), which is listed anew
+    after the others (:func:`list_neighbours`' second pass) and takes it then. A promoted ball
+    owns its pairs with the balls listed anew that its old list held or that it would own, with
+    the balls that kept their lists those their old lists do not hold, and with the other
+    promoted balls those it would own: each pair once, as by :func:`owns` but for the pairs that
+    the old lists keep."""
+    marks = ti.static(keep.kept.marks)
+    promoted = marks[i][2] != 0.0  # (only in the second pass: the first lists the balls marked anew)
+    if marks[j][1] == 0.0:  # j kept its list, and may have been promoted
+        both = False
+        if promoted:
+            both = marks[j][2] != 0.0
+        if not both:
+            held = kept_by_other(i, j, keep)
+            if promoted:
+                mine = not held
+            elif held:
+                mine = False
+            elif not mine:
+                marks[j][2] = 1.0  # (every thread that promotes j writes the same)
+    elif promoted:  # j listed anew, in the first pass: its pairs with i are the complement of its own
+        mine = mine or kept_by_other(j, i, keep)
+    return mine
+
+
+@ti.func
+def promoted(i, keep: ti.template()):
+    """Whether ball i, which kept its list, is listed anew in the second pass (:func:`amended_owner`)."""
+    anew = False
+    if keep.amend != 0:
+        anew = keep.kept.marks[i][2] != 0.0
+    return anew
 
 
 @ti.func

@@ -291,8 +291,7 @@ class CollisionSolver(Recorded, Stepping):
         fast, v_max = self._size_cells(state)
         amend = amend and self.n_apart == 0
         self._ids = state.ids
-        kept = self._kept_lists(state, stashed if amend else None)
-        longest = self._list_balls(state, fast, int(amend), kept)
+        longest = self._list_balls(state, fast, int(amend), self._kept_lists(state, stashed if amend else None))
         check_loop_cap(self.loop_cap, self.cell, self._model, state, int(longest[2]))
         if n << self.slot_bits > 2**31:  # the largest slot, (n − 1)·2^bits + 2^bits − 1, must fit an i32
             raise SimulationError(
