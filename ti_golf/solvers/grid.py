@@ -30,8 +30,10 @@ land, and most of the pile has not moved. Each ball then *owes* the skin it used
 was made: its distance from where it was then, and before the last build its ``drift``. A ball
 that owes less than half the skin, less 2h·|v| for the step ahead, keeps its list
 (:func:`list_kept`): the pairs of its old list still within reach. The others are listed anew
-(:func:`list_ball`), and own a pair with a ball that keeps its list unless that list holds it. So
-every pair within reach with a ball listed anew is listed, and a pair of two balls that kept
+(:func:`list_ball`); a pair of theirs with a ball that keeps its list stays in that list if it
+held it, else goes by :func:`owns`, and when that gives it to the other ball, that ball is listed
+anew after them (:func:`amended_owner`). So every pair within reach with a ball listed anew is listed, once, the
+lists as narrow as :func:`owns` makes them; and a pair of two balls that kept
 their lists and were not listed had, at the build before, a gap of at least the skin less what
 the two owed then: ``stale.flag_stale_lists`` counts the drift as skin used, and searches for
 such pairs as it searches for the others.

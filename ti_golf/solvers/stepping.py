@@ -145,7 +145,8 @@ class Stepping:
         """Every pair of balls that may overlap now, by ball id (i < j; int array of shape (pairs, 2)):
         the listed pairs (:meth:`pairs`), then, without a build, the pairs a build could add that may
         overlap: each ball that moved far since the build with every other ball (a pair may so come
-        twice). A pair the build left out had a surface gap of at least the skin; since, the gap shrank
+        twice). A pair the build left out had a surface gap of at least the skin, less its balls'
+        ``drift`` (counted in their shifts below); since, the gap shrank
         by at most |Δx_a − Δx_b| ≤ |Δx_a − c| + |Δx_b − c| for any c, the balls' displacements Δx
         taken here relative to their median c (balls that fall together close no gap). So only a pair
         whose two shifts sum to more than the skin can be missing: a pair of a ball whose shift and the
