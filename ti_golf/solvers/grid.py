@@ -32,14 +32,12 @@ that owes less than half the skin, less 2h·|v| for the step ahead, keeps its li
 (:func:`list_kept`): the pairs of its old list still within reach. The others are listed anew
 (:func:`list_ball`); a pair of theirs with a ball that keeps its list stays in that list if it
 held it, else goes by :func:`owns`, and when that gives it to the other ball, that ball is listed
-anew after them (:func:`amended_owner`). So every pair within reach with a ball listed anew is listed, once, the
+anew after them (:func:`.kept.amended_owner`). So every pair within reach with a ball listed anew is listed, once, the
 lists as narrow as :func:`owns` makes them; and a pair of two balls that kept
 their lists and were not listed had, at the build before, a gap of at least the skin less what
 the two owed then: ``stale.flag_stale_lists`` counts the drift as skin used, and searches for
 such pairs as it searches for the others.
 """
-
-from typing import Any, NamedTuple
 
 import taichi as ti
 
@@ -57,8 +55,9 @@ from ti_golf.physics.types import (
     vec3_array,
 )
 from ti_golf.solvers.apart import is_apart
+from ti_golf.solvers.kept import Keep, amended_owner, keeps_list, old_index, promoted, rounded_up
 from ti_golf.solvers.sort import FOLD, bucket_of, cell_of, counting_sort, fold_threads
-from ti_golf.solvers.stash import stashed_id_bits, stashed_row
+from ti_golf.solvers.stash import stashed_id_bits
 
 SCATTERED_HASH = (19349663, 1, 83492791)
 
@@ -270,7 +269,7 @@ def list_ball(
     keep: ti.template(),
 ):
     """The neighbours whose pairs ball i owns into its row of ``upper`` in id order (as many as
-    fit; ``g``, ``scratch``: see :func:`list_neighbours`; ``keep``: :class:`Keep`). Returns how many
+    fit; ``g``, ``scratch``: see :func:`list_neighbours`; ``keep``: :class:`.kept.Keep`). Returns how many
     neighbours it has (whose pairs it owns, whose pairs the others own) and a bound on the
     iterations of the thread's loops (see ``LOOP_CAP``).
 
@@ -452,84 +451,6 @@ def within_reach(i, j, xi, xj, r_sum, skin, v: ti.template(), h, fast):
     return (xj - xi).norm_sqr() < reach * reach
 
 
-class Keep(NamedTuple):
-    """What a build that keeps the lists of the balls that did not move reads (see
-    :func:`list_neighbours`), bound once in its kernel (as ``solvers.step.Step`` is)."""
-
-    amend: Any
-    """1: the balls ``kept.marks`` marks keep their lists; 0: every ball is listed anew."""
-    kept: Any
-    """The :data:`~ti_golf.physics.types.KeptLists` pack."""
-    sorted_ids: Any
-    """With ``stored_sorted``, each ball's index before the build's reorder (``GridScratch``)."""
-    stored_sorted: bool
-    """Whether the build stored the balls in a new order (see :func:`list_neighbours`)."""
-
-
-@ti.func
-def amended_owner(i, j, mine, keep: ti.template()):
-    """Whether ball i, listed anew at a build that keeps lists, owns its pair with ball j within
-    reach (``mine``: whether it would by :func:`owns`; :class:`Keep`). Ball j's old list keeps
-    the pair if it held it. Else a pair with a ball that keeps its list goes by :func:`owns`:
-    when ball j would own it, ball i *promotes* j (``kept.marks[j][2]``), which is listed anew
-    after the others (:func:`list_neighbours`' second pass) and takes it then. A promoted ball
-    owns its pairs with the balls listed anew that its old list held or that it would own, with
-    the balls that kept their lists those their old lists do not hold, and with the other
-    promoted balls those it would own: each pair once, as by :func:`owns` but for the pairs that
-    the old lists keep."""
-    marks = ti.static(keep.kept.marks)
-    promoted = marks[i][2] != 0.0  # (only in the second pass: the first lists the balls marked anew)
-    if marks[j][1] == 0.0:  # j kept its list, and may have been promoted
-        both = False
-        if promoted:
-            both = marks[j][2] != 0.0
-        if not both:
-            held = kept_by_other(i, j, keep)
-            if promoted:
-                mine = not held
-            elif held:
-                mine = False
-            elif not mine:
-                marks[j][2] = 1.0  # (every thread that promotes j writes the same)
-    elif promoted:  # j listed anew, in the first pass: its pairs with i are the complement of its own
-        mine = mine or kept_by_other(j, i, keep)
-    return mine
-
-
-@ti.func
-def promoted(i, keep: ti.template()):
-    """Whether ball i, which kept its list, is listed anew in the second pass (:func:`amended_owner`)."""
-    anew = False
-    if keep.amend != 0:
-        anew = keep.kept.marks[i][2] != 0.0
-    return anew
-
-
-@ti.func
-def keeps_list(i, keep: ti.template()):
-    """Whether ball i keeps its old list at this build (:class:`Keep`)."""
-    kept = False
-    if keep.amend != 0:
-        kept = keep.kept.marks[i][1] == 0.0
-    return kept
-
-
-@ti.func
-def old_index(i, keep: ti.template()):
-    """Ball i's index in the old lists: before the build's reorder, if it made one."""
-    o = i
-    if ti.static(keep.stored_sorted):
-        o = keep.sorted_ids[i]
-    return o
-
-
-@ti.func
-def kept_by_other(i, j, keep: ti.template()):
-    """Whether the old list of ball j, which keeps its list, holds its pair with ball i."""
-    row, _bits = stashed_row(keep.kept.stashed, keep.kept.stash_first, 0, old_index(j, keep), old_index(i, keep), True)
-    return row >= 0
-
-
 @ti.func
 def list_kept(
     i,
@@ -555,13 +476,6 @@ def list_kept(
             insert_sorted(upper, i, n_up, upper.shape[1], j)
             n_up += 1
     return n_up
-
-
-@ti.func
-def rounded_up(d):
-    """The distance ``d`` [m] >= 0 in f32, rounded up (never below ``d``): 2^-22 of it added
-    before the cast to the nearest f32."""
-    return ti.cast(d * (1.0 + 2.0**-22), ti.f32)
 
 
 @ti.func
