@@ -282,6 +282,10 @@ def test_a_run_saved_before_builds_kept_lists_reads_every_list_as_made_at_the_la
     np.testing.assert_array_equal(resumed.solver.drift.to_numpy(), np.zeros(4, np.float32))
     assert not resumed.solver.amendable
     resumed.run(steps=10)
+    as_saved = tg.Simulation.load(base)  # (its balls owed nothing either: they go on the same)
+    as_saved.run(steps=10)
+    np.testing.assert_array_equal(resumed.x, as_saved.x)
+    np.testing.assert_array_equal(resumed.v, as_saved.v)
 
 
 def _cut(content: bytes) -> bytes:
