@@ -663,7 +663,28 @@ def test_bench_pit_pours_the_scene_and_reports_the_piles_quality():
     assert result["step_cost_in_bare_gathers"] == pytest.approx(gather / result["ball_steps_per_s"], rel=1e-9)
     assert result["step_cost_in_bare_gathers"] > 1.0
     assert any("deepest overlap" in line for line in lines)
+    # the loop probe's figures; a share of the sweeps' loops only with the parallel sweeps (1,000 balls: serial)
+    assert result["loop_s"] >= 0.0 and result["ball_loop_s"] >= 0.0 and "sweep_loops_share" not in result
     json.loads(json.dumps(result))
+
+
+def test_bench_pits_loop_probe_runs_the_loops_it_says():
+    # the probe behind loop_s and ball_loop_s: loops over no item run no thread, loops over the
+    # balls a thread a ball (a ball whose rest timer reads negative raises the flag it tests)
+    from ti_golf.bench.pit import _loops, _scaled_simulation, loop_costs, pit_scene
+
+    sim = _scaled_simulation(pit_scene(300)[0], 300)
+    sim.step(1)
+    solver = sim.solver
+    lists, scratch = solver.packs.lists(solver), solver.packs.scratch(solver)
+    for every_ball, raised in ((False, 0), (True, 1)):
+        solver.flag[1] = 0
+        solver.calm[299] = -2.0  # (the last ball: a loop over every ball reaches it)
+        _loops(lists, scratch, 2, every_ball)
+        assert solver.flag[1] == raised, every_ball
+    solver.forget_quiet()  # (the rest timers as a step leaves them)
+    costs = loop_costs(lists, scratch)
+    assert set(costs) == {"loop_s", "ball_loop_s"} and all(0.0 <= c < 0.1 for c in costs.values())
 
 
 @pytest.mark.slow

@@ -23,13 +23,18 @@ that does no work, called with the solver's neighbour lists and step scratch as 
 times, the last waited for), as a share of the pour's wall time. On a GPU backend a launch
 returns once queued, so that is the time the device may wait on the host (none while the queue
 holds work; all of it after each result a step reads back); on a CPU backend the kernels run in
-the calling thread, and it is the time the threads of the kernels' loops stand idle. Ctrl-C or SIGTERM ends the pour at the step it reached,
+the calling thread, and it is the time the threads of the kernels' loops stand idle. Beside it,
+what one more parallel loop in a kernel costs (``loop_s`` with no item, ``ball_loop_s`` over the
+balls: :func:`loop_costs`), and with the parallel Gauss–Seidel sweeps the share of the wall time
+that at least went to starting their loops (``sweep_loops_share``: the steps taken, times
+``launches_per_step``, times ``loop_s``). Ctrl-C or SIGTERM ends the pour at the step it reached,
 and the benchmark reports that much of it (``interrupted``).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -202,6 +207,9 @@ def bench_pit(
     result.update(pair_tables(sim))
     if times is None and steps > 0 and sim.solver is not None:
         result.update(host_share(sim, wall_s, steps))
+    if "loop_s" in result and "launches_per_step" in result:  # (the parallel Gauss–Seidel sweeps)
+        taken = steps - result["steps_asleep"]  # (a step skipped asleep starts no loop)
+        result["sweep_loops_share"] = min(taken * result["launches_per_step"] * result["loop_s"] / wall_s, 1.0)
     if every is not None:
         result["timeline"] = timeline
     if times is not None:
@@ -225,6 +233,15 @@ def bench_pit(
         log(
             f"{result['host_calls_per_step']:.1f} kernel calls a step, {1e6 * result['launch_host_s']:.1f} µs of host "
             f"time each: the host's share of the wall time about {100 * result['host_share']:.2g} %"
+        )
+    if "loop_s" in result:
+        share = result.get("sweep_loops_share")
+        at_least = (
+            "" if share is None else f" ({100 * share:.2g} % of the wall time at least, to start the sweeps' loops)"
+        )
+        log(
+            f"one parallel loop more in a kernel: {1e6 * result['loop_s']:.1f} µs of no item, "
+            f"{1e6 * result['ball_loop_s']:.1f} µs over the balls{at_least}"
         )
     log(f"baseline bare_gather: {gather_rate:.3g} balls/s -> a step costs {result['step_cost_in_bare_gathers']:.1f}")
     if times is not None:
@@ -397,9 +414,65 @@ def _no_work_body(lists, scratch):
         scratch.flag[0] += 0
 
 
+PROBE_LOOPS = 32
+"""Parallel loops a call of the loop probe (:func:`loop_costs`): as many as a pass of the contact
+colours holds on CUDA."""
+
+LOOP_PROBE_CALLS = 100
+"""Calls of each kernel of :func:`loop_costs`."""
+
+
+def _loops_body(lists, scratch, loops, every_ball):
+    """``loops`` parallel loops one after another, each with its bounds read on the device, as the
+    contact colours' loops are (:func:`~ti_golf.solvers.contact_colour.colour_pass`): with
+    ``every_ball``, over the balls, each thread reading one number and writing nothing, as a
+    sweep's thread for a ball asleep; else over no item (:func:`loop_costs`)."""
+    for _ in ti.static(range(loops)):
+        end = lists.first[0]  # (0: the pair table's first start)
+        if ti.static(every_ball):
+            end = lists.first.shape[0] - 1
+        for i in range(lists.first[0], end):
+            if scratch.calm[i] < -1.0:  # (never: a rest timer is not negative)
+                scratch.flag[1] = 1
+
+
 # (the annotations as objects: this module's are strings, which ti.kernel cannot read)
 _no_work_body.__annotations__ = {"lists": NeighbourLists, "scratch": StepScratch}
 _no_work = kernel(_no_work_body)
+_loops_body.__annotations__ = {
+    "lists": NeighbourLists,
+    "scratch": StepScratch,
+    "loops": ti.template(),
+    "every_ball": ti.template(),
+}
+_loops = kernel(_loops_body)
+
+
+def _per_call_s(call: Callable[[], Any], calls: int = PROBE_CALLS) -> float:
+    """Seconds a call of a probe kernel, over ``calls`` calls after one that compiles it, the last
+    waited for."""
+    call()
+    ti.sync()
+    t0 = time.perf_counter()
+    for _ in range(calls):
+        call()
+    ti.sync()
+    return (time.perf_counter() - t0) / calls
+
+
+def loop_costs(lists: Any, scratch: Any) -> dict[str, float]:
+    """What one more parallel loop in a kernel costs, on the device and for the host's launch of
+    it, from kernels that differ in their number of loops alone (``_loops``): a loop of no item
+    (``loop_s``: starting it, on a CPU backend waking the thread pool and waiting for it, on a GPU a
+    launch of its own) and a loop over the balls in which each thread reads one number
+    (``ball_loop_s``: a sweep's loop over a pile asleep), each from ``PROBE_LOOPS`` loops a call
+    against one."""
+    costs = {}
+    for name, every_ball in (("loop_s", False), ("ball_loop_s", True)):
+        one = _per_call_s(functools.partial(_loops, lists, scratch, 1, every_ball), LOOP_PROBE_CALLS)
+        many = _per_call_s(functools.partial(_loops, lists, scratch, PROBE_LOOPS, every_ball), LOOP_PROBE_CALLS)
+        costs[name] = max(many - one, 0.0) / (PROBE_LOOPS - 1)
+    return costs
 
 
 def host_share(sim: Simulation, wall_s: float, steps: int) -> dict[str, Any]:
@@ -410,16 +483,11 @@ def host_share(sim: Simulation, wall_s: float, steps: int) -> dict[str, Any]:
     solver = sim.solver
     assert solver is not None  # a pour: its balls collide
     lists, scratch = solver.packs.lists(solver), solver.packs.scratch(solver)
-    _no_work(lists, scratch)  # (compiled)
-    ti.sync()
-    t0 = time.perf_counter()
-    for _ in range(PROBE_CALLS):
-        _no_work(lists, scratch)
-    ti.sync()
-    per_call = (time.perf_counter() - t0) / PROBE_CALLS
+    per_call = _per_call_s(lambda: _no_work(lists, scratch))
     host = max(wall_s - inside, 0.0) + calls * per_call
     return {
         "host_calls_per_step": calls / steps,
         "launch_host_s": per_call,
         "host_share": min(host / wall_s, 1.0),
+        **loop_costs(lists, scratch),
     }
