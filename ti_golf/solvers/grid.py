@@ -56,7 +56,7 @@ from ti_golf.physics.types import (
 )
 from ti_golf.solvers.apart import is_apart
 from ti_golf.solvers.kept import Keep, amended_owner, keeps_list, old_index, promoted, rounded_up
-from ti_golf.solvers.sort import FOLD, bucket_of, cell_of, counting_sort, fold_threads
+from ti_golf.solvers.sort import FOLD, bucket_of, cell_of, counting_sort, fold_in_array, fold_threads
 from ti_golf.solvers.stash import stashed_id_bits
 
 SCATTERED_HASH = (19349663, 1, 83492791)
@@ -211,7 +211,7 @@ def list_neighbours(
     then every per-ball array gathered into that order): ball p is the p-th of the sort, ``start``
     still holds the buckets' starts, and the sort is skipped (``sorted_ids`` is not read)."""
     longest[0], longest[1] = 0, 0
-    most_loops = 0
+    most_up, most_low, most_loops = 0, 0, 0  # (the CPU's: see fold_in_array)
     if ti.static(not stored_sorted):
         counting_sort(
             x,
@@ -239,8 +239,12 @@ def list_neighbours(
         lists.first[i + 1] = ti.min(n_up, lists.upper.shape[1])  # its length, until links.pair_starts
         lists.x_at_build[i] = ti.cast(x[i], ti.f32)
         lists.drift[i] = rounded_up(owed)
-        ti.atomic_max(longest[0], n_up)
-        ti.atomic_max(longest[1], n_low)
+        if ti.static(fold_in_array()):  # (CUDA: atomics on an array cost next to nothing there)
+            ti.atomic_max(longest[0], n_up)
+            ti.atomic_max(longest[1], n_low)
+        else:  # (the kernel's own, folded per thread: two threads' atomics on an array take turns)
+            ti.atomic_max(most_up, n_up)
+            ti.atomic_max(most_low, n_low)
         ti.atomic_max(most_loops, loops)
     for idx in range(x.shape[0] * keep.amend):  # the balls promoted in the first pass (amended_owner)
         i = idx
@@ -250,9 +254,15 @@ def list_neighbours(
             n_up, n_low, loops = list_ball(i, x, v, radius, apart_ids, g, scratch, lists.upper, keep)
             lists.first[i + 1] = ti.min(n_up, lists.upper.shape[1])
             lists.drift[i] = 0.0
-            ti.atomic_max(longest[0], n_up)
-            ti.atomic_max(longest[1], n_low)
+            if ti.static(fold_in_array()):  # (CUDA: atomics on an array cost next to nothing there)
+                ti.atomic_max(longest[0], n_up)
+                ti.atomic_max(longest[1], n_low)
+            else:  # (the kernel's own, folded per thread: two threads' atomics on an array take turns)
+                ti.atomic_max(most_up, n_up)
+                ti.atomic_max(most_low, n_low)
             ti.atomic_max(most_loops, loops)
+    if ti.static(not fold_in_array()):
+        longest[0], longest[1] = most_up, most_low
     return ti.Vector([longest[0], longest[1], most_loops])
 
 
