@@ -198,6 +198,10 @@ MAX_STEPS = 1_000_000
 """The most steps ``bench collide`` times: its steps run in launches that hold Ctrl-C."""
 
 
+N_LEAST = {"pit": 16, "collide": 2}
+"""The fewest ``--n`` of the benchmarks that need more than one: a bin of balls, a pair."""
+
+
 def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per bench and per option checked)
     """Run the benchmark ``args.bench`` (sweep, collide, pit, reductions, render, dispersion, startup, study) after
     checking its options; print its summary, or its JSON with ``--json``; 0."""
@@ -205,8 +209,9 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
         return cmd_startup(args)
     if args.bench == "study":
         return _bench_study(args)
-    if not 0 < args.n <= MAX_N:
-        raise ConfigError("--n", None, f"must be in [1, {MAX_N:,}] (got {args.n})")
+    least = N_LEAST.get(args.bench, 1)
+    if not least <= args.n <= MAX_N:
+        raise ConfigError("--n", None, f"must be in [{least:,}, {MAX_N:,}] (got {args.n})")
     if args.bench == "dispersion":
         if not 0 <= args.rest <= args.n:
             raise ConfigError("--rest", None, f"must be in [0, --n] shots (got {args.rest})")
@@ -224,14 +229,10 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
     elif args.bench == "pit":
         if not 0.0 < args.t <= 60.0:  # (also false for NaN)
             raise ConfigError("--t", None, f"must be in (0, 60] s (got {args.t})")
-        if args.n < 16:
-            raise ConfigError("--n", None, f"must be >= 16 balls (got {args.n})")
         if args.every is not None and not 0.0 < args.every <= args.t:  # (also false for NaN)
             raise ConfigError("--every", None, f"must be in (0, --t] s (got {args.every})")
         result = bench_pit(n=args.n, t=args.t, overrides=args.overrides, every=args.every)
     elif args.bench == "collide":
-        if args.n < 2:
-            raise ConfigError("--n", None, f"must be >= 2 balls (got {args.n})")
         if not 1 <= args.steps <= MAX_STEPS:
             raise ConfigError("--steps", None, f"must be in [1, {MAX_STEPS:,}] (got {args.steps})")
         if not 1 <= args.iterations <= 100:
