@@ -414,10 +414,10 @@ def test_play_in_a_window_needs_a_display(green_file, capsys, monkeypatch):
     assert "Round seed" not in out  # no round was played: no seed to play it again
 
 
-def test_play_in_a_window_needs_the_cpu_backend(green_file, capsys, monkeypatch):
-    monkeypatch.setattr("ti_golf.render.offscreen.non_cpu_arch", lambda: "vulkan")  # as with --arch vulkan
+def test_play_in_a_window_needs_a_backend_ggui_draws_with(green_file, capsys, monkeypatch):
+    monkeypatch.setattr("ti_golf.render.offscreen.arch_ggui_refuses", lambda: "vulkan")  # as with --arch vulkan
     assert cli.main(["play", str(green_file), "--gui"]) == 2
-    assert "--gui: draws with the CPU backend only (this process runs on vulkan)" in capsys.readouterr().err
+    assert "--gui: draws with the CPU or CUDA backend (this process runs on vulkan)" in capsys.readouterr().err
 
 
 WINDOW_SCRIPT = """

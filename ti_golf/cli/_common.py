@@ -78,13 +78,19 @@ def seed_value(text: str) -> int:
     return seed
 
 
-def runtime_options(p: argparse.ArgumentParser, cpu_only: bool = False) -> None:
+def runtime_options(p: argparse.ArgumentParser, window: bool = False) -> None:
     """``--arch`` and ``--precision``: the Taichi backend and float type of a command that simulates
-    (``cpu_only``: a command that draws in a GGUI window, which runs on the CPU backend alone)."""
+    (``window``: a command that draws in a GGUI window, which GGUI draws with the CPU and CUDA
+    backends alone: ``render.GGUI_ARCHES``)."""
     from ti_golf.runtime import ARCHES, PRECISIONS  # (imports Taichi: not for the commands without these options)
 
-    if cpu_only:
-        p.add_argument("--arch", choices=("cpu",), default=None, help="Taichi backend: cpu (GGUI draws with it alone)")
+    if window:
+        p.add_argument(
+            "--arch",
+            choices=("cpu", "cuda"),
+            default=None,
+            help="Taichi backend: cpu or cuda, those GGUI draws with (default: $TI_GOLF_ARCH or cpu)",
+        )
     else:
         p.add_argument("--arch", choices=ARCHES, default=None, help="Taichi backend (default: $TI_GOLF_ARCH or cpu)")
     p.add_argument(

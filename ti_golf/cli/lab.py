@@ -56,7 +56,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         metavar="SECONDS",
         help="with --screenshot: simulated seconds the scene runs before the picture (default 0: at t0)",
     )
-    runtime_options(p, cpu_only=True)
+    runtime_options(p, window=True)
     return p
 
 

@@ -39,6 +39,7 @@ from ti_golf.render import (
     build_frame,
     destroy_window,
     draw_scene,
+    open_window,
     window_problem,
     write_png,
 )
@@ -82,7 +83,7 @@ class GolfWindow:
         self.follow = True
         """Whether the camera follows the ball during a replay (and goes behind it for the next stroke)."""
         self.size = size
-        self.window = ti.ui.Window("ti-golf play", size, show_window=show_window, vsync=True)
+        self.window = open_window("ti-golf play", size, show_window, key="--gui")
         self.scene = self.window.get_scene()
         self.canvas = self.window.get_canvas()
         self.camera = ti.ui.Camera()

@@ -42,6 +42,7 @@ from ti_golf.render import (
     build_frame,
     destroy_window,
     draw_scene,
+    open_window,
     window_problem,
     write_png,
 )
@@ -97,7 +98,7 @@ class LabWindow:
         self.shown = show_window
         self.out_dir = Path(out_dir)
         self.rates = rates
-        self.window: Any = ti.ui.Window("ti-golf lab", size, show_window=show_window, vsync=True)
+        self.window: Any = open_window("ti-golf lab", size, show_window, key="lab")
         self.scene = self.window.get_scene()
         self.canvas = self.window.get_canvas()
         self.camera = ti.ui.Camera()

@@ -12,9 +12,10 @@ from ti_golf.render.ggui import (
     draw_scene,
     ggui_available,
     ggui_problem,
+    open_window,
     write_png,
 )
-from ti_golf.render.offscreen import NO_DISPLAY, non_cpu_arch, render, window_problem
+from ti_golf.render.offscreen import GGUI_ARCHES, NO_DISPLAY, arch_ggui_refuses, render, window_problem
 from ti_golf.render.style import (
     AT_REST_COLOR,
     BACKENDS,
@@ -52,7 +53,9 @@ __all__ = [
     "TERRAIN_COLORS",
     "WALL_COLORS",
     "RenderError",
+    "GGUI_ARCHES",
     "View",
+    "arch_ggui_refuses",
     "ball_colors",
     "build_frame",
     "camera_view",
@@ -60,7 +63,7 @@ __all__ = [
     "draw_scene",
     "ggui_available",
     "ggui_problem",
-    "non_cpu_arch",
+    "open_window",
     "orbit_view",
     "render",
     "window_problem",

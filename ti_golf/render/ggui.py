@@ -19,9 +19,11 @@ from taichi.ui.utils import get_field_info
 
 if TYPE_CHECKING:  # pragma: no cover
     pass
+from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.render.frame import _Frame
 from ti_golf.render.style import AMBIENT, BACKGROUND_COLOR, LIGHT
+from ti_golf.runtime import info
 
 
 # -- GGUI -----------------------------------------------------------------------------------------
@@ -114,6 +116,22 @@ def _ggui_window(size: tuple[int, int]) -> Any:
     _ggui.window, _ggui.size = window, size
     atexit.register(_close_window)
     return window
+
+
+def open_window(title: str, size: tuple[int, int], show_window: bool, key: str) -> Any:
+    """A GGUI window (``ti.ui.Window``, vsync on) of ``size`` pixels, shown or hidden, for the lab
+    or the game; where GGUI cannot open one after :func:`ggui_problem` found nothing wrong (its
+    Vulkan device made for a backend it cannot share memory with, say), a :class:`ConfigError`
+    on ``key`` that names the backend and GGUI's first line, instead of GGUI's traceback."""
+    try:
+        with _quiet_stderr():
+            return ti.ui.Window(title, size, show_window=show_window, vsync=True)
+    except Exception as exc:
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        rt = info()
+        arch = rt.arch if rt is not None else "cpu"
+        hint = "" if arch in ("x64", "arm64", "cpu") else "; on the CPU backend: leave out --arch and TI_GOLF_ARCH"
+        raise ConfigError(key, None, f"GGUI could not open a window on the {arch} backend ({msg}){hint}") from None
 
 
 def _close_window() -> None:

@@ -210,9 +210,9 @@ def render(
     os.close(fd)
     try:
         used = "matplotlib"
-        other_arch = non_cpu_arch() if backend == "auto" else None
+        other_arch = arch_ggui_refuses() if backend == "auto" else None
         if other_arch:
-            _note(f"GGUI pictures are only drawn with the CPU backend (this process runs on {other_arch})")
+            _note(f"GGUI pictures are only drawn with the CPU and CUDA backends (this process runs on {other_arch})")
         elif backend != "matplotlib":
             try:
                 _draw_ggui(frame, tmp)
@@ -230,15 +230,20 @@ def render(
     return used
 
 
-def non_cpu_arch() -> str | None:
-    """The Taichi backend's name when it is not the CPU, else None.
+GGUI_ARCHES = ("x64", "arm64", "cpu", "cuda")
+"""The Taichi backends GGUI draws with here: the CPU's, which the tests check, and CUDA, GGUI's own
+GPU backend (Taichi's GGUI guide: x64, CUDA, Vulkan)."""
+
+
+def arch_ggui_refuses() -> str | None:
+    """The Taichi backend's name when GGUI is not drawn with it (not in ``GGUI_ARCHES``), else None.
 
     With ``arch=vulkan`` (software driver, Taichi 1.7.4) GGUI draws particles from garbled vertex
-    data (balls missing or huge), so ``backend="auto"`` uses GGUI only on the CPU backend, the one
-    the tests check; ``backend="ggui"`` still tries any backend.
+    data (balls missing or huge), so ``backend="auto"`` draws with matplotlib there and the windows
+    refuse it; ``backend="ggui"`` still tries any backend.
     """
     rt = info()
-    return rt.arch if rt is not None and rt.arch not in ("x64", "arm64", "cpu") else None
+    return rt.arch if rt is not None and rt.arch not in GGUI_ARCHES else None
 
 
 NO_DISPLAY = "needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set)"
@@ -248,10 +253,10 @@ NO_DISPLAY = "needs a display (neither DISPLAY nor WAYLAND_DISPLAY is set)"
 def window_problem(on_screen: bool = True) -> str | None:
     """Why a GGUI window cannot be opened in this process (one line: what is wrong and what to
     do), or ``None`` when it can; ``on_screen=False`` asks for a hidden window, which needs no
-    display. GGUI draws on the CPU backend only (see :func:`non_cpu_arch`) and needs Vulkan."""
-    arch = non_cpu_arch()
+    display. GGUI draws with the CPU and CUDA backends (see :func:`arch_ggui_refuses`) and needs Vulkan."""
+    arch = arch_ggui_refuses()
     if arch:
-        return f"draws with the CPU backend only (this process runs on {arch}); leave out --arch and TI_GOLF_ARCH"
+        return f"draws with the CPU or CUDA backend (this process runs on {arch}); leave out --arch and TI_GOLF_ARCH"
     if on_screen and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         return NO_DISPLAY
     problem = ggui_problem()
