@@ -239,12 +239,7 @@ def list_neighbours(
         lists.first[i + 1] = ti.min(n_up, lists.upper.shape[1])  # its length, until links.pair_starts
         lists.x_at_build[i] = ti.cast(x[i], ti.f32)
         lists.drift[i] = rounded_up(owed)
-        if ti.static(fold_in_array()):  # (CUDA: atomics on an array cost next to nothing there)
-            ti.atomic_max(longest[0], n_up)
-            ti.atomic_max(longest[1], n_low)
-        else:  # (the kernel's own, folded per thread: two threads' atomics on an array take turns)
-            ti.atomic_max(most_up, n_up)
-            ti.atomic_max(most_low, n_low)
+        count_longest(longest, most_up, most_low, n_up, n_low)
         ti.atomic_max(most_loops, loops)
     for idx in range(x.shape[0] * keep.amend):  # the balls promoted in the first pass (amended_owner)
         i = idx
@@ -254,16 +249,26 @@ def list_neighbours(
             n_up, n_low, loops = list_ball(i, x, v, radius, apart_ids, g, scratch, lists.upper, keep)
             lists.first[i + 1] = ti.min(n_up, lists.upper.shape[1])
             lists.drift[i] = 0.0
-            if ti.static(fold_in_array()):  # (CUDA: atomics on an array cost next to nothing there)
-                ti.atomic_max(longest[0], n_up)
-                ti.atomic_max(longest[1], n_low)
-            else:  # (the kernel's own, folded per thread: two threads' atomics on an array take turns)
-                ti.atomic_max(most_up, n_up)
-                ti.atomic_max(most_low, n_low)
+            count_longest(longest, most_up, most_low, n_up, n_low)
             ti.atomic_max(most_loops, loops)
     if ti.static(not fold_in_array()):
         longest[0], longest[1] = most_up, most_low
     return ti.Vector([longest[0], longest[1], most_loops])
+
+
+@ti.func
+def count_longest(longest: ti.template(), most_up: ti.template(), most_low: ti.template(), n_up, n_low):
+    """A ball's upper and lower lists (``n_up``, ``n_low`` pairs) counted into the longest of a
+    build (:func:`list_neighbours`): on CUDA into ``longest[0:2]``, where atomics on an array cost
+    next to nothing; elsewhere into the kernel's own ``most_up`` and ``most_low`` (passed by
+    reference), which Taichi's CPU backend folds in a copy per thread, where two threads' atomics
+    on one place of an array take turns with it (:func:`~ti_golf.solvers.sort.fold_in_array`)."""
+    if ti.static(fold_in_array()):
+        ti.atomic_max(longest[0], n_up)
+        ti.atomic_max(longest[1], n_low)
+    else:
+        ti.atomic_max(most_up, n_up)
+        ti.atomic_max(most_low, n_low)
 
 
 @ti.func
