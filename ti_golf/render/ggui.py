@@ -23,7 +23,7 @@ from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.render.frame import _Frame
 from ti_golf.render.style import AMBIENT, BACKGROUND_COLOR, LIGHT
-from ti_golf.runtime import info
+from ti_golf.runtime import ensure_init, on_cpu
 
 
 # -- GGUI -----------------------------------------------------------------------------------------
@@ -110,7 +110,7 @@ def _ggui_window(size: tuple[int, int]) -> Any:
         _ggui.camera = ti.ui.Camera()
         _ggui.canvas = window.get_canvas()
     except Exception as exc:
-        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        msg = _first_line(exc)
         _ggui.failed = "Vulkan is not available" if "vulkan" in msg.lower() else f"GGUI failed ({msg})"
         raise _GGUIUnavailable(_ggui.failed) from None
     _ggui.window, _ggui.size = window, size
@@ -127,11 +127,17 @@ def open_window(title: str, size: tuple[int, int], show_window: bool, key: str) 
         with _quiet_stderr():
             return ti.ui.Window(title, size, show_window=show_window, vsync=True)
     except Exception as exc:
-        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        rt = info()
-        arch = rt.arch if rt is not None else "cpu"
-        hint = "" if arch in ("x64", "arm64", "cpu") else "; on the CPU backend: leave out --arch and TI_GOLF_ARCH"
-        raise ConfigError(key, None, f"GGUI could not open a window on the {arch} backend ({msg}){hint}") from None
+        arch = ensure_init().arch
+        hint = "" if on_cpu() else "; on the CPU backend: leave out --arch and TI_GOLF_ARCH"
+        raise ConfigError(
+            key, None, f"GGUI could not open a window on the {arch} backend ({_first_line(exc)}){hint}"
+        ) from None
+
+
+def _first_line(exc: Exception) -> str:
+    """The first line of what an exception of GGUI's says (its name when it says nothing)."""
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else type(exc).__name__
 
 
 def _close_window() -> None:
