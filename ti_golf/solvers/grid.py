@@ -248,7 +248,7 @@ def list_neighbours(
         if promoted(i, keep):
             n_up, n_low, loops = list_ball(i, x, v, radius, apart_ids, g, scratch, lists.upper, keep)
             lists.first[i + 1] = ti.min(n_up, lists.upper.shape[1])
-            lists.drift[i] = 0.0
+            lists.drift[i] = ti.cast(0.0, ti.f32)
             count_longest(longest, most_up, most_low, n_up, n_low)
             ti.atomic_max(most_loops, loops)
     if ti.static(not fold_in_array()):
