@@ -524,6 +524,10 @@ def test_balls_stored_in_grid_order_are_read_and_written_by_id():
     # ... and read by ball id: a permutation moves values, it does no arithmetic
     np.testing.assert_array_equal(sim.x, x)
     assert np.all(sim.flight().apex == x[:, 1])  # the flight records start at the launch point
+    for i in (0, int(order[0]), len(x) - 1):  # one ball read alone, as a view of it reads it every frame
+        np.testing.assert_array_equal(sim.ball(i)[0], x[i])
+    with pytest.raises(IndexError, match=f"ball {len(x)} is not one of the {len(x)} balls"):
+        sim.ball(len(x))
     found = {(int(i), int(j)) for i, j in solver.pairs()}
     assert found == {(i, j) for i, j in _brute_force_pairs(x, r, solver.skin) if i < j}
     sim.v = np.tile([0.0, 0.0, 1e-3], (len(x), 1)) * np.arange(len(x))[:, None]  # ball k moves at k mm/s
@@ -531,6 +535,10 @@ def test_balls_stored_in_grid_order_are_read_and_written_by_id():
     moved = sim.x - x
     far = np.array([not any(k in p for p in found) for k in range(len(x))])  # balls that touch none
     np.testing.assert_allclose(moved[far, 2], 1e-3 * np.arange(len(x))[far] * sim.dt, rtol=1e-9)
+    x1, v1, w1 = sim.x, sim.v, sim.w
+    for i in (1, int(order[1]), len(x) - 2):
+        for one, every in zip(sim.ball(i), (x1, v1, w1)):
+            np.testing.assert_array_equal(one, every[i])
 
 
 def test_a_non_finite_ball_is_named_by_id_in_grid_order():

@@ -438,6 +438,7 @@ class Lab:
     def readout(self) -> Readout:
         """The run's time, the balls' states and the selected ball (see :class:`Readout`)."""
         sim, i = self.sim, self.selected
+        x, v, w = sim.ball(i)
         return Readout(
             self.scene.name,
             sim.t,
@@ -446,9 +447,9 @@ class Lab:
             sim.n,
             sim.counts(),
             i,
-            sim.x[i],
-            sim.v[i],
-            sim.w[i],
+            x,
+            v,
+            w,
             self.running,
             self.t_stop,
             self._pace.rate if self.running else 0.0,

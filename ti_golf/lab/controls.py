@@ -116,7 +116,7 @@ class Controls:
         """The camera of a window of ``size`` pixels: around the selected ball when following it,
         else fitted to the balls, their trails and the ground between the panels."""
         lab = self.lab
-        target = lab.sim.x[lab.selected] if self.follow else None
+        target = tuple(lab.sim.ball(lab.selected)[0]) if self.follow else None
         w, h = size
         between = max(int((RIGHT[0] - LEFT[0] - LEFT[2]) * w), 16)
         view = orbit_view(lab.sim, self.yaw, self.pitch, self.zoom, (between, h), 45.0, lab.trails(), target)

@@ -174,7 +174,7 @@ class LabWindow:
         if not self.edit_ball:
             return
         sim, i = lab.sim, lab.selected
-        for name, values, unit in (("x", sim.x[i], "m"), ("v", sim.v[i], "m/s"), ("w", sim.w[i], "rad/s")):
+        for name, values, unit in zip("xvw", sim.ball(i), ("m", "m/s", "rad/s")):
             lo, hi = BALL_SPANS[name]
             lo, hi = min(lo, float(values.min())), max(hi, float(values.max()))
             for c, axis in enumerate("xyz"):

@@ -283,7 +283,7 @@ def build_frame(
     radius = sim.model.radius_np.astype(float)
     colors = ball_colors(sim, color_by, value_range)
     trail = _trail_array(trails, sim.n)
-    lo, hi = _bounds(sim, trail, extent)
+    lo, hi = _bounds(sim, trail, extent, x)
     r_max = float(radius.max())
     reach = _FOLLOW_REACH * float(np.linalg.norm(np.subtract(view.lookat, view.position))) if follow else 0.0
     tiles, tile_n, tile_c = _plane_tiles(view, sim.model.plane_p, sim.model.plane_n, lo, hi, r_max, reach)

@@ -357,6 +357,16 @@ class Simulation:
         """Per-ball status codes (ti_golf.scene.schema: FLYING, ROLLING, AT_REST, OUT_OF_BOUNDS), shape (N,)."""
         return self.state.read("status")
 
+    def ball(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Ball ``i``'s centre [m], velocity [m/s] and angular velocity ω [rad/s], copies of shape
+        (3,) each: ``sim.x[i]``, ``sim.v[i]`` and ``sim.w[i]``, read from that ball alone (a view
+        of one ball among a million, every frame, reads 72 bytes rather than three arrays)."""
+        if not 0 <= int(i) < self.n:
+            raise IndexError(f"ball {i} is not one of the {self.n} balls")
+        p, state = self.state.index_of(int(i)), self.state
+        x, v, w = (np.asarray(a[p], dtype=np.float64) for a in (state.x, state.v, state.w))
+        return x, v, w
+
     @property
     def terrain(self) -> Terrain | None:
         """The scene's height field (:class:`ti_golf.scene.terrain.Terrain`: heights, origin, spacing,
@@ -366,7 +376,7 @@ class Simulation:
     def counts(self) -> dict[str, int]:
         """How many balls are in each status: ``{"flying": …, "rolling": …, "at_rest": …,
         "out_of_bounds": …}``."""
-        s = self.status
+        s = self.state.status.to_numpy()  # (in storage order: a count is the same in any)
         return {name: int(np.count_nonzero(s == code)) for code, name in STATUS_NAMES.items()}
 
     def deepest_overlap(self) -> Overlap | None:
