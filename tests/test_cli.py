@@ -898,6 +898,11 @@ BAD_BENCH_OPTIONS = [
     (("sweep", "--dt", "inf"), "[1e-05, 1] s"),  # (it printed Infinity into the JSON)
     (("sweep", "--repeats", "0"), "[1, 100]"),
     (("render", "--frames", "0"), "[1, 1000]"),
+    (("lab", "--seconds", "0"), "(0, 3600] s"),
+    (("lab", "--seconds", "nan"), "(0, 3600] s"),
+    (("lab", "--screenshot", "lab.jpg"), ".png"),
+    (("lab", "no_such_scene"), "file not found"),
+    (("lab", "--set", "air.C_D=-1"), "[0, 100]"),
     (("startup", "--scenes", ","), "names no scene"),  # (it timed every scene)
     (("startup", "--top", "3", "--cache", "warm"), "has no effect without --kernels"),
     (("startup", "--repeats", "2", "--kernels", "lab_vacuum"), "has no effect with --kernels"),

@@ -76,6 +76,7 @@ OPTIONS = {
     "bench pit": ["--n", "--t", "--every", "--set"],
     "bench sweep": ["--n", "--dt", "--repeats"],
     "bench render": ["--n", "--frames"],
+    "bench lab": ["--seconds", "--size", "--set"],
     "bench reductions": ["--n", "--repeats"],
     "bench startup": ["--cache", "--scenes", "--repeats", "--kernels", "--top"],
     "lab": ["--out", "--speed", "--size", "--set"],
@@ -87,6 +88,7 @@ SCENES = {
     "shot": "tour_shot",
     "dispersion": "tour_shot",
     "lab": "lab_magnus",
+    "bench lab": "break_shot",
 }
 
 
@@ -139,6 +141,8 @@ def run_cli(argv: list[str]) -> tuple[int, str]:
         stack.enter_context(mock.patch("ti_golf.cli.lab.LabWindow.__init__", lambda self, *a, **k: None))
         for name in ("bench_collide", "bench_pit", "bench_sweep", "bench_render", "bench_reductions"):
             stack.enter_context(mock.patch(f"ti_golf.cli.bench.{name}", lambda **k: {"benchmark": "fuzz"}))
+        stack.enter_context(mock.patch("ti_golf.cli.bench.bench_lab", lambda *a, **k: {"benchmark": "fuzz"}))
+        stack.enter_context(mock.patch("ti_golf.lab.window.check_display", lambda **k: None))
         stack.enter_context(  # (no processes started: the options are what is fuzzed)
             mock.patch("ti_golf.cli.bench.bench_startup", lambda *a, **k: {"passed": 0, "failed": 0, "load_average": 0})
         )

@@ -4,6 +4,8 @@ against a baseline picture."""
 
 from __future__ import annotations
 
+import json
+
 import background
 import pytest
 from conftest import ON_VULKAN, ROOT, run_cli
@@ -169,6 +171,39 @@ def test_the_lab_window_draws_a_flight_and_the_break_shot_and_saves(background_r
     img = read_png(workdir / "break_shot.png")
     assert matches(img[:, 300:660], STATUS_COLORS[ROLLING]).sum() > 100  # the rack's balls, rolling
     assert not (workdir / "imgui.ini").exists()
+
+
+BENCH_SCRIPT = """
+import sys
+from ti_golf.render import ggui_available
+if not ggui_available():
+    sys.exit(77)
+from ti_golf.cli import main
+sys.exit(main(["bench", "lab", "break_shot", "--seconds", "3", "--size", "480x270", "--json",
+               "--screenshot", sys.argv[1] + "/bench_lab.png"]))
+"""
+
+
+background.declare("bench-lab", lambda workdir: (background.python("-c", BENCH_SCRIPT, str(workdir)), {}))
+
+
+@pytest.mark.background("bench-lab")
+def test_bench_lab_runs_the_window_frame_after_frame_and_says_where_a_frame_goes(background_runs):
+    # the lab's pace as a user watches it, hidden: each frame steps for its budget, then draws
+    done, workdir = background_runs.succeeded("bench-lab", "GGUI needs Vulkan (apt-get install mesa-vulkan-drivers)")
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["scene"] == "break_shot" and result["n"] == 16 and result["frames"] >= 1
+    assert result["sim_s"] == pytest.approx(result["steps"] * result["dt_s"], rel=1e-9)
+    assert result["sim_s_per_wall_s"] == pytest.approx(result["sim_s"] / result["wall_s"], rel=1e-4)
+    parts = result["seconds_per_frame"]
+    assert set(parts) == {"panels", "steps", "picture", "drawing"} and min(parts.values()) > 0
+    assert sum(parts.values()) * result["frames"] <= result["wall_s"] * (1 + 1e-6)  # parts of the frames' time
+    # the steps alone go faster than the window that also draws them (the baseline: the frames' cost)
+    assert result["baselines"]["stepping_sim_s_per_wall_s"] > result["sim_s_per_wall_s"]
+    assert result["stepping_share"] == pytest.approx(parts["steps"] * result["frames"] / result["wall_s"], rel=1e-4)
+    assert result["deepest_overlap"] < 1e-3
+    img = read_png(workdir / "bench_lab.png")
+    assert img.shape == (270, 480, 3) and matches(img, STATUS_COLORS[ROLLING]).sum() > 0
 
 
 # ----------------------------------------------------------------------------------------------

@@ -8,12 +8,21 @@ import os
 from ti_golf.bench.collide import bench_collide
 from ti_golf.bench.common import to_json
 from ti_golf.bench.dispersion import bench_dispersion
+from ti_golf.bench.lab import bench_lab
 from ti_golf.bench.pit import PIT_BALLS, bench_pit
 from ti_golf.bench.reductions import bench_reductions
 from ti_golf.bench.render import bench_render
 from ti_golf.bench.startup import bench_startup, profile_lines, scene_names, start_profile
 from ti_golf.bench.sweep import bench_sweep
-from ti_golf.cli._common import Parser, refuse_given, runtime_options, set_option
+from ti_golf.cli._common import (
+    Parser,
+    check_writable,
+    parse_size,
+    refuse_given,
+    runtime_options,
+    scene_options,
+    set_option,
+)
 from ti_golf.errors import ConfigError
 from ti_golf.scene.loader import load_scene
 
@@ -107,6 +116,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     br.add_argument("--frames", type=int, default=3, help="timed frames (default 3)")
     br.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(br)
+    bl = bsub.add_parser(
+        "lab",
+        help="the lab's window running a scene as fast as it goes, hidden: simulated seconds per wall second, "
+        "frames per second, and where a frame's time goes",
+    )
+    scene_options(bl, default="ball_pit", scene_help="a scene file or a bundled scene's name (default ball_pit)")
+    bl.add_argument(
+        "--seconds", type=float, default=20.0, help="wall seconds of frames after the first step (default 20)"
+    )
+    bl.add_argument("--size", type=parse_size, default=(1280, 720), help="window size WIDTHxHEIGHT (default 1280x720)")
+    bl.add_argument("--screenshot", metavar="PNG", help="also write the last frame's picture, the panels with it")
+    bl.add_argument("--json", action="store_true", help="end with one line of JSON")
+    runtime_options(bl, window=True)
     bx = bsub.add_parser(
         "reductions",
         help="a list build's reductions over N balls, both ways their threads can meet, against a loop "
@@ -209,6 +231,8 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
         return cmd_startup(args)
     if args.bench == "study":
         return _bench_study(args)
+    if args.bench == "lab":
+        return _bench_lab(args)
     least = N_LEAST.get(args.bench, 1)
     if not least <= args.n <= MAX_N:
         raise ConfigError("--n", None, f"must be in [{least:,}, {MAX_N:,}] (got {args.n})")
@@ -271,6 +295,20 @@ def _bench_study(args: argparse.Namespace) -> int:
         raise ConfigError("--steps", None, f"must be > 0 (got {args.steps})")
     require_dask()
     result = bench_study(n=args.tasks, steps=args.steps)
+    if args.json:
+        print(to_json(result))
+    return 0
+
+
+def _bench_lab(args: argparse.Namespace) -> int:
+    from ti_golf.lab.window import check_display
+
+    if not 0.0 < args.seconds <= 3600.0:  # (also false for NaN)
+        raise ConfigError("--seconds", None, f"must be in (0, 3600] s (got {args.seconds})")
+    check_writable(args.screenshot, "--screenshot", (".png",))
+    load_scene(args.scene, args.overrides)  # a bad scene is refused before the window opens
+    check_display(on_screen=False)
+    result = bench_lab(args.scene, args.overrides, args.seconds, args.size, args.screenshot)
     if args.json:
         print(to_json(result))
     return 0

@@ -111,6 +111,11 @@ class LabWindow:
         self.edit_ball = False
         self._last = time.perf_counter()
         self._image: np.ndarray | None = None
+        self.seconds: dict[str, float] = {}
+        """Where the last :meth:`frame`'s wall time went [s]: ``panels`` (the keys, the mouse and
+        the panels), ``steps`` (the run's steps), ``picture`` (the 3-D view made on the host and
+        handed to GGUI) and, in a hidden window, ``drawing`` (GGUI drawing it and reading it back;
+        a window on screen draws in :meth:`run`'s ``show``)."""
         self._draw: Any = None
 
     # -- the keys and the mouse -------------------------------------------------------------------
@@ -264,21 +269,28 @@ class LabWindow:
             self._input()
         self._lab_panel()
         self._parameter_panel()
+        stepping = time.perf_counter()
         self.lab.advance(wall_dt, max_steps=max_steps)
+        drawing = time.perf_counter()
         self._draw_view()
+        self.seconds.update(panels=stepping - now, steps=drawing - stepping)
         if pending == "save":
             self.lab.save(self.out_dir, screenshot=self.screenshot)
 
     def _draw_view(self) -> None:
         lab = self.lab
+        start = time.perf_counter()
         frame = build_frame(lab.sim, self.controls.view(self.size), "status", lab.trails(), 3.0, None)
         draw = draw_scene(frame, self.scene, self.camera)
         self.canvas.set_background_color(BACKGROUND_COLOR)
         self.canvas.scene(self.scene)
         self._draw = draw  # (its buffers stay alive until the frame has been handed over)
         self._image = None
+        handed = time.perf_counter()
+        self.seconds.update(picture=handed - start)
         if not self.shown:  # a hidden window cannot show(): reading the picture ends its frame
             self._image = self.window.get_image_buffer_as_numpy()
+            self.seconds.update(drawing=time.perf_counter() - handed)
 
     def screenshot(self, path: str | Path) -> None:
         """Write the frame just drawn (the panels with it) as a PNG, whole or not at all."""
