@@ -248,3 +248,7 @@ def test_a_drag_orbits_the_camera_unless_it_began_on_a_panel():
     assert c.zoom == pytest.approx(1.03**-10)
     view = c.view((800, 450))
     assert view.size == (800, 450)
+    x = c.lab.sim.x  # the centres the window read for its picture: the same camera
+    assert c.view((800, 450), x) == view
+    c.follow = True
+    assert c.view((800, 450), x) == c.view((800, 450))

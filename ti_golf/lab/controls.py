@@ -112,12 +112,15 @@ class Controls:
         """Look at the whole scene again from the first angle (C)."""
         self.yaw, self.pitch, self.zoom, self.follow = YAW_DEG, PITCH_DEG, 1.0, False
 
-    def view(self, size: tuple[int, int]) -> View:
+    def view(self, size: tuple[int, int], x: np.ndarray | None = None) -> View:
         """The camera of a window of ``size`` pixels: around the selected ball when following it,
-        else fitted to the balls, their trails and the ground between the panels."""
+        else fitted to the balls, their trails and the ground between the panels (``x``: the
+        balls' centres (N, 3) [m] when the caller has read them for its picture, else read)."""
         lab = self.lab
-        target = tuple(lab.sim.ball(lab.selected)[0]) if self.follow else None
+        target = None
+        if self.follow:
+            target = tuple(lab.sim.ball(lab.selected)[0] if x is None else x[lab.selected])
         w, h = size
         between = max(int((RIGHT[0] - LEFT[0] - LEFT[2]) * w), 16)
-        view = orbit_view(lab.sim, self.yaw, self.pitch, self.zoom, (between, h), 45.0, lab.trails(), target)
+        view = orbit_view(lab.sim, self.yaw, self.pitch, self.zoom, (between, h), 45.0, lab.trails(), target, x)
         return dataclasses.replace(view, size=(w, h))

@@ -280,7 +280,8 @@ class LabWindow:
     def _draw_view(self) -> None:
         lab = self.lab
         start = time.perf_counter()
-        frame = build_frame(lab.sim, self.controls.view(self.size), "status", lab.trails(), 3.0, None)
+        x = lab.sim.x  # (read once: the camera's box and the picture)
+        frame = build_frame(lab.sim, self.controls.view(self.size, x), "status", lab.trails(), 3.0, None, x=x)
         draw = draw_scene(frame, self.scene, self.camera)
         self.canvas.set_background_color(BACKGROUND_COLOR)
         self.canvas.scene(self.scene)

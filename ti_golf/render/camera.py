@@ -282,18 +282,20 @@ def orbit_view(
     fov: float = 45.0,
     trails: Any = None,
     target: Sequence[float] | None = None,
+    x: np.ndarray | None = None,
 ) -> View:
     """A camera on a sphere around the scene: at azimuth ``yaw_deg`` (from +x toward +z) and
     elevation ``pitch_deg`` above the horizontal, seen from the look-at point. Without ``target``
     it looks at the middle of the balls, trails and ground under them from the distance that
     shows all of them (as the presets do) times ``zoom``; with ``target`` (3,) [m] it looks at
-    that point from ``zoom`` × 60 ball radii (as ``follow`` does)."""
+    that point from ``zoom`` × 60 ball radii (as ``follow`` does). ``x``: the balls' centres
+    (N, 3) [m] when the caller has read them, else they are read."""
     size = _check_size(size)
     yaw, pitch = math.radians(yaw_deg), math.radians(pitch_deg)
     toward_camera = np.array([math.cos(pitch) * math.cos(yaw), math.sin(pitch), math.cos(pitch) * math.sin(yaw)])
     forward = -toward_camera
     up = np.array([0.0, 1.0, 0.0])
-    lo, hi = _bounds(sim, _trail_array(trails, sim.n))
+    lo, hi = _bounds(sim, _trail_array(trails, sim.n), x=x)
     if target is None:
         fitted = _fit(lo, hi, forward, up, size, fov)
         center = np.asarray(fitted.lookat)

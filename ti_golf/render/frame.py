@@ -276,10 +276,12 @@ def build_frame(
     value_range: tuple[float, float] | None,
     follow: bool = False,
     extent: np.ndarray | None = None,
+    x: np.ndarray | None = None,
 ) -> _Frame:
     """What :func:`render` draws of ``sim`` seen through ``view`` (arguments as there; ``follow``
-    for the follow camera's reach): balls, planes, terrain, cup and flag, trails, wind arrow, light."""
-    x = sim.x
+    for the follow camera's reach): balls, planes, terrain, cup and flag, trails, wind arrow, light.
+    ``x``: the balls' centres (N, 3) [m] when the caller has read them, else they are read."""
+    x = sim.x if x is None else x
     radius = sim.model.radius_np.astype(float)
     colors = ball_colors(sim, color_by, value_range)
     trail = _trail_array(trails, sim.n)
