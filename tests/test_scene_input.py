@@ -671,6 +671,8 @@ def test_cli_bad_range_exits_2(option, value, fragment):
     "text, key, fragment",
     [
         ('[[blocks]]\nkind = "random"\nnumber = 3\nseed = -1\n', "blocks[0].seed", "must be >= 0 (got -1)"),
+        ('[[blocks]]\nkind = "random"\nnumber = 0\n', "blocks[0].number", "must be in [1, 50000000] (got 0)"),
+        ('[[blocks]]\nkind = "random"\n', "blocks[0].number", "is required for a random block"),
         (
             '[[blocks]]\nkind = "random"\nnumber = 10\nbox_min = [-1e200, 0, -1e200]\nbox_max = [1e200, 1, 1e200]\n',
             "blocks[0].box_min",
@@ -689,7 +691,7 @@ def test_cli_bad_range_exits_2(option, value, fragment):
 )
 def test_a_block_or_terrain_value_that_a_run_cannot_use_is_refused_before_it_starts(tmp_path, text, key, fragment):
     # each of these ended in a traceback (a negative seed in numpy, a box whose volume overflowed,
-    # a terrain of NaN heights), hung (a box of 1e200 m: its spacing overflowed to inf), or was
+    # a terrain of NaN heights, a random block of no balls), hung (a box of 1e200 m: its spacing overflowed to inf), or was
     # quietly without effect (a backspin for balls that are not shots)
     path = write_scene(tmp_path, "[world]\nground = true\n" + text)
     with pytest.raises(ConfigError) as info:

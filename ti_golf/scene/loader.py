@@ -481,6 +481,8 @@ lattice's sites would overflow)."""
 
 def _block(values: dict[str, Any], source: str, i: int) -> Block:
     block = Block(**values)
+    if block.kind == "random" and "number" not in values:
+        raise_config(source, f"blocks[{i}].number", "is required for a random block: how many balls, 1 to 50,000,000")
     if block.kind == "random" and any(lo >= hi for lo, hi in zip(block.box_min, block.box_max)):
         raise_config(source, f"blocks[{i}].box_max", "must exceed box_min on every axis")
     corners = ("box_min", "box_max") if block.kind == "random" else ("origin",)
