@@ -17,6 +17,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 
 import background
@@ -1015,9 +1016,11 @@ def test_the_first_run_on_a_machine_is_announced(tmp_path):
     assert "first run" not in warm.stderr
 
 
-def interrupt_mid_run(args: list[str], sig: int = signal.SIGTERM) -> tuple[int, str]:
+def interrupt_mid_run(args: list[str], sig: int = signal.SIGTERM, until: Path | None = None) -> tuple[int, str]:
     """Start ``ti-golf ARGS`` in a real process, send it ``sig`` once its first progress line shows
-    it is simulating, and return its exit code and the rest of its standard error."""
+    it is simulating, and return its exit code and the rest of its standard error. ``until``: send
+    ``sig`` again every 10 ms until that file exists or the process ends (a user pressing Ctrl-C
+    again while the run writes what it simulated)."""
     proc = subprocess.Popen(
         cli(*args),
         stderr=subprocess.PIPE,
@@ -1031,6 +1034,10 @@ def interrupt_mid_run(args: list[str], sig: int = signal.SIGTERM) -> tuple[int, 
             if line.startswith("progress:"):
                 break
         proc.send_signal(sig)
+        deadline = time.monotonic() + 120
+        while until is not None and not until.exists() and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+            proc.send_signal(sig)
         rest = proc.stderr.read()
         return proc.wait(timeout=120), rest
     finally:
@@ -1054,6 +1061,20 @@ def test_an_interrupted_run_keeps_what_it_computed(sig, tmp_path):
         assert bool(d["partial"]) and 0.0 < float(d["t"]) < 100.0
         assert d["x"].shape == (400, 3) and np.isfinite(d["x"]).all()
         assert d["traj_t"][-1] <= float(d["t"]) and d["traj_x"].shape == (len(d["traj_t"]), 400, 3)
+
+
+@pytest.mark.slow
+def test_a_run_keeps_what_it_computed_when_ctrl_c_comes_again_while_it_writes(tmp_path):
+    # the second Ctrl-C (and every one after it) waits until the state is written: before, one that
+    # came while the run was saving ended it with nothing saved
+    out = tmp_path / "run.npz"
+    args = ["run", "terrain_3d", "--t", "100", "--out", str(out), "--record-every", "10"]
+    code, rest = interrupt_mid_run(args, signal.SIGINT, until=out)
+    assert code == 130, rest
+    assert "ti-golf: writing what was simulated first" in rest and "Traceback" not in rest, rest
+    assert rest.strip().splitlines()[-1].endswith(f"kept in {out} (marked partial)"), rest
+    with np.load(out) as d:
+        assert bool(d["partial"]) and 0.0 < float(d["t"]) < 100.0 and d["x"].shape == (400, 3)
 
 
 def test_an_interrupted_sweep_keeps_its_results(tmp_path, capsys, monkeypatch):

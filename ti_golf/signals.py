@@ -10,6 +10,7 @@ them, to the handlers that were there, once the steps are done.
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -19,17 +20,21 @@ HELD = (signal.SIGINT, signal.SIGTERM)
 
 
 @contextmanager
-def whole_steps() -> Iterator[list[int]]:
+def whole_steps(note: str | None = None) -> Iterator[list[int]]:
     """Hold :data:`HELD` inside the block and raise each one that came, in order, when it ends
     (with the handlers restored: Ctrl-C then raises ``KeyboardInterrupt`` after the last whole
     step). The block gets the list of the signals held so far, to stop early between its steps
-    when one came. Outside the main thread, where Python runs no signal handler, it holds nothing."""
+    when one came; a block that clears it drops them. ``note``: a line written to stderr when the
+    first signal is held (what the program finishes before it stops). Outside the main thread,
+    where Python runs no signal handler, it holds nothing."""
     came: list[int] = []
     if threading.current_thread() is not threading.main_thread():
         yield came
         return
 
     def hold(signum: int, frame: object) -> None:
+        if note is not None and not came:
+            print(f"ti-golf: {note}", file=sys.stderr, flush=True)
         came.append(signum)
 
     previous = {s: signal.signal(s, hold) for s in HELD}

@@ -89,6 +89,8 @@ def run_cli() -> None:
     except BrokenPipeError:
         code = _reader_gone()
     if "ti_golf.runtime" in sys.modules:  # Taichi was started (a command that simulates)
+        for held in (signal.SIGINT, signal.SIGTERM):  # the command is over: its exit work (the kernels
+            signal.signal(held, signal.SIG_IGN)  # written to the cache) is not cut off by a late Ctrl-C
         sys.modules["ti_golf.runtime"].exit_process(code)
     sys.exit(code)
 

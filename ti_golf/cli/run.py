@@ -28,6 +28,7 @@ from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.scene.checks import TIME_LIMIT
 from ti_golf.scene.schema import STATUS_NAMES
+from ti_golf.signals import whole_steps
 from ti_golf.sim.simulation import Recording, Simulation
 
 RUN_DEFAULTS: dict[str, Any] = {
@@ -157,17 +158,23 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
         )
     except KeyboardInterrupt:  # Ctrl-C, or SIGTERM (see cli.main)
         partial = True
-        kept = [p for p in (args.out, args.plot if len(rec.t) > 1 else None) if p and sim.t > 0]
-        saved = f"; what was simulated is kept in {' and '.join(kept)} (marked partial)" if kept else ""
+        gif = args.gif if frames is not None and frames.any else None
+        kept = [p for p in (args.out, args.plot if len(rec.t) > 1 else None, gif) if p and sim.t > 0]
+        listed = ", ".join(kept[:-1]) + " and " + kept[-1] if len(kept) > 1 else "".join(kept)
+        saved = f"; what was simulated is kept in {listed} (marked partial)" if kept else ""
         raise KeyboardInterrupt(f"at t = {sim.t:.4g} s{saved}") from None
     finally:
-        progress.close()
-        if frames is not None:
-            frames.close()  # the frames rendered so far are kept, and the GIF is written from them
-        if args.out and sim.t > 0:
-            sim.save(args.out, rec, partial=partial)  # save what was simulated even if the run stopped early
-        if partial and args.plot and len(rec.t) > 1:
-            _plot(rec, args.plot, sim)
+        # a second Ctrl-C or SIGTERM waits until what was simulated is written (SIGKILL does not)
+        with whole_steps("writing what was simulated first") as came:
+            progress.close()
+            if frames is not None:
+                frames.close()  # the frames rendered so far are kept, and the GIF is written from them
+            if args.out and sim.t > 0:
+                sim.save(args.out, rec, partial=partial)  # save what was simulated even if the run stopped early
+            if partial and args.plot and len(rec.t) > 1:
+                _plot(rec, args.plot, sim)
+            if partial:
+                came.clear()  # (stopping already: a second signal asks nothing more)
     elapsed = time.perf_counter() - t0
     counts = sim.counts()
     resumed = "" if resumed_at is None else f" (resumed at t = {resumed_at:.4g} s)"
@@ -288,6 +295,11 @@ class _Frames:
         finally:
             progress.close()
         self._kept.clear()
+
+    @property
+    def any(self) -> bool:
+        """Whether a frame was drawn or kept to draw."""
+        return bool(self.paths or self._kept)
 
     def close(self) -> None:
         self._draw_kept()

@@ -466,7 +466,12 @@ class Block:
         read_when=("kind", ("lattice",)),
     )
     number: int = key(
-        "int", 0, "-", "number of balls of a random block (required)", Interval(1, 50_000_000), read_when=("kind", ("random",))
+        "int",
+        0,
+        "-",
+        "number of balls of a random block (required)",
+        Interval(1, 50_000_000),
+        read_when=("kind", ("random",)),
     )
     origin: Vec3 = key(
         "vec3", (0.0, 0.0, 0.0), "m", "centre of the lattice's first ball", read_when=("kind", ("lattice",))
