@@ -331,6 +331,7 @@ def test_a_failing_task_records_its_error_and_the_others_go_on(tmp_path):
 
 def test_a_resumed_study_runs_only_the_tasks_not_finished(flight_study, tmp_path):
     from ti_golf.study import run_study
+    from ti_golf.study.results import Manifest
 
     spec, result = flight_study
     folder = tmp_path / "out"
@@ -343,6 +344,28 @@ def test_a_resumed_study_runs_only_the_tasks_not_finished(flight_study, tmp_path
     assert [r["task_id"] for r in again.rows] == [r["task_id"] for r in result.rows]
     assert [figures_of(r) for r in again.rows] == [figures_of(r) for r in result.rows]
     assert any(r["task_id"] == dropped for r in again.rows)
+    # the row run again starts a line of its own after the torn one: read again, all four are there
+    assert sorted(Manifest(folder).rows) == sorted(r["task_id"] for r in result.rows)
+
+
+def test_a_finished_task_whose_saved_run_is_gone_or_broken_runs_again(tmp_path):
+    # its row in results.csv named a file that was missing or cut short, and running the study
+    # again skipped the task
+    from ti_golf.study.results import MANIFEST, RUNS, Manifest
+
+    (tmp_path / RUNS).mkdir()
+    np.savez(tmp_path / RUNS / "a1.npz", x=np.zeros((1, 3)))
+    whole = (tmp_path / RUNS / "a1.npz").read_bytes()
+    (tmp_path / RUNS / "b2.npz").write_bytes(whole[:100])
+    rows = [
+        {**GOOD_ROW, "id": "a1", "run_path": f"{RUNS}/a1.npz"},
+        {**GOOD_ROW, "id": "b2", "run_path": f"{RUNS}/b2.npz"},
+        {**GOOD_ROW, "id": "c3", "run_path": f"{RUNS}/c3.npz"},
+        {**GOOD_ROW, "id": "d4", "run_path": ""},  # (a task that saves no run)
+    ]
+    (tmp_path / MANIFEST).write_text("".join(json.dumps(r) + "\n" for r in rows))
+    manifest = Manifest(tmp_path)
+    assert [manifest.finished(i) for i in ("a1", "b2", "c3", "d4")] == [True, False, False, True]
 
 
 @pytest.mark.slow
@@ -507,6 +530,7 @@ GOOD_ROW = {"id": "a1", "carry_m": 150.5, "status": "ok", "error": "", "wall_s":
         (json.dumps({**GOOD_ROW, "carry_m": "abc"}), "task a1: 'carry_m' must be a number (got 'abc')"),
         (json.dumps({**GOOD_ROW, "wall_s": True}), "task a1: 'wall_s' must be a number (got True)"),
         (json.dumps({**GOOD_ROW, "host": 3}), "task a1: 'host' must be text (got 3)"),
+        ("garbage {{{", "is not a task's row (not JSON: Expecting value)"),  # (was skipped as if cut short)
     ],
 )
 def test_a_manifest_edited_into_something_else_is_one_error_naming_its_line(tmp_path, line, problem):

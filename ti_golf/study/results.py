@@ -16,6 +16,7 @@ import csv
 import json
 import math
 import os
+import zipfile
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -35,42 +36,53 @@ BOOKKEEPING = ("status", "error", "wall_s", "host", "worker", "run_path")
 class Manifest:
     """The rows finished so far in a study folder, by task id (the last row of a task wins).
 
-    The file is read as input: a line cut short (the machine went down while writing it) is
-    skipped, so its task runs again; a file that is not UTF-8 text, or a line that is JSON but not
-    a task's row as :meth:`add` writes it, is a :class:`~ti_golf.errors.ConfigError` naming the
-    file and the line."""
+    The file is read as input: a row cut short (the machine went down while writing it) is
+    skipped, so its task runs again; a file that is not UTF-8 text, or a line that is not a task's
+    row as :meth:`add` writes it, is a :class:`~ti_golf.errors.ConfigError` naming the file and
+    the line."""
 
     def __init__(self, folder: str | os.PathLike[str]) -> None:
         self.path = Path(folder) / MANIFEST
         self.rows: dict[str, dict[str, Any]] = {}
+        self._cut = False
         if not self.path.is_file():
             return
         try:
             text = self.path.read_bytes().decode("utf-8")
         except UnicodeDecodeError as exc:
             raise ConfigError(str(self.path), None, f"is not UTF-8 text (byte {exc.start}); {_REDO}") from None
+        self._cut = bool(text) and not text.endswith("\n")  # (the next row starts a line of its own)
         for number, line in enumerate(text.splitlines(), 1):
             line = line.strip()
             if not line:
                 continue
             try:
                 row = json.loads(line)
-            except json.JSONDecodeError:  # a line cut short when the machine went down: that task runs again
-                continue
+            except json.JSONDecodeError as exc:
+                if line.startswith('{"id": '):  # a row cut short when the machine went down: that task runs again
+                    continue
+                raise ConfigError(
+                    f"{self.path}:{number}", None, f"is not a task's row (not JSON: {exc.msg}); {_REDO}"
+                ) from None
             problem = _row_problem(row)
             if problem:
                 raise ConfigError(f"{self.path}:{number}", None, f"{problem}; {_REDO}")
             self.rows[row["id"]] = row
 
     def finished(self, task_id: str) -> bool:
-        """Whether the task has a row that says ``ok``."""
-        return self.rows.get(task_id, {}).get("status") == "ok"
+        """Whether the task has a row that says ``ok`` and its saved run, if it made one, is still
+        in the folder whole (a zip archive whose directory can be read; else the task runs again)."""
+        row = self.rows.get(task_id, {})
+        if row.get("status") != "ok":
+            return False
+        return not row.get("run_path") or zipfile.is_zipfile(self.path.parent / row["run_path"])
 
     def add(self, row: Mapping[str, Any]) -> None:
         """Keep a finished task's row: in memory and, at once, at the end of the manifest file."""
         self.rows[row["id"]] = dict(row)
         with open(self.path, "a", encoding="utf-8") as fh:
-            fh.write(json.dumps(row, default=_plain) + "\n")
+            fh.write(("\n" if self._cut else "") + json.dumps(row, default=_plain) + "\n")
+            self._cut = False
             fh.flush()
             os.fsync(fh.fileno())
 
