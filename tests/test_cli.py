@@ -94,6 +94,15 @@ def test_scenes_lists_every_scene_with_its_description():
         )
 
 
+def test_scenes_names_the_key_of_a_scene_it_cannot_load(tmp_path):
+    (tmp_path / "good.toml").write_text('description = "fine"\n[launch]\nspeed = 10\n')
+    (tmp_path / "bad.toml").write_text("[contact]\nmu_rol = 0.1\n")
+    proc = ok(run_cli("scenes", env={"TI_GOLF_SCENES": str(tmp_path)}))
+    lines = proc.stdout.splitlines()
+    assert lines[0].startswith("bad   (invalid: key 'contact.mu_rol' is unknown (did you mean 'mu_roll'?)"), lines
+    assert lines[1].split() == ["good", "fine"]
+
+
 def _keys_rows(stdout: str) -> dict[str, list[str]]:
     """The rows of the `keys` Markdown table by key name, cells split on unescaped pipes."""
     rows: dict[str, list[str]] = {}

@@ -27,7 +27,7 @@ def cmd_scenes(args: argparse.Namespace) -> int:
         try:
             desc = load_scene(f).description
         except ConfigError as exc:
-            desc = f"(invalid: {exc.reason})"
+            desc = f"(invalid: {f'key {exc.key!r} ' if exc.key else ''}{exc.reason})"
         print(f"{f.stem:<{width}}  {desc}")
     return 0
 
