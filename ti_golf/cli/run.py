@@ -201,9 +201,11 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
     def state_of(i: int) -> str:  # "at rest", "out of bounds", ...
         return STATUS_NAMES[int(status[i])].replace("_", " ")
 
-    for i in np.flatnonzero(f.landed)[:10]:
+    launch_y = sim.launch_x[:, 1] if sim.launch_x is not None else np.zeros(sim.n)
+    for i in np.flatnonzero(f.landed)[:10]:  # (apex above the launch point, as the shots' and sweeps' tables)
         print(
-            f"ball {i}: carry {f.carry[i]:.3f} m, apex {f.apex[i]:.2f} m, flight {f.flight_time[i]:.3f} s, "
+            f"ball {i}: carry {f.carry[i]:.3f} m, apex {f.apex[i] - launch_y[i]:.2f} m above launch, "
+            f"flight {f.flight_time[i]:.3f} s, "
             f"lands at {f.landing_angle[i]:.1f} deg, {f.landing_speed[i]:.2f} m/s; now at "
             f"x = {x[i, 0]:.2f} m, z = {x[i, 2]:.2f} m ({state_of(i)})"
         )
