@@ -1202,6 +1202,18 @@ def test_a_run_until_rest_that_reaches_its_time_limit_says_so_and_names_the_ball
     assert "time limit" not in capsys.readouterr().out  # landed before it
 
 
+def test_run_prints_the_apex_above_the_launch_point(capsys):
+    # in vacuo, RK4 follows the parabola exactly: apex (v0·sin θ)²/2g above the launch point, whose
+    # centre sits a radius above the ground (the run printed the centre's height, a radius more);
+    # the printed 0.01 m, plus the apex sampled at steps of h = 0.01 s, g·(h/2)²/2 at most
+    scene = ti_golf.load_scene("lab_vacuum")
+    assert main(["run", "lab_vacuum", "--until", "landed"]) == 0
+    printed = float(re.search(r"apex (\S+) m above launch", capsys.readouterr().out).group(1))
+    g = -scene.world.gravity[1]
+    rise = (scene.launch.speed * math.sin(math.radians(scene.launch.angle_deg))) ** 2 / (2 * g)
+    assert printed == pytest.approx(rise, abs=0.005 + g * (scene.world.dt / 2) ** 2 / 2)
+
+
 def test_a_run_until_rest_that_reaches_the_scenes_length_says_it_counts_from_the_resume(tmp_path, capsys):
     # the default length of a run, world.t_end, counts from where a resumed run starts: at t = 4.5 s a
     # line that named "world.t_end = 4 s" alone read as a contradiction
