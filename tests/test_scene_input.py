@@ -191,6 +191,24 @@ def test_the_spin_ratio_models_need_turbulent_flow(tmp_path, model):
         ti_golf.Simulation(scene)
 
 
+@pytest.mark.parametrize(
+    "name, value, fragment",
+    [
+        ("C_D_S", "[-5, 0, 0]", "gives C_D(S) from -5 to -5 over the spin ratios 0.02 ≤ S ≤ 0.75"),
+        ("C_D_S", "[0.1, 0, -1]", "gives C_D(S) from -0.4625 to 0.0996"),  # negative past S = 0.316
+        ("C_L_S", "[0, 0, -300]", "gives C_L(S) from -168.8 to -0.12"),
+        ("C_D_S", "[0, 0, 1000]", "it must stay within [0, 100]"),
+    ],
+)
+def test_spin_reynolds_coefficients_whose_drag_turns_negative_or_overflows_are_refused(name, value, fragment):
+    # a negative drag fed the ball energy: apex 1.4e40 yd, exit 0; the quadratic is checked at the
+    # ends of the fits' spin ratios and at its vertex
+    with pytest.raises(ConfigError) as info:
+        ti_golf.load_scene("tour_shot", [f"air.{name}={value}"])
+    assert info.value.key == f"air.{name}" and fragment in str(info.value), str(info.value)
+    assert ti_golf.load_scene("tour_shot", ["air.C_D_S=[0.1, 0, -0.1]"]).air.C_D_S == (0.1, 0.0, -0.1)
+
+
 def test_every_key_that_its_setting_leaves_unread_is_refused(tmp_path):
     # walks the key table: each key declared with read_when (it takes effect only under another
     # key's setting) is given with that setting violated, and refused naming the file, the key

@@ -51,6 +51,7 @@ import taichi as ti
 
 from ti_golf import front_end
 from ti_golf.physics.types import AirParams, log, vec, vec3
+from ti_golf.scene.air import SPIN_RATIOS
 
 LAB, SPIN_RATIO, SPIN_REYNOLDS = 0, 1, 2
 AIR_MODEL_CODES = {"lab": LAB, "spin_ratio": SPIN_RATIO, "spin_reynolds": SPIN_REYNOLDS}
@@ -58,7 +59,7 @@ AIR_MODEL_CODES = {"lab": LAB, "spin_ratio": SPIN_RATIO, "spin_reynolds": SPIN_R
 CONSTANT_WIND, LOG_WIND = 0, 1
 WIND_PROFILE_CODES = {"constant": CONSTANT_WIND, "log": LOG_WIND}
 """Kernel codes of ``air.wind_profile`` (:data:`ti_golf.scene.schema.WIND_PROFILES`)."""
-S_MIN, S_MAX = 0.02, 0.75
+S_MIN, S_MAX = SPIN_RATIOS
 """The range of spin ratios of the C_D(S), C_L(S) fit; the coefficients are held at its ends."""
 _TINY = 1e-12
 

@@ -20,6 +20,9 @@ AIR_MODELS = ("lab", "spin_ratio", "spin_reynolds")
 spin ratio and the Reynolds number."""
 WIND_PROFILES = ("constant", "log")
 """How the wind varies with height (``air.wind_profile``): not at all, or logarithmically."""
+SPIN_RATIOS = (0.02, 0.75)
+"""The range of spin ratios S = Rω/|v_rel| of the C_D(S), C_L(S) fits of the spin-ratio models; the
+coefficients are held at its ends."""
 SPIN_REYNOLDS_C_D = (0.1304, 0.6683, -0.8259)
 """Default ``air.C_D_S`` [C_D0, C_D1, C_D2] of ``air.model = "spin_reynolds"`` (``ti-golf fit-aero``)."""
 SPIN_REYNOLDS_C_L = (0.0504, 1.2031, -1.3073)
@@ -158,15 +161,16 @@ class Air:
         "vec3",
         SPIN_REYNOLDS_C_D,
         "-",
-        "[C_D0, C_D1, C_D2]: drag coefficient C_D0 + C_D1·S + C_D2·S² above the drag crisis (S held within 0.02–0.75)",
+        "[C_D0, C_D1, C_D2]: drag coefficient C_D0 + C_D1·S + C_D2·S² above the drag crisis (S held within "
+        "0.02–0.75, where it must stay in [0, 100])",
         read_when=("model", ("spin_reynolds",)),
     )
     C_L_S: Vec3 = key(
         "vec3",
         SPIN_REYNOLDS_C_L,
         "-",
-        "[C_L0, C_L1, C_L2]: lift coefficient C_L0 + C_L1·S + C_L2·S² (S held within 0.02–0.75; "
-        "in proportion to S below 0.02)",
+        "[C_L0, C_L1, C_L2]: lift coefficient C_L0 + C_L1·S + C_L2·S² (S held within 0.02–0.75, where it "
+        "must stay in [-100, 100]; in proportion to S below 0.02)",
         read_when=("model", ("spin_reynolds",)),
     )
     C_D_crisis: float = key(
@@ -174,7 +178,7 @@ class Air:
         SPIN_REYNOLDS_CRISIS[0],
         "-",
         "drag crisis: C_D rises by C_D_crisis/(1 + (Re/Re_crisis)⁴) as the ball slows",
-        NON_NEGATIVE,
+        COEFFICIENT,
         read_when=("model", ("spin_reynolds",)),
     )
     Re_crisis: float = key(
@@ -193,3 +197,12 @@ class Air:
         NON_NEGATIVE,
         read_when=("model", ("spin_reynolds",)),
     )
+
+
+def quadratic_range(c: Vec3, lo: float, hi: float) -> tuple[float, float]:
+    """The least and greatest of c0 + c1·S + c2·S² over lo ≤ S ≤ hi (at an end or at the vertex)."""
+    at = [lo, hi]
+    if c[2] != 0.0 and lo < -c[1] / (2.0 * c[2]) < hi:
+        at.append(-c[1] / (2.0 * c[2]))
+    values = [c[0] + c[1] * s + c[2] * s * s for s in at]
+    return min(values), max(values)

@@ -22,6 +22,7 @@ else:  # pragma: no cover - Python 3.10
 
 from ti_golf.errors import OVERRIDES, ConfigError
 from ti_golf.scene.across import READ_ACROSS, read_across, unread_text, with_value
+from ti_golf.scene.air import SPIN_RATIOS, quadratic_range
 from ti_golf.scene.checks import REACH, raise_config
 from ti_golf.scene.keys import Key, read_when_text
 from ti_golf.scene.schema import (
@@ -419,6 +420,8 @@ def _air(values: dict[str, Any], sources: dict[str, str], source: str) -> dict[s
     """
     values = dict(values)
     cli = {k for k in values if sources.get(k) == OVERRIDES}
+    if values.get("model") == "spin_reynolds":
+        _spin_coefficients(values, sources, source)
 
     def drop_file(*names: str) -> None:
         for name in names:
@@ -465,6 +468,25 @@ def _air(values: dict[str, Any], sources: dict[str, str], source: str) -> dict[s
                 f"cannot be given with the weather ({given}), which sets {what}: give one or the other",
             )
     return values
+
+
+def _spin_coefficients(values: dict[str, Any], sources: dict[str, str], source: str) -> None:
+    """``air.C_D_S`` and ``air.C_L_S`` give a drag coefficient C_D(S) in [0, 100] and a lift
+    coefficient C_L(S) in [-100, 100] over the fits' spin ratios (``SPIN_RATIOS``), where the
+    flight holds S: a negative drag feeds the ball energy, and larger coefficients overflow the
+    forces, as the lab's C_D and C_M are bounded."""
+    lo_s, hi_s = SPIN_RATIOS
+    for name, least in (("C_D_S", 0.0), ("C_L_S", -100.0)):
+        if name not in values:
+            continue
+        lo, hi = quadratic_range(values[name], lo_s, hi_s)
+        if lo < least or hi > 100.0:
+            raise_config(
+                sources.get(name, source),
+                f"air.{name}",
+                f"gives {name[:3]}(S) from {lo:.4g} to {hi:.4g} over the spin ratios {lo_s:g} ≤ S ≤ {hi_s:g}; "
+                f"it must stay within [{least:g}, 100]",
+            )
 
 
 def _ball_spec(values: dict[str, Any], source: str, i: int) -> BallSpec:
