@@ -173,6 +173,19 @@ def test_sweep_columns_hold_the_same_numbers(tour):
         np.testing.assert_allclose(cols[col], want, rtol=1e-9, atol=1e-9, err_msg=col)
 
 
+def test_a_ball_that_lands_behind_the_tee_carries_a_negative_distance_and_is_never_the_best():
+    # the report's Magnus law at 40 rad/s of backspin loops a 60° launch back over the tee: its carry
+    # was the distance alone, positive, so a sweep could call a backward shot its best
+    lab = load_scene("lab_magnus")
+    res = sweep(lab, angles_deg=[10.0, 60.0], spins=[40.0])
+    f, s = res.flight, res.shots
+    assert f.landed.all() and s.along[1] < 0 < s.along[0]  # (along the target line, +x)
+    np.testing.assert_allclose(np.abs(res.carry), np.hypot(f.landing_x, f.landing_z), rtol=1e-12)
+    assert res.carry[1] == -f.carry[1] < 0 < res.carry[0] == f.carry[0]
+    assert res.best() == 0 and res.columns()["carry_m"][1] == res.carry[1]
+    assert f.carry[1] > f.carry[0]  # (the case that was wrong: farther from the tee, but backward)
+
+
 # ----------------------------------------------------------------------------------------------
 # dispersion
 # ----------------------------------------------------------------------------------------------

@@ -112,7 +112,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         f = res.flight
         print(
             f"best: angle {res.angle_deg[b]:.4f} deg, speed {res.speed_mps[b]:g} m/s, spin {res.spin_radps[b]:g} rad/s"
-            f" -> carry {f.carry[b]:.4f} m (apex {f.apex[b] - launch_position(scene)[1]:.2f} m, "
+            f" -> carry {res.carry[b]:.4f} m (apex {f.apex[b] - launch_position(scene)[1]:.2f} m, "
             f"flight {f.flight_time[b]:.3f} s, lands at {f.landing_angle[b]:.1f} deg, {f.landing_speed[b]:.2f} m/s)"
         )
         edge = edge_of_angles(res.angle_deg, res.angle_deg[b])

@@ -54,15 +54,16 @@ class SweepResult:
 
     @property
     def carry(self) -> np.ndarray:
-        """Carry [m], shape (N,)."""
-        return self.flight.carry
+        """Carry [m], shape (N,): negative for a ball that lands behind the launch point (along the
+        target line, :attr:`Shots.carry`; the distance alone for a result built without shots)."""
+        return self.flight.carry if self.shots is None else self.shots.carry
 
     def best(self) -> int:
-        """Index of the longest carry (ignoring balls that did not land); a ValueError when no
-        ball landed (within ``world.t_max``)."""
+        """Index of the longest carry down the target line (ignoring balls that did not land); a
+        ValueError when no ball landed (within ``world.t_max``)."""
         if not np.any(self.flight.landed):
             raise ValueError("no ball of the sweep landed (within world.t_max): it has no best launch")
-        c = np.where(self.flight.landed, self.flight.carry, -np.inf)
+        c = np.where(self.flight.landed, self.carry, -np.inf)
         return int(np.argmax(c))
 
     def columns(self) -> dict[str, np.ndarray]:
@@ -78,7 +79,7 @@ class SweepResult:
                     self.angle_deg,
                     self.speed_mps,
                     self.spin_radps,
-                    f.carry,
+                    s.carry,
                     f.landing_x,
                     f.landing_z,
                     s.apex,

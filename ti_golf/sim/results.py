@@ -110,8 +110,9 @@ class Shots:
     Attributes:
         landed: True where the ball came back down through its launch height.
         at_rest: True where the ball was rolled out and came to rest.
-        carry: distance to the landing point at launch height [m].
-        total: distance to the point of rest [m].
+        carry: distance to the landing point at launch height [m], negative when that point lies
+            behind the launch point (``along`` < 0: a ball blown or spun back over the tee).
+        total: distance to the point of rest [m], negative when it lies behind the launch point.
         roll: total − carry [m] (negative when a ball checks and spins back).
         offline: the landing point's distance right of the target line [m].
         along: the landing point's distance along the target line [m].
@@ -162,16 +163,18 @@ class Shots:
         total, rest_along, rest_offline = nan, nan, nan
         if rest_x is not None:
             rest = np.where(rest_ok[:, None], np.asarray(rest_x, float) - launch_x, np.nan)
-            total = np.hypot(rest[:, 0], rest[:, 2])
             rest_along, rest_offline = rest @ d_hat, rest @ r_hat
+            total = np.copysign(np.hypot(rest[:, 0], rest[:, 2]), rest_along)  # (behind the tee: negative)
+        land_along = land @ d_hat
+        carry = np.copysign(flight.carry, land_along)  # (a ball that lands behind the tee: negative)
         return cls(
             landed=flight.landed,
             at_rest=rest_ok,
-            carry=flight.carry,
+            carry=carry,
             total=total,
-            roll=total - flight.carry,
+            roll=total - carry,
             offline=land @ r_hat,
-            along=land @ d_hat,
+            along=land_along,
             rest_offline=rest_offline,
             rest_along=rest_along,
             apex=flight.apex - launch_x[:, 1],
