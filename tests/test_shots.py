@@ -296,6 +296,9 @@ def test_shot_prints_the_numbers_golfers_read_in_either_units():
         (["shot", "tour_shot", "--axis", "nan"], "--axis"),
         (["shot", "tour_shot", "--units", "furlongs"], "--units"),
         (["shot", "driving_range", "--speed", "150"], "--vla"),  # no [launch] to take VLA and spin from
+        # a scene's launch out of a shot's range names its key, not an option that was not given
+        (["shot", "lab_magnus", "--set", "launch.spin=[0, 0, 100000]"], "launch.spin of scene 'lab_magnus'"),
+        (["shot", "lab_magnus", "--set", "launch.speed=0"], "launch.speed of scene 'lab_magnus'"),
         (["dispersion", "tour_shot", "--n", "1"], "--n"),
         (["dispersion", "tour_shot", "--n", "1000001"], "--n"),
         (["dispersion", "tour_shot", "--sd-vla", "-1"], "--sd-vla"),

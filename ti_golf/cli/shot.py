@@ -18,6 +18,14 @@ from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import GOLFER_COLUMNS, Shots
 
 LAUNCH_OPTIONS = {"speed": "--speed", "vla_deg": "--vla", "hla_deg": "--hla", "spin": "--spin", "axis_deg": "--axis"}
+SCENE_KEYS = {
+    "speed": "launch.speed",
+    "vla_deg": "launch.angle_deg",
+    "hla_deg": "launch.direction_deg",
+    "spin": "launch.spin",
+    "axis_deg": "launch.spin",
+}
+"""The scene's keys that a launch value comes from when its option is not given."""
 """The option of each launch-monitor value."""
 
 LABELS = {
@@ -72,15 +80,23 @@ def read_launch(args: argparse.Namespace, scene: Scene, units: Units) -> Monitor
     """The launch of the options given, the scene's launch for the others, checked (SI)."""
     refuse_replaced_launch(args)
     if scene.launch is None:
-        for option in ("--speed", "--vla", "--spin"):
-            if getattr(args, option[2:]) is None:
-                raise ConfigError(option, None, f"required: scene {scene.name!r} has no [launch] table to take it from")
+        missing = [option for option in ("--speed", "--vla", "--spin") if getattr(args, option[2:]) is None]
+        if missing:
+            raise ConfigError(
+                missing[0],
+                None,
+                f"required: scene {scene.name!r} has no [launch] table to take it from (give --speed, --vla and --spin)",
+            )
     values = scene_launch(scene).in_units(units)
+    named = {}  # what an error names: the option given, or the scene's key the value came from
     for name, option in LAUNCH_OPTIONS.items():
         if getattr(args, option[2:]) is not None:
             values[name] = getattr(args, option[2:])
+            named[name] = option
+        else:
+            named[name] = f"{SCENE_KEYS[name]} of scene {scene.name!r} (as a shot's {option[2:]})"
     launch = MonitorLaunch.from_units(values, units)
-    check_launch(launch, units, LAUNCH_OPTIONS)
+    check_launch(launch, units, named)
     return launch
 
 
