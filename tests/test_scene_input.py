@@ -691,6 +691,7 @@ def test_cli_bad_range_exits_2(option, value, fragment):
         ('[[blocks]]\nkind = "random"\nnumber = 3\nseed = -1\n', "blocks[0].seed", "must be >= 0 (got -1)"),
         ('[[blocks]]\nkind = "random"\nnumber = 0\n', "blocks[0].number", "must be in [1, 50000000] (got 0)"),
         ('[[blocks]]\nkind = "random"\n', "blocks[0].number", "is required for a random block"),
+        ("[sweep]\nangles = [100, 200]\n", "sweep.angles", "must each be in [-90, 90] deg (got 100.0)"),
         (
             '[[blocks]]\nkind = "random"\nnumber = 10\nbox_min = [-1e200, 0, -1e200]\nbox_max = [1e200, 1, 1e200]\n',
             "blocks[0].box_min",

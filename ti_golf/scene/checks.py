@@ -220,6 +220,8 @@ GRAVITY = Each(Interval(-GRAVITY_LIMIT, GRAVITY_LIMIT), 3)
 """A gravitational acceleration [m/s²] within :data:`GRAVITY_LIMIT` on each axis."""
 POSITION = Each(Interval(-REACH, REACH), 3)
 """A point [m] within :data:`REACH` of the origin on each axis."""
+ELEVATIONS = Each(Interval(-90.0, 90.0), 0)
+"""Launch elevations [deg], from straight down to straight up."""
 SPEEDS = Each(Interval(0.0, SPEED_LIMIT), 0)
 """A list of speeds [m/s] in [0, :data:`SPEED_LIMIT`]."""
 VELOCITY = Each(Interval(-SPEED_LIMIT, SPEED_LIMIT), 3)

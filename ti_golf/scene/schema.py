@@ -36,6 +36,7 @@ from ti_golf.scene.air import (
 )
 from ti_golf.scene.checks import (
     DURATION,
+    ELEVATIONS,
     GRAVITY,
     MASS,
     NON_NEGATIVE,
@@ -530,7 +531,7 @@ class SweepDefaults:
     """Default launch-condition lists for ``ti-golf sweep`` (``None``: use the launch table)."""
 
     angles: tuple[float, ...] | None = key(
-        "range", None, "deg", "default elevation angles of `ti-golf sweep` (START:STOP:STEP or list)"
+        "range", None, "deg", "default elevation angles of `ti-golf sweep` (START:STOP:STEP or list)", ELEVATIONS
     )
     speeds: tuple[float, ...] | None = key("range", None, "m/s", "default launch speeds of `ti-golf sweep`", SPEEDS)
     spins: tuple[float, ...] | None = key(
