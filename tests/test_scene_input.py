@@ -692,6 +692,13 @@ def test_cli_bad_range_exits_2(option, value, fragment):
         ('[[blocks]]\nkind = "random"\nnumber = 0\n', "blocks[0].number", "must be in [1, 50000000] (got 0)"),
         ('[[blocks]]\nkind = "random"\n', "blocks[0].number", "is required for a random block"),
         ("[sweep]\nangles = [100, 200]\n", "sweep.angles", "must each be in [-90, 90] deg (got 100.0)"),
+        ("[hole]\nposition = [1e9, 0]\n", "hole.position", "must be in [-1000000, 1000000] m on both axes"),
+        ("[[blocks]]\ncount = [2, 1, 1]\nseed = 5\n", "blocks[0].seed", "has no effect: the lattice draws nothing"),
+        (
+            '[terrain]\n[[surfaces]]\nname = "a"\n[[surfaces]]\nname = "b"\n',
+            "terrain.surface_levels",
+            "is required with 2 [[surfaces]]",
+        ),
         (
             '[[blocks]]\nkind = "random"\nnumber = 10\nbox_min = [-1e200, 0, -1e200]\nbox_max = [1e200, 1, 1e200]\n',
             "blocks[0].box_min",
@@ -710,8 +717,10 @@ def test_cli_bad_range_exits_2(option, value, fragment):
 )
 def test_a_block_or_terrain_value_that_a_run_cannot_use_is_refused_before_it_starts(tmp_path, text, key, fragment):
     # each of these ended in a traceback (a negative seed in numpy, a box whose volume overflowed,
-    # a terrain of NaN heights, a random block of no balls), hung (a box of 1e200 m: its spacing overflowed to inf), or was
-    # quietly without effect (a backspin for balls that are not shots)
+    # a terrain of NaN heights, a random block of no balls), hung (a box of 1e200 m: its spacing
+    # overflowed to inf), or was quietly without effect (a backspin for balls that are not shots, a
+    # lattice's seed that draws nothing, surface types beyond the first without the levels that
+    # divide them)
     path = write_scene(tmp_path, "[world]\nground = true\n" + text)
     with pytest.raises(ConfigError) as info:
         ti_golf.Simulation(ti_golf.load_scene(path))
@@ -734,6 +743,15 @@ def test_a_heights_file_that_is_empty_or_too_high_is_refused(tmp_path):
         with pytest.raises(ConfigError) as info:
             ti_golf.load_scene(write_scene(tmp_path, text))
         assert info.value.key == "terrain.file" and fragment in str(info.value), str(info.value)
+
+
+def test_a_scene_saved_with_a_byte_order_mark_loads_as_without_one(tmp_path):
+    # Windows editors save UTF-8 with a BOM, which TOML's parser called an "invalid statement"
+    text = 'description = "with a BOM"\n[launch]\nspeed = 12.5\n'
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    scene = ti_golf.load_scene(path)
+    assert scene.description == "with a BOM" and scene.launch.speed == 12.5
 
 
 def test_a_scene_or_heights_file_that_is_a_fifo_is_refused_at_once(tmp_path):

@@ -196,4 +196,5 @@ def test_keys_markdown_lists_every_key_with_section_type_unit_default_allowed_an
     assert set(rows) == expected
     assert rows[("[contact]", "relax")][2:6] == ["number", "-", "`0.5`", "(0, 1]"]
     assert rows[("[air]", "wind")][2:5] == ["[x, y, z]", "m/s", "`[0, 0, 0]`"]
-    assert rows[("[hole]", "position")][5] == "required"
+    assert rows[("[hole]", "position")][5] == "required; [[-1000000, 1000000], [-1000000, 1000000]]"
+    assert rows[("[[balls]]", "position")][5] == "required; each in [-1000000, 1000000]"

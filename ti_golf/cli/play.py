@@ -216,7 +216,7 @@ def file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
     if Path(path).exists() and not Path(path).is_file() and not Path(path).is_dir():
         raise ConfigError(path, None, "is not a regular file")  # (a FIFO or a device: it could wait for ever)
     try:  # (worded as for the other files read: scenes, saved runs, studies)
-        lines = Path(path).read_text(encoding="utf-8").splitlines()
+        lines = Path(path).read_text(encoding="utf-8-sig").splitlines()
     except FileNotFoundError:
         raise ConfigError(path, None, "file not found") from None
     except IsADirectoryError:

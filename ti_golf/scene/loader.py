@@ -121,7 +121,7 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     if not p.is_file():  # (a FIFO or a device: reading it could wait for ever)
         raise ConfigError(str(p), None, "is not a regular file")
     try:
-        text = p.read_bytes().decode("utf-8")
+        text = p.read_bytes().decode("utf-8-sig")  # (a byte-order mark, as Windows editors write, is dropped)
     except OSError as exc:
         raise ConfigError(str(p), None, f"cannot be read ({exc.strerror or exc})") from None
     except UnicodeDecodeError:
@@ -344,6 +344,13 @@ def _build_arrays(doc: dict[str, Any], source: str, kwargs: dict[str, Any]) -> N
             raise_config(source, "terrain.surface_levels", "must increase")
     elif kwargs["surfaces"] and kwargs.get("terrain") is None:
         raise_config(source, "surfaces", "surface types need a [terrain] (with terrain.surface_levels)")
+    elif len(kwargs["surfaces"]) > 1:  # (without levels every cell is the first's: the others had no effect)
+        raise_config(
+            source,
+            "terrain.surface_levels",
+            f"is required with {len(kwargs['surfaces'])} [[surfaces]]: the heights that divide them, one level "
+            "fewer than surfaces",
+        )
 
 
 def _array_tables(value: Any, name: str, source: str, doc: Mapping[str, Any]) -> list[dict[str, Any]]:
@@ -521,12 +528,25 @@ def _block(values: dict[str, Any], source: str, i: int) -> Block:
             f"blocks[{i}].spacing",
             f"spans more than {BLOCK_REACH:,.0f} m with count {[int(c) for c in block.count]}",
         )
+    if block.kind == "lattice" and "seed" in values and not _draws_at_random(block):
+        raise_config(
+            source,
+            f"blocks[{i}].seed",
+            "has no effect: the lattice draws nothing at random (no jitter, radius_jitter, velocity_jitter, "
+            "nor shots' ranges)",
+        )
     if (block.speed is None) != (block.angle_deg is None):
         raise_config(source, f"blocks[{i}].speed", "shots need both speed and angle_deg ([min, max] each)")
     for name in ("direction_deg", "backspin"):
         if name in values and block.speed is None:
             raise_config(source, f"blocks[{i}].{name}", "is read only for shots (a block with speed and angle_deg)")
     return block
+
+
+def _draws_at_random(block: Block) -> bool:
+    """Whether a lattice block draws something from its seed (:func:`~.balls.build_balls`)."""
+    ranges = (block.speed, block.angle_deg, block.direction_deg, block.backspin) if block.speed is not None else ()
+    return block.jitter > 0 or block.radius_jitter > 0 or block.velocity_jitter > 0 or any(lo < hi for lo, hi in ranges)
 
 
 def _terrain(values: dict[str, Any], sources: dict[str, str], source: str) -> TerrainConfig:

@@ -37,7 +37,7 @@ def keys_markdown() -> str:
     rows = ["| section | key | type | unit | default | allowed | help |", "|---|---|---|---|---|---|---|"]
     for section, _, keys in _tables():
         for k in keys.values():
-            allowed = k.allowed or ("required" if k.required else "")
+            allowed = "; ".join(filter(None, ("required" if k.required else "", k.allowed)))
             rows.append(
                 f"| `{section}` | `{k.name}` | {_cell(TYPE_NAMES[k.kind])} | {k.unit} | `{_default_text(k, 'help')}` | "
                 f"{_cell(allowed)} | {_cell(help_text(k))} |"

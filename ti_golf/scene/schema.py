@@ -43,6 +43,7 @@ from ti_golf.scene.checks import (
     POSITION,
     POSITIVE,
     RADIUS,
+    REACH,
     SPEED_LIMIT,
     SPEEDS,
     SPIN,
@@ -144,6 +145,7 @@ class World:
         "m",
         "height of the ground plane, of a [launch] ball resting on the ground and of the log wind "
         "profile's zero (read only when one of the three is in the scene)",
+        Interval(-REACH, REACH),
     )
     v_rest: float = key(
         "float",
@@ -361,6 +363,7 @@ class HoleConfig:
         "m",
         "the cup's centre [x, z] (required); it sits on the terrain, else on the ground or the first "
         "upward-facing plane",
+        Each(Interval(-REACH, REACH), 2),
     )
     radius: float = key("float", 0.054, "m", "cup radius (regulation: 108 mm across)", POSITIVE)
     flag_height: float = key(
