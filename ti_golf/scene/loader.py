@@ -545,8 +545,10 @@ def _block(values: dict[str, Any], source: str, i: int) -> Block:
 
 def _draws_at_random(block: Block) -> bool:
     """Whether a lattice block draws something from its seed (:func:`~.balls.build_balls`)."""
-    ranges = (block.speed, block.angle_deg, block.direction_deg, block.backspin) if block.speed is not None else ()
-    return block.jitter > 0 or block.radius_jitter > 0 or block.velocity_jitter > 0 or any(lo < hi for lo, hi in ranges)
+    shots = block.speed is not None and any(
+        r is not None and r[0] < r[1] for r in (block.speed, block.angle_deg, block.direction_deg, block.backspin)
+    )
+    return block.jitter > 0 or block.radius_jitter > 0 or block.velocity_jitter > 0 or shots
 
 
 def _terrain(values: dict[str, Any], sources: dict[str, str], source: str) -> TerrainConfig:
