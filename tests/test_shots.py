@@ -186,6 +186,19 @@ def test_a_ball_that_lands_behind_the_tee_carries_a_negative_distance_and_is_nev
     assert f.carry[1] > f.carry[0]  # (the case that was wrong: farther from the tee, but backward)
 
 
+def test_a_ball_that_never_rises_has_no_landing_to_describe_and_all_its_travel_is_roll(tour):
+    # launched 10° down, the ball is below its launch height at once: the landing angle, speed and
+    # spin were the launch's (10°, 123 mph), read as a landing; launched level with a 7-iron's
+    # backspin it climbs on its lift and flies (a landing of its own, steeper than level)
+    base = scene_launch(tour)
+    down, level = (shots(tour, replace(base, vla_deg=vla)) for vla in (-10.0, 0.0))
+    assert down.carry[0] == 0.0 and down.apex[0] == 0.0 and down.hang_time[0] == 0.0
+    assert np.isnan([down.land_angle[0], down.land_speed[0], down.land_spin[0]]).all()
+    assert down.total[0] > 0 and down.roll[0] == down.total[0]
+    assert level.apex[0] > 1.0 and level.carry[0] > 100.0 and level.hang_time[0] > 1.0
+    assert 0.0 < level.land_angle[0] < 90.0 and np.isfinite([level.land_speed[0], level.land_spin[0]]).all()
+
+
 # ----------------------------------------------------------------------------------------------
 # dispersion
 # ----------------------------------------------------------------------------------------------

@@ -183,6 +183,8 @@ def cmd_shot(args: argparse.Namespace) -> int:
     for (name, kind), v in zip(GOLFER_COLUMNS, values.values()):
         note = "  (+ right of the target line)" if name == "offline" else ""
         print(f"  {LABELS[name]:<11} {fmt(v, kind, units):>8} {unit_label(kind, units)}{note}")
+    if not res.apex[0] > 0.0:
+        print("  (the ball never rose above its launch height: no flight, it was down through it at once)")
     if not to_rest:
         print("  (total and roll need a ground to roll out on: the scene has none)")
     elif not res.at_rest[0]:

@@ -38,7 +38,9 @@ def fly_shots(
     progress: RunProgress | None = None,
 ) -> Shots:
     """Fly balls from (x0, v0, ω0) (each (N, 3), SI) to landing and, with ``to_rest``, roll them
-    out to rest on the scene's ground.
+    out to rest on the scene's ground. A ball that never rises above its launch height (launched
+    level or downward, without the lift to climb) is down through it at once: its carry, apex and
+    hang time are 0, its landing angle, speed and spin NaN, and all it travels is roll.
 
     ``flight_dt`` [s] replaces ``world.dt`` for the flight only (the roll-out keeps ``world.dt``,
     which the contacts need); ``progress(t_done, t_total)`` follows the roll-out.
@@ -49,7 +51,14 @@ def fly_shots(
         raise ValueError(f"flight_dt must be in [{lo:g}, {hi:g}] s (got {flight_dt!r})")
     flown = scene if flight_dt is None else replace(scene, world=replace(scene.world, dt=float(flight_dt)))
     raw = fly(flown, x0, v0, w0)
-    return shots_from_landing(scene, x0, raw, to_rest, progress)
+    out = shots_from_landing(scene, x0, raw, to_rest, progress)
+    rose = ~(out.apex <= 0.0)  # (a ball that never rose is "down" at once: no landing to describe)
+    if not rose.all():
+        nan = np.where(rose, 1.0, np.nan)
+        out = replace(
+            out, land_angle=out.land_angle * nan, land_speed=out.land_speed * nan, land_spin=out.land_spin * nan
+        )
+    return out
 
 
 FLIGHT_DT_RANGE = (1e-5, 0.05)
