@@ -223,6 +223,21 @@ def test_ellipses_of_a_known_normal_distribution():
         np.testing.assert_allclose(np.einsum("ij,jk,ik->i", d, np.linalg.inv(cov), d), k * k, rtol=1e-9)
 
 
+def test_draws_held_at_a_launch_limit_are_counted():
+    # a VLA of 16.1 ± 100° draws beyond ±90° a share Φ((-90 - 16.1)/100) + 1 - Φ((90 - 16.1)/100)
+    # of the time, held there (the summary said VLA 100° and the "68 %" ellipse held 78 %)
+    from ti_golf.golf.dispersion import draw_launches, held_at_limits
+
+    mean = MonitorLaunch(55.0, 16.1, 0.0, 700.0, 0.0)
+    sd = MonitorLaunch(0.0, 100.0, 1.5, 0.0, 3.0)
+    n = 200_000
+    held = held_at_limits(draw_launches(mean, sd, n, seed=5), sd)
+    phi = [0.5 * (1 + math.erf(z / math.sqrt(2))) for z in ((-90 - 16.1) / 100, (90 - 16.1) / 100)]
+    want = phi[0] + 1 - phi[1]
+    assert set(held) == {"vla_deg"}  # (no spread, or within the limits: not listed)
+    assert held["vla_deg"] == pytest.approx(want, abs=4 * math.sqrt(want * (1 - want) / n))
+
+
 def test_dispersion_is_deterministic_for_a_seed(tour):
     sd = MonitorLaunch(1.5 * MPH, 1.0, 1.5, 300 * RPM, 3.0)
     a, b = (dispersion(tour, SEVEN_IRON, sd, n=48, seed=3) for _ in range(2))

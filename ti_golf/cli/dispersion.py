@@ -18,10 +18,18 @@ from ti_golf.cli._common import (
 )
 from ti_golf.cli.shot import LAUNCH_OPTIONS, launch_line, launch_options, read_launch, units_option
 from ti_golf.errors import ConfigError
-from ti_golf.golf.dispersion import MAX_SHOTS, PLAYER_SPREAD, dispersion
+from ti_golf.golf.dispersion import MAX_SHOTS, PLAYER_SPREAD, dispersion, held_at_limits
 from ti_golf.golf.rollout import has_ground
 from ti_golf.golf.shots import FLIGHT_DT_RANGE
-from ti_golf.scene.launch_monitor import UNITS, MonitorLaunch, Units, check_launch
+from ti_golf.scene.launch_monitor import (
+    LAUNCH_LIMITS,
+    UNITS,
+    MonitorLaunch,
+    Units,
+    check_launch,
+    field_factor,
+    field_label,
+)
 from ti_golf.scene.loader import load_scene
 
 SPREAD = PLAYER_SPREAD
@@ -109,6 +117,12 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
     )
     print(f"mean launch: {launch_line(mean, units)}")
     print(f"spread (sd): {launch_line(sd, units, signed=False)}")
+    for name, share in held_at_limits(d.launches, sd).items():
+        lo, hi = (v / field_factor(units, name) for v in LAUNCH_LIMITS[name])
+        print(
+            f"note: {100 * share:.1f} % of the drawn {LAUNCH_OPTIONS[name][2:]} values fell beyond "
+            f"[{lo:g}, {hi:g}] {field_label(units, name)} and were held there: the spread flown is narrower than its sd"
+        )
     summary = d.summary()
     print(f"{'':<8} {'mean':>9} {'sd':>7}")
     for name, (m, sdv) in summary.items():

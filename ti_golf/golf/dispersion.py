@@ -45,6 +45,20 @@ def draw_launches(mean: MonitorLaunch, sd: MonitorLaunch, n: int, seed: int) -> 
     return MonitorLaunch(**out)
 
 
+def held_at_limits(launches: MonitorLaunch, sd: MonitorLaunch) -> dict[str, float]:
+    """The share of the drawn values of each launch field that :func:`draw_launches` held at a
+    limit of :data:`~ti_golf.scene.launch_monitor.LAUNCH_LIMITS` (fields with a spread only, and
+    only those where some were): there the spread flown is narrower than ``sd`` says."""
+    out = {}
+    for f in fields(MonitorLaunch):
+        if float(getattr(sd, f.name)) > 0.0:
+            value = np.asarray(getattr(launches, f.name))
+            share = float(np.mean(np.isin(value, LAUNCH_LIMITS[f.name])))
+            if share > 0.0:
+                out[f.name] = share
+    return out
+
+
 def chi2_radius(p: float) -> float:
     """k with P(χ²₂ ≤ k²) = p: the Mahalanobis radius of the ellipse holding a fraction p of a 2-D normal."""
     return math.sqrt(-2.0 * math.log1p(-p))

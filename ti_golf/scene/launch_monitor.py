@@ -155,12 +155,12 @@ class MonitorLaunch:
 
     def in_units(self, units: Units) -> dict[str, float | np.ndarray]:
         """The values in ``units`` (speed and spin converted; angles stay in degrees), by field name."""
-        return {f.name: getattr(self, f.name) / _factor(units, f.name) for f in fields(self)}
+        return {f.name: getattr(self, f.name) / field_factor(units, f.name) for f in fields(self)}
 
     @classmethod
     def from_units(cls, values: dict[str, float | np.ndarray], units: Units) -> "MonitorLaunch":
         """From values in ``units`` by field name (see :meth:`in_units`); floats stay floats."""
-        si = {name: np.asarray(v, dtype=float) * _factor(units, name) for name, v in values.items()}
+        si = {name: np.asarray(v, dtype=float) * field_factor(units, name) for name, v in values.items()}
         return cls(**{name: v if v.ndim else float(v) for name, v in si.items()})
 
 
@@ -174,11 +174,13 @@ LAUNCH_LIMITS = {
 """Allowed launch values, SI (ball speed up to 150 m/s ≈ 335 mph, spin up to 2000 rad/s ≈ 19,100 rpm)."""
 
 
-def _factor(units: Units, name: str) -> float:
+def field_factor(units: Units, name: str) -> float:
+    """SI per unit of the launch field ``name`` in ``units`` (m/s per mph, rad/s per rpm; 1 for angles)."""
     return units.speed if name == "speed" else units.spin if name == "spin" else 1.0
 
 
-def _label(units: Units, name: str) -> str:
+def field_label(units: Units, name: str) -> str:
+    """The unit of the launch field ``name`` in ``units`` (mph, rpm, deg ...)."""
     return units.speed_label if name == "speed" else units.spin_label if name == "spin" else "deg"
 
 
@@ -188,7 +190,7 @@ def check_launch(launch: MonitorLaunch, units: Units, options: dict[str, str], s
     ``spread``, the values are standard deviations: finite, ≥ 0 and at most the range's width."""
     for name, (lo, hi) in LAUNCH_LIMITS.items():
         value = float(np.asarray(getattr(launch, name)))
-        f, label = _factor(units, name), _label(units, name)
+        f, label = field_factor(units, name), field_label(units, name)
         if spread:
             lo, hi = 0.0, hi - lo
         if not (math.isfinite(value) and lo <= value <= hi) or (name == "speed" and not spread and value <= 0.0):
