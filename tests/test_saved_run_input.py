@@ -151,6 +151,8 @@ CASES = {
     "time so late a step no longer moves it": (_set("t", np.float64(1e300)), "t", "is 1e+300 s; expects a time in"),
     "infinite time": (_set("t", np.float64(np.inf)), "t", "is inf s"),
     "two times": (_set("t", np.zeros(2)), "t", "shape (2,); expects one number"),
+    "partial as text": (_set("partial", np.array("yes")), "partial", "expects true or false"),
+    "partial for each ball": (_set("partial", np.zeros(4, bool)), "partial", "expects true or false"),
     "text velocities": (_set("v", lambda v: v.astype(str)), "v", "dtype <U"),
     "text time": (_set("t", np.array("5")), "t", "dtype <U1; expects numbers"),
     "float statuses": (_set("status", lambda s: s.astype(float)), "status", "dtype float64; expects whole numbers"),

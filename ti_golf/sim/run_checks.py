@@ -121,6 +121,12 @@ def check_entries(source: str, data: dict[str, np.ndarray], meta: dict[str, Any]
         _numbers(source, data, name, what, (n, *shape), allowed, words)
     _codes(source, data, "status", "the balls' statuses", n, STATUS_NAMES)
     _time(source, data)
+    if "partial" in data and (data["partial"].dtype.kind != "b" or data["partial"].shape != ()):
+        fail(
+            source,
+            "partial",
+            f"is {_short(data['partial'])}; expects true or false (whether the run was stopped early)",
+        )
     if meta["tracking"]:
         landed = _codes(source, data, "landed", "the balls' flight states", n, LANDED_NAMES)
         if np.all(landed == NOT_TRACKED):
