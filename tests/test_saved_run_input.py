@@ -152,6 +152,8 @@ CASES = {
     "infinite time": (_set("t", np.float64(np.inf)), "t", "is inf s"),
     "two times": (_set("t", np.zeros(2)), "t", "shape (2,); expects one number"),
     "partial as text": (_set("partial", np.array("yes")), "partial", "expects true or false"),
+    "a speed no run reaches": (_poke("v", (0, 0), 1e30), "v", "ball 0 holds 1e+30; expects the balls' velocities"),
+    "a position whose square overflows": (_poke("x", (3, 0), 1e300), "x", "ball 3 holds 1e+300"),
     "partial for each ball": (_set("partial", np.zeros(4, bool)), "partial", "expects true or false"),
     "text velocities": (_set("v", lambda v: v.astype(str)), "v", "dtype <U"),
     "text time": (_set("t", np.array("5")), "t", "dtype <U1; expects numbers"),

@@ -34,6 +34,17 @@ def _finite(a: np.ndarray) -> np.ndarray:
     return np.isfinite(a)
 
 
+BOUND = 1.0e24
+"""The largest magnitude of a saved position [m], velocity [m/s] or spin [rad/s]: past what any run
+reaches (a ball falling freely under the largest gravity until the latest time moves at 1e12 m/s
+and 5e20 m at most), and far from the floats whose squares overflow (a position of 1e300 gave
+overflow warnings, and a velocity of 1e30 a ball reported rolling at 8e28 m)."""
+
+
+def _bounded(a: np.ndarray) -> np.ndarray:
+    return np.isfinite(a) & (np.abs(a) <= BOUND)
+
+
 def _positive(a: np.ndarray) -> np.ndarray:
     return np.isfinite(a) & (a > 0)
 
@@ -43,9 +54,9 @@ def _non_negative(a: np.ndarray) -> np.ndarray:
 
 
 BALLS: dict[str, tuple[str, tuple[int, ...], Check, str]] = {
-    "x": ("the balls' positions [m]", (3,), _finite, "finite"),
-    "v": ("the balls' velocities [m/s]", (3,), _finite, "finite"),
-    "w": ("the balls' spins [rad/s]", (3,), _finite, "finite"),
+    "x": ("the balls' positions [m]", (3,), _bounded, "finite and within ±1e24"),
+    "v": ("the balls' velocities [m/s]", (3,), _bounded, "finite and within ±1e24"),
+    "w": ("the balls' spins [rad/s]", (3,), _bounded, "finite and within ±1e24"),
     "radius": ("the balls' radii [m]", (), _positive, "finite and > 0"),
     "mass": ("the balls' masses [kg]", (), _positive, "finite and > 0"),
     "rest_time": ("the balls' rest timers [s]", (), _non_negative, "finite and >= 0"),
