@@ -558,6 +558,12 @@ def test_a_manifest_edited_into_something_else_is_one_error_naming_its_line(tmp_
         (["--address", "EMPTY.json"], {}, "holds no scheduler's address (JSON with an 'address')"),
         (["--workers", "100000"], {}, "--workers: must be a whole number in [1, "),
         (["--gpus", "1"], {}, "--gpus: has no effect: the tasks of flight ask for no GPU"),  # (it ran, exit 0)
+        # (found only after every task had run)
+        (
+            ["--plot", "f.png", "--figure", "nope"],
+            {},
+            "--figure: is not a figure of flight (got 'nope'); its figures: ",
+        ),
     ],
 )
 def test_a_bad_scheduler_address_or_worker_count_is_one_error(tmp_path, options, env, message):
@@ -570,6 +576,8 @@ def test_a_bad_scheduler_address_or_worker_count_is_one_error(tmp_path, options,
     last = proc.stderr.strip().splitlines()[-1]
     assert last.startswith("ti-golf: error: ") and message in last, proc.stderr
     assert "Traceback" not in proc.stderr
+    if "--figure" in options:
+        assert not (tmp_path / "out").exists()  # (refused before any task ran)
 
 
 def test_the_command_lines_set_replaces_the_files_and_may_not_set_a_varied_key(tmp_path):

@@ -8,10 +8,14 @@ finished rows were written (a re-run finishes the study).
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
 from ti_golf.cli._common import check_plot, plot_help, refuse_without, set_option
 from ti_golf.errors import ConfigError
 from ti_golf.study.cluster import ADDRESS_ENV, check_workers, require_dask
+
+if TYPE_CHECKING:
+    from ti_golf.study.spec import StudySpec
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -59,6 +63,8 @@ def cmd_study(args: argparse.Namespace) -> int:
         raise ConfigError(
             "--lines", None, f"draws one line per value of a second varied key; {spec.name} varies {len(spec.keys)}"
         )
+    if args.figure is not None:  # (before the tasks run: a long study would find it only at its end)
+        _check_figure(args.figure, spec)
     require_dask()
     result = run_study(spec, out=args.out, workers=args.workers, address=args.address, gpus=args.gpus)
     print(
@@ -74,3 +80,15 @@ def cmd_study(args: argparse.Namespace) -> int:
         plot_study(table, spec.keys, column, args.plot, title=title, lines=args.lines)
         print(f"wrote {args.plot}")
     return 1 if result.failed else 0
+
+
+def _check_figure(column: str, spec: StudySpec) -> None:
+    """``--figure`` names a column that the study's figures give (a tour's per club: ``carry_m[PGA
+    Driver]``); else a :class:`ConfigError` listing them."""
+    from ti_golf.study.figures import FIGURES
+
+    columns = [FIGURES[f].column for f in spec.figures]
+    if column.partition("[")[0] not in columns:
+        raise ConfigError(
+            "--figure", None, f"is not a figure of {spec.name} (got {column!r}); its figures: {', '.join(columns)}"
+        )
