@@ -693,6 +693,11 @@ def test_cli_bad_range_exits_2(option, value, fragment):
         ('[[blocks]]\nkind = "random"\n', "blocks[0].number", "is required for a random block"),
         ("[sweep]\nangles = [100, 200]\n", "sweep.angles", "must each be in [-90, 90] deg (got 100.0)"),
         ("[hole]\nposition = [1e9, 0]\n", "hole.position", "must be in [-1000000, 1000000] m on both axes"),
+        (  # (the launched ball was out of bounds before its first step, and the run said nothing)
+            "[launch]\nspeed = 10.0\n[terrain]\norigin = [10, 0, 10]\n",
+            "terrain.origin",
+            "leaves x = z = 0, where the [launch] ball rests, off the terrain (x in [10, 110], z in [10, 110] m)",
+        ),
         ("[[blocks]]\ncount = [2, 1, 1]\nseed = 5\n", "blocks[0].seed", "has no effect: the lattice draws nothing"),
         (
             '[terrain]\n[[surfaces]]\nname = "a"\n[[surfaces]]\nname = "b"\n',

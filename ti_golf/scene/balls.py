@@ -40,7 +40,16 @@ def launch_position(scene: Scene) -> Vec3:
     if scene.launch is not None and scene.launch.position is not None:
         return scene.launch.position
     if scene.terrain is not None:
-        height = float(build_terrain(scene.terrain, scene.path).height(0.0, 0.0))
+        terrain = build_terrain(scene.terrain, scene.path)
+        if not terrain.contains(0.0, 0.0):  # (the ball would be out of bounds before its first step)
+            (x0, _, z0), (sx, sz) = scene.terrain.origin, scene.terrain.size
+            raise_config(
+                scene.path,
+                "terrain.origin",
+                f"leaves x = z = 0, where the [launch] ball rests, off the terrain (x in [{x0:g}, {x0 + sx:g}], "
+                f"z in [{z0:g}, {z0 + sz:g}] m): move the terrain, or give launch.position",
+            )
+        height = float(terrain.height(0.0, 0.0))
         return (0.0, height + scene.ball.radius, 0.0)
     return (0.0, scene.world.ground_height + scene.ball.radius, 0.0)
 
