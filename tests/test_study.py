@@ -348,6 +348,21 @@ def test_a_resumed_study_runs_only_the_tasks_not_finished(flight_study, tmp_path
     assert sorted(Manifest(folder).rows) == sorted(r["task_id"] for r in result.rows)
 
 
+def test_a_folder_that_holds_another_studys_rows_says_so_and_lists_this_studys(flight_study, tmp_path):
+    from ti_golf.study import run_study
+
+    spec, result = flight_study
+    folder = tmp_path / "out"
+    shutil.copytree(result.folder, folder)
+    with open(folder / "manifest.jsonl", "a") as fh:
+        fh.write(json.dumps({**GOOD_ROW, "id": "0ther0ther0ther0"}) + "\n")
+    lines = []
+    again = run_study(spec, out=folder, workers=1, log=lines.append)
+    assert (again.ran, again.skipped) == (0, 4)
+    assert any(f"also holds 1 task row that {again.spec.name} does not have" in line for line in lines), lines
+    assert [r["task_id"] for r in again.rows] == [r["task_id"] for r in result.rows]
+
+
 def test_a_finished_task_whose_saved_run_is_gone_or_broken_runs_again(tmp_path):
     # its row in results.csv named a file that was missing or cut short, and running the study
     # again skipped the task

@@ -74,6 +74,12 @@ def run_study(
     result = StudyResult(spec, folder, skipped=len(spec.tasks) - len(todo))
     if result.skipped:
         log(f"{spec.name}: {result.skipped} of {len(spec.tasks)} tasks finished before (in {folder}), skipped")
+    foreign = len(set(manifest.rows) - {t.id for t in spec.tasks})
+    if foreign:  # (another study's, or this one's before an edit: kept, and left out of the table)
+        log(
+            f"note: {folder} also holds {foreign} task row{'s' if foreign != 1 else ''} that {spec.name} does not "
+            "have (another study's, or this one's before it was changed); the results table lists this study's only"
+        )
     try:
         if todo:
             with study_client(address, workers, gpus, need_gpu=spec.gpu) as client:
