@@ -22,6 +22,7 @@ from ti_golf.cli import main
 from ti_golf.golf.dispersion import chi2_radius, dispersion, ellipse
 from ti_golf.golf.shots import shots
 from ti_golf.golf.sweep import sweep
+from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import (
     MPH,
     RPM,
@@ -221,6 +222,19 @@ def test_ellipses_of_a_known_normal_distribution():
         d = out - e.center
         cov = np.cov(pts, rowvar=False)
         np.testing.assert_allclose(np.einsum("ij,jk,ik->i", d, np.linalg.inv(cov), d), k * k, rtol=1e-9)
+
+
+def test_a_flight_that_diverges_while_finite_is_stopped_naming_the_step():
+    # a 5 m ball of a milligram: its drag acts in far less than a step of 10 ms, the explicit step
+    # overshoots, and the flight grew to an apex of 5e47 m, reported as "did not land" with exit 0
+    from ti_golf.errors import SimulationError
+
+    with pytest.raises(SimulationError, match=r"rose past what their launch can lift them.*try a smaller world.dt"):
+        sweep("lab_magnus", angles_deg=[45.0], overrides=["ball.radius=5", "ball.mass=1e-6"])
+    # (the bound: 10 × (|v0| + |wind|)²/2g; the report's own Magnus shots rise well within it)
+    res = sweep("lab_magnus", angles_deg=[10.0, 45.0, 80.0], spins=[0.0, 40.0])
+    rise = res.flight.apex - launch_position(res.scene)[1]
+    assert np.all(rise < (res.speed_mps**2 / (2 * 9.81)) + 1e-9)
 
 
 def test_draws_held_at_a_launch_limit_are_counted():

@@ -242,7 +242,34 @@ def fly(
             f"(launch v = {np.round(v0[ids[0]], 6).tolist()} m/s); try a smaller world.dt",
             ids[:20].tolist(),
         )
+    _check_rise(out["apex"], x0, v0, a.wind, g, wld.dt)
     return out
+
+
+RISE_MARGIN = 10.0
+"""How many times the height its launch can lift a ball (:func:`_check_rise`) a flight may rise
+before it is taken for an integration that diverged: the wind's log profile grows with height, so
+the bound of a uniform wind is kept with room to spare."""
+
+
+def _check_rise(apex: np.ndarray, x0: np.ndarray, v0: np.ndarray, wind: Any, g: float, dt: float) -> None:
+    """Raise :class:`SimulationError` for balls that rose past what their launch can lift them.
+    In the frame of a uniform wind, lift does no work and drag only takes energy, so a ball rises
+    at most |v0 − wind|²/2g ≤ (|v0| + |wind|)²/2g; beyond :data:`RISE_MARGIN` times that (and
+    1 m), the explicit step was too long for the forces (a light, large ball: the drag's time
+    m/(k|v|) under world.dt) and the flight grew without bound while it stayed finite."""
+    reach = np.linalg.norm(np.asarray(v0, float), axis=1) + float(np.linalg.norm(wind))
+    limit = RISE_MARGIN * reach**2 / (2.0 * g) + 1.0
+    rise = np.asarray(apex, float) - np.asarray(x0, float)[:, 1]
+    ids = np.flatnonzero(rise > limit)
+    if ids.size:
+        i = ids[0]
+        raise SimulationError(
+            f"{ids.size} ball(s) rose past what their launch can lift them, first ball {i}: {rise[i]:.3g} m "
+            f"against at most {limit[i]:.3g} m; the flight's integration diverged at world.dt = {dt:g} s: "
+            "try a smaller world.dt (a light, large ball's drag acts faster than a step)",
+            ids[:20].tolist(),
+        )
 
 
 def sweep(
