@@ -237,6 +237,25 @@ def test_a_flight_that_diverges_while_finite_is_stopped_naming_the_step():
     assert np.all(rise < (res.speed_mps**2 / (2 * 9.81)) + 1e-9)
 
 
+def test_a_launch_spun_far_past_the_fitted_rows_gets_a_note():
+    # the default spin_reynolds coefficients were fitted to the PGA rows (spin ratios 0.07 to 0.45
+    # at launch); past S ≈ 0.40 their drag falls, and more spin carries farther
+    from ti_golf.golf.aero_fit import EXTRAPOLATED, beyond_the_fit, fitted_spin_ratios
+
+    tour = load_scene("tour_shot")
+    lo, hi = fitted_spin_ratios(tour.ball.radius)
+    assert 0.07 < lo < 0.08 and 0.44 < hi < 0.46
+    speed = 54.99
+    spin_at = [hi * speed / tour.ball.radius * k for k in (1.0, EXTRAPOLATED * 1.01)]
+    assert beyond_the_fit(tour, speed, spin_at[0]) is None
+    assert "lies past the PGA rows" in beyond_the_fit(tour, [speed, speed], spin_at)
+    assert beyond_the_fit(load_scene("lab_magnus"), speed, spin_at[1]) is None  # (other air)
+    own = load_scene("tour_shot", ["air.C_D_S=[0.13, 0.9, -0.8]"])
+    assert beyond_the_fit(own, speed, spin_at[1]) is None  # (coefficients of the scene's own)
+    r = sweep(tour, angles_deg=[16.1], speeds=[speed], spins=[7124 * RPM, 13369 * RPM])
+    assert r.carry[1] > r.carry[0]  # (the extrapolation the note warns of)
+
+
 def test_draws_held_at_a_launch_limit_are_counted():
     # a VLA of 16.1 ± 100° draws beyond ±90° a share Φ((-90 - 16.1)/100) + 1 - Φ((90 - 16.1)/100)
     # of the time, held there (the summary said VLA 100° and the "68 %" ellipse held 78 %)

@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 
 import numpy as np
 
 from ti_golf.cli._common import refuse_replaced, runtime_options, scene_options
 from ti_golf.errors import ConfigError
+from ti_golf.golf.aero_fit import beyond_the_fit
 from ti_golf.golf.rollout import has_ground
 from ti_golf.golf.shots import shots
 from ti_golf.scene.launch_monitor import UNITS, MonitorLaunch, Units, check_launch, scene_launch
@@ -166,6 +168,9 @@ def cmd_shot(args: argparse.Namespace) -> int:
     to_rest = has_ground(scene)
     res = shots(scene, launch, to_rest=to_rest)
     values = {k: float(v[0]) for k, v in res.columns(units).items()}
+    note = beyond_the_fit(scene, launch.speed, launch.spin)
+    if note and args.json:
+        print(f"ti-golf: {note}", file=sys.stderr)
     if args.json:
         out: dict[str, object] = {
             "scene": scene.name,
@@ -189,4 +194,6 @@ def cmd_shot(args: argparse.Namespace) -> int:
         print("  (total and roll need a ground to roll out on: the scene has none)")
     elif not res.at_rest[0]:
         print(f"  (the ball was still moving after world.t_max = {scene.world.t_max:g} s: no total)")
+    if note:
+        print(note)
     return 0

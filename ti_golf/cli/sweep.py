@@ -20,6 +20,7 @@ from ti_golf.cli._common import (
 )
 from ti_golf.cli.shot import golfer_table
 from ti_golf.errors import ConfigError
+from ti_golf.golf.aero_fit import beyond_the_fit
 from ti_golf.golf.rollout import has_ground
 from ti_golf.golf.sweep import sweep
 from ti_golf.scene.balls import launch_position
@@ -115,6 +116,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             f" -> carry {res.carry[b]:.4f} m (apex {f.apex[b] - launch_position(scene)[1]:.2f} m, "
             f"flight {f.flight_time[b]:.3f} s, lands at {f.landing_angle[b]:.1f} deg, {f.landing_speed[b]:.2f} m/s)"
         )
+        note = beyond_the_fit(scene, res.speed_mps, res.spin_radps)
+        if note:
+            print(note)
         edge = edge_of_angles(res.angle_deg, res.angle_deg[b])
         if edge:
             print(f"the best angle is the {edge} swept: the longest carry may lie beyond it")

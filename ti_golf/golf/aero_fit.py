@@ -23,6 +23,8 @@ import numpy as np
 from ti_golf.errors import TiGolfError
 from ti_golf.golf.tour import TourFlight, fly_tour
 from ti_golf.golf.trackman import PGA_TOUR
+from ti_golf.scene.air import SPIN_REYNOLDS_C_D, SPIN_REYNOLDS_C_L, SPIN_REYNOLDS_CRISIS
+from ti_golf.scene.launch_monitor import MPH, RPM
 from ti_golf.scene.schema import Air, Scene
 
 
@@ -151,4 +153,45 @@ def fit(scene: Scene, bounded: bool = True) -> FitResult:
     fitted = with_values(scene, values)
     return FitResult(
         values, fitted, fly_tour(fitted, PGA_TOUR), float(sol.cost), evaluations, sol.status > 0, str(sol.message)
+    )
+
+
+def fitted_spin_ratios(radius: float) -> tuple[float, float]:
+    """The least and greatest spin ratio S = R·ω/v at launch among the PGA rows the fit flies, for
+    balls of radius ``radius`` [m]: the launches whose drag and lift the default coefficients of
+    ``spin_reynolds`` were fitted to."""
+    ratios = [radius * row.spin_rpm * RPM / (row.ball_mph * MPH) for row in PGA_TOUR]
+    return min(ratios), max(ratios)
+
+
+EXTRAPOLATED = 1.1
+"""How far past the fitted rows' greatest launch spin ratio (:func:`fitted_spin_ratios`) a launch
+may go before :func:`beyond_the_fit` says so."""
+
+
+def beyond_the_fit(scene: Scene, speeds: Any, spins: Any) -> str | None:
+    """A note when a launch of ``speeds`` [m/s] and ``spins`` [rad/s] has a spin ratio well past
+    the PGA rows that ``spin_reynolds``'s default coefficients were fitted to: there its drag and
+    lift are extrapolated, and the fit (whose drag falls past S ≈ 0.4, as the wedges' flights
+    ask) lets more spin carry farther, where real shots balloon and fall short. ``None`` for other
+    air, or for coefficients of the scene's own."""
+    air = scene.air
+    if air.model != "spin_reynolds" or (air.C_D_S, air.C_L_S, (air.C_D_crisis, air.Re_crisis)) != (
+        SPIN_REYNOLDS_C_D,
+        SPIN_REYNOLDS_C_L,
+        SPIN_REYNOLDS_CRISIS,
+    ):
+        return None
+    speeds, spins = np.broadcast_arrays(np.asarray(speeds, float), np.asarray(spins, float))
+    moving = speeds > 0
+    if not np.any(moving):
+        return None
+    ratio = float(np.max(scene.ball.radius * np.abs(spins[moving]) / speeds[moving]))
+    highest = fitted_spin_ratios(scene.ball.radius)[1]
+    if ratio <= EXTRAPOLATED * highest:
+        return None
+    return (
+        f"note: a spin ratio of {ratio:.2f} at launch lies past the PGA rows the spin_reynolds air was fitted to "
+        f"(up to {highest:.2f}): its drag and lift there are extrapolated, and more spin may carry farther than "
+        "real shots do"
     )
