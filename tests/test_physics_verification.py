@@ -597,6 +597,27 @@ def test_dropped_ball_comes_to_rest_without_sinking_or_jitter():
     assert sim.x[0, 1] == pytest.approx(0.02, abs=1e-9)
 
 
+def test_a_ball_rolling_with_topspin_under_the_reports_magnus_law_rolls_without_hopping():
+    # The lab's Magnus law (L.2), linear in ω, presses a ball rolling at 9 m/s with ω = v/R of
+    # topspin into the ground at some 2 g: each 10 ms step's approach (0.28 m/s) passed
+    # v_bounce + 2|g|h (0.25 m/s), so it bounced at e = 0.5 every other step, hopping up to 9 mm
+    # and flickering between flying and rolling. It rolls on the ground, in contact at every step,
+    # and the rolling resistance slows it by at least μ_roll·g (the downforce adds to it).
+    scene = lab("lab_magnus")
+    R, mu_r = scene.ball.radius, scene.contact.mu_roll
+    sim = tg.Simulation(scene, x=[[0.0, R, 0.0]], v=[[9.0, 0.0, 0.0]], w=[[0.0, 0.0, -9.0 / R]])
+    ys, statuses, speeds = [], [], []
+    for _ in range(200):
+        sim.step()
+        x, v, _ = sim.ball(0)
+        ys.append(x[1])
+        statuses.append(int(sim.status[0]))
+        speeds.append(v[0])
+    assert max(ys) - R < 1e-6 and min(ys) - R > -1e-6  # on the ground, neither above nor in it
+    assert set(statuses) == {tg.ROLLING}
+    assert speeds[-1] <= 9.0 - mu_r * G * 200 * scene.world.dt + 1e-9
+
+
 def test_rolling_ball_stops_where_closed_form_says():
     # A ball pushed along the ground at u0 with no spin (no air): it slides, friction μ slows it
     # and spins it up until the contact point sticks, then it rolls and rolling resistance μ_roll

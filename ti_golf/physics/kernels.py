@@ -205,9 +205,11 @@ def advance(
                 )
                 v1 = v_free
                 touching = 0
+                pushed = v_free - vi - h * params.gravity  # (what the air added this step [m/s])
                 for p in range(model.plane_p.shape[0]):
+                    v_in = v_inelastic + 2.0 * ti.max(-pushed.dot(model.plane_n[p]), 0.0)
                     v1, w1, t = plane_impulse(
-                        xi, v1, w1, r, model.plane_p[p], model.plane_n[p], contact, v_inelastic, h, kinds
+                        xi, v1, w1, r, model.plane_p[p], model.plane_n[p], contact, v_in, h, kinds
                     )
                     touching |= t
                 pt, nt = zero3(), vec(0.0, 1.0, 0.0)
@@ -216,7 +218,8 @@ def advance(
                     ct = surface_contact(
                         contact, model.surface_table, model.terrain_cells, model.heights, terrain, x_free
                     )
-                    v1, w1, t = plane_impulse(xi, v1, w1, r, pt, nt, ct, v_inelastic, h, kinds)
+                    v_in = v_inelastic + 2.0 * ti.max(-pushed.dot(nt), 0.0)
+                    v1, w1, t = plane_impulse(xi, v1, w1, r, pt, nt, ct, v_in, h, kinds)
                     touching |= t
                 x1 = x_free + h * (v1 - v_free)
                 for p in range(model.plane_p.shape[0]):

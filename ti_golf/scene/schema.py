@@ -246,8 +246,9 @@ class Contact:
         "float",
         0.05,
         "m/s",
-        "normal approach speeds below v_bounce + 2|g|h are treated as inelastic (no micro-bounces) "
-        "and as resting contacts, whose impulse carries over to the next step",
+        "normal approach speeds below v_bounce + 2|g|h (for a ball without collisions, plus twice what the air "
+        "pushed it into the surface in the step) are treated as inelastic (no micro-bounces) and as resting "
+        "contacts, whose impulse carries over to the next step",
         NON_NEGATIVE,
     )
 
