@@ -50,6 +50,34 @@ def test_many_balls_of_different_size_and_mass():
     assert carry[1] > carry[0] > carry[2]
 
 
+def test_a_tracked_ball_moved_or_struck_again_starts_a_new_flight_record(tmp_path):
+    # moved 100 m downrange at t0, its carry was measured from the old launch point (312 m); struck
+    # again after it landed, it stayed "landed" with the old shot's carry, and a run until it
+    # landed stopped at once. Now each is a new launch from where and when it is: the same shot's
+    # carry (to the last bit when struck from the same point: RK4's steps do not depend on the
+    # time) and its hang time to the rounding of the absolute times it is taken from
+    base = tg.Simulation("lab_turbulent")
+    x0, v0 = base.x[0].copy(), base.v[0].copy()
+    base.run(until="landed")
+    shot = base.flight()
+    sim = tg.Simulation("lab_turbulent")
+    sim.x = [x0 + [100.0, 0.0, 0.0]]
+    sim.run(until="landed")
+    moved = sim.flight()
+    assert moved.carry[0] == pytest.approx(shot.carry[0], rel=1e-12)  # (the positions' rounding 100 m on)
+    assert moved.landing_x[0] == pytest.approx(shot.landing_x[0] + 100.0, rel=1e-12)
+    struck_at = sim.t
+    sim.set_ball(0, x=x0, v=v0)
+    assert sim.unfinished("landed").tolist() == [0] and np.isnan(sim.flight().carry[0])
+    sim.run(t=30.0, until="landed")
+    again = sim.flight()
+    assert again.carry[0] == shot.carry[0] and again.apex[0] == shot.apex[0]
+    assert again.flight_time[0] == pytest.approx(shot.flight_time[0], abs=1e-9 * struck_at)
+    # a saved run keeps the launch time: continued, the record reads the same
+    sim.save(tmp_path / "again.npz")
+    assert tg.Simulation.load(tmp_path / "again.npz").flight().flight_time[0] == again.flight_time[0]
+
+
 def test_sweep_returns_arrays_in_grid_order():
     res = tg.sweep("lab_magnus", angles_deg=[8, 10, 12], speeds=[60, 80], spins=[0, 10])
     assert res.angle_deg.shape == res.carry.shape == (12,)

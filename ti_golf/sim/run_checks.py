@@ -73,6 +73,10 @@ FLIGHT: dict[str, tuple[str, tuple[int, ...], Check, str]] = {
 }
 """The flight record's numbers, held while some ball's flight is tracked."""
 
+LAUNCH_T = ("the tracked balls' launch times [s]", (), _non_negative, "finite and >= 0")
+"""The launch times, held with the flight record by runs saved since balls are launched again
+when moved or struck (older runs launched every ball at t0)."""
+
 LANDED_NAMES = {NOT_TRACKED: "not tracked", IN_FLIGHT: "in flight", LANDED: "landed"}
 """The flight states of ``landed``."""
 
@@ -110,6 +114,7 @@ ENTRIES = (
     "t",
     "partial",
     "landed",
+    "launch_t",
     "order",
     "terrain_heights",
     "terrain_origin",
@@ -144,6 +149,9 @@ def check_entries(source: str, data: dict[str, np.ndarray], meta: dict[str, Any]
             fail(source, "landed", "tracks no ball, but the run says some ball is tracked (entry 'run', 'tracking')")
         for name, (what, shape, allowed, words) in FLIGHT.items():
             _numbers(source, data, name, what, (n, *shape), allowed, words)
+        if "launch_t" in data:
+            what, shape, allowed, words = LAUNCH_T
+            _numbers(source, data, "launch_t", what, (n, *shape), allowed, words)
     if "order" in data:
         _order(source, data["order"], n)
     _initial(source, data, n)

@@ -81,6 +81,7 @@ def write_run(sim: Any, path: str | os.PathLike[str], recording: Any, partial: b
     if state.tracking:
         data.update({name: state.read(name) for name in FLIGHT})
         data["launch_x"] = sim.launch_x
+        data["launch_t"] = sim.launch_t
     if state.order is not None:
         data["order"] = state.order
     solver_meta = None

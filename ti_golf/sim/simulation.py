@@ -35,6 +35,7 @@ from ti_golf.sim.changes import (
     refuse_for_given_balls,
     refuse_unread,
 )
+from ti_golf.sim.flight_record import launch_again
 from ti_golf.sim.given import as_vectors, check_memory, per_ball, steps_to_run, whole_number
 from ti_golf.sim.results import Flight
 
@@ -185,6 +186,8 @@ class Simulation:
         self.state.reset(x, v, w, track)
         self.launch_x = x.copy() if tracking else None
         """Launch points [m], shape (N, 3): carry is measured from here; ``None`` when no ball is tracked."""
+        self.launch_t = np.full(n, self.state.t) if tracking else None
+        """Launch times [s], shape (N,): hang times are measured from here; ``None`` when no ball is tracked."""
         self._check_buf: Any = None  # a Taichi i32 array of 1, made on the first check
         self._packs = Packs()
         self.solver = None
@@ -221,6 +224,8 @@ class Simulation:
         x, radius, mass, track = saved.balls()
         sim._set_up(saved.scene, x, None, None, radius, mass, track, solver_flags=saved.solver_flags)
         restore_run(saved, sim.state, sim.model, sim.solver)
+        if saved.tracking and "launch_t" in saved.data:  # (runs saved before relaunches: all at t0)
+            sim.launch_t = saved.data["launch_t"].astype(np.float64)
         return sim
 
     # -- changing the scene between runs ----------------------------------------------------------
@@ -335,6 +340,10 @@ class Simulation:
         self.state.write(name, arr)
         if name == "x" and self.solver is not None:
             self.solver.invalidate()  # moved balls may now touch balls missing from their lists
+        if name != "w":  # (tracked balls: a new flight from here, flight_record)
+            launch_again(
+                self.state, self.model, self.launch_x, self.launch_t, self.t, self._vectors("x"), np.arange(self.n)
+            )
 
     x = property(
         lambda self: self._vectors("x"),
@@ -404,7 +413,8 @@ class Simulation:
         """Landing outcomes of the tracked balls (NaN where not landed yet, and for balls not tracked)."""
         a = self.state.numpy()
         launch_x = self.launch_x if self.launch_x is not None else np.full((self.n, 3), np.nan)
-        return Flight.from_arrays(launch_x, a["landed"], a["apex"], a["t_land"], a["land_x"], a["land_v"])
+        hang = a["t_land"] - (self.launch_t if self.launch_t is not None else 0.0)
+        return Flight.from_arrays(launch_x, a["landed"], a["apex"], hang, a["land_x"], a["land_v"])
 
     def _wake(self) -> None:
         s = self.state.status.to_numpy()
@@ -429,7 +439,9 @@ class Simulation:
         velocity ``v`` [m/s] and spin ``w`` [rad/s], each (3,) (the same for every ball ``i``) or
         (len(i), 3); ``None`` leaves it. The edited balls are flying again (awake, back in play if
         they were out of bounds: a ball still outside is out again after the next step); the others
-        keep their status. Moved balls get their neighbour lists rebuilt before the next step.
+        keep their status. Moved balls get their neighbour lists rebuilt before the next step, and
+        tracked balls moved or struck start a new flight record from where they are
+        (:meth:`flight`: carry, apex and hang time measured from there and then).
 
         Raises:
             ValueError: a ball id outside 0 … N − 1, a value of another shape, or NaN or infinite.
@@ -454,6 +466,8 @@ class Simulation:
         self._statuses_edited()
         if x is not None and self.solver is not None:
             self.solver.invalidate()
+        if x is not None or v is not None:  # (tracked balls: a new flight from here, flight_record)
+            launch_again(self.state, self.model, self.launch_x, self.launch_t, self.t, self._vectors("x"), ids)
 
     # -- stepping ---------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
