@@ -311,6 +311,19 @@ def test_the_readme_round_holes_in_three_strokes(capsys):
     assert text.rstrip().endswith("Holed in 3 strokes.")
 
 
+def test_a_stroke_that_never_comes_down_has_no_carry():
+    # a path that leaves the ground and lands (at its fourth point), one that never leaves it (a
+    # putt: 0), and one that leaves it and never comes down: out of bounds in the air, the carry
+    # was the distance to where the record stopped, 180 m for a driver 29 m up
+    from ti_golf.game.rules import _carry
+
+    path = np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [2.0, 1.0, 0.0], [3.0, 0.0, 4.0], [9.0, 0.0, 4.0]])
+    low = np.array([True, False, False, True, True])
+    assert _carry(path, low) == 5.0
+    assert _carry(path, np.ones(5, bool)) == 0.0
+    assert np.isnan(_carry(path[:3], low[:3]))
+
+
 def test_play_asks_again_after_bad_answers_and_stops_at_the_end_of_input(green_file, capsys, monkeypatch):
     answers = "north\n\n500\n4\nabc\n0\n\n"  # one answer a line, then the input ends
     monkeypatch.setattr("sys.stdin", io.StringIO(answers))

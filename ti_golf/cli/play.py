@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import math
 import secrets
 import sys
 from collections.abc import Callable, Iterator
@@ -290,7 +291,7 @@ def write_csv(strokes: list[Stroke], path: str) -> None:
                     f"{s.end[0]:.3f}",
                     f"{s.end[1]:.3f}",
                     f"{s.end[2]:.3f}",
-                    f"{s.carry:.3f}",
+                    f"{s.carry:.3f}" if math.isfinite(s.carry) else "",  # (never came down: no carry)
                     f"{s.distance:.3f}",
                     s.outcome,
                     f"{s.to_hole:.3f}",

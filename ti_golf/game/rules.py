@@ -152,7 +152,8 @@ class Stroke:
     outcome: str
     to_hole: float
     carry: float
-    """Horizontal distance [m] from where the ball was hit to where it first came down (0 for a putt)."""
+    """Horizontal distance [m] from where the ball was hit to where it first came down (0 for a putt,
+    NaN when it never came down: out of bounds in the air, or still flying when the stroke ended)."""
 
     @property
     def distance(self) -> float:
@@ -348,13 +349,15 @@ def describe_round(game: GolfGame, ended: str) -> str:
 
 def _carry(path: np.ndarray, low: np.ndarray) -> float:
     """Horizontal distance [m] from the first point of ``path`` (S, 3) to where the ball first came
-    down after being in the air (``low`` (S,): down on the ground); 0 when it never left it."""
+    down after being in the air (``low`` (S,): down on the ground); 0 when it never left it, NaN
+    when it never came down (out of bounds in the air, or still flying when the stroke ended)."""
     up = np.flatnonzero(~low)
     if up.size == 0:
         return 0.0
     down = np.flatnonzero(low[up[0] :])
-    k = up[0] + down[0] if down.size else len(path) - 1
-    return float(np.hypot(*(path[k] - path[0])[[0, 2]]))
+    if down.size == 0:
+        return math.nan
+    return float(np.hypot(*(path[up[0] + down[0]] - path[0])[[0, 2]]))
 
 
 def _point(p: np.ndarray) -> str:
