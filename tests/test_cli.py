@@ -761,6 +761,18 @@ PARALLEL_PIT = SERIAL_MAX_BALLS + 1
 background.declare("bench-pit-memory", lambda _: (cli("bench", "pit", "--n", "1000", "--t", "0.05", "--json"), {}))
 
 
+@pytest.mark.parametrize("n", [16, 17, 100, 101, 150, 562, 563])
+def test_the_pit_scaled_to_any_count_in_its_range_holds_its_balls(n):
+    # the bin scaled to 16 balls was narrower than a ball, and its box held no 100 to 150 balls
+    # (a whole number of sites across); now at least MIN_SIDE wide, and raised until it holds them
+    from ti_golf.bench.pit import MIN_SIDE, pit_scene
+    from ti_golf.scene.balls import build_balls
+
+    scene, side = pit_scene(n)
+    assert side >= MIN_SIDE - 1e-12 and len(build_balls(scene).x) == n
+    assert side == pytest.approx(max(MIN_SIDE, 2.0 * (n / 100_000) ** 0.5))  # (as deep a pile, when wide enough)
+
+
 @pytest.mark.background("bench-pit-memory")
 def test_bench_pit_memory_is_the_piles_arrays(background_runs):
     # In a process of its own: a pytest worker's memory after other tests' piles (Taichi's pools,
@@ -941,9 +953,9 @@ BAD_BENCH_OPTIONS = [
     (("pit", "--every", "nan"), "(0, --t]"),
     (("pit", "--t", "0"), "(0, 60]"),
     (
-        ("pit", "--n", "101", "--t", "0.01"),
-        "101 balls do not fit the pit's bin scaled to them",
-    ),  # (named ball_pit.toml)
+        ("pit", "--n", "100", "--t", "0.01", "--set", "ball.radius=0.1"),
+        "100 balls do not fit the pit's bin scaled to them",
+    ),  # (named ball_pit.toml; balls wider than the narrowest bin)
 ]
 """(bench and one bad option, a fragment of the allowed range the error must name)."""
 

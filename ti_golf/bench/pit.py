@@ -50,8 +50,9 @@ from ti_golf.errors import ConfigError
 from ti_golf.physics.kernels import int_at
 from ti_golf.physics.types import LAUNCHES, NeighbourLists, StepScratch, kernel
 from ti_golf.runtime import ensure_init, release_freed_memory
+from ti_golf.scene.balls import random_sites
 from ti_golf.scene.loader import load_scene
-from ti_golf.scene.schema import AT_REST, Plane, Scene
+from ti_golf.scene.schema import AT_REST, Block, Plane, Scene
 from ti_golf.signals import whole_steps
 from ti_golf.sim.simulation import Simulation
 from ti_golf.solvers.colour import COLOURS as COLUMN_COLOURS
@@ -81,7 +82,8 @@ def pit_scene(n: int | None = None, overrides: Sequence[str] = ()) -> tuple[Scen
     side = max(p.point[0] for p in scene.planes)  # the wall at x = side
     if n is None or n == block.number:
         return scene, side
-    scale = math.sqrt(n / block.number)
+    # as deep a pile: the bin's area in proportion to the balls, but never narrower than MIN_SIDE
+    scale = max(math.sqrt(n / block.number), MIN_SIDE / side)
     new_side = side * scale
 
     def widen(v: tuple[float, float, float]) -> tuple[float, float, float]:
@@ -89,8 +91,29 @@ def pit_scene(n: int | None = None, overrides: Sequence[str] = ()) -> tuple[Scen
 
     planes = tuple(Plane(point=widen(p.point), normal=p.normal) for p in scene.planes)
     block = dataclasses.replace(block, number=n, box_min=widen(block.box_min), box_max=widen(block.box_max))
+    block = _box_that_holds(block, scene.ball.radius)
     desc = f"{scene.description} (scaled to {n:,} balls in a {new_side:.2f} m bin)"
     return dataclasses.replace(scene, planes=planes, blocks=(block,), description=desc), new_side
+
+
+MIN_SIDE = 0.15
+"""The narrowest bin [m] of a scaled pit (some 3.5 golf balls across): fewer balls than fill a bin
+this wide as deep as the bundled pit (about 560) make a shallower pile, not a bin narrower than a
+ball."""
+
+
+def _box_that_holds(block: Block, radius: float) -> Block:
+    """``block`` with its box raised (``box_max``'s height) until its random sites hold its balls
+    (:func:`~ti_golf.scene.balls.random_sites`): a box scaled in its width alone holds a whole
+    number of sites across, and some counts fell between (100 to 150 balls did not fit)."""
+    r_max = radius * (1.0 + block.radius_jitter)
+    across = min(block.box_max[0] - block.box_min[0], block.box_max[2] - block.box_min[2])
+    for _ in range(100):  # (each raise adds a tenth: some 14,000 times as tall at most)
+        if across < 2.0 * r_max or random_sites(block, r_max) >= block.number:
+            break  # (narrower than a ball: no height helps, and the build says so)
+        lo, hi = block.box_min[1], block.box_max[1]
+        block = dataclasses.replace(block, box_max=(block.box_max[0], hi + 0.1 * (hi - lo), block.box_max[2]))
+    return block
 
 
 def pile_quality(sim: Simulation, side: float) -> dict[str, Any]:

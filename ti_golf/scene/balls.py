@@ -103,6 +103,27 @@ def build_balls(scene: Scene) -> Balls:
     return Balls(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("x", "v", "w", "radius", "mass", "track")))
 
 
+def _site_grid(size: np.ndarray, n: int, r_max: float) -> tuple[float, np.ndarray]:
+    """The spacing [m] and the sites per axis (3,) of a random block's grid of sites over ``size``
+    (3,) [m] (the box less a ball's diameter) for ``n`` balls of radius up to ``r_max`` [m]: as
+    wide as the box allows, narrowed until the sites hold the balls or the balls touch."""
+    spacing = max(2.02 * r_max, float(np.prod(size + 2 * r_max) / max(n, 1)) ** (1.0 / 3.0))
+    while True:
+        per_axis = np.floor(size / spacing).astype(int) + 1
+        if np.prod(per_axis) >= n or spacing <= 2.02 * r_max:
+            return spacing, per_axis
+        spacing = max(2.02 * r_max, spacing * 0.98)
+
+
+def random_sites(block: Block, r_max: float) -> int:
+    """How many sites a random block's box offers balls of radius up to ``r_max`` [m] (0 when it is
+    narrower than one), of which its balls take ``block.number``."""
+    size = np.asarray(block.box_max) - np.asarray(block.box_min) - 2.0 * r_max
+    if np.any(size < 0):
+        return 0
+    return int(np.prod(_site_grid(size, block.number, r_max)[1]))
+
+
 def _block_balls(scene: Scene, block: Block, index: int) -> Balls:
     rng = np.random.default_rng(block.seed)
     R0 = block.radius or scene.ball.radius
@@ -126,12 +147,7 @@ def _block_balls(scene: Scene, block: Block, index: int) -> Balls:
         size = hi - lo - 2.0 * r_max
         if np.any(size < 0):
             raise_config(scene.path, f"{key}.box_max", f"the box is smaller than one ball (diameter {2 * r_max:g} m)")
-        spacing = max(2.02 * r_max, float(np.prod(size + 2 * r_max) / max(n, 1)) ** (1.0 / 3.0))
-        while True:
-            per_axis = np.floor(size / spacing).astype(int) + 1
-            if np.prod(per_axis) >= n or spacing <= 2.02 * r_max:
-                break
-            spacing = max(2.02 * r_max, spacing * 0.98)
+        spacing, per_axis = _site_grid(size, n, r_max)
         if np.prod(per_axis) < n:
             raise_config(
                 scene.path,
