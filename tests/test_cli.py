@@ -946,6 +946,7 @@ BAD_BENCH_OPTIONS = [
     (("pit", "--t", "0.02", "--n", "500", "--set", "world.dt=1e-9"), "20,000,000 steps; at most 10,000,000"),
     (("collide", "--n", "1"), "must be in [2, 10,000,000]"),
     (("pit", "--n", "15"), "must be in [16, 10,000,000]"),
+    (("dispersion", "--n", "100", "--rest", "200"), "--rest: must be in [0, --n] shots (got 200)"),
     (("collide", "--boulder", "-0.1"), "[0, 10] m"),
     (("collide", "--boulder", "nan"), "[0, 10] m"),
     (("pit", "--every", "0"), "(0, --t]"),

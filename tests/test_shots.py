@@ -400,6 +400,13 @@ def test_dispersion_command_writes_its_shots_and_plot(tmp_path):
     assert UNITS["imperial"].distance == YARD
 
 
+def test_bench_dispersion_of_fewer_shots_than_its_default_rest_rolls_them_all_out():
+    # --rest's default (10,000) was refused for any --n below it, naming --rest, not given
+    code, out, err = cli("bench", "dispersion", "--n", "100", "--json")
+    assert code == 0, err
+    assert json.loads(out.strip().splitlines()[-1])["rest"]["n"] == 100
+
+
 def test_bench_dispersion_reports_rates_baselines_and_accuracy():
     from ti_golf.bench.dispersion import bench_dispersion
 

@@ -26,6 +26,9 @@ from ti_golf.cli._common import (
 from ti_golf.errors import ConfigError
 from ti_golf.scene.loader import load_scene
 
+DISPERSION_REST = 10_000
+"""Shots of ``bench dispersion`` rolled out to rest unless ``--rest`` says (all, when fewer)."""
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``bench`` and its benchmarks to ``ti-golf``'s subcommands."""
@@ -97,7 +100,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "dispersion", help="a player's shots to landing and to rest (tour_shot) vs one-at-a-time, numpy and scipy"
     )
     bd.add_argument("--n", type=int, default=100_000, help="shots flown to landing (default 100000)")
-    bd.add_argument("--rest", type=int, default=10_000, help="of them rolled out to rest (default 10000; 0: none)")
+    bd.add_argument(
+        "--rest", type=int, default=None, help="of them rolled out to rest (default 10000, or --n if fewer; 0: none)"
+    )
     bd.add_argument(
         "--flight-dt", type=float, default=0.01, help="a second, coarser RK4 step timed to landing [s] (default 0.01)"
     )
@@ -237,11 +242,12 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
     if not least <= args.n <= MAX_N:
         raise ConfigError("--n", None, f"must be in [{least:,}, {MAX_N:,}] (got {args.n})")
     if args.bench == "dispersion":
-        if not 0 <= args.rest <= args.n:
-            raise ConfigError("--rest", None, f"must be in [0, --n] shots (got {args.rest})")
         if not 1e-5 <= args.flight_dt <= 0.05:  # (also false for NaN)
             raise ConfigError("--flight-dt", None, f"must be in [1e-05, 0.05] s (got {args.flight_dt})")
-        result = bench_dispersion(n=args.n, rest=args.rest, flight_dt=args.flight_dt)
+        rest = min(DISPERSION_REST, args.n) if args.rest is None else args.rest
+        if not 0 <= rest <= args.n:
+            raise ConfigError("--rest", None, f"must be in [0, --n] shots (got {rest})")
+        result = bench_dispersion(n=args.n, rest=rest, flight_dt=args.flight_dt)
     elif args.bench == "reductions":
         if not 1 <= args.repeats <= 10_000:
             raise ConfigError("--repeats", None, f"must be in [1, 10,000] (got {args.repeats})")
