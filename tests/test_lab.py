@@ -129,7 +129,13 @@ def test_the_selected_ball_is_edited_and_read_out_in_the_break_shot():
     assert lab.selected == 15  # clamped to the last ball
     lab.select(0)
     assert "holds NaN" in lab.set_ball(v=[np.nan, 0.0, 0.0])
-    assert lab.set_ball(v=[0.0, 0.0, 2.0], w=[0.0, 0.0, 0.0]) is None
+    # a value that is not three numbers is refused before anything changes (a position given
+    # with it stays as it was; [[1, 2, 3]] ended in a TypeError after the ball had changed)
+    x_before = lab.sim.x[0].copy()
+    for bad in ([1.0, 2.0], "fast"):
+        assert "takes three numbers [x, y, z]" in lab.set_ball(x=[0.5, 0.5, 0.5], v=bad) and lab.refused
+        np.testing.assert_array_equal(lab.sim.x[0], x_before)
+    assert lab.set_ball(v=[[0.0, 0.0, 2.0]], w=[0.0, 0.0, 0.0]) is None
     r = lab.readout()
     assert r.speed == 2.0 and r.spin == 0.0 and r.height == pytest.approx(0.02, abs=1e-3)
     assert sum(r.counts.values()) == 16

@@ -262,15 +262,23 @@ class Lab:
         """Give the selected ball the position ``x`` [m], velocity ``v`` [m/s] and spin ``w``
         [rad/s] (each (3,), or ``None`` to leave it); it flies on from there. Returns ``None``, or
         the message saying why the values were refused."""
+        values: dict[str, np.ndarray] = {}
+        for name, value in (("x", x), ("v", v), ("w", w)):  # (checked before anything changes)
+            if value is None:
+                continue
+            try:
+                values[name] = np.asarray(value, dtype=np.float64).reshape(-1)
+            except (ValueError, TypeError):
+                values[name] = np.zeros(0)
+            if values[name].shape != (3,):
+                return self._say(f"{name} of ball {self.selected} takes three numbers [x, y, z] (got {value!r})", True)
         try:
-            self.sim.set_ball(self.selected, x=x, v=v, w=w)
+            self.sim.set_ball(self.selected, **values)
         except ValueError as exc:
             return self._say(str(exc), refused=True)
         if self.recording is not None and self.recording.t:
             self._sample()  # the trail goes on from the ball's new state
-        edited = ", ".join(
-            f"{n} = {format_value(tuple(map(float, a)))}" for n, a in (("x", x), ("v", v), ("w", w)) if a is not None
-        )
+        edited = ", ".join(f"{n} = {format_value(tuple(map(float, a)))}" for n, a in values.items())
         self._say(f"ball {self.selected}: {edited}")
         return None
 
