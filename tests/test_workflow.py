@@ -351,6 +351,13 @@ def test_keys_that_set_up_the_balls_apply_at_t0_only():
     given = tg.Simulation(sim.scene, x=[[0.0, 1.0, 0.0]])
     with pytest.raises(tg.ConfigError, match="given as arrays"):
         given.set("launch.speed", 5.0)
+    # radii given alone (the scene's balls): a new ball.radius had no effect and was taken quietly,
+    # while the launch's keys still set the scene's ball up
+    sized = tg.Simulation(sim.scene, radius=0.03)
+    with pytest.raises(tg.ConfigError, match="'ball.radius' has no effect: this simulation's balls were given"):
+        sized.set("ball.radius", 0.01)
+    sized.set("launch.speed", 5.0)
+    assert np.linalg.norm(sized.v[0]) == pytest.approx(5.0) and sized.model.radius_np.tolist() == [0.03]
 
 
 def test_reset_goes_back_to_t0_bit_for_bit_with_the_changed_parameters():

@@ -88,9 +88,23 @@ def refuse_after_t0(key: str, t: float) -> None:
         )
 
 
-def refuse_for_given_balls(key: str, radius_given: bool, mass_given: bool) -> None:
-    """Raise :class:`ConfigError` for a ball key that balls given as arrays do not read."""
-    given = table_of(key) == "launch" or (key == "ball.radius" and radius_given) or (key == "ball.mass" and mass_given)
+def refuse_for_given_balls(key: str, initial: Any, kept: bool) -> None:
+    """Raise :class:`ConfigError` for a ball key that balls given as arrays do not read: the
+    launch's when the positions were given, the radius and the mass when they were (``initial``:
+    the balls at t0 as given, ``None`` for the scene's; not ``kept``: what was given is not known,
+    so none of them is taken)."""
+    if kept and initial is None:
+        return
+    x_given, radius_given, mass_given = (
+        (True,) * 3
+        if initial is None
+        else (initial.x is not None, initial.radius is not None, initial.mass is not None)
+    )
+    given = (
+        (table_of(key) == "launch" and x_given)
+        or (key == "ball.radius" and radius_given)
+        or (key == "ball.mass" and mass_given)
+    )
     if given:
         raise ConfigError(
             OVERRIDES,

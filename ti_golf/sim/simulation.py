@@ -274,9 +274,7 @@ class Simulation:
         scene = with_changes(self.scene, changes)
         for key in changes:
             refuse_unread(key)
-            if not self.initial_kept or (self.initial is not None and self.initial.x is not None):
-                i = self.initial
-                refuse_for_given_balls(key, i is None or i.radius is not None, i is None or i.mass is not None)
+            refuse_for_given_balls(key, self.initial, self.initial_kept)
         return scene
 
     def _take_parameters(self, scene: Scene) -> None:
