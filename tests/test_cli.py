@@ -567,6 +567,22 @@ def test_fit_aero_finds_the_bundled_coefficients_from_its_start():
     assert len([ln for ln in out.splitlines() if TOUR_ROW.match(ln)]) == 23
 
 
+def test_fit_aero_refuses_an_air_model_it_would_replace(capsys):
+    # it fits spin_reynolds whatever --set air.model said, and said nothing
+    assert main(["fit-aero", "--set", "air.model=lab"]) == 2
+    assert "key 'air.model' has no effect with fit-aero" in capsys.readouterr().err
+
+
+def test_a_run_takes_numpys_scalars_for_its_time():
+    # run(t=np.int64(1)) was refused as not a number of seconds, while step() and set() took them
+    sim = ti_golf.Simulation("lab_vacuum")
+    sim.run(t=np.float64(0.05))
+    sim.run(t=np.int64(0))
+    assert sim.step_count == 5
+    sim.run(t=np.float32(0.5))  # (0.5 exactly in f32)
+    assert sim.step_count == 55
+
+
 def test_fit_aero_without_scipy_says_what_it_needs(capsys, monkeypatch):
     import sys
 

@@ -72,6 +72,7 @@ def cmd_tour(args: argparse.Namespace) -> int:
 def cmd_fit_aero(args: argparse.Namespace) -> int:
     """Fit the spin_reynolds air model's coefficients of ``args.scene`` to the 12 PGA Tour rows and
     print them (as scene keys too) and the fitted model on every row; 0."""
+    refuse_replaced(args.overrides, {"air.model": 'fit-aero, which fits air.model = "spin_reynolds"'})
     scene = load_scene(args.scene, args.overrides)
     if scene.launch is None:
         raise ConfigError(

@@ -89,8 +89,10 @@ def steps_to_run(t: Any, steps: Any, dt: float, t_end: float) -> int:
         if steps * dt > TIME_LIMIT:
             raise ValueError(f"steps must be at most {TIME_LIMIT / dt:.3g}, {TIME_LIMIT:g} s of steps (got {steps})")
         return steps
-    if t is not None and not (isinstance(t, (int, float)) and not isinstance(t, bool) and t >= 0):
-        raise ValueError(f"t must be a number of seconds >= 0 (got {t!r})")
+    if t is not None and not (
+        isinstance(t, (int, float, np.integer, np.floating)) and not isinstance(t, bool) and t >= 0
+    ):
+        raise ValueError(f"t must be a number of seconds >= 0 (got {t!r})")  # (numpy's scalars too)
     duration = t_end if t is None else float(t)
     if not (math.isfinite(duration) and duration <= TIME_LIMIT):
         raise ValueError(f"t must be at most {TIME_LIMIT:g} s (got {t!r})")
