@@ -436,3 +436,23 @@ def test_a_run_until_rest_stops_at_the_same_step_whatever_it_records():
         assert other[0] == runs[0][0]
         for a, b in zip(other[1:], runs[0][1:]):
             np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize(
+    "given, message",
+    [
+        ({"track": [True] * 5}, "track must be true or false, or one of them per ball, shape (2,)"),
+        ({"track": np.ones((2, 2))}, "track must be true or false"),
+        ({"track": "yes"}, "track must be true or false"),  # (was taken as true)
+        ({"radius": "big"}, "radius must be one real number or one per ball, shape (2,) (got 'big')"),
+        ({"x": [[0.0, 1.0, 0.0], [1.0, 1.0]]}, "x must be real numbers, shape (N, 3)"),
+        ({"x": np.array([[0.0, 0.1, 0.0], [1.0, 0.1, 0.0]]) + 1j}, "x must be real numbers"),  # (parts dropped)
+    ],
+)
+def test_balls_given_wrongly_are_one_error_naming_the_argument(given, message):
+    # each ended in numpy's words (broadcast shapes, an element set with a sequence), or was taken
+    # (a text as true, complex positions with their imaginary parts dropped and a warning)
+    args = {"x": np.array([[0.0, 0.1, 0.0], [1.0, 0.1, 0.0]]), **given}
+    with pytest.raises(ValueError) as info:
+        tg.Simulation(tg.load_scene("break_shot"), **args)
+    assert message in str(info.value) and "\n" not in str(info.value), str(info.value)

@@ -43,9 +43,11 @@ def as_vectors(a: Any, name: str, n: int | None = None) -> np.ndarray:
     """``a`` as N vectors of 3 finite numbers, (N, 3) (one vector (3,) for one ball), N >= 1 (or
     ``n``), or a ValueError naming ``name``."""
     try:
+        if np.iscomplexobj(a):  # (numpy would drop the imaginary parts with a warning)
+            raise TypeError
         arr = np.asarray(a, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be numbers, shape (N, 3) (got {a!r:.60})") from None
+        raise ValueError(f"{name} must be real numbers, shape (N, 3) (got {_short(a)})") from None
     if arr.ndim == 1 and arr.shape == (3,):
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] < 1 or (n is not None and arr.shape[0] != n):
@@ -68,7 +70,12 @@ def whole_number(value: Any, name: str) -> int:
 def per_ball(a: Any, n: int, name: str) -> np.ndarray:
     """Per-ball values (N,) from a scalar or an array, read-only: one number broadcast, when it is
     one, takes no memory per ball (the model copies what it keeps)."""
-    given = np.asarray(a, dtype=np.float64)
+    try:
+        if np.iscomplexobj(a):
+            raise TypeError
+        given = np.asarray(a, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be one real number or one per ball, shape ({n},) (got {_short(a)})") from None
     if given.shape not in ((), (n,)):
         raise ValueError(f"{name} must be one number or one per ball, shape ({n},) (got shape {given.shape})")
     arr = np.broadcast_to(given, (n,))
@@ -97,3 +104,27 @@ def steps_to_run(t: Any, steps: Any, dt: float, t_end: float) -> int:
     if not (math.isfinite(duration) and duration <= TIME_LIMIT):
         raise ValueError(f"t must be at most {TIME_LIMIT:g} s (got {t!r})")
     return int(math.ceil(duration / dt - 1e-9))
+
+
+def flags(a: Any, n: int, name: str) -> np.ndarray:
+    """Per-ball true or false (N,) from one bool or an array of N bools, or a ValueError naming
+    ``name``: a text or numbers were taken as true, and a wrong shape failed inside numpy."""
+    given = np.asarray(a)
+    if given.dtype != bool or given.shape not in ((), (n,)):
+        raise ValueError(f"{name} must be true or false, or one of them per ball, shape ({n},) (got {_short(a)})")
+    return np.broadcast_to(given, (n,))
+
+
+def copied(a: Any) -> Any:
+    """A copy of an array given (``None`` kept; one numpy cannot make, a ragged list, as it came,
+    for the checks that name it)."""
+    try:
+        return None if a is None else np.array(a, copy=True)
+    except ValueError:
+        return a
+
+
+def _short(a: Any) -> str:
+    """``a`` written on one line, cut to 60 characters."""
+    text = " ".join(repr(a).split())
+    return text if len(text) <= 60 else text[:57] + "..."

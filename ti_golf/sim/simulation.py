@@ -36,7 +36,7 @@ from ti_golf.sim.changes import (
     refuse_unread,
 )
 from ti_golf.sim.flight_record import launch_again
-from ti_golf.sim.given import as_vectors, check_memory, per_ball, steps_to_run, whole_number
+from ti_golf.sim.given import as_vectors, check_memory, copied, flags, per_ball, steps_to_run, whole_number
 from ti_golf.sim.results import Flight
 
 
@@ -90,11 +90,7 @@ class InitialBalls:
     @classmethod
     def copy_of(cls, x: Any, v: Any, w: Any, radius: Any, mass: Any, track: Any) -> "InitialBalls":
         """The balls as given, each array copied (``None`` kept), so that later changes leave them."""
-
-        def copy(a: Any) -> Any:
-            return None if a is None else np.array(a, copy=True)
-
-        return cls(copy(x), copy(v), copy(w), copy(radius), copy(mass), np.array(track, copy=True))
+        return cls(copied(x), copied(v), copied(w), copied(radius), copied(mass), copied(track))
 
 
 class Simulation:
@@ -179,6 +175,7 @@ class Simulation:
         w = None if w is None else as_vectors(w, "w", n)
         radius = per_ball(scene.ball.radius if radius is None else radius, n, "radius")
         mass = per_ball(scene.ball.mass if mass is None else mass, n, "mass")
+        track = flags(track, n, "track")
         tracking = bool(np.any(track))  # else no flight record is kept (a pile: 96 bytes per ball less in f64)
         self.solver = None  # the old one's arrays go before the new ones are made
         self.model = Model(scene, radius, mass, launch_height=x[:, 1] if tracking else np.zeros(1))
