@@ -158,7 +158,10 @@ def main(argv: Sequence[str] | None = None, status: bool = False) -> int:
         print(f"ti-golf: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
-        print(f"ti-golf: interrupted{f' {exc}' if exc.args else ''}", file=sys.stderr)
+        said: BaseException = exc  # (a Ctrl-C again while the first one's outputs were written: its words)
+        while not said.args and isinstance(said.__context__, KeyboardInterrupt):
+            said = said.__context__
+        print(f"ti-golf: interrupted{f' {said}' if said.args else ''}", file=sys.stderr)
         return 130
     finally:
         if on_main_thread:
