@@ -59,6 +59,8 @@ from ti_golf.scene.checks import (
     angle,
 )
 from ti_golf.scene.checks import parse_range as parse_range  # re-exported: the CLI parses --angles with it
+from ti_golf.scene.course import GameConfig as GameConfig  # re-exported: the course's tables live apart
+from ti_golf.scene.course import HoleConfig as HoleConfig
 from ti_golf.scene.keys import REQUIRED, Key, key, keys_of
 
 Vec3 = tuple[float, float, float]
@@ -352,63 +354,6 @@ class TerrainConfig:
     def kill(self) -> float:
         """Height [m] below which a ball is out of bounds (``kill_height``, default origin y − 10 m)."""
         return self.origin[1] - 10.0 if self.kill_height is None else self.kill_height
-
-
-@dataclass(frozen=True)
-class HoleConfig:
-    """The ``[hole]`` table: a cup at ``position`` (x, z, in metres) on the course, and its flagstick."""
-
-    position: tuple[float, float] = key(
-        "vec2",
-        REQUIRED,
-        "m",
-        "the cup's centre [x, z] (required); it sits on the terrain, else on the ground or the first "
-        "upward-facing plane",
-        Each(Interval(-REACH, REACH), 2),
-    )
-    radius: float = key("float", 0.054, "m", "cup radius (regulation: 108 mm across)", POSITIVE)
-    flag_height: float = key(
-        "float", 2.13, "m", "flagstick height above the cup (2.13 m = 7 ft is usual; 0: none)", NON_NEGATIVE
-    )
-
-
-@dataclass(frozen=True)
-class GameConfig:
-    """The ``[game]`` table of ``ti-golf play`` (see :mod:`ti_golf.game.rules`)."""
-
-    start: tuple[float, float] | None = key(
-        "vec2",
-        None,
-        "m",
-        "where the ball lies for the first stroke of `ti-golf play`, [x, z] on the terrain (default: a "
-        "random point of the course, from --seed)",
-        read_when=("[hole]", (True,)),
-    )
-    wind_max: float = key(
-        "float",
-        0.0,
-        "m/s",
-        "each stroke's wind blows level from a random direction at a random speed up to this (0: the "
-        "scene's air.wind throughout)",
-        Interval(0.0, SPEED_LIMIT),
-        read_when=("[hole]", (True,)),
-    )
-    max_strokes: int = key(
-        "int",
-        20,
-        "-",
-        "the round ends unfinished after this many strokes",
-        Interval(1, 1000),
-        read_when=("[hole]", (True,)),
-    )
-    shot_time: float = key(
-        "float",
-        60.0,
-        "s",
-        "longest a stroke is simulated; a ball still moving then is played from where it is",
-        POSITIVE,
-        read_when=("[hole]", (True,)),
-    )
 
 
 @dataclass(frozen=True)
