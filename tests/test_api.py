@@ -456,3 +456,30 @@ def test_balls_given_wrongly_are_one_error_naming_the_argument(given, message):
     with pytest.raises(ValueError) as info:
         tg.Simulation(tg.load_scene("break_shot"), **args)
     assert message in str(info.value) and "\n" not in str(info.value), str(info.value)
+
+
+def test_the_golf_calls_take_what_the_command_line_takes_and_name_what_they_refuse():
+    # sweep(angles_deg="30:42:0.5") ended in numpy's "could not convert string to float", shots()
+    # of a scene's name in "'str' object has no attribute 'launch'", dispersion(n=2.5) flew 2 shots
+    # and sim.ball(0.7) read ball 0
+    from ti_golf.golf.dispersion import dispersion
+    from ti_golf.golf.shots import shots
+    from ti_golf.scene.launch_monitor import MonitorLaunch
+
+    by_text = tg.sweep("lab_turbulent", angles_deg="36:37:0.5")
+    np.testing.assert_array_equal(by_text.angle_deg, [36.0, 36.5, 37.0])
+    np.testing.assert_array_equal(by_text.carry, tg.sweep("lab_turbulent", angles_deg=[36, 36.5, 37]).carry)
+    with pytest.raises(tg.ConfigError, match=re.escape("angles_deg: must be numbers or START:STOP:STEP")):
+        tg.sweep("lab_turbulent", angles_deg=[30, "a"])
+    with pytest.raises(ValueError, match=re.escape("trajectories must be a whole number >= 0 (got 2.5)")):
+        tg.sweep("lab_turbulent", trajectories=2.5)
+    seven = MonitorLaunch(50.0, 16.1, 0.0, 700.0, 0.0)
+    assert shots("tour_shot", seven).carry == shots(tg.load_scene("tour_shot"), seven).carry
+    spread = MonitorLaunch(1.0, 1.0, 1.0, 10.0, 1.0)
+    for given, message in (({"n": 2.5}, "n must be a whole number >= 0 (got 2.5)"), ({"seed": -1}, "seed must be")):
+        with pytest.raises(ValueError, match=re.escape(message)):
+            dispersion("tour_shot", seven, spread, **{"n": 20, **given})
+    sim = tg.Simulation("break_shot")
+    with pytest.raises(ValueError, match=re.escape("ball must be a whole number >= 0 (got 0.7)")):
+        sim.ball(0.7)
+    np.testing.assert_array_equal(sim.ball(np.int64(1))[0], sim.x[1])

@@ -21,6 +21,7 @@ from ti_golf.files import atomic_path
 from ti_golf.golf.shots import shots
 from ti_golf.scene.launch_monitor import LAUNCH_LIMITS, MPH, RPM, MonitorLaunch, Units
 from ti_golf.scene.schema import Scene
+from ti_golf.sim.given import whole_number
 from ti_golf.sim.results import Shots
 from ti_golf.sim.simulation import RunProgress
 
@@ -192,7 +193,7 @@ class Dispersion:
 
 
 def dispersion(
-    scene: Scene,
+    scene: Scene | str | os.PathLike[str],
     mean: MonitorLaunch,
     sd: MonitorLaunch,
     n: int = 10_000,
@@ -211,7 +212,8 @@ def dispersion(
         >>> d = dispersion(load_scene("tour_shot"), mean, sd, n=100_000, seed=1)        # doctest: +SKIP
         >>> d.summary()["carry"], d.ellipses()[1].semi_major                           # doctest: +SKIP
     """
-    if not 2 <= int(n) <= MAX_SHOTS:
+    n, seed = whole_number(n, "n"), whole_number(seed, "seed")
+    if not 2 <= n <= MAX_SHOTS:
         raise ValueError(f"n must be in [2, {MAX_SHOTS}] (got {n})")
     launches = draw_launches(mean, sd, n, seed)
     result = shots(scene, launches, to_rest=to_rest, flight_dt=flight_dt, progress=progress)

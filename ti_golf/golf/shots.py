@@ -10,6 +10,7 @@ Two phases, each the fastest the engine has for it:
 
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 
 import numpy as np
@@ -18,6 +19,7 @@ from ti_golf.golf.rollout import shots_from_landing
 from ti_golf.golf.sweep import fly
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import LAUNCH_LIMITS, MonitorLaunch
+from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import Shots
 from ti_golf.sim.simulation import RunProgress
@@ -83,7 +85,7 @@ def check_launches(launch: MonitorLaunch) -> None:
 
 
 def shots(
-    scene: Scene,
+    scene: Scene | str | os.PathLike[str],
     launch: MonitorLaunch,
     to_rest: bool = True,
     flight_dt: float | None = None,
@@ -91,7 +93,8 @@ def shots(
 ) -> Shots:
     """Fly launch-monitor launches (floats, or arrays of shape (N,)) from the scene's launch point
     (the ball on the ground at the origin unless ``launch.position`` says otherwise), the target
-    line along the scene's launch azimuth; see :func:`fly_shots`.
+    line along the scene's launch azimuth; see :func:`fly_shots`. ``scene`` is a Scene, a TOML
+    path or a bundled scene name.
 
     Example:
         >>> from ti_golf.scene.launch_monitor import MonitorLaunch, MPH, RPM   # doctest: +SKIP
@@ -99,6 +102,8 @@ def shots(
         >>> s = shots(load_scene("tour_shot"), fade); s.carry, s.offline        # doctest: +SKIP
     """
     check_launches(launch)
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
     v0, w0 = launch.vectors(target_direction(scene))
     x0 = np.tile(np.asarray(launch_position(scene), float), (len(v0), 1))
     return fly_shots(scene, x0, v0, w0, to_rest=to_rest, flight_dt=flight_dt, progress=progress)

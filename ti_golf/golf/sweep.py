@@ -20,9 +20,10 @@ from ti_golf.physics.kinds import kinds_of
 from ti_golf.physics.types import vec3
 from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile
 from ti_golf.scene.balls import launch_position
-from ti_golf.scene.checks import SPEED_LIMIT, SPIN_LIMIT
+from ti_golf.scene.checks import SPEED_LIMIT, SPIN_LIMIT, parse_range
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene, backspin_axis
+from ti_golf.sim.given import whole_number
 from ti_golf.sim.results import CSV_COLUMNS, ROLLED_CSV_COLUMNS, Flight, Shots
 
 
@@ -106,11 +107,27 @@ class SweepResult:
                 out.writerow([f"{v:.10g}" for v in row])
 
 
+def _values(name: str, given: Sequence[float] | str | None, default: Sequence[float]) -> np.ndarray:
+    """The values a sweep takes for ``name``: ``given`` (numbers, or the command line's
+    ``START:STOP:STEP`` or ``a,b,c`` text) or else ``default``, as a flat float array; a ConfigError
+    naming ``name`` when they are not numbers."""
+    if given is None:
+        return np.asarray(default, float)
+    if isinstance(given, str):
+        return np.asarray(parse_range(given, name, None), float)
+    try:
+        if np.iscomplexobj(given):
+            raise TypeError
+        return np.asarray(given, float).ravel()
+    except (TypeError, ValueError):
+        raise ConfigError(name, None, f"must be numbers or START:STOP:STEP (got {given!r:.60})") from None
+
+
 def launch_grid(
     scene: Scene,
-    angles_deg: Sequence[float] | None = None,
-    speeds: Sequence[float] | None = None,
-    spins: Sequence[float] | None = None,
+    angles_deg: Sequence[float] | str | None = None,
+    speeds: Sequence[float] | str | None = None,
+    spins: Sequence[float] | str | None = None,
 ) -> tuple[np.ndarray, ...]:
     """All combinations (angle fastest, then spin, then speed) as arrays.
 
@@ -122,12 +139,12 @@ def launch_grid(
             scene.path, "launch", "is required: a sweep launches its balls as the scene's [launch] table says"
         )
     L = scene.launch
-    angles = np.asarray(angles_deg if angles_deg is not None else (scene.sweep.angles or (L.angle_deg,)), float)
-    speeds_ = np.asarray(speeds if speeds is not None else (scene.sweep.speeds or (L.speed,)), float)
+    angles = _values("angles_deg", angles_deg, scene.sweep.angles or (L.angle_deg,))
+    speeds_ = _values("speeds", speeds, scene.sweep.speeds or (L.speed,))
     spin_vec = np.asarray(L.spin, float)
     spin_mag = float(np.linalg.norm(spin_vec))
     axis = spin_vec / spin_mag if spin_mag > 0 else np.asarray(backspin_axis(L.direction_deg))
-    spins_ = np.asarray(spins if spins is not None else (scene.sweep.spins or (spin_mag,)), float)
+    spins_ = _values("spins", spins, scene.sweep.spins or (spin_mag,))
     for name, arr, lo, hi, allowed in (
         ("angles_deg", angles, -90, 90, "finite and in [-90, 90] deg"),
         ("speeds", speeds_, 0, SPEED_LIMIT, f"in [0, {SPEED_LIMIT:g}] m/s"),
@@ -274,9 +291,9 @@ def _check_rise(apex: np.ndarray, x0: np.ndarray, v0: np.ndarray, wind: Any, g: 
 
 def sweep(
     scene: Scene | str | os.PathLike[str],
-    angles_deg: Sequence[float] | None = None,
-    speeds: Sequence[float] | None = None,
-    spins: Sequence[float] | None = None,
+    angles_deg: Sequence[float] | str | None = None,
+    speeds: Sequence[float] | str | None = None,
+    spins: Sequence[float] | str | None = None,
     overrides: Mapping[str, Any] | Iterable[str] | None = None,
     trajectories: int = 0,
     to_rest: bool = False,
@@ -285,7 +302,8 @@ def sweep(
 
     Args:
         scene: a Scene, a TOML path or a bundled scene name.
-        angles_deg: launch elevations [deg] (default: the scene's ``[sweep]`` list, else its
+        angles_deg: launch elevations [deg], numbers or a ``"START:STOP:STEP"`` text (STOP
+            included) as the command line takes (default: the scene's ``[sweep]`` list, else its
             ``[launch]`` value). Every combination of angle, speed and spin is flown.
         speeds: launch speeds [m/s], likewise.
         spins: spin magnitudes [rad/s] along the scene's spin axis, likewise.
@@ -298,6 +316,7 @@ def sweep(
         >>> res = sweep("lab_turbulent", angles_deg=np.arange(36, 37.41, 0.02))   # doctest: +SKIP
         >>> res.angle_deg[res.best()], res.carry.max()                           # doctest: +SKIP
     """
+    trajectories = whole_number(trajectories, "trajectories")
     if not isinstance(scene, Scene):
         scene = load_scene(scene, overrides)
     elif overrides:
