@@ -286,6 +286,12 @@ def test_a_value_that_starts_with_a_negative_number_is_a_value(argv, dest, value
             ["render", "lab_vacuum", "--t", "inf", "--out", "r.png"],
             "--t: must be in [0, 1e+09] seconds (got inf)",
         ),
+        (  # (a traceback: the run's own ValueError)
+            ["render", "lab_vacuum", "--steps", "100000000000000", "--out", "r.png"],
+            "--steps: must be at most 1e+11 steps of 0.01 s (1e+09 s; got 100000000000000)",
+        ),
+        (["bench", "study", "--tasks", "100000000"], "--tasks: must be in [2, 1,000] (got 100000000)"),  # (hung)
+        (["bench", "study", "--steps", "100000000000000000"], "--steps: must be in [1, 10,000,000] (got 100000000000000000)"),
         (["dispersion", "tour_shot", "--seed", "-1"], "argument --seed: must be a whole number, 0 or more (got -1)"),
         (
             ["run", "lab_vacuum", "--set", "air.rho=1", "--set", "air.rho=2"],

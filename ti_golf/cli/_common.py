@@ -142,6 +142,16 @@ def scene_or_saved_run(args: argparse.Namespace, command: str) -> Simulation:
     return sim
 
 
+def check_steps_span(steps: int | None, dt: float) -> None:
+    """``--steps`` within :data:`~ti_golf.scene.checks.TIME_LIMIT` of simulated time at step ``dt``
+    [s], or a ConfigError saying how many steps that is (past it a step no longer moves the clock)."""
+    from ti_golf.scene.checks import TIME_LIMIT
+
+    if steps is not None and steps * dt > TIME_LIMIT:
+        limit = f"{TIME_LIMIT / dt:.3g} steps of {dt:g} s ({TIME_LIMIT:g} s; got {steps})"
+        raise ConfigError("--steps", None, f"must be at most {limit}")
+
+
 def set_key(text: str) -> str:
     """The KEY of a ``--set KEY=VALUE`` text, as the scene loader reads it."""
     return text.split("=", 1)[0].strip()

@@ -291,14 +291,20 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
     return 0
 
 
+MAX_STUDY_TASKS = 1_000
+"""The most tasks ``bench study`` runs (each three times: without Dask, on one and on two workers)."""
+MAX_STUDY_STEPS = 10_000_000
+"""The most steps of each ``bench study`` task: about 11 minutes a task on the CI class."""
+
+
 def _bench_study(args: argparse.Namespace) -> int:
     from ti_golf.study.benchmark import bench_study
     from ti_golf.study.cluster import require_dask
 
-    if args.tasks < 2:
-        raise ConfigError("--tasks", None, f"must be >= 2 (got {args.tasks})")
-    if args.steps <= 0:
-        raise ConfigError("--steps", None, f"must be > 0 (got {args.steps})")
+    if not 2 <= args.tasks <= MAX_STUDY_TASKS:
+        raise ConfigError("--tasks", None, f"must be in [2, {MAX_STUDY_TASKS:,}] (got {args.tasks})")
+    if not 1 <= args.steps <= MAX_STUDY_STEPS:
+        raise ConfigError("--steps", None, f"must be in [1, {MAX_STUDY_STEPS:,}] (got {args.steps})")
     require_dask()
     result = bench_study(n=args.tasks, steps=args.steps)
     if args.json:

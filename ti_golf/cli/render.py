@@ -8,6 +8,7 @@ import time
 
 from ti_golf.cli._common import (
     Progress,
+    check_steps_span,
     check_writable,
     parse_size,
     resume_option,
@@ -68,6 +69,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     if not 1.0 <= args.fov <= 170.0:
         raise ConfigError("--fov", None, f"must be in [1, 170] degrees (got {args.fov})")
     sim = scene_or_saved_run(args, "render")
+    check_steps_span(args.steps, sim.dt)
     if args.steps is not None:
         steps = args.steps
     else:  # default: the initial state, or up to world.t_end with --until

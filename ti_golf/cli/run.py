@@ -14,6 +14,7 @@ import numpy as np
 from ti_golf.cli._common import (
     Progress,
     check_plot,
+    check_steps_span,
     check_writable,
     parse_size,
     plot_help,
@@ -127,12 +128,7 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
     if args.record_every < 0:
         raise ConfigError("--record-every", None, f"must be >= 0 (got {args.record_every})")
     sim = scene_or_saved_run(args, "run")
-    if args.steps is not None and args.steps * sim.dt > TIME_LIMIT:
-        raise ConfigError(
-            "--steps",
-            None,
-            f"must be at most {TIME_LIMIT / sim.dt:.3g} steps of {sim.dt:g} s ({TIME_LIMIT:g} s; got {args.steps})",
-        )
+    check_steps_span(args.steps, sim.dt)
     resumed_at = sim.t if args.resume else None
     record_every = args.record_every
     if args.plot and not record_every:
