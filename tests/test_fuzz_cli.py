@@ -291,7 +291,10 @@ def test_a_value_that_starts_with_a_negative_number_is_a_value(argv, dest, value
             "--steps: must be at most 1e+11 steps of 0.01 s (1e+09 s; got 100000000000000)",
         ),
         (["bench", "study", "--tasks", "100000000"], "--tasks: must be in [2, 1,000] (got 100000000)"),  # (hung)
-        (["bench", "study", "--steps", "100000000000000000"], "--steps: must be in [1, 10,000,000] (got 100000000000000000)"),
+        (
+            ["bench", "study", "--steps", "100000000000000000"],
+            "--steps: must be in [1, 10,000,000] (got 100000000000000000)",
+        ),
         (["dispersion", "tour_shot", "--seed", "-1"], "argument --seed: must be a whole number, 0 or more (got -1)"),
         (
             ["run", "lab_vacuum", "--set", "air.rho=1", "--set", "air.rho=2"],
@@ -318,6 +321,7 @@ def test_an_infinite_time_or_a_negative_seed_is_one_error(argv, last, tmp_path):
         (["sweep", "lab_vacuum", "--trajectories", "5"], "--trajectories: has no effect without --plot"),
         (["study", "bag_weather", "--figure", "carry_m"], "--figure: has no effect without --plot"),
         (["study", "bag_weather", "--lines"], "--lines: has no effect without --plot"),
+        (["bench", "collide", "--n", "100", "--shuffled"], "--shuffled: has no effect on 100 balls, stepped serially"),
     ],
 )
 def test_an_option_without_the_option_it_serves_is_refused(argv, last):

@@ -25,6 +25,7 @@ from ti_golf.cli._common import (
 )
 from ti_golf.errors import ConfigError
 from ti_golf.scene.loader import load_scene
+from ti_golf.solvers.stepping import SERIAL_MAX_BALLS, steps_serially
 
 DISPERSION_REST = 10_000
 """Shots of ``bench dispersion`` rolled out to rest unless ``--rest`` says (all, when fewer)."""
@@ -269,6 +270,13 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
             raise ConfigError("--iterations", None, f"must be in [1, 100] (got {args.iterations})")
         if not 0.0 <= args.boulder <= 10.0:  # (also false for NaN)
             raise ConfigError("--boulder", None, f"must be a radius in [0, 10] m (got {args.boulder})")
+        if args.shuffled and steps_serially(args.n):  # (a serial pile is stepped in id order: nothing to compare)
+            raise ConfigError(
+                "--shuffled",
+                None,
+                f"has no effect on {args.n} balls, stepped serially in their id order on the CPU "
+                f"(at most {SERIAL_MAX_BALLS:,}): give --n > {SERIAL_MAX_BALLS:,}",
+            )
         result = bench_collide(
             n=args.n,
             steps=args.steps,
