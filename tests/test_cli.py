@@ -1466,6 +1466,7 @@ def test_bench_startup_times_commands_in_fresh_processes_against_the_targets():
         assert row["warm_error"] is None and 0 < row["warm_s"] < 600
         assert row["warm_pass"] == (row["warm_s"] <= row["warm_target_s"])
         assert "cold_s" not in row
+    assert result["benchmark"] == "startup"  # (it was "bench", where every other benchmark says "benchmark")
     assert result["passed"] + result["failed"] == 3
     assert isinstance(result["bytecode_stale"], list)  # (make setup compiled them: see the test below)
     assert "ti-golf keys" in proc.stdout.splitlines()[2] and "target 0.5 s" in proc.stdout
@@ -1494,6 +1495,7 @@ def test_bench_startup_kernels_reports_each_kernels_front_end_and_what_was_compi
     # from an empty cache every instance is compiled; once the cache holds them, none is
     cold = ok(run_cli("bench", "startup", "--kernels", "lab_vacuum", "--cache", "cold", "--json"))
     report = json.loads(cold.stdout.strip().splitlines()[-1])
+    assert report["benchmark"] == "startup_kernels"
     assert report["instances"] > 0 and report["compiled"] == report["instances"]
     names = [k["kernel"] for k in report["kernels"]]
     assert "ti_golf.physics.kernels.advance" in names or "ti_golf.physics.kernels.fly_to_landing" in names, names

@@ -157,7 +157,7 @@ def bench_startup(
             say(startup_line(row))
     judged = [r[k] for r in rows for k in ("warm_pass", "cold_pass") if r.get(k) is not None]
     return {
-        "bench": "startup",
+        "benchmark": "startup",
         "arch": arch,
         "precision": precision,
         "cpu_count": os.cpu_count(),
@@ -243,6 +243,7 @@ def profile_in_process(scene: str, start: float) -> dict[str, Any]:
     load = _load()
     instances, front_end, compile_s, first_launch = log.totals()
     return {
+        "benchmark": "startup_kernels",
         "scene": scene,
         "arch": info.arch,
         "precision": info.precision,
