@@ -41,6 +41,7 @@ def test_a_plot_is_written_in_the_format_of_its_extension(tmp_path, fmt):
     code, out, err = run_main("sweep", "lab_vacuum", "--angles", "44:46:1", "--trajectories", "3", "--plot", str(path))
     assert code == 0, err
     assert path.read_bytes().startswith(MAGIC[fmt])
+    assert f".{path.name}.".encode() not in path.read_bytes()[:2000]  # (EPS's title named the temporary file)
     assert "transparency" not in err  # (EPS has none: said in the help, not at every plot)
     assert f"wrote {path}" in out
 

@@ -44,8 +44,9 @@ def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int) -> None:
     ps_log = logging.getLogger("matplotlib.backends.backend_ps")
     ps_log.addFilter(quiet)
     try:
-        with atomic_path(target) as tmp:
-            fig.savefig(tmp, dpi=dpi, format=fmt)
+        # (written through a file object: EPS takes its title from a path's name, the temporary one)
+        with atomic_path(target) as tmp, open(tmp, "wb") as fh:
+            fig.savefig(fh, dpi=dpi, format=fmt)
     finally:
         ps_log.removeFilter(quiet)
 
