@@ -217,6 +217,13 @@ def test_unwritable_outputs_are_refused_before_anything_runs(argv, path):
     assert last.startswith(f"ti-golf: error: {argv[-1]}") and "Traceback" not in err, err
 
 
+def test_an_output_inside_a_file_is_refused_saying_it_is_a_file(tmp_path):
+    # it said "folder ... does not exist" of a file that does
+    (tmp_path / "x.png").write_bytes(b"")
+    code, err = run_cli(["render", "break_shot", "--out", str(tmp_path / "x.png" / "a.png")])
+    assert code == 2 and err.strip().endswith(f"'{tmp_path / 'x.png'}' is a file, not a folder"), err
+
+
 @pytest.mark.parametrize(
     "argv, allowed",
     [

@@ -187,6 +187,8 @@ def check_writable(path: str | None, option: str, suffixes: tuple[str, ...] = ()
     if Path(path).is_dir() or Path(path).name in ("", ".", ".."):
         raise ConfigError(option, None, f"cannot write {path!r}: it is a folder; give a file name")
     parent = Path(path).resolve().parent
+    if parent.exists() and not parent.is_dir():
+        raise ConfigError(option, None, f"cannot write {path!r}: {str(parent)!r} is a file, not a folder")
     if not parent.is_dir():
         raise ConfigError(option, None, f"cannot write {path!r}: folder {str(parent)!r} does not exist")
     try:  # the one sure test (permission bits say yes to root where the file system says no)
