@@ -376,6 +376,7 @@ def test_the_first_prompt_offers_the_clubs_and_a_club_name_gives_its_stroke(gree
         ("0 5\n", "shots.txt:1: a stroke is 'direction speed loft [spin]' or 'direction club'"),
         ("0 spoon\n", "shots.txt:1: a stroke is 'direction speed loft [spin]' or 'direction club'"),
         ("\n0 fast 0\n", "shots.txt:2: key 'speed' must be a number in [0, 350] km/h (got 'fast')"),
+        ("0 putter 2\n", "shots.txt:1: a club gives speed, loft and spin: 'direction club', no more"),  # (was: speed)
         (b"0 5 \xff\n", "shots.txt: is not UTF-8 text (byte 4)"),
     ],
 )

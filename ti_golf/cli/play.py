@@ -232,7 +232,11 @@ def file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
         if not text:
             continue
         source = f"{path}:{number}"
-        clubbed = club(text[1]) if len(text) == 2 else None
+        clubbed = club(text[1]) if len(text) >= 2 else None
+        if clubbed is not None and len(text) > 2:
+            raise ConfigError(
+                source, None, f"a club gives speed, loft and spin: 'direction club', no more (got {line.strip()!r})"
+            )
         if clubbed is not None:
             text = [text[0], *(f"{v:g}" for v in clubbed)]
         if len(text) not in (3, 4):
