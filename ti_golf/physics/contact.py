@@ -54,8 +54,10 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
     separating pair gives back at most ``lam`` (so a warm start that pushed too hard is undone,
     but impacts are never pulled back). Coulomb friction, bounded by μ times the normal impulse
     of this sweep, can at most stop the slip at the contact point.
-    ``relax`` ∈ (0, 1] scales the impulses of lasting contacts in a Jacobi sweep: a ball pressed by
-    many neighbours at once would otherwise receive all their corrections together and overshoot.
+    ``relax`` ∈ (0, 1] scales, in a Jacobi sweep, the impulses of lasting contacts, the give-back of
+    a separating pair and the effective mass the friction may use to stop the slip (of every
+    pressing contact, impacts included): a ball pressed by many neighbours at once would otherwise
+    receive all their corrections together and overshoot.
     Returns (P, lam, touching, impact): ``impact`` is 1 when P is an impact's jolt (a Jacobi sweep
     takes one of a ball's simultaneous impacts at a time, see :func:`ti_golf.solvers.pairs.matched`).
     """
@@ -342,8 +344,17 @@ def plane_position(x, x_free, x1, v_free, v, radius, p, n, k_p, h):
 
 
 PRESSED = 2
-"""``touching`` of a ball that another ball overlaps by more than 1 % of its radius: the position
-projection (B.18) is still pushing them apart, so it is not at rest (see :func:`rest_update`)."""
+"""``touching`` of a ball that another ball overlaps by more than ``PRESSED_OVERLAP`` of its radius
+(1 % with the Jacobi sweeps): the position projection (B.18) is still pushing them apart, so it is
+not at rest (see :func:`rest_update`)."""
+
+PRESSED_OVERLAP = 0.01
+"""The overlap, as a share of a ball's radius, past which the Jacobi sweeps call a ball pressed
+(:data:`PRESSED`; the Gauss–Seidel sweeps use ``colour.ASLEEP_OVERLAP``)."""
+
+TOUCHING_GAP = 0.01
+"""A surface gap below this share of a ball's radius counts as touching (a plane, the terrain or
+another ball): the contacts that keep a ball's rest timer and its island's calm."""
 
 
 @ti.func

@@ -26,7 +26,7 @@ NOT_TRACKED, IN_FLIGHT, LANDED = -1, 0, 1
 
 @ti.func
 def step_free(S, h, kinds: ti.template(), coef, air, gravity):
-    """One free-flight step of size ``h`` [s] of a lane state matrix S (9, L) (see :mod:`.aero`) by
+    """One free-flight step of size ``h`` [s] of a lane state matrix S (10, L) (``aero.ROWS``; see :mod:`.aero`) by
     ``kinds.integrator`` in ``kinds.air_model``'s air (:class:`~ti_golf.physics.kinds.Kinds`)."""
     S1 = S
     if ti.static(kinds.integrator == RK4):

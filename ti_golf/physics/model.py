@@ -118,7 +118,6 @@ class Model:
         planes = scene_planes(scene)
         self.plane_p = np.array([p for p, _ in planes], dtype=f).reshape(-1, 3)
         self.plane_n = np.array([n for _, n in planes], dtype=f).reshape(-1, 3)
-        self.v_inelastic = c.v_bounce + 2.0 * float(np.linalg.norm(w.gravity)) * w.dt
         surfaces = scene.surfaces or (Surface(),)
         self.surface_table = np.array(
             [

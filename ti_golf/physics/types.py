@@ -182,7 +182,7 @@ ContactParams: TypeAlias = Deferred(
         mu=float,  # Coulomb friction (B.15)
         k_p=float,  # position projection factor (B.18)
         mu_roll=float,  # rolling resistance: deceleration μ_roll·g_n while rolling
-        relax=float,  # Jacobi relaxation of resting ball–ball impulses
+        relax=float,  # Jacobi relaxation of resting ball–ball impulses (see contact.pair_impulse)
         v_bounce=float,  # approach speeds below v_bounce + 2|g|h are inelastic [m/s]
         turf=ti.i32,  # 1: ground impacts as on turf (contact.turf_impact, built with Kinds.turf); 0: restitution e
     ),

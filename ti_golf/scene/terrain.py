@@ -87,7 +87,9 @@ class Terrain:
         return n / np.linalg.norm(n, axis=-1, keepdims=True)
 
     def contains(self, x, z) -> np.ndarray:
-        """Whether (x, z) lies over the grid (balls elsewhere are out of bounds)."""
+        """Whether (x, z) lies over the grid: balls elsewhere are out of bounds, and so are balls
+        below the scene's ``terrain.kill_height`` anywhere (the kernels' test, which this one
+        leaves out: it takes no height)."""
         x, z = np.asarray(x, dtype=float), np.asarray(z, dtype=float)
         ex, ez = self.size
         return (x >= self.origin[0]) & (x <= self.origin[0] + ex) & (z >= self.origin[2]) & (z <= self.origin[2] + ez)

@@ -118,7 +118,7 @@ class Simulation:
 
     def __init__(
         self,
-        scene: Scene,
+        scene: Scene | str | os.PathLike[str],
         x: np.ndarray | None = None,
         v: np.ndarray | None = None,
         w: np.ndarray | None = None,
@@ -177,7 +177,8 @@ class Simulation:
         mass = per_ball(scene.ball.mass if mass is None else mass, n, "mass")
         track = flags(track, n, "track")
         tracking = bool(np.any(track))  # else no flight record is kept (a pile: 96 bytes per ball less in f64)
-        self.solver = None  # the old one's arrays go before the new ones are made
+        self.solver: CollisionSolver | None = None  # (the old one's arrays go before the new ones are made)
+        """The CollisionSolver when balls can collide (several balls and ``world.collisions``)."""
         self.model = Model(scene, radius, mass, launch_height=x[:, 1] if tracking else np.zeros(1))
         self.state = State(n, tracking)
         self.state.reset(x, v, w, track)
@@ -187,8 +188,6 @@ class Simulation:
         """Launch times [s], shape (N,): hang times are measured from here; ``None`` when no ball is tracked."""
         self._check_buf: Any = None  # a Taichi i32 array of 1, made on the first check
         self._packs = Packs()
-        self.solver = None
-        """The CollisionSolver when balls can collide (several balls and ``world.collisions``)."""
         if n > 1 and scene.world.collisions:
             from ti_golf.solvers import CollisionSolver  # (imported when balls collide: a flight alone needs none)
 
@@ -405,7 +404,8 @@ class Simulation:
         return Overlap(float(depth[k]), float(fraction[k]), int(i[k]), int(j[k]))
 
     def flight(self) -> Flight:
-        """Landing outcomes of the tracked balls (NaN where not landed yet, and for balls not tracked)."""
+        """Landing outcomes of the tracked balls: a ball in flight has its apex so far and NaN for the
+        rest; a ball not tracked has NaN for all."""
         a = self.state.numpy()
         launch_x = self.launch_x if self.launch_x is not None else np.full((self.n, 3), np.nan)
         hang = a["t_land"] - (self.launch_t if self.launch_t is not None else 0.0)

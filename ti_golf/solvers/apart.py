@@ -19,9 +19,9 @@ from ti_golf.solvers.sort import FOLD, fold_threads
 
 APART_MAX = 32
 """Most balls set *apart* (see :func:`apart_balls`: much faster or bigger than the rest), which
-own none of their pairs with the others (see :func:`owns`) and whose pairs are listed ball by
+own none of their pairs with the others (see :func:`.grid.owns`) and whose pairs are listed ball by
 ball; with more, the cells are sized for the fastest pair and the largest ball instead
-(:func:`cell_size`): a thousand balls hit at once are spread out, and big cells cost them
+(:func:`.grid.cell_size`): a thousand balls hit at once are spread out, and big cells cost them
 little. Their pairs are listed ball by ball on CPU backends only (``CollisionSolver.build``): a
 ball listed apart tests every ball in one thread, and Taichi's Vulkan backend stops the loops of
 a thread after 65,535 iterations in all, nested or not, without a word (measured with Taichi 1.7.4 and

@@ -54,6 +54,8 @@ import taichi as ti
 
 from ti_golf.physics.aero import V, W, X, coefficients, column
 from ti_golf.physics.contact import (
+    PRESSED_OVERLAP,
+    TOUCHING_GAP,
     plane_position,
     rest_update,
 )
@@ -332,7 +334,7 @@ def sweep(v_inelastic, bits, s: ti.template(), last: ti.template()):
         for i in range(state.x.shape[0]):
             if scratch.flag[1] != 0:  # (a loop inside the test would not run in parallel)
                 impact_keys(i, bits, s.lists, scratch)
-    pressed = 0.01  # the overlap [share of a radius] that keeps a ball awake
+    pressed = PRESSED_OVERLAP  # the overlap [share of a radius] that keeps a ball awake
     if ti.static(s.kinds.gauss_seidel):
         pressed = ASLEEP_OVERLAP
     for i in range(state.x.shape[0]):
@@ -432,13 +434,13 @@ def end_position(i, v_final, touching, s: ti.template()):
         x1 = plane_position(
             xi, x_free, x1, v_free, v_final, ri, model.plane_p[p], model.plane_n[p], k_p=contact.k_p, h=h
         )
-        if (x1 - model.plane_p[p]).dot(model.plane_n[p]) - ri < 0.01 * ri:
+        if (x1 - model.plane_p[p]).dot(model.plane_n[p]) - ri < TOUCHING_GAP * ri:
             touching = ti.max(touching, 1)
     if ti.static(s.kinds.terrain):
         if not far:
             pt, nt = surface(model.heights, terrain, x_free)
             x1 = plane_position(xi, x_free, x1, v_free, v_final, ri, pt, nt, k_p=contact.k_p, h=h)
             x1 = terrain_position(xi, x1, pt, nt, ri, model.heights, terrain)
-            if (x1 - pt).dot(nt) - ri < 0.01 * ri:
+            if (x1 - pt).dot(nt) - ri < TOUCHING_GAP * ri:
                 touching = ti.max(touching, 1)
     return x1, touching

@@ -4,7 +4,7 @@ colouring of the contact graph, as Box2D v3's constraint graph does), on the dev
 
 The colouring is made each time the neighbour lists are rebuilt, and only for the pairs new to
 the lists: a pair that was listed before keeps its colour (:func:`colour_carry`, looked up in the
-stash of the old lists as its resting impulse is, ``links.stashed_row``), and stays valid, since
+stash of the old lists as its resting impulse is, ``stash.stashed_row``), and stays valid, since
 two such pairs that share a ball had different colours before. While a pour lands the lists are
 rebuilt every step, but only the few pairs of the balls that landed are new. The new pairs are
 coloured speculatively (:func:`colour_rounds`, Gebremedhin and Manne's parallel greedy colouring

@@ -19,7 +19,7 @@ h·|v_a − v_b| (:func:`pair_reach`), and the cells are widened for the fastest
 (6 m/s is 3 mm per 0.5 ms step, against a skin of 2 mm for golf balls), would meet a ball
 missing from its lists only in the next step, after flying into it. A few balls much faster or
 bigger than the rest (at most ``APART_MAX``: moving more than a diameter in two steps, see
-:func:`fast_speed`, or more than twice the size of the rest, see :func:`size_cut`) are set
+:func:`.apart.fast_speed`, or more than twice the size of the rest, see :func:`.apart.size_cut`) are set
 apart: they own none of their pairs with the others (:func:`owns`), and on CPU backends they are
 listed apart, each tested against every ball (:func:`list_ball`), so that the cells stay small
 for the rest.

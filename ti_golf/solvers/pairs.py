@@ -11,6 +11,7 @@ import taichi as ti
 
 from ti_golf.physics.contact import (
     PRESSED,
+    TOUCHING_GAP,
     clamp_friction,
     pair_impulse,
 )
@@ -255,7 +256,7 @@ def warm_start(i, bits, hop, s: ti.template()):
     Jacobi sweeps' columns, no impulse yet; with the Gauss–Seidel sweeps in f32, their pairs'
     normals then those of :func:`kept_normal`. Reads only
     what the free-flight loop does not write (start-of-step positions, status, λ, rest timers),
-    so it runs inside that loop. Returns (Δv, the calm time [s] of ball i: the least of its rest
+    so it runs inside that loop. Returns (Δv [m/s], Δω [rad/s], the calm time [s] of ball i: the least of its rest
     timer and the rest timers of the balls it touches, each plus ``hop`` [s] (:func:`island_calm`),
     see :func:`finish`; or ``QUIET`` for a ball at rest
     whose listed neighbours are all at rest or out of bounds: nothing can touch it this step, so
@@ -331,7 +332,7 @@ def island_calm(calm, gap, r, status_j, rest_time_j, hop):
     falls asleep once every ball within ``REGION_HOPS`` contacts of it is calm, each for as much
     longer as it is nearer: a ball moving somewhere in a pile of 100,000 keeps only its region
     awake."""
-    if gap < 0.01 * r and status_j != OUT_OF_BOUNDS:
+    if gap < TOUCHING_GAP * r and status_j != OUT_OF_BOUNDS:
         calm = ti.min(calm, rest_time_j + hop)
     return calm
 
@@ -375,7 +376,7 @@ def resting_impulse(status: ti.template(), i, j, n, lam):
 def impact_keys(i, bits, lists: ti.template(), scratch: ti.template()):
     """Keep in ``scratch.impact[i]`` the greatest key of ball i's impacts in this sweep (0 when it has
     none): the key of a pair is its slot, owner·2^bits + column (as in the
-    lower lists, see :func:`.grid.owner_slot`), plus one. Gathered from the pairs' marks
+    lower lists, see :func:`.links.owner_slot`), plus one. Gathered from the pairs' marks
     (:func:`impact_mark`), as the impulses are: no atomics."""
     first, lower, lower_first = ti.static((lists.first, lists.lower, lists.lower_first))
     J, impact = ti.static((scratch.J, scratch.impact))
@@ -415,7 +416,7 @@ def contact_state(g, r, inv_m_i, mass: ti.template(), j, k_p, pressed):
     ``pressed`` of ``r``. Ball j's mass is read only for an overlap (this runs for every pair of
     the step's last sweep)."""
     state = 0
-    if g > -0.01 * r:
+    if g > -TOUCHING_GAP * r:
         state = 1
         if g > 0.0:
             if g * (inv_m_i + 1.0 / of_ball(mass, j)) > pressed * r * k_p:
@@ -449,7 +450,7 @@ def touching_by_gaps(i, r, bits, k_p, pressed, lists: ti.template(), scratch: ti
 def gap_state(gap, r, k_p, pressed):
     """:func:`contact_state` of a pair from its surface gap [m] (see :func:`touching_by_gaps`)."""
     state = 0
-    if gap < 0.01 * r:
+    if gap < TOUCHING_GAP * r:
         state = 1
         if k_p > 0.0 and -gap > pressed * r:
             state = PRESSED

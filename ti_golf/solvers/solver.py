@@ -563,7 +563,7 @@ class CollisionSolver(Recorded, Stepping):
     @property
     def slot_bits(self) -> int:
         """Low bits of a lower-list entry that hold the pair's column in its owner's upper list (the
-        owner's id is in the bits above; see ``grid.slot_bits``)."""
+        owner's id is in the bits above; see ``links.slot_bits``)."""
         return max(0, int(self.capacity - 1).bit_length())
 
     def pairs(self) -> np.ndarray:
