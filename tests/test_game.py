@@ -407,6 +407,7 @@ def test_a_missing_shots_file_is_worded_as_every_missing_file(green_file, tmp_pa
         (["--set", "game.start=[1e9, 0]"], "; got [1e+09, 0])"),  # (numpy's np.float64(...) reprs were shown)
         (["--set", "game.start=[3.01, 0]"], "key 'game.start' must lie outside the cup"),  # (holed before a stroke)
         (["--set", "game.max_strokes=0"], "key 'game.max_strokes' must be in [1, 1000]"),
+        (["--set", "game.shot_time=1e300"], "key 'game.shot_time' must be in (0, 1000000000] s"),  # (a traceback)
     ],
 )
 def test_play_rejects_a_bad_course(green_file, capsys, overrides, needle):

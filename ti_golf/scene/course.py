@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ti_golf.scene.checks import NON_NEGATIVE, POSITIVE, REACH, SPEED_LIMIT, Each, Interval
+from ti_golf.scene.checks import DURATION, NON_NEGATIVE, POSITIVE, REACH, SPEED_LIMIT, Each, Interval
 from ti_golf.scene.keys import REQUIRED, key
 
 
@@ -62,6 +62,6 @@ class GameConfig:
         60.0,
         "s",
         "longest a stroke is simulated; a ball still moving then is played from where it is",
-        POSITIVE,
+        DURATION,
         read_when=("[hole]", (True,)),
     )
