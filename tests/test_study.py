@@ -119,6 +119,12 @@ BAD = [
     ('scene = "lab_turbulent"\n[[points]]\n"air.model" = "magic"\n', "points[0].air.model", "must be one of"),
     ('scene = "lab_turbulent"\n[grid]\n"air.C_D" = [0.2, 0.3, 0.2]\n', "grid.air.C_D", "holds the value 0.2 twice"),
     ('scene = "lab_vacuum"\n[task]\nkind = "run"\nballs = 100\n', "task.balls", "'lab_vacuum' has 0"),
+    (  # (it passed, and every task failed)
+        'scene = "heap"\n[task]\nkind = "run"\nballs = 500\n',
+        "task.balls",
+        "asks for 500 balls: the random block of 'heap', scaled to them, holds at most 448",
+    ),
+    ('scene = "lab_turbulent"\n[grid]\n"air.C_D" = "0:80:0.0001"\n', "grid", "gives 800,001 tasks"),  # (it hung)
     ('scene = "lab_turbulent"\n[task]\nfigures = []\n', "task.figures", "names no figure"),
     (
         'scene = "lab_turbulent"\n[[points]]\n"air.C_D" = 0.2\n[[points]]\n"air.C_D" = 0.2\n',

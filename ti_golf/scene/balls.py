@@ -6,6 +6,7 @@ on every machine.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -177,3 +178,41 @@ def _block_balls(scene: Scene, block: Block, index: int) -> Balls:
         w = w + spin[:, None] * np.array([backspin_axis(d) for d in direction])
         track[:] = angle > 0.0
     return Balls(x, v, w, radius, mass, track)
+
+
+def scaled_block(scene: Scene, n: int) -> Scene:
+    """``scene`` with its one random block holding ``n`` balls, its box widened or narrowed across
+    (x and z about its centre) so that the balls are as densely packed and the column as tall
+    (a study's ``task.balls``; :func:`scaled_block_problem` says when it cannot be)."""
+    problem = scaled_block_problem(scene, n)
+    if problem is not None:
+        raise_config("task.balls", None, problem)
+    i = next(k for k, b in enumerate(scene.blocks) if b.kind == "random")
+    b = scene.blocks[i]
+    scale = math.sqrt(n / b.number) if b.number else 1.0
+    centre = [(lo + hi) / 2 for lo, hi in zip(b.box_min, b.box_max)]
+
+    def across(corner: tuple[float, float, float]) -> tuple[float, float, float]:
+        return (centre[0] + (corner[0] - centre[0]) * scale, corner[1], centre[2] + (corner[2] - centre[2]) * scale)
+
+    block = dataclasses.replace(b, number=n, box_min=across(b.box_min), box_max=across(b.box_max))
+    return dataclasses.replace(scene, blocks=scene.blocks[:i] + (block,) + scene.blocks[i + 1 :])
+
+
+def scaled_block_problem(scene: Scene, n: int) -> str | None:
+    """Why :func:`scaled_block` cannot give ``scene``'s random block ``n`` balls (the scene has
+    none or several, or its box scaled to them holds fewer sites), or ``None``."""
+    randoms = [b for b in scene.blocks if b.kind == "random"]
+    if len(randoms) != 1:
+        return f"scales a scene's one random block; {scene.name!r} has {len(randoms)}"
+    b = randoms[0]
+    scale = math.sqrt(n / b.number) if b.number else 1.0
+    lo, hi = np.asarray(b.box_min, float), np.asarray(b.box_max, float)
+    centre, half = (lo + hi) / 2, (hi - lo) / 2 * np.array([scale, 1.0, scale])
+    r_max = (b.radius or scene.ball.radius) * (1.0 + b.radius_jitter)
+    sites = random_sites(
+        dataclasses.replace(b, number=n, box_min=tuple(centre - half), box_max=tuple(centre + half)), r_max
+    )
+    if sites < n:
+        return f"asks for {n:,} balls: the random block of {scene.name!r}, scaled to them, holds at most {sites:,}"
+    return None

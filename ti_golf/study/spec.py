@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from ti_golf.errors import OVERRIDES, ConfigError
+from ti_golf.scene.balls import scaled_block_problem
 from ti_golf.scene.checks import DURATION, Interval, OneOf, parse_range, raise_config
 from ti_golf.scene.document import scene_document
 from ti_golf.scene.jsonschema import DIALECT, key_schema
@@ -359,11 +360,15 @@ def _grid_points(table: Any, source: str) -> list[dict[str, Any]]:
     if not isinstance(table, dict) or not table:
         raise_config(source, "grid", "must be a table of scene keys, each with its values (a list or START:STOP:STEP)")
     axes = {name: _values(name, value, source) for name, value in table.items()}
+    n = math.prod(len(values) for values in axes.values())
+    if n > MAX_TASKS:  # (before the combinations are made)
+        raise_config(source, "grid", f"gives {n:,} tasks; at most {MAX_TASKS:,} are allowed")
     for name, values in axes.items():
-        seen = [repr(v) for v in values]
-        twice = next((v for v, r in zip(values, seen) if seen.count(r) > 1), None)
-        if twice is not None:
-            raise_config(source, f"grid.{name}", f"holds the value {_toml(twice)} twice")
+        seen: set[str] = set()  # (a set: an axis may hold 100,000 values)
+        for v in values:
+            if repr(v) in seen:
+                raise_config(source, f"grid.{name}", f"holds the value {_toml(v)} twice")
+            seen.add(repr(v))
     return [dict(zip(axes, combo)) for combo in itertools.product(*axes.values())]
 
 
@@ -506,8 +511,9 @@ def _check_scene(
     if task.kind in ("shot", "dispersion") and scene.launch is None:
         raise_config(source, "scene", f"task.kind = {task.kind!r} flies the scene's [launch]: {scene.name!r} has none")
     random_blocks = sum(b.kind == "random" for b in scene.blocks)
-    if task.kind == "run" and task.balls is not None and random_blocks != 1:
-        raise_config(source, "task.balls", f"scales a scene's one random block; {scene.name!r} has {random_blocks}")
+    problem = scaled_block_problem(scene, task.balls) if task.kind == "run" and task.balls is not None else None
+    if problem is not None:
+        raise_config(source, "task.balls", problem)
     if task.kind == "run" and seeded and not random_blocks:
         raise_config(source, "seeds", f"replace the seeds of the scene's random blocks; {scene.name!r} has none")
     return scene_document(scene)

@@ -19,13 +19,13 @@ from typing import Any
 import numpy as np
 
 from ti_golf.bench.pit import bench_pit, pile_quality
-from ti_golf.errors import ConfigError
 from ti_golf.golf.dispersion import PLAYER_SPREAD, dispersion
 from ti_golf.golf.rollout import has_ground
 from ti_golf.golf.shots import shots, target_direction
 from ti_golf.golf.sweep import sweep
 from ti_golf.golf.tour import fly_tour
 from ti_golf.golf.trackman import LPGA_TOUR, PGA_TOUR, TOUR, YD
+from ti_golf.scene.balls import scaled_block
 from ti_golf.scene.launch_monitor import right_of, scene_launch
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import OUT_OF_BOUNDS, Scene
@@ -54,26 +54,6 @@ def task_scene(task: dict[str, Any]) -> Scene:
     if task["task"]["balls"] is not None:
         scene = scaled_block(scene, task["task"]["balls"])
     return scene
-
-
-def scaled_block(scene: Scene, n: int) -> Scene:
-    """``scene`` with its one random block holding ``n`` balls, its box widened or narrowed across
-    (x and z about its centre) so that the balls are as densely packed and the column as tall."""
-    random_blocks = [i for i, b in enumerate(scene.blocks) if b.kind == "random"]
-    if len(random_blocks) != 1:
-        raise ConfigError(
-            "task.balls", None, f"scales a scene's one random block; {scene.name!r} has {len(random_blocks)}"
-        )
-    i = random_blocks[0]
-    b = scene.blocks[i]
-    scale = math.sqrt(n / b.number) if b.number else 1.0
-    centre = [(lo + hi) / 2 for lo, hi in zip(b.box_min, b.box_max)]
-
-    def across(corner: tuple[float, float, float]) -> tuple[float, float, float]:
-        return (centre[0] + (corner[0] - centre[0]) * scale, corner[1], centre[2] + (corner[2] - centre[2]) * scale)
-
-    block = dataclasses.replace(b, number=n, box_min=across(b.box_min), box_max=across(b.box_max))
-    return dataclasses.replace(scene, blocks=scene.blocks[:i] + (block,) + scene.blocks[i + 1 :])
 
 
 def execute(task: dict[str, Any], run_dir: str | None) -> dict[str, Any]:
