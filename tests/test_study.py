@@ -613,3 +613,51 @@ def test_the_command_lines_set_replaces_the_files_and_may_not_set_a_varied_key(t
     assert (info.value.source, info.value.key) == ("overrides", "air.rho") and "is varied by the study's [grid]" in str(
         info.value
     )
+
+
+def test_a_ctrl_c_keeps_the_rows_of_tasks_that_finished_while_it_waited(tmp_path, monkeypatch):
+    # the Ctrl-C came while the loop waited for the next task: the tasks that had finished since
+    # (their rows not yet read) were cancelled with the rest, and ran again in the next run
+    import distributed
+
+    from ti_golf.study import runner
+    from ti_golf.study.results import Manifest
+
+    spec = load_study(write(tmp_path, "s.toml", FLIGHT_STUDY))
+
+    class Future:
+        def __init__(self, task: dict, finished: bool) -> None:
+            self.row = {"id": task["id"], "status": "ok", "error": "", "wall_s": 1.0, "run_path": ""}
+            self.status = "finished" if finished else "pending"
+
+        def result(self, timeout=None):
+            return dict(self.row)
+
+        def done(self) -> bool:
+            return self.status == "finished"
+
+    class Client:
+        scheduler = type("Scheduler", (), {"address": "inproc://test"})()
+        cancelled: list = []
+
+        def scheduler_info(self):
+            return {"workers": {"a": {}}}
+
+        def submit(self, fn, task, run_dir, **kwargs):
+            return Future(task, finished=task["id"] != spec.tasks[-1].id)  # all but the last finished
+
+        def cancel(self, futures):
+            self.cancelled.extend(futures)
+
+    def first_then_ctrl_c(futures):
+        yield next(iter(futures))
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(distributed, "as_completed", first_then_ctrl_c)
+    manifest, result = Manifest(tmp_path), runner.StudyResult(spec, tmp_path)
+    client = Client()
+    with pytest.raises(KeyboardInterrupt):
+        runner._run(spec, list(spec.tasks), client, tmp_path, manifest, result, log=lambda line: None)
+    kept = [t.id for t in spec.tasks if Manifest(tmp_path).finished(t.id)]
+    assert kept == [t.id for t in spec.tasks[:-1]] and result.ran == len(spec.tasks) - 1
+    assert len(client.cancelled) == 1  # the one still running

@@ -7,6 +7,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
 from collections.abc import Callable, Sequence
@@ -21,6 +22,8 @@ from ti_golf.study.spec import StudySpec, TaskSpec, load_study
 
 TABLE_EVERY_S = 30.0
 """While a study runs, its table is rewritten at most this often (the manifest at every row)."""
+FINISHED_ROW_S = 5.0
+"""After a Ctrl-C, the longest the row of a task that had finished is waited for [s]."""
 
 
 @dataclass
@@ -119,26 +122,39 @@ def _run(
         for t in todo
     }
     last_table = time.monotonic()
+    recorded: set[Any] = set()
+
+    def record(future: Any, row: dict[str, Any]) -> None:
+        task = futures[future]
+        row["run_path"] = os.path.relpath(row["run_path"], folder) if row.get("run_path") else ""
+        manifest.add(row)
+        recorded.add(future)
+        result.ran += 1
+        what = ", ".join(f"{k} = {v}" for k, v in task.point.items()) or "the base scene"
+        seed = "" if task.seed is None else f", seed {task.seed}"
+        outcome = "ok" if row["status"] == "ok" else f"FAILED: {row['error']}"
+        wall = f" in {row['wall_s']:.1f} s" if row.get("wall_s") is not None else ""
+        where = f" on {row['host']}" if row.get("host") else ""
+        log(f"[{result.ran}/{len(todo)}] {what}{seed}: {outcome}{wall}{where}")
+
     try:
         for future in as_completed(futures):
-            task = futures[future]
             try:
                 row = future.result()
             except Exception as exc:  # the task's worker died too often (KilledWorker), or the scheduler left
+                task = futures[future]
                 row = {"id": task.id, "status": "failed", "error": f"{type(exc).__name__}: {exc}", "wall_s": None}
-            row["run_path"] = os.path.relpath(row["run_path"], folder) if row.get("run_path") else ""
-            manifest.add(row)
-            result.ran += 1
-            what = ", ".join(f"{k} = {v}" for k, v in task.point.items()) or "the base scene"
-            seed = "" if task.seed is None else f", seed {task.seed}"
-            outcome = "ok" if row["status"] == "ok" else f"FAILED: {row['error']}"
-            wall = f" in {row['wall_s']:.1f} s" if row.get("wall_s") is not None else ""
-            where = f" on {row['host']}" if row.get("host") else ""
-            log(f"[{result.ran}/{len(todo)}] {what}{seed}: {outcome}{wall}{where}")
+            record(future, row)
             if time.monotonic() - last_table > TABLE_EVERY_S:
                 write_table(folder, *table_rows(spec.tasks, manifest, spec.keys))
                 last_table = time.monotonic()
     finally:
+        # a Ctrl-C while waiting: the tasks that finished meanwhile are kept too (their rows were
+        # waiting to be read), each read in at most a few seconds; the others are cancelled
+        for future in futures:
+            if future not in recorded and future.status == "finished":
+                with contextlib.suppress(Exception):  # (what cannot be read now runs again next time)
+                    record(future, future.result(timeout=FINISHED_ROW_S))
         unfinished = [f for f in futures if not f.done()]
         if unfinished:
             client.cancel(unfinished)
