@@ -661,3 +661,18 @@ def test_a_ctrl_c_keeps_the_rows_of_tasks_that_finished_while_it_waited(tmp_path
     kept = [t.id for t in spec.tasks if Manifest(tmp_path).finished(t.id)]
     assert kept == [t.id for t in spec.tasks[:-1]] and result.ran == len(spec.tasks) - 1
     assert len(client.cancelled) == 1  # the one still running
+
+
+def test_a_manifest_row_with_only_its_id_and_status_is_a_row_of_the_table(tmp_path):
+    # it passed the manifest's checks, then the table mixed "" with the other rows' times and
+    # pyarrow stopped with a traceback
+    from ti_golf.study.results import MANIFEST, Manifest, read_table, table_rows, write_table
+
+    spec = load_study(write(tmp_path, "s.toml", FLIGHT_STUDY))
+    first, second = spec.tasks[:2]
+    rows = [{**GOOD_ROW, "id": first.id}, {"id": second.id, "status": "ok"}]
+    (tmp_path / MANIFEST).write_text("".join(json.dumps(r) + "\n" for r in rows))
+    write_table(tmp_path, *table_rows(spec.tasks, Manifest(tmp_path), spec.keys))
+    table = read_table(tmp_path)
+    assert list(table["task_id"]) == [first.id, second.id]
+    assert table["wall_s"] == [GOOD_ROW["wall_s"], None]  # (null: no time was recorded)

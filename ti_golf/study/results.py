@@ -130,8 +130,8 @@ def table_rows(tasks: Iterable[Any], manifest: Manifest, keys: Sequence[str]) ->
             if name not in figure_columns:
                 figure_columns.append(name)
             row[name] = value
-        for name in BOOKKEEPING:
-            row[name] = done.get(name, "")
+        for name in BOOKKEEPING:  # (a row without them: empty text, and no time: a number column)
+            row[name] = done.get(name, None if name == "wall_s" else "")
         rows.append(row)
     columns = ["task_id", *keys, "seed", *figure_columns, *BOOKKEEPING]
     return columns, rows
