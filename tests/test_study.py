@@ -333,6 +333,14 @@ def test_a_failing_task_records_its_error_and_the_others_go_on(tmp_path):
     assert "went non-finite" in table["error"][1] and table["error"][0] == ""
     assert math.isfinite(table["carry_m"][0]) and math.isfinite(table["carry_m"][2])
     assert "1 failed" in done.stdout
+    # every task failed: the plot is left out (it said "--figure: the table has no column ''", exit 2)
+    text = 'scene = "lab_turbulent"\nset = ["air.rho=1000"]\n[task]\nkind = "run"\nuntil = "landed"\n'
+    path = write(tmp_path, "all_fail.toml", text + '[grid]\n"air.C_D" = [99.0, 100.0]\n')
+    done = run_cli(
+        "study", str(path), "--out", str(tmp_path / "out2"), "--workers", "1", "--plot", str(tmp_path / "p.png")
+    )
+    assert done.returncode == 1 and "no plot: no task of all_fail finished ok" in done.stdout, done.stderr
+    assert not (tmp_path / "p.png").exists()
 
 
 def test_a_resumed_study_runs_only_the_tasks_not_finished(flight_study, tmp_path):

@@ -71,7 +71,9 @@ def cmd_study(args: argparse.Namespace) -> int:
         f"{spec.name}: {len(result.rows)} of {len(spec.tasks)} tasks in {result.folder}/results.parquet and "
         f"results.csv ({result.ran} run now, {result.skipped} finished before, {result.failed} failed)"
     )
-    if args.plot and result.rows:
+    if args.plot and not any(row["status"] == "ok" for row in result.rows):  # (a failure, not bad input)
+        print(f"no plot: no task of {spec.name} finished ok, so there is no figure to draw")
+    elif args.plot:
         table = result.table
         column = args.figure or (figure_columns(table, spec.keys) or [""])[0]
         title = spec.description or spec.name
