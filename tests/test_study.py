@@ -621,6 +621,15 @@ def test_the_command_lines_set_replaces_the_files_and_may_not_set_a_varied_key(t
     assert (info.value.source, info.value.key) == ("overrides", "air.rho") and "is varied by the study's [grid]" in str(
         info.value
     )
+    # a [task] key given on the command line is named as given there (the study file was blamed)
+    for given, reason in (
+        ("task.shots=10", "is read only when"),
+        ("task.t=-1", "must be in (0, "),
+        ("task.t=1", "not both"),
+    ):
+        with pytest.raises(ConfigError) as info:
+            load_study(spec, [given, "task.steps=5"] if given == "task.t=1" else [given])
+        assert info.value.source == "overrides" and reason in info.value.reason, str(info.value)
 
 
 def test_a_ctrl_c_keeps_the_rows_of_tasks_that_finished_while_it_waited(tmp_path, monkeypatch):

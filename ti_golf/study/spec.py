@@ -235,11 +235,8 @@ def bundled_studies_dir() -> Path:
 def load_study(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> StudySpec:
     """Read and check a study file (a path or a bundled study's name), with ``overrides``
     (``--set``-style texts: ``task.KEY=VALUE`` changes the ``[task]`` table, any other is added to
-    the study's ``set``), and expand it into its tasks.
-
-    Raises:
-        ConfigError: naming the file, the key and what is allowed.
-    """
+    the study's ``set``), and expand it into its tasks; a ConfigError names the file (or
+    ``--set``), the key and what is allowed."""
     p = resolve_study_path(path)
     doc = read_toml(p)
     source = str(p)
@@ -252,16 +249,17 @@ def load_study(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> S
     if not isinstance(task_doc, dict):
         raise_config(source, "task", "must be a table [task]")
     task_doc = dict(task_doc)
-    scene_overrides = []
+    scene_overrides, cli_task = [], set()
     for text in overrides:
         dotted, value = parse_override(text)
         if dotted.startswith("task."):
             if dotted[5:] not in TASK_KEYS:
                 raise_config(OVERRIDES, dotted, f"is not a task key; allowed: {', '.join(TASK_KEYS)}")
             task_doc[dotted[5:]] = value
+            cli_task.add(dotted[5:])
         else:
             scene_overrides.append(text)
-    task = _task(task_doc, source)
+    task = _task(task_doc, source, cli_task)
     given = [name for name in VARY_TABLES if name in doc]
     if len(given) > 1:
         raise_config(source, given[1], f"give one of [grid], [[points]] and [random], not {given[0]} and {given[1]}")
@@ -318,17 +316,21 @@ def _checked(values: Mapping[str, Any], keys: Mapping[str, Key], source: str, ta
     return out
 
 
-def _task(doc: Mapping[str, Any], source: str) -> Task:
+def _task(doc: Mapping[str, Any], source: str, from_cli: set[str]) -> Task:
+    """The ``[task]`` table ``doc`` checked; an error names ``--set`` for the keys ``from_cli``."""
     for name in doc:
         if name not in TASK_KEYS:
             raise_config(source, f"task.{name}", f"is not a task key; allowed: {', '.join(TASK_KEYS)}")
+    _checked({name: doc[name] for name in from_cli}, TASK_KEYS, OVERRIDES, "task")
     task = Task(**_checked(doc, TASK_KEYS, source, "task"))
     for name in doc:
         k = TASK_KEYS[name]
         if k.read_when is not None and getattr(task, k.read_when[0]) not in k.read_when[1]:
-            raise_config(source, f"task.{name}", f"is read only when {read_when_text(k, 'task')}")
+            where = OVERRIDES if name in from_cli else source
+            raise_config(where, f"task.{name}", f"is read only when {read_when_text(k, 'task')}")
     if task.t is not None and task.steps is not None:
-        raise_config(source, "task.steps", "give task.t or task.steps, not both")
+        where = OVERRIDES if {"t", "steps"} & from_cli else source
+        raise_config(where, "task.steps", "give task.t or task.steps, not both")
     return task
 
 
