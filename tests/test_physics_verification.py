@@ -597,15 +597,40 @@ def test_dropped_ball_comes_to_rest_without_sinking_or_jitter():
     assert sim.x[0, 1] == pytest.approx(0.02, abs=1e-9)
 
 
-def test_a_ball_rolling_with_topspin_under_the_reports_magnus_law_rolls_without_hopping():
+STEPS = [None, "jacobi", "gauss_seidel", "jacobi/parallel", "gauss_seidel/parallel"]
+"""How a ball is stepped: alone (``advance``), or beside a ball far away by a collision solver,
+serially as few balls are on the CPU or in parallel launches as many are."""
+
+
+def solver_keys(solver: str | None) -> list[str]:
+    """The scene key choosing the contact solver of a :data:`STEPS` entry."""
+    return [f"contact.solver={solver.split('/')[0]}"] if solver else []
+
+
+def stepped_by(solver: str | None, sim: tg.Simulation) -> tg.Simulation:
+    """``sim`` stepped as the :data:`STEPS` entry says (its collision solver made parallel)."""
+    from ti_golf.solvers import CollisionSolver
+
+    assert (sim.solver is None) == (solver is None)
+    if solver and solver.endswith("/parallel"):
+        sim.solver = CollisionSolver(sim.model, serial=False)
+    return sim
+
+
+@pytest.mark.parametrize("solver", STEPS, ids=lambda s: s or "advance")
+def test_a_ball_rolling_with_topspin_under_the_reports_magnus_law_rolls_without_hopping(solver):
     # The lab's Magnus law (L.2), linear in ω, presses a ball rolling at 9 m/s with ω = v/R of
     # topspin into the ground at some 2 g: each 10 ms step's approach (0.28 m/s) passed
     # v_bounce + 2|g|h (0.25 m/s), so it bounced at e = 0.5 every other step, hopping up to 9 mm
     # and flickering between flying and rolling. It rolls on the ground, in contact at every step,
-    # and the rolling resistance slows it by at least μ_roll·g (the downforce adds to it).
-    scene = lab("lab_magnus")
+    # and the rolling resistance slows it by at least μ_roll·g (the downforce adds to it). With a
+    # second ball far away the collision solvers step it (they let it hop and gain speed: Magnus
+    # does no work, yet 20 m/s became 20.21 m/s in 0.5 s).
+    scene = lab("lab_magnus", *solver_keys(solver))
     R, mu_r = scene.ball.radius, scene.contact.mu_roll
-    sim = tg.Simulation(scene, x=[[0.0, R, 0.0]], v=[[9.0, 0.0, 0.0]], w=[[0.0, 0.0, -9.0 / R]])
+    x = [[0.0, R, 0.0], [0.0, R, 2.0]][: 1 if solver is None else 2]
+    v, w = [[9.0, 0.0, 0.0], [0.0, 0.0, 0.0]][: len(x)], [[0.0, 0.0, -9.0 / R], [0.0, 0.0, 0.0]][: len(x)]
+    sim = stepped_by(solver, tg.Simulation(scene, x=x, v=v, w=w))
     ys, statuses, speeds = [], [], []
     for _ in range(200):
         sim.step()
@@ -616,6 +641,57 @@ def test_a_ball_rolling_with_topspin_under_the_reports_magnus_law_rolls_without_
     assert max(ys) - R < 1e-6 and min(ys) - R > -1e-6  # on the ground, neither above nor in it
     assert set(statuses) == {tg.ROLLING}
     assert speeds[-1] <= 9.0 - mu_r * G * 200 * scene.world.dt + 1e-9
+
+
+IMPACT = ("world.gravity=[0,0,0]", "air.C_D=0", "contact.e=0.5", "world.v_rest=0")
+"""An impact alone: no gravity, no air, restitution 0.5."""
+F32_CARRIED = 1e-7
+"""Relative tolerance where the Gauss–Seidel sweeps carry a contact's impulses in f32 (2^-24 of
+each, a few times over)."""
+
+
+@pytest.mark.parametrize("solver", STEPS, ids=lambda s: s or "advance")
+def test_a_ball_striking_the_ground_takes_coulomb_friction_of_the_whole_impact(solver):
+    # B.15 for a solid sphere striking a plane at (u, −v_n) without spin: the normal impulse per
+    # unit mass is (1 + e)·v_n; friction stops the slip, (2/7)·u, or gives out at μ·(1 + e)·v_n;
+    # ω = (5/2)·J_t/R (no rolling resistance: the Gauss–Seidel sweeps apply it to an impact's
+    # impulse too, a ball alone and the Jacobi sweeps to a resting one only). With a ball far
+    # away (the collision solvers), the Gauss–Seidel sweeps bounded the friction by the
+    # compression alone, less the gap closed in the step.
+    u, v_n, R, e = 5.0, 3.0, 0.02, 0.5
+    for mu in (0.1, 0.4):
+        over = (*IMPACT, f"contact.mu={mu}", "contact.mu_roll=0", *solver_keys(solver))
+        x = [[0.0, R + 1e-3, 0.0], [10.0, 1.0, 0.0]][: 1 if solver is None else 2]
+        v = [[u, -v_n, 0.0], [0.0, 0.0, 0.0]][: len(x)]
+        sim = stepped_by(solver, tg.Simulation(lab("lab_vacuum", *over), x=x, v=v, radius=R))
+        sim.step(3)
+        J_t = min(2 / 7 * u, mu * (1 + e) * v_n)
+        tol = F32_CARRIED if solver and solver.startswith("gauss_seidel") else 1e-12
+        np.testing.assert_allclose(sim.v[0], [u - J_t, e * v_n, 0.0], rtol=tol, atol=1e-12)
+        np.testing.assert_allclose(sim.w[0], [0.0, 0.0, -2.5 * J_t / R], rtol=tol, atol=1e-9)
+
+
+@pytest.mark.parametrize("solver", STEPS[1:])
+@pytest.mark.parametrize("phi, mu", [(30.0, 0.4), (60.0, 0.1)], ids=["stops_the_slip", "gives_out"])
+def test_an_oblique_impact_of_two_balls_takes_coulomb_friction_of_the_whole_impact(solver, phi, mu):
+    # equal solid spheres, ball a at 3 m/s striking ball b at rest whose centre lies φ off its
+    # path: J_n = (1 + e)·(m/2)·v cos φ; the friction stops the slip at the contact, v sin φ,
+    # with J_t = (m/7)·v sin φ, or gives out at μ·J_n; each ball spins at (5/2)·J_t/(m R). The
+    # Jacobi sweeps scaled an impact's friction by contact.relax (half the slip left), the
+    # Gauss–Seidel sweeps bounded it by μ times the compression alone (1/(1 + e) of it).
+    speed, R, m, e = 3.0, 0.02, 0.045, 0.5
+    p, d = np.radians(phi), 2 * R + 1e-9
+    x = [[0.0, 0.0, 0.0], [d * np.cos(p), d * np.sin(p), 0.0]]
+    over = (*IMPACT, "world.ground=false", f"contact.mu={mu}", *solver_keys(solver))
+    v = [[speed, 0.0, 0.0], [0.0, 0.0, 0.0]]
+    sim = stepped_by(solver, tg.Simulation(lab("lab_vacuum", *over), x=x, v=v, radius=R, mass=m))
+    sim.step(1)
+    J_n = (1 + e) * m / 2 * speed * np.cos(p)
+    J_t = min(m / 7 * speed * np.sin(p), mu * J_n)
+    np.testing.assert_allclose(
+        sim.w[:, 2], 2.5 * J_t / (m * R), rtol=F32_CARRIED if solver.startswith("gauss_seidel") else 1e-12
+    )
+    np.testing.assert_allclose(m * sim.v.sum(axis=0), [m * speed, 0.0, 0.0], rtol=1e-12, atol=1e-15)
 
 
 def test_rolling_ball_stops_where_closed_form_says():

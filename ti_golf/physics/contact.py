@@ -54,10 +54,10 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
     separating pair gives back at most ``lam`` (so a warm start that pushed too hard is undone,
     but impacts are never pulled back). Coulomb friction, bounded by μ times the normal impulse
     of this sweep, can at most stop the slip at the contact point.
-    ``relax`` ∈ (0, 1] scales, in a Jacobi sweep, the impulses of lasting contacts, the give-back of
-    a separating pair and the effective mass the friction may use to stop the slip (of every
-    pressing contact, impacts included): a ball pressed by many neighbours at once would otherwise
-    receive all their corrections together and overshoot.
+    ``relax`` ∈ (0, 1] scales, in a Jacobi sweep, the normal and friction impulses of lasting
+    contacts and the give-back of a separating pair: a ball pressed by many neighbours at once
+    would otherwise receive all their corrections together and overshoot. Impacts and slow
+    approaches take their whole impulse, friction included (B.15).
     Returns (P, lam, touching, impact): ``impact`` is 1 when P is an impact's jolt (a Jacobi sweep
     takes one of a ball's simultaneous impacts at a time, see :func:`ti_golf.solvers.pairs.matched`).
     """
@@ -68,6 +68,7 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
     m_eff = 1.0 / inv_m  # the pair's effective mass (m_red·m_a); one division, not one per use
     v_n = (v_a - v_b).dot(n)
     j_n = 0.0
+    m_slip = m_eff  # the effective mass with which the friction stops the slip
     if gap + h * ti.min(v_n, 0.0) < 0.0:
         touching = 1
         if v_n < 0.0:
@@ -78,6 +79,7 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
                 j_n = -v_n * m_eff
                 if lasting:
                     j_n *= relax
+                    m_slip *= relax
                 lam += j_n
             else:
                 impact = 1
@@ -88,7 +90,7 @@ def pair_impulse(n, gap, v_a, w_a, r_a, inv_m_a, v_b, w_b, r_b, inv_m_b, lam, e,
     if j_n != 0.0:
         P = j_n * n
         if j_n > 0.0:
-            P += friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, relax * m_eff, mu * j_n)
+            P += friction_impulse(n, v_a, w_a, r_a, v_b, w_b, r_b, m_slip, mu * j_n)
     return P, lam, touching, impact
 
 

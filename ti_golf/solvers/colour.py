@@ -201,8 +201,8 @@ def gauss_seidel_sweep(
     ``any_far``, those whose other ball was not beside them at the build), then their planes and
     the terrain (:func:`sweep_ball`), with the parameters in ``scalars``
     (:func:`ti_golf.physics.types.scalars_of`) and the scene's ``kinds`` of code."""
-    _, contact, terrain, params = scalars_of(scalars)
-    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, kinds=kinds))
+    air, contact, terrain, params = scalars_of(scalars)  # (the air: a surface's inelastic speed, surfaces.air_push)
+    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, kinds=kinds, air=air))
     block_sweep(phase, project=False, any_far=any_far, inv_cell=inv_cell, tasks=tasks, blocks=blocks, s=s)
 
 
@@ -267,8 +267,8 @@ def far_pairs(
 ):
     """The pairs the colours left out (their balls were farther apart than beside each other at the
     build), one ball after another in storage order (``kinds``: the scene's kinds of code)."""
-    _, contact, terrain, params = scalars_of(scalars)
-    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, kinds=kinds))
+    air, contact, terrain, params = scalars_of(scalars)  # (the air: a surface's inelastic speed, surfaces.air_push)
+    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, kinds=kinds, air=air))
     ti.loop_config(serialize=True)
     for i in range(state.x.shape[0]):
         if phase == Phase.PROJECT:

@@ -156,8 +156,8 @@ def colour_pass(
     :func:`project_colour_pair`), each loop's bounds read from ``tables.start`` on the device;
     with ``tail``, the overflow set after, one pair after another, and in a projection each
     ball's planes last (:func:`.sequential.project_planes`). ``kinds``: the scene's kinds of code."""
-    _, contact, terrain, params = scalars_of(scalars)
-    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, kinds=kinds))
+    air, contact, terrain, params = scalars_of(scalars)  # (the air: a surface's inelastic speed, surfaces.air_push)
+    s = ti.static(Step(contact, terrain, params, model, lists, state, scratch, kinds=kinds, air=air))
     if ti.static(head and not project):
         for i in range(state.x.shape[0]):
             surface_ball(i, phase, s)

@@ -62,7 +62,7 @@ def pair_step(phase, n, gap, v_n0, a, b, lam, F, e, mu, v_inelastic, h, friction
 
     ``BOUNCE``: restitution, once per step after the sweeps, for a contact that approached faster
     than ``v_inelastic`` and is pressed (λ > 0): toward v_n = −e·v_n0 (B.9), again through the
-    clamped λ. Slower approaches are resting contacts and never bounce: a resting contact gains no
+    clamped λ, and the friction again, bounded by the larger μ·λ. Slower approaches are resting contacts and never bounce: a resting contact gains no
     energy. A plastic pair (e = 0) still apart at the step's start is left as the sweeps made it,
     closing its gap exactly within the step (the next step stops it, touching): v_n = 0 would stop
     it short, up to h·|v_n0| apart. With e > 0 such a pair bounces from where it is, up to
@@ -82,7 +82,9 @@ def pair_step(phase, n, gap, v_n0, a, b, lam, F, e, mu, v_inelastic, h, friction
     lam_new = ti.max(lam + m_eff * (target - v_n), 0.0)
     P = (lam_new - lam) * n
     F_new = F
-    if phase != Phase.BOUNCE:
+    # the friction, toward stopping the slip, in the sweeps; in the bounce only when it pressed
+    # harder: its bound μ·λ then takes in the restitution's impulse, μ·(1 + e)·m·|v_n0| in all (B.15)
+    if phase != Phase.BOUNCE or lam_new > lam:
         F_new = zero3()  # |F| ≤ μ·λ: a contact that presses no more holds no friction
         if lam_new > 0.0:
             if ti.static(friction == CENTRE_FRICTION):
@@ -102,8 +104,9 @@ def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, 
     ``contact``'s restitution, or with ``contact.turf`` in the turf frame of :func:`ti_golf.physics.contact.turf_impact`
     (:func:`ti_golf.physics.contact.impact_frame`).
     In the ``BOUNCE`` pass a pressed ball also meets rolling resistance and the resistance to spin
-    about the normal, bounded by μ_roll·λ (once per step, as :func:`ti_golf.physics.contact.plane_jolt` does). With the
-    report's friction (``kinds.friction``) the spin is left as it is. Returns (v, ω, λ, F)."""
+    about the normal, bounded by μ_roll·λ (once per step; :func:`ti_golf.physics.contact.plane_jolt`
+    applies them to a resting impulse only, not to an impact). With the report's friction
+    (``kinds.friction``) the spin is left as it is. Returns (v, ω, λ, F)."""
     n_eff, e = impact_frame(n, gap, v, lam, contact, v_inelastic, h, kinds)
     ball = body(v, w, radius, 1.0)
     P, lam_new, F_new = pair_step(

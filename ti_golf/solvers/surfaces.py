@@ -16,6 +16,7 @@ pile after the pair tables. Each rebuild carries the rows of the balls that keep
 
 import taichi as ti
 
+from ti_golf.physics.aero import V, coefficients, column, rates
 from ti_golf.physics.contact import (
     CENTRE_FRICTION,
     centre_friction,
@@ -25,6 +26,7 @@ from ti_golf.physics.contact import (
     surface_impulse,
     warm_impulse,
 )
+from ti_golf.physics.kernels import lane_state
 from ti_golf.physics.terrain import (
     surface,
     surface_contact,
@@ -133,11 +135,16 @@ def surface_impulses(i, warm: ti.template(), vi, wi, h, v_inelastic, s: ti.templ
     n_planes = model.plane_n.shape[0]
     if far:
         n_planes = 0
+    push = zero3()  # what the air adds to the ball's velocity in the step (see air_push)
+    if ti.static(not warm):
+        if not far:
+            push = air_push(i, wi, h, s)
     for p in range(n_planes):
         n = model.plane_n[p]
         gap = (state.x[i] - model.plane_p[p]).dot(n) - r
+        v_in = v_inelastic + 2.0 * ti.max(-push.dot(n), 0.0)
         vi, wi = surface_contact_step(
-            i, row, p, n, gap, vi, wi, r, contact=contact, h=h, v_inelastic=v_inelastic, s=s, warm=warm, phase=phase
+            i, row, p, n, gap, vi, wi, r, contact=contact, h=h, v_inelastic=v_in, s=s, warm=warm, phase=phase
         )
     if ti.static(s.kinds.terrain):
         if not far:
@@ -148,10 +155,25 @@ def surface_impulses(i, warm: ti.template(), vi, wi, h, v_inelastic, s: ti.templ
                     contact, model.surface_table, model.terrain_cells, model.heights, terrain, scratch.x_free[i]
                 )
                 gap = (state.x[i] - pt).dot(n) - r
+                v_in = v_inelastic + 2.0 * ti.max(-push.dot(n), 0.0)
                 vi, wi = surface_contact_step(
-                    i, row, q, n, gap, vi, wi, r, contact=ct, h=h, v_inelastic=v_inelastic, s=s, warm=warm, phase=phase
+                    i, row, q, n, gap, vi, wi, r, contact=ct, h=h, v_inelastic=v_in, s=s, warm=warm, phase=phase
                 )
     return vi, wi
+
+
+@ti.func
+def air_push(i, w, h, s: ti.template()):
+    """What the air adds to ball i's velocity in a step of ``h`` [s] [m/s]: h times its drag and
+    Magnus acceleration at the end of its free flight (``scratch.x_free``, ``scratch.v_free``),
+    spinning at ``w`` [rad/s]. A surface's inelastic speed grows by twice what it pushes the ball
+    into the surface, as :func:`ti_golf.physics.kernels.advance` does for a ball alone: the
+    report's Magnus law presses a ball rolling with topspin into the ground, and each step's
+    approach would otherwise pass for an impact and bounce."""
+    air, model, scratch = ti.static((s.air, s.model, s.scratch))
+    coef = coefficients(air, s.kinds, ti.Vector([of_ball(model.radius, i)]), ti.Vector([of_ball(model.mass, i)]))
+    dS = rates(lane_state(scratch.x_free[i], scratch.v_free[i], w), coef, air, s.kinds, s.params.gravity)
+    return h * (column(dS, V, 0) - s.params.gravity)
 
 
 @ti.func
