@@ -647,6 +647,8 @@ BAD_RANGES = {
     "step_negative": ("36:37:-0.1", "STEP must be > 0"),
     "two_parts": ("36:37", "START:STOP:STEP"),
     "empty": ("", "at least one value"),
+    "empty_item": ("30,,40", "has an empty item in '30,,40'"),  # (40 and 30 were swept, the gap dropped)
+    "trailing_comma": ("30,", "has an empty item"),
     "nan": ("36,nan", "finite"),
     "too_many": ("0:90:0.000001", "at most 10,000,000"),
 }

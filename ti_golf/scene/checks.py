@@ -263,7 +263,10 @@ def parse_range(text: str | Sequence[float], source: str, key: str | None) -> tu
                     raise_config(source, key, f"gives {n} values; at most 10,000,000 are allowed")
                 out = tuple(round(start + i * step, 12) for i in range(n))
             else:
-                out = tuple(float(p) for p in s.split(",") if p.strip() != "")
+                items = [p.strip() for p in s.split(",")]
+                if s and "" in items:  # ("30,,40" or "30,": a number left out is not taken as none)
+                    raise_config(source, key, f"has an empty item in {s!r}: give a number between every two commas")
+                out = tuple(float(p) for p in items if p)
         except ValueError:
             raise_config(source, key, f"must be START:STOP:STEP (STOP included) or a comma list of numbers (got {s!r})")
     if not out:
