@@ -329,6 +329,8 @@ def test_an_infinite_time_or_a_negative_seed_is_one_error(argv, last, tmp_path):
         (["study", "bag_weather", "--figure", "carry_m"], "--figure: has no effect without --plot"),
         (["study", "bag_weather", "--lines"], "--lines: has no effect without --plot"),
         (["bench", "collide", "--n", "100", "--shuffled"], "--shuffled: has no effect on 100 balls, stepped serially"),
+        (["sweep", "lab_vacuum", "--to-rest"], "--to-rest: has no effect without --out or --units"),  # (it rolled them)
+        (["run", "lab_vacuum", "--gif", "g.gif", "--camera", "follow", "--follow"], "--follow: has no effect with"),
     ],
 )
 def test_an_option_without_the_option_it_serves_is_refused(argv, last):

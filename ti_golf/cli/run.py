@@ -114,6 +114,8 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
     if not (args.frames or args.gif):
         frame_options = {"frames_every": "--frames-every", "camera": "--camera", "follow": "--follow", "size": "--size"}
         refuse_without(args, RUN_DEFAULTS, frame_options, "--frames or --gif (which the frames are drawn for)")
+    if args.follow and args.camera == "follow":
+        raise ConfigError("--follow", None, "has no effect with --camera follow, which chases ball 0 itself")
     if args.frames is not None and not args.frames.strip():
         raise ConfigError("--frames", None, "needs a folder name (got an empty path)")
     if args.frames is not None and Path(args.frames).exists() and not Path(args.frames).is_dir():

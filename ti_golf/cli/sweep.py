@@ -91,6 +91,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         raise ConfigError(
             "--to-rest", None, f"{scene.name} has no ground to come to rest on (world.ground, [terrain] or planes)"
         )
+    if args.to_rest and not (args.out or args.units):
+        raise ConfigError("--to-rest", None, "has no effect without --out or --units (which show total and roll)")
     angles = _parse_opt_range(args.angles, "--angles")
     speeds = _parse_opt_range(args.speeds, "--speeds")
     spins = _parse_opt_range(args.spins, "--spins")
