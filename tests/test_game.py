@@ -399,6 +399,17 @@ def test_a_missing_shots_file_is_worded_as_every_missing_file(green_file, tmp_pa
     assert capsys.readouterr().err.strip() == f"ti-golf: error: {tmp_path / 'nothere.npz'}: file not found"
 
 
+def test_a_bundled_round_is_found_by_its_name_from_any_folder(tmp_path, monkeypatch, capsys):
+    # an installed copy has no scenes/ folder: the docs' `--shots scenes/golf_hole_round.txt`
+    # failed outside a checkout, and the round's bare name was not looked up
+    monkeypatch.chdir(tmp_path)
+    for name in ("golf_hole_round", "golf_hole_round.txt"):
+        assert cli.main(["play", "golf_hole", "--seed", "3", "--shots", name]) == 0
+        assert "holed" in capsys.readouterr().out.lower()
+    assert cli.main(["play", "golf_hole", "--shots", "golf_hole_rounds"]) == 2
+    assert "file not found (the bundled rounds: golf_hole_round, lab_course_round)" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     "overrides, needle",
     [

@@ -138,7 +138,7 @@ COURSE_SEED = 11
 
 def _course_round(path: str) -> None:
     """The report's five strokes on ``lab_course`` from its random start (seed :data:`COURSE_SEED`),
-    as ``ti-golf play lab_course --seed 11 --shots scenes/lab_course_round.txt`` plays them."""
+    as ``ti-golf play lab_course --seed 11 --shots lab_course_round`` plays them."""
     game = GolfGame(load_scene("lab_course"), seed=COURSE_SEED)
     print(f"lab_course (seed {COURSE_SEED}): the hole at x = {game.cup[0]:g} m, z = {game.cup[2]:g} m")
     shots = file_shots(str(scenes_dir() / "lab_course_round.txt"), game)

@@ -33,7 +33,7 @@ from ti_golf.game.rules import (
     describe_stroke,
     describe_wind,
 )
-from ti_golf.scene.loader import load_scene
+from ti_golf.scene.loader import load_scene, scenes_dir
 
 DEFAULT_SCENE = "golf_hole"
 
@@ -62,7 +62,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "--shots",
         metavar="FILE",
         help="play the strokes in FILE, one per line: 'direction speed loft [spin]' (deg, km/h, deg, rpm) or "
-        "'direction club' (a club's speed, loft and spin); 'hole' aims at the hole, # starts a comment",
+        "'direction club' (a club's speed, loft and spin); 'hole' aims at the hole, # starts a comment; "
+        "a bundled round by its name (golf_hole_round, lab_course_round) from any folder",
     )
     how.add_argument(
         "--gui", action="store_true", help="play in a window: the course in 3-D, clubs and sliders, a camera to move"
@@ -212,14 +213,31 @@ def _field_value(f: Field, text: str, default: float | None, game: GolfGame, sou
     return f.parse(text, source)
 
 
+def shots_file(path: str) -> str:
+    """A ``--shots`` file as given, or a bundled round's name (``golf_hole_round`` or
+    ``golf_hole_round.txt``) looked up in the bundled scenes' folder (an installed copy has no
+    ``scenes/`` of its own)."""
+    p = Path(path)
+    if p.exists() or p.parent != Path("."):
+        return path
+    for candidate in (scenes_dir() / p, scenes_dir() / f"{p}.txt"):
+        if candidate.is_file():
+            return str(candidate)
+    return path
+
+
 def file_shots(path: str, game: GolfGame) -> Iterator[Shot]:
-    """The shots of a ``--shots`` file, checked line by line (errors name the file, line and field)."""
+    """The shots of a ``--shots`` file (a path, or a bundled round's name: :func:`shots_file`),
+    checked line by line (errors name the file, line and field)."""
+    path = shots_file(path)
     if Path(path).exists() and not Path(path).is_file() and not Path(path).is_dir():
         raise ConfigError(path, None, "is not a regular file")  # (a FIFO or a device: it could wait for ever)
     try:  # (worded as for the other files read: scenes, saved runs, studies)
         lines = Path(path).read_text(encoding="utf-8-sig").splitlines()
     except FileNotFoundError:
-        raise ConfigError(path, None, "file not found") from None
+        rounds = ", ".join(sorted(f.stem for f in scenes_dir().glob("*_round.txt")))
+        bare = Path(path).parent == Path(".")  # (a name: perhaps a bundled round's, misspelled)
+        raise ConfigError(path, None, "file not found" + (f" (the bundled rounds: {rounds})" if bare else "")) from None
     except IsADirectoryError:
         raise ConfigError(path, None, "is a directory, not a file of shots") from None
     except OSError as exc:
