@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -693,3 +694,14 @@ def test_a_manifest_row_with_only_its_id_and_status_is_a_row_of_the_table(tmp_pa
     table = read_table(tmp_path)
     assert list(table["task_id"]) == [first.id, second.id]
     assert table["wall_s"] == [GOOD_ROW["wall_s"], None]  # (null: no time was recorded)
+
+
+def test_figure_of_a_tour_study_is_checked_against_its_columns_per_club():
+    # `--figure carry_m` passed the check before the tasks ran, then, after all of them, the plot
+    # found no such column: a tour study's columns are per club
+    from ti_golf.cli.study import _check_figure
+
+    spec = load_study("bag_weather")
+    with pytest.raises(ConfigError, match=re.escape("its figures: carry_m[PGA Driver], carry_m[PGA 3-wood]")):
+        _check_figure("carry_m", spec)
+    _check_figure("carry_m[PGA Driver]", spec)

@@ -87,10 +87,13 @@ def cmd_study(args: argparse.Namespace) -> int:
 def _check_figure(column: str, spec: StudySpec) -> None:
     """``--figure`` names a column that the study's figures give (a tour's per club: ``carry_m[PGA
     Driver]``); else a :class:`ConfigError` listing them."""
+    from ti_golf.golf.trackman import TOURS
     from ti_golf.study.figures import FIGURES
 
     columns = [FIGURES[f].column for f in spec.figures]
-    if column.partition("[")[0] not in columns:
+    if spec.task.kind == "tour":  # (a column per club and figure)
+        columns = [f"{c}[{row.name}]" for c in columns for row in TOURS[spec.task.tour]]
+    if column not in columns:
         raise ConfigError(
             "--figure", None, f"is not a figure of {spec.name} (got {column!r}); its figures: {', '.join(columns)}"
         )

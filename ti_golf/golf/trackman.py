@@ -100,4 +100,7 @@ PW     | 72 | -3.2 |  88 | 25.2 | 8465 | 27 | 48 | 111
 """The LPGA Tour's 11 clubs (never seen by the fit)."""
 
 TOUR = PGA_TOUR + LPGA_TOUR
+
+TOURS = {"PGA": PGA_TOUR, "LPGA": LPGA_TOUR, "all": TOUR}
+"""The rows of each ``tour`` a study's tour task may fly."""
 """All 23 rows, PGA first."""

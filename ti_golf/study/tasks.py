@@ -24,7 +24,7 @@ from ti_golf.golf.rollout import has_ground
 from ti_golf.golf.shots import shots, target_direction
 from ti_golf.golf.sweep import sweep
 from ti_golf.golf.tour import fly_tour
-from ti_golf.golf.trackman import LPGA_TOUR, PGA_TOUR, TOUR, YD
+from ti_golf.golf.trackman import TOURS, YD
 from ti_golf.scene.balls import scaled_block
 from ti_golf.scene.launch_monitor import right_of, scene_launch
 from ti_golf.scene.loader import load_scene
@@ -32,9 +32,6 @@ from ti_golf.scene.schema import OUT_OF_BOUNDS, Scene
 from ti_golf.sim.results import Flight, Shots
 from ti_golf.sim.simulation import Simulation
 from ti_golf.study.figures import FIGURES, landed_mean, pile_height, repose_angle
-
-TOUR_ROWS = {"PGA": PGA_TOUR, "LPGA": LPGA_TOUR, "all": TOUR}
-"""The rows of the TrackMan table a tour task flies (``task.tour``)."""
 
 KILL_ONCE_ENV = "TI_GOLF_STUDY_KILL_ONCE"
 """For the tests of a worker lost mid-task: when this environment variable names a file that does
@@ -85,7 +82,7 @@ def execute(task: dict[str, Any], run_dir: str | None) -> dict[str, Any]:
         )
         figures = _shot_figures(d.shots)
     elif kind == "tour":
-        flight = fly_tour(scene, TOUR_ROWS[task["task"]["tour"]])
+        flight = fly_tour(scene, TOURS[task["task"]["tour"]])
         figures = {}
         for name, values in (("carry", flight.carry * YD), ("apex", flight.apex * YD), ("landing_angle", flight.land)):
             for row, value in zip(flight.rows, values):
