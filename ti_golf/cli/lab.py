@@ -71,7 +71,7 @@ def cmd_lab(args: argparse.Namespace) -> int:
         raise ConfigError("--out", None, f"folder {args.out!r} does not exist (Save writes several files into it)")
     check_writable(str(out / "lab.npz"), "--out")
     if not (math.isfinite(args.speed) and args.speed >= 0):
-        raise ConfigError("--speed", None, f"must be a number >= 0 (got {args.speed!r})")
+        raise ConfigError("--speed", None, f"must be a finite number >= 0 (got {args.speed!r})")
     if not (math.isfinite(args.t) and args.t >= 0):
         raise ConfigError("--t", None, f"must be a number of seconds >= 0 (got {args.t!r})")
     if args.t and not args.screenshot:
