@@ -1541,3 +1541,16 @@ def test_the_task_threads_variable_is_a_count(monkeypatch):
             env_count("TI_GOLF_TASK_THREADS")
     monkeypatch.setenv("TI_GOLF_TASK_THREADS", "4")
     assert env_count("TI_GOLF_TASK_THREADS") == 4
+
+
+def test_a_ctrl_c_while_the_commands_modules_are_imported_ends_in_one_line(monkeypatch, capsys):
+    # a Ctrl-C in the first few tenths of a second (the parser imports the commands' modules)
+    # printed a traceback
+    from ti_golf.cli import main as cli_main
+
+    def interrupted(argv):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli_main, "build_parser", interrupted)
+    assert cli_main.main(["play", "golf_hole"]) == 130
+    assert capsys.readouterr().err == "ti-golf: interrupted\n"

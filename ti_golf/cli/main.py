@@ -136,6 +136,9 @@ def main(argv: Sequence[str] | None = None, status: bool = False) -> int:
     except ConfigError as exc:  # (a switch read as the command's modules are imported: TI_GOLF_PLAIN_FRONT_END)
         print(f"ti-golf: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # (a Ctrl-C while the command's modules are imported, before it started)
+        print("ti-golf: interrupted", file=sys.stderr)
+        return 130
     on_main_thread = threading.current_thread() is threading.main_thread()
     if on_main_thread:  # a kill stops as Ctrl-C does, keeping what was done (signals reach the main thread only)
         previous = signal.signal(signal.SIGTERM, _interrupt)
