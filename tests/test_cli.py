@@ -1546,7 +1546,7 @@ def test_the_task_threads_variable_is_a_count(monkeypatch):
 def test_a_ctrl_c_while_the_commands_modules_are_imported_ends_in_one_line(monkeypatch, capsys):
     # a Ctrl-C in the first few tenths of a second (the parser imports the commands' modules)
     # printed a traceback
-    from ti_golf.cli import main as cli_main
+    cli_main = sys.modules["ti_golf.cli.main"]  # (the module: ti_golf.cli.main is also its function's name)
 
     def interrupted(argv):
         raise KeyboardInterrupt
