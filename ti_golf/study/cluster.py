@@ -14,7 +14,9 @@ import json
 import logging
 import os
 import shutil
+import signal
 import subprocess
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -161,10 +163,6 @@ def study_client(
 def _local_cluster(n: int, gpus: int, task_threads: int | None = None) -> Any:
     """``n`` single-threaded CPU workers (Taichi given ``cores / n`` threads each) and ``gpus``
     GPU workers, every process listening on 127.0.0.1, no dashboard."""
-    from distributed import LocalCluster, Nanny
-
-    from ti_golf.study.worker import THREADS_ENV
-
     threads = task_threads or max(1, cores() // max(n, 1))
     options = {
         "host": LOOPBACK,
@@ -173,6 +171,30 @@ def _local_cluster(n: int, gpus: int, task_threads: int | None = None) -> Any:
         "protocol": "tcp://",
         "silence_logs": logging.ERROR,
     }
+    with _ctrl_c_left_to_this_process():
+        return _start_local_cluster(n, gpus, threads, options)
+
+
+@contextlib.contextmanager
+def _ctrl_c_left_to_this_process() -> Iterator[None]:
+    """Ctrl-C ignored while the local workers' processes are started, so that they inherit it so:
+    a terminal's Ctrl-C reaches every process of its group, and this process alone handles it
+    (it stops the study and the cluster); the workers printed their own KeyboardInterrupt."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _start_local_cluster(n: int, gpus: int, threads: int, options: dict[str, Any]) -> Any:
+    from distributed import LocalCluster, Nanny
+
+    from ti_golf.study.worker import THREADS_ENV
+
     cluster = LocalCluster(
         n_workers=n,
         threads_per_worker=1,
