@@ -330,6 +330,21 @@ def test_an_infinite_time_or_a_negative_seed_is_one_error(argv, last, tmp_path):
         (["study", "bag_weather", "--lines"], "--lines: has no effect without --plot"),
         (["bench", "collide", "--n", "100", "--shuffled"], "--shuffled: has no effect on 100 balls, stepped serially"),
         (["sweep", "lab_vacuum", "--to-rest"], "--to-rest: has no effect without --out or --units"),  # (it rolled them)
+        # --set keys the command does not read (each was taken, and nothing changed)
+        (["run", "golf_hole", "--set", "game.wind_max=1"], "--set: key 'game.wind_max' has no effect on `ti-golf run`"),
+        (["run", "lab_vacuum", "--set", "world.t_max=1"], "--set: key 'world.t_max' has no effect on `ti-golf run`"),
+        (
+            ["lab", "lab_magnus", "--set", "sweep.angles=[3]"],
+            "--set: key 'sweep.angles' has no effect on `ti-golf lab`",
+        ),
+        (
+            ["play", "golf_hole", "--set", "launch.speed=10"],
+            "--set: key 'launch.speed' has no effect on `ti-golf play`",
+        ),
+        (
+            ["play", "golf_hole", "--set", "air.wind=[5,0,0]"],
+            "--set: key 'air.wind' has no effect while game.wind_max > 0",
+        ),
         (["run", "lab_vacuum", "--gif", "g.gif", "--camera", "follow", "--follow"], "--follow: has no effect with"),
     ],
 )

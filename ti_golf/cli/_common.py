@@ -133,6 +133,7 @@ def scene_or_saved_run(args: argparse.Namespace, command: str) -> Simulation:
             raise ConfigError(
                 command, None, "needs a SCENE (a scene file or a bundled scene's name) or --resume RUN.npz"
             )
+        refuse_unread_keys(args.overrides, command)
         return Simulation.from_scene(args.scene, args.overrides)
     if args.scene:
         raise ConfigError("--resume", None, f"takes the scene from {args.resume}: leave out SCENE (got {args.scene!r})")
@@ -140,6 +141,20 @@ def scene_or_saved_run(args: argparse.Namespace, command: str) -> Simulation:
     if args.overrides:
         sim.set(args.overrides)
     return sim
+
+
+def refuse_unread_keys(overrides: list[str] | None, command: str, unread: dict[str, str] | None = None) -> None:
+    """A ConfigError naming ``--set`` for a key that ``ti-golf command`` does not read (``unread``:
+    keys or whole tables, each with who reads it; default: those no simulation reads,
+    :data:`ti_golf.sim.changes.NOT_READ`): a key without effect is an error."""
+    from ti_golf.sim.changes import NOT_READ, table_of
+
+    unread = NOT_READ if unread is None else unread
+    for text in overrides or ():
+        key = set_key(text)
+        reason = unread.get(key, unread.get(table_of(key)))
+        if reason is not None:
+            raise ConfigError("--set", key, f"has no effect on `ti-golf {command}` ({reason})")
 
 
 def check_steps_span(steps: int | None, dt: float) -> None:

@@ -9,7 +9,14 @@ import argparse
 import math
 from pathlib import Path
 
-from ti_golf.cli._common import check_writable, parse_size, refuse_without, runtime_options, scene_options
+from ti_golf.cli._common import (
+    check_writable,
+    parse_size,
+    refuse_unread_keys,
+    refuse_without,
+    runtime_options,
+    scene_options,
+)
 from ti_golf.errors import ConfigError
 from ti_golf.lab.app import DEFAULT_SCENE, Lab
 from ti_golf.lab.window import LabWindow, check_display
@@ -81,6 +88,7 @@ def cmd_lab(args: argparse.Namespace) -> int:
         refuse_without(
             args, {"speed": 1.0, "out": "."}, {"speed": "--speed", "out": "--out"}, "a window (leave out --screenshot)"
         )
+    refuse_unread_keys(args.overrides, "lab")
     scene = load_scene(args.scene, args.overrides)  # a bad scene is refused before any window opens
     if args.t > scene.world.t_end:
         raise ConfigError(

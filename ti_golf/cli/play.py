@@ -18,7 +18,16 @@ import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-from ti_golf.cli._common import check_plot, check_writable, plot_help, runtime_options, scene_options, seed_value
+from ti_golf.cli._common import (
+    check_plot,
+    check_writable,
+    plot_help,
+    refuse_unread_keys,
+    runtime_options,
+    scene_options,
+    seed_value,
+    set_key,
+)
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
 from ti_golf.game.rules import (
@@ -36,6 +45,15 @@ from ti_golf.game.rules import (
 from ti_golf.scene.loader import load_scene, scenes_dir
 
 DEFAULT_SCENE = "golf_hole"
+
+GAME_UNREAD = {
+    "description": "it is text for `ti-golf scenes`",
+    "launch": "each stroke is the launch",
+    "sweep": "`ti-golf sweep` reads it",
+    "world.t_end": "a stroke runs to rest, at most game.shot_time",
+    "world.t_max": "sweeps read it",
+}
+"""The scene keys (or tables) the game does not read, with why."""
 
 PROMPT_DEFAULTS = {"spin": 0.0}
 """Fields whose prompt takes Enter for a fixed default (the direction's default is at the hole)."""
@@ -79,7 +97,15 @@ def cmd_play(args: argparse.Namespace) -> int:
     check_writable(args.out, "--out", (".csv",))
     check_plot(args.plot)
     seed = args.seed if args.seed is not None else secrets.randbelow(2**31)  # (said, so a round can be played again)
-    game = GolfGame(load_scene(args.scene, args.overrides), seed=seed)
+    refuse_unread_keys(args.overrides, "play", GAME_UNREAD)
+    scene = load_scene(args.scene, args.overrides)
+    if scene.game.wind_max > 0 and any(set_key(text) == "air.wind" for text in args.overrides):
+        raise ConfigError(
+            "--set",
+            "air.wind",
+            "has no effect while game.wind_max > 0, which draws each stroke's wind: set it to 0 too",
+        )
+    game = GolfGame(scene, seed=seed)
     if args.gui:
         from ti_golf.game.window import check_display  # (GGUI and matplotlib: only for a window)
 
