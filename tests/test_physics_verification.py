@@ -490,7 +490,7 @@ def test_tour_shot_misses_are_bounded_and_land_angles_follow_the_table(tour_flig
 def test_bounce_heights_follow_restitution():
     # a ball dropped from height H rebounds to e²H, then e⁴H (no drag). The position is split at
     # the time of impact, the velocity is not (the rebound is e times the step's end velocity):
-    # the error is first order in h, about 0.1 % of H a bounce at h = 0.1 ms.
+    # the error is first order in h, some 0.05 % of H a bounce at h = 0.1 ms.
     H, e, h = 1.0, 0.6, 1e-4
     scene = lab("lab_vacuum", f"contact.e={e}", "world.integrator=semi_implicit", f"world.dt={h}", "contact.mu=0")
     sim = tg.Simulation(scene, x=[[0, 0.02 + H, 0]])
