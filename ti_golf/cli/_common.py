@@ -108,7 +108,8 @@ def scene_options(
     if default is None:
         p.add_argument("scene", help=scene_help)
     else:
-        p.add_argument("scene", nargs="?", default=default, help=scene_help)
+        with_default = scene_help if "default" in scene_help else f"{scene_help} (default {default})"
+        p.add_argument("scene", nargs="?", default=default, help=with_default)
     set_option(
         p,
         f"override a scene key with a TOML value, e.g. --set {example}; KEY= (no value) clears it, back "

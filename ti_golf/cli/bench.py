@@ -38,7 +38,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     bs = bsub.add_parser("sweep", help="data-parallel sweep vs numpy and scipy baselines")
     bs.add_argument("--n", type=int, default=100_000, help="launch conditions (default 100000)")
     bs.add_argument("--dt", type=float, default=0.1, help="RK4 step [s] (default 0.1)")
-    bs.add_argument("--repeats", type=int, default=3, help="timed repeats; the best is reported")
+    bs.add_argument("--repeats", type=int, default=3, help="timed repeats; the best is reported (default 3)")
     bs.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(bs)
     bc = bsub.add_parser("collide", help="full collision step on a dense pile of N balls")
@@ -159,7 +159,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     bu.add_argument(
         "--scenes", metavar="A,B,...", help="the bundled scenes whose `run --steps 1` is timed (default: all)"
     )
-    bu.add_argument("--repeats", type=int, default=1, help="warm timings per command; the best is reported")
+    bu.add_argument("--repeats", type=int, default=1, help="warm timings per command; the best is reported (default 1)")
     bu.add_argument(
         "--kernels",
         metavar="SCENE",

@@ -39,9 +39,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     """Add ``sweep`` to ``ti-golf``'s subcommands."""
     s = sub.add_parser("sweep", help="fly one ball per launch condition, all at once, and report carry")
     scene_options(s)
-    s.add_argument("--angles", help="elevations [deg]: START:STOP:STEP (STOP included) or a,b,c")
-    s.add_argument("--speeds", help="launch speeds [m/s]: START:STOP:STEP or a,b,c")
-    s.add_argument("--spins", help="spin magnitudes [rad/s] along the scene's spin axis: START:STOP:STEP or a,b,c")
+    s.add_argument(
+        "--angles",
+        help="elevations [deg]: START:STOP:STEP (STOP included) or a,b,c (default: the scene's sweep.angles, "
+        "else its launch.angle_deg)",
+    )
+    s.add_argument(
+        "--speeds", help="launch speeds [m/s]: START:STOP:STEP or a,b,c (default: sweep.speeds, else launch.speed)"
+    )
+    s.add_argument(
+        "--spins",
+        help="spin magnitudes [rad/s] along the scene's spin axis: START:STOP:STEP or a,b,c (default: sweep.spins, "
+        "else the launch's spin)",
+    )
     s.add_argument("--out", help="write one CSV row per launch condition")
     s.add_argument("--plot", help=plot_help("trajectories (side view) and carry vs angle"))
     s.add_argument(
