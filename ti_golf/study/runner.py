@@ -71,7 +71,6 @@ def run_study(
     folder = Path(out) if out is not None else default_folder(spec)
     if folder.exists() and not folder.is_dir():
         raise ConfigError("out", None, f"{str(folder)!r} is a file, not a folder")
-    (folder / RUNS).mkdir(parents=True, exist_ok=True)
     manifest = Manifest(folder)
     todo = [t for t in spec.tasks if not manifest.finished(t.id)]
     result = StudyResult(spec, folder, skipped=len(spec.tasks) - len(todo))
@@ -86,6 +85,7 @@ def run_study(
     try:
         if todo:
             with study_client(address, workers, gpus, need_gpu=spec.gpu) as client:
+                (folder / RUNS).mkdir(parents=True, exist_ok=True)  # (once the cluster is up: not for a bad address)
                 _run(spec, todo, client, folder, manifest, result, log)
     except KeyboardInterrupt:
         result.interrupted = True
@@ -95,7 +95,8 @@ def run_study(
         ) from None
     finally:
         result.columns, result.rows = table_rows(spec.tasks, manifest, spec.keys)
-        write_table(folder, result.columns, result.rows)
+        if folder.is_dir():
+            write_table(folder, result.columns, result.rows)
         result.failed = sum(1 for row in result.rows if row["status"] != "ok")
     return result
 
