@@ -117,6 +117,11 @@ BAD = [
         "must be in",
     ),
     ('scene = "lab_turbulent"\n[random.uniform]\n"air.C_D" = [1, 0]\n', "random.uniform.air.C_D", "low <= high"),
+    (  # (the same task, run three times)
+        'scene = "lab_turbulent"\n[random]\nsamples = 3\n[random.uniform]\n"air.C_D" = [0.2, 0.2]\n',
+        "random.uniform",
+        "draws the same task every time",
+    ),
     ('scene = "lab_turbulent"\n[[points]]\n"air.model" = "magic"\n', "points[0].air.model", "must be one of"),
     ('scene = "lab_turbulent"\n[grid]\n"air.C_D" = [0.2, 0.3, 0.2]\n', "grid.air.C_D", "holds the value 0.2 twice"),
     ('scene = "lab_vacuum"\n[task]\nkind = "run"\nballs = 100\n', "task.balls", "'lab_vacuum' has 0"),

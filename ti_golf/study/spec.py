@@ -357,8 +357,7 @@ def _base_scene(study: Study, task: Task, path: Path) -> str:
 
 
 def _grid_points(table: Any, source: str) -> list[dict[str, Any]]:
-    """The points of a ``[grid]``: every combination of its keys' values (no value twice: the
-    same task twice)."""
+    """The points of a ``[grid]``: every combination of its keys' values, each value once."""
     if not isinstance(table, dict) or not table:
         raise_config(source, "grid", "must be a table of scene keys, each with its values (a list or START:STOP:STEP)")
     axes = {name: _values(name, value, source) for name, value in table.items()}
@@ -421,6 +420,8 @@ def _points(doc: Mapping[str, Any], how: str | None, source: str) -> list[dict[s
                 source, f"random.uniform.{name}", f"must be [low, high], two numbers with low <= high (got {value!r})"
             )
         ranges[name] = (float(value[0]), float(value[1]))
+    if settings.samples > 1 and all(lo == hi for lo, hi in ranges.values()):
+        raise_config(source, "random.uniform", "draws the same task every time: each of its ranges is one value")
     rng = random.Random(settings.seed)
     return [{name: rng.uniform(lo, hi) for name, (lo, hi) in ranges.items()} for _ in range(settings.samples)]
 
@@ -496,8 +497,7 @@ def _check_scene(
     seeded: bool = False,
 ):
     """The task's scene as a document (for its id), built now so that a bad value fails before
-    anything runs; the scene loader's error is given again naming the study file and its table
-    (a point's key), or ``--set`` (a change given on the command line)."""
+    anything runs; a loader's error names the study file and its table, or ``--set``."""
     try:
         scene = load_scene(base, changes)
     except ConfigError as exc:
