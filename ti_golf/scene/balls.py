@@ -188,15 +188,19 @@ def scaled_block(scene: Scene, n: int) -> Scene:
     if problem is not None:
         raise_config("task.balls", None, problem)
     i = next(k for k, b in enumerate(scene.blocks) if b.kind == "random")
-    b = scene.blocks[i]
+    return dataclasses.replace(scene, blocks=scene.blocks[:i] + (_scaled(scene.blocks[i], n),) + scene.blocks[i + 1 :])
+
+
+def _scaled(b: Block, n: int) -> Block:
+    """Random block ``b`` holding ``n`` balls, its box scaled across (x and z about its centre) by
+    sqrt(n / b.number), its height kept."""
     scale = math.sqrt(n / b.number) if b.number else 1.0
     centre = [(lo + hi) / 2 for lo, hi in zip(b.box_min, b.box_max)]
 
     def across(corner: tuple[float, float, float]) -> tuple[float, float, float]:
         return (centre[0] + (corner[0] - centre[0]) * scale, corner[1], centre[2] + (corner[2] - centre[2]) * scale)
 
-    block = dataclasses.replace(b, number=n, box_min=across(b.box_min), box_max=across(b.box_max))
-    return dataclasses.replace(scene, blocks=scene.blocks[:i] + (block,) + scene.blocks[i + 1 :])
+    return dataclasses.replace(b, number=n, box_min=across(b.box_min), box_max=across(b.box_max))
 
 
 def scaled_block_problem(scene: Scene, n: int) -> str | None:
@@ -206,13 +210,7 @@ def scaled_block_problem(scene: Scene, n: int) -> str | None:
     if len(randoms) != 1:
         return f"scales a scene's one random block; {scene.name!r} has {len(randoms)}"
     b = randoms[0]
-    scale = math.sqrt(n / b.number) if b.number else 1.0
-    lo, hi = np.asarray(b.box_min, float), np.asarray(b.box_max, float)
-    centre, half = (lo + hi) / 2, (hi - lo) / 2 * np.array([scale, 1.0, scale])
-    r_max = (b.radius or scene.ball.radius) * (1.0 + b.radius_jitter)
-    sites = random_sites(
-        dataclasses.replace(b, number=n, box_min=tuple(centre - half), box_max=tuple(centre + half)), r_max
-    )
+    sites = random_sites(_scaled(b, n), (b.radius or scene.ball.radius) * (1.0 + b.radius_jitter))
     if sites < n:
         return f"asks for {n:,} balls: the random block of {scene.name!r}, scaled to them, holds at most {sites:,}"
     return None

@@ -135,14 +135,10 @@ def surface_impulses(i, warm: ti.template(), vi, wi, h, v_inelastic, s: ti.templ
     n_planes = model.plane_n.shape[0]
     if far:
         n_planes = 0
-    push = zero3()  # what the air adds to the ball's velocity in the step (see air_push)
-    if ti.static(not warm):
-        if not far:
-            push = air_push(i, wi, h, s)
     for p in range(n_planes):
         n = model.plane_n[p]
         gap = (state.x[i] - model.plane_p[p]).dot(n) - r
-        v_in = v_inelastic + 2.0 * ti.max(-push.dot(n), 0.0)
+        v_in = surface_inelastic_speed(i, n, vi, wi, v_inelastic, h, s, warm)
         vi, wi = surface_contact_step(
             i, row, p, n, gap, vi, wi, r, contact=contact, h=h, v_inelastic=v_in, s=s, warm=warm, phase=phase
         )
@@ -155,11 +151,25 @@ def surface_impulses(i, warm: ti.template(), vi, wi, h, v_inelastic, s: ti.templ
                     contact, model.surface_table, model.terrain_cells, model.heights, terrain, scratch.x_free[i]
                 )
                 gap = (state.x[i] - pt).dot(n) - r
-                v_in = v_inelastic + 2.0 * ti.max(-push.dot(n), 0.0)
+                v_in = surface_inelastic_speed(i, n, vi, wi, v_inelastic, h, s, warm)
                 vi, wi = surface_contact_step(
                     i, row, q, n, gap, vi, wi, r, contact=ct, h=h, v_inelastic=v_in, s=s, warm=warm, phase=phase
                 )
     return vi, wi
+
+
+@ti.func
+def surface_inelastic_speed(i, n, vi, wi, v_inelastic, h, s: ti.template(), warm: ti.template()):
+    """The inelastic speed [m/s] of ball i against a surface of unit normal ``n``: ``v_inelastic``
+    plus twice what the air pushes the ball into it in the step (:func:`air_push`). The push is
+    worked out only for a ball approaching faster than ``v_inelastic`` (at the end of its free
+    flight or now, ``vi``): a slower approach is a resting contact whatever the push, and a warm
+    start reads no inelastic speed."""
+    v_in = v_inelastic
+    if ti.static(not warm):
+        if ti.min(s.scratch.v_free[i].dot(n), vi.dot(n)) < -v_inelastic:
+            v_in += 2.0 * ti.max(-air_push(i, wi, h, s).dot(n), 0.0)
+    return v_in
 
 
 @ti.func
