@@ -330,6 +330,12 @@ def test_an_infinite_time_or_a_negative_seed_is_one_error(argv, last, tmp_path):
         (["study", "bag_weather", "--lines"], "--lines: has no effect without --plot"),
         (["bench", "collide", "--n", "100", "--shuffled"], "--shuffled: has no effect on 100 balls, stepped serially"),
         (["sweep", "lab_vacuum", "--to-rest"], "--to-rest: has no effect without --out or --units"),  # (it rolled them)
+        # given at their default values: given all the same, and without effect
+        (["run", "lab_vacuum", "--camera", "iso"], "--camera: has no effect without --frames or --gif"),
+        (["run", "lab_vacuum", "--record-every", "0"], "--record-every: has no effect without --out or --plot"),
+        (["sweep", "lab_vacuum", "--trajectories", "21"], "--trajectories: has no effect without --plot"),
+        (["lab", "--screenshot", "s.png", "--speed", "1"], "--speed: has no effect without a window"),
+        (["bench", "startup", "--kernels", "lab_vacuum", "--repeats", "1"], "--repeats: has no effect with --kernels"),
         # --set keys the command does not read (each was taken, and nothing changed)
         (["run", "golf_hole", "--set", "game.wind_max=1"], "--set: key 'game.wind_max' has no effect on `ti-golf run`"),
         (["run", "lab_vacuum", "--set", "world.t_max=1"], "--set: key 'world.t_max' has no effect on `ti-golf run`"),

@@ -54,7 +54,37 @@ class Parser(argparse.ArgumentParser):
             near = [f"'--{g[0]}'" for g in guesses if g]
             hint = f" (did you mean {', '.join(near)}?)" if near else ""
             parser.error(f"unrecognized arguments: {' '.join(extra)}{hint}")
+        args.given = self._given(argv)
         return args
+
+    def _given(self, argv: list[str]) -> frozenset[str]:
+        """The ``dest`` of each option that ``argv`` gives, whatever its value (an option given at
+        its default value is given all the same): ``argv`` parsed again with every default of
+        every (sub)command's parser suppressed, so that only what was given is set."""
+        parsers = self._parsers()
+        actions = [(action, action.default) for parser in parsers for action in parser._actions]
+        set_defaults = [(parser, parser._defaults) for parser in parsers]
+        try:
+            for action, _ in actions:
+                action.default = argparse.SUPPRESS
+            for parser in parsers:
+                parser._defaults = {}
+            given, _ = self.parse_known_args(argv)
+        finally:
+            for action, default in actions:
+                action.default = default
+            for parser, defaults in set_defaults:
+                parser._defaults = defaults
+        return frozenset(vars(given))
+
+    def _parsers(self) -> list[argparse.ArgumentParser]:
+        """This parser and every (sub)command's parser below it."""
+        parsers: list[argparse.ArgumentParser] = [self]
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in dict.fromkeys(action.choices.values()):
+                    parsers += sub._parsers() if isinstance(sub, Parser) else [sub]
+        return parsers
 
     def _command_parser(self, args: argparse.Namespace) -> argparse.ArgumentParser:
         """The innermost parser of the (sub)commands ``args`` names."""
@@ -180,7 +210,7 @@ class _SetOnce(argparse.Action):
     def __call__(
         self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, value: Any, option: Any = None
     ) -> None:
-        given = list(getattr(namespace, self.dest) or [])
+        given = list(getattr(namespace, self.dest, None) or [])  # (none: its default suppressed)
         key = set_key(str(value))
         if key and any(set_key(text) == key for text in given):
             raise ConfigError("--set", key, "is given twice: give it once")
@@ -241,21 +271,26 @@ def options_named(options: dict[str, str]) -> Iterator[None]:
         raise ConfigError(options[exc.source], exc.key, exc.reason) from None
 
 
-def refuse_without(
-    args: argparse.Namespace, parser_defaults: dict[str, Any], options: dict[str, str], needs: str
-) -> None:
+def refuse_without(args: argparse.Namespace, options: dict[str, str], needs: str) -> None:
     """A key without effect is an error: each option of ``options`` (``dest`` → its flag) given
-    another value than its default (``parser_defaults``) while none of what it ``needs`` (words
-    naming the options, which the caller found absent) is given."""
-    refuse_given(args, parser_defaults, options, f"without {needs}")
+    while none of what it ``needs`` (words naming the options, which the caller found absent) is
+    given."""
+    refuse_given(args, options, f"without {needs}")
 
 
-def refuse_given(args: argparse.Namespace, parser_defaults: dict[str, Any], options: dict[str, str], why: str) -> None:
-    """Each option of ``options`` (``dest`` → its flag) given another value than its default
-    (``parser_defaults``) is refused: it "has no effect ``why``"."""
+def refuse_given(args: argparse.Namespace, options: dict[str, str], why: str) -> None:
+    """Each option of ``options`` (``dest`` → its flag) given on the command line, at any value
+    (its default included: :meth:`Parser.parse_command_line` records what was given), is
+    refused: it "has no effect ``why``"."""
     for dest, flag in options.items():
-        if getattr(args, dest) != parser_defaults[dest]:
+        if given(args, dest):
             raise ConfigError(flag, None, f"has no effect {why}")
+
+
+def given(args: argparse.Namespace, dest: str) -> bool:
+    """Whether the command line gave the option ``dest``, at any value (``args.given``, recorded
+    by :meth:`Parser.parse_command_line`)."""
+    return dest in args.given
 
 
 def refuse_replaced(overrides: list[str] | None, replaced: dict[str, str]) -> None:

@@ -180,7 +180,7 @@ def cmd_startup(args: argparse.Namespace) -> int:
         raise ConfigError("--top", None, f"must be >= 1 kernels (got {args.top})")
     if args.kernels:
         unused = {"scenes": "--scenes", "repeats": "--repeats"}
-        refuse_given(args, {"scenes": None, "repeats": 1}, unused, "with --kernels (one profiled run of its scene)")
+        refuse_given(args, unused, "with --kernels (one profiled run of its scene)")
         args.cache = args.cache or "warm"
         if args.cache == "both":
             raise ConfigError("--cache", None, "with --kernels: warm or cold (one profiled run)")

@@ -85,9 +85,7 @@ def cmd_lab(args: argparse.Namespace) -> int:
         raise ConfigError("--t", None, "goes with --screenshot (the window runs the scene with Start)")
     check_writable(args.screenshot, "--screenshot", (".png",))
     if args.screenshot:  # (no window runs: the window's pace and its Save folder would have no effect)
-        refuse_without(
-            args, {"speed": 1.0, "out": "."}, {"speed": "--speed", "out": "--out"}, "a window (leave out --screenshot)"
-        )
+        refuse_without(args, {"speed": "--speed", "out": "--out"}, "a window (leave out --screenshot)")
     refuse_unread_keys(args.overrides, "lab")
     scene = load_scene(args.scene, args.overrides)  # a bad scene is refused before any window opens
     if args.t > scene.world.t_end:

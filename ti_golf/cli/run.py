@@ -108,12 +108,10 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
     check_plot(args.plot)
     check_writable(args.gif, "--gif", (".gif",))
     if not (args.out or args.plot):
-        refuse_without(
-            args, RUN_DEFAULTS, {"record_every": "--record-every"}, "--out or --plot (which keep the record)"
-        )
+        refuse_without(args, {"record_every": "--record-every"}, "--out or --plot (which keep the record)")
     if not (args.frames or args.gif):
         frame_options = {"frames_every": "--frames-every", "camera": "--camera", "follow": "--follow", "size": "--size"}
-        refuse_without(args, RUN_DEFAULTS, frame_options, "--frames or --gif (which the frames are drawn for)")
+        refuse_without(args, frame_options, "--frames or --gif (which the frames are drawn for)")
     if args.follow and args.camera == "follow":
         raise ConfigError("--follow", None, "has no effect with --camera follow, which chases ball 0 itself")
     if args.frames is not None and not args.frames.strip():

@@ -51,7 +51,7 @@ def cmd_study(args: argparse.Namespace) -> int:
 
     check_plot(args.plot)
     if not args.plot:
-        refuse_without(args, {"figure": None, "lines": False}, {"figure": "--figure", "lines": "--lines"}, "--plot")
+        refuse_without(args, {"figure": "--figure", "lines": "--lines"}, "--plot")
     if args.workers is not None:
         check_workers(args.workers)
     if args.gpus is not None and args.gpus < 0:

@@ -84,9 +84,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.trajectories < 0:
         raise ConfigError("--trajectories", None, f"must be >= 0 (got {args.trajectories})")
     if not args.plot:
-        refuse_without(
-            args, {"trajectories": TRAJECTORIES}, {"trajectories": "--trajectories"}, "--plot (which draws them)"
-        )
+        refuse_without(args, {"trajectories": "--trajectories"}, "--plot (which draws them)")
     check_plot(args.plot)
     replaced = {}
     if args.angles is not None:
