@@ -352,6 +352,26 @@ def test_an_infinite_time_or_a_negative_seed_is_one_error(argv, last, tmp_path):
             "--set: key 'air.wind' has no effect while game.wind_max > 0",
         ),
         (["run", "lab_vacuum", "--gif", "g.gif", "--camera", "follow", "--follow"], "--follow: has no effect with"),
+        # keys the flights, the pour or a run of its own length do not read
+        (
+            ["sweep", "lab_vacuum", "--set", "game.wind_max=2"],
+            "--set: key 'game.wind_max' has no effect on `ti-golf sweep`",
+        ),
+        (["shot", "tour_shot", "--set", "world.t_end=3"], "--set: key 'world.t_end' has no effect on `ti-golf shot`"),
+        (
+            ["dispersion", "tour_shot", "--set", 'contact.solver="jacobi"'],
+            "--set: key 'contact.solver' has no effect on `ti-golf dispersion` (each shot flies and rolls out alone",
+        ),
+        (["tour", "--set", "hole.radius=0.2"], "--set: key 'hole.radius' has no effect on `ti-golf tour`"),
+        (["bench", "pit", "--set", "world.t_end=3"], "--set: key 'world.t_end' has no effect on `ti-golf bench pit`"),
+        (
+            ["run", "lab_vacuum", "--steps", "3", "--set", "world.t_end=5"],
+            "--set: key 'world.t_end' has no effect with --steps",
+        ),
+        (
+            ["render", "lab_vacuum", "--out", "r.png", "--set", "world.t_end=5"],
+            "--set: key 'world.t_end' has no effect with --t or --steps, or",
+        ),
     ],
 )
 def test_an_option_without_the_option_it_serves_is_refused(argv, last):

@@ -91,6 +91,17 @@ def test_each_key_is_declared_once_as_a_field_of_its_tables_dataclass():
             assert k.doc and k.unit, (table, name)
 
 
+def test_the_keys_an_application_leaves_unread_are_scene_keys_or_tables():
+    # a misspelt entry would refuse nothing, and the key it meant would pass without effect
+    from ti_golf.scene.readers import APPLICATIONS, TIMED_RUN_NOT_READ
+
+    for unread in (*APPLICATIONS.values(), TIMED_RUN_NOT_READ):
+        for entry, reason in unread.items():
+            table, _, name = entry.partition(".")
+            known = name in S.SCHEMA[table] if name else (table in S.SCHEMA or table in S.TOP_LEVEL)
+            assert known and reason, entry
+
+
 def test_the_json_schema_lists_every_key_with_its_bounds():
     schema = json_schema()
     json.dumps(schema)  # serialisable

@@ -148,6 +148,29 @@ BAD = [
         "set: air.C_D",
         "is given twice: give it once",
     ),
+    # keys the task's kind does not read (each was taken, and every task ran the same)
+    (
+        'scene = "tour_shot"\nset = ["game.wind_max=3"]\n[task]\nkind = "tour"\n',
+        "set: game.wind_max",
+        "is not read by a task of task.kind = 'tour' (`ti-golf play` reads it)",
+    ),
+    (
+        'scene = "tour_shot"\n[task]\nkind = "tour"\n[grid]\n"launch.speed" = [60, 70]\n',
+        "grid.launch.speed",
+        "varying it changes nothing (the tour table's rows give each ball's speed",
+    ),
+    ('scene = "tour_shot"\n[task]\nkind = "shot"\n[grid]\n"world.t_end" = [1, 2]\n', "grid.world.t_end", "'shot'"),
+    (
+        'scene = "tour_shot"\n[task]\nkind = "sweep"\n[[points]]\n"air.rho" = 1.2\n[[points]]\n"world.collisions" = false\n',
+        "points[1].world.collisions",
+        "is not read by a task of task.kind = 'sweep': varying it changes nothing (each shot flies",
+    ),
+    (
+        'scene = "heap"\n[task]\nkind = "run"\nt = 0.1\n[random]\nsamples = 2\n[random.uniform]\n"world.t_end" = [1, 2]\n',
+        "random.uniform.world.t_end",
+        "(the run's own length (task.t or task.steps) replaces it)",
+    ),
+    ('scene = "heap"\nset = ["world.t_max=9"]\n', "set: world.t_max", "is not read by a task of task.kind = 'run'"),
 ]
 
 
@@ -626,6 +649,11 @@ def test_the_command_lines_set_replaces_the_files_and_may_not_set_a_varied_key(t
     assert (info.value.source, info.value.key) == ("overrides", "air.rho") and "is varied by the study's [grid]" in str(
         info.value
     )
+    # a key the task's kind does not read, given on the command line, is named as given there
+    with pytest.raises(ConfigError) as info:
+        load_study(spec, ["game.wind_max=2"])
+    assert (info.value.source, info.value.key) == ("overrides", "game.wind_max"), str(info.value)
+    assert "is not read by a task of task.kind = 'run'" in info.value.reason
     # a [task] key given on the command line is named as given there (the study file was blamed)
     for given, reason in (
         ("task.shots=10", "is read only when"),

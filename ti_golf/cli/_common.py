@@ -12,7 +12,7 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -174,16 +174,16 @@ def scene_or_saved_run(args: argparse.Namespace, command: str) -> Simulation:
     return sim
 
 
-def refuse_unread_keys(overrides: list[str] | None, command: str, unread: dict[str, str] | None = None) -> None:
+def refuse_unread_keys(overrides: list[str] | None, command: str, unread: Mapping[str, str] | None = None) -> None:
     """A ConfigError naming ``--set`` for a key that ``ti-golf command`` does not read (``unread``:
-    keys or whole tables, each with who reads it; default: those no simulation reads,
-    :data:`ti_golf.sim.changes.NOT_READ`): a key without effect is an error."""
-    from ti_golf.sim.changes import NOT_READ, table_of
+    keys or whole tables, each with who reads it, as in :mod:`ti_golf.scene.readers`; default:
+    those no simulation reads, :data:`~ti_golf.scene.readers.NOT_READ`): a key without effect is
+    an error."""
+    from ti_golf.scene.readers import NOT_READ, unread_reason
 
-    unread = NOT_READ if unread is None else unread
     for text in overrides or ():
         key = set_key(text)
-        reason = unread.get(key, unread.get(table_of(key)))
+        reason = unread_reason(NOT_READ if unread is None else unread, key)
         if reason is not None:
             raise ConfigError("--set", key, f"has no effect on `ti-golf {command}` ({reason})")
 

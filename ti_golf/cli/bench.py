@@ -19,12 +19,14 @@ from ti_golf.cli._common import (
     check_writable,
     parse_size,
     refuse_given,
+    refuse_unread_keys,
     runtime_options,
     scene_options,
     set_option,
 )
 from ti_golf.errors import ConfigError
 from ti_golf.scene.loader import load_scene
+from ti_golf.scene.readers import POUR_NOT_READ
 from ti_golf.solvers.stepping import SERIAL_MAX_BALLS, steps_serially
 
 DISPERSION_REST = 10_000
@@ -262,6 +264,7 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
             raise ConfigError("--t", None, f"must be in (0, 60] s (got {args.t})")
         if args.every is not None and not 0.0 < args.every <= args.t:  # (also false for NaN)
             raise ConfigError("--every", None, f"must be in (0, --t] s (got {args.every})")
+        refuse_unread_keys(args.overrides, "bench pit", POUR_NOT_READ)
         result = bench_pit(n=args.n, t=args.t, overrides=args.overrides, every=args.every)
     elif args.bench == "collide":
         if not 1 <= args.steps <= MAX_STEPS:
@@ -326,6 +329,7 @@ def _bench_lab(args: argparse.Namespace) -> int:
     if not 0.0 < args.seconds <= 3600.0:  # (also false for NaN)
         raise ConfigError("--seconds", None, f"must be in (0, 3600] s (got {args.seconds})")
     check_writable(args.screenshot, "--screenshot", (".png",))
+    refuse_unread_keys(args.overrides, "bench lab")
     load_scene(args.scene, args.overrides)  # a bad scene is refused before the window opens
     check_display(on_screen=False)
     result = bench_lab(args.scene, args.overrides, args.seconds, args.size, args.screenshot)

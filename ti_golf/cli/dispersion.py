@@ -12,6 +12,7 @@ from ti_golf.cli._common import (
     check_plot,
     check_writable,
     plot_help,
+    refuse_unread_keys,
     runtime_options,
     scene_options,
     seed_value,
@@ -31,6 +32,7 @@ from ti_golf.scene.launch_monitor import (
     field_label,
 )
 from ti_golf.scene.loader import load_scene
+from ti_golf.scene.readers import SHOTS_NOT_READ
 
 SPREAD = PLAYER_SPREAD
 SPREAD_OPTIONS = {name: f"--sd-{option[2:]}" for name, option in LAUNCH_OPTIONS.items()}
@@ -95,6 +97,7 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
         raise ConfigError("--flight-dt", None, f"must be in [{lo:g}, {hi:g}] s (got {args.flight_dt})")
     check_writable(args.out, "--out", (".csv", ".npz"))
     check_plot(args.plot)
+    refuse_unread_keys(args.overrides, "dispersion", SHOTS_NOT_READ)
     scene = load_scene(args.scene, args.overrides)
     mean = read_launch(args, scene, units)
     sd = read_spread(args, units)

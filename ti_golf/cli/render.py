@@ -11,6 +11,7 @@ from ti_golf.cli._common import (
     check_steps_span,
     check_writable,
     parse_size,
+    refuse_replaced,
     resume_option,
     runtime_options,
     say_unfinished,
@@ -68,6 +69,8 @@ def cmd_render(args: argparse.Namespace) -> int:
     w, h = args.size
     if not 1.0 <= args.fov <= 170.0:
         raise ConfigError("--fov", None, f"must be in [1, 170] degrees (got {args.fov})")
+    if args.t is not None or args.steps is not None or not args.until:  # (world.t_end: the length with --until)
+        refuse_replaced(args.overrides, {"world.t_end": "--t or --steps, or without --until"})
     sim = scene_or_saved_run(args, "render")
     check_steps_span(args.steps, sim.dt)
     if args.steps is not None:

@@ -18,6 +18,7 @@ from ti_golf.cli._common import (
     check_writable,
     parse_size,
     plot_help,
+    refuse_replaced,
     refuse_without,
     resume_option,
     runtime_options,
@@ -127,6 +128,8 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
         raise ConfigError("--steps", None, f"must be > 0 (got {args.steps})")
     if args.record_every < 0:
         raise ConfigError("--record-every", None, f"must be >= 0 (got {args.record_every})")
+    if args.t is not None or args.steps is not None:  # (world.t_end is the length of a run given neither)
+        refuse_replaced(args.overrides, {"world.t_end": "--t" if args.t is not None else "--steps"})
     sim = scene_or_saved_run(args, "run")
     check_steps_span(args.steps, sim.dt)
     resumed_at = sim.t if args.resume else None

@@ -9,13 +9,14 @@ import sys
 
 import numpy as np
 
-from ti_golf.cli._common import refuse_replaced, runtime_options, scene_options
+from ti_golf.cli._common import refuse_replaced, refuse_unread_keys, runtime_options, scene_options
 from ti_golf.errors import ConfigError
 from ti_golf.golf.aero_fit import beyond_the_fit
 from ti_golf.golf.rollout import has_ground
 from ti_golf.golf.shots import shots
 from ti_golf.scene.launch_monitor import UNITS, MonitorLaunch, Units, check_launch, scene_launch
 from ti_golf.scene.loader import load_scene
+from ti_golf.scene.readers import SHOTS_NOT_READ
 from ti_golf.scene.schema import Scene
 from ti_golf.sim.results import GOLFER_COLUMNS, Shots
 
@@ -163,6 +164,7 @@ def cmd_shot(args: argparse.Namespace) -> int:
     ground) and print its carry, apex, landing and rest in ``--units`` (one JSON line with
     ``--json``); 0."""
     units = UNITS[args.units]
+    refuse_unread_keys(args.overrides, "shot", SHOTS_NOT_READ)
     scene = load_scene(args.scene, args.overrides)
     launch = read_launch(args, scene, units)
     to_rest = has_ground(scene)

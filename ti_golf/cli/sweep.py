@@ -14,6 +14,7 @@ from ti_golf.cli._common import (
     options_named,
     plot_help,
     refuse_replaced,
+    refuse_unread_keys,
     refuse_without,
     runtime_options,
     scene_options,
@@ -26,6 +27,7 @@ from ti_golf.golf.sweep import sweep
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import UNITS
 from ti_golf.scene.loader import load_scene
+from ti_golf.scene.readers import FLIGHTS_NOT_READ
 from ti_golf.scene.schema import parse_range
 
 TRAJECTORIES = 21
@@ -94,6 +96,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.spins is not None:
         replaced["sweep.spins"] = "--spins"
     refuse_replaced(args.overrides, replaced)
+    refuse_unread_keys(args.overrides, "sweep", FLIGHTS_NOT_READ)
     scene = load_scene(args.scene, args.overrides)
     if args.to_rest and not has_ground(scene):
         raise ConfigError(

@@ -6,12 +6,20 @@ from __future__ import annotations
 import argparse
 import time
 
-from ti_golf.cli._common import check_plot, plot_help, refuse_replaced, runtime_options, scene_options
+from ti_golf.cli._common import (
+    check_plot,
+    plot_help,
+    refuse_replaced,
+    refuse_unread_keys,
+    runtime_options,
+    scene_options,
+)
 from ti_golf.errors import ConfigError
 from ti_golf.golf.aero_fit import FIT_PARAMETERS, START, bounds, fit
 from ti_golf.golf.tour import fly_tour, within_tolerance_text
 from ti_golf.golf.trackman import LPGA_TOUR, PGA_TOUR, TOUR
 from ti_golf.scene.loader import load_scene
+from ti_golf.scene.readers import TOUR_NOT_READ
 
 ROWS = {"all": TOUR, "pga": PGA_TOUR, "lpga": LPGA_TOUR}
 """The rows ``--rows`` picks."""
@@ -46,6 +54,7 @@ def cmd_tour(args: argparse.Namespace) -> int:
     check_plot(args.plot)
     rows = "the tour's rows, which give every launch (only launch.position is the scene's)"
     refuse_replaced(args.overrides, {f"launch.{k}": rows for k in ("speed", "angle_deg", "direction_deg", "spin")})
+    refuse_unread_keys(args.overrides, "tour", TOUR_NOT_READ)
     scene = load_scene(args.scene, args.overrides)
     if scene.launch is None:  # the rows launch from the scene's launch point
         raise ConfigError(

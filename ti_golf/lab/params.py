@@ -21,9 +21,10 @@ from ti_golf.scene.across import read_across
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.checks import Interval, OneOf
 from ti_golf.scene.keys import Key, help_text, is_read
+from ti_golf.scene.readers import NOT_READ
 from ti_golf.scene.schema import SCHEMA, Scene
 from ti_golf.scene.weather import isa_pressure, isa_temperature
-from ti_golf.sim.changes import NOT_READ, at_t0
+from ti_golf.sim.changes import at_t0
 
 TABLES = ("air", "ball", "launch", "world", "contact", "terrain")
 """The scene tables whose keys the lab edits, in the panel's order."""

@@ -20,6 +20,7 @@ from typing import Any
 
 from ti_golf.errors import OVERRIDES, ConfigError
 from ti_golf.scene.loader import parse_override
+from ti_golf.scene.readers import NOT_READ, table_of, unread_reason
 
 AT_T0 = ("launch", "ball", "terrain")
 """Tables whose keys set up the balls or the ground at t0."""
@@ -27,14 +28,6 @@ AT_T0 = ("launch", "ball", "terrain")
 MOVES_T0_BALLS = ("world.ground_height",)
 """Live keys that also place the balls at t0 (a launched ball rests on the ground): at t0 they set
 the simulation up again, as the keys of :data:`AT_T0` do."""
-
-NOT_READ = {
-    "description": "it is text for `ti-golf scenes`",
-    "world.t_max": "sweeps read it (`ti-golf sweep`, ti_golf.sweep)",
-    "sweep": "`ti-golf sweep` reads it",
-    "game": "`ti-golf play` reads it",
-}
-"""Keys (or whole tables) that no simulation reads, with who does."""
 
 
 def as_changes(changes: Mapping[str, Any] | Iterable[str] | str, value: Any) -> dict[str, Any]:
@@ -60,11 +53,6 @@ _UNSET: Any = _Unset()
 """``set``'s value when none is given (``None`` is a value)."""
 
 
-def table_of(key: str) -> str:
-    """The table of a dotted key (``"air"`` of ``"air.C_D"``; a top-level key is its own table)."""
-    return key.split(".", 1)[0]
-
-
 def at_t0(key: str) -> bool:
     """Whether ``key`` sets up the balls or the ground at t0."""
     return table_of(key) in AT_T0
@@ -72,7 +60,7 @@ def at_t0(key: str) -> bool:
 
 def refuse_unread(key: str) -> None:
     """Raise :class:`ConfigError` for a key that no simulation reads."""
-    reader = NOT_READ.get(key, NOT_READ.get(table_of(key)))
+    reader = unread_reason(NOT_READ, key)
     if reader is not None:
         raise ConfigError(OVERRIDES, key, f"has no effect on a simulation ({reader})")
 

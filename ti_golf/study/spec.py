@@ -44,6 +44,7 @@ from ti_golf.scene.loader import load_scene, parse_override, read_toml, resolve_
 from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
 from ti_golf.scene.values import check_value
 from ti_golf.study.figures import FIGURES, KINDS, default_figures
+from ti_golf.study.reads import refuse_unread
 
 MAX_TASKS = 100_000
 """The most tasks a study may hold (a grid's combinations times the seeds)."""
@@ -192,15 +193,8 @@ class TaskSpec:
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data, to send to a worker."""
-        return {
-            "id": self.id,
-            "point": dict(self.point),
-            "seed": self.seed,
-            "scene": self.scene,
-            "changes": list(self.changes),
-            "task": dict(self.task),
-            "figures": list(self.figures),
-        }
+        lists = {"changes": list(self.changes), "figures": list(self.figures)}
+        return {**vars(self), "point": dict(self.point), "task": dict(self.task), **lists}
 
 
 @dataclass(frozen=True)
@@ -266,6 +260,7 @@ def load_study(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> S
     base = _base_scene(study, task, p)
     fixed, file_keys, cli_keys = _fixed_changes(study.set, scene_overrides, source)
     points = _points(doc, given[0] if given else None, source)
+    refuse_unread(task, points, given[0] if given else None, file_keys, cli_keys, source)
     seeds = _seeds(study, task, source)
     n = len(points) * len(seeds)
     if n > MAX_TASKS:
