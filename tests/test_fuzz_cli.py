@@ -372,12 +372,80 @@ def test_an_infinite_time_or_a_negative_seed_is_one_error(argv, last, tmp_path):
             ["render", "lab_vacuum", "--out", "r.png", "--set", "world.t_end=5"],
             "--set: key 'world.t_end' has no effect with --t or --steps, or",
         ),
+        # keys and options that only the roll-out, a simulated time or a random draw reads
+        (
+            ["sweep", "lab_vacuum", "--set", "contact.e=0.3"],
+            "--set: key 'contact.e' has no effect on `ti-golf sweep` (read only when the balls bounce and roll out",
+        ),
+        (
+            ["dispersion", "tour_shot", "--no-roll", "--set", "world.ground=false"],
+            "--set: key 'world.ground' has no effect on `ti-golf dispersion --no-roll`",
+        ),
+        (
+            ["dispersion", "tour_shot", "--no-roll", "--flight-dt", "0.01", "--set", "world.dt=0.002"],
+            "--set: key 'world.dt' has no effect on `ti-golf dispersion --no-roll` (--flight-dt steps the flights",
+        ),
+        (
+            [
+                "dispersion",
+                "tour_shot",
+                "--seed",
+                "0",
+                *(f"--sd-{o}=0" for o in ("speed", "vla", "hla", "spin", "axis")),
+            ],
+            "--seed: has no effect: every standard deviation is 0",
+        ),
+        (["tour", "--set", "contact.mu=0.2"], "--set: key 'contact.mu' has no effect on `ti-golf tour`"),
+        (
+            ["fit-aero", "--set", "air.Re_crisis=5e4"],
+            "--set: key 'air.Re_crisis' has no effect on `ti-golf fit-aero` (the fit starts from the same",
+        ),
+        (
+            ["render", "lab_vacuum", "--out", "r.png", "--set", "air.rho=1.0"],
+            "--set: key 'air.rho' has no effect on `ti-golf render` (a picture of the initial state simulates nothing",
+        ),
+        (
+            ["render", "lab_vacuum", "--out", "r.png", "--precision", "f64"],
+            "--precision: has no effect on a picture of the initial state",
+        ),
+        (
+            ["render", "lab_vacuum", "--out", "r.png", "--t", "0", "--until", "rest"],
+            "--until: has no effect on a picture of the initial state",
+        ),
+        (
+            ["bench", "startup", "--cache", "cold", "--repeats", "1"],
+            "--repeats: has no effect with --cache cold",
+        ),
+        (["lab", "--t", "0"], "--t: goes with --screenshot"),
+        (["study", "repose", "--gpus", "0"], "--gpus: has no effect: the tasks of repose ask for no GPU"),
     ],
 )
 def test_an_option_without_the_option_it_serves_is_refused(argv, last):
     # a key without effect is an error: each of these ran and quietly did nothing with it
     code, err = run_cli(argv)
     assert code == 2 and err.strip().splitlines()[-1].startswith(f"ti-golf: error: {last}"), err
+
+
+def test_the_keys_and_options_refused_without_effect_pass_where_they_act(tmp_path):
+    # the same keys and options as above, given where they change the outcome, run
+    out = str(tmp_path / "out")
+    for argv in (
+        ["sweep", "lab_vacuum", "--angles", "40", "--to-rest", "--out", f"{out}.csv", "--set", "contact.e=0.3"],
+        ["dispersion", "tour_shot", "--n", "2", "--set", "world.ground=false"],
+        ["dispersion", "tour_shot", "--n", "2", "--flight-dt", "0.01", "--set", "world.dt=0.002"],
+        ["render", "lab_vacuum", "--out", f"{out}.png", "--steps", "2", "--set", "air.rho=1.0", "--precision", "f64"],
+        ["render", "lab_vacuum", "--out", f"{out}.png", "--set", "air.wind=[-3,0,0]"],  # (its arrow is drawn)
+    ):
+        code, err = run_cli(argv)
+        assert code == 0, (argv, err)
+
+
+def test_a_dispersion_plot_that_cannot_be_drawn_is_said_and_fails(tmp_path):
+    # with fewer than three shots landed the plot was left out, with no word and exit code 0
+    plot = tmp_path / "d.png"
+    code, err = run_cli(["dispersion", "tour_shot", "--n", "4", "--set", "world.t_max=0.5", "--plot", str(plot)])
+    assert code == 1 and err.strip() == f"{plot} not written: 0 of the shots landed, and the plot's ellipses need 3"
+    assert not plot.exists()
 
 
 def test_frames_into_a_folder_whose_parent_is_missing_or_a_file_are_refused(tmp_path):

@@ -18,6 +18,7 @@ from conftest import ON_VULKAN, colour_pixels, png_rgb
 
 import ti_golf as tg
 from ti_golf import cli
+from ti_golf.errors import ConfigError
 from ti_golf.game.cup import capture_speed, drop_time, holed_at
 from ti_golf.game.rules import HOLED, OUT, RESTS, GolfGame, Shot
 from ti_golf.scene.schema import GameConfig
@@ -191,7 +192,9 @@ def test_an_empty_set_clears_the_fixed_start():
         assert np.hypot(*a.ball[[0, 2]]) > 1.0  # not the tee
     assert tg.load_scene("golf_hole", ["contact.mu_roll="]).contact.mu_roll == 0.05  # the schema's default
     assert tg.load_scene("golf_hole", ["launch.angle_deg= "]).launch.angle_deg == 45.0
-    assert tg.load_scene("lab_vacuum", ["hole.position="]).hole is None  # (no table is made to clear a key)
+    for unset in ("hole.position=", "launch.position=", "air.wind="):  # (at its default: no effect)
+        with pytest.raises(ConfigError, match=f"key '{unset[:-1]}' is not set by the scene: clearing it"):
+            tg.load_scene("lab_vacuum", [unset])
 
 
 def _first_lie(text: str) -> str:
@@ -206,13 +209,13 @@ def test_both_game_modes_start_at_the_same_random_point_of_the_seed(green_file, 
     console = ["play", str(green_file), "--set", "game.start=", "--shots", str(shots)]
     assert cli.main([*console, "--seed", "4"]) == 0
     seeded = capsys.readouterr().out
-    assert "Round seed 4: --seed 4 plays this start and these winds again." in seeded
+    assert "Round seed 4: --seed 4 plays this start again." in seeded
     assert "The ball starts at a random point of the course: " in seeded
     assert cli.main([*console, "--seed", "5"]) == 0
     assert _first_lie(capsys.readouterr().out) != _first_lie(seeded)
     assert cli.main(console) == 0
     drawn = capsys.readouterr().out
-    seed = re.search(r"--seed (\d+) plays this start and these winds again", drawn).group(1)
+    seed = re.search(r"--seed (\d+) plays this start again", drawn).group(1)
     assert cli.main([*console, "--seed", seed]) == 0
     assert _first_lie(capsys.readouterr().out) == _first_lie(drawn)
 
@@ -228,7 +231,7 @@ def test_both_game_modes_start_at_the_same_random_point_of_the_seed(green_file, 
     monkeypatch.setattr("ti_golf.game.window.check_display", lambda: None)
     monkeypatch.setattr("ti_golf.game.window.GolfWindow", Window)
     assert cli.main(["play", str(green_file), "--set", "game.start=", "--gui", "--seed", "4"]) == 0
-    assert "Round seed 4: --seed 4 plays this start and these winds again." in capsys.readouterr().out
+    assert "Round seed 4: --seed 4 plays this start again." in capsys.readouterr().out
     x, z = windows[0].ball[[0, 2]]
     assert _first_lie(seeded) == f"x = {x:.2f} m, z = {z:.2f} m"
 
@@ -352,13 +355,18 @@ def test_every_round_says_its_seed_and_the_seed_plays_its_winds_again(green_file
     lie_winds = r"^Stroke \d: the ball lies .*; (wind .*)$"
     winds = re.findall(lie_winds, drawn, re.M)
     assert len(set(winds)) >= 2 and re.findall(lie_winds, again, re.M) == winds
+    # a round that draws nothing (a fixed start, no wind drawn) has no seed to say, or to give
+    assert cli.main(console[:2] + console[4:]) == 0
+    assert "Round seed" not in capsys.readouterr().out
+    assert cli.main([*console[:2], *console[4:], "--seed", "3"]) == 2
+    assert "--seed: has no effect: game.start places the ball" in capsys.readouterr().err
 
 
 def test_the_first_prompt_offers_the_clubs_and_a_club_name_gives_its_stroke(green_file, capsys, monkeypatch):
     from ti_golf.game.rules import CLUBS
 
     monkeypatch.setattr("sys.stdin", io.StringIO("hole\nputter\n"))
-    assert cli.main(["play", str(green_file), "--seed", "1"]) == 0
+    assert cli.main(["play", str(green_file)]) == 0
     text = capsys.readouterr().out
     before = text[: text.index("Stroke 1:")]
     for name, (speed, loft, spin) in CLUBS.items():
@@ -506,7 +514,7 @@ def test_enter_at_the_direction_prompt_aims_as_hole_does(green_file, tmp_path, c
     for direction in ("", "hole"):
         monkeypatch.setattr("sys.stdin", io.StringIO(f"{direction}\n5\n0\n\n"))
         out = tmp_path / f"round{len(rounds)}.csv"
-        args = ["play", str(green_file), "--seed", "1", "--set", "game.start=[0, 0.37]", "--out", str(out)]
+        args = ["play", str(green_file), "--set", "game.start=[0, 0.37]", "--out", str(out)]
         assert cli.main(args) == 0
         assert "Enter: at the hole, -7.0]" in capsys.readouterr().out
         rounds.append(out.read_text())

@@ -198,6 +198,8 @@ def cmd_startup(args: argparse.Namespace) -> int:
         if scenes == []:
             raise ConfigError("--scenes", None, f"names no scene (got {args.scenes!r}); leave it out for all")
         args.cache = args.cache or "both"
+        if args.cache == "cold":
+            refuse_given(args, {"repeats": "--repeats"}, "with --cache cold (it repeats the warm timings only)")
         unknown = sorted(set(scenes or ()) - set(scene_names()))
         if unknown:
             raise ConfigError(

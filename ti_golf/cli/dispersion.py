@@ -5,12 +5,14 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 import time
 
 from ti_golf.cli._common import (
     Progress,
     check_plot,
     check_writable,
+    given,
     plot_help,
     refuse_unread_keys,
     runtime_options,
@@ -32,7 +34,7 @@ from ti_golf.scene.launch_monitor import (
     field_label,
 )
 from ti_golf.scene.loader import load_scene
-from ti_golf.scene.readers import SHOTS_NOT_READ
+from ti_golf.scene.readers import LANDING_NOT_READ, SHOTS_NOT_READ
 
 SPREAD = PLAYER_SPREAD
 SPREAD_OPTIONS = {name: f"--sd-{option[2:]}" for name, option in LAUNCH_OPTIONS.items()}
@@ -97,10 +99,17 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
         raise ConfigError("--flight-dt", None, f"must be in [{lo:g}, {hi:g}] s (got {args.flight_dt})")
     check_writable(args.out, "--out", (".csv", ".npz"))
     check_plot(args.plot)
-    refuse_unread_keys(args.overrides, "dispersion", SHOTS_NOT_READ)
+    unread = LANDING_NOT_READ if args.no_roll else SHOTS_NOT_READ
+    if args.no_roll and args.flight_dt is not None:
+        unread = {**unread, "world.dt": "--flight-dt steps the flights, and --no-roll leaves out the roll-out"}
+    refuse_unread_keys(args.overrides, "dispersion" + " --no-roll" * args.no_roll, unread)
     scene = load_scene(args.scene, args.overrides)
     mean = read_launch(args, scene, units)
     sd = read_spread(args, units)
+    if given(args, "seed") and not any(sd.in_units(units).values()):
+        raise ConfigError(
+            "--seed", None, "has no effect: every standard deviation is 0, so every shot is the mean launch"
+        )
     to_rest = not args.no_roll and has_ground(scene)
     progress = Progress()
     t0 = time.perf_counter()
@@ -142,11 +151,15 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
     if args.out:
         d.save(args.out, units)
         print(f"wrote {args.out}")
+    code = 0
     if args.plot and landed > 2:
         from ti_golf.render.dispersion import plot_dispersion  # (matplotlib: imported only to plot)
 
         plot_dispersion(d, units, args.plot, title=f"{scene.name}: {args.n:,} shots, seed {args.seed}")
         print(f"wrote {args.plot}")
+    elif args.plot:
+        print(f"{args.plot} not written: {landed} of the shots landed, and the plot's ellipses need 3", file=sys.stderr)
+        code = 1
     if args.json:
         out = {
             "scene": scene.name,
@@ -172,7 +185,7 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
             ],
         }
         print(json.dumps(_finite(out)))
-    return 0
+    return code
 
 
 def _finite(o: object) -> object:

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ti_golf.cli._common import (
     check_writable,
+    given,
     parse_size,
     refuse_unread_keys,
     refuse_without,
@@ -81,7 +82,7 @@ def cmd_lab(args: argparse.Namespace) -> int:
         raise ConfigError("--speed", None, f"must be a finite number >= 0 (got {args.speed!r})")
     if not (math.isfinite(args.t) and args.t >= 0):
         raise ConfigError("--t", None, f"must be a number of seconds >= 0 (got {args.t!r})")
-    if args.t and not args.screenshot:
+    if given(args, "t") and not args.screenshot:
         raise ConfigError("--t", None, "goes with --screenshot (the window runs the scene with Start)")
     check_writable(args.screenshot, "--screenshot", (".png",))
     if args.screenshot:  # (no window runs: the window's pace and its Save folder would have no effect)

@@ -21,6 +21,7 @@ from pathlib import Path
 from ti_golf.cli._common import (
     check_plot,
     check_writable,
+    given,
     plot_help,
     refuse_unread_keys,
     runtime_options,
@@ -43,6 +44,7 @@ from ti_golf.game.rules import (
     describe_wind,
 )
 from ti_golf.scene.loader import load_scene, scenes_dir
+from ti_golf.scene.schema import Scene
 
 DEFAULT_SCENE = "golf_hole"
 
@@ -105,6 +107,10 @@ def cmd_play(args: argparse.Namespace) -> int:
             "air.wind",
             "has no effect while game.wind_max > 0, which draws each stroke's wind: set it to 0 too",
         )
+    if given(args, "seed") and not random_round(scene):
+        raise ConfigError(
+            "--seed", None, "has no effect: game.start places the ball and game.wind_max = 0 leaves the wind as it is"
+        )
     game = GolfGame(scene, seed=seed)
     if args.gui:
         from ti_golf.game.window import check_display  # (GGUI and matplotlib: only for a window)
@@ -140,11 +146,23 @@ def cmd_play(args: argparse.Namespace) -> int:
     return 130 if ended == "interrupted" and not game.over else 0
 
 
+def random_round(scene: Scene) -> bool:
+    """Whether a round of ``scene`` draws anything: a random start (no ``game.start``) or winds
+    (``game.wind_max`` > 0)."""
+    return scene.game.start is None or scene.game.wind_max > 0
+
+
 def _say_seed(game: GolfGame, seed: int) -> None:
-    """The round's seed, which plays its winds (and, on a course without ``game.start``, its
-    random start) again, and where such a course put the ball."""
-    what = "this start and these winds" if game.scene.game.start is None else "these winds"
-    print(f"Round seed {seed}: --seed {seed} plays {what} again.")
+    """The round's seed, which plays its random start (a course without ``game.start``) and its
+    winds (``game.wind_max`` > 0) again, and where such a course put the ball; nothing for a
+    round that draws neither."""
+    if not random_round(game.scene):
+        return
+    rules = game.scene.game
+    drawn = [
+        what for what, random in (("this start", rules.start is None), ("these winds", rules.wind_max > 0)) if random
+    ]
+    print(f"Round seed {seed}: --seed {seed} plays {' and '.join(drawn)} again.")
     if game.scene.game.start is None:
         print(f"The ball starts at a random point of the course: x = {game.ball[0]:.2f} m, z = {game.ball[2]:.2f} m.")
 

@@ -11,7 +11,9 @@ from ti_golf.cli._common import (
     check_steps_span,
     check_writable,
     parse_size,
+    refuse_given,
     refuse_replaced,
+    refuse_unread_keys,
     resume_option,
     runtime_options,
     say_unfinished,
@@ -21,6 +23,7 @@ from ti_golf.cli._common import (
 from ti_golf.errors import ConfigError
 from ti_golf.render import BACKENDS, CAMERAS, COLOR_BY, render
 from ti_golf.scene.checks import TIME_LIMIT
+from ti_golf.scene.readers import STILL_NOT_READ
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -71,6 +74,11 @@ def cmd_render(args: argparse.Namespace) -> int:
         raise ConfigError("--fov", None, f"must be in [1, 170] degrees (got {args.fov})")
     if args.t is not None or args.steps is not None or not args.until:  # (world.t_end: the length with --until)
         refuse_replaced(args.overrides, {"world.t_end": "--t or --steps, or without --until"})
+    if args.t == 0 or args.steps == 0 or (args.t is None and args.steps is None and not args.until):
+        still = "on a picture of the initial state, which simulates nothing (give --t, --steps or --until)"
+        refuse_given(args, {"until": "--until", "precision": "--precision"}, still)
+        if not args.resume:  # (a saved run's own refusal follows: its keys act on its next steps)
+            refuse_unread_keys(args.overrides, "render", STILL_NOT_READ)
     sim = scene_or_saved_run(args, "render")
     check_steps_span(args.steps, sim.dt)
     if args.steps is not None:

@@ -57,7 +57,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     if args.gpus is not None and args.gpus < 0:
         raise ConfigError("--gpus", None, f"must be >= 0 (got {args.gpus})")
     spec = load_study(args.study, args.overrides)  # bad input before anything starts
-    if args.gpus and not spec.gpu:
+    if args.gpus is not None and not spec.gpu:
         raise ConfigError("--gpus", None, f"has no effect: the tasks of {spec.name} ask for no GPU (task.gpu = false)")
     if args.lines and len(spec.keys) != 2:
         raise ConfigError(

@@ -27,7 +27,7 @@ from ti_golf.golf.sweep import sweep
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import UNITS
 from ti_golf.scene.loader import load_scene
-from ti_golf.scene.readers import FLIGHTS_NOT_READ
+from ti_golf.scene.readers import FLIGHTS_NOT_READ, SWEEP_NOT_READ
 from ti_golf.scene.schema import parse_range
 
 TRAJECTORIES = 21
@@ -96,7 +96,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.spins is not None:
         replaced["sweep.spins"] = "--spins"
     refuse_replaced(args.overrides, replaced)
-    refuse_unread_keys(args.overrides, "sweep", FLIGHTS_NOT_READ)
+    refuse_unread_keys(
+        args.overrides, "sweep" + " --to-rest" * args.to_rest, FLIGHTS_NOT_READ if args.to_rest else SWEEP_NOT_READ
+    )
     scene = load_scene(args.scene, args.overrides)
     if args.to_rest and not has_ground(scene):
         raise ConfigError(

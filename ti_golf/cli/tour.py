@@ -19,7 +19,7 @@ from ti_golf.golf.aero_fit import FIT_PARAMETERS, START, bounds, fit
 from ti_golf.golf.tour import fly_tour, within_tolerance_text
 from ti_golf.golf.trackman import LPGA_TOUR, PGA_TOUR, TOUR
 from ti_golf.scene.loader import load_scene
-from ti_golf.scene.readers import TOUR_NOT_READ
+from ti_golf.scene.readers import FIT_NOT_READ, TOUR_NOT_READ
 
 ROWS = {"all": TOUR, "pga": PGA_TOUR, "lpga": LPGA_TOUR}
 """The rows ``--rows`` picks."""
@@ -82,6 +82,7 @@ def cmd_fit_aero(args: argparse.Namespace) -> int:
     """Fit the spin_reynolds air model's coefficients of ``args.scene`` to the 12 PGA Tour rows and
     print them (as scene keys too) and the fitted model on every row; 0."""
     refuse_replaced(args.overrides, {"air.model": 'fit-aero, which fits air.model = "spin_reynolds"'})
+    refuse_unread_keys(args.overrides, "fit-aero", FIT_NOT_READ)
     scene = load_scene(args.scene, args.overrides)
     if scene.launch is None:
         raise ConfigError(

@@ -82,12 +82,13 @@ def parse_override(text: str) -> tuple[str, Any]:
 
 def _apply_override(data: dict[str, Any], dotted: str, value: Any) -> None:
     """Set ``dotted`` in the scene document ``data`` to ``value``, or clear it (``None``: the key
-    takes its default; a table the scene does not have is not made)."""
+    takes its default; clearing a key that the scene does not set has no effect, and is refused)."""
     parts = dotted.split(".")
     if len(parts) == 1:
         if parts[0] not in TOP_LEVEL:
             raise ConfigError(OVERRIDES, dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
         if value is None:
+            _refuse_clearing_unset(parts[0] in data, dotted)
             data.pop(parts[0], None)
         else:
             data[parts[0]] = (OVERRIDES, value)
@@ -98,13 +99,20 @@ def _apply_override(data: dict[str, Any], dotted: str, value: Any) -> None:
     if section not in SCHEMA or name not in SCHEMA[section]:
         raise ConfigError(OVERRIDES, dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
     if value is None:
-        if isinstance(data.get(section), dict):
-            data[section].pop(name, None)
+        cleared = data.get(section)
+        _refuse_clearing_unset(isinstance(cleared, dict) and name in cleared, dotted)
+        data[section].pop(name)
         return
     table = data.setdefault(section, {})
     if not isinstance(table, dict):
         raise ConfigError(OVERRIDES, dotted, f"cannot be set: '{section}' is not a table in the scene")
     table[name] = (OVERRIDES, value)
+
+
+def _refuse_clearing_unset(is_set: bool, dotted: str) -> None:
+    """A ConfigError for ``KEY=`` (clear) of a key the scene does not set: it is at its default already."""
+    if not is_set:
+        raise ConfigError(OVERRIDES, dotted, "is not set by the scene: clearing it (KEY=) has no effect")
 
 
 def _all_keys() -> list[str]:

@@ -103,8 +103,9 @@ def study_client(
     address = address or os.environ.get(ADDRESS_ENV) or None
     logging.getLogger("distributed").setLevel(logging.ERROR)
     if address:
-        if workers is not None:
-            raise ConfigError("workers", None, "starts a local cluster: give it or a scheduler's address, not both")
+        for name, value in (("workers", workers), ("gpus", gpus)):
+            if value is not None:
+                raise ConfigError(name, None, "starts a local cluster: give it or a scheduler's address, not both")
         given = "address" if os.environ.get(ADDRESS_ENV) != address else ADDRESS_ENV
         if Path(address).suffix == ".json":
             if not Path(address).is_file():
