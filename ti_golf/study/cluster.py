@@ -161,6 +161,12 @@ def study_client(
         cluster.close()
 
 
+WORKER_LOGS = logging.CRITICAL
+"""The least level of the local workers' own log that reaches the terminal: their errors (a
+scheduler that closed under a heartbeat while the study stops, with its traceback) say nothing
+the study does not say itself; a task's failure comes back as its row's error."""
+
+
 def _local_cluster(n: int, gpus: int, task_threads: int | None = None) -> Any:
     """``n`` single-threaded CPU workers (Taichi given ``cores / n`` threads each) and ``gpus``
     GPU workers, every process listening on 127.0.0.1, no dashboard."""
@@ -170,7 +176,7 @@ def _local_cluster(n: int, gpus: int, task_threads: int | None = None) -> Any:
         "dashboard_address": None,
         "worker_dashboard_address": None,
         "protocol": "tcp://",
-        "silence_logs": logging.ERROR,
+        "silence_logs": WORKER_LOGS,
     }
     with _ctrl_c_left_to_this_process():
         return _start_local_cluster(n, gpus, threads, options)
@@ -214,7 +220,7 @@ def _start_local_cluster(n: int, gpus: int, threads: int, options: dict[str, Any
                 "nthreads": 1,
                 "resources": {"GPU": 1},
                 "dashboard_address": None,
-                "silence_logs": logging.ERROR,
+                "silence_logs": WORKER_LOGS,
                 "env": {THREADS_ENV: str(threads), "CUDA_VISIBLE_DEVICES": str(i)},
             },
         }
