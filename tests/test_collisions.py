@@ -1041,6 +1041,22 @@ def test_a_calm_column_falls_asleep_in_one_step(iterations):
     assert asleep_at[0] * 0.001 >= sc.world.t_rest  # no earlier than t_rest after the drop
 
 
+@pytest.mark.parametrize("solver", ["gauss_seidel", "jacobi"])
+def test_with_no_rest_time_only_slow_balls_rest(solver):
+    # world.t_rest = 0 put every touching ball at rest in its first step, whatever its speed: the
+    # break's cue ball (6 m/s) stayed where it was; now it rolls on, and balls at rest stay so
+    sim = tg.Simulation.from_scene("break_shot", ["world.t_rest=0", f'contact.solver="{solver}"'])
+    sim.step(50)  # the cue ball does not reach the rack at x = 1 m
+    x, v = sim.x, sim.v
+    assert sim.state.status.to_numpy()[0] != AT_REST and 0.9 * 6.0 * sim.t < x[0, 0] < 6.0 * sim.t, x[0]
+    assert np.all(sim.state.status.to_numpy()[1:] == AT_REST) and np.all(v[1:] == 0.0)
+    if solver == "gauss_seidel":  # one ball (no collision solver): the putt rolls too
+        putt = tg.Simulation.from_scene("putting_green", ["world.t_rest=0"])
+        x0 = putt.x[0].copy()
+        putt.step(50)
+        assert putt.counts()["at_rest"] == 0 and np.linalg.norm(putt.x[0] - x0) > 0.5 * np.linalg.norm(putt.v[0]) * putt.t
+
+
 def test_a_sleeping_column_stays_put_until_a_ball_lands_on_it():
     # balls asleep whose neighbours are all asleep are skipped by the sweeps and stay exactly where
     # they are (docs, physics: "put at rest and stays exactly where it is"); a ball falling onto the top of

@@ -370,9 +370,9 @@ def rest_update(touching, v, w, radius, rest_time, h, v_rest, t_rest, friction: 
     slow = v.norm() < v_rest
     if ti.static(friction != CENTRE_FRICTION):
         slow = slow and radius * w.norm() < v_rest
-    if touching == 1 and slow:
-        rt = rest_time + h
     st = ROLLING if touching != 0 else FLYING
-    if rt >= t_rest and touching != 0:
-        st = AT_REST
+    if touching == 1 and slow:  # (only a slow ball rests: with t_rest = 0 too, where rt = 0 >= t_rest)
+        rt = rest_time + h
+        if rt >= t_rest:
+            st = AT_REST
     return st, rt
