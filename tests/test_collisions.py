@@ -1054,7 +1054,9 @@ def test_with_no_rest_time_only_slow_balls_rest(solver):
         putt = tg.Simulation.from_scene("putting_green", ["world.t_rest=0"])
         x0 = putt.x[0].copy()
         putt.step(50)
-        assert putt.counts()["at_rest"] == 0 and np.linalg.norm(putt.x[0] - x0) > 0.5 * np.linalg.norm(putt.v[0]) * putt.t
+        assert (
+            putt.counts()["at_rest"] == 0 and np.linalg.norm(putt.x[0] - x0) > 0.5 * np.linalg.norm(putt.v[0]) * putt.t
+        )
 
 
 def test_a_sleeping_column_stays_put_until_a_ball_lands_on_it():

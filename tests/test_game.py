@@ -164,6 +164,20 @@ def test_the_round_ends_after_max_strokes():
     assert game.over and game.outcome == "no strokes left"
 
 
+def test_a_random_start_lies_outside_even_a_wide_cup_or_is_refused():
+    # a cup wider than a quarter of the course: the start was drawn in it (and holed at once)
+    sc = green()
+    wide = dataclasses.replace(sc, game=dataclasses.replace(sc.game, start=None))
+    for radius, inside in ((2.8, False), (20.0, True)):
+        free = dataclasses.replace(wide, hole=dataclasses.replace(wide.hole, radius=radius))
+        if inside:
+            with pytest.raises(ConfigError, match="hole.radius.*leaves no point of the course to start from"):
+                GolfGame(free, seed=1)
+        else:
+            for seed in range(20):
+                assert GolfGame(free, seed=seed).to_hole()[0] > radius
+
+
 def test_a_random_start_and_the_winds_follow_the_seed():
     sc = tg.load_scene("golf_hole")
     assert sc.game.start is not None  # the bundled hole starts at its tee; without one, at random:

@@ -734,6 +734,12 @@ def test_a_block_or_terrain_value_that_a_run_cannot_use_is_refused_before_it_sta
     assert info.value.key == key and fragment in str(info.value), str(info.value)
 
 
+def test_one_ball_of_a_lattice_spans_nothing_whatever_its_spacing(tmp_path):
+    # the span was spacing × count: one ball with a wide spacing (which bounds its jitter) was refused
+    path = write_scene(tmp_path, '[[blocks]]\nkind = "lattice"\ncount = [1, 1, 1]\nspacing = 2e6\njitter = 0.5\n')
+    assert len(ti_golf.load_scene(path).blocks) == 1
+
+
 @pytest.mark.parametrize("normal", ["[0, 1e-170, 0]", "[0, 1e300, 0]", "[0, 2, 0]"])
 def test_a_plane_normal_too_small_or_too_large_to_square_is_still_its_direction(tmp_path, normal):
     # |n|² of 1e-170 underflows to 0 (a ZeroDivisionError) and of 1e300 overflows (a zero normal)

@@ -237,6 +237,31 @@ def test_a_flight_that_diverges_while_finite_is_stopped_naming_the_step():
     assert np.all(rise < (res.speed_mps**2 / (2 * 9.81)) + 1e-9)
 
 
+@pytest.mark.parametrize(
+    "scene, overrides, spins",
+    [
+        ("lab_turbulent", ["ball.mass=1e-6"], None),  # drag 45,000 times a golf ball's on its mass
+        ("lab_turbulent", ["air.rho=1000", 'world.integrator="semi_implicit"'], None),
+        ("lab_magnus", [], [1e5]),  # a spin whose lift turns the ball faster than a step
+        ("tour_shot", ["air.spin_decay=1e9"], None),
+    ],
+)
+def test_a_flight_whose_first_step_overshoots_is_stopped_not_landed_at_its_tee(scene, overrides, spins):
+    # the step threw the ball below its launch height at once, and the landing was put at the
+    # launch: carry 0, landing upward at the launch speed, exit code 0
+    from ti_golf.errors import SimulationError
+
+    with pytest.raises(SimulationError, match=r"fell below their launch height in one step while rising.*smaller"):
+        sweep(scene, angles_deg=[30.0], spins=spins, overrides=overrides)
+
+
+def test_a_ball_that_gravity_does_not_pull_down_does_not_land_and_is_no_divergence():
+    # gravity upward or sideways: the rise bound of a ball pulled down said the flight diverged
+    for gravity in ("[0, 9.81, 0]", "[9.81, 0, 0]"):
+        res = sweep("lab_vacuum", angles_deg=[45.0], overrides=[f"world.gravity={gravity}", "world.t_max=5"])
+        assert not res.flight.landed.any()
+
+
 def test_a_launch_spun_far_past_the_fitted_rows_gets_a_note():
     # the default spin_reynolds coefficients were fitted to the PGA rows (spin ratios 0.07 to 0.45
     # at launch); past S ≈ 0.40 their drag falls, and more spin carries farther
@@ -326,6 +351,19 @@ def cli(*args):
         except SystemExit as exc:
             code = exc.code
     return code, out.getvalue(), err.getvalue()
+
+
+def test_a_dispersion_in_which_no_shot_lands_says_so():
+    # it printed the table's header with no rows under it, and no word why
+    code, out, err = cli("dispersion", "lab_turbulent", "--n", "2", "--no-roll", "--set", "world.t_max=0.5")
+    assert code == 0 and out.splitlines()[-1] == "no shot landed within world.t_max = 0.5 s", out + err
+    assert "mean" not in out.split("spread (sd):")[1]
+
+
+def test_a_speed_ratio_below_one_is_said_as_slower():
+    from ti_golf.bench.common import faster
+
+    assert (faster(2.54), faster(0.625), faster(1.0, 2)) == ("2.5x faster", "1.6x slower", "1.00x faster")
 
 
 def test_shot_prints_the_numbers_golfers_read_in_either_units():

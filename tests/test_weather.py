@@ -115,6 +115,19 @@ REFUSED = {
     "height_of_a_constant_wind": ({"wind_height": 2.0}, [], "air.wind_height", 'wind_profile = "log"'),
     "z0_of_a_constant_wind": ({"wind_z0": 0.1}, [], "air.wind_z0", 'wind_profile = "log"'),
     "pressure_in_hPa": ({"pressure": 1013.0}, [], "air.pressure", "hPa × 100"),
+    # ln(z/z₀)/ln(z_ref/z₀) grows without bound as z₀ nears z_ref: 1e8 times the wind at 1,000 km
+    "z0_just_below_reference": (
+        {"wind_profile": "log", "wind_z0": 9.999999, "wind": [-1.0, 0.0, 0.0]},
+        [],
+        "air.wind_z0",
+        "makes the log profile's wind 1.15e+08 m/s at 1e+06 m above the ground",
+    ),
+    "log_wind_named_where_given": (
+        {"wind_profile": "log"},
+        ["air.wind=[-400,0,0]"],  # (× ln(1e6/0.03)/ln(10/0.03) = 2.97 at 1,000 km)
+        "air.wind",
+        "past the wind's limit of 1000 m/s",
+    ),
 }
 
 

@@ -11,7 +11,7 @@ import numpy as np
 import taichi as ti
 
 from ti_golf.bench import baseline
-from ti_golf.bench.common import _best_time, _peak_rss_bytes, _restart_peak_rss, _rss_bytes
+from ti_golf.bench.common import _best_time, _peak_rss_bytes, _restart_peak_rss, _rss_bytes, faster
 from ti_golf.physics.types import vec3
 from ti_golf.runtime import ensure_init, release_freed_memory
 from ti_golf.scene.schema import (
@@ -222,14 +222,14 @@ def bench_collide(
             "awake_ms_per_step",
             "asleep_speedup",
             lambda s, b: b / s,
-            lambda q: f"the pile asleep vs awake: {q:.2f}x faster per step",
+            lambda q: f"the pile asleep vs awake: {faster(q, 2)} per step",
         ),
         (
             in_id_order_seconds,
             "not_reordered_ms_per_step",
             "reorder_speedup",
             lambda s, b: b / s,
-            lambda q: f"stored in the grid's order vs left in random id order: {q:.2f}x faster per step",
+            lambda q: f"stored in the grid's order vs left in random id order: {faster(q, 2)} per step",
         ),
         (
             alone_seconds,
@@ -243,7 +243,7 @@ def bench_collide(
             "parallel_ms_per_step",
             "serial_speedup",
             lambda s, b: b / s,
-            lambda q: f"stepped serially vs one parallel launch per step: {q:.1f}x faster per step",
+            lambda q: f"stepped serially vs one parallel launch per step: {faster(q)} per step",
         ),
     ):
         if base is not None:

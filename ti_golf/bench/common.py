@@ -18,6 +18,12 @@ def _best_time(fn: Callable[[], Any], repeats: int) -> float:
     return best
 
 
+def faster(q: float, digits: int = 1) -> str:
+    """A speed ratio ``q`` (this one's speed over another's) in words: ``"2.5x faster"``, or
+    ``"1.7x slower"`` below 1."""
+    return f"{q:,.{digits}f}x faster" if q >= 1.0 else f"{1.0 / q:,.{digits}f}x slower"
+
+
 def to_json(result: dict[str, Any]) -> str:
     """One line of JSON (floats rounded to 6 significant digits)."""
 

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ti_golf.bench.common import _best_time
+from ti_golf.bench.common import _best_time, faster
 from ti_golf.bench.reference import carry_numpy, landing_scipy
 from ti_golf.golf.dispersion import PLAYER_SPREAD, draw_launches
 from ti_golf.golf.rollout import roll_out
@@ -143,7 +143,7 @@ def bench_dispersion(
     fastest = landing[f"dt_{dt0:g}"]["shots_per_s"]
     for name, rate in baselines.items():
         log(
-            f"baseline {name}: {rate:,.0f} shots/s to landing -> the lanes at h = {dt0:g} s are {fastest / rate:,.1f}x faster"
+            f"baseline {name}: {rate:,.0f} shots/s to landing -> the lanes at h = {dt0:g} s are {faster(fastest / rate)}"
         )
     out["baselines"] = baselines
     out["baseline_sizes"] = {

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from ti_golf.bench.common import _best_time
+from ti_golf.bench.common import _best_time, faster
 from ti_golf.bench.reference import carry_numpy, carry_scipy
 from ti_golf.golf.sweep import fly
 from ti_golf.runtime import ensure_init
@@ -93,7 +93,7 @@ def bench_sweep(
     baselines = {"numpy_rk4_vectorised": k_np / t_np, "scipy_solve_ivp_dop853": k_sp / t_sp}
     tps = n / seconds
     for name, rate in baselines.items():
-        log(f"baseline {name}: {rate:,.0f} trajectories/s -> ti_golf is {tps / rate:,.1f}x faster")
+        log(f"baseline {name}: {rate:,.0f} trajectories/s -> ti_golf is {faster(tps / rate)}")
     return {
         "benchmark": "sweep",
         "n": n,

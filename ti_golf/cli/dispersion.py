@@ -136,10 +136,13 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
             f"[{lo:g}, {hi:g}] {field_label(units, name)} and were held there: the spread flown is narrower than its sd"
         )
     summary = d.summary()
-    print(f"{'':<8} {'mean':>9} {'sd':>7}")
+    if landed == 0:
+        print(f"no shot landed within world.t_max = {scene.world.t_max:g} s")
+    else:
+        print(f"{'':<8} {'mean':>9} {'sd':>7}")
     for name, (m, sdv) in summary.items():
         if not math.isfinite(m):
-            continue  # total without a roll-out
+            continue  # total without a roll-out, or nothing landed
         print(f"{name:<8} {m / f:9.1f} {sdv / f:7.1f} {lab}" + ("  (+ right)" if name == "offline" else ""))
     ellipses = d.ellipses() if landed > 2 else []
     for e in ellipses:

@@ -213,6 +213,13 @@ class GolfGame:
                 )
         else:
             start = self._random_start(hole)
+            if np.hypot(*(start - hole)) <= self.hole.radius:
+                raise ConfigError(
+                    source,
+                    "hole.radius",
+                    f"= {self.hole.radius:g} m leaves no point of the course to start from outside the cup: a "
+                    "smaller cup, or a game.start",
+                )
         self.ball = self._on_ground(start)
         """Where the ball lies [m] (3,): its centre, resting on the terrain."""
         self.strokes: list[Stroke] = []
@@ -233,15 +240,20 @@ class GolfGame:
 
     def _random_start(self, hole: np.ndarray) -> np.ndarray:
         """A random point of the course, 10 % of its size in from the edges and at least a quarter of
-        the course's length from the hole (the report's game puts the ball anywhere)."""
+        the course's length from the hole and outside the cup (the report's game puts the ball
+        anywhere); on a course too small for that, the draw farthest from the hole."""
         lo = self.terrain.origin[[0, 2]] + 0.1 * self.terrain.size
         hi = lo + 0.8 * self.terrain.size
-        far = 0.25 * float(self.terrain.size.max())
+        far = max(0.25 * float(self.terrain.size.max()), np.nextafter(self.hole.radius, np.inf))
+        farthest, reach = lo, -1.0
         for _ in range(1000):
             p = self.rng.uniform(lo, hi)
-            if np.hypot(*(p - hole)) >= far:
+            d = float(np.hypot(*(p - hole)))
+            if d >= far:
                 return p
-        return lo  # (a course too small for the rule: its corner)
+            if d > reach:
+                farthest, reach = p, d
+        return farthest
 
     def _draw_wind(self) -> np.ndarray:
         """Level wind of up to ``game.wind_max`` from a random direction; the scene's wind when it is 0."""

@@ -259,8 +259,28 @@ def fly(
             f"(launch v = {np.round(v0[ids[0]], 6).tolist()} m/s); try a smaller world.dt",
             ids[:20].tolist(),
         )
-    _check_rise(out["apex"], x0, v0, a.wind, g, wld.dt)
+    if wld.gravity[1] < 0.0:  # (the bound of a ball pulled down; nothing bounds one that is not)
+        _check_rise(out["apex"], x0, v0, a.wind, -wld.gravity[1], wld.dt)
+    _check_landing(out["landed"], out["land_v"], v0, wld.dt)
     return out
+
+
+def _check_landing(landed: np.ndarray, land_v: np.ndarray, v0: np.ndarray, dt: float) -> None:
+    """Raise :class:`SimulationError` for balls that landed while rising: a ball comes down to its
+    launch height, so a landing velocity with an upward y component means that a step threw the
+    ball below that height in one go (the landing is then put at the launch, carry 0), the
+    integration of forces that act faster than a step (a light, large ball's drag, a fast spin's
+    lift or decay)."""
+    ids = np.flatnonzero(np.asarray(landed, bool) & (np.asarray(land_v, float)[:, 1] > 0.0))
+    if ids.size:
+        i = ids[0]
+        raise SimulationError(
+            f"{ids.size} ball(s) fell below their launch height in one step while rising, first ball {i} "
+            f"(launch v = {np.round(v0[i], 6).tolist()} m/s): the flight's integration diverged at world.dt = "
+            f"{dt:g} s: try a smaller world.dt (a light, large ball's drag, or a fast spin's lift or decay, acts "
+            "faster than a step)",
+            ids[:20].tolist(),
+        )
 
 
 RISE_MARGIN = 10.0
@@ -272,9 +292,10 @@ the bound of a uniform wind is kept with room to spare."""
 def _check_rise(apex: np.ndarray, x0: np.ndarray, v0: np.ndarray, wind: Any, g: float, dt: float) -> None:
     """Raise :class:`SimulationError` for balls that rose past what their launch can lift them.
     In the frame of a uniform wind, lift does no work and drag only takes energy, so a ball rises
-    at most |v0 − wind|²/2g ≤ (|v0| + |wind|)²/2g; beyond :data:`RISE_MARGIN` times that (and
-    1 m), the explicit step was too long for the forces (a light, large ball: the drag's time
-    m/(k|v|) under world.dt) and the flight grew without bound while it stayed finite."""
+    at most |v0 − wind|²/2g ≤ (|v0| + |wind|)²/2g (g [m/s²]: gravity's downward component);
+    beyond :data:`RISE_MARGIN` times that (and 1 m), the explicit step was too long for the forces
+    (a light, large ball: the drag's time m/(k|v|) under world.dt) and the flight grew without
+    bound while it stayed finite."""
     reach = np.linalg.norm(np.asarray(v0, float), axis=1) + float(np.linalg.norm(wind))
     limit = RISE_MARGIN * reach**2 / (2.0 * g) + 1.0
     rise = np.asarray(apex, float) - np.asarray(x0, float)[:, 1]

@@ -23,7 +23,7 @@ else:  # pragma: no cover - Python 3.10
 from ti_golf.errors import OVERRIDES, ConfigError
 from ti_golf.scene.across import READ_ACROSS, read_across, unread_text, with_value
 from ti_golf.scene.air import SPIN_RATIOS, quadratic_range
-from ti_golf.scene.checks import REACH, raise_config
+from ti_golf.scene.checks import REACH, SPEED_LIMIT, raise_config
 from ti_golf.scene.keys import Key, read_when_text
 from ti_golf.scene.schema import (
     ARRAY_SCHEMA,
@@ -295,6 +295,22 @@ def _build_top_level(doc: dict[str, Any], source: str, kwargs: dict[str, Any]) -
             raise_config(source, top, f"must be a table [{top}] (got {value!r})")
 
 
+def _check_log_wind(wind: tuple[float, float, float], z_ref: float, z0: float, source: str, key: str) -> None:
+    """The log profile's wind u(z) = wind·ln(z/z₀)/ln(z_ref/z₀) within the wind's limit
+    (:data:`~ti_golf.scene.checks.SPEED_LIMIT` on each axis) up to :data:`REACH` above the ground,
+    as far as a scene reaches (a z₀ just below z_ref makes the profile steep without bound), else
+    a ConfigError naming ``key`` of ``source``."""
+    peak = max(abs(c) for c in wind) * math.log(REACH / z0) / math.log(z_ref / z0)
+    if peak > SPEED_LIMIT:
+        raise_config(
+            source,
+            key,
+            f"makes the log profile's wind {peak:.3g} m/s at {REACH:g} m above the ground (wind_z0 = {z0:.7g} m, "
+            f"wind_height = {z_ref:.7g} m), past the wind's limit of {SPEED_LIMIT:g} m/s: less wind, or a "
+            "wind_z0 further below wind_height",
+        )
+
+
 def _build_section(
     section: str, keys: dict[str, Key], table: dict[str, Any], source: str, doc: dict[str, Any], kwargs: dict[str, Any]
 ) -> None:
@@ -456,6 +472,8 @@ def _air(values: dict[str, Any], sources: dict[str, str], source: str) -> dict[s
                 f"air.{where}",
                 f"must {rule} (got wind_height = {z_ref:g} m, wind_z0 = {z0:g} m)",
             )
+        given = next((k for k in ("wind", "wind_z0", "wind_height", "wind_profile") if k in cli), "wind_z0")
+        _check_log_wind(values.get("wind", Air.wind), z_ref, z0, sources.get(given, source), f"air.{given}")
     if cli & set(WEATHER_KEYS):
         drop_file("rho", "viscosity")
     if "pressure" in cli:
@@ -530,7 +548,7 @@ def _block(values: dict[str, Any], source: str, i: int) -> Block:
                 f"blocks[{i}].{name}",
                 f"must lie within ±{BLOCK_REACH:,.0f} m on every axis (got {getattr(block, name)})",
             )
-    if block.kind == "lattice" and (block.spacing or 0.0) * max(block.count) > BLOCK_REACH:
+    if block.kind == "lattice" and (block.spacing or 0.0) * (max(block.count) - 1) > BLOCK_REACH:
         raise_config(
             source,
             f"blocks[{i}].spacing",
