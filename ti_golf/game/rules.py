@@ -194,8 +194,7 @@ class GolfGame:
         hole = np.asarray(scene.hole.position, dtype=float)
         if not self.terrain.contains(*hole):
             raise ConfigError(
-                source,
-                "hole.position",
+                *scene.where("hole.position"),
                 f"must lie on the terrain (x in {self._span(0)}, z in {self._span(2)}; got {_point(hole)})",
             )
         self.cup = self._on_ground(hole)
@@ -203,20 +202,19 @@ class GolfGame:
             start = np.asarray(scene.game.start, dtype=float)
             if not self.terrain.contains(*start):
                 raise ConfigError(
-                    source,
-                    "game.start",
+                    *scene.where("game.start"),
                     f"must lie on the terrain (x in {self._span(0)}, z in {self._span(2)}; got {_point(start)})",
                 )
             if np.hypot(*(start - hole)) <= self.hole.radius:
                 raise ConfigError(
-                    source, "game.start", f"must lie outside the cup (within {self.hole.radius:g} m of {_point(hole)})"
+                    *scene.where("game.start"),
+                    f"must lie outside the cup (within {self.hole.radius:g} m of {_point(hole)})",
                 )
         else:
             start = self._random_start(hole)
             if np.hypot(*(start - hole)) <= self.hole.radius:
                 raise ConfigError(
-                    source,
-                    "hole.radius",
+                    *scene.where("hole.radius"),
                     f"= {self.hole.radius:g} m leaves no point of the course to start from outside the cup: a "
                     "smaller cup, or a game.start",
                 )

@@ -199,8 +199,7 @@ def fly(
     steps = scene.world.t_max / scene.world.dt
     if steps > FLIGHT_STEPS_MAX:
         raise ConfigError(
-            scene.path,
-            "world.t_max",
+            *scene.where("world.t_max", "world.dt"),
             f"allows {steps:.3g} steps of world.dt = {scene.world.dt:g} s to a landing, in one kernel launch that "
             f"Ctrl-C cannot stop; at most {FLIGHT_STEPS_MAX:.0e} (world.t_max / world.dt): a shorter "
             "world.t_max or a longer world.dt",

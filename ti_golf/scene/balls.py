@@ -45,8 +45,7 @@ def launch_position(scene: Scene) -> Vec3:
         if not terrain.contains(0.0, 0.0):  # (the ball would be out of bounds before its first step)
             (x0, _, z0), (sx, sz) = scene.terrain.origin, scene.terrain.size
             raise_config(
-                scene.path,
-                "terrain.origin",
+                *scene.where("terrain.origin"),
                 f"leaves x = z = 0, where the [launch] ball rests, off the terrain (x in [{x0:g}, {x0 + sx:g}], "
                 f"z in [{z0:g}, {z0 + sz:g}] m): move the terrain, or give launch.position",
             )

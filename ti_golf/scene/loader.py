@@ -239,6 +239,12 @@ def _build(doc: dict[str, Any], source: str, name: str, file_doc: dict[str, Any]
     if (kwargs["planes"] or kwargs.get("terrain") is not None) and "ground" not in doc.get("world", {}):
         world = kwargs.get("world", World())
         kwargs["world"] = World(**{**world.__dict__, "ground": False})
+    kwargs["overridden"] = frozenset(
+        f"{table}.{name}" if name else table
+        for table, value in doc.items()
+        for name, given in (value.items() if isinstance(value, dict) else [("", value)])
+        if _with_source(given, source)[0] == OVERRIDES
+    )
     return _refuse_unread_across(doc, Scene(**kwargs), source, file_doc)
 
 

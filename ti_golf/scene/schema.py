@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from ti_golf.errors import OVERRIDES
 from ti_golf.scene.air import (  # re-exported: the [air] table lives in its own module
     AIR_MODELS as AIR_MODELS,
 )
@@ -512,6 +513,14 @@ class Scene:
     surfaces: tuple[Surface, ...] = ()
     hole: HoleConfig | None = None
     game: GameConfig = field(default_factory=GameConfig)
+    overridden: frozenset[str] = field(default=frozenset(), compare=False)
+    """Dotted keys whose values the overrides gave (``--set``, a study's changes), not the file."""
+
+    def where(self, *keys: str) -> tuple[str, str]:
+        """(source, key) for an error about ``keys`` (dotted): the first that the overrides gave,
+        with :data:`~ti_golf.errors.OVERRIDES` (``--set``), else the first, with the scene's file."""
+        given = next((k for k in keys if k in self.overridden), None)
+        return (OVERRIDES, given) if given else (self.path or self.name, keys[0])
 
 
 # -- the tables of a scene file, from the declarations above ---------------------------------------
