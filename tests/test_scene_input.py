@@ -356,8 +356,13 @@ def test_a_flight_that_ctrl_c_could_not_stop_is_refused():
     scene = ti_golf.load_scene("lab_vacuum", {"world.dt": 1e-7, "world.gravity": [0.0, 0.0, 0.0]})
     with pytest.raises(ConfigError) as err:
         ti_golf.sweep(scene, angles_deg=[30.0])
-    assert err.value.key == "world.t_max" and f"at most {FLIGHT_STEPS_MAX:.0e}" in str(err.value)
-    assert "6e+08 steps" in str(err.value)
+    # (named where the step came from: the overrides gave world.dt)
+    assert (err.value.source, err.value.key) == ("overrides", "world.dt")
+    assert f"at most {FLIGHT_STEPS_MAX:.0e}" in str(err.value) and "6e+08 steps" in str(err.value)
+    scene = ti_golf.load_scene("lab_vacuum", {"world.t_max": 1e3, "world.dt": 1e-6})
+    with pytest.raises(ConfigError) as err:
+        ti_golf.sweep(scene, angles_deg=[30.0])
+    assert (err.value.source, err.value.key) == ("overrides", "world.t_max")
 
 
 def test_balls_too_small_for_how_far_they_are_spread_stop_with_a_message():
