@@ -17,7 +17,8 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from ti_golf.errors import ConfigError
-from ti_golf.scene.loader import load_scene, parse_override
+from ti_golf.scene.loader import load_scene
+from ti_golf.scene.overrides import parse_override
 from ti_golf.scene.schema import ARRAY_SCHEMA, SCHEMA, TOP_LEVEL, parse_range
 
 SOURCE = "fuzz.toml"

@@ -433,7 +433,10 @@ def test_an_option_without_the_option_it_serves_is_refused(argv, last):
             ["play", "putting_green", "--shots", "none.txt", "--set", "hole.position=[1000000,0]"],
             "--set: key 'hole.position' must lie on the terrain",
         ),
-        (["sweep", "lab_vacuum", "--angles", "45", "--set", "world.dt=1e-9"], "--set: key 'world.dt' allows 6e+10 steps"),
+        (
+            ["sweep", "lab_vacuum", "--angles", "45", "--set", "world.dt=1e-9"],
+            "--set: key 'world.dt' allows 6e+10 steps",
+        ),
     ],
 )
 def test_a_value_given_with_set_is_blamed_on_set_not_on_the_scene_file(argv, last):

@@ -15,7 +15,8 @@ from typing import Any
 
 from ti_golf.scene.across import READ_ACROSS, read_across, with_value
 from ti_golf.scene.keys import Key, is_read
-from ti_golf.scene.loader import load_scene, parse_override
+from ti_golf.scene.loader import load_scene
+from ti_golf.scene.overrides import parse_override
 from ti_golf.scene.schema import ARRAY_SCHEMA, SCHEMA, TOP_LEVEL, Scene
 from ti_golf.scene.weather import WEATHER_KEYS, air_from_weather
 

@@ -25,6 +25,7 @@ from ti_golf.scene.across import READ_ACROSS, read_across, unread_text, with_val
 from ti_golf.scene.air import SPIN_RATIOS, quadratic_range
 from ti_golf.scene.checks import REACH, SPEED_LIMIT, raise_config
 from ti_golf.scene.keys import Key, read_when_text
+from ti_golf.scene.overrides import apply_override, parse_override, suggest
 from ti_golf.scene.schema import (
     ARRAY_SCHEMA,
     SCHEMA,
@@ -49,74 +50,6 @@ from ti_golf.scene.values import coerce
 from ti_golf.scene.weather import WEATHER_KEYS, air_from_weather
 
 _SECTION_TYPES = {"air": Air, "ball": Ball, "launch": Launch, "world": World, "contact": Contact, "game": GameConfig}
-
-
-def _suggest(name: str, candidates: Iterable[str]) -> str:
-    close = difflib.get_close_matches(name, list(candidates), n=1)
-    return f" (did you mean '{close[0]}'?)" if close else ""
-
-
-def parse_override(text: str) -> tuple[str, Any]:
-    """Split ``KEY=VALUE`` and parse VALUE as TOML (``[-5,0,0]``, ``0.25``, ``true``); bare words and
-    paths (letters, digits and ``_-./~``) are strings. An empty VALUE (``KEY=``) is ``None``: the
-    key is cleared, back to its default (``game.start=``: a random start)."""
-    if "=" not in text:
-        raise ConfigError(OVERRIDES, text, "must be KEY=VALUE, e.g. air.wind=[-5,0,0]")
-    dotted, raw = text.split("=", 1)
-    dotted, raw = dotted.strip(), raw.strip()
-    if not dotted:
-        raise ConfigError(OVERRIDES, None, f"missing KEY in {text!r} (expected KEY=VALUE)")
-    if not raw:
-        return dotted, None
-    try:
-        value = tomllib.loads(f"v = {raw}")["v"]
-    except tomllib.TOMLDecodeError:
-        if raw and all(c.isalnum() or c in "_-./~" for c in raw):
-            value = raw  # a bare word such as rk4, or a path such as data/hills.npy
-        else:
-            raise ConfigError(
-                OVERRIDES, dotted, f'value {raw!r} is not valid TOML (numbers, [x, y, z], true/false, "text")'
-            ) from None
-    return dotted, value
-
-
-def _apply_override(data: dict[str, Any], dotted: str, value: Any) -> None:
-    """Set ``dotted`` in the scene document ``data`` to ``value``, or clear it (``None``: the key
-    takes its default; clearing a key that the scene does not set has no effect, and is refused)."""
-    parts = dotted.split(".")
-    if len(parts) == 1:
-        if parts[0] not in TOP_LEVEL:
-            raise ConfigError(OVERRIDES, dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
-        if value is None:
-            _refuse_clearing_unset(parts[0] in data, dotted)
-            data.pop(parts[0], None)
-        else:
-            data[parts[0]] = (OVERRIDES, value)
-        return
-    if len(parts) != 2:
-        raise ConfigError(OVERRIDES, dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
-    section, name = parts
-    if section not in SCHEMA or name not in SCHEMA[section]:
-        raise ConfigError(OVERRIDES, dotted, f"is not a scene key{_suggest(dotted, _all_keys())}")
-    if value is None:
-        cleared = data.get(section)
-        _refuse_clearing_unset(isinstance(cleared, dict) and name in cleared, dotted)
-        data[section].pop(name)
-        return
-    table = data.setdefault(section, {})
-    if not isinstance(table, dict):
-        raise ConfigError(OVERRIDES, dotted, f"cannot be set: '{section}' is not a table in the scene")
-    table[name] = (OVERRIDES, value)
-
-
-def _refuse_clearing_unset(is_set: bool, dotted: str) -> None:
-    """A ConfigError for ``KEY=`` (clear) of a key the scene does not set: it is at its default already."""
-    if not is_set:
-        raise ConfigError(OVERRIDES, dotted, "is not set by the scene: clearing it (KEY=) has no effect")
-
-
-def _all_keys() -> list[str]:
-    return list(TOP_LEVEL) + [f"{s}.{k}" for s, keys in SCHEMA.items() for k in keys]
 
 
 def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -218,7 +151,7 @@ def load_scene(
         file_doc = {k: (dict(v) if isinstance(v, dict) else v) for k, v in doc.items()}
         items = overrides.items() if isinstance(overrides, Mapping) else (parse_override(o) for o in overrides)
         for dotted, value in items:
-            _apply_override(doc, dotted, value)
+            apply_override(doc, dotted, value)
     return _build(doc, source, p.stem, file_doc)
 
 
@@ -294,7 +227,7 @@ def _build_top_level(doc: dict[str, Any], source: str, kwargs: dict[str, Any]) -
             raise_config(
                 source,
                 top,
-                f"is not a scene table or key{_suggest(top, list(SCHEMA) + list(TOP_LEVEL) + list(ARRAY_SCHEMA))}; "
+                f"is not a scene table or key{suggest(top, list(SCHEMA) + list(TOP_LEVEL) + list(ARRAY_SCHEMA))}; "
                 f"allowed: {', '.join(names)}",
             )
         if not isinstance(value, dict):
@@ -327,7 +260,7 @@ def _build_section(
         dotted = f"{section}.{name}"
         src, value = _with_source(value, source)
         if name not in keys:
-            raise_config(src, dotted, f"is unknown{_suggest(name, keys)}; allowed in [{section}]: " + ", ".join(keys))
+            raise_config(src, dotted, f"is unknown{suggest(name, keys)}; allowed in [{section}]: " + ", ".join(keys))
         values[name] = coerce(value, keys[name], src, dotted)
         sources[name] = src
     if section == "terrain" and "file" in values and "kind" not in values:
@@ -396,9 +329,7 @@ def _array_tables(value: Any, name: str, source: str, doc: Mapping[str, Any]) ->
         for k, v in table.items():
             dotted = f"{name}[{i}].{k}"
             if k not in keys:
-                raise_config(
-                    source, dotted, f"is unknown{_suggest(k, keys)}; allowed in [[{name}]]: " + ", ".join(keys)
-                )
+                raise_config(source, dotted, f"is unknown{suggest(k, keys)}; allowed in [[{name}]]: " + ", ".join(keys))
             values[k] = coerce(v, keys[k], source, dotted)
         _refuse_unread(values, keys, f"{name}[{i}]", {}, source, doc)
         out.append(values)

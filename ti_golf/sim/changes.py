@@ -19,7 +19,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from ti_golf.errors import OVERRIDES, ConfigError
-from ti_golf.scene.loader import parse_override
+from ti_golf.scene.overrides import parse_override
 from ti_golf.scene.readers import NOT_READ, table_of, unread_reason
 
 AT_T0 = ("launch", "ball", "terrain")

@@ -6,41 +6,38 @@ Plain Python, no Taichi."""
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from typing import TYPE_CHECKING
 
 from ti_golf.errors import OVERRIDES
 from ti_golf.scene.checks import raise_config
 from ti_golf.scene.readers import APPLICATIONS, TIMED_RUN_NOT_READ, Unread, unread_reason
-
-if TYPE_CHECKING:
-    from ti_golf.study.spec import Task
 
 VARIED_IN = {"grid": "grid", "points": "points", "random": "random.uniform"}
 """Each way of choosing the points, with the table an error names a varied key in (a point of
 ``[[points]]`` by its index)."""
 
 
-def not_read_by(task: Task) -> Unread:
-    """The keys that ``task`` does not read (a run given task.t or task.steps: its own length
-    replaces the scene's world.t_end)."""
-    timed = task.t is not None or task.steps is not None
-    return TIMED_RUN_NOT_READ if task.kind == "run" and timed else APPLICATIONS[task.kind]
+def not_read_by(kind: str, timed: bool) -> Unread:
+    """The keys that a task of ``kind`` does not read (a run ``timed``, given task.t or
+    task.steps: its own length replaces the scene's world.t_end)."""
+    return TIMED_RUN_NOT_READ if kind == "run" and timed else APPLICATIONS[kind]
 
 
 def refuse_unread(
-    task: Task,
+    kind: str,
+    timed: bool,
     points: Sequence[Iterable[str]],
     how: str | None,
     file_keys: Iterable[str],
     cli_keys: Iterable[str],
     source: str,
 ) -> None:
-    """A ConfigError for the first key that ``task`` does not read (:func:`not_read_by`): of the
-    command line's ``--set`` (``cli_keys``), of the study file's ``set`` (``file_keys``), or varied
-    by one of the ``points`` (their keys, chosen ``how``: grid, points or random; None: no point
-    varies a key). It names ``--set``, or the file and its key."""
-    unread = not_read_by(task)
-    why = f"is not read by a task of task.kind = {task.kind!r}"
+    """A ConfigError for the first key that a task of ``kind`` (``timed``: given its own length)
+    does not read (:func:`not_read_by`): of the command line's ``--set`` (``cli_keys``), of the
+    study file's ``set`` (``file_keys``), or varied by one of the ``points`` (their keys, chosen
+    ``how``: grid, points or random; None: no point varies a key). It names ``--set``, or the
+    file and its key."""
+    unread = not_read_by(kind, timed)
+    why = f"is not read by a task of task.kind = {kind!r}"
     for where, keys in ((OVERRIDES, cli_keys), (source, file_keys)):
         for key in keys:
             reason = unread_reason(unread, key)

@@ -40,7 +40,8 @@ from ti_golf.scene.checks import DURATION, Interval, OneOf, parse_range, raise_c
 from ti_golf.scene.document import scene_document
 from ti_golf.scene.jsonschema import DIALECT, key_schema
 from ti_golf.scene.keys import Key, key, keys_of, read_when_text
-from ti_golf.scene.loader import load_scene, parse_override, read_toml, resolve_scene_path, scenes_dir
+from ti_golf.scene.loader import load_scene, read_toml, resolve_scene_path, scenes_dir
+from ti_golf.scene.overrides import parse_override
 from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
 from ti_golf.scene.values import check_value
 from ti_golf.study.figures import FIGURES, KINDS, default_figures
@@ -259,8 +260,10 @@ def load_study(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> S
         raise_config(source, given[1], f"give one of [grid], [[points]] and [random], not {given[0]} and {given[1]}")
     base = _base_scene(study, task, p)
     fixed, file_keys, cli_keys = _fixed_changes(study.set, scene_overrides, source)
-    points = _points(doc, given[0] if given else None, source)
-    refuse_unread(task, points, given[0] if given else None, file_keys, cli_keys, source)
+    how = given[0] if given else None
+    points = _points(doc, how, source)
+    timed = task.t is not None or task.steps is not None
+    refuse_unread(task.kind, timed, points, how, file_keys, cli_keys, source)
     seeds = _seeds(study, task, source)
     n = len(points) * len(seeds)
     if n > MAX_TASKS:

@@ -1,0 +1,86 @@
+"""``--set KEY=VALUE`` overrides: parsed as TOML values and applied to a scene's document
+before it is checked (:func:`ti_golf.scene.loader.load_scene`). No Taichi import here."""
+
+from __future__ import annotations
+
+import difflib
+import sys
+from collections.abc import Iterable
+from typing import Any
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+from ti_golf.errors import OVERRIDES, ConfigError
+from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
+
+
+def suggest(name: str, candidates: Iterable[str]) -> str:
+    """`` (did you mean 'X'?)`` for the candidate closest to ``name``, or ``""``."""
+    close = difflib.get_close_matches(name, list(candidates), n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """Split ``KEY=VALUE`` and parse VALUE as TOML (``[-5,0,0]``, ``0.25``, ``true``); bare words and
+    paths (letters, digits and ``_-./~``) are strings. An empty VALUE (``KEY=``) is ``None``: the
+    key is cleared, back to its default (``game.start=``: a random start)."""
+    if "=" not in text:
+        raise ConfigError(OVERRIDES, text, "must be KEY=VALUE, e.g. air.wind=[-5,0,0]")
+    dotted, raw = text.split("=", 1)
+    dotted, raw = dotted.strip(), raw.strip()
+    if not dotted:
+        raise ConfigError(OVERRIDES, None, f"missing KEY in {text!r} (expected KEY=VALUE)")
+    if not raw:
+        return dotted, None
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        if raw and all(c.isalnum() or c in "_-./~" for c in raw):
+            value = raw  # a bare word such as rk4, or a path such as data/hills.npy
+        else:
+            raise ConfigError(
+                OVERRIDES, dotted, f'value {raw!r} is not valid TOML (numbers, [x, y, z], true/false, "text")'
+            ) from None
+    return dotted, value
+
+
+def apply_override(data: dict[str, Any], dotted: str, value: Any) -> None:
+    """Set ``dotted`` in the scene document ``data`` to ``value``, or clear it (``None``: the key
+    takes its default; clearing a key that the scene does not set has no effect, and is refused)."""
+    parts = dotted.split(".")
+    if len(parts) == 1:
+        if parts[0] not in TOP_LEVEL:
+            raise ConfigError(OVERRIDES, dotted, f"is not a scene key{suggest(dotted, _all_keys())}")
+        if value is None:
+            _refuse_clearing_unset(parts[0] in data, dotted)
+            data.pop(parts[0], None)
+        else:
+            data[parts[0]] = (OVERRIDES, value)
+        return
+    if len(parts) != 2:
+        raise ConfigError(OVERRIDES, dotted, f"is not a scene key{suggest(dotted, _all_keys())}")
+    section, name = parts
+    if section not in SCHEMA or name not in SCHEMA[section]:
+        raise ConfigError(OVERRIDES, dotted, f"is not a scene key{suggest(dotted, _all_keys())}")
+    if value is None:
+        cleared = data.get(section)
+        _refuse_clearing_unset(isinstance(cleared, dict) and name in cleared, dotted)
+        data[section].pop(name)
+        return
+    table = data.setdefault(section, {})
+    if not isinstance(table, dict):
+        raise ConfigError(OVERRIDES, dotted, f"cannot be set: '{section}' is not a table in the scene")
+    table[name] = (OVERRIDES, value)
+
+
+def _refuse_clearing_unset(is_set: bool, dotted: str) -> None:
+    """A ConfigError for ``KEY=`` (clear) of a key the scene does not set: it is at its default already."""
+    if not is_set:
+        raise ConfigError(OVERRIDES, dotted, "is not set by the scene: clearing it (KEY=) has no effect")
+
+
+def _all_keys() -> list[str]:
+    return list(TOP_LEVEL) + [f"{s}.{k}" for s, keys in SCHEMA.items() for k in keys]
