@@ -761,3 +761,33 @@ def test_friction_spins_up_a_sliding_ball():
     sim.run(t=1.0)
     assert sim.w[0, 2] == pytest.approx(-sim.v[0, 0] / 0.02, rel=1e-6)
     assert sim.v[0, 0] == pytest.approx(5 / 7 * 2.0, rel=1e-3)  # angular momentum about the contact point
+
+
+@pytest.mark.parametrize("integrator", ["semi_implicit", "rk4"])
+def test_the_longest_step_a_ball_s_drag_allows_is_the_explicit_step_s_limit(integrator):
+    # a 10 m ball of a milligram reaches its terminal speed v_t = √(g/(k/m)) (0.4 mm/s) in about
+    # v_t/g = 41 µs: a step of 1 ms threw it to the ground in one step, with exit code 0. The
+    # explicit step's map v' = v + h(g − (k/m)v²) has v_t as its fixed point, stable while
+    # h ≤ 1/((k/m)v_t) = v_t/g: below that limit the ball settles at v_t exactly, above it is refused
+    from ti_golf.errors import ConfigError
+
+    def dropped(dt: float) -> tg.Scene:
+        return tg.load_scene(
+            data={
+                "world": {"dt": dt, "integrator": integrator, "ground": False},
+                "launch": {"position": [0, 20, 0], "speed": 0.0},
+                "ball": {"radius": 10.0, "mass": 1e-6},
+                "air": {"rho": 1.2, "C_D": 0.3, "gamma": 2},
+            }
+        )
+
+    k = 0.5 * 1.2 * math.pi * 10.0**2 * 0.3 / 1e-6
+    v_t = math.sqrt(9.81 / k)
+    h_max = v_t / 9.81
+    with pytest.raises(ConfigError, match=rf"world.dt' = 0.001 s is too long a step.*at most {h_max:.3g} s"):
+        tg.Simulation(dropped(1e-3))
+    with pytest.raises(ConfigError, match="too long a step"):
+        tg.Simulation(dropped(1.01 * h_max))
+    sim = tg.Simulation(dropped(0.9 * h_max))
+    sim.step(120)  # 108 v_t/g: the distance to v_t shrinks by |1 − 2·0.9| = 0.8 a step (or faster)
+    assert sim.v[0, 1] == pytest.approx(-v_t, rel=1e-6) and sim.x[0, 1] > 20.0 - 2.0 * v_t * sim.t

@@ -23,6 +23,9 @@ WIND_PROFILES = ("constant", "log")
 SPIN_RATIOS = (0.02, 0.75)
 """The range of spin ratios S = Rω/|v_rel| of the C_D(S), C_L(S) fits of the spin-ratio models; the
 coefficients are held at its ends."""
+SPIN_RATIO_C_D = (0.1304, 0.9287, -0.8259)
+"""C_D(S) = C_D0 + C_D1·S + C_D2·S² of ``air.model = "spin_ratio"`` (Ferguson, McNally & McPhee 2022;
+the kernels' ``physics.aero.spin_ratio_coefficients``)."""
 SPIN_REYNOLDS_C_D = (0.1304, 0.6683, -0.8259)
 """Default ``air.C_D_S`` [C_D0, C_D1, C_D2] of ``air.model = "spin_reynolds"`` (``ti-golf fit-aero``)."""
 SPIN_REYNOLDS_C_L = (0.0504, 1.2031, -1.3073)
