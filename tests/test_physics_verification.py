@@ -791,3 +791,6 @@ def test_the_longest_step_a_ball_s_drag_allows_is_the_explicit_step_s_limit(inte
     sim = tg.Simulation(dropped(0.9 * h_max))
     sim.step(120)  # 108 v_t/g: the distance to v_t shrinks by |1 − 2·0.9| = 0.8 a step (or faster)
     assert sim.v[0, 1] == pytest.approx(-v_t, rel=1e-6) and sim.x[0, 1] > 20.0 - 2.0 * v_t * sim.t
+    with pytest.raises(ConfigError, match="too long a step"):  # (a change is checked too, and not made)
+        sim.set("air.rho", 2.0)  # (h_max shrinks as 1/√ρ: 0.9 × √(2/1.2) = 1.16 of it)
+    assert sim.scene.air.rho == 1.2

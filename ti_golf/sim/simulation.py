@@ -38,7 +38,7 @@ from ti_golf.sim.changes import (
 from ti_golf.sim.flight_record import launch_again
 from ti_golf.sim.given import as_vectors, check_memory, copied, flags, per_ball, steps_to_run, whole_number
 from ti_golf.sim.results import Flight
-from ti_golf.sim.step_check import check_drag_step
+from ti_golf.sim.step_check import check_changed_drag_step, check_drag_step
 
 
 class RunProgress(Protocol):
@@ -277,7 +277,7 @@ class Simulation:
 
     def _take_parameters(self, scene: Scene) -> None:
         """Continue with ``scene``'s parameters (the balls and the terrain unchanged)."""
-        check_drag_step(scene, self.model.radius_np, self.model.mass_np, self.v)
+        check_changed_drag_step(self.scene, scene, self.model.radius_np, self.model.mass_np, lambda: self.v)
         old = self.scene
         self.scene = scene
         self.model.set_parameters(scene)

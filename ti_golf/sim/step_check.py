@@ -13,6 +13,7 @@ v_t = √(g/(k/m)), which a falling ball reaches within about v_t/g: so h ≤ v_
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -51,3 +52,13 @@ def check_drag_step(scene: Scene, radius: np.ndarray, mass: np.ndarray, v: np.nd
             f"it must be at most {h_max[i]:.3g} s, or the explicit step of the drag diverges (a light, large ball "
             "reaches its terminal speed within a step): a smaller world.dt, or a heavier or smaller ball",
         )
+
+
+def check_changed_drag_step(
+    old: Scene, scene: Scene, radius: np.ndarray, mass: np.ndarray, velocities: Callable[[], np.ndarray]
+) -> None:
+    """:func:`check_drag_step` of ``scene``'s balls when its air, step or gravity differ from
+    ``old``'s (a change of any other key leaves the drag's limit as it was, and the balls'
+    velocities, read from the device by ``velocities``, are not read then)."""
+    if (scene.air, scene.world.dt, scene.world.gravity) != (old.air, old.world.dt, old.world.gravity):
+        check_drag_step(scene, radius, mass, velocities())
