@@ -237,6 +237,17 @@ def test_a_flight_that_diverges_while_finite_is_stopped_naming_the_step():
     assert np.all(rise < (res.speed_mps**2 / (2 * 9.81)) + 1e-9)
 
 
+def test_a_flight_that_diverges_at_a_chosen_flight_step_names_that_step():
+    # `dispersion --flight-dt 0.05` of a 10 mg ball diverged and said "try a smaller world.dt",
+    # the step the user had not chosen (world.dt steps only the roll-out)
+    from ti_golf.errors import SimulationError
+
+    scene = load_scene("tour_shot", ["ball.mass=1e-5"])
+    with pytest.raises(SimulationError, match=r"diverged at flight_dt = 0.05 s: try a smaller flight_dt") as got:
+        dispersion(scene, SEVEN_IRON, MonitorLaunch(0.0, 0.0, 1.0, 0.0, 0.0), n=4, flight_dt=0.05, to_rest=False)
+    assert "world.dt" not in str(got.value)
+
+
 @pytest.mark.parametrize(
     "scene, overrides, spins",
     [

@@ -52,7 +52,7 @@ def fly_shots(
         lo, hi = FLIGHT_DT_RANGE
         raise ValueError(f"flight_dt must be in [{lo:g}, {hi:g}] s (got {flight_dt!r})")
     flown = scene if flight_dt is None else replace(scene, world=replace(scene.world, dt=float(flight_dt)))
-    raw = fly(flown, x0, v0, w0)
+    raw = fly(flown, x0, v0, w0, step_name="world.dt" if flight_dt is None else "flight_dt")
     out = shots_from_landing(scene, x0, raw, to_rest, progress)
     rose = ~(out.apex <= 0.0)  # (a ball that never rose is "down" at once: no landing to describe)
     if not rose.all():

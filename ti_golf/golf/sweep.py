@@ -187,10 +187,12 @@ def fly(
     record_every: int = 0,
     n_samples: int = 0,
     lanes: int | None = None,
+    step_name: str = "world.dt",
 ) -> dict[str, np.ndarray]:
     """Integrate balls from (x0, v0, w0) (each (N, 3)) to landing at their launch height.
 
     Uses the scene's integrator and ``world.dt``; gives up on a ball after ``world.t_max``.
+    ``step_name`` names the step in errors (``flight_dt`` where a caller put its own step there).
     Balls are ordered by their drag-free flight time before they are grouped into SIMD lanes, so a
     group's balls land at about the same step. Returns the raw per-ball arrays: landed (N,), apex
     (N,), t_land (N,), the landing point land_x, velocity land_v and spin land_w (N, 3) and, when
@@ -198,11 +200,12 @@ def fly(
     """
     steps = scene.world.t_max / scene.world.dt
     if steps > FLIGHT_STEPS_MAX:
+        blamed = ("world.t_max", "world.dt") if step_name == "world.dt" else ("world.t_max",)
         raise ConfigError(
-            *scene.where("world.t_max", "world.dt"),
-            f"allows {steps:.3g} steps of world.dt = {scene.world.dt:g} s to a landing, in one kernel launch that "
-            f"Ctrl-C cannot stop; at most {FLIGHT_STEPS_MAX:.0e} (world.t_max / world.dt): a shorter "
-            "world.t_max or a longer world.dt",
+            *scene.where(*blamed),
+            f"allows {steps:.3g} steps of {step_name} = {scene.world.dt:g} s to a landing, in one kernel launch "
+            f"that Ctrl-C cannot stop; at most {FLIGHT_STEPS_MAX:.0e} (world.t_max / {step_name}): a shorter "
+            f"world.t_max or a longer {step_name}",
         )
     ensure_init()
     lanes = default_lanes() if lanes is None else int(lanes)
@@ -255,16 +258,16 @@ def fly(
         ids = np.flatnonzero(bad)
         raise SimulationError(
             f"{ids.size} ball(s) went non-finite, first ball {ids[0]} "
-            f"(launch v = {np.round(v0[ids[0]], 6).tolist()} m/s); try a smaller world.dt",
+            f"(launch v = {np.round(v0[ids[0]], 6).tolist()} m/s); try a smaller {step_name}",
             ids[:20].tolist(),
         )
     if wld.gravity[1] < 0.0:  # (the bound of a ball pulled down; nothing bounds one that is not)
-        _check_rise(out["apex"], x0, v0, a.wind, -wld.gravity[1], wld.dt)
-    _check_landing(out["landed"], out["land_v"], v0, wld.dt)
+        _check_rise(out["apex"], x0, v0, a.wind, -wld.gravity[1], wld.dt, step_name)
+    _check_landing(out["landed"], out["land_v"], v0, wld.dt, step_name)
     return out
 
 
-def _check_landing(landed: np.ndarray, land_v: np.ndarray, v0: np.ndarray, dt: float) -> None:
+def _check_landing(landed: np.ndarray, land_v: np.ndarray, v0: np.ndarray, dt: float, step_name: str) -> None:
     """Raise :class:`SimulationError` for balls that landed while rising: a ball comes down to its
     launch height, so a landing velocity with an upward y component means that a step threw the
     ball below that height in one go (the landing is then put at the launch, carry 0), the
@@ -275,8 +278,8 @@ def _check_landing(landed: np.ndarray, land_v: np.ndarray, v0: np.ndarray, dt: f
         i = ids[0]
         raise SimulationError(
             f"{ids.size} ball(s) fell below their launch height in one step while rising, first ball {i} "
-            f"(launch v = {np.round(v0[i], 6).tolist()} m/s): the flight's integration diverged at world.dt = "
-            f"{dt:g} s: try a smaller world.dt (a light, large ball's drag, or a fast spin's lift or decay, acts "
+            f"(launch v = {np.round(v0[i], 6).tolist()} m/s): the flight's integration diverged at {step_name} = "
+            f"{dt:g} s: try a smaller {step_name} (a light, large ball's drag, or a fast spin's lift or decay, acts "
             "faster than a step)",
             ids[:20].tolist(),
         )
@@ -288,7 +291,9 @@ before it is taken for an integration that diverged: the wind's log profile grow
 the bound of a uniform wind is kept with room to spare."""
 
 
-def _check_rise(apex: np.ndarray, x0: np.ndarray, v0: np.ndarray, wind: Any, g: float, dt: float) -> None:
+def _check_rise(
+    apex: np.ndarray, x0: np.ndarray, v0: np.ndarray, wind: Any, g: float, dt: float, step_name: str
+) -> None:
     """Raise :class:`SimulationError` for balls that rose past what their launch can lift them.
     In the frame of a uniform wind, lift does no work and drag only takes energy, so a ball rises
     at most |v0 − wind|²/2g ≤ (|v0| + |wind|)²/2g (g [m/s²]: gravity's downward component);
@@ -303,8 +308,8 @@ def _check_rise(apex: np.ndarray, x0: np.ndarray, v0: np.ndarray, wind: Any, g: 
         i = ids[0]
         raise SimulationError(
             f"{ids.size} ball(s) rose past what their launch can lift them, first ball {i}: {rise[i]:.3g} m "
-            f"against at most {limit[i]:.3g} m; the flight's integration diverged at world.dt = {dt:g} s: "
-            "try a smaller world.dt (a light, large ball's drag acts faster than a step)",
+            f"against at most {limit[i]:.3g} m; the flight's integration diverged at {step_name} = {dt:g} s: "
+            f"try a smaller {step_name} (a light, large ball's drag acts faster than a step)",
             ids[:20].tolist(),
         )
 
