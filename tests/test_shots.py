@@ -237,6 +237,17 @@ def test_a_flight_that_diverges_while_finite_is_stopped_naming_the_step():
     assert np.all(rise < (res.speed_mps**2 / (2 * 9.81)) + 1e-9)
 
 
+def test_a_roll_out_without_a_ground_names_who_took_the_ground_away():
+    # an override that took the ground away is named as such, not the bundled scene's file
+    from ti_golf.errors import OVERRIDES, ConfigError
+    from ti_golf.golf.rollout import roll_out
+
+    scene = load_scene("tour_shot", ["world.ground=false"])
+    with pytest.raises(ConfigError, match="needs a ground") as got:
+        roll_out(scene, np.zeros((1, 3)), np.zeros((1, 3)), np.zeros((1, 3)))
+    assert (got.value.source, got.value.key) == (OVERRIDES, "world.ground")
+
+
 def test_a_flight_that_diverges_at_a_chosen_flight_step_names_that_step():
     # `dispersion --flight-dt 0.05` of a 10 mg ball diverged and said "try a smaller world.dt",
     # the step the user had not chosen (world.dt steps only the roll-out)

@@ -58,7 +58,7 @@ def cmd_tour(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene, args.overrides)
     if scene.launch is None:  # the rows launch from the scene's launch point
         raise ConfigError(
-            scene.path, "launch", "is required: the tour rows are launched as the scene's [launch] table says"
+            *scene.where("launch"), "is required: the tour rows are launched as the scene's [launch] table says"
         )
     t0 = time.perf_counter()
     flight = fly_tour(scene, ROWS[args.rows])
@@ -86,10 +86,10 @@ def cmd_fit_aero(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene, args.overrides)
     if scene.launch is None:
         raise ConfigError(
-            scene.path, "launch", "is required: the tour rows are launched as the scene's [launch] table says"
+            *scene.where("launch"), "is required: the tour rows are launched as the scene's [launch] table says"
         )
     if scene.air.gamma != 2:
-        raise ConfigError(scene.path, "air.gamma", 'must be 2 to fit air.model = "spin_reynolds" (turbulent drag)')
+        raise ConfigError(*scene.where("air.gamma"), 'must be 2 to fit air.model = "spin_reynolds" (turbulent drag)')
     air = scene.air
     print(
         f"fitting air.model = 'spin_reynolds' to the {len(PGA_TOUR)} PGA Tour rows in {scene.name}'s air "

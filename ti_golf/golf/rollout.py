@@ -35,9 +35,7 @@ def roll_out(
         (x, at_rest): final centres [m], shape (N, 3), and whether each ball came to rest, (N,).
     """
     if not has_ground(scene):
-        raise ConfigError(
-            scene.path or scene.name, "world.ground", "rolling shots out to rest needs a ground, a terrain or planes"
-        )
+        raise ConfigError(*scene.where("world.ground"), "rolling shots out to rest needs a ground, a terrain or planes")
     if len(x) == 0:
         return np.zeros((0, 3)), np.zeros(0, bool)
     apart = replace(scene, world=replace(scene.world, collisions=False))
