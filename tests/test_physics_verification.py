@@ -794,3 +794,48 @@ def test_the_longest_step_a_ball_s_drag_allows_is_the_explicit_step_s_limit(inte
     with pytest.raises(ConfigError, match="too long a step"):  # (a change is checked too, and not made)
         sim.set("air.rho", 2.0)  # (h_max shrinks as 1/√ρ: 0.9 × √(2/1.2) = 1.16 of it)
     assert sim.scene.air.rho == 1.2
+
+
+@pytest.mark.parametrize("integrator", ["semi_implicit", "rk4"])
+def test_the_longest_step_a_ball_s_spin_decay_allows_keeps_the_spin_s_sense(integrator):
+    # laminar spin decay dω/dt = −k_ω·ω at a fixed rate k_ω = ½ρπR²·C_ω/m: a step maps ω to
+    # ω·P(h·k_ω), P(z) = 1 − z (semi-implicit Euler) or the RK4 polynomial 1 − z + z²/2 − z³/6 + z⁴/24,
+    # so after n steps ω = ω0·P(z)^n exactly (no drag on a ball at rest, no Magnus). Past z = 1 an
+    # Euler step turns the spin around (z = 1.5: −0.5 ω0) and past 2 it grows: refused up front
+    from ti_golf.errors import OVERRIDES, ConfigError
+
+    R, m, rho, C_omega = 0.02, 1e-4, 1.2, 100.0  # a 0.1 g ball of the lab's radius: k_ω = 754/s
+    k_omega = 0.5 * rho * math.pi * R**2 * C_omega / m
+    w0 = np.array([[0.0, 0.0, 300.0]])
+
+    def spun(dt: float) -> tg.Scene:
+        return lab(
+            "lab_laminar",
+            "world.ground=false",
+            "world.gravity=[0, 0, 0]",
+            "air.C_M=0",
+            f"air.C_omega={C_omega}",
+            f"ball.mass={m}",
+            f"ball.radius={R}",
+            f"air.rho={rho}",
+            f'world.integrator="{integrator}"',
+            f"world.dt={dt}",
+        )
+
+    h = 0.99 / k_omega
+    sim = tg.Simulation(spun(h), x=[[0.0, 1.0, 0.0]], v=[[0.0, 0.0, 0.0]], w=w0)
+    sim.step(5)
+    z = h * k_omega
+    P = 1 - z if integrator == "semi_implicit" else 1 - z + z**2 / 2 - z**3 / 6 + z**4 / 24
+    np.testing.assert_allclose(sim.w[0], w0[0] * P**5, rtol=1e-9, atol=1e-12)
+    assert sim.w[0, 2] > 0.0  # the spin kept its sense
+    with pytest.raises(
+        ConfigError,
+        match=r"'world.dt' is too long a step for the spin decay: .* and air.C_omega = 100, the spin of ball 0",
+    ) as got:
+        tg.Simulation(spun(1.01 / k_omega), x=[[0.0, 1.0, 0.0]], w=w0)
+    assert got.value.source == OVERRIDES  # (--set gave both; the first overridden of world.dt, C_omega)
+    assert f"at most {1 / k_omega:.3g} s" in str(got.value)
+    # the same in the spin_reynolds air, λ|v_rel|/R: ten times its limit at the tour's 7-iron speed
+    with pytest.raises(ConfigError, match=r"'air.spin_decay' makes the spin decay too fast: .*the spin of ball 0"):
+        tg.Simulation(lab("tour_shot", "air.spin_decay=300"))

@@ -38,7 +38,7 @@ from ti_golf.sim.changes import (
 from ti_golf.sim.flight_record import launch_again
 from ti_golf.sim.given import as_vectors, check_memory, copied, flags, per_ball, steps_to_run, whole_number
 from ti_golf.sim.results import Flight
-from ti_golf.sim.step_check import check_changed_drag_step, check_drag_step
+from ti_golf.sim.step_check import check_changed_step, check_step
 
 
 class RunProgress(Protocol):
@@ -176,7 +176,7 @@ class Simulation:
         w = None if w is None else as_vectors(w, "w", n)
         radius = per_ball(scene.ball.radius if radius is None else radius, n, "radius")
         mass = per_ball(scene.ball.mass if mass is None else mass, n, "mass")
-        check_drag_step(scene, radius, mass, v)
+        check_step(scene, radius, mass, v, w)
         track = flags(track, n, "track")
         tracking = bool(np.any(track))  # else no flight record is kept (a pile: 96 bytes per ball less in f64)
         self.solver: CollisionSolver | None = None  # (the old one's arrays go before the new ones are made)
@@ -277,7 +277,7 @@ class Simulation:
 
     def _take_parameters(self, scene: Scene) -> None:
         """Continue with ``scene``'s parameters (the balls and the terrain unchanged)."""
-        check_changed_drag_step(self.scene, scene, self.model.radius_np, self.model.mass_np, lambda: self.v)
+        check_changed_step(self.scene, scene, self.model.radius_np, self.model.mass_np, lambda: (self.v, self.w))
         old = self.scene
         self.scene = scene
         self.model.set_parameters(scene)

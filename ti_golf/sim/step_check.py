@@ -1,6 +1,6 @@
-"""Whether a step of ``world.dt`` can integrate each ball's drag: an explicit step diverges where
-the drag acts faster than a step, and a ground under the ball hides it (a 10 m ball of a
-milligram fell its 10 m in one step and lay there, exit code 0). Plain numpy, no Taichi.
+"""Whether a step of ``world.dt`` can integrate each ball's drag and spin decay: an explicit step
+diverges where the drag acts faster than a step, and a ground under the ball hides it (a 10 m ball
+of a milligram fell its 10 m in one step and lay there, exit code 0). Plain numpy, no Taichi.
 
 The drag's rate is λ = ∂|a_D|/∂|v| = 2(k/m)|v_rel| with quadratic drag (γ = 2) and k/m with
 laminar drag (γ = 1), k/m = ½ρπR²·C_D/m [1/m or 1/s], C_D the air model's greatest (the spin-ratio
@@ -8,6 +8,11 @@ fits over their range of S, with the drag crisis at its full height). An explici
 the drag is stable while h·λ ≤ 2 (RK4's limit, 2.79, is wider). The speed is the greater of the
 ball's start against the wind (|v| + |wind|) and, under gravity g, its terminal speed
 v_t = √(g/(k/m)), which a falling ball reaches within about v_t/g: so h ≤ v_t/g at least.
+
+The spin decays as dω/dt = −r·ω (:mod:`ti_golf.physics.aero`) at the rate r = k_ω (γ = 1),
+k_ω(|v_rel| + R|ω|) (γ = 2) or λ|v_rel|/R (``spin_reynolds``), greatest at the start spin and at
+the speed above. A step scales the spin by 1 − h·r, so it must keep h·r ≤ 1: beyond it a step turns
+the spin around (the Magnus force with it), beyond 2 it grows without bound.
 """
 
 from __future__ import annotations
@@ -32,33 +37,55 @@ def greatest_C_D(scene: Scene) -> float:
     return a.C_D
 
 
-def check_drag_step(scene: Scene, radius: np.ndarray, mass: np.ndarray, v: np.ndarray | None) -> None:
-    """Raise :class:`ConfigError` naming ``world.dt`` when a step is too long for the drag of a ball
-    of radii ``radius`` [m] and masses ``mass`` [kg] (N,), starting at velocities ``v`` [m/s]
-    (N, 3; ``None``: at rest)."""
-    h, g = scene.world.dt, float(np.linalg.norm(scene.world.gravity))
-    k = 0.5 * scene.air.rho * math.pi * np.square(radius) * greatest_C_D(scene) / mass  # k/m
-    if scene.air.gamma == 1:
-        h_max = 2.0 / np.maximum(k, 1e-300)
-    else:
-        speed = float(np.linalg.norm(scene.air.wind)) + (0.0 if v is None else np.linalg.norm(v, axis=1))
-        terminal = np.sqrt(g / np.maximum(k, 1e-300))
-        h_max = 1.0 / np.maximum(k * np.maximum(speed, terminal), 1e-300)
-    i = int(np.argmin(h_max))
-    if h > h_max[i]:
+def check_step(scene: Scene, radius: np.ndarray, mass: np.ndarray, v: np.ndarray | None, w: np.ndarray | None) -> None:
+    """Raise :class:`ConfigError` naming ``world.dt`` when a step is too long for the drag or the
+    spin decay of balls of radii ``radius`` [m] and masses ``mass`` [kg] (N,), starting at
+    velocities ``v`` [m/s] and spins ``w`` [rad/s] (N, 3; ``None``: zero)."""
+    h, g, a = scene.world.dt, float(np.linalg.norm(scene.world.gravity)), scene.air
+    half_rho_A = 0.5 * a.rho * math.pi * np.square(radius)
+    k = half_rho_A * greatest_C_D(scene) / mass  # k/m
+    terminal = np.sqrt(g / np.maximum(k, 1e-300))
+    speed = np.maximum(float(np.linalg.norm(a.wind)) + (0.0 if v is None else np.linalg.norm(v, axis=1)), terminal)
+    drag_max = 2.0 / np.maximum(k, 1e-300) if a.gamma == 1 else 1.0 / np.maximum(k * speed, 1e-300)
+    i = int(np.argmin(drag_max))
+    if h > drag_max[i]:
         raise ConfigError(
             *scene.where("world.dt"),
             f"= {h:g} s is too long a step for the drag of ball {i} (radius {radius[i]:g} m, mass {mass[i]:g} kg): "
-            f"it must be at most {h_max[i]:.3g} s, or the explicit step of the drag diverges (a light, large ball "
-            "reaches its terminal speed within a step): a smaller world.dt, or a heavier or smaller ball",
+            f"it must be at most {drag_max[i]:.3g} s, or the explicit step of the drag diverges (a light, large "
+            "ball reaches its terminal speed within a step): a smaller world.dt, or a heavier or smaller ball",
+        )
+    spin = np.zeros_like(radius) if w is None else np.linalg.norm(w, axis=1)
+    if a.model == "spin_reynolds":
+        key, value = "air.spin_decay", a.spin_decay
+        rate = value * speed / radius
+    else:
+        key, value = "air.C_omega", a.C_omega
+        k_omega = half_rho_A * value / mass
+        rate = k_omega if a.gamma == 1 else k_omega * (speed + radius * spin)
+    i = int(np.argmax(rate))
+    if h * rate[i] > 1.0:
+        source, blamed = scene.where("world.dt", key)
+        what = "is too long a step for the spin decay" if blamed == "world.dt" else "makes the spin decay too fast"
+        raise ConfigError(
+            source,
+            blamed,
+            f"{what}: with world.dt = {h:g} s and {key} = {value:g}, the spin of ball {i} "
+            f"(radius {radius[i]:g} m, mass {mass[i]:g} kg, spin {spin[i]:.6g} rad/s) decays at up to "
+            f"{rate[i]:.3g} per second, so a step must be at most {1.0 / rate[i]:.3g} s, or it turns the spin "
+            f"around: a smaller world.dt or {key}",
         )
 
 
-def check_changed_drag_step(
-    old: Scene, scene: Scene, radius: np.ndarray, mass: np.ndarray, velocities: Callable[[], np.ndarray]
+def check_changed_step(
+    old: Scene,
+    scene: Scene,
+    radius: np.ndarray,
+    mass: np.ndarray,
+    motion: Callable[[], tuple[np.ndarray, np.ndarray]],
 ) -> None:
-    """:func:`check_drag_step` of ``scene``'s balls when its air, step or gravity differ from
-    ``old``'s (a change of any other key leaves the drag's limit as it was, and the balls'
-    velocities, read from the device by ``velocities``, are not read then)."""
+    """:func:`check_step` of ``scene``'s balls when its air, step or gravity differ from ``old``'s
+    (a change of any other key leaves the limits as they were, and the balls' velocities and spins,
+    read from the device by ``motion``, are not read then)."""
     if (scene.air, scene.world.dt, scene.world.gravity) != (old.air, old.world.dt, old.world.gravity):
-        check_drag_step(scene, radius, mass, velocities())
+        check_step(scene, radius, mass, *motion())
