@@ -103,9 +103,10 @@ def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, 
     the friction impulse applied so far), with
     ``contact``'s restitution, or with ``contact.turf`` in the turf frame of :func:`ti_golf.physics.contact.turf_impact`
     (:func:`ti_golf.physics.contact.impact_frame`).
-    In the ``BOUNCE`` pass a pressed ball also meets rolling resistance and the resistance to spin
-    about the normal, bounded by μ_roll·λ (once per step; :func:`ti_golf.physics.contact.plane_jolt`
-    applies them to a resting impulse only, not to an impact). With the report's friction
+    In the ``BOUNCE`` pass a pressed ball that did not approach faster than ``v_inelastic`` (a
+    resting contact, not an impact) also meets rolling resistance and the resistance to spin about
+    the normal, bounded by μ_roll·λ (once per step), as :func:`ti_golf.physics.contact.plane_jolt`
+    applies them to a resting impulse only: an impact's jolt does not brake the ball's rolling. With the report's friction
     (``kinds.friction``) the spin is left as it is. Returns (v, ω, λ, F)."""
     n_eff, e = impact_frame(n, gap, v, lam, contact, v_inelastic, h, kinds)
     ball = body(v, w, radius, 1.0)
@@ -129,7 +130,7 @@ def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, 
     w_new = w
     if ti.static(spin):
         w_new = w + spin_jolt(P, n_eff, radius, 1.0)
-    if phase == Phase.BOUNCE and lam_new > 0.0:
+    if phase == Phase.BOUNCE and lam_new > 0.0 and v0.dot(n_eff) >= -v_inelastic:  # resting, no impact
         dv, dw = rolling_resistance(v_new, radius, contact.mu_roll, lam_new, n_eff)
         v_new += dv
         if ti.static(spin):
