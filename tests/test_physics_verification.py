@@ -672,6 +672,25 @@ def test_a_ball_striking_the_ground_takes_coulomb_friction_of_the_whole_impact(s
         np.testing.assert_allclose(sim.w[0], [0.0, 0.0, -2.5 * J_t / R], rtol=tol, atol=1e-9)
 
 
+@pytest.mark.parametrize("solver", STEPS, ids=lambda s: s or "advance")
+def test_a_plastic_impact_ends_its_step_on_the_ground_not_in_it(solver):
+    # a ball 3 mm above the ground falls at 10 m/s (no gravity, e = 0): it reaches the ground 30 %
+    # into the 1 ms step. The Gauss–Seidel sweeps close the gap exactly within the step (v_n =
+    # −3 m/s); the position's split at the time of impact, made for a ball turned back, put it
+    # (1 − 0.3)·3 mm into the ground, (1 − k_p) of that left after the projection (B.18). Every
+    # solver ends it on the ground (to rounding), and none above it by more than the gap it had.
+    R, gap0, speed = 0.02, 3e-3, 10.0
+    over = (*IMPACT, "contact.e=0", "contact.mu=0", *solver_keys(solver))
+    x = [[0.0, R + gap0, 0.0], [10.0, 1.0, 0.0]][: 1 if solver is None else 2]
+    v = [[0.0, -speed, 0.0], [0.0, 0.0, 0.0]][: len(x)]
+    sim = stepped_by(solver, tg.Simulation(lab("lab_vacuum", *over), x=x, v=v, radius=R))
+    sim.step(1)
+    gap = sim.x[0, 1] - R
+    assert -1e-12 <= gap <= gap0 + 1e-12, gap
+    sim.step(1)  # and touching it at rest from then on
+    assert abs(sim.x[0, 1] - R) < 1e-12 and abs(sim.v[0, 1]) < 1e-12
+
+
 @pytest.mark.parametrize("solver", STEPS[1:])
 @pytest.mark.parametrize("phi, mu", [(30.0, 0.4), (60.0, 0.1)], ids=["stops_the_slip", "gives_out"])
 def test_an_oblique_impact_of_two_balls_takes_coulomb_friction_of_the_whole_impact(solver, phi, mu):

@@ -322,19 +322,29 @@ def plane_jolt(P, lam, v, w, radius, n, mu_roll, friction: ti.template()):
     return v_new, w_new
 
 
+SPLIT_ROUNDING = 1e-6
+"""How far a normal velocity taken to 0 may fall below it by rounding, as a share of the approach
+speed, and still count as turned back (:func:`plane_position`): f32 keeps about 1e-7."""
+
+
 @ti.func
 def plane_position(x, x_free, x1, v_free, v, radius, p, n, k_p, h):
     """End-of-step position ``x1`` of a ball corrected for the plane (p, n̂).
 
     ``x`` is the position at the start of the step, ``x_free``/``v_free`` the free-flight
     prediction, ``v`` the final velocity and ``x1`` the position so far (``x_free + h·(v − v_free)``
-    before the first plane). When the free flight crosses the plane and the plane pushed back, the
-    step is split at the time of impact (linear in the gaps; at the start of the step for a ball
-    already touching); what still penetrates is projected out with k_p (B.18, m_red = 1).
+    before the first plane). When the free flight crosses the plane and the plane turned the ball
+    back (v·n̂ ≥ 0, to :data:`SPLIT_ROUNDING`, after its v_free·n̂ < 0), the step is split at the
+    time of impact (linear in the gaps; at the start of the step for a ball already touching). A
+    ball that the plane only slowed,
+    still approaching (the Gauss–Seidel sweeps close a plastic contact's gap exactly within the
+    step), keeps ``x1``: the split would put it (1 − frac)·h·|v·n̂| into the plane, never less deep.
+    What still penetrates is projected out with k_p (B.18, m_red = 1).
     """
     gap0 = (x - p).dot(n) - radius
     gap1 = (x_free - p).dot(n) - radius
-    if gap1 < 0.0 and v.dot(n) > v_free.dot(n):
+    v_n, v_free_n = v.dot(n), v_free.dot(n)
+    if gap1 < 0.0 and v_n > v_free_n and v_n >= -SPLIT_ROUNDING * ti.abs(v_free_n):
         frac = 0.0  # already touching at the start of the step: the impulse acts from its start
         if gap0 > 0.0:
             frac = gap0 / (gap0 - gap1)
