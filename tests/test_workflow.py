@@ -418,6 +418,38 @@ def test_set_ball_edits_one_ball_and_wakes_it():
             sim.set_ball(**bad)
 
 
+def test_a_change_that_can_move_balls_at_rest_wakes_them_and_one_that_cannot_does_not():
+    # a ball at rest on the ground stayed put, "at rest", when gravity turned upward, the ground
+    # went away or it was moved 5 m up by assigning x: a change of the scene or of x must be felt
+    def resting() -> tg.Simulation:
+        sim = tg.Simulation("lab_vacuum", x=[[0.0, 0.02, 0.0]])
+        sim.run(t=0.5)
+        assert sim.status[0] == tg.AT_REST
+        return sim
+
+    sim = resting()
+    for key, value in (("contact.e", 0.3), ("world.dt", 5e-4), ("world.t_rest", 0.2)):
+        sim.set(key, value)  # (ti_golf.sim.changes.STILL_AT_REST: they cannot move it)
+        assert sim.status[0] == tg.AT_REST, key
+    sim.run(t=0.1)
+    assert sim.status[0] == tg.AT_REST and sim.x[0, 1] == pytest.approx(0.02, abs=1e-12)
+    sim.set("world.gravity", [0.0, 9.81, 0.0])  # falls up: ½·g·t² in vacuum, to first order in h
+    x0, t = sim.x[0, 1], 0.2
+    sim.run(t=t)
+    assert sim.status[0] == tg.FLYING and sim.x[0, 1] - x0 == pytest.approx(0.5 * 9.81 * t**2, rel=0.01)
+    sim = resting()
+    sim.set("world.ground", False)
+    sim.run(t=0.2)
+    assert sim.x[0, 1] < 0.02 - 0.19
+    sim = resting()
+    sim.x = [[0.0, 5.0, 0.0]]
+    sim.run(t=0.2)
+    assert sim.x[0, 1] < 5.0 - 0.19
+    sim = resting()
+    sim.x = sim.x  # (no ball moved: none woken)
+    assert sim.status[0] == tg.AT_REST
+
+
 # ----------------------------------------------------------------------------------------------
 # the command line
 # ----------------------------------------------------------------------------------------------

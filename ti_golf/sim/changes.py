@@ -30,6 +30,33 @@ MOVES_T0_BALLS = ("world.ground_height",)
 the simulation up again, as the keys of :data:`AT_T0` do."""
 
 
+STILL_AT_REST = frozenset(
+    {
+        "world.dt",
+        "world.integrator",
+        "world.t_end",
+        "world.v_rest",
+        "world.t_rest",
+        "contact.e",
+        "contact.v_bounce",
+        "contact.k_p",
+        "contact.solver",
+        "contact.layout",
+        "contact.iterations",
+        "contact.relax",
+        "contact.skin",
+    }
+)
+"""Live keys whose change cannot set a ball at rest moving: how the steps are taken, how impacts
+bounce, when a ball counts as at rest. A change of any other key (the air and its wind, gravity,
+the ground, collisions, friction) wakes the balls at rest, which rest again if nothing moves them."""
+
+
+def wakes(key: str) -> bool:
+    """Whether a change of the live ``key`` wakes the balls at rest (:data:`STILL_AT_REST`)."""
+    return key not in STILL_AT_REST
+
+
 def as_changes(changes: Mapping[str, Any] | Iterable[str] | str, value: Any) -> dict[str, Any]:
     """``set``'s arguments as ``{dotted key: value}``: a key and a value, a mapping, or
     ``KEY=VALUE`` texts (one, or several) as ``--set`` takes them."""

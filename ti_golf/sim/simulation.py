@@ -34,6 +34,7 @@ from ti_golf.sim.changes import (
     refuse_after_t0,
     refuse_for_given_balls,
     refuse_unread,
+    wakes,
 )
 from ti_golf.sim.flight_record import launch_again
 from ti_golf.sim.given import as_vectors, check_memory, copied, flags, per_ball, steps_to_run, whole_number
@@ -48,6 +49,11 @@ class RunProgress(Protocol):
 
     def __call__(self, done: float, total: float, /, finished: tuple[int, int, str] | None = None) -> None:
         """Say that ``done`` of ``total`` simulated seconds are done (and ``finished``: see the class)."""
+
+
+def _per_ball(name: str, doc: str) -> Any:
+    """The property of :class:`Simulation`'s per-ball vectors ``name`` (x, v or w)."""
+    return property(lambda self: self._vectors(name), lambda self, a: self._assign(name, a), doc=doc)
 
 
 @dataclass
@@ -235,10 +241,11 @@ class Simulation:
         key left unread by the scene's settings is refused), and so is a key that no simulation
         reads (``sweep.*``, ``game.*``, ``world.t_max``, ``description``). The air, contact,
         gravity, time step, integrator, sleeping, ground, collision and solver keys apply from the
-        next step on, continuing from the current state (a new ``contact.skin`` or ``world.dt``
-        rebuilds the neighbour lists, each touching pair keeping its carried impulse; a new
-        ``contact.solver`` or ``world.collisions`` makes a new collision solver, whose contacts start
-        without carried impulses, as at t0). The keys that set up the balls or the ground
+        next step on, from the current state: a new ``contact.skin`` or ``world.dt`` rebuilds the
+        neighbour lists (touching pairs keep their carried impulses), a new ``contact.solver`` or
+        ``world.collisions`` makes a new collision solver (no carried impulses, as at t0), and the
+        balls at rest wake unless the key cannot move them (``ti_golf.sim.changes.STILL_AT_REST``).
+        The keys that set up the balls or the ground
         (``launch.*``, ``ball.*``, ``terrain.*``) apply at t0 only: there the simulation is set up
         again, as ``Simulation`` of the changed scene would be (``world.ground_height`` too, which
         places a launched ball), and later in a run they are refused: use :meth:`reset` with them.
@@ -256,6 +263,8 @@ class Simulation:
             self._set_up(scene, *self._initial_balls(), solver_flags=self._solver_flags())
         else:
             self._take_parameters(scene)
+            if any(wakes(k) for k in changed):
+                self._wake()
 
     def reset(self, changes: Mapping[str, Any] | Iterable[str] | str | None = None) -> None:
         """Go back to t0: the balls as they started (built again from the scene, or as given to
@@ -326,14 +335,13 @@ class Simulation:
         """Time step h [s]."""
         return self.model.dt
 
-    def _vectors(self, name: str) -> np.ndarray:
+    def _vectors(self, name: str) -> np.ndarray:  # (a copy, by ball id)
         return self.state.read(name).astype(np.float64)
 
     def _assign(self, name: str, value: np.ndarray) -> None:
-        """Overwrite x, v or w; a changed velocity or spin wakes balls at rest."""
+        """Overwrite x, v or w; the balls at rest whose value changed are awake again."""
         arr = as_vectors(value, name, self.n).astype(np_float())
-        if name != "x":
-            self._wake()
+        self._wake(np.any(arr != self.state.read(name), axis=1))
         self.state.write(name, arr)
         if name == "x" and self.solver is not None:
             self.solver.invalidate()  # moved balls may now touch balls missing from their lists
@@ -342,21 +350,9 @@ class Simulation:
                 self.state, self.model, self.launch_x, self.launch_t, self.t, self._vectors("x"), np.arange(self.n)
             )
 
-    x = property(
-        lambda self: self._vectors("x"),
-        lambda self, a: self._assign("x", a),
-        doc="Ball centres [m], a copy, shape (N, 3); assign to move balls.",
-    )
-    v = property(
-        lambda self: self._vectors("v"),
-        lambda self, a: self._assign("v", a),
-        doc="Velocities [m/s], a copy, shape (N, 3); assign to change them (wakes resting balls).",
-    )
-    w = property(
-        lambda self: self._vectors("w"),
-        lambda self, a: self._assign("w", a),
-        doc="Angular velocities ω [rad/s], a copy, shape (N, 3); assign to change them.",
-    )
+    x = _per_ball("x", "Ball centres [m], a copy, shape (N, 3); assign to move balls (wakes those at rest).")
+    v = _per_ball("v", "Velocities [m/s], a copy, shape (N, 3); assign to change them (wakes resting balls).")
+    w = _per_ball("w", "Angular velocities ω [rad/s], a copy, shape (N, 3); assign to change them (wakes them).")
 
     @property
     def status(self) -> np.ndarray:
@@ -414,12 +410,15 @@ class Simulation:
         hang = a["t_land"] - (self.launch_t if self.launch_t is not None else 0.0)
         return Flight.from_arrays(launch_x, a["landed"], a["apex"], hang, a["land_x"], a["land_v"])
 
-    def _wake(self) -> None:
-        s = self.state.status.to_numpy()
-        s[s == AT_REST] = 0
-        self.state.status.from_numpy(s)
-        self.state.rest_time.from_numpy(np.zeros(self.n, self.state.rest_time.to_numpy().dtype))
-        self._statuses_edited()
+    def _wake(self, which: np.ndarray | None = None) -> None:
+        """Set the balls at rest among ``which`` (a mask (N,); ``None``: all) flying, rest timers at 0."""
+        status, rest = self.status, self.state.read("rest_time")
+        woken = (status == AT_REST) & (True if which is None else which)
+        if woken.any():
+            status[woken], rest[woken] = FLYING, 0.0
+            self.state.write("status", status)
+            self.state.write("rest_time", rest)
+            self._statuses_edited()
 
     def _statuses_edited(self) -> None:
         """Tell the collision solver that balls' statuses or rest timers changed between steps."""
