@@ -326,6 +326,18 @@ def test_a_scene_too_big_for_the_memory_is_refused_before_any_ball_is_made(tmp_p
     assert "27,000,000 balls" in text and "51.5 GiB" in text and "24.0 GiB available" in text, text
 
 
+def test_a_sweep_grid_too_big_for_the_memory_is_refused_before_it_is_made(monkeypatch):
+    # 901 angles × 7,901 speeds: 7.1 million launches at 1 KiB need 6.8 GiB; numpy's MemoryError
+    # of the grid was all a user saw of a grid far greater than the memory
+    from ti_golf.golf import sweep as sweep_module
+
+    monkeypatch.setattr(sweep_module, "available_memory", lambda: 2 * 2**30)
+    monkeypatch.setattr(sweep_module.np, "meshgrid", lambda *a, **k: pytest.fail("grid made"))
+    with pytest.raises(tg.ConfigError, match=r"7,118,801 launches.*6.8 GiB.*2.0 GiB available") as err:
+        tg.sweep("lab_turbulent", angles_deg="0:90:0.1", speeds="1:80:0.01")
+    assert err.value.source == "angles_deg"
+
+
 def test_every_public_name_is_in_the_api_reference():
     # the docs' API page (docs/api.md) renders each name of ti_golf.__all__ from its docstring
     # (`::: ti_golf.NAME`, mkdocstrings) or, for the status constants, lists it in a table; every

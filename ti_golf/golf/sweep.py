@@ -18,7 +18,7 @@ from ti_golf.physics import kernels
 from ti_golf.physics.aero import air_params
 from ti_golf.physics.kinds import kinds_of
 from ti_golf.physics.types import vec3
-from ti_golf.runtime import ensure_init, np_float, on_cpu, plain_compile
+from ti_golf.runtime import available_memory, ensure_init, np_float, on_cpu, plain_compile
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.checks import SPEED_LIMIT, SPIN_LIMIT, parse_range
 from ti_golf.scene.loader import load_scene
@@ -136,7 +136,7 @@ def launch_grid(
     """
     if scene.launch is None:
         raise ConfigError(
-            scene.path, "launch", "is required: a sweep launches its balls as the scene's [launch] table says"
+            *scene.where("launch"), "is required: a sweep launches its balls as the scene's [launch] table says"
         )
     L = scene.launch
     angles = _values("angles_deg", angles_deg, scene.sweep.angles or (L.angle_deg,))
@@ -155,6 +155,7 @@ def launch_grid(
         bad = arr[~(np.isfinite(arr) & (arr >= lo) & (arr <= hi))]
         if bad.size:
             raise ConfigError(name, None, f"values must be {allowed} (got {bad[0]:g})")
+    _check_grid_memory(angles.size * speeds_.size * spins_.size)
     sp, sn, an = np.meshgrid(speeds_, spins_, angles, indexing="ij")
     an, sp, sn = an.ravel(), sp.ravel(), sn.ravel()
     n = an.size
@@ -163,6 +164,24 @@ def launch_grid(
     v0 = np.stack([sp * np.cos(th) * math.cos(ph), sp * np.sin(th), sp * np.cos(th) * math.sin(ph)], axis=1)
     w0 = sn[:, None] * axis[None, :]
     return an, sp, sn, x0, v0, w0
+
+
+SWEEP_BYTES_PER_BALL = 1024
+"""Peak memory [bytes] a ball of a sweep takes: its launch, its flight's outcomes and the result's
+arrays, in float64, some 60 numbers, bounded with room to spare."""
+
+
+def _check_grid_memory(n: int) -> None:
+    """Refuse a grid of ``n`` launches that would not fit in the memory available, before making it."""
+    need, avail = n * SWEEP_BYTES_PER_BALL, available_memory()
+    if avail is not None and need > avail:
+        raise ConfigError(
+            "angles_deg",
+            None,
+            f"with the speeds and spins makes {n:,} launches, which would need about {need / 2**30:.1f} GiB of "
+            f"memory ({SWEEP_BYTES_PER_BALL} bytes each); this machine has {avail / 2**30:.1f} GiB available: "
+            "fewer values or a coarser step",
+        )
 
 
 def default_lanes() -> int:
