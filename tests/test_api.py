@@ -338,6 +338,33 @@ def test_a_sweep_grid_too_big_for_the_memory_is_refused_before_it_is_made(monkey
     assert err.value.source == "angles_deg"
 
 
+def test_arguments_of_the_wrong_kind_are_refused_naming_the_argument():
+    # each of these, tried as a new user would, raised Python's or numpy's own error from inside
+    # the package ("'int' object is not iterable"), or ran on something else than was meant
+    # (to_rest="no" rolled the balls out, angles_deg=[True] flew at 1°, an unknown `until` meant
+    # "landed", ball(-1) and ball(5) raised different errors)
+    sim = tg.Simulation("break_shot")
+    cases = [
+        (lambda: tg.load_scene("lab_vacuum", 3), TypeError, "overrides must be"),
+        (lambda: tg.load_scene(b"lab_vacuum"), TypeError, "path must be"),
+        (lambda: tg.Simulation(""), tg.ConfigError, "no scene given"),
+        (lambda: sim.set(None), TypeError, "changes must be"),
+        (lambda: sim.set(5, 1), TypeError, r"set\(key, value\) takes a key"),
+        (lambda: sim.set_ball(0, v="fast"), ValueError, r"v of balls \[0\] must be real numbers"),
+        (lambda: sim.unfinished("xyz"), ValueError, "until must be 'rest' or 'landed'"),
+        (lambda: sim.ball(-1), IndexError, "ids 0 … 15"),
+        (lambda: sim.ball(16), IndexError, "ids 0 … 15"),
+        (lambda: tg.sweep("lab_turbulent", angles_deg=[30], to_rest="no"), TypeError, "to_rest must be"),
+        (lambda: tg.sweep("lab_turbulent", angles_deg=[True]), tg.ConfigError, "flat list of numbers"),
+        (lambda: tg.sweep("lab_turbulent", angles_deg=[[30, 40]]), tg.ConfigError, "flat list of numbers"),
+    ]
+    for call, error, match in cases:
+        with pytest.raises(error, match=match):
+            call()
+    sim.set_ball([0, 1], v=[1.0, 0.0, 0.0])  # one vector for every ball given
+    np.testing.assert_array_equal(sim.v[:2], [[1.0, 0.0, 0.0]] * 2)
+
+
 def test_every_public_name_is_in_the_api_reference():
     # the docs' API page (docs/api.md) renders each name of ti_golf.__all__ from its docstring
     # (`::: ti_golf.NAME`, mkdocstrings) or, for the status constants, lists it in a table; every

@@ -116,11 +116,14 @@ def _values(name: str, given: Sequence[float] | str | None, default: Sequence[fl
     if isinstance(given, str):
         return np.asarray(parse_range(given, name, None), float)
     try:
-        if np.iscomplexobj(given):
+        raw = np.asarray(given)
+        if np.iscomplexobj(raw) or raw.dtype == bool or raw.ndim > 1:
             raise TypeError
-        return np.asarray(given, float).ravel()
+        return raw.astype(float).ravel()
     except (TypeError, ValueError):
-        raise ConfigError(name, None, f"must be numbers or START:STOP:STEP (got {given!r:.60})") from None
+        raise ConfigError(
+            name, None, f"must be a flat list of numbers or START:STOP:STEP (got {given!r:.60})"
+        ) from None
 
 
 def launch_grid(
@@ -361,6 +364,8 @@ def sweep(
         >>> res.angle_deg[res.best()], res.carry.max()                           # doctest: +SKIP
     """
     trajectories = whole_number(trajectories, "trajectories")
+    if not isinstance(to_rest, (bool, np.bool_)):
+        raise TypeError(f"to_rest must be True or False (got {to_rest!r:.60})")
     if not isinstance(scene, Scene):
         scene = load_scene(scene, overrides)
     elif overrides:

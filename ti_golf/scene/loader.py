@@ -133,8 +133,12 @@ def load_scene(
     Raises:
         ConfigError: naming the file, the key and what is allowed.
     """
+    if isinstance(path, bytes) or (path is not None and not isinstance(path, (str, os.PathLike))):
+        raise TypeError(f"path must be a scene file's path or a bundled scene's name, a str (got {path!r:.60})")
+    if overrides is not None and not isinstance(overrides, (str, Mapping, list, tuple)):
+        raise TypeError(f"overrides must be a mapping of keys to values or KEY=VALUE texts (got {overrides!r:.60})")
     if data is None:
-        if path is None:
+        if path is None or not str(path).strip():
             raise ConfigError("", None, "no scene given")
         p = resolve_scene_path(path)
         raw = read_toml(p)

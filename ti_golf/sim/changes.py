@@ -65,9 +65,13 @@ def as_changes(changes: Mapping[str, Any] | Iterable[str] | str, value: Any) -> 
             return {changes: value}
         return dict([parse_override(changes)])
     if value is not _UNSET:
-        raise TypeError("set(key, value) takes a value only with a single key")
+        raise TypeError(f"set(key, value) takes a key, a dotted text such as 'air.C_D' (got {changes!r:.60})")
     if isinstance(changes, Mapping):
         return dict(changes)
+    if not isinstance(changes, (list, tuple)) or not all(isinstance(text, str) for text in changes):
+        raise TypeError(
+            f"changes must be a key and a value, a mapping of keys to values or KEY=VALUE texts (got {changes!r:.60})"
+        )
     return dict(parse_override(text) for text in changes)
 
 

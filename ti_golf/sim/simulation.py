@@ -364,8 +364,8 @@ class Simulation:
         (3,) each: ``sim.x[i]``, ``sim.v[i]`` and ``sim.w[i]``, reading that ball's entries (and,
         for balls stored in the grid's order, where it is stored) rather than three whole arrays:
         a view of one ball among 100,000 reads it in 0.6 ms every frame, against 15 ms."""
-        if not 0 <= whole_number(i, "ball") < self.n:
-            raise IndexError(f"ball {i} is not one of the {self.n} balls")
+        if not isinstance(i, (int, np.integer)) or isinstance(i, bool) or not 0 <= i < self.n:
+            raise IndexError(f"ball {i!r} is not one of the {self.n} balls (ids 0 … {self.n - 1})")
         p, state = self.state.index_of(int(i)), self.state
         x, v, w = (np.asarray(a[p], dtype=np.float64) for a in (state.x, state.v, state.w))
         return x, v, w
@@ -449,10 +449,8 @@ class Simulation:
         for name, value in (("x", x), ("v", v), ("w", w)):
             if value is None:
                 continue
-            arr = np.asarray(value, dtype=np.float64)
-            if arr.shape == (3,):
-                arr = np.broadcast_to(arr, (ids.size, 3))
-            arr = as_vectors(arr, f"{name} of balls {ids.tolist()}", ids.size)
+            arr = as_vectors(value, label := f"{name} of balls {ids.tolist()}")  # (3,) for each, or (K, 3)
+            arr = as_vectors(np.broadcast_to(arr, (ids.size, 3)) if len(arr) == 1 else arr, label, ids.size)
             values = self._vectors(name)
             values[ids] = arr
             self.state.write(name, values.astype(np_float()))
@@ -573,6 +571,8 @@ class Simulation:
         if until == "rest":
             s = self.status
             return np.flatnonzero((s != AT_REST) & (s != OUT_OF_BOUNDS))
+        if until != "landed":
+            raise ValueError(f"until must be 'rest' or 'landed' (got {until!r})")
         return np.flatnonzero(self.state.read("landed") == 0)
 
     def save(self, path: str | os.PathLike[str], recording: Recording | None = None, partial: bool = False) -> None:
