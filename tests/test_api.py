@@ -365,6 +365,32 @@ def test_arguments_of_the_wrong_kind_are_refused_naming_the_argument():
     np.testing.assert_array_equal(sim.v[:2], [[1.0, 0.0, 0.0]] * 2)
 
 
+def test_balls_given_where_no_contact_can_sort_them_out_are_refused():
+    # tried as a new user would: two balls at one point stayed there (no direction to push them
+    # apart along: an overlap of 2 radii for ever), a ball 5 m under the ground came to rest inside
+    # it, and 1e6 m/s (past the scene files' 1000 m/s) or 1e300 m/s ran, the last refused as a
+    # "world.dt" of the scene file
+    bin_scene = tg.load_scene("break_shot", ["world.ground=false"])  # (no planes either: open space)
+    cases = [
+        ("lab_vacuum", {"x": [[0, 1, 0], [0, 1, 0]]}, r"x of balls 0 and 1 is the same point"),
+        ("lab_vacuum", {"x": [[0, -5, 0]]}, r"x of ball 0 \(\[0.0, -5.0, 0.0\]\) lies 5 m inside the ground"),
+        ("lab_vacuum", {"x": [[0, 1, 0]], "v": [[1e6, 0, 0]]}, r"v must be within ±1000 m/s"),
+        ("lab_vacuum", {"x": [[0, 1, 0]], "v": [[1e300, 2, 3]]}, r"v must be within ±1000 m/s"),
+        ("lab_vacuum", {"x": [[0, 1, 0]], "w": [[0, 0, 1e9]]}, r"w must be within ±100000 rad/s"),
+        ("lab_vacuum", {"x": [[0, 2e6, 0]]}, r"x must be within ±1e\+06 m"),
+    ]
+    for scene, given, match in cases:
+        with pytest.raises(ValueError, match=match):
+            tg.Simulation(scene, **given)
+    tg.Simulation("lab_vacuum", x=[[0, 0.01, 0]])  # overlapping the ground, centre above it: pushed out
+    tg.Simulation(bin_scene, x=[[0, -5, 0], [1, -5, 0]])  # nothing solid: anywhere
+    sim = tg.Simulation("lab_vacuum", x=[[0, 1, 0]])
+    with pytest.raises(ValueError, match=r"v must be within ±1000 m/s"):
+        sim.v = [[2000.0, 0, 0]]
+    with pytest.raises(ValueError, match=r"w of balls \[0\] must be within ±100000 rad/s"):
+        sim.set_ball(0, w=[0, 0, 2e5])
+
+
 def test_every_public_name_is_in_the_api_reference():
     # the docs' API page (docs/api.md) renders each name of ti_golf.__all__ from its docstring
     # (`::: ti_golf.NAME`, mkdocstrings) or, for the status constants, lists it in a table; every

@@ -35,13 +35,15 @@ if TYPE_CHECKING:  # pragma: no cover
     from ti_golf.runtime import init
     from ti_golf.scene.loader import load_scene
     from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, ROLLING, Scene
-    from ti_golf.sim.simulation import Overlap, Recording, Simulation
+    from ti_golf.sim.results import Overlap, Recording
+    from ti_golf.sim.simulation import Simulation
 
 _LAZY = {
     "init": "ti_golf.runtime",
     "load_scene": "ti_golf.scene.loader",
     **dict.fromkeys(("AT_REST", "FLYING", "OUT_OF_BOUNDS", "ROLLING", "Scene"), "ti_golf.scene.schema"),
-    **dict.fromkeys(("Overlap", "Recording", "Simulation"), "ti_golf.sim.simulation"),
+    **dict.fromkeys(("Overlap", "Recording"), "ti_golf.sim.results"),
+    "Simulation": "ti_golf.sim.simulation",
     **dict.fromkeys(("SweepResult", "sweep"), "ti_golf.golf.sweep"),
 }
 """The public names imported on first use, each from its module: ``import ti_golf`` (and every

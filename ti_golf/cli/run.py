@@ -31,7 +31,8 @@ from ti_golf.files import atomic_path
 from ti_golf.scene.checks import TIME_LIMIT
 from ti_golf.scene.schema import STATUS_NAMES
 from ti_golf.signals import whole_steps
-from ti_golf.sim.simulation import Recording, Simulation
+from ti_golf.sim.results import Recording
+from ti_golf.sim.simulation import Simulation
 
 RUN_DEFAULTS: dict[str, Any] = {
     "record_every": 0,

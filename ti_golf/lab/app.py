@@ -26,7 +26,8 @@ from ti_golf.render.plots import plot_speed, plot_spin, plot_trajectory
 from ti_golf.scene.loader import load_scene, scenes_dir
 from ti_golf.scene.schema import AT_REST, OUT_OF_BOUNDS, Scene
 from ti_golf.sim.changes import at_t0
-from ti_golf.sim.simulation import Recording, Simulation
+from ti_golf.sim.results import Recording
+from ti_golf.sim.simulation import Simulation
 
 DEFAULT_SCENE = "lab_magnus"
 """The scene the lab opens with: one ball launched with backspin (report Table 3.1-1, row 4)."""

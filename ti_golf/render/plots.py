@@ -22,7 +22,7 @@ TERRAIN_FILL = (0.62, 0.74, 0.50)
 if TYPE_CHECKING:  # pragma: no cover
     from ti_golf.golf.sweep import SweepResult
     from ti_golf.golf.tour import TourFlight
-    from ti_golf.sim.simulation import Recording
+    from ti_golf.sim.results import Recording
 
 
 class _NoTransparencyNotice(logging.Filter):

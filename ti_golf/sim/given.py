@@ -12,7 +12,7 @@ import numpy as np
 from ti_golf.errors import ConfigError
 from ti_golf.runtime import available_memory
 from ti_golf.scene.balls import ball_count, block_size
-from ti_golf.scene.checks import TIME_LIMIT
+from ti_golf.scene.checks import REACH, SPEED_LIMIT, SPIN_LIMIT, TIME_LIMIT
 from ti_golf.scene.schema import Scene
 
 BYTES_PER_BALL = 2048
@@ -39,9 +39,16 @@ def check_memory(scene: Scene) -> None:
     )
 
 
-def as_vectors(a: Any, name: str, n: int | None = None) -> np.ndarray:
+VECTOR_LIMITS = {"x": (REACH, "m"), "v": (SPEED_LIMIT, "m/s"), "w": (SPIN_LIMIT, "rad/s")}
+"""The bound on each axis of a ball's centre, velocity and spin given as arrays: the scene's own
+(:mod:`ti_golf.scene.checks`), past which the laws and the floats stop holding."""
+
+
+def as_vectors(a: Any, name: str, n: int | None = None, bounded: bool = False) -> np.ndarray:
     """``a`` as N vectors of 3 finite numbers, (N, 3) (one vector (3,) for one ball), N >= 1 (or
-    ``n``), or a ValueError naming ``name``."""
+    ``n``), or a ValueError naming ``name``; ``bounded``: ``x``, ``v`` and ``w`` (the first word of
+    ``name``) within :data:`VECTOR_LIMITS`, as given by a user (a saved run's balls may have gone
+    past them)."""
     try:
         if np.iscomplexobj(a):  # (numpy would drop the imaginary parts with a warning)
             raise TypeError
@@ -55,6 +62,14 @@ def as_vectors(a: Any, name: str, n: int | None = None) -> np.ndarray:
         raise ValueError(f"{name} must have shape {want} (got {arr.shape})")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} holds NaN or infinite values")
+    limit, unit = VECTOR_LIMITS.get(name.split()[0], (math.inf, "")) if bounded else (math.inf, "")
+    beyond = np.flatnonzero(np.any(np.abs(arr) > limit, axis=1))
+    if beyond.size:
+        i = int(beyond[0])
+        raise ValueError(
+            f"{name} must be within ±{limit:g} {unit} on each axis, as in a scene file "
+            f"(got {arr[i].tolist()} for ball {i})"
+        )
     return arr
 
 
@@ -128,3 +143,38 @@ def _short(a: Any) -> str:
     """``a`` written on one line, cut to 60 characters."""
     text = " ".join(repr(a).split())
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def check_placement(scene: Scene, x: np.ndarray) -> None:
+    """Refuse given centres ``x`` (N, 3) [m] that no contact could sort out: a ball whose centre
+    lies below the ground plane or behind one of the scene's planes (inside the solid: the
+    projection pushed it deeper, or left it resting inside), or two balls at the same point (no
+    direction to push them apart along), naming the ball and what it is in."""
+    solids = [(scene.world.ground_height * np.array([0.0, 1.0, 0.0]), np.array([0.0, 1.0, 0.0]), "the ground")]
+    solids = solids[: 1 if scene.world.ground else 0] + [
+        (np.asarray(p.point, float), np.asarray(p.normal, float), f"planes[{k}]") for k, p in enumerate(scene.planes)
+    ]
+    for point, normal, what in solids:
+        depth = (x - point) @ (normal / np.linalg.norm(normal))
+        inside = np.flatnonzero(depth < 0.0)
+        if inside.size:
+            i = int(inside[0])
+            raise ValueError(
+                f"x of ball {i} ({x[i].tolist()}) lies {-depth[i]:.6g} m inside {what}: a ball must start "
+                f"with its centre on the open side ({inside.size} ball(s) do not)"
+            )
+    if len(x) > 1 and scene.world.collisions:
+        order = np.lexsort(x.T)
+        same = np.flatnonzero(np.all(x[order[1:]] == x[order[:-1]], axis=1))
+        if same.size:
+            i, j = sorted(int(b) for b in order[same[0] : same[0] + 2])
+            raise ValueError(f"x of balls {i} and {j} is the same point {x[i].tolist()}: balls must start apart")
+
+
+def given_balls(scene: Scene, x: Any, v: Any, w: Any) -> tuple[np.ndarray | None, ...]:
+    """The centres, velocities and spins a user gave (each ``None`` or (N, 3)), checked: within
+    :data:`VECTOR_LIMITS` and placed where a contact can sort them out (:func:`check_placement`)."""
+    x, v, w = (None if a is None else as_vectors(a, name, bounded=True) for name, a in (("x", x), ("v", v), ("w", w)))
+    if x is not None:
+        check_placement(scene, x)
+    return x, v, w

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -203,3 +203,27 @@ def _unit(units: Units, kind: str) -> tuple[float, str]:
     if kind in ("distance", "speed", "spin"):
         return getattr(units, kind), getattr(units, f"{kind}_label")
     return 1.0, kind
+
+
+@dataclass
+class Recording:
+    """Samples taken every ``record_every`` steps: times (S,), positions and spins (S, N, 3)."""
+
+    t: list[float] = field(default_factory=list)
+    x: list[np.ndarray] = field(default_factory=list)
+    w: list[np.ndarray] = field(default_factory=list)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """``traj_t`` (S,), ``traj_x`` (S, N, 3), ``traj_w`` (S, N, 3)."""
+        return {"traj_t": np.asarray(self.t), "traj_x": np.asarray(self.x), "traj_w": np.asarray(self.w)}
+
+
+@dataclass(frozen=True)
+class Overlap:
+    """The deepest overlap between two balls: r_i + r_j − |x_i − x_j| [m] and as a fraction of the
+    smaller radius (the report's Δx, B.18, which the position projection removes step by step)."""
+
+    depth: float
+    fraction: float
+    i: int
+    j: int

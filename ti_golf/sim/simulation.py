@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
@@ -37,8 +37,17 @@ from ti_golf.sim.changes import (
     wakes,
 )
 from ti_golf.sim.flight_record import launch_again
-from ti_golf.sim.given import as_vectors, check_memory, copied, flags, per_ball, steps_to_run, whole_number
-from ti_golf.sim.results import Flight
+from ti_golf.sim.given import (
+    as_vectors,
+    check_memory,
+    copied,
+    flags,
+    given_balls,
+    per_ball,
+    steps_to_run,
+    whole_number,
+)
+from ti_golf.sim.results import Flight, Overlap, Recording
 from ti_golf.sim.step_check import check_changed_step, check_step
 
 
@@ -54,30 +63,6 @@ class RunProgress(Protocol):
 def _per_ball(name: str, doc: str) -> Any:
     """The property of :class:`Simulation`'s per-ball vectors ``name`` (x, v or w)."""
     return property(lambda self: self._vectors(name), lambda self, a: self._assign(name, a), doc=doc)
-
-
-@dataclass
-class Recording:
-    """Samples taken every ``record_every`` steps: times (S,), positions and spins (S, N, 3)."""
-
-    t: list[float] = field(default_factory=list)
-    x: list[np.ndarray] = field(default_factory=list)
-    w: list[np.ndarray] = field(default_factory=list)
-
-    def arrays(self) -> dict[str, np.ndarray]:
-        """``traj_t`` (S,), ``traj_x`` (S, N, 3), ``traj_w`` (S, N, 3)."""
-        return {"traj_t": np.asarray(self.t), "traj_x": np.asarray(self.x), "traj_w": np.asarray(self.w)}
-
-
-@dataclass(frozen=True)
-class Overlap:
-    """The deepest overlap between two balls: r_i + r_j − |x_i − x_j| [m] and as a fraction of the
-    smaller radius (the report's Δx, B.18, which the position projection removes step by step)."""
-
-    depth: float
-    fraction: float
-    i: int
-    j: int
 
 
 @dataclass(frozen=True)
@@ -146,6 +131,7 @@ class Simulation:
             )
             if extra:
                 raise ValueError(f"{', '.join(extra)} given without x: the scene's balls come with their own")
+        x, v, w = given_balls(scene, x, v, w)
         given = x is not None or radius is not None or mass is not None
         self.initial = InitialBalls.copy_of(x, v, w, radius, mass, track) if given and keep_initial else None
         """The balls at t0 as given to the constructor (:meth:`reset` goes back to them), or ``None``
@@ -340,7 +326,7 @@ class Simulation:
 
     def _assign(self, name: str, value: np.ndarray) -> None:
         """Overwrite x, v or w; the balls at rest whose value changed are awake again."""
-        arr = as_vectors(value, name, self.n).astype(np_float())
+        arr = as_vectors(value, name, self.n, bounded=True).astype(np_float())
         self._wake(np.any(arr != self.state.read(name), axis=1))
         self.state.write(name, arr)
         if name == "x" and self.solver is not None:
@@ -449,7 +435,7 @@ class Simulation:
         for name, value in (("x", x), ("v", v), ("w", w)):
             if value is None:
                 continue
-            arr = as_vectors(value, label := f"{name} of balls {ids.tolist()}")  # (3,) for each, or (K, 3)
+            arr = as_vectors(value, label := f"{name} of balls {ids.tolist()}", bounded=True)  # (3,) or (K, 3)
             arr = as_vectors(np.broadcast_to(arr, (ids.size, 3)) if len(arr) == 1 else arr, label, ids.size)
             values = self._vectors(name)
             values[ids] = arr
