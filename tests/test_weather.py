@@ -108,7 +108,12 @@ REFUSED = {
         "sets μ",
     ),
     "viscosity_of_the_lab_air": ({"viscosity": 1.8e-5}, [], "air.viscosity", 'air.model = "spin_reynolds"'),
-    "altitude_beside_pressure": ({"pressure": 90000.0, "altitude": 1000.0}, [], "air.altitude", "air.pressure"),
+    "altitude_beside_pressure_and_temperature": (
+        {"pressure": 90000.0, "altitude": 1000.0, "temperature": 20.0},
+        [],
+        "air.altitude",
+        "air.pressure and air.temperature",
+    ),
     "both_on_the_command_line": ({}, ["air.rho=1.2", "air.altitude=100"], "air.rho", "give one or the other"),
     "z0_above_reference": ({"wind_profile": "log", "wind_z0": 20.0}, [], "air.wind_z0", "below air.wind_height"),
     "reference_below_z0": ({"wind_profile": "log", "wind_height": 0.01}, [], "air.wind_height", "exceed"),
@@ -149,10 +154,24 @@ def test_the_command_line_wins_over_the_file():
     # --set pressure replaces the file's altitude (and its standard temperature: 15 °C)
     scene = _air({"altitude": 2000.0}, ["air.pressure=80000"])
     assert scene.air.rho == weather.air_density(15.0, 80000.0)
+    # beside the pressure alone the altitude still sets the temperature: it is not refused
+    scene = _air({"altitude": 1000.0, "pressure": 90000.0})
+    assert scene.air.rho == weather.air_density(weather.isa_temperature(1000.0), 90000.0)
 
 
-def test_cli_refuses_altitude_with_pressure_in_one_line():
-    proc = run_cli("sweep", "tour_shot", "--angles", "10", "--set", "air.altitude=1000", "--set", "air.pressure=90000")
+def test_cli_refuses_altitude_with_pressure_and_temperature_in_one_line():
+    proc = run_cli(
+        "sweep",
+        "tour_shot",
+        "--angles",
+        "10",
+        "--set",
+        "air.altitude=1000",
+        "--set",
+        "air.pressure=90000",
+        "--set",
+        "air.temperature=20",
+    )
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "air.altitude" in lines[0] and "air.pressure" in lines[0], proc.stderr

@@ -384,7 +384,7 @@ def _air(values: dict[str, Any], sources: dict[str, str], source: str) -> dict[s
 
     Keys that would leave another without effect are refused when they come from the same place
     (both in the file, or both ``--set``): ``rho`` or ``viscosity`` beside a weather key,
-    ``altitude`` beside ``pressure``. Across places the command line wins, as ``--set`` does
+    ``altitude`` beside both ``pressure`` and ``temperature``. Across places the command line wins, as ``--set`` does
     everywhere: a ``--set`` weather key replaces the file's ``rho`` and ``viscosity``, a ``--set``
     ``rho`` or ``viscosity`` what the file's weather gives for that one quantity, ``--set``
     ``pressure`` the file's ``altitude`` and the other way round. A log profile's reference height
@@ -425,11 +425,12 @@ def _air(values: dict[str, Any], sources: dict[str, str], source: str) -> dict[s
     if not weather:
         return values
     given = ", ".join(f"air.{k}" for k in weather)
-    if "pressure" in values and "altitude" in values:
+    if {"pressure", "altitude", "temperature"} <= values.keys():
         raise_config(
             sources.get("altitude", source),
             "air.altitude",
-            "cannot be given with air.pressure: the altitude only sets the pressure (and the default temperature)",
+            "cannot be given with air.pressure and air.temperature: the altitude only sets the pressure and the "
+            "default temperature",
         )
     rho, mu = air_from_weather(**{k: values[k] for k in weather})
     for name, what, value in (("rho", "ρ", rho), ("viscosity", "μ", mu)):
