@@ -475,6 +475,8 @@ def test_python_errors_name_the_arguments_and_the_command_line_its_options(capsy
     with pytest.raises(tg.ConfigError) as info:
         tg.Simulation.from_scene("lab_magnus", overrides={"air.C_DD": 0.3})
     assert str(info.value).startswith("overrides: key 'air.C_DD' is not a scene key (did you mean 'air.C_D'?)")
+    with pytest.raises(tg.ConfigError, match=r"did you mean 'air.C_D'\?"):  # (difflib's closest was C_M)
+        tg.load_scene("lab_magnus", ["air.C_d=0.3"])
     with pytest.raises(tg.ConfigError, match="^arch: unknown backend 'tpu'"):
         tg.init(arch="tpu")
     assert main(["run", "lab_magnus", "--steps", "1", "--set", "air.C_DD=0.3"]) == 2

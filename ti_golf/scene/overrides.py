@@ -18,8 +18,11 @@ from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
 
 
 def suggest(name: str, candidates: Iterable[str]) -> str:
-    """`` (did you mean 'X'?)`` for the candidate closest to ``name``, or ``""``."""
-    close = difflib.get_close_matches(name, list(candidates), n=1)
+    """`` (did you mean 'X'?)`` for the candidate closest to ``name``, or ``""``: one that differs
+    only in case first (``C_d``: ``C_D``, not ``C_M``)."""
+    candidates = list(candidates)
+    same = [c for c in candidates if c.lower() == name.lower()]
+    close = same or difflib.get_close_matches(name, candidates, n=1)
     return f" (did you mean '{close[0]}'?)" if close else ""
 
 
