@@ -138,7 +138,7 @@ def scene_options(
     if default is None:
         p.add_argument("scene", help=scene_help)
     else:
-        with_default = scene_help if "default" in scene_help else f"{scene_help} (default {default})"
+        with_default = scene_help if "default" in scene_help or not default else f"{scene_help} (default {default})"
         p.add_argument("scene", nargs="?", default=default, help=with_default)
     set_option(
         p,

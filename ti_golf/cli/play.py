@@ -164,7 +164,9 @@ def _say_seed(game: GolfGame, seed: int) -> None:
     ]
     print(f"Round seed {seed}: --seed {seed} plays {' and '.join(drawn)} again.")
     if game.scene.game.start is None:
-        print(f"The ball starts at a random point of the course: x = {game.ball[0]:.2f} m, z = {game.ball[2]:.2f} m.")
+        print(
+            f"The ball starts at a random point of the course: x = {_fixed(game.ball[0])} m, z = {_fixed(game.ball[2])} m."
+        )
 
 
 def _play_in_window(game: GolfGame, args: argparse.Namespace) -> int:
@@ -199,9 +201,14 @@ def _lie(game: GolfGame) -> str:
     """Where the ball lies, the hole and the wind, before a stroke."""
     dist, bearing = game.to_hole()
     return (
-        f"Stroke {len(game.strokes) + 1}: the ball lies at x = {game.ball[0]:.2f} m, z = {game.ball[2]:.2f} m, "
-        f"{dist:.2f} m from the hole (direction {bearing:.1f} deg); {describe_wind(game.wind)}."
+        f"Stroke {len(game.strokes) + 1}: the ball lies at x = {_fixed(game.ball[0])} m, z = {_fixed(game.ball[2])} m, "
+        f"{dist:.2f} m from the hole (direction {_fixed(bearing, 1)} deg); {describe_wind(game.wind)}."
     )
+
+
+def _fixed(value: float, digits: int = 2) -> str:
+    """``value`` with ``digits`` decimals, and no "-0.00" for a value that rounds to zero."""
+    return f"{round(float(value), digits) + 0.0:.{digits}f}"
 
 
 def _asked_shots(game: GolfGame, ask: Callable[[str], str], interactive: bool) -> Iterator[Shot]:
