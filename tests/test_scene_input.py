@@ -130,7 +130,7 @@ BAD_VALUES = {
     "unknown_key_world": ("world", "dtt", "0.01", "world.dtt", ["'dt'", "integrator"]),
     # wrong types
     "string_for_number": ("air", "C_D", '"0.3"', "air.C_D", ["must be a number", "'0.3'"]),
-    "bool_for_number": ("ball", "mass", "true", "ball.mass", ["must be a number", "kg", "True"]),
+    "bool_for_number": ("ball", "mass", "true", "ball.mass", ["must be a number in [1e-06, 1000000] kg", "True"]),
     "list_of_2_for_vec3": ("air", "wind", "[1, 2]", "air.wind", ["list of 3 numbers", "m/s"]),
     "string_for_vec3": ("launch", "spin", '"0,0,10"', "launch.spin", ["list of 3 numbers", "rad/s"]),
     "bool_in_vec3": ("world", "gravity", "[0, true, 0]", "world.gravity", ["list of 3 numbers"]),

@@ -69,7 +69,7 @@ def _coerce_number(value: Any, key: Key, source: str, dotted: str) -> int | floa
     if isinstance(value, (np.integer, np.floating)):  # (a numpy number from Python)
         value = value.item()
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise_config(source, dotted, f"must be a number{unit_text(key)} (got {value!r})")
+        raise_config(source, dotted, f"must be a number{_allowed_numbers(key)} (got {value!r})")
     if key.kind == "int":
         if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
             raise_config(source, dotted, f"must be an integer (got {value!r})")
@@ -105,6 +105,16 @@ def check_value(value: Any, key: Key, source: str, dotted: str) -> Any:
     scene file's value is (the same one-line errors): for other files declared with the same keys,
     such as study files (:mod:`ti_golf.study.spec`)."""
     return coerce(value, key, source, dotted)
+
+
+def _allowed_numbers(key: Key) -> str:
+    """`` in [0, 1000] m/s`` for an error that names a number key's allowed values and unit (the
+    unit alone when its check is no interval)."""
+    check = key.check
+    if not isinstance(check, Interval):
+        return unit_text(key)
+    unit = f" {key.unit}" if key.unit not in ("-", "") and not check.unit_word else ""
+    return f" {check.text}{unit}{f' {check.unit_word}' if check.unit_word else ''}"
 
 
 def unit_text(key: Key) -> str:
