@@ -85,7 +85,10 @@ def test_the_figure_help_lists_every_figure_and_the_docs_show_each():
         assert re.search(rf"^\s+{re.escape(number)}\s+\S", out, re.M), number
         assert f"ti-golf figure {number}" in docs, number
     code, _, err = run_main("figure", "3.9-9")
-    assert code == 2 and "invalid choice" in err
+    assert code == 2 and "no figure '3.9-9' (choose from 3.1-1," in err
+    code, _, err = run_main("figure", "3.2-2")  # a picture of balls: the command that draws it
+    assert code == 2 and "ti-golf render terrain_3d --t 3 --out figure_3_2_2.png" in err
+    assert "ti-golf render terrain_3d --t 3 --out figure_3_2_2.png" in docs
 
 
 def test_figure_3_1_5_holes_the_reports_five_strokes(tmp_path):

@@ -221,9 +221,23 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         epilog=f"the figures:\n{listing}",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("number", choices=list(FIGURES), metavar="NUMBER", help="the report's figure number, e.g. 3.2-3")
+    p.add_argument("number", type=_figure_number, metavar="NUMBER", help="the report's figure number, e.g. 3.2-3")
     p.add_argument("--plot", help=plot_help("the picture (default figure_NUMBER.png)"))
     runtime_options(p)
+
+
+RENDERED = {"3.2-2": "ti-golf render terrain_3d --t 3 --out figure_3_2_2.png"}
+"""The report's figures that are a picture of balls, made by ``ti-golf render``, by number."""
+
+
+def _figure_number(text: str) -> str:
+    """``text`` when it names one of :data:`FIGURES`; else an error listing them (and, for a
+    figure that is a render, the command that makes it)."""
+    if text in FIGURES:
+        return text
+    if text in RENDERED:
+        raise argparse.ArgumentTypeError(f"Figure {text} is a render of balls: `{RENDERED[text]}`")
+    raise argparse.ArgumentTypeError(f"no figure {text!r} (choose from {', '.join(FIGURES)})")
 
 
 def cmd_figure(args: argparse.Namespace) -> int:
