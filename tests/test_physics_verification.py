@@ -691,6 +691,22 @@ def test_a_plastic_impact_ends_its_step_on_the_ground_not_in_it(solver):
     assert abs(sim.x[0, 1] - R) < 1e-12 and abs(sim.v[0, 1]) < 1e-12
 
 
+@pytest.mark.parametrize("solver", STEPS, ids=lambda s: s or "advance")
+def test_a_ball_settling_onto_the_ground_under_rk4_lands_on_it_and_rests(solver):
+    # 0.3 mm above the ground at rest, g = 9.81, RK4 at h = 10 ms (lab_vacuum): the free flight
+    # crosses the ground and the contact only slows the ball (an approach of g·h, below the
+    # inelastic speed). Ending the step on the free flight's path plus h·(v − v_free) left it
+    # ½·g·h² = 0.49 mm above the ground for ever, flying, under the Gauss–Seidel sweeps
+    R = 0.02
+    x = [[0.0, R + 3e-4, 0.0], [10.0, R, 0.0]][: 1 if solver is None else 2]
+    sim = stepped_by(solver, tg.Simulation(lab("lab_vacuum", *solver_keys(solver)), x=x, radius=R))
+    assert sim.scene.world.integrator == "rk4"
+    sim.step(1)
+    assert abs(sim.x[0, 1] - R) < 1e-12
+    sim.run(t=1.0)
+    assert sim.status[0] == tg.AT_REST and abs(sim.x[0, 1] - R) < 1e-12
+
+
 @pytest.mark.parametrize("solver", STEPS[1:])
 @pytest.mark.parametrize("phi, mu", [(30.0, 0.4), (60.0, 0.1)], ids=["stops_the_slip", "gives_out"])
 def test_an_oblique_impact_of_two_balls_takes_coulomb_friction_of_the_whole_impact(solver, phi, mu):

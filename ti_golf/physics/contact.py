@@ -333,20 +333,20 @@ def plane_position(x, x_free, x1, v_free, v, radius, p, n, k_p, h):
 
     ``x`` is the position at the start of the step, ``x_free``/``v_free`` the free-flight
     prediction, ``v`` the final velocity and ``x1`` the position so far (``x_free + h·(v − v_free)``
-    before the first plane). When the free flight crosses the plane and the plane turned the ball
-    back (v·n̂ ≥ 0, to :data:`SPLIT_ROUNDING`, after its v_free·n̂ < 0), the step is split at the
-    time of impact (linear in the gaps; at the start of the step for a ball already touching). A
-    ball that the plane only slowed,
-    still approaching (the Gauss–Seidel sweeps close a plastic contact's gap exactly within the
-    step), keeps ``x1``: the split would put it (1 − frac)·h·|v·n̂| into the plane, never less deep.
+    before the first plane). When the free flight crosses the plane and the plane pushed back, the
+    step is split at the time of impact (linear in the gaps) if the plane turned the ball back (v·n̂
+    ≥ 0, to :data:`SPLIT_ROUNDING`); a ball already touching, or one that the plane only slowed and
+    still approaches, moves at ``v`` for the whole step, x + h·v (the Gauss–Seidel sweeps close such
+    a contact's gap exactly within the step: the split would put it (1 − frac)·h·|v·n̂| into the
+    plane, and the free flight's own path, with RK4's ½·g·h², would leave it hovering above).
     What still penetrates is projected out with k_p (B.18, m_red = 1).
     """
     gap0 = (x - p).dot(n) - radius
     gap1 = (x_free - p).dot(n) - radius
     v_n, v_free_n = v.dot(n), v_free.dot(n)
-    if gap1 < 0.0 and v_n > v_free_n and v_n >= -SPLIT_ROUNDING * ti.abs(v_free_n):
-        frac = 0.0  # already touching at the start of the step: the impulse acts from its start
-        if gap0 > 0.0:
+    if gap1 < 0.0 and v_n > v_free_n:
+        frac = 0.0  # touching at the start, or only slowed: the impulse acts from the step's start
+        if gap0 > 0.0 and v_n >= -SPLIT_ROUNDING * ti.abs(v_free_n):
             frac = gap0 / (gap0 - gap1)
         x1 = x + frac * (x_free - x) + (1.0 - frac) * h * v
     gap = (x1 - p).dot(n) - radius
