@@ -1458,7 +1458,8 @@ def test_lists_that_would_exhaust_memory_stop_the_run_and_name_the_ball(monkeypa
     pile, x = pile_scene(400)
     fast = apart.APART_MAX + 8
     top = [x[:, 0].mean(), x[:, 1].max() + 0.1, x[:, 2].mean()]
-    layer = top + 0.05 * np.stack([np.arange(fast) % 8 - 3.5, np.zeros(fast), np.arange(fast) // 8 - 2.0], axis=1)
+    k = np.arange(fast)  # (in the 0.2 m bin: rows of five touching balls, 25 to a layer)
+    layer = top + np.stack([0.04 * (k % 5 - 2), 0.05 * (k // 25), 0.04 * ((k // 5) % 5 - 2)], axis=1)
     x = np.vstack([x, layer])
     v = np.zeros_like(x)
     v[400:] = [0.0, -2000.0, 0.0]

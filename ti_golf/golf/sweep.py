@@ -21,6 +21,7 @@ from ti_golf.physics.types import vec3
 from ti_golf.runtime import available_memory, ensure_init, np_float, on_cpu, plain_compile
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.checks import SPEED_LIMIT, SPIN_LIMIT, parse_range
+from ti_golf.scene.document import check_values
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene, backspin_axis
 from ti_golf.sim.given import whole_number
@@ -369,7 +370,11 @@ def sweep(
     if not isinstance(scene, Scene):
         scene = load_scene(scene, overrides)
     elif overrides:
-        raise ValueError("overrides apply to scene files; pass a modified Scene instead")
+        raise ValueError(
+            "overrides go with a scene's name or file: sweep(name, overrides=...), or a Scene from "
+            "tg.load_scene(name, overrides)"
+        )
+    check_values(scene, "scene")
     an, sp, sn, x0, v0, w0 = launch_grid(scene, angles_deg, speeds, spins)
     raw = fly(scene, x0, v0, w0)
     flight = Flight.from_arrays(x0, raw["landed"], raw["apex"], raw["t_land"], raw["land_x"], raw["land_v"])

@@ -18,6 +18,7 @@ from ti_golf.scene.keys import Key, is_read
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.overrides import parse_override
 from ti_golf.scene.schema import ARRAY_SCHEMA, SCHEMA, TOP_LEVEL, Scene
+from ti_golf.scene.values import coerce
 from ti_golf.scene.weather import WEATHER_KEYS, air_from_weather
 
 OPTIONAL_TABLES = ("launch", "terrain", "hole")
@@ -144,3 +145,16 @@ def _table(obj: Any, keys: dict[str, Key], scene: Scene, section: str) -> dict[s
 def _plain(value: Any) -> Any:
     """Tuples as lists (TOML arrays), the rest as it is."""
     return [_plain(v) for v in value] if isinstance(value, tuple) else value
+
+
+def check_values(scene: Scene, source: str) -> None:
+    """Refuse a scene whose values a scene file could not hold (a :class:`Scene` changed in Python
+    with ``dataclasses.replace``: a negative ``world.dt`` ran backwards in time): each key that is
+    set and read (:func:`_table`) checked as the loader checks it, its kind and allowed values,
+    naming ``source`` and the dotted key."""
+    tables = [(section, section, getattr(scene, section), keys) for section, keys in SCHEMA.items()]
+    for name, keys in ARRAY_SCHEMA.items():
+        tables += [(name, f"{name}[{i}]", table, keys) for i, table in enumerate(getattr(scene, name))]
+    for section, prefix, table, keys in tables:
+        for name, value in _table(table, keys, scene, section).items() if table is not None else ():
+            coerce(value, keys[name], source, f"{prefix}.{name}")

@@ -12,7 +12,7 @@ import numpy as np
 from ti_golf.errors import ConfigError
 from ti_golf.runtime import available_memory
 from ti_golf.scene.balls import ball_count, block_size
-from ti_golf.scene.checks import REACH, SPEED_LIMIT, SPIN_LIMIT, TIME_LIMIT
+from ti_golf.scene.checks import REACH, TIME_LIMIT
 from ti_golf.scene.schema import Scene
 
 BYTES_PER_BALL = 2048
@@ -39,9 +39,11 @@ def check_memory(scene: Scene) -> None:
     )
 
 
-VECTOR_LIMITS = {"x": (REACH, "m"), "v": (SPEED_LIMIT, "m/s"), "w": (SPIN_LIMIT, "rad/s")}
-"""The bound on each axis of a ball's centre, velocity and spin given as arrays: the scene's own
-(:mod:`ti_golf.scene.checks`), past which the laws and the floats stop holding."""
+VECTOR_LIMITS = {"x": (REACH, "m")}
+"""The bound on each axis of a ball's centre given as an array: the scene's own
+(:data:`ti_golf.scene.checks.REACH`), past which the grid's cell coordinates overflow. Velocities
+and spins have none beyond being finite: a ball falls past the scene files' 1000 m/s in vacuum,
+and a state from such a run may be given back."""
 
 
 def as_vectors(a: Any, name: str, n: int | None = None, bounded: bool = False) -> np.ndarray:
@@ -145,36 +147,31 @@ def _short(a: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def check_placement(scene: Scene, x: np.ndarray) -> None:
-    """Refuse given centres ``x`` (N, 3) [m] that no contact could sort out: a ball whose centre
-    lies below the ground plane or behind one of the scene's planes (inside the solid: the
-    projection pushed it deeper, or left it resting inside), or two balls at the same point (no
-    direction to push them apart along), naming the ball and what it is in."""
+def check_placement(scene: Scene, x: np.ndarray, radius: np.ndarray) -> None:
+    """Refuse given centres ``x`` (N, 3) [m] of balls of radii ``radius`` [m] (N,) that no contact
+    could sort out: a ball wholly below the ground plane or behind one of the scene's planes (a
+    ball 5 m under the ground came to rest inside it), naming the ball and the solid. A ball that
+    overlaps a solid is pushed out by the position projection (B.18)."""
     solids = [(scene.world.ground_height * np.array([0.0, 1.0, 0.0]), np.array([0.0, 1.0, 0.0]), "the ground")]
     solids = solids[: 1 if scene.world.ground else 0] + [
         (np.asarray(p.point, float), np.asarray(p.normal, float), f"planes[{k}]") for k, p in enumerate(scene.planes)
     ]
     for point, normal, what in solids:
-        depth = (x - point) @ (normal / np.linalg.norm(normal))
-        inside = np.flatnonzero(depth < 0.0)
+        height = (x - point) @ (normal / np.linalg.norm(normal))
+        inside = np.flatnonzero(height < -radius)
         if inside.size:
             i = int(inside[0])
             raise ValueError(
-                f"x of ball {i} ({x[i].tolist()}) lies {-depth[i]:.6g} m inside {what}: a ball must start "
-                f"with its centre on the open side ({inside.size} ball(s) do not)"
+                f"x of ball {i} ({x[i].tolist()}) lies {-height[i]:.6g} m inside {what}, the whole ball in the "
+                f"solid: a ball must start at least partly on the open side ({inside.size} ball(s) do not)"
             )
-    if len(x) > 1 and scene.world.collisions:
-        order = np.lexsort(x.T)
-        same = np.flatnonzero(np.all(x[order[1:]] == x[order[:-1]], axis=1))
-        if same.size:
-            i, j = sorted(int(b) for b in order[same[0] : same[0] + 2])
-            raise ValueError(f"x of balls {i} and {j} is the same point {x[i].tolist()}: balls must start apart")
 
 
-def given_balls(scene: Scene, x: Any, v: Any, w: Any) -> tuple[np.ndarray | None, ...]:
+def given_balls(scene: Scene, x: Any, v: Any, w: Any, radius: Any) -> tuple[np.ndarray | None, ...]:
     """The centres, velocities and spins a user gave (each ``None`` or (N, 3)), checked: within
-    :data:`VECTOR_LIMITS` and placed where a contact can sort them out (:func:`check_placement`)."""
+    :data:`VECTOR_LIMITS`, and with the radii given (``None``: the scene's) placed where a contact
+    can sort them out (:func:`check_placement`)."""
     x, v, w = (None if a is None else as_vectors(a, name, bounded=True) for name, a in (("x", x), ("v", v), ("w", w)))
     if x is not None:
-        check_placement(scene, x)
+        check_placement(scene, x, per_ball(scene.ball.radius if radius is None else radius, len(x), "radius"))
     return x, v, w

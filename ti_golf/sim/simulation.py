@@ -21,7 +21,7 @@ from ti_golf.physics.packs import Packs
 from ti_golf.physics.state import State
 from ti_golf.runtime import ensure_init, np_float
 from ti_golf.scene.balls import build_balls
-from ti_golf.scene.document import with_changes
+from ti_golf.scene.document import check_values, with_changes
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import AT_REST, FLYING, OUT_OF_BOUNDS, STATUS_NAMES, Scene
 from ti_golf.scene.terrain import Terrain
@@ -125,13 +125,14 @@ class Simulation:
             scene = load_scene(scene)
         if not isinstance(scene, Scene):
             raise TypeError(f"scene must be a Scene, a scene file's path or a bundled scene's name (got {scene!r:.60})")
+        check_values(scene, "scene")  # (one changed in Python, by dataclasses.replace)
         if x is None:
             extra = [name for name, a in (("v", v), ("w", w)) if a is not None] + (
                 ["track"] if track is not True else []
             )
             if extra:
                 raise ValueError(f"{', '.join(extra)} given without x: the scene's balls come with their own")
-        x, v, w = given_balls(scene, x, v, w)
+        x, v, w = given_balls(scene, x, v, w, radius)
         given = x is not None or radius is not None or mass is not None
         self.initial = InitialBalls.copy_of(x, v, w, radius, mass, track) if given and keep_initial else None
         """The balls at t0 as given to the constructor (:meth:`reset` goes back to them), or ``None``
@@ -350,7 +351,8 @@ class Simulation:
         (3,) each: ``sim.x[i]``, ``sim.v[i]`` and ``sim.w[i]``, reading that ball's entries (and,
         for balls stored in the grid's order, where it is stored) rather than three whole arrays:
         a view of one ball among 100,000 reads it in 0.6 ms every frame, against 15 ms."""
-        if not isinstance(i, (int, np.integer)) or isinstance(i, bool) or not 0 <= i < self.n:
+        negative = isinstance(i, (int, np.integer)) and not isinstance(i, bool) and i < 0
+        if negative or not 0 <= whole_number(i, "ball") < self.n:  # (not a whole number: ValueError)
             raise IndexError(f"ball {i!r} is not one of the {self.n} balls (ids 0 … {self.n - 1})")
         p, state = self.state.index_of(int(i)), self.state
         x, v, w = (np.asarray(a[p], dtype=np.float64) for a in (state.x, state.v, state.w))
