@@ -381,6 +381,8 @@ def test_balls_given_where_no_contact_can_sort_them_out_are_refused():
     tg.Simulation("lab_vacuum", x=[[0, -0.01, 0]], radius=0.02)  # partly in the ground: pushed out (B.18)
     tg.Simulation(bin_scene, x=[[0, -5, 0], [1, -5, 0]])  # nothing solid: anywhere
     sim = tg.Simulation("lab_vacuum", x=[[0, 1, 0]], v=[[2000.0, 0, 0]])  # (a ball falls that fast in vacuum)
+    with pytest.raises(ValueError, match=r"v must be within ±2.99792e\+08 m/s on each axis, the speed of light"):
+        sim.v = [[1e300, 2.0, 3.0]]  # (its drag's step check said "world.dt must be at most 0 s")
     with pytest.raises(ValueError, match=r"x must be within ±1e\+06 m"):
         sim.x = [[3e6, 0.0, 0.0]]
     with pytest.raises(ValueError, match=r"x of balls \[0\] must be within ±1e\+06 m"):

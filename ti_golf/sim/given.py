@@ -39,11 +39,18 @@ def check_memory(scene: Scene) -> None:
     )
 
 
-VECTOR_LIMITS = {"x": (REACH, "m")}
-"""The bound on each axis of a ball's centre given as an array: the scene's own
-(:data:`ti_golf.scene.checks.REACH`), past which the grid's cell coordinates overflow. Velocities
-and spins have none beyond being finite: a ball falls past the scene files' 1000 m/s in vacuum,
-and a state from such a run may be given back."""
+SPEED_OF_LIGHT = 299_792_458.0
+"""[m/s]."""
+
+VECTOR_LIMITS = {
+    "x": (REACH, "m", "as in a scene file: past it the grid's cell coordinates overflow"),
+    "v": (SPEED_OF_LIGHT, "m/s", "the speed of light"),
+}
+"""The bound on each axis of a ball's centre and velocity given as arrays, and why. The centre's
+is the scene files' own (:data:`ti_golf.scene.checks.REACH`); the velocity's is not their
+1000 m/s, which a ball falls past in vacuum (and a state of such a run may be given back), but the
+speed of light, far short of the speeds whose drag overflows (1e300 m/s said "world.dt must be at
+most 0 s")."""
 
 
 def as_vectors(a: Any, name: str, n: int | None = None, bounded: bool = False) -> np.ndarray:
@@ -64,13 +71,12 @@ def as_vectors(a: Any, name: str, n: int | None = None, bounded: bool = False) -
         raise ValueError(f"{name} must have shape {want} (got {arr.shape})")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} holds NaN or infinite values")
-    limit, unit = VECTOR_LIMITS.get(name.split()[0], (math.inf, "")) if bounded else (math.inf, "")
+    limit, unit, why = VECTOR_LIMITS.get(name.split()[0], (math.inf, "", "")) if bounded else (math.inf, "", "")
     beyond = np.flatnonzero(np.any(np.abs(arr) > limit, axis=1))
     if beyond.size:
         i = int(beyond[0])
         raise ValueError(
-            f"{name} must be within ±{limit:g} {unit} on each axis, as in a scene file "
-            f"(got {arr[i].tolist()} for ball {i})"
+            f"{name} must be within ±{limit:g} {unit} on each axis, {why} (got {arr[i].tolist()} for ball {i})"
         )
     return arr
 
