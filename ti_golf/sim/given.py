@@ -55,7 +55,7 @@ most 0 s")."""
 
 def as_vectors(a: Any, name: str, n: int | None = None, bounded: bool = False) -> np.ndarray:
     """``a`` as N vectors of 3 finite numbers, (N, 3) (one vector (3,) for one ball), N >= 1 (or
-    ``n``), or a ValueError naming ``name``; ``bounded``: ``x``, ``v`` and ``w`` (the first word of
+    ``n``), or a ValueError naming ``name``; ``bounded``: ``x`` and ``v`` (the first word of
     ``name``) within :data:`VECTOR_LIMITS`, as given by a user (a saved run's balls may have gone
     past them)."""
     try:
