@@ -1305,6 +1305,8 @@ def test_progress_shows_the_larger_of_the_time_and_the_balls_finished(capsys):
 
 
 RESTING_BALL = """description = "one ball at rest on the ground"
+[ball]
+radius = 0.02134
 [[balls]]
 position = [0.0, 0.02134, 0.0]
 velocity = [0.0, 0.0, 0.0]

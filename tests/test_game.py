@@ -324,7 +324,7 @@ def test_the_readme_round_holes_in_three_strokes(capsys):
     shots = str(scenes_dir() / "golf_hole_round.txt")
     assert cli.main(["play", "golf_hole", "--seed", "3", "--shots", shots]) == 0
     text = capsys.readouterr().out
-    assert "carried 124.7 m (apex 21.5 m), went 131.8 m; the ball is 2.38 m from the hole." in text
+    assert "carried 125.8 m (apex 21.5 m), went 131.7 m; the ball is 2.34 m from the hole." in text
     assert text.rstrip().endswith("Holed in 3 strokes.")
 
 

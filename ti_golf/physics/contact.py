@@ -328,18 +328,20 @@ speed, and still count as turned back (:func:`plane_position`): f32 keeps about 
 
 
 @ti.func
-def plane_position(x, x_free, x1, v_free, v, radius, p, n, k_p, h):
-    """End-of-step position ``x1`` of a ball corrected for the plane (p, n̂).
+def plane_position(x, x_free, x1, v_free, v, radius, p, n, k_p, h, g):
+    """End-of-step position ``x1`` and velocity ``v`` of a ball corrected for the plane (p, n̂).
 
     ``x`` is the position at the start of the step, ``x_free``/``v_free`` the free-flight
     prediction, ``v`` the final velocity and ``x1`` the position so far (``x_free + h·(v − v_free)``
-    before the first plane). When the free flight crosses the plane and the plane pushed back, the
-    step is split at the time of impact (linear in the gaps) if the plane turned the ball back (v·n̂
-    ≥ 0, to :data:`SPLIT_ROUNDING`); a ball already touching, or one that the plane only slowed and
-    still approaches, moves at ``v`` for the whole step, x + h·v (the Gauss–Seidel sweeps close such
-    a contact's gap exactly within the step: the split would put it (1 − frac)·h·|v·n̂| into the
-    plane, and the free flight's own path, with RK4's ½·g·h², would leave it hovering above).
-    What still penetrates is projected out with k_p (B.18, m_red = 1).
+    before the first plane); ``g`` is gravity [m/s²]. When the free flight crosses the plane and the
+    plane pushed back, the step is split at the time of impact (linear in the gaps) if the plane
+    turned the ball back (v·n̂ ≥ 0, to :data:`SPLIT_ROUNDING`); a ball already touching, or one that
+    the plane only slowed and still approaches, moves at ``v`` for the whole step, x + h·v (the
+    Gauss–Seidel sweeps close such a contact's gap exactly within the step: the split would put it
+    (1 − frac)·h·|v·n̂| into the plane, and the free flight's own path, with RK4's ½·g·h², would
+    leave it hovering above). A ball that bounced (v·n̂ > 0) is also given the velocity and height
+    of the bounce at the time of impact (:func:`bounce_split`). What still penetrates is projected
+    out with k_p (B.18, m_red = 1). Returns (x1, v).
     """
     gap0 = (x - p).dot(n) - radius
     gap1 = (x_free - p).dot(n) - radius
@@ -348,11 +350,35 @@ def plane_position(x, x_free, x1, v_free, v, radius, p, n, k_p, h):
         frac = 0.0  # touching at the start, or only slowed: the impulse acts from the step's start
         if gap0 > 0.0 and v_n >= -SPLIT_ROUNDING * ti.abs(v_free_n):
             frac = gap0 / (gap0 - gap1)
-        x1 = x + frac * (x_free - x) + (1.0 - frac) * h * v
+        after = (1.0 - frac) * h  # the step's time after the impact [s]
+        at_impact = x + frac * (x_free - x)
+        x1 = at_impact + after * v
+        if frac > 0.0 and v_n > 0.0 and v_free_n < 0.0:  # a bounce within the step
+            v, rise = bounce_split(v, v_n, v_free_n, g.dot(n) * after, after, n)
+            x1 = at_impact + after * (v - v.dot(n) * n) + rise * n
     gap = (x1 - p).dot(n) - radius
     if gap < 0.0:
         x1 -= k_p * gap * n
-    return x1
+    return x1, v
+
+
+@ti.func
+def bounce_split(v, v_n, v_free_n, g_after, after, n):
+    """A bounce off a plane of normal n̂ split at the time of impact. The impulse gave the ball the
+    normal velocity v_n = e·|v_free·n̂| from the free flight's end velocity, which holds gravity's
+    pull g_after = (g·n̂)·after [m/s] over the time ``after`` [s] between the impact and the step's
+    end: at the impact the ball approached at v_free·n̂ − g_after, so it left at u = v_n + e·g_after,
+    and by the step's end it rose rise = after·(u + ½·g_after) and moves at u + g_after along n̂
+    (e = v_n/|v_free·n̂|: the restitution the impulse used). Without the split, the step would end
+    (1 + e)·|g_after| too fast along n̂, an error of first order in h that grows bounce by bounce. A
+    ball that falls back within the step ends on the plane, at rest along n̂. Returns (v, rise [m])."""
+    e = v_n / -v_free_n
+    u = ti.max(v_n + e * g_after, 0.0)
+    rise = after * (u + 0.5 * g_after)
+    v_end_n = u + g_after
+    if rise <= 0.0:
+        rise, v_end_n = 0.0, ti.max(v_end_n, 0.0)
+    return v + (v_end_n - v_n) * n, rise
 
 
 PRESSED = 2

@@ -223,11 +223,21 @@ def advance(
                     touching |= t
                 x1 = x_free + h * (v1 - v_free)
                 for p in range(model.plane_p.shape[0]):
-                    x1 = plane_position(
-                        xi, x_free, x1, v_free, v1, r, model.plane_p[p], model.plane_n[p], contact.k_p, h
+                    x1, v1 = plane_position(
+                        xi,
+                        x_free,
+                        x1,
+                        v_free,
+                        v1,
+                        r,
+                        model.plane_p[p],
+                        model.plane_n[p],
+                        contact.k_p,
+                        h,
+                        params.gravity,
                     )
                 if ti.static(kinds.terrain):
-                    x1 = plane_position(xi, x_free, x1, v_free, v1, r, pt, nt, contact.k_p, h)
+                    x1, v1 = plane_position(xi, x_free, x1, v_free, v1, r, pt, nt, contact.k_p, h, params.gravity)
                     x1 = terrain_position(xi, x1, pt, nt, r, model.heights, terrain)
                 xi, vi, wi = x1, v1, w1
                 t_step += dt

@@ -381,7 +381,7 @@ def finish(i, v_final, w_final, dx, touching, s: ti.template()):
     h = params.h
     st = state.status[i]
     xi, ri = state.x[i], of_ball(model.radius, i)
-    x1, touching = end_position(i, v_final, touching, s)
+    x1, v_final, touching = end_position(i, v_final, touching, s)
     if ti.static(not s.kinds.gauss_seidel):  # (Gauss–Seidel projects after the step: colour.project_sweep)
         x1 += dx  # position projection k_p·m_red·Δx·n̂ of the ball overlaps (B.18)
     if st == AT_REST and (v_final.norm() > 0.0 or w_final.norm() > 0.0):
@@ -413,10 +413,11 @@ def finish(i, v_final, w_final, dx, touching, s: ti.template()):
 def end_position(i, v_final, touching, s: ti.template()):
     """Ball i's position at the end of the step from its final velocity, split at the time of
     impact of each plane and of the terrain's patch that it reaches within the step (none beyond
-    reach: :func:`.surfaces.surface_clearance`): (the position [m], ``touching`` raised to 1 when
-    it ends within 1 % of its radius of one)."""
+    reach: :func:`.surfaces.surface_clearance`), as is the velocity of a bounce
+    (:func:`~ti_golf.physics.contact.plane_position`): (the position [m], the velocity [m/s],
+    ``touching`` raised to 1 when it ends within 1 % of its radius of one)."""
     contact, terrain, model, state, scratch = ti.static((s.contact, s.terrain, s.model, s.state, s.scratch))
-    h = s.params.h
+    h, g = s.params.h, s.params.gravity
     xi, ri = state.x[i], of_ball(model.radius, i)
     x_free, v_free = scratch.x_free[i], scratch.v_free[i]
     x1 = x_free + h * (v_final - v_free)
@@ -431,16 +432,16 @@ def end_position(i, v_final, touching, s: ti.template()):
     if far:
         n_planes = 0
     for p in range(n_planes):
-        x1 = plane_position(
-            xi, x_free, x1, v_free, v_final, ri, model.plane_p[p], model.plane_n[p], k_p=contact.k_p, h=h
+        x1, v_final = plane_position(
+            xi, x_free, x1, v_free, v_final, ri, model.plane_p[p], model.plane_n[p], contact.k_p, h, g
         )
         if (x1 - model.plane_p[p]).dot(model.plane_n[p]) - ri < TOUCHING_GAP * ri:
             touching = ti.max(touching, 1)
     if ti.static(s.kinds.terrain):
         if not far:
             pt, nt = surface(model.heights, terrain, x_free)
-            x1 = plane_position(xi, x_free, x1, v_free, v_final, ri, pt, nt, k_p=contact.k_p, h=h)
+            x1, v_final = plane_position(xi, x_free, x1, v_free, v_final, ri, pt, nt, contact.k_p, h, g)
             x1 = terrain_position(xi, x1, pt, nt, ri, model.heights, terrain)
             if (x1 - pt).dot(nt) - ri < TOUCHING_GAP * ri:
                 touching = ti.max(touching, 1)
-    return x1, touching
+    return x1, v_final, touching
