@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from ti_golf.scene.air import SPIN_DECAY_RHO
 from ti_golf.scene.schema import Scene
 
 
@@ -89,7 +90,7 @@ def derivatives(
             C_D, C_L = spin_ratio_coefficients(s)
         else:
             C_D, C_L = spin_reynolds_coefficients(scene, s, scene.air.rho * speed * 2.0 * R / scene.air.viscosity)
-            decay = scene.air.spin_decay * speed / R
+            decay = scene.air.spin_decay * (scene.air.rho / SPIN_DECAY_RHO) * speed / R
         drag = half_rho_A_over_m * C_D * speed
         lift = half_rho_A_over_m * C_L * speed / np.maximum(spin, 1e-12)
     dv = np.asarray(scene.world.gravity) - drag * v_rel + lift * np.cross(w, v_rel)

@@ -30,7 +30,7 @@ slows late in flight; and spin decays as Smits & Smith (1994) measured it (golf_
 
 * C_D = C_D0 + C_D1 S + C_D2 S² + ΔC_D / (1 + (Re/Re_c)⁴)        (``air.C_D_S``, ``C_D_crisis``, ``Re_crisis``)
 * C_L = C_L0 + C_L1 S + C_L2 S²                                  (``air.C_L_S``)
-* spin decay dω/dt = −λ |v_rel| ω / R                            (λ = ``air.spin_decay``)
+* spin decay dω/dt = −(ρ/ρ_λ)·λ |v_rel| ω / R                    (λ = ``air.spin_decay``, ρ_λ = 1.225 kg/m³)
 
 with S held within S_MIN–S_MAX and C_L in proportion to S below S_MIN, as for ``spin_ratio``
 (:func:`spin_reynolds_coefficients`). The coefficients' defaults are fitted to the PGA Tour
@@ -51,7 +51,7 @@ import taichi as ti
 
 from ti_golf import front_end
 from ti_golf.physics.types import AirParams, log, vec, vec3
-from ti_golf.scene.air import SPIN_RATIOS
+from ti_golf.scene.air import SPIN_DECAY_RHO, SPIN_RATIOS
 
 LAB, SPIN_RATIO, SPIN_REYNOLDS = 0, 1, 2
 AIR_MODEL_CODES = {"lab": LAB, "spin_ratio": SPIN_RATIO, "spin_reynolds": SPIN_REYNOLDS}
@@ -113,14 +113,14 @@ def air_params(air: Any, ground_height: float) -> Any:
 def coefficients(air, kinds: ti.template(), radius, mass):
     """(4, L) matrix of k_D/m, k_M/m, k_ω [1/m] and R [m] for lanes of radius [m] and mass [kg];
     with the spin-ratio models the first two rows are ½ρA/m, which :func:`rates` multiplies by
-    C_D and C_L/|ω|, and with ``spin_reynolds`` k_ω is λ/R."""
+    C_D and C_L/|ω|, and with ``spin_reynolds`` k_ω is (ρ/ρ_λ)·λ/R (``SPIN_DECAY_RHO``)."""
     half_rho_A = 0.5 * air.rho * math.pi * radius * radius
     c_D, c_M = air.C_D, air.C_M / air.omega_M
     k_omega = half_rho_A * air.C_omega / mass
     if ti.static(kinds.air_model != LAB):
         c_D, c_M = 1.0, 1.0
     if ti.static(kinds.air_model == SPIN_REYNOLDS):
-        k_omega = air.spin_decay / radius
+        k_omega = air.spin_decay / radius * (air.rho / SPIN_DECAY_RHO)
     return ti.Matrix.rows(
         [
             half_rho_A * c_D / mass,

@@ -32,6 +32,10 @@ SPIN_REYNOLDS_C_L = (0.0504, 1.2031, -1.3073)
 """Default ``air.C_L_S`` [C_L0, C_L1, C_L2] (``ti-golf fit-aero``)."""
 SPIN_REYNOLDS_CRISIS = (0.4668, 66500.0)
 """Default ``air.C_D_crisis`` and ``air.Re_crisis`` (``ti-golf fit-aero``)."""
+SPIN_DECAY_RHO = 1.225
+"""The air density [kg/m³] at which ``air.spin_decay``'s λ holds (Smits & Smith's sea-level air,
+and the ``tour_shot`` air the other coefficients were fitted in): the spin-down torque is an air
+force, so in air of density ρ the decay is dω/dt = −(ρ/SPIN_DECAY_RHO)·λ|v_rel|ω/R."""
 
 
 @dataclass(frozen=True)
@@ -121,7 +125,7 @@ class Air:
         "C_D(S) and C_L(S) of the spin ratio S = R|ω|/|v_rel| fitted to launch-monitor shots "
         "(Ferguson, McNally & McPhee 2022; C_D, C_M and omega_M unused; needs gamma = 2); "
         "spin_reynolds = C_D(S, Re) with a drag crisis and C_L(S), fitted to the PGA Tour averages, "
-        "and spin decay dω/dt = −λ|v_rel|ω/R (needs gamma = 2; see docs/real_shots.md)",
+        "and spin decay dω/dt = −(ρ/1.225)·λ|v_rel|ω/R (needs gamma = 2; see docs/real_shots.md)",
         OneOf(AIR_MODELS),
     )
     viscosity: float = key(
@@ -196,7 +200,8 @@ class Air:
         "float",
         2.0e-5,
         "-",
-        "spin-decay constant λ of dω/dt = −λ|v_rel|ω/R (Smits & Smith 1994: about 2e-5)",
+        "spin-decay constant λ of dω/dt = −(ρ/1.225)·λ|v_rel|ω/R, λ at sea-level density (Smits & Smith "
+        "1994: about 2e-5)",
         NON_NEGATIVE,
         read_when=("model", ("spin_reynolds",)),
     )

@@ -10,7 +10,7 @@ ball's start against the wind (|v| + |wind|) and, under gravity g, its terminal 
 v_t = √(g/(k/m)), which a falling ball reaches within about v_t/g: so h ≤ v_t/g at least.
 
 The spin decays as dω/dt = −r·ω (:mod:`ti_golf.physics.aero`) at the rate r = k_ω (γ = 1),
-k_ω(|v_rel| + R|ω|) (γ = 2) or λ|v_rel|/R (``spin_reynolds``), greatest at the start spin and at
+k_ω(|v_rel| + R|ω|) (γ = 2) or (ρ/1.225)·λ|v_rel|/R (``spin_reynolds``), greatest at the start spin and at
 the speed above. A step scales the spin by 1 − h·r, so it must keep h·r ≤ 1: beyond it a step turns
 the spin around (the Magnus force with it), beyond 2 it grows without bound.
 """
@@ -23,7 +23,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ti_golf.errors import ConfigError
-from ti_golf.scene.air import SPIN_RATIO_C_D, SPIN_RATIOS, quadratic_range
+from ti_golf.scene.air import SPIN_DECAY_RHO, SPIN_RATIO_C_D, SPIN_RATIOS, quadratic_range
 from ti_golf.scene.schema import Scene
 
 
@@ -58,7 +58,7 @@ def check_step(scene: Scene, radius: np.ndarray, mass: np.ndarray, v: np.ndarray
     spin = np.zeros_like(radius) if w is None else np.linalg.norm(w, axis=1)
     if a.model == "spin_reynolds":
         key, value = "air.spin_decay", a.spin_decay
-        rate = value * speed / radius
+        rate = value * (a.rho / SPIN_DECAY_RHO) * speed / radius
     else:
         key, value = "air.C_omega", a.C_omega
         k_omega = half_rho_A * value / mass
