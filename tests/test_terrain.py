@@ -259,6 +259,18 @@ def test_bounce_on_terrain_follows_restitution(integrator):
     assert y.min() >= -1e-12
 
 
+def test_the_putting_green_is_a_stimpmeter_10_green():
+    # A Stimpmeter releases a ball rolling at 1.83 m/s; on a green of Stimp 10 it rolls 10 ft
+    # (3.048 m) on the flat: a deceleration of 0.55 m/s². The scene says its green is one
+    # (μ_roll = 0.03 rolled it 5.58 m, Stimp 18); its terrain made flat, the ball rolls within 3 %.
+    sim = tg.Simulation.from_scene("putting_green", ["terrain.amplitude=0"])
+    R = sim.scene.ball.radius
+    x0 = np.array([-1.0, R, 0.0])
+    sim.x, sim.v, sim.w = [x0], [[1.83, 0.0, 0.0]], [[0.0, 0.0, -1.83 / R]]
+    sim.run(until="rest")
+    assert np.linalg.norm(sim.x[0] - x0) == pytest.approx(3.048, rel=0.03)
+
+
 INCLINE = math.radians(20.0)
 
 
