@@ -13,9 +13,11 @@ import io
 import math
 import re
 
+import numpy as np
 import pytest
 from conftest import ROOT
 
+import ti_golf as tg
 from ti_golf.cli import main
 from ti_golf.cli.figure import FIGURES
 
@@ -120,3 +122,16 @@ def test_figure_3_2_3_spin_decays_through_every_flight(tmp_path):
     for _, carry, _, flight, spin in rows:
         assert float(carry) > 50.0 and float(flight) > 3.0
         assert 0.0 < float(spin) < 0.2 * spin0  # C_ω = 1 takes most of the spin in flight
+    # the 40° row as one ball flown alone without a ground, sampled at every 1 ms step: its spin
+    # where it comes down through its launch height (its landing) and its apex above the launch.
+    # The table gave the spin of its last 10 ms sample before the landing (0.1 rad/s more) and the
+    # apex's height above the ground (R higher)
+    one = tg.Simulation.from_scene("lab_spin_decay", ["launch.angle_deg=40", "world.ground=false"])
+    y0 = one.x[0, 1]
+    rec = one.run(t=6.0, record_every=1).arrays()
+    y, spin_now = rec["traj_x"][:, 0, 1], np.linalg.norm(rec["traj_w"][:, 0], axis=1)
+    k = int(np.nonzero((y[1:] <= y0) & (y[:-1] > y0))[0][-1])  # the step that crosses the launch height
+    f = (y[k] - y0) / (y[k] - y[k + 1])
+    _, _, apex, _, spin = rows[3]
+    assert float(spin) == pytest.approx(spin_now[k] + f * (spin_now[k + 1] - spin_now[k]), abs=0.051)
+    assert float(apex) == pytest.approx(y.max() - y0, abs=0.0051)

@@ -71,18 +71,18 @@ def _nine_iron(path: str) -> None:
     a = rec.arrays()
     t, x, w = a["traj_t"], a["traj_x"], a["traj_w"]
     fl = sim.flight()
+    w_land = [_spin_at(fl.flight_time[i], t, np.linalg.norm(w[:, i], axis=1)) for i in range(n)]
     for i in range(n):  # each ball's curves end at its landing
         after = t > fl.flight_time[i]
         x[after, i] = np.nan
         w[after, i] = np.nan
     print(f"lab_spin_decay: {launch.speed * 3.6:.0f} km/h, {spin / RPM:.0f} rpm, C_omega = {scene.air.C_omega:g}")
     print(f"{'angle':>7} {'carry':>9} {'apex':>8} {'flight':>8} {'spin at landing':>16}")
+    apex = fl.apex - launch_position(scene)[1]  # (above the launch, as every other output gives it)
     for i, ang in enumerate(angles):
-        k = int(np.searchsorted(t, fl.flight_time[i])) - 1
-        w_land = float(np.linalg.norm(a["traj_w"][k, i]))
         print(
-            f"{ang:6.1f}° {fl.carry[i]:7.2f} m {fl.apex[i]:6.2f} m {fl.flight_time[i]:6.2f} s "
-            f"{w_land:8.1f} rad/s ({w_land / spin:.0%})"
+            f"{ang:6.1f}° {fl.carry[i]:7.2f} m {apex[i]:6.2f} m {fl.flight_time[i]:6.2f} s "
+            f"{w_land[i]:8.1f} rad/s ({w_land[i] / spin:.0%})"
         )
     plot_spin_family(
         [f"{ang:g}°" for ang in angles],
@@ -93,6 +93,18 @@ def _nine_iron(path: str) -> None:
         title=f"Figure 3.2-3: 9-iron, v0 = {launch.speed * 3.6:.0f} km/h, {spin / RPM:.0f} rpm backspin, turbulent drag, "
         f"Magnus and spin decay (C_ω = {scene.air.C_omega:g})",
     )
+
+
+def _spin_at(t_land: float, t: np.ndarray, spin: np.ndarray) -> float:
+    """|ω| [rad/s] at the landing time ``t_land`` [s] of a ball sampled at times ``t`` (T,) with
+    |ω| = ``spin`` (T,): carried on from the last sample in flight at the decay rate of the two
+    samples before (the flight's spin decays exponentially between samples; the sample after the
+    landing holds the bounce's friction)."""
+    k = int(np.searchsorted(t, t_land, side="right")) - 1  # the last sample at or before the landing
+    if k < 1:
+        return float(spin[max(k, 0)])
+    rate = np.log(spin[k - 1] / spin[k]) / (t[k] - t[k - 1])
+    return float(spin[k] * np.exp(-rate * (t_land - t[k])))
 
 
 # -- Figures 3.2-1, 3.2-6 and 3.2-7: a ball on a 2-D terrain ------------------------------------
