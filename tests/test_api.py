@@ -569,3 +569,51 @@ def test_the_golf_calls_take_what_the_command_line_takes_and_name_what_they_refu
     with pytest.raises(ValueError, match=re.escape("ball must be a whole number >= 0 (got 0.7)")):
         sim.ball(0.7)
     np.testing.assert_array_equal(sim.ball(np.int64(1))[0], sim.x[1])
+
+
+def test_a_run_whose_process_ignores_ctrl_c_takes_every_step():
+    # A process that ignores SIGINT (nohup, `trap '' INT`, a script's background job) must not
+    # stop its steps on one: the steps held the signal, stopped early, and raised it again under
+    # SIG_IGN, so nothing happened and the run counted steps it never took (t = 3.845 s of a
+    # --t 4 run, saved as whole). SIGINTs sent every 5 ms through 300 parallel collision steps
+    import signal
+    import threading
+
+    from ti_golf.solvers import CollisionSolver
+
+    sim = tg.Simulation.from_scene("break_shot")
+    sim.solver = CollisionSolver(sim.model, serial=False)  # (one launch a step: a held signal stops between steps)
+    sim.run(steps=2)  # (compiled)
+    done = threading.Event()
+
+    def pester() -> None:
+        while not done.wait(0.005):
+            os.kill(os.getpid(), signal.SIGINT)
+
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    sender = threading.Thread(target=pester)
+    try:
+        sender.start()
+        sim.run(steps=300)
+    finally:
+        done.set()
+        sender.join()
+        signal.signal(signal.SIGINT, previous)
+    assert round(sim.t / sim.dt) == 302
+
+
+def test_a_run_too_many_steps_long_is_refused_and_a_tiny_step_runs_in_bounded_calls(monkeypatch):
+    # world.dt = 1e-300 made `run --t 1` pass 1e300 steps to a kernel (a Taichi TypeError) and
+    # world.dt = 1e-11 a launch of 5e9 steps that Ctrl-C waited minutes for
+    from ti_golf.sim import simulation
+
+    with pytest.raises(tg.ConfigError, match=r"'world.dt' = 1e-300 s makes a run of 1 s 1e\+300 steps; at most 1e\+12"):
+        tg.Simulation.from_scene("lab_vacuum", ["world.dt=1e-300"]).run(t=1.0)
+    with pytest.raises(ValueError, match=r"steps must be at most 1e\+12"):
+        tg.Simulation.from_scene("lab_vacuum", ["world.dt=1e-20"]).run(steps=2 * 10**12)
+    calls = []
+    sim = tg.Simulation.from_scene("lab_vacuum", ["world.dt=1e-9"])
+    real = simulation.kernels.advance
+    monkeypatch.setattr(simulation.kernels, "advance", lambda *a: calls.append(a[3]) or real(*a))
+    sim.run(t=5e-4)
+    assert calls == [simulation.STEPS_PER_CALL] * 5 and round(sim.t / sim.dt) == 500_000

@@ -436,6 +436,22 @@ def test_a_value_given_with_set_is_blamed_on_set_not_on_the_scene_file():
         assert code == 2 and err.strip().splitlines()[-1].startswith(f"ti-golf: error: --set: key '{key}' {said}"), err
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [["run", "lab_vacuum", "--t", "1"], ["render", "lab_vacuum", "--t", "1", "--out", "r.png"]],
+    ids=["run", "render"],
+)
+def test_a_run_of_more_steps_than_days_hold_is_refused(argv, tmp_path, monkeypatch):
+    # run and render passed 1e300 steps of world.dt = 1e-300 s to a kernel: a Taichi TypeError and
+    # exit code 1 (the simulation's own check, so not through run_cli's shortened runs)
+    monkeypatch.chdir(tmp_path)
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        code = main([*argv, "--set", "world.dt=1e-300"])
+    last = err.getvalue().strip().splitlines()[-1]
+    assert code == 2 and last.startswith("ti-golf: error: --set: key 'world.dt' = 1e-300 s makes a run of 1 s"), last
+
+
 def test_the_keys_and_options_refused_without_effect_pass_where_they_act(tmp_path):
     # the same keys and options as above, given where they change the outcome, run
     out = str(tmp_path / "out")

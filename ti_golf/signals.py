@@ -25,8 +25,8 @@ def whole_steps(note: str | None = None) -> Iterator[list[int]]:
     (with the handlers restored: Ctrl-C then raises ``KeyboardInterrupt`` after the last whole
     step). The block gets the list of the signals held so far, to stop early between its steps
     when one came; a block that clears it drops them. ``note``: a line written to stderr when the
-    first signal is held (what the program finishes before it stops). Outside the main thread,
-    where Python runs no signal handler, it holds nothing."""
+    first signal is held (what the program finishes before it stops). A signal the process ignores
+    stays ignored. Outside the main thread, where Python runs no signal handler, it holds nothing."""
     came: list[int] = []
     if threading.current_thread() is not threading.main_thread():
         yield came
@@ -37,7 +37,9 @@ def whole_steps(note: str | None = None) -> Iterator[list[int]]:
             print(f"ti-golf: {note}", file=sys.stderr, flush=True)
         came.append(signum)
 
-    previous = {s: signal.signal(s, hold) for s in HELD}
+    # a signal the process ignores (``nohup``, ``trap '' INT``, a background job of a script) stays
+    # ignored: held, it would stop the steps early while the run went on as if they were all taken
+    previous = {s: signal.signal(s, hold) for s in HELD if signal.getsignal(s) is not signal.SIG_IGN}
     try:
         yield came
     finally:

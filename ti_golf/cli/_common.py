@@ -190,12 +190,16 @@ def refuse_unread_keys(overrides: list[str] | None, command: str, unread: Mappin
 
 def check_steps_span(steps: int | None, dt: float) -> None:
     """``--steps`` within :data:`~ti_golf.scene.checks.TIME_LIMIT` of simulated time at step ``dt``
-    [s], or a ConfigError saying how many steps that is (past it a step no longer moves the clock)."""
+    [s] (past it a step no longer moves the clock) and at most
+    :data:`~ti_golf.sim.given.RUN_STEPS_MAX`, or a ConfigError saying how many steps that is."""
     from ti_golf.scene.checks import TIME_LIMIT
+    from ti_golf.sim.given import RUN_STEPS_MAX
 
     if steps is not None and steps * dt > TIME_LIMIT:
         limit = f"{TIME_LIMIT / dt:.3g} steps of {dt:g} s ({TIME_LIMIT:g} s; got {steps})"
         raise ConfigError("--steps", None, f"must be at most {limit}")
+    if steps is not None and steps > RUN_STEPS_MAX:
+        raise ConfigError("--steps", None, f"must be at most {RUN_STEPS_MAX:.0e}, which would take days (got {steps})")
 
 
 def set_key(text: str) -> str:

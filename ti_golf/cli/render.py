@@ -24,6 +24,7 @@ from ti_golf.errors import ConfigError
 from ti_golf.render import BACKENDS, CAMERAS, COLOR_BY, render
 from ti_golf.scene.checks import TIME_LIMIT
 from ti_golf.scene.readers import STILL_NOT_READ
+from ti_golf.sim.given import steps_to_run
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -85,7 +86,7 @@ def cmd_render(args: argparse.Namespace) -> int:
         steps = args.steps
     else:  # default: the initial state, or up to world.t_end with --until
         duration = args.t if args.t is not None else (sim.scene.world.t_end if args.until else 0.0)
-        steps = int(math.ceil(duration / sim.dt - 1e-9))
+        steps = steps_to_run(duration, None, sim.dt, sim.scene.world.t_end, sim.scene)
     if steps == 0 and args.resume and args.overrides:  # (a saved run takes only keys that act on its next steps)
         raise ConfigError("--set", None, "has no effect on a saved run drawn as it is: give --t, --steps or --until")
     if steps == 0 and args.trails:  # (nothing is simulated: no path to draw)

@@ -107,17 +107,31 @@ def per_ball(a: Any, n: int, name: str) -> np.ndarray:
     return arr
 
 
-def steps_to_run(t: Any, steps: Any, dt: float, t_end: float) -> int:
+STEPS_PER_CALL = 100_000
+"""The most steps a run takes in one call of ``Simulation.step`` (one kernel launch, for balls
+without collisions): Ctrl-C and SIGTERM are heard between calls, so with a step of 1e-11 s a run
+still stops within a fraction of a second (a launch of a run's check interval of steps, 5e9, ran
+for minutes). With steps of 0.5 µs or more no run reaches it."""
+
+RUN_STEPS_MAX = 10**12
+"""The most steps one run may take: a ball's step costs some 0.1 µs at best, so more would run for
+days (a tiny ``world.dt`` is the likely cause)."""
+
+
+def steps_to_run(t: Any, steps: Any, dt: float, t_end: float, scene: Scene) -> int:
     """The steps of ``dt`` [s] that a run of ``t`` seconds or ``steps`` steps takes (neither given:
     ``t_end`` [s]), each checked: a number of seconds >= 0 or a whole number of steps, and at most
     :data:`~ti_golf.scene.checks.TIME_LIMIT` of simulated time (past it a step no longer moves the
-    time on)."""
+    time on); more than :data:`RUN_STEPS_MAX` steps is a ConfigError naming ``scene``'s
+    ``world.dt``."""
     if t is not None and steps is not None:
         raise ValueError("give t or steps, not both")
     if steps is not None:
         steps = whole_number(steps, "steps")
         if steps * dt > TIME_LIMIT:
             raise ValueError(f"steps must be at most {TIME_LIMIT / dt:.3g}, {TIME_LIMIT:g} s of steps (got {steps})")
+        if steps > RUN_STEPS_MAX:
+            raise ValueError(f"steps must be at most {RUN_STEPS_MAX:.0e}, which would take days (got {steps})")
         return steps
     if t is not None and not (
         isinstance(t, (int, float, np.integer, np.floating)) and not isinstance(t, bool) and t >= 0
@@ -126,6 +140,12 @@ def steps_to_run(t: Any, steps: Any, dt: float, t_end: float) -> int:
     duration = t_end if t is None else float(t)
     if not (math.isfinite(duration) and duration <= TIME_LIMIT):
         raise ValueError(f"t must be at most {TIME_LIMIT:g} s (got {t!r})")
+    if duration / dt > RUN_STEPS_MAX:
+        raise ConfigError(
+            *scene.where("world.dt"),
+            f"= {dt:g} s makes a run of {duration:g} s {duration / dt:.3g} steps; at most {RUN_STEPS_MAX:.0e}, which "
+            "would take days: a longer step or a shorter run",
+        )
     return int(math.ceil(duration / dt - 1e-9))
 
 

@@ -38,6 +38,7 @@ from ti_golf.sim.changes import (
 )
 from ti_golf.sim.flight_record import launch_again
 from ti_golf.sim.given import (
+    STEPS_PER_CALL,
     as_vectors,
     check_memory,
     copied,
@@ -464,18 +465,21 @@ class Simulation:
             self.solver.advance(m, s, int(n))
             self.check_finite()
             return
-        with whole_steps():  # the kernel, then t and the step count, or none of them
-            kernels.advance(
-                self._packs.step_scalars(m),
-                s.t,
-                m.dt,
-                int(n),
-                m.kinds,
-                self._packs.model(m),
-                self._packs.state(s),
-                self._packs.flight(s),
-            )
-            s.advance_clock(m.dt, n)
+        with whole_steps() as came:  # each launch, then t and the step count, or none of them
+            while n > 0 and not came:  # (launches of at most STEPS_PER_CALL: Ctrl-C stops between them)
+                k = min(n, STEPS_PER_CALL)
+                kernels.advance(
+                    self._packs.step_scalars(m),
+                    s.t,
+                    m.dt,
+                    k,
+                    m.kinds,
+                    self._packs.model(m),
+                    self._packs.state(s),
+                    self._packs.flight(s),
+                )
+                s.advance_clock(m.dt, k)
+                n -= k
         self.check_finite()
 
     def check_finite(self) -> None:
@@ -519,7 +523,7 @@ class Simulation:
         """
         if until not in (None, "rest", "landed"):
             raise ValueError(f"until must be None, 'rest' or 'landed' (got {until!r})")
-        steps = steps_to_run(t, steps, self.dt, self.scene.world.t_end)
+        steps = steps_to_run(t, steps, self.dt, self.scene.world.t_end, self.scene)
         record_every, every = whole_number(record_every, "record_every"), whole_number(every, "every")
         if every and on_every is None or on_every is not None and not every:
             raise ValueError("every and on_every go together: on_every(sim) is called every `every` steps")
@@ -534,6 +538,7 @@ class Simulation:
             # a launch runs to the next step that records, calls on_every or checks: the steps at
             # which a run with `until` may stop do not depend on what it records
             k = min(steps, *((done // c + 1) * c for c in (record_every, every, check) if c)) - done
+            k = min(k, STEPS_PER_CALL)  # (a tiny step: Ctrl-C is heard between calls)
             self.step(k)
             done += k
             if record_every and done % record_every == 0:
