@@ -752,11 +752,24 @@ def test_a_plane_normal_too_small_or_too_large_to_square_is_still_its_direction(
     assert ti_golf.load_scene(path).planes[0].normal == (0.0, 1.0, 0.0)
 
 
-def test_a_heights_file_that_is_empty_or_too_high_is_refused(tmp_path):
-    empty, high = tmp_path / "empty.npy", tmp_path / "high.npy"
+def test_a_heights_file_that_is_empty_too_high_or_too_large_is_refused(tmp_path):
+    # a header that claims 200,000 x 200,000 heights had numpy allocate 298 GiB (a MemoryError
+    # traceback); the header is now checked against the file, and the points against the limit
+    empty, high, lying, large = (tmp_path / f"{name}.npy" for name in ("empty", "high", "lying", "large"))
     empty.write_bytes(b"")
     np.save(high, np.full((4, 4), 1e308))
-    for path, fragment in ((empty, "cannot be read as a .npy array (No data left in file)"), (high, "beyond ±10000 m")):
+    with open(lying, "wb") as fh:
+        np.lib.format.write_array_header_1_0(fh, {"descr": "<f8", "fortran_order": False, "shape": (200_000, 200_000)})
+        fh.write(b"\0" * 800)
+    with open(large, "wb") as fh:  # (as long as its header says, but sparse: nothing written)
+        np.lib.format.write_array_header_1_0(fh, {"descr": "<f4", "fortran_order": False, "shape": (8, 6_250_001)})
+        fh.truncate(fh.tell() + 8 * 6_250_001 * 4)
+    for path, fragment in (
+        (empty, "cannot be read as a .npy array ("),
+        (high, "beyond ±10000 m"),
+        (lying, "cannot be read as a .npy array (mmap length is greater than file size)"),
+        (large, "holds 50,000,008 points; at most 50,000,000"),
+    ):
         text = f'[terrain]\nkind = "file"\nfile = "{path.name}"\nsize = [10, 10]\n'
         with pytest.raises(ConfigError) as info:
             ti_golf.load_scene(write_scene(tmp_path, text))

@@ -85,6 +85,10 @@ HEIGHT_LIMIT = 10_000.0
 """The largest height [m] of a terrain, above or below 0 (generated amplitudes and the heights of a
 file): 10 km, past any golf course, so that the slopes and normals stay finite numbers."""
 
+TERRAIN_POINTS_MAX = 50_000_000
+"""The most grid points a terrain may have, generated or read from a file (400 MB of heights in
+f64)."""
+
 SLOPE_LIMIT = 100.0
 """The steepest tilt (dh/dx, dh/dz) of ``terrain.slope``: 89.4°."""
 
@@ -294,7 +298,7 @@ class TerrainConfig:
         (129, 129),
         "-",
         "grid points [nx, nz] of generated terrain",
-        WholeCounts(2, 2, 50_000_000, "points"),
+        WholeCounts(2, 2, TERRAIN_POINTS_MAX, "points"),
         read_when=("kind", ("generated",)),
     )
     seed: int = key(

@@ -28,7 +28,7 @@ from functools import lru_cache
 import numpy as np
 
 from ti_golf.scene.checks import raise_config
-from ti_golf.scene.schema import HEIGHT_LIMIT, TerrainConfig
+from ti_golf.scene.schema import HEIGHT_LIMIT, TERRAIN_POINTS_MAX, TerrainConfig
 
 
 @dataclass(frozen=True)
@@ -115,8 +115,8 @@ def load_heights_file(path: str | os.PathLike[str], source: str = "") -> np.ndar
         raise_config(source, key, f"is a directory, not a .npy file: {p}")
     if not os.path.isfile(p):  # (a FIFO or a device: reading it could wait for ever)
         raise_config(source, key, f"is not a regular file: {p}")
-    try:
-        a = np.load(p, allow_pickle=False)
+    try:  # (mapped: the header's shape is checked against the file before anything is read)
+        a = np.load(p, mmap_mode="r", allow_pickle=False)
     except (OSError, ValueError, EOFError) as exc:  # (EOFError: an empty file)
         raise_config(source, key, f"cannot be read as a .npy array ({exc or 'empty file'}): {p}")
     if not isinstance(a, np.ndarray) or a.dtype.kind not in "iuf":
@@ -127,6 +127,9 @@ def load_heights_file(path: str | os.PathLike[str], source: str = "") -> np.ndar
         raise_config(
             source, key, f"must hold a 2-D array (nx, nz) of heights with nx, nz >= 2 (got shape {a.shape}): {p}"
         )
+    if a.size > TERRAIN_POINTS_MAX:
+        raise_config(source, key, f"holds {a.size:,} points; at most {TERRAIN_POINTS_MAX:,}: {p}")
+    a = np.array(a)  # (read, and the file let go)
     if not np.all(np.isfinite(a)):
         raise_config(
             source, key, f"holds NaN or infinite heights ({int(np.count_nonzero(~np.isfinite(a)))} of them): {p}"
