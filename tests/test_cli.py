@@ -1556,3 +1556,18 @@ def test_a_ctrl_c_while_the_commands_modules_are_imported_ends_in_one_line(monke
     monkeypatch.setattr(cli_main, "build_parser", interrupted)
     assert cli_main.main(["play", "golf_hole"]) == 130
     assert capsys.readouterr().err == "ti-golf: interrupted\n"
+
+
+def test_a_full_disk_names_the_output_it_could_not_write(tmp_path):
+    # numpy's writes raise ENOSPC naming no file: `ti-golf: error: No space left on device`
+    # said nothing of which output it was (the temporary file beside it is removed, as before)
+    import errno
+
+    from ti_golf.files import atomic_path
+
+    target = tmp_path / "a.npz"
+    with pytest.raises(OSError) as info, atomic_path(target) as tmp:
+        tmp.write_bytes(b"half")
+        raise OSError(errno.ENOSPC, "No space left on device")
+    assert (info.value.errno, info.value.filename) == (errno.ENOSPC, str(target))
+    assert list(tmp_path.iterdir()) == []

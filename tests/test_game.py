@@ -533,3 +533,13 @@ def test_enter_at_the_direction_prompt_aims_as_hole_does(green_file, tmp_path, c
         assert "Enter: at the hole, -7.0]" in capsys.readouterr().out
         rounds.append(out.read_text())
     assert rounds[0] == rounds[1] and ",-7.03" in rounds[0]  # (the stroke's direction_deg, to its digits)
+
+
+def test_a_round_s_csv_may_not_replace_the_shots_it_plays(tmp_path, monkeypatch, capsys):
+    # `play --shots r.csv --out r.csv` replaced the user's strokes with the round's CSV, silently
+    monkeypatch.chdir(tmp_path)
+    strokes = "hole 160 20 6000\n"
+    (tmp_path / "r.csv").write_text(strokes)
+    assert cli.main(["play", "golf_hole", "--seed", "3", "--shots", "r.csv", "--out", "./r.csv"]) == 2
+    assert "--out: is the --shots file './r.csv'" in capsys.readouterr().err
+    assert (tmp_path / "r.csv").read_text() == strokes

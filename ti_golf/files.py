@@ -14,7 +14,8 @@ from ti_golf.errors import ConfigError
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """A temporary path beside ``path`` to write to; renamed onto ``path`` when the block ends
-    without an error, removed otherwise, so ``path`` is never left half-written."""
+    without an error, removed otherwise, so ``path`` is never left half-written. An OSError that
+    names no file, or only the temporary one (a full disk), is raised again naming ``path``."""
     target = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix, dir=target.parent or ".")
     os.close(fd)
@@ -22,9 +23,11 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         yield Path(tmp)
         os.chmod(tmp, 0o666 & ~_umask())  # as a file opened for writing gets, not mkstemp's 0600
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and exc.errno is not None and exc.filename in (None, tmp, Path(tmp)):
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
         raise
 
 

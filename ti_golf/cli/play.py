@@ -97,6 +97,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def cmd_play(args: argparse.Namespace) -> int:
     """Play a round of ``args.scene``; 0 when it ends (holed, out of bounds, no strokes or input left)."""
     check_writable(args.out, "--out", (".csv",))
+    if args.out and args.shots and Path(shots_file(args.shots)).resolve() == Path(args.out).resolve():
+        raise ConfigError("--out", None, f"is the --shots file {args.out!r}: the round's CSV would replace its strokes")
     check_plot(args.plot)
     seed = args.seed if args.seed is not None else secrets.randbelow(2**31)  # (said, so a round can be played again)
     refuse_unread_keys(args.overrides, "play", GAME_UNREAD)
