@@ -580,6 +580,19 @@ def test_tasks_that_ask_for_a_gpu_go_to_the_worker_that_has_one(tmp_path):
 GOOD_ROW = {"id": "a1", "carry_m": 150.5, "status": "ok", "error": "", "wall_s": 1.5, "host": "h", "run_path": ""}
 
 
+def test_a_manifest_row_without_one_of_its_figures_runs_again(tmp_path):
+    # a row whose figure was deleted counted as finished: the results table had an empty cell
+    from ti_golf.study.results import MANIFEST, Manifest
+
+    row = {**GOOD_ROW, "carry_m[PGA Driver]": 250.0}
+    (tmp_path / MANIFEST).write_text(json.dumps(row) + "\n")
+    manifest = Manifest(tmp_path)
+    assert manifest.finished("a1", ("carry",)) and not manifest.finished("a1", ("carry", "apex"))
+    del row["carry_m"], row["carry_m[PGA Driver]"]
+    (tmp_path / MANIFEST).write_text(json.dumps(row) + "\n")
+    assert not Manifest(tmp_path).finished("a1", ("carry",)) and Manifest(tmp_path).finished("a1")
+
+
 @pytest.mark.parametrize(
     "line, problem",
     [
@@ -589,6 +602,8 @@ GOOD_ROW = {"id": "a1", "carry_m": 150.5, "status": "ok", "error": "", "wall_s":
         (json.dumps({**GOOD_ROW, "wall_s": True}), "task a1: 'wall_s' must be a number (got True)"),
         (json.dumps({**GOOD_ROW, "host": 3}), "task a1: 'host' must be text (got 3)"),
         ("garbage {{{", "is not a task's row (not JSON: Expecting value)"),  # (was skipped as if cut short)
+        # (an entry no task writes became a column of the results table)
+        (json.dumps({**GOOD_ROW, "bogus": 1}), "task a1: 'bogus' is neither a figure nor the task's bookkeeping"),
     ],
 )
 def test_a_manifest_edited_into_something_else_is_one_error_naming_its_line(tmp_path, line, problem):
@@ -614,6 +629,7 @@ def test_a_manifest_edited_into_something_else_is_one_error_naming_its_line(tmp_
         (["--address", "zzz"], {}, "--address: no Dask scheduler reached through the address 'zzz' (ValueError: "),
         ([], {"TI_GOLF_SCHEDULER": "zzz"}, "TI_GOLF_SCHEDULER: no Dask scheduler reached through the address 'zzz'"),
         (["--address", "EMPTY.json"], {}, "holds no scheduler's address (JSON with an 'address')"),
+        (["--address", "NUMBER.json"], {}, "holds no scheduler's address (JSON with an 'address')"),  # (a TypeError)
         (["--workers", "100000"], {}, "--workers: must be a whole number in [1, "),
         (["--gpus", "1"], {}, "--gpus: has no effect: the tasks of flight ask for no GPU"),  # (it ran, exit 0)
         # (found only after every task had run)
@@ -628,6 +644,7 @@ def test_a_bad_scheduler_address_or_worker_count_is_one_error(tmp_path, options,
     # a malformed address ended in distributed's traceback; 100,000 local workers were started
     spec = write(tmp_path, "flight.toml", FLIGHT_STUDY)
     (tmp_path / "EMPTY.json").write_text("")
+    (tmp_path / "NUMBER.json").write_text('{"address": 5}')
     options = [str(tmp_path / o) if o.endswith(".json") else o for o in options]
     proc = run_cli("study", str(spec), "--out", str(tmp_path / "out"), *options, env=env)
     assert proc.returncode == 2, proc.stderr

@@ -111,7 +111,8 @@ def study_client(
             if not Path(address).is_file():
                 raise ConfigError(given, None, f"scheduler file {address!r} not found")
             try:
-                json.loads(Path(address).read_text(encoding="utf-8"))["address"]
+                if not isinstance(json.loads(Path(address).read_text(encoding="utf-8"))["address"], str):
+                    raise TypeError("an address is a text")  # (5 failed inside Dask's client: a traceback)
             except (OSError, ValueError, KeyError, TypeError):
                 raise ConfigError(
                     given, None, f"scheduler file {address!r} holds no scheduler's address (JSON with an 'address')"

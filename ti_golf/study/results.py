@@ -23,6 +23,7 @@ from typing import Any
 
 from ti_golf.errors import ConfigError
 from ti_golf.files import atomic_path
+from ti_golf.study.figures import FIGURES
 
 MANIFEST = "manifest.jsonl"
 TABLE_PARQUET = "results.parquet"
@@ -69,11 +70,15 @@ class Manifest:
                 raise ConfigError(f"{self.path}:{number}", None, f"{problem}; {_REDO}")
             self.rows[row["id"]] = row
 
-    def finished(self, task_id: str) -> bool:
-        """Whether the task has a row that says ``ok`` and its saved run, if it made one, is still
-        in the folder whole (a zip archive whose directory can be read; else the task runs again)."""
+    def finished(self, task_id: str, figures: Sequence[str] = ()) -> bool:
+        """Whether the task has a row that says ``ok``, holds each of its ``figures`` (names of
+        :data:`~ti_golf.study.figures.FIGURES`; a row without one runs again), and whose saved run,
+        if it made one, is still in the folder whole (a zip archive whose directory can be read;
+        else the task runs again)."""
         row = self.rows.get(task_id, {})
         if row.get("status") != "ok":
+            return False
+        if not all(any(_of_figure(name, FIGURES[f].column) for name in row) for f in figures):
             return False
         return not row.get("run_path") or zipfile.is_zipfile(self.path.parent / row["run_path"])
 
@@ -99,12 +104,20 @@ def _row_problem(row: Any) -> str | None:
     if row.get("status") not in ("ok", "failed"):
         return f"task {row['id']}: 'status' must be 'ok' or 'failed' (got {row.get('status')!r})"
     for name, value in row.items():
+        if name not in ("id", *BOOKKEEPING) and not any(_of_figure(name, f.column) for f in FIGURES.values()):
+            return f"task {row['id']}: {name!r} is neither a figure nor the task's bookkeeping"
         if name == "wall_s" or name not in ("id", *BOOKKEEPING):
             if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))):
                 return f"task {row['id']}: {name!r} must be a number (got {value!r})"
         elif name != "id" and value is not None and not isinstance(value, str):
             return f"task {row['id']}: {name!r} must be text (got {value!r})"
     return None
+
+
+def _of_figure(name: str, column: str) -> bool:
+    """Whether a row's entry ``name`` is a figure's ``column``, or one of its columns per club
+    (``carry_m[PGA Driver]``)."""
+    return name == column or name.startswith(column + "[") and name.endswith("]")
 
 
 def _plain(value: Any) -> Any:

@@ -72,7 +72,7 @@ def run_study(
     if folder.exists() and not folder.is_dir():
         raise ConfigError("out", None, f"{str(folder)!r} is a file, not a folder")
     manifest = Manifest(folder)
-    todo = [t for t in spec.tasks if not manifest.finished(t.id)]
+    todo = [t for t in spec.tasks if not manifest.finished(t.id, t.figures)]
     result = StudyResult(spec, folder, skipped=len(spec.tasks) - len(todo))
     if result.skipped:
         log(f"{spec.name}: {result.skipped} of {len(spec.tasks)} tasks finished before (in {folder}), skipped")
