@@ -617,3 +617,14 @@ def test_a_run_too_many_steps_long_is_refused_and_a_tiny_step_runs_in_bounded_ca
     monkeypatch.setattr(simulation.kernels, "advance", lambda *a: calls.append(a[3]) or real(*a))
     sim.run(t=5e-4)
     assert calls == [simulation.STEPS_PER_CALL] * 5 and round(sim.t / sim.dt) == 500_000
+
+
+def test_a_run_saved_under_another_suffix_or_no_name_is_refused(tmp_path):
+    # save("x.txt") wrote x.txt.npz, which load("x.txt") then did not find; save("") called the
+    # empty name a folder
+    sim = tg.Simulation.from_scene("lab_vacuum")
+    with pytest.raises(ValueError, match=r"'.*x.txt': a saved run is an .npz file; end its name in .npz"):
+        sim.save(tmp_path / "x.txt")
+    with pytest.raises(ValueError, match="it needs a file name"):
+        sim.save("")
+    assert list(tmp_path.iterdir()) == []

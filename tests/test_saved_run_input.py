@@ -168,6 +168,12 @@ CASES = {
     "steps negative": (lambda d, m: m.update(steps=-3), "run", "'steps' is -3; expects a whole number >= 0"),
     "tracking as text": (lambda d, m: m.update(tracking="yes"), "run", "'tracking' is 'yes'; expects true or false"),
     "no scene": (lambda d, m: m.pop("scene"), "run", "'scene' is missing"),
+    # (the advice named '--precision f16', which is no choice)
+    "precision f16": (
+        lambda d, m: m.update(precision="f16"),
+        "run",
+        "key 'precision' must be one of f32, f64 (got 'f16')",
+    ),
     "a bad scene key": (
         lambda d, m: m["scene"]["world"].update(dt=-1.0),
         "run",

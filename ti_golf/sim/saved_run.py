@@ -30,7 +30,7 @@ from ti_golf.files import atomic_path
 from ti_golf.physics.integrate import NOT_TRACKED
 from ti_golf.physics.model import Model
 from ti_golf.physics.state import State
-from ti_golf.runtime import ensure_init, np_float, on_cpu
+from ti_golf.runtime import PRECISIONS, ensure_init, np_float, on_cpu
 from ti_golf.scene.document import scene_document
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene
@@ -57,7 +57,8 @@ INITIAL = ("x", "v", "w", "radius", "mass", "track")
 
 def write_run(sim: Any, path: str | os.PathLike[str], recording: Any, partial: bool) -> None:
     """Write the :class:`~ti_golf.sim.simulation.Simulation` ``sim`` to ``path`` (``.npz`` added
-    when missing) as the module says, with its ``Recording`` (or ``None``)."""
+    to a name without a suffix; another suffix is a ValueError) as the module says, with its
+    ``Recording`` (or ``None``)."""
     state = sim.state
     data: dict[str, Any] = {
         "x": sim.x,
@@ -109,8 +110,12 @@ def write_run(sim: Any, path: str | os.PathLike[str], recording: Any, partial: b
     }
     data["run"] = np.array(json.dumps(meta))
     target = Path(path)
+    if not str(path).strip():
+        raise ValueError("cannot save the run: it needs a file name (got an empty path)")
     if target.is_dir():
         raise ValueError(f"cannot save the run to {str(path)!r}: it is a folder; give a file name")
+    if target.suffix and target.suffix != ".npz":  # (x.txt was saved as x.txt.npz, which load("x.txt") did not find)
+        raise ValueError(f"cannot save the run to {str(path)!r}: a saved run is an .npz file; end its name in .npz")
     if target.suffix != ".npz":
         target = target.with_name(target.name + ".npz")  # as np.savez names it
     if not target.resolve().parent.is_dir():
@@ -182,6 +187,10 @@ def read_run(path: str | os.PathLike[str]) -> SavedRun:
         source += ".npz"  # (as save() names it: .npz added to a path without it)
     data, meta = _read(source)
     precision = ensure_init().precision
+    if meta["precision"] not in PRECISIONS:  # (an edited file: no option continues it)
+        raise ConfigError(
+            f"{source}: entry 'run'", "precision", f"must be one of {', '.join(PRECISIONS)} (got {meta['precision']!r})"
+        )
     if meta["precision"] != precision:
         raise ConfigError(
             source,
