@@ -1138,6 +1138,25 @@ def test_an_interrupted_sweep_keeps_its_results(tmp_path, capsys, monkeypatch):
     assert signal.getsignal(signal.SIGTERM) == before  # the handlers are put back
 
 
+def test_an_interrupted_dispersion_without_a_roll_out_keeps_its_shots(tmp_path, capsys, monkeypatch):
+    # the shots' flights are one kernel launch: a Ctrl-C during them waited for the launch to end,
+    # then threw its shots away (no --out written); they are kept, as a sweep's are
+    from ti_golf.cli import dispersion as dispersion_command
+
+    real = dispersion_command.dispersion
+
+    def interrupted(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)  # arrives while the shots fly
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(dispersion_command, "dispersion", interrupted)
+    out = tmp_path / "d.csv"
+    assert main(["dispersion", "tour_shot", "--n", "20", "--no-roll", "--out", str(out)]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("ti-golf: interrupted during the shots' flights") and str(out) in err[-1], err
+    assert len(out.read_text().splitlines()) >= 1 + 20  # the header (and notes) and the twenty shots
+
+
 @pytest.mark.slow
 @ON_VULKAN
 def test_an_interrupted_render_draws_the_state_it_reached(tmp_path):

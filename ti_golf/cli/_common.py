@@ -482,8 +482,9 @@ class HeldInterrupt:
         self.requested = True
 
     def __enter__(self) -> HeldInterrupt:
-        if threading.current_thread() is threading.main_thread():
-            self._previous = {s: signal.signal(s, self._hold) for s in self.SIGNALS}
+        if threading.current_thread() is threading.main_thread():  # (a signal the process ignores stays ignored)
+            held = [s for s in self.SIGNALS if signal.getsignal(s) is not signal.SIG_IGN]
+            self._previous = {s: signal.signal(s, self._hold) for s in held}
         return self
 
     def __exit__(self, *exc: object) -> None:

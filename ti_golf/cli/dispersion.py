@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import sys
 import time
 
 from ti_golf.cli._common import (
+    HeldInterrupt,
     Progress,
     check_plot,
     check_writable,
@@ -113,10 +115,14 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
     to_rest = not args.no_roll and has_ground(scene)
     progress = Progress()
     t0 = time.perf_counter()
-    try:
-        d = dispersion(scene, mean, sd, args.n, args.seed, to_rest=to_rest, flight_dt=args.flight_dt, progress=progress)
-    finally:
-        progress.close()
+    # without a roll-out the shots are one kernel launch: an interrupt waits for it, and its shots are kept
+    with HeldInterrupt() if not to_rest else contextlib.nullcontext(None) as interrupt:
+        try:
+            d = dispersion(
+                scene, mean, sd, args.n, args.seed, to_rest=to_rest, flight_dt=args.flight_dt, progress=progress
+            )
+        finally:
+            progress.close()
     elapsed = time.perf_counter() - t0
     f, lab = units.distance, units.distance_label
     s = d.shots
@@ -188,6 +194,12 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
             ],
         }
         print(json.dumps(_finite(out)))
+    if interrupt is not None and interrupt.requested:
+        kept = ", ".join(p for p in (args.out, args.plot) if p)
+        raise KeyboardInterrupt(
+            "during the shots' flights, which are one kernel launch: they ran to their end"
+            + (f" and are saved in {kept}" if kept else "")
+        )
     return code
 
 
