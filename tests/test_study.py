@@ -754,3 +754,18 @@ def test_figure_of_a_tour_study_is_checked_against_its_columns_per_club():
     with pytest.raises(ConfigError, match=re.escape("its figures: carry_m[PGA Driver], carry_m[PGA 3-wood]")):
         _check_figure("carry_m", spec)
     _check_figure("carry_m[PGA Driver]", spec)
+
+
+def test_a_study_folder_whose_manifest_or_runs_is_the_wrong_kind_is_refused_before_its_tasks(tmp_path):
+    # a folder holding a directory named manifest.jsonl, or a file named runs, started the cluster
+    # and ran tasks, then failed with "manifest.jsonl: Is a directory" or "runs: File exists"
+    from ti_golf.study.results import MANIFEST, RUNS
+
+    spec = write(tmp_path, "flight.toml", FLIGHT_STUDY)
+    for name, make, said in ((MANIFEST, Path.mkdir, "is not a file"), (RUNS, Path.touch, "is not a folder")):
+        out = tmp_path / f"out_{name}"
+        out.mkdir()
+        make(out / name)
+        proc = run_cli("study", str(spec), "--out", str(out))
+        assert proc.returncode == 2 and f"{out / name}: {said}" in proc.stderr, proc.stderr
+        assert sorted(p.name for p in out.iterdir()) == [name]

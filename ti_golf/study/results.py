@@ -46,6 +46,10 @@ class Manifest:
         self.path = Path(folder) / MANIFEST
         self.rows: dict[str, dict[str, Any]] = {}
         self._cut = False
+        if self.path.exists() and not self.path.is_file():  # (found only once the tasks had run)
+            raise ConfigError(
+                str(self.path), None, "is not a file: a study folder's manifest is its file of finished rows"
+            )
         if not self.path.is_file():
             return
         try:

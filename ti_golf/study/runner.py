@@ -72,6 +72,8 @@ def run_study(
     if folder.exists() and not folder.is_dir():
         raise ConfigError("out", None, f"{str(folder)!r} is a file, not a folder")
     manifest = Manifest(folder)
+    if (folder / RUNS).exists() and not (folder / RUNS).is_dir():
+        raise ConfigError(str(folder / RUNS), None, "is not a folder: a study folder keeps its tasks' saved runs there")
     todo = [t for t in spec.tasks if not manifest.finished(t.id, t.figures)]
     result = StudyResult(spec, folder, skipped=len(spec.tasks) - len(todo))
     if result.skipped:
