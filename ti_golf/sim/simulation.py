@@ -570,9 +570,9 @@ class Simulation:
 
     def save(self, path: str | os.PathLike[str], recording: Recording | None = None, partial: bool = False) -> None:
         """Write the run to an ``.npz``, whole or not at all (a temporary file renamed into place;
-        ``.npz`` is added to a name without a suffix, and another suffix is refused): ``x``, ``v``, ``w`` (N, 3), ``t``, ``status``,
-        ``radius``, ``mass`` by ball id; with a terrain ``terrain_heights`` (nx, nz),
-        ``terrain_origin`` (3,) and ``terrain_spacing`` (dx, dz); the recording, if given
+        ``.npz`` is added to a name without a suffix, and another suffix is refused): ``x``, ``v``,
+        ``w`` (N, 3), ``t``, ``status``, ``radius``, ``mass`` by ball id; with a terrain
+        ``terrain_heights`` (nx, nz), ``terrain_origin`` (3,) and ``terrain_spacing`` (dx, dz); the recording, if given
         (``traj_t``, ``traj_x``, ``traj_w``); ``partial`` (a bool), whether the run was stopped
         before the time it was asked to reach; and all that :meth:`load` needs to continue the
         run bit for bit (the scene, the step count, the flight records, the sleeping timers, the
