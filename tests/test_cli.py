@@ -1590,3 +1590,11 @@ def test_a_full_disk_names_the_output_it_could_not_write(tmp_path):
         raise OSError(errno.ENOSPC, "No space left on device")
     assert (info.value.errno, info.value.filename) == (errno.ENOSPC, str(target))
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_pour_says_100_percent_asleep_only_when_every_ball_is():
+    # three balls of 100,000 awake (99.997 %) were printed as "100 % asleep" beside a pile whose
+    # steps were never skipped
+    from ti_golf.bench.pit import asleep_share
+
+    assert [asleep_share(f) for f in (1.0, 0.99997, 0.989, 0.0)] == ["100 %", "99.997 %", "98.9 %", "0 %"]
