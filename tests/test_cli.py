@@ -1117,25 +1117,32 @@ def test_a_run_keeps_what_it_computed_when_ctrl_c_comes_again_while_it_writes(tm
         assert bool(d["partial"]) and 0.0 < float(d["t"]) < 100.0 and d["x"].shape == (400, 3)
 
 
+def interrupted_launch(monkeypatch, module, name: str, signum: int, argv: list[str], capsys) -> list[str]:
+    """``main(argv)`` with ``module.name`` (the command's one kernel launch) sent ``signum`` as it
+    starts; asserts the exit code 130 and the handlers put back, and returns standard error's lines."""
+    real = getattr(module, name)
+
+    def interrupted(*args, **kwargs):
+        os.kill(os.getpid(), signum)  # arrives while the launch runs
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(module, name, interrupted)
+    before = signal.getsignal(signum)
+    assert main(argv) == 130
+    assert signal.getsignal(signum) == before  # the handlers are put back
+    return capsys.readouterr().err.strip().splitlines()
+
+
 def test_an_interrupted_sweep_keeps_its_results(tmp_path, capsys, monkeypatch):
     # a sweep is one kernel launch, which cannot stop half-way: SIGTERM (or Ctrl-C) during it is
     # held until its results are written, then the command stops with one line and code 130
     from ti_golf.cli import sweep as sweep_command
 
-    real = sweep_command.sweep
-
-    def interrupted_sweep(*args, **kwargs):
-        os.kill(os.getpid(), signal.SIGTERM)  # arrives while the sweep runs
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(sweep_command, "sweep", interrupted_sweep)
     out = tmp_path / "s.csv"
-    before = signal.getsignal(signal.SIGTERM)
-    assert main(["sweep", "lab_vacuum", "--angles", "30,45,60", "--out", str(out)]) == 130
-    err = capsys.readouterr().err.strip().splitlines()
+    argv = ["sweep", "lab_vacuum", "--angles", "30,45,60", "--out", str(out)]
+    err = interrupted_launch(monkeypatch, sweep_command, "sweep", signal.SIGTERM, argv, capsys)
     assert len(err) == 1 and err[0].startswith("ti-golf: interrupted during the sweep") and str(out) in err[0]
     assert len(out.read_text().splitlines()) == 1 + 3  # header and the three launches
-    assert signal.getsignal(signal.SIGTERM) == before  # the handlers are put back
 
 
 def test_an_interrupted_dispersion_without_a_roll_out_keeps_its_shots(tmp_path, capsys, monkeypatch):
@@ -1143,16 +1150,9 @@ def test_an_interrupted_dispersion_without_a_roll_out_keeps_its_shots(tmp_path, 
     # then threw its shots away (no --out written); they are kept, as a sweep's are
     from ti_golf.cli import dispersion as dispersion_command
 
-    real = dispersion_command.dispersion
-
-    def interrupted(*args, **kwargs):
-        os.kill(os.getpid(), signal.SIGINT)  # arrives while the shots fly
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(dispersion_command, "dispersion", interrupted)
     out = tmp_path / "d.csv"
-    assert main(["dispersion", "tour_shot", "--n", "20", "--no-roll", "--out", str(out)]) == 130
-    err = capsys.readouterr().err.strip().splitlines()
+    argv = ["dispersion", "tour_shot", "--n", "20", "--no-roll", "--out", str(out)]
+    err = interrupted_launch(monkeypatch, dispersion_command, "dispersion", signal.SIGINT, argv, capsys)
     assert err[-1].startswith("ti-golf: interrupted during the shots' flights") and str(out) in err[-1], err
     assert len(out.read_text().splitlines()) >= 1 + 20  # the header (and notes) and the twenty shots
 
