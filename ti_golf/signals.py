@@ -19,6 +19,13 @@ HELD = (signal.SIGINT, signal.SIGTERM)
 """The signals held while steps run."""
 
 
+def not_ignored(signals: tuple[int, ...]) -> list[int]:
+    """Those of ``signals`` the process does not ignore: a signal ignored (``nohup``, ``trap ''
+    INT``, a background job of a script) stays ignored by whoever holds signals, since a held one
+    would stop the work early while the program went on as if it had all been done."""
+    return [s for s in signals if signal.getsignal(s) is not signal.SIG_IGN]
+
+
 @contextmanager
 def whole_steps(note: str | None = None) -> Iterator[list[int]]:
     """Hold :data:`HELD` inside the block and raise each one that came, in order, when it ends
@@ -37,9 +44,7 @@ def whole_steps(note: str | None = None) -> Iterator[list[int]]:
             print(f"ti-golf: {note}", file=sys.stderr, flush=True)
         came.append(signum)
 
-    # a signal the process ignores (``nohup``, ``trap '' INT``, a background job of a script) stays
-    # ignored: held, it would stop the steps early while the run went on as if they were all taken
-    previous = {s: signal.signal(s, hold) for s in HELD if signal.getsignal(s) is not signal.SIG_IGN}
+    previous = {s: signal.signal(s, hold) for s in not_ignored(HELD)}
     try:
         yield came
     finally:

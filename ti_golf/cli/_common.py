@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from ti_golf.errors import OVERRIDES, ConfigError
 from ti_golf.files import PLOT_FORMATS, PLOT_FORMATS_HELP, plot_format
+from ti_golf.signals import HELD, not_ignored
 
 if TYPE_CHECKING:
     import rich.progress
@@ -470,9 +471,8 @@ class StartupStatus:
 class HeldInterrupt:
     """Holds Ctrl-C and SIGTERM while work that cannot stop half-way runs (a sweep is one kernel
     launch), so that what it computes is kept: ``requested`` says whether one came, and the
-    caller stops once its outputs are written. Outside the main thread it holds nothing."""
-
-    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+    caller stops once its outputs are written. A signal the process ignores stays ignored
+    (:func:`~ti_golf.signals.not_ignored`); outside the main thread it holds nothing."""
 
     def __init__(self) -> None:
         self.requested = False
@@ -482,9 +482,8 @@ class HeldInterrupt:
         self.requested = True
 
     def __enter__(self) -> HeldInterrupt:
-        if threading.current_thread() is threading.main_thread():  # (a signal the process ignores stays ignored)
-            held = [s for s in self.SIGNALS if signal.getsignal(s) is not signal.SIG_IGN]
-            self._previous = {s: signal.signal(s, self._hold) for s in held}
+        if threading.current_thread() is threading.main_thread():
+            self._previous = {s: signal.signal(s, self._hold) for s in not_ignored(HELD)}
         return self
 
     def __exit__(self, *exc: object) -> None:
