@@ -1101,7 +1101,6 @@ def _outcome(sim, asleep: int, *arrays: np.ndarray) -> tuple:
     )
 
 
-@pytest.mark.slow
 def _gauss_seidel_column() -> tg.Simulation:
     """A column of 10 touching balls on the ground (e = 0.3, the Gauss–Seidel sweeps, 1 ms steps),
     no air: it falls asleep by t = 0.2 s."""
@@ -1112,6 +1111,7 @@ def _gauss_seidel_column() -> tg.Simulation:
     return tg.Simulation(sc, x=np.array([[0.0, 0.02 + 0.04 * i, 0.0] for i in range(10)]))
 
 
+@pytest.mark.slow
 def test_a_step_with_every_ball_asleep_is_skipped_and_changes_nothing():
     # with the Gauss–Seidel sweeps a ball asleep takes no impulse and does not move
     # (colour.stands_firm), and only a moving ball wakes it: a step in which no ball is awake
