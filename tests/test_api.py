@@ -367,19 +367,22 @@ def test_arguments_of_the_wrong_kind_are_refused_naming_the_argument():
 
 
 def test_balls_given_where_no_contact_can_sort_them_out_are_refused():
-    # tried as a new user would: a ball 5 m under the ground came to rest inside it, and one 2,000 km
-    # away (past the scene files' 1,000 km, where the grid's cell coordinates overflow) was taken
+    # tried as a new user would: a ball 5 m under the ground came to rest inside it, one 2,000 km
+    # away (past the scene files' 1,000 km, where the grid's cell coordinates overflow) was taken,
+    # and two balls at one point stayed there, wholly overlapping
     bin_scene = tg.load_scene("break_shot", ["world.ground=false"])  # (no planes either: open space)
     cases = [
         ("lab_vacuum", {"x": [[0, -5, 0]]}, r"x of ball 0 \(\[0.0, -5.0, 0.0\]\) lies 5 m inside the ground"),
         ("lab_vacuum", {"x": [[0, -0.03, 0]], "radius": 0.02}, r"lies 0.03 m inside the ground, the whole ball"),
         ("lab_vacuum", {"x": [[0, 2e6, 0]]}, r"x must be within ±1e\+06 m"),
+        ("break_shot", {"x": [[0, 1, 0], [1, 1, 0], [0, 1, 0]]}, r"x of balls 0 and 2 is one point, \[0.0, 1.0, 0.0\]"),
     ]
     for scene, given, match in cases:
         with pytest.raises(ValueError, match=match):
             tg.Simulation(scene, **given)
     tg.Simulation("lab_vacuum", x=[[0, -0.01, 0]], radius=0.02)  # partly in the ground: pushed out (B.18)
     tg.Simulation(bin_scene, x=[[0, -5, 0], [1, -5, 0]])  # nothing solid: anywhere
+    tg.Simulation(tg.load_scene("break_shot", ["world.collisions=false"]), x=[[0, 1, 0]] * 2)  # shots: never meeting
     sim = tg.Simulation("lab_vacuum", x=[[0, 1, 0]], v=[[2000.0, 0, 0]])  # (a ball falls that fast in vacuum)
     with pytest.raises(ValueError, match=r"v must be within ±2.99792e\+08 m/s on each axis, the speed of light"):
         sim.v = [[1e300, 2.0, 3.0]]  # (its drag's step check said "world.dt must be at most 0 s")

@@ -725,6 +725,11 @@ def test_cli_bad_range_exits_2(option, value, fragment):
         ),
         ("[terrain]\nslope = [1e308, 0]\n", "terrain.slope", "must be in [-100, 100] on both axes"),
         ("[terrain]\namplitude = 1e308\n", "terrain.amplitude", "must be in [0, 10000] m"),
+        (  # (two balls at one point never parted: their contact has no direction)
+            "[[balls]]\nposition = [0, 0.5, 0]\n[[blocks]]\ncount = [2, 2, 2]\norigin = [0, 0.5, 0]\n",
+            "blocks[0]",
+            "puts ball 1 at the point of ball 0 (balls[0].position), [0.0, 0.5, 0.0] m",
+        ),
     ],
 )
 def test_a_block_or_terrain_value_that_a_run_cannot_use_is_refused_before_it_starts(tmp_path, text, key, fragment):

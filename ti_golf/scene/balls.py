@@ -100,7 +100,47 @@ def build_balls(scene: Scene) -> Balls:
         parts.append(_block_balls(scene, block, i))
     if not parts:
         raise_config(scene.path, None, "the scene creates no ball: add a [launch] table, [[balls]] or [[blocks]]")
-    return Balls(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("x", "v", "w", "radius", "mass", "track")))
+    balls = Balls(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("x", "v", "w", "radius", "mass", "track")))
+    pair = coincident_pair(balls.x) if scene.world.collisions and len(parts) > 1 else None  # (a block's are apart)
+    if pair is not None:
+        i, j = pair
+        raise_config(
+            scene.path,
+            _key_of_ball(scene, j),
+            f"puts ball {j} at the point of ball {i} ({_key_of_ball(scene, i)}), {balls.x[i].tolist()} m: a contact "
+            "between two balls at one point has no direction, so they would never part; move one, or set "
+            "world.collisions = false for balls that fly apart without meeting",
+        )
+    return balls
+
+
+def coincident_pair(x: np.ndarray) -> tuple[int, int] | None:
+    """Two balls whose centres ``x`` (N, 3) [m] are one point (the pair of lowest ids), or None."""
+    if len(x) < 2:
+        return None
+    order = np.lexsort(x.T[::-1])
+    same = np.flatnonzero(np.all(x[order[1:]] == x[order[:-1]], axis=1))
+    if same.size == 0:
+        return None
+    pairs = np.sort(np.stack([order[same], order[same + 1]], axis=1), axis=1)
+    i, j = pairs[np.lexsort(pairs.T[::-1])[0]]
+    return int(i), int(j)
+
+
+def _key_of_ball(scene: Scene, i: int) -> str:
+    """The scene key that creates ball i (in :func:`build_balls`' order)."""
+    if scene.launch is not None:
+        if i == 0:
+            return "launch.position"
+        i -= 1
+    if i < len(scene.balls):
+        return f"balls[{i}].position"
+    i -= len(scene.balls)
+    for k, block in enumerate(scene.blocks):
+        if i < block_size(block):
+            return f"blocks[{k}]"
+        i -= block_size(block)
+    raise IndexError(i)
 
 
 def _site_grid(size: np.ndarray, n: int, r_max: float) -> tuple[float, np.ndarray]:
