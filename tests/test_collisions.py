@@ -1041,6 +1041,28 @@ def test_a_calm_column_falls_asleep_in_one_step(iterations):
     assert asleep_at[0] * 0.001 >= sc.world.t_rest  # no earlier than t_rest after the drop
 
 
+def test_touching_balls_fall_asleep_in_the_same_step_with_the_gauss_seidel_sweeps():
+    # with the Gauss–Seidel sweeps a ball may fall asleep before balls a few contacts away
+    # (pairs.island_calm), but not before a ball it touches: a ball whose supports fell asleep
+    # first stood on them firm while it still crept, rolled off and woke them, over and over (so
+    # the top of the 100,000-ball pour stayed awake). Two balls side by side on the ground, one
+    # spinning about the vertical (R|ω| = 6 cm/s, above v_rest) until the pivot friction stops it:
+    # the other's rest timer runs ahead of it, yet the two fall asleep in one step
+    sc = tg.load_scene("break_shot", ['contact.solver="gauss_seidel"', "world.dt=0.001"])
+    r = sc.ball.radius
+    sim = tg.Simulation(sc, x=np.array([[0.0, r, 0.0], [2.0 * r, r, 0.0]]), w=np.array([[0.0] * 3, [0.0, 3.0, 0.0]]))
+    asleep_at, calm_from = np.full(2, -1), np.full(2, -1)
+    for k in range(1, 1001):  # 1 s
+        sim.step(1)
+        calm_from[(sim.state.rest_time.to_numpy() > 0.0) & (calm_from < 0)] = k
+        at_rest = sim.state.status.to_numpy() == AT_REST
+        asleep_at[at_rest & (asleep_at < 0)] = k
+        if at_rest.all():
+            break
+    assert calm_from[0] < calm_from[1], calm_from  # the still ball's timer ran ahead
+    assert asleep_at[0] == asleep_at[1] > 0, asleep_at
+
+
 @pytest.mark.parametrize("solver", ["gauss_seidel", "jacobi"])
 def test_with_no_rest_time_only_slow_balls_rest(solver):
     # world.t_rest = 0 put every touching ball at rest in its first step, whatever its speed: the

@@ -285,7 +285,7 @@ def warm_start(i, bits, hop, s: ti.template()):
                 F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
                 P -= F
                 T += n.cross(F)
-            calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop)
+            calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop, s.params)
     p0 = first[i]
     for k in range(listed(first, i)):  # (a quiet ball's too: the gaps of its neighbours' lower pairs)
         j, p = upper[i, k], p0 + k
@@ -304,7 +304,7 @@ def warm_start(i, bits, hop, s: ti.template()):
                 F = carried_friction(status, i, j, n, lam[p], friction[p], mu)
                 P += F
                 T -= n.cross(F)
-            calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop)
+            calm = island_calm(calm, gap, of_ball(radius, i), status[j], rest_time[j], hop, s.params)
     if quiet:
         calm = QUIET
     m = of_ball(mass, i)
@@ -323,17 +323,25 @@ def carried_friction(status: ti.template(), i, j, n, lam, F, mu):
 
 
 @ti.func
-def island_calm(calm, gap, r, status_j, rest_time_j, hop):
+def island_calm(calm, gap, r, status_j, rest_time_j, hop, params: ti.template()):
     """The calm time [s] so far, lowered to the rest timer of a neighbour that touches the ball
-    (surface gap below 1 % of its radius ``r``) and is not out of bounds, plus ``hop`` [s].
+    (surface gap below 1 % of its radius ``r``) and is not out of bounds, plus ``hop`` [s]
+    (``params``: the step's ``t_rest`` and ``h``).
 
     With ``hop`` 0 a calm group falls asleep as a whole (an island: every ball of it calm for
     ``t_rest``). With ``hop`` = t_rest / ``colour.REGION_HOPS`` (the Gauss–Seidel sweeps) a ball
     falls asleep once every ball within ``REGION_HOPS`` contacts of it is calm, each for as much
     longer as it is nearer: a ball moving somewhere in a pile of 100,000 keeps only its region
-    awake."""
+    awake. There a ball also waits for each ball it touches that will not reach ``t_rest`` in this
+    step (rest timer + h below it): its calm time is then at most t_rest − 1.5·h, so it stays awake,
+    and ends the step with a timer half a step short of ``t_rest``, which its other neighbours read
+    as ready and do not wait for. So two touching balls fall asleep in the same step. A ball whose
+    supports fell asleep ``hop`` before it would have them stand firm under it while it still
+    creeps, roll off them and wake them, over and over (with ``hop`` 0 its timer holds it already)."""
     if gap < TOUCHING_GAP * r and status_j != OUT_OF_BOUNDS:
         calm = ti.min(calm, rest_time_j + hop)
+        if hop > 0.0 and rest_time_j + params.h < params.t_rest:
+            calm = ti.min(calm, ti.max(params.t_rest - 1.5 * params.h, 0.0))
     return calm
 
 
