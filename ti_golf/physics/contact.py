@@ -334,13 +334,17 @@ def plane_position(x, x_free, x1, v_free, v, radius, p, n, k_p, h, g):
     ``x`` is the position at the start of the step, ``x_free``/``v_free`` the free-flight
     prediction, ``v`` the final velocity and ``x1`` the position so far (``x_free + h·(v − v_free)``
     before the first plane); ``g`` is gravity [m/s²]. When the free flight crosses the plane and the
-    plane pushed back, the step is split at the time of impact (linear in the gaps) if the plane
-    turned the ball back (v·n̂ ≥ 0, to :data:`SPLIT_ROUNDING`); a ball already touching, or one that
-    the plane only slowed and still approaches, moves at ``v`` for the whole step, x + h·v (the
-    Gauss–Seidel sweeps close such a contact's gap exactly within the step: the split would put it
-    (1 − frac)·h·|v·n̂| into the plane, and the free flight's own path, with RK4's ½·g·h², would
+    plane pushed back, the step is split at the time of impact (:func:`impact_fraction`) if the
+    plane turned the ball back (v·n̂ ≥ 0, to :data:`SPLIT_ROUNDING`); a ball already touching, or
+    one that the plane only slowed and still approaches, moves at ``v`` for the whole step, x + h·v
+    (the Gauss–Seidel sweeps close such a contact's gap exactly within the step: the split would put
+    it (1 − frac)·h·|v·n̂| into the plane, and the free flight's own path, with RK4's ½·g·h², would
     leave it hovering above). A ball that bounced (v·n̂ > 0) is also given the velocity and height
-    of the bounce at the time of impact (:func:`bounce_split`). What still penetrates is projected
+    of the bounce at the time of impact (:func:`bounce_split`). A ball that bounced though its free
+    flight ends above the plane (the contact test's straight line x + h·v_free runs below RK4's
+    curve, by up to ½·|g·n̂|·h²) meets it at the step's end: it ends the step on the plane, leaving
+    it at e times the speed it would have reached it with (its rebound's height is kept; its
+    clock runs ahead by that last gap's flight, under a µs). What still penetrates is projected
     out with k_p (B.18, m_red = 1). Returns (x1, v).
     """
     gap0 = (x - p).dot(n) - radius
@@ -349,17 +353,41 @@ def plane_position(x, x_free, x1, v_free, v, radius, p, n, k_p, h, g):
     if gap1 < 0.0 and v_n > v_free_n:
         frac = 0.0  # touching at the start, or only slowed: the impulse acts from the step's start
         if gap0 > 0.0 and v_n >= -SPLIT_ROUNDING * ti.abs(v_free_n):
-            frac = gap0 / (gap0 - gap1)
+            frac = impact_fraction(gap0, gap1, v_free_n, h)
         after = (1.0 - frac) * h  # the step's time after the impact [s]
         at_impact = x + frac * (x_free - x)
+        if frac > 0.0:  # on the plane at the impact (the straight line between x and x_free is not)
+            at_impact -= ((at_impact - p).dot(n) - radius) * n
         x1 = at_impact + after * v
         if frac > 0.0 and v_n > 0.0 and v_free_n < 0.0:  # a bounce within the step
             v, rise = bounce_split(v, v_n, v_free_n, g.dot(n) * after, after, n)
             x1 = at_impact + after * (v - v.dot(n) * n) + rise * n
+    elif gap0 > 0.0 and v_n > 0.0 and v_free_n < 0.0:  # a bounce at the step's end, on the plane
+        x1 = x_free - gap1 * n
+        reach_n = ti.sqrt(ti.max(v_free_n * v_free_n - 2.0 * g.dot(n) * gap1, 0.0))  # |v·n̂| there [m/s]
+        v += (v_n / -v_free_n * reach_n - v_n) * n
     gap = (x1 - p).dot(n) - radius
     if gap < 0.0:
         x1 -= k_p * gap * n
     return x1, v
+
+
+@ti.func
+def impact_fraction(gap0, gap1, v_free_n, h):
+    """The share of a step [0, 1] at which a ball meets a plane, from its gaps [m] at the start
+    (``gap0`` > 0) and at the end of its free flight (``gap1`` < 0) and its normal velocity there
+    (``v_free_n`` [m/s], approaching): the root of the parabola through those three, gap(h − s) =
+    gap1 − v_free_n·s + c·s², c = (gap0 − gap1 + v_free_n·h)/h² (half the normal acceleration).
+    It is exact for a flight under constant acceleration (RK4 without air), and the straight line
+    between the gaps where the flight is one (semi-implicit Euler: c = 0); the line alone put RK4's
+    impacts up to (1/8)·|g·n̂|·h²/|v·n̂| of a step late."""
+    c = (gap0 - gap1 + v_free_n * h) / (h * h)
+    b = -v_free_n
+    den = b + ti.sqrt(ti.max(b * b - 4.0 * c * gap1, 0.0))
+    frac = 0.0  # (den ≤ 0: no such parabola but by rounding; the impulse acts from the start)
+    if den > 0.0:
+        frac = ti.min(ti.max(1.0 + 2.0 * gap1 / (den * h), 0.0), 1.0)  # s = −2·gap1/den, the root nearest the end
+    return frac
 
 
 @ti.func
