@@ -362,10 +362,12 @@ def plane_position(x, x_free, x1, v_free, v, radius, p, n, k_p, h, g):
         if frac > 0.0 and v_n > 0.0 and v_free_n < 0.0:  # a bounce within the step
             v, rise = bounce_split(v, v_n, v_free_n, g.dot(n) * after, after, n)
             x1 = at_impact + after * (v - v.dot(n) * n) + rise * n
-    elif gap0 > 0.0 and v_n > 0.0 and v_free_n < 0.0:  # a bounce at the step's end, on the plane
+    elif gap0 > 0.0 and gap0 + h * v_free_n < 0.0 and v_n > 0.0 and v_free_n < -ti.abs(g.dot(n)) * h:
+        # a bounce that the contact test's line met while RK4's curve ends above (gap1 < ½|g·n̂|h²),
+        # at an approach faster than a step of gravity: at the step's end, on the plane
         x1 = x_free - gap1 * n
-        reach_n = ti.sqrt(ti.max(v_free_n * v_free_n - 2.0 * g.dot(n) * gap1, 0.0))  # |v·n̂| there [m/s]
-        v += (v_n / -v_free_n * reach_n - v_n) * n
+        reach_n = ti.sqrt(v_free_n * v_free_n - 2.0 * g.dot(n) * gap1)  # |v·n̂| on the plane [m/s]
+        v += ti.min(v_n / -v_free_n, 1.0) * (reach_n + v_free_n) * n  # (e at most 1: at most |g·n̂|·h more)
     gap = (x1 - p).dot(n) - radius
     if gap < 0.0:
         x1 -= k_p * gap * n
