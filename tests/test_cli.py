@@ -1148,14 +1148,35 @@ def test_an_interrupted_sweep_keeps_its_results(tmp_path, capsys, monkeypatch):
 def test_an_interrupted_dispersion_without_a_roll_out_keeps_its_shots(tmp_path, capsys, monkeypatch):
     # the shots' flights are one kernel launch: a Ctrl-C during them waited for the launch to end,
     # then threw its shots away (no --out written); they are kept, as a sweep's are
-    from ti_golf.cli import dispersion as dispersion_command
+    from ti_golf.golf import shots
 
     out = tmp_path / "d.csv"
     argv = ["dispersion", "tour_shot", "--n", "20", "--no-roll", "--out", str(out)]
-    err = interrupted_launch(monkeypatch, dispersion_command, "dispersion", signal.SIGINT, argv, capsys)
+    err = interrupted_launch(monkeypatch, shots, "fly", signal.SIGINT, argv, capsys)
     assert err[-1].startswith("ti-golf: interrupted during the shots' flights") and str(out) in err[-1], err
     assert len(out.read_text().splitlines()) >= 1 + 20  # the header (and notes) and the twenty shots
 
+
+
+def test_an_interrupted_dispersion_with_a_roll_out_keeps_what_it_computed(tmp_path, capsys, monkeypatch):
+    # with a roll-out, a Ctrl-C during the flights (one launch) or the roll-out (steps) threw every
+    # shot away; the flights are kept, and the rests reached, with a line that says which
+    import csv
+
+    from ti_golf.golf import rollout, shots
+
+    out = tmp_path / "d.csv"
+    argv = ["dispersion", "tour_shot", "--n", "20", "--out", str(out)]
+    for module, name, said in (
+        (shots, "fly", "during the shots' flights, which are one kernel launch: they ran to their end, not rolled out"),
+        (rollout.Simulation, "run", "during the roll-out: 0 of the 20 landed shots had come to rest"),
+    ):
+        err = interrupted_launch(monkeypatch, module, name, signal.SIGINT, argv, capsys)
+        assert err[-1].startswith(f"ti-golf: interrupted {said}") and str(out) in err[-1], err
+        rows = list(csv.DictReader(out.read_text().splitlines()))
+        assert len(rows) == 20 and all(float(r["carry_yd"]) > 150 for r in rows), rows[:1]
+        assert all(r.get("total_yd", "") in ("", "nan") for r in rows), rows[:1]  # (none rested)
+        monkeypatch.undo()
 
 @pytest.mark.slow
 @ON_VULKAN

@@ -14,9 +14,19 @@ import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any
 
 HELD = (signal.SIGINT, signal.SIGTERM)
 """The signals held while steps run."""
+
+
+class KeptInterrupt(KeyboardInterrupt):
+    """Ctrl-C (or SIGTERM) that stopped work between whole steps or launches, holding what had
+    been computed by then (``kept``), for the caller to keep."""
+
+    def __init__(self, kept: Any) -> None:
+        super().__init__()
+        self.kept = kept  # (each layer's own result: what it raises is documented where it is raised)
 
 
 def not_ignored(signals: tuple[int, ...]) -> list[int]:

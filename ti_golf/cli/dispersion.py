@@ -3,14 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import math
 import sys
 import time
 
 from ti_golf.cli._common import (
-    HeldInterrupt,
     Progress,
     check_plot,
     check_writable,
@@ -37,6 +35,8 @@ from ti_golf.scene.launch_monitor import (
 )
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.readers import LANDING_NOT_READ, SHOTS_NOT_READ
+from ti_golf.signals import KeptInterrupt
+from ti_golf.sim.results import Shots
 
 SPREAD = PLAYER_SPREAD
 SPREAD_OPTIONS = {name: f"--sd-{option[2:]}" for name, option in LAUNCH_OPTIONS.items()}
@@ -115,14 +115,14 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
     to_rest = not args.no_roll and has_ground(scene)
     progress = Progress()
     t0 = time.perf_counter()
-    # without a roll-out the shots are one kernel launch: an interrupt waits for it, and its shots are kept
-    with HeldInterrupt() if not to_rest else contextlib.nullcontext(None) as interrupt:
-        try:
-            d = dispersion(
-                scene, mean, sd, args.n, args.seed, to_rest=to_rest, flight_dt=args.flight_dt, progress=progress
-            )
-        finally:
-            progress.close()
+    # the flights are one kernel launch: an interrupt waits for it, and the shots computed are kept
+    stopped: KeptInterrupt | None = None
+    try:
+        d = dispersion(scene, mean, sd, args.n, args.seed, to_rest=to_rest, flight_dt=args.flight_dt, progress=progress)
+    except KeptInterrupt as stop:
+        d, stopped = stop.kept, stop
+    finally:
+        progress.close()
     elapsed = time.perf_counter() - t0
     f, lab = units.distance, units.distance_label
     s = d.shots
@@ -194,13 +194,24 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
             ],
         }
         print(json.dumps(_finite(out)))
-    if interrupt is not None and interrupt.requested:
-        kept = ", ".join(p for p in (args.out, args.plot) if p)
-        raise KeyboardInterrupt(
-            "during the shots' flights, which are one kernel launch: they ran to their end"
-            + (f" and are saved in {kept}" if kept else "")
-        )
+    if stopped is not None:
+        raise _stopped(s, to_rest, ", ".join(p for p in (args.out, args.plot) if p))
     return code
+
+
+def _stopped(s: Shots, to_rest: bool, kept: str) -> KeyboardInterrupt:
+    """What an interrupt kept of the shots ``s`` (``kept``: the files they are saved in, or "")."""
+    if s.rolled_out:
+        landed, rested = int(s.landed.sum()), int(s.at_rest.sum())
+        return KeyboardInterrupt(
+            f"during the roll-out: {rested:,} of the {landed:,} landed shots had come to rest (no total for the"
+            " others)" + (f"; the shots are saved in {kept}" if kept else "")
+        )
+    return KeyboardInterrupt(
+        "during the shots' flights, which are one kernel launch: they ran to their end"
+        + (", not rolled out" if to_rest else "")
+        + (f", and are saved in {kept}" if kept else "")
+    )
 
 
 def _finite(o: object) -> object:

@@ -21,6 +21,7 @@ from ti_golf.files import atomic_path
 from ti_golf.golf.shots import shots
 from ti_golf.scene.launch_monitor import LAUNCH_LIMITS, MPH, RPM, MonitorLaunch, Units
 from ti_golf.scene.schema import Scene
+from ti_golf.signals import KeptInterrupt
 from ti_golf.sim.given import whole_number
 from ti_golf.sim.results import Shots
 from ti_golf.sim.simulation import RunProgress
@@ -211,10 +212,16 @@ def dispersion(
         >>> sd = MonitorLaunch(1.5 * MPH, 1.0, 1.5, 300 * RPM, 3.0)                     # doctest: +SKIP
         >>> d = dispersion(load_scene("tour_shot"), mean, sd, n=100_000, seed=1)        # doctest: +SKIP
         >>> d.summary()["carry"], d.ellipses()[1].semi_major                           # doctest: +SKIP
+
+    An interrupt raises :class:`~ti_golf.signals.KeptInterrupt` holding the Dispersion of the
+    shots computed by then (see :func:`~ti_golf.golf.shots.fly_shots`).
     """
     n, seed = whole_number(n, "n"), whole_number(seed, "seed")
     if not 2 <= n <= MAX_SHOTS:
         raise ValueError(f"n must be in [2, {MAX_SHOTS}] (got {n})")
     launches = draw_launches(mean, sd, n, seed)
-    result = shots(scene, launches, to_rest=to_rest, flight_dt=flight_dt, progress=progress)
+    try:
+        result = shots(scene, launches, to_rest=to_rest, flight_dt=flight_dt, progress=progress)
+    except KeptInterrupt as stop:  # (the shots computed when it came)
+        raise KeptInterrupt(Dispersion(launches, stop.kept, mean, sd, int(seed))) from None
     return Dispersion(launches, result, mean, sd, int(seed))

@@ -21,6 +21,7 @@ from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import LAUNCH_LIMITS, MonitorLaunch
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene
+from ti_golf.signals import KeptInterrupt, whole_steps
 from ti_golf.sim.results import Shots
 from ti_golf.sim.simulation import RunProgress
 
@@ -46,15 +47,31 @@ def fly_shots(
 
     ``flight_dt`` [s] replaces ``world.dt`` for the flight only (the roll-out keeps ``world.dt``,
     which the contacts need); ``progress(t_done, t_total)`` follows the roll-out.
+
+    The flights are one kernel launch: an interrupt waits for it. Interrupted then, or during the
+    roll-out, it raises :class:`KeptInterrupt` holding the Shots computed: the flights, and the
+    rests reached (none when the flights were interrupted).
     """
     x0 = np.asarray(x0, dtype=float)
     if flight_dt is not None and not FLIGHT_DT_RANGE[0] <= flight_dt <= FLIGHT_DT_RANGE[1]:
         lo, hi = FLIGHT_DT_RANGE
         raise ValueError(f"flight_dt must be in [{lo:g}, {hi:g}] s (got {flight_dt!r})")
     flown = scene if flight_dt is None else replace(scene, world=replace(scene.world, dt=float(flight_dt)))
-    raw = fly(flown, x0, v0, w0, step_name="world.dt" if flight_dt is None else "flight_dt")
-    out = shots_from_landing(scene, x0, raw, to_rest, progress)
-    rose = ~(out.apex <= 0.0)  # (a ball that never rose is "down" at once: no landing to describe)
+    try:
+        with whole_steps():  # (a signal is raised once the launch is done)
+            raw = fly(flown, x0, v0, w0, step_name="world.dt" if flight_dt is None else "flight_dt")
+    except KeyboardInterrupt:
+        raise KeptInterrupt(_down_at_once(shots_from_landing(scene, x0, raw, False))) from None
+    try:
+        return _down_at_once(shots_from_landing(scene, x0, raw, to_rest, progress))
+    except KeptInterrupt as stop:
+        raise KeptInterrupt(_down_at_once(stop.kept)) from None
+
+
+def _down_at_once(out: Shots) -> Shots:
+    """``out`` with no landing angle, speed or spin for a ball that never rose above its launch
+    height: it is "down" at once, with no landing to describe."""
+    rose = ~(out.apex <= 0.0)
     if not rose.all():
         nan = np.where(rose, 1.0, np.nan)
         out = replace(
