@@ -711,6 +711,19 @@ def test_bench_pits_loop_probe_runs_the_loops_it_says():
     assert set(costs) == {"loop_s", "ball_loop_s"} and all(0.0 <= c < 0.1 for c in costs.values())
 
 
+
+@pytest.mark.slow
+@ON_VULKAN
+def test_bench_pit_runs_on_vulkan():
+    # the loop probe behind loop_s started its loops at a bound read on the device, which Taichi's
+    # SPIR-V code generator refuses: the pour ran, then a traceback lost its figures
+    proc = run_cli("bench", "pit", "--n", "100", "--t", "0.01", "--arch", "vulkan", "--json")
+    if "running on the CPU" in proc.stderr:  # (runtime.init's note when Taichi finds no Vulkan)
+        pytest.skip(NO_VULKAN_BACKEND)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert result["arch"] == "vulkan" and result["steps"] == 10 and result["ball_loop_s"] >= 0.0
+
 @pytest.mark.slow
 def test_an_interrupted_bench_pit_reports_the_pour_so_far(monkeypatch, capsys):
     # Ctrl-C or SIGTERM 30 steps into a 50-step pour: Simulation.run ends after the whole step it

@@ -462,11 +462,12 @@ def _loops_body(lists, scratch, loops, every_ball):
     ``every_ball``, over the balls, each thread reading one number and writing nothing, as a
     sweep's thread for a ball asleep; else over no item (:func:`loop_costs`)."""
     for _ in ti.static(range(loops)):
-        end = lists.first[0]  # (0: the pair table's first start)
+        start = lists.first[0]  # (0: the pair table's first start)
+        count = 0
         if ti.static(every_ball):
-            end = lists.first.shape[0] - 1
-        for i in range(lists.first[0], end):
-            if scratch.calm[i] < -1.0:  # (never: a rest timer is not negative)
+            count = lists.first.shape[0] - 1 - start
+        for k in range(count):  # (from 0: Vulkan's code generator takes no loop start read on the device)
+            if scratch.calm[start + k] < -1.0:  # (never: a rest timer is not negative)
                 scratch.flag[1] = 1
 
 
