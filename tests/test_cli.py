@@ -711,7 +711,6 @@ def test_bench_pits_loop_probe_runs_the_loops_it_says():
     assert set(costs) == {"loop_s", "ball_loop_s"} and all(0.0 <= c < 0.1 for c in costs.values())
 
 
-
 @pytest.mark.slow
 @ON_VULKAN
 def test_bench_pit_runs_on_vulkan():
@@ -723,6 +722,7 @@ def test_bench_pit_runs_on_vulkan():
     assert proc.returncode == 0, proc.stderr[-2000:]
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     assert result["arch"] == "vulkan" and result["steps"] == 10 and result["ball_loop_s"] >= 0.0
+
 
 @pytest.mark.slow
 def test_an_interrupted_bench_pit_reports_the_pour_so_far(monkeypatch, capsys):
@@ -982,6 +982,9 @@ BAD_BENCH_OPTIONS = [
     (("pit", "--every", "5"), "(0, --t]"),  # longer than the pour (--t 4)
     (("pit", "--every", "nan"), "(0, --t]"),
     (("pit", "--t", "0"), "(0, 60]"),
+    (("pit", "--set", "launch.speed=10", "--n", "100", "--t", "0.01"), "makes a launched ball"),  # (101 balls, n 100)
+    (("pit", "--set", "world.collisions=false", "--n", "100", "--t", "0.01"), "must be true for the pit"),  # (0 %)
+    (("pit", "--every", "0.0001", "--n", "100", "--t", "0.05"), "at least world.dt = 0.001 s"),  # (rows a step apart)
     (
         ("pit", "--n", "100", "--t", "0.01", "--set", "ball.radius=0.1"),
         "100 balls do not fit the pit's bin scaled to them",
@@ -1170,7 +1173,6 @@ def test_an_interrupted_dispersion_without_a_roll_out_keeps_its_shots(tmp_path, 
     assert len(out.read_text().splitlines()) >= 1 + 20  # the header (and notes) and the twenty shots
 
 
-
 def test_an_interrupted_dispersion_with_a_roll_out_keeps_what_it_computed(tmp_path, capsys, monkeypatch):
     # with a roll-out, a Ctrl-C during the flights (one launch) or the roll-out (steps) threw every
     # shot away; the flights are kept, and the rests reached, with a line that says which
@@ -1190,6 +1192,7 @@ def test_an_interrupted_dispersion_with_a_roll_out_keeps_what_it_computed(tmp_pa
         assert len(rows) == 20 and all(float(r["carry_yd"]) > 150 for r in rows), rows[:1]
         assert all(r.get("total_yd", "") in ("", "nan") for r in rows), rows[:1]  # (none rested)
         monkeypatch.undo()
+
 
 @pytest.mark.slow
 @ON_VULKAN

@@ -78,6 +78,13 @@ def pit_scene(n: int | None = None, overrides: Sequence[str] = ()) -> tuple[Scen
     so that the pile is as deep, and the scene's keys changed by ``overrides`` (``--set``
     syntax); returns the scene and the bin's side [m]."""
     scene = load_scene(PIT_SCENE, overrides)
+    launched = sorted(k for k in scene.overridden if k.startswith("launch."))
+    if scene.launch is not None:  # (a ball more than the pour's n, counted in none of its figures)
+        raise ConfigError(*scene.where(*launched, "launch"), "makes a launched ball: the pit pours its block alone")
+    if not scene.world.collisions:
+        raise ConfigError(
+            *scene.where("world.collisions"), "must be true for the pit: balls that do not collide make no pile"
+        )
     block = scene.blocks[0]
     side = max(p.point[0] for p in scene.planes)  # the wall at x = side
     if n is None or n == block.number:
@@ -185,6 +192,8 @@ def bench_pit(
             None,
             f"{t:g} s at world.dt = {scene.world.dt:g} s is {t / scene.world.dt:,.0f} steps; at most {MAX_STEPS:,}",
         )
+    if every is not None and every < scene.world.dt:  # (a stretch is whole steps: it was one step)
+        raise ConfigError("--every", None, f"must be at least world.dt = {scene.world.dt:g} s (got {every:g})")
     t0 = time.perf_counter()
     warm_scene, _ = pit_scene(min(n_balls, WARM_UP_BALLS), overrides)  # (stepped as the pour is)
     warm = _scaled_simulation(warm_scene, n)
