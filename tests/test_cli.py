@@ -993,6 +993,18 @@ BAD_BENCH_OPTIONS = [
 """(bench and one bad option, a fragment of the allowed range the error must name)."""
 
 
+def test_bench_startup_refuses_a_backend_the_machine_lacks():
+    # its commands, started with TI_GOLF_ARCH=cuda on a machine without CUDA, ran on the CPU and
+    # their times were reported as CUDA's ("0 of 0 targets met (cuda, f64 …)")
+    from ti_golf.runtime import backend_found
+
+    if backend_found("cuda"):
+        pytest.skip("this machine has CUDA")
+    proc = run_cli("bench", "startup", "--scenes", "lab_magnus", "--cache", "warm", "--arch", "cuda")
+    assert proc.returncode == 2, proc.stderr[-2000:]
+    assert "--arch: Taichi finds no cuda backend on this machine" in proc.stderr and "Traceback" not in proc.stderr
+
+
 @pytest.mark.parametrize("args, fragment", BAD_BENCH_OPTIONS, ids=[" ".join(a) for a, _ in BAD_BENCH_OPTIONS])
 def test_bench_bad_option_exits_2(args, fragment):
     proc = run_cli("bench", *args)

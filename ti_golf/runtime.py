@@ -54,6 +54,11 @@ passes on CUDA (empty or ``0``: without them, the default), so that ``make gpu-c
 both ways on one GPU."""
 
 
+ON_THE_CPU = "running on the CPU"
+"""The end of the note said when the backend asked for is not found (tools that start ti-golf
+read it)."""
+
+
 def _plain_on_cuda() -> bool:
     """Whether :func:`plain_compile` applies on CUDA: unless :data:`CUDA_PASSES_ENV` is ``1``."""
     text = os.environ.get(CUDA_PASSES_ENV, "")
@@ -154,7 +159,7 @@ def init(
     if want_arch != "cpu" and not backend_found(want_arch):
         start_arch = "cpu"
         wanted = "GPU" if want_arch == "gpu" else want_arch
-        print(f"ti-golf: Taichi finds no {wanted} backend on this machine; running on the CPU", file=sys.stderr)
+        print(f"ti-golf: Taichi finds no {wanted} backend on this machine; {ON_THE_CPU}", file=sys.stderr)
     banner = io.StringIO()
     with contextlib.redirect_stdout(banner):  # Taichi prints "Starting on arch=..." on stdout
         ti.init(**init_options(start_arch, want_prec, debug, profile, cpu_threads))

@@ -31,7 +31,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from ti_golf.errors import ConfigError
 from ti_golf.kernel_log import cache_hits, cache_keys, cached_module_lines
+from ti_golf.runtime import ON_THE_CPU
 from ti_golf.scene.balls import ball_count
 from ti_golf.scene.loader import load_scene, scenes_dir
 
@@ -103,6 +105,9 @@ def _time_command(args: Sequence[str], env: dict[str, str], timeout: float) -> t
     except subprocess.TimeoutExpired:
         return time.perf_counter() - start, math.nan, f"took more than {timeout:g} s"
     seconds, cpu = time.perf_counter() - start, _child_cpu_s() - cpu
+    fallback = next((line for line in proc.stderr.splitlines() if line.endswith(ON_THE_CPU)), None)
+    if fallback is not None:  # (its times would be the CPU's, labelled with the backend asked for)
+        raise ConfigError("--arch", None, f"{fallback.removeprefix('ti-golf: ')}: nothing to time on it")
     if proc.returncode != 0:
         last = (proc.stderr.strip().splitlines() or ["(no message)"])[-1]
         return seconds, cpu, f"exit code {proc.returncode}: {last}"
