@@ -46,6 +46,7 @@ from ti_golf.bench.collide import pile_scene
 from ti_golf.cli import main
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
+from ti_golf.solvers.solver import REORDER_MIN_BALLS
 from ti_golf.solvers.stepping import RELIST_MAX_BALLS, SERIAL_MAX_BALLS
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -956,6 +957,28 @@ def test_bench_collide_with_a_boulder_times_the_pile_alone_too(background_runs):
     )
 
 
+def test_bench_collide_bounds_the_boulder_by_the_bin_of_its_pile():
+    # a boulder wider than the bin of --n balls never reached the pile (the walls inside it), and
+    # one below a scene's least ball radius was taken too: refused, naming the range for that --n
+    from ti_golf.bench.collide import drop_boulder, widest_boulder
+    from ti_golf.scene.checks import RADIUS
+
+    n = 301  # (a top layer partly filled: the boulder falls over the pile's middle, off the bin's)
+    widest = widest_boulder(n)
+    scene, x = pile_scene(n)
+    walls = [p for p in scene.planes if p.normal[1] == 0]
+    for radius, fits in ((widest, True), (widest + 1e-3, False)):
+        centre = drop_boulder(scene, x, radius)[0][-1]
+        room = min(np.dot(centre - np.asarray(p.point), np.asarray(p.normal)) for p in walls)
+        assert (room >= radius) == fits, (radius, room)
+    for bad in (widest + 1e-3, RADIUS.lo / 2):
+        proc = run_cli("bench", "collide", "--n", str(n), "--steps", "1", "--boulder", str(bad))
+        assert proc.returncode == 2, (bad, proc.stdout[-500:], proc.stderr)
+        assert f"--boulder: must be 0 (no boulder) or a radius in [{RADIUS.lo:g}, {widest:g}] m for --n {n}" in (
+            proc.stderr
+        )
+
+
 BAD_BENCH_OPTIONS = [
     (("collide", "--iterations", "0"), "[1, 100]"),
     (("collide", "--steps", "0"), "[1, 1,000,000]"),
@@ -976,8 +999,16 @@ BAD_BENCH_OPTIONS = [
     (("collide", "--n", "1"), "must be in [2, 10,000,000]"),
     (("pit", "--n", "15"), "must be in [16, 10,000,000]"),
     (("dispersion", "--n", "100", "--rest", "200"), "--rest: must be in [0, --n] shots (got 200)"),
-    (("collide", "--boulder", "-0.1"), "[0, 10] m"),
-    (("collide", "--boulder", "nan"), "[0, 10] m"),
+    (("collide", "--boulder", "-0.1"), "must be 0 (no boulder) or a radius in ["),
+    (("collide", "--boulder", "nan"), "must be 0 (no boulder) or a radius in ["),
+    # (4,097 to 8,191 balls: stepped in parallel, not reordered; both runs timed the random order)
+    (("collide", "--shuffled", "--n", str(REORDER_MIN_BALLS - 1), "--steps", "1"), f"--n >= {REORDER_MIN_BALLS:,}"),
+    (("collide", "--shuffled", "--n", str(SERIAL_MAX_BALLS + 1), "--steps", "1"), f"--n >= {REORDER_MIN_BALLS:,}"),
+    # (with the boulder, one ball fewer makes the pile the solver reorders)
+    (
+        ("collide", "--shuffled", "--boulder", "0.1", "--n", str(REORDER_MIN_BALLS - 2), "--steps", "1"),
+        f"--n >= {REORDER_MIN_BALLS - 1:,}",
+    ),
     (("pit", "--every", "0"), "(0, --t]"),
     (("pit", "--every", "5"), "(0, --t]"),  # longer than the pour (--t 4)
     (("pit", "--every", "nan"), "(0, --t]"),

@@ -27,21 +27,34 @@ from ti_golf.sim.simulation import Simulation
 from ti_golf.solvers import CollisionSolver
 from ti_golf.solvers.stepping import RELIST_MAX_BALLS, relists_in_kernel, steps_serially
 
+PILE_RADIUS = 0.02
+"""The radius [m] of the balls of :func:`pile_scene`'s pile (the scenes' default ball)."""
 
-def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scene, np.ndarray]:
-    """A dense pile: n balls on a cubic lattice of touching balls in a square bin, resting on the floor.
+DROP_GAP = 0.005
+"""How far above the top of the pile :func:`drop_boulder` starts a boulder's lowest point [m]."""
 
-    Every inner ball touches six neighbours. With ``terrain`` the floor is a flat height field
-    instead of a plane (same results, the terrain's cost); ``iterations`` Jacobi sweeps per step.
-    Returns the scene (planes, full contact model, air, no sleeping) and the positions (n, 3).
-    """
-    r = 0.02
+
+def pile_lattice(n: int) -> tuple[np.ndarray, float, int]:
+    """The pile of :func:`pile_scene`: the centres (n, 3) [m] of n touching balls of radius
+    :data:`PILE_RADIUS` on a cubic lattice in a square bin about 16 layers deep, the bin's width
+    [m] and the number of layers (the top one partly filled unless n fills it)."""
+    r = PILE_RADIUS
     side = int(np.ceil(np.sqrt(n / 16.0)))  # a bin about 16 layers deep
     layers = int(np.ceil(n / side**2))
     idx = np.arange(n)
     grid = np.stack([idx % side, idx // (side * side), (idx // side) % side], axis=1)
-    x = r + 2.0 * r * grid.astype(float)
-    width = 2.0 * r * side
+    return r + 2.0 * r * grid.astype(float), 2.0 * r * side, layers
+
+
+def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scene, np.ndarray]:
+    """A dense pile: n balls on a cubic lattice of touching balls in a square bin, resting on the floor
+    (:func:`pile_lattice`).
+
+    Every inner ball touches six neighbours. With ``terrain`` the floor is a flat height field
+    instead of a plane (same results, the terrain's cost); ``iterations`` Jacobi sweeps per step.
+    Returns the scene (planes, full contact model, air, no sleeping) and the positions (n, 3) [m].
+    """
+    x, width, layers = pile_lattice(n)
     planes: tuple[Plane, ...] = (
         Plane((0, 0, 0), (0, 1, 0)),
         Plane((0, 0, 0), (1, 0, 0)),
@@ -72,15 +85,32 @@ def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scen
     return scene, x
 
 
+def boulder_centre(x: np.ndarray, r: float, radius: float) -> np.ndarray:
+    """Where :func:`drop_boulder` starts a boulder of ``radius`` [m] above the pile of balls of
+    radius ``r`` [m] at ``x`` (n, 3) [m]: over the middle of the pile, :data:`DROP_GAP` above its
+    top (3,) [m]."""
+    return np.array([x[:, 0].mean(), x[:, 1].max() + r + DROP_GAP + radius, x[:, 2].mean()])
+
+
+def widest_boulder(n: int) -> float:
+    """The largest radius [m] of a boulder that :func:`drop_boulder` drops onto the pile of
+    ``n`` balls of :func:`pile_scene` without it reaching through the bin's walls: the distance
+    from its centre to the nearest wall, to the 0.1 mm below."""
+    x, width, _ = pile_lattice(n)
+    c = boulder_centre(x, PILE_RADIUS, 0.0)
+    room = min(c[0], width - c[0], c[2], width - c[2])
+    return float(np.floor(room * 1e4 + 1e-6) / 1e4)
+
+
 def drop_boulder(
     scene: Scene, x: np.ndarray, radius: float, speed: float = 3.0
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """A ball of ``radius`` [m], as dense as the scene's balls, 5 mm above the middle of the top
-    of the pile at ``x`` (n, 3) [m], falling at ``speed`` [m/s]: a boulder thrown into a ball pit.
+    """A ball of ``radius`` [m], as dense as the scene's balls, :data:`DROP_GAP` above the middle
+    of the top of the pile at ``x`` (n, 3) [m], falling at ``speed`` [m/s]: a boulder thrown into a
+    ball pit (:func:`widest_boulder`: the widest that fits the bin of :func:`pile_scene`).
     Returns the positions, velocities, radii and masses of the n + 1 balls (the boulder last)."""
     r, m = scene.ball.radius, scene.ball.mass
-    centre = [x[:, 0].mean(), x[:, 1].max() + r + 0.005 + radius, x[:, 2].mean()]
-    x = np.vstack([x, centre])
+    x = np.vstack([x, boulder_centre(x, r, radius)])
     v = np.zeros_like(x)
     v[-1, 1] = -speed
     radii = np.full(len(x), r)

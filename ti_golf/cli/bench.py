@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import math
 import os
 
-from ti_golf.bench.collide import bench_collide
+from ti_golf.bench.collide import bench_collide, widest_boulder
 from ti_golf.bench.common import to_json
 from ti_golf.bench.dispersion import bench_dispersion
 from ti_golf.bench.lab import bench_lab
@@ -25,9 +26,10 @@ from ti_golf.cli._common import (
     set_option,
 )
 from ti_golf.errors import ConfigError
+from ti_golf.scene.checks import RADIUS
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.readers import POUR_NOT_READ
-from ti_golf.solvers.stepping import SERIAL_MAX_BALLS, steps_serially
+from ti_golf.solvers.solver import REORDER_MIN_BALLS
 
 DISPERSION_REST = 10_000
 """Shots of ``bench dispersion`` rolled out to rest unless ``--rest`` says (all, when fewer)."""
@@ -61,7 +63,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="the pile's balls numbered in a random order, as balls given in no spatial order are "
         "(the same pile left in that order, not stored in the grid's order, is timed too, as "
-        "baseline)",
+        f"baseline; from {REORDER_MIN_BALLS:,} balls, the least the solver reorders)",
     )
     bc.add_argument(
         "--boulder",
@@ -69,7 +71,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default=0.0,
         metavar="R",
         help="a ball of radius R [m], as dense as the golf balls, dropped at 3 m/s onto the pile (the "
-        "pile alone is timed too, as baseline)",
+        f"pile alone is timed too, as baseline); from {RADIUS.lo:g} m to the widest that falls between the "
+        "walls of the pile's bin (half its width: 0.1 m at --n 300)",
     )
     bc.add_argument(
         "--iterations",
@@ -273,14 +276,16 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
             raise ConfigError("--steps", None, f"must be in [1, {MAX_STEPS:,}] (got {args.steps})")
         if not 1 <= args.iterations <= 100:
             raise ConfigError("--iterations", None, f"must be in [1, 100] (got {args.iterations})")
-        if not 0.0 <= args.boulder <= 10.0:  # (also false for NaN)
-            raise ConfigError("--boulder", None, f"must be a radius in [0, 10] m (got {args.boulder})")
-        if args.shuffled and steps_serially(args.n):  # (a serial pile is stepped in id order: nothing to compare)
+        _check_boulder(args.boulder, args.n)
+        balls = args.n + (args.boulder > 0)  # (the boulder is a ball of the pile's solver)
+        if args.shuffled and balls < REORDER_MIN_BALLS:  # (both runs would keep the random order)
+            least = REORDER_MIN_BALLS - (args.boulder > 0)
             raise ConfigError(
                 "--shuffled",
                 None,
-                f"has no effect on {args.n} balls, stepped serially in their id order on the CPU "
-                f"(at most {SERIAL_MAX_BALLS:,}): give --n > {SERIAL_MAX_BALLS:,}",
+                f"has no effect on {args.n:,} balls{' and the boulder' if args.boulder > 0 else ''}: the solver stores the balls in the grid's order from "
+                f"{REORDER_MIN_BALLS:,} balls on (smaller piles stay in the CPU's caches in any order), so both "
+                f"runs would keep the random order: give --n >= {least:,}",
             )
         result = bench_collide(
             n=args.n,
@@ -302,6 +307,23 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
     if result.get("interrupted"):
         raise KeyboardInterrupt(f"at t = {result['t_s']:.4g} s; the figures of the pour so far are printed above")
     return 0
+
+
+def _check_boulder(radius: float, n: int) -> None:
+    """Refuse a ``bench collide --boulder`` radius [m] other than 0 (no boulder) that is below a
+    scene's least ball radius or too wide for the bin of the pile of ``n`` balls
+    (:func:`~ti_golf.bench.collide.widest_boulder`), or the largest a scene takes."""
+    if radius == 0.0:
+        return
+    widest = min(RADIUS.hi or math.inf, widest_boulder(n))
+    if not RADIUS.lo <= radius <= widest:  # (also false for NaN)
+        raise ConfigError(
+            "--boulder",
+            None,
+            f"must be 0 (no boulder) or a radius in [{RADIUS.lo:g}, {widest:g}] m for --n {n}: from a scene's "
+            f"least ball radius to the widest that falls between the walls of the bin of {n:,} balls "
+            f"(got {radius})",
+        )
 
 
 MAX_STUDY_TASKS = 1_000
