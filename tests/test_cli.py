@@ -979,6 +979,50 @@ def test_bench_collide_bounds_the_boulder_by_the_bin_of_its_pile():
         )
 
 
+@ON_VULKAN
+def test_bench_render_refuses_a_backend_ggui_does_not_draw_with():
+    # on Vulkan GGUI is not drawn (render's "auto" falls back to matplotlib): the bench timed
+    # matplotlib against matplotlib and exited 0. --arch offers cpu and cuda, as `bench lab` does,
+    # and TI_GOLF_ARCH=vulkan is refused naming --arch
+    proc = run_cli("bench", "render", "--arch", "vulkan", "--n", "10", "--frames", "1")
+    assert proc.returncode == 2 and "argument --arch: invalid choice: 'vulkan'" in proc.stderr, proc.stderr
+    proc = run_cli("bench", "render", "--n", "10", "--frames", "1", env={"TI_GOLF_ARCH": "vulkan"})
+    if "running on the CPU" in proc.stderr:  # (runtime.init's note when Taichi finds no Vulkan)
+        pytest.skip(NO_VULKAN_BACKEND)
+    assert proc.returncode == 2, (proc.stdout[-500:], proc.stderr)
+    assert "--arch: times GGUI against matplotlib, and GGUI draws with the CPU or CUDA backend" in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_bench_render_reports_the_best_of_its_frames_of_each_renderer_and_the_precision(monkeypatch):
+    # the docs said "the best of three frames each": the bench reported the mean of the GGUI
+    # frames and one matplotlib frame, and no precision, which every other bench reports. The
+    # frames' seconds here come from a clock that each fake frame advances by its own time
+    import types
+
+    from ti_golf.bench import common
+    from ti_golf.bench import render as bench
+    from ti_golf.runtime import ensure_init
+
+    clock = [0.0]
+    times = {"ggui": [5.0, 0.3, 0.1, 0.2], "matplotlib": [9.0, 0.7, 0.9, 0.5]}  # (the first: untimed)
+    drawn = {"ggui": 0, "matplotlib": 0}
+
+    def fake_render(sim, path, backend="auto", **kwargs):
+        clock[0] += times[backend][drawn[backend]]
+        drawn[backend] += 1
+        return backend
+
+    monkeypatch.setattr(bench, "render", fake_render)
+    monkeypatch.setattr(common, "time", types.SimpleNamespace(perf_counter=lambda: clock[0]))
+    result = bench.bench_render(n=10, frames=3, log=lambda line: None)
+    assert drawn == {"ggui": 4, "matplotlib": 4}  # an untimed first frame, then three timed, each
+    assert result["renderer"] == "ggui"
+    assert result["seconds_per_frame"] == pytest.approx(min(times["ggui"][1:]))
+    assert result["baselines"]["matplotlib_seconds_per_frame"] == pytest.approx(min(times["matplotlib"][1:]))
+    assert result["precision"] == ensure_init().precision and result["frames"] == 3
+
+
 BAD_BENCH_OPTIONS = [
     (("collide", "--iterations", "0"), "[1, 100]"),
     (("collide", "--steps", "0"), "[1, 1,000,000]"),

@@ -124,9 +124,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     bst.add_argument("--json", action="store_true", help="end with one line of JSON")
     br = bsub.add_parser("render", help="seconds per off-screen frame of N balls over a terrain")
     br.add_argument("--n", type=int, default=100_000, help="balls (default 100000)")
-    br.add_argument("--frames", type=int, default=3, help="timed frames (default 3)")
+    br.add_argument(
+        "--frames",
+        type=int,
+        default=3,
+        help="timed frames of each, GGUI and matplotlib; the best is reported (default 3)",
+    )
     br.add_argument("--json", action="store_true", help="end with one line of JSON")
-    runtime_options(br)
+    runtime_options(br, window=True)
     bl = bsub.add_parser(
         "lab",
         help="the lab's window running a scene as fast as it goes, hidden: simulated seconds per wall second, "
@@ -263,6 +268,7 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
     elif args.bench == "render":
         if not 1 <= args.frames <= 1000:
             raise ConfigError("--frames", None, f"must be in [1, 1000] (got {args.frames})")
+        _check_ggui()
         result = bench_render(n=args.n, frames=args.frames)
     elif args.bench == "pit":
         if not 0.0 < args.t <= 60.0:  # (also false for NaN)
@@ -307,6 +313,18 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
     if result.get("interrupted"):
         raise KeyboardInterrupt(f"at t = {result['t_s']:.4g} s; the figures of the pour so far are printed above")
     return 0
+
+
+def _check_ggui() -> None:
+    """Refuse ``bench render`` where GGUI does not draw (it would time the matplotlib fallback
+    against itself): a backend GGUI is not drawn with (``TI_GOLF_ARCH=vulkan``; ``--arch`` offers
+    cpu and cuda alone), or no window can be opened."""
+    from ti_golf.render import arch_ggui_refuses, window_problem
+
+    problem = window_problem(on_screen=False)
+    if problem:
+        option = "--arch" if arch_ggui_refuses() else "bench render"
+        raise ConfigError(option, None, f"times GGUI against matplotlib, and GGUI {problem}")
 
 
 def _check_boulder(radius: float, n: int) -> None:
