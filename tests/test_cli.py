@@ -1037,6 +1037,8 @@ BAD_BENCH_OPTIONS = [
     (("lab", "no_such_scene"), "file not found"),
     (("lab", "--set", "air.C_D=-1"), "[0, 100]"),
     (("startup", "--scenes", ","), "names no scene"),  # (it timed every scene)
+    (("startup", "--repeats", "101", "--cache", "warm", "--scenes", "lab_vacuum"), "[1, 100]"),  # (no bound)
+    (("startup", "--repeats", "0"), "[1, 100]"),
     (("startup", "--top", "3", "--cache", "warm"), "has no effect without --kernels"),
     (("startup", "--repeats", "2", "--kernels", "lab_vacuum"), "has no effect with --kernels"),
     (("pit", "--t", "0.02", "--n", "500", "--set", "world.dt=1e-9"), "20,000,000 steps; at most 10,000,000"),

@@ -169,7 +169,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     bu.add_argument(
         "--scenes", metavar="A,B,...", help="the bundled scenes whose `run --steps 1` is timed (default: all)"
     )
-    bu.add_argument("--repeats", type=int, default=1, help="warm timings per command; the best is reported (default 1)")
+    bu.add_argument(
+        "--repeats", type=int, default=1, help="warm timings per command, 1 to 100; the best is reported (default 1)"
+    )
     bu.add_argument(
         "--kernels",
         metavar="SCENE",
@@ -200,8 +202,8 @@ def cmd_startup(args: argparse.Namespace) -> int:
     else:
         if args.top is not None:
             raise ConfigError("--top", None, "has no effect without --kernels")
-        if args.repeats < 1:
-            raise ConfigError("--repeats", None, f"must be >= 1 (got {args.repeats})")
+        if not 1 <= args.repeats <= 100:  # (as bench sweep's: each repeat starts every command again)
+            raise ConfigError("--repeats", None, f"must be in [1, 100] (got {args.repeats})")
         scenes = [s.strip() for s in args.scenes.split(",") if s.strip()] if args.scenes is not None else None
         if scenes == []:
             raise ConfigError("--scenes", None, f"names no scene (got {args.scenes!r}); leave it out for all")
