@@ -1023,6 +1023,9 @@ def test_bench_render_reports_the_best_of_its_frames_of_each_renderer_and_the_pr
     assert result["precision"] == ensure_init().precision and result["frames"] == 3
 
 
+TOUR_DT = tomllib.loads((SCENES / "tour_shot.toml").read_text(encoding="utf-8"))["world"]["dt"]
+"""The time step of ``tour_shot``, the scene ``bench dispersion`` flies [s]."""
+
 BAD_BENCH_OPTIONS = [
     (("collide", "--iterations", "0"), "[1, 100]"),
     (("collide", "--steps", "0"), "[1, 1,000,000]"),
@@ -1045,6 +1048,12 @@ BAD_BENCH_OPTIONS = [
     (("collide", "--n", "1"), "must be in [2, 10,000,000]"),
     (("pit", "--n", "15"), "must be in [16, 10,000,000]"),
     (("dispersion", "--n", "100", "--rest", "200"), "--rest: must be in [0, --n] shots (got 200)"),
+    # (a step equal to world.dt was timed once, the second timing dropped; a finer one is no "coarser step")
+    (
+        ("dispersion", "--flight-dt", str(TOUR_DT), "--n", "100"),
+        f"must be coarser than tour_shot's world.dt = {TOUR_DT:g} s",
+    ),
+    (("dispersion", "--flight-dt", str(TOUR_DT / 2), "--n", "100"), f"in ({TOUR_DT:g}, 0.05] s"),
     (("collide", "--boulder", "-0.1"), "must be 0 (no boulder) or a radius in ["),
     (("collide", "--boulder", "nan"), "must be 0 (no boulder) or a radius in ["),
     # (4,097 to 8,191 balls: stepped in parallel, not reordered; both runs timed the random order)

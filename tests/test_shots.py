@@ -467,6 +467,47 @@ def test_bench_dispersion_of_fewer_shots_than_its_default_rest_rolls_them_all_ou
     assert json.loads(out.strip().splitlines()[-1])["rest"]["n"] == 100
 
 
+def test_bench_dispersion_rolls_out_the_landings_at_the_scenes_step(monkeypatch):
+    # the loop over (world.dt, flight_dt) kept only the last flight's landings, so the roll-out
+    # started from the coarse step's while its rate and its log said world.dt's
+    from ti_golf.bench import dispersion as bench
+
+    n, rest = 64, 32  # (apart from the 16 shots that compile, and the one compared with a Simulation)
+    landed: dict[float, np.ndarray] = {}
+    rolled: list[np.ndarray] = []
+    fly, roll_out = bench.fly, bench.roll_out
+
+    def flown(scene, x0, v0, w0, **kwargs):
+        out = fly(scene, x0, v0, w0, **kwargs)
+        if len(x0) == n:
+            landed[scene.world.dt] = out["land_x"].copy()
+        return out
+
+    def rolled_out(scene, x, v, w, *args, **kwargs):
+        if len(x) == rest:
+            rolled.append(x.copy())
+        return roll_out(scene, x, v, w, *args, **kwargs)
+
+    monkeypatch.setattr(bench, "fly", flown)
+    monkeypatch.setattr(bench, "roll_out", rolled_out)
+    r = bench.bench_dispersion(
+        n=n, rest=rest, flight_dt=0.01, n_reference=2, n_single=1, n_numpy=4, n_scipy=1, n_compare=1, log=lambda _: None
+    )
+    dt = load_scene(bench.SCENE).world.dt
+    assert set(landed) == {dt, 0.01} and r["rest"]["n"] == rest and len(rolled) == 1
+    assert not np.array_equal(landed[dt][:rest], landed[0.01][:rest])  # (the two steps land apart)
+    np.testing.assert_array_equal(rolled[0], landed[dt][:rest].astype(np.float64))
+
+
+def test_bench_dispersion_refuses_a_flight_step_not_coarser_than_the_scenes():
+    from ti_golf.bench.dispersion import SCENE, bench_dispersion
+
+    dt = load_scene(SCENE).world.dt
+    for flight_dt in (dt, dt / 2, math.nan):
+        with pytest.raises(ValueError, match="coarser than"):
+            bench_dispersion(n=4, rest=0, flight_dt=flight_dt)
+
+
 def test_bench_dispersion_reports_rates_baselines_and_accuracy():
     from ti_golf.bench.dispersion import bench_dispersion
 

@@ -8,6 +8,7 @@ import os
 
 from ti_golf.bench.collide import bench_collide, widest_boulder
 from ti_golf.bench.common import to_json
+from ti_golf.bench.dispersion import SCENE as DISPERSION_SCENE
 from ti_golf.bench.dispersion import bench_dispersion
 from ti_golf.bench.lab import bench_lab
 from ti_golf.bench.pit import PIT_BALLS, bench_pit
@@ -110,7 +111,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--rest", type=int, default=None, help="of them rolled out to rest (default 10000, or --n if fewer; 0: none)"
     )
     bd.add_argument(
-        "--flight-dt", type=float, default=0.01, help="a second, coarser RK4 step timed to landing [s] (default 0.01)"
+        "--flight-dt",
+        type=float,
+        default=0.01,
+        help=f"a second RK4 step timed to landing [s], coarser than {DISPERSION_SCENE}'s world.dt (timed first) and "
+        "at most 0.05 (default 0.01)",
     )
     bd.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(bd)
@@ -257,8 +262,14 @@ def cmd_bench(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per benc
     if not least <= args.n <= MAX_N:
         raise ConfigError("--n", None, f"must be in [{least:,}, {MAX_N:,}] (got {args.n})")
     if args.bench == "dispersion":
-        if not 1e-5 <= args.flight_dt <= 0.05:  # (also false for NaN)
-            raise ConfigError("--flight-dt", None, f"must be in [1e-05, 0.05] s (got {args.flight_dt})")
+        dt = load_scene(DISPERSION_SCENE).world.dt
+        if not dt < args.flight_dt <= 0.05:  # (also false for NaN)
+            raise ConfigError(
+                "--flight-dt",
+                None,
+                f"must be coarser than {DISPERSION_SCENE}'s world.dt = {dt:g} s, the step timed first, and at most "
+                f"0.05 s: in ({dt:g}, 0.05] s (got {args.flight_dt})",
+            )
         rest = min(DISPERSION_REST, args.n) if args.rest is None else args.rest
         if not 0 <= rest <= args.n:
             raise ConfigError("--rest", None, f"must be in [0, --n] shots (got {rest})")
