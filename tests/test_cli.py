@@ -957,6 +957,20 @@ def test_bench_collide_with_a_boulder_times_the_pile_alone_too(background_runs):
     )
 
 
+def test_bench_collide_names_the_sweeps_of_the_solver_its_pile_uses(capsys):
+    # --iterations' help and pile_scene's docstring said "Jacobi sweeps per step" of a pile that the
+    # default solver, Gauss-Seidel, steps
+    words = {"gauss_seidel": "Gauss–Seidel", "jacobi": "Jacobi"}
+    solver = pile_scene(2)[0].contact.solver
+    with pytest.raises(SystemExit):
+        main(["bench", "collide", "--help"])
+    said = " ".join(capsys.readouterr().out.split())
+    iterations = said[said.index("--iterations ITERATIONS") :]
+    for text in (iterations, " ".join((pile_scene.__doc__ or "").split())):
+        assert f"{words[solver]} sweeps per step" in text, text
+        assert all(word not in text for name, word in words.items() if name != solver), text
+
+
 def test_bench_collide_bounds_the_boulder_by_the_bin_of_its_pile():
     # a boulder wider than the bin of --n balls never reached the pile (the walls inside it), and
     # one below a scene's least ball radius was taken too: refused, naming the range for that --n

@@ -51,7 +51,8 @@ def pile_scene(n: int, terrain: bool = False, iterations: int = 4) -> tuple[Scen
     (:func:`pile_lattice`).
 
     Every inner ball touches six neighbours. With ``terrain`` the floor is a flat height field
-    instead of a plane (same results, the terrain's cost); ``iterations`` Jacobi sweeps per step.
+    instead of a plane (same results, the terrain's cost); ``iterations`` Gauss–Seidel sweeps per
+    step (``contact.solver``'s default; the last is the shock sweep).
     Returns the scene (planes, full contact model, air, no sleeping) and the positions (n, 3) [m].
     """
     x, width, layers = pile_lattice(n)

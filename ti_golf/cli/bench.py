@@ -79,7 +79,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--iterations",
         type=int,
         default=4,
-        help="Jacobi sweeps per step (default 4, the scenes' default; a deep pile at rest needs 8)",
+        help="Gauss–Seidel sweeps per step (the scenes' default solver); the last is the shock sweep (default 4, "
+        "as the scenes')",
     )
     bc.add_argument("--json", action="store_true", help="end with one line of JSON")
     runtime_options(bc)
