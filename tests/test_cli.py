@@ -971,6 +971,31 @@ def test_bench_collide_names_the_sweeps_of_the_solver_its_pile_uses(capsys):
         assert all(word not in text for name, word in words.items() if name != solver), text
 
 
+def test_the_performance_pages_collide_options_claim_only_baselines_the_bench_times(capsys):
+    # the `--iterations 8` row gave "4 sweeps in the same session" as its same-run baseline, which
+    # `bench collide --iterations 8` neither times nor prints: a row's baseline is a yardstick every
+    # run times, the parallel step a serial pile is timed against, one its option's help says is
+    # "timed too, as baseline", or it says it is a separate run
+    page = (ROOT / "docs" / "performance.md").read_text(encoding="utf-8")
+    table = page[
+        page.index("The same command with an option") : page.index("**What limits it.**", page.index("## Collisions"))
+    ]
+    with pytest.raises(SystemExit):
+        main(["bench", "collide", "--help"])
+    said = " ".join(capsys.readouterr().out.split())
+    said = said[said.index(" options: ") :]  # (each option's help, after the usage line)
+    rows = [
+        [c.strip() for c in ln.strip().strip("|").split("|")] for ln in table.splitlines() if ln.startswith("| `--")
+    ]
+    assert any("--iterations" in row[0] for row in rows)
+    for row in rows:
+        option = re.match(r"`(--[\w-]+)", row[0]).group(1)
+        start = said.find(f" {option} ")
+        helped = start >= 0 and "as baseline" in said[start : said.find(" --", start + 1)]
+        kinds = ("one pass of the contacts", "bare gather", "one parallel launch a step", "a separate run")
+        assert helped or any(kind in row[3] for kind in kinds), row
+
+
 def test_bench_collide_bounds_the_boulder_by_the_bin_of_its_pile():
     # a boulder wider than the bin of --n balls never reached the pile (the walls inside it), and
     # one below a scene's least ball radius was taken too: refused, naming the range for that --n
