@@ -915,6 +915,27 @@ def test_bench_collide_json(n, flags, background_runs, request):
         )
 
 
+def test_bench_json_rounds_the_floats_in_lists_and_tuples_too():
+    # to_json promised floats to 6 significant digits but left those in lists (the pit's timeline,
+    # the start-up's commands) at full length
+    from ti_golf.bench.common import to_json
+
+    values = [math.pi, -math.e * 1e-9, 1.0 / 3.0 * 1e7]
+    result = {
+        "x": values[0],
+        "timeline": [{"t_s": v, "kernels": {"k": [v]}} for v in values],
+        "commands": [("run", v) for v in values],
+    }
+    out = json.loads(to_json(result))
+    found = [out["x"]]
+    for row in out["timeline"]:
+        found += [row["t_s"], *row["kernels"]["k"]]
+    found += [v for _, v in out["commands"]]
+    expected = [values[0]] + [v for v in values for _ in range(2)] + values
+    for got, v in zip(found, expected, strict=True):
+        assert got == round(v, 5 - math.floor(math.log10(abs(v)))), (got, v)  # 6 significant digits
+
+
 @pytest.mark.skipif(not Path("/proc/self/clear_refs").exists(), reason="restarting the peak RSS needs Linux /proc")
 def test_the_bench_restarts_the_peak_memory_after_its_warm_up():
     # the collide bench reports the pile's peak resident memory above the process's after the

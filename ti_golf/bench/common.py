@@ -25,13 +25,16 @@ def faster(q: float, digits: int = 1) -> str:
 
 
 def to_json(result: dict[str, Any]) -> str:
-    """One line of JSON (floats rounded to 6 significant digits)."""
+    """One line of JSON (floats rounded to 6 significant digits, in dicts, lists and tuples at any
+    depth: the pit's ``timeline``, the start-up's ``commands``)."""
 
     def clean(o: Any) -> Any:
         if isinstance(o, float):
             return float(f"{o:.6g}")
         if isinstance(o, dict):
             return {k: clean(v) for k, v in o.items()}
+        if isinstance(o, (list, tuple)):
+            return [clean(v) for v in o]
         return o
 
     return json.dumps(clean(result))
