@@ -207,6 +207,21 @@ def test_bench_lab_runs_the_window_frame_after_frame_and_says_where_a_frame_goes
     assert img.shape == (270, 480, 3) and matches(img, STATUS_COLORS[ROLLING]).sum() > 0
 
 
+def test_bench_lab_says_in_its_output_that_the_run_stopped_before_its_seconds_and_why():
+    # a scene that ends before --seconds said so only in the JSON ("stopped": true)
+    proc = run_cli(
+        "bench", "lab", "lab_vacuum", "--set", "world.t_end=0.05", "--seconds", "60", "--size", "160x90", "--json"
+    )
+    if proc.returncode == 2 and "cannot open a window" in proc.stderr:
+        pytest.skip("GGUI needs Vulkan (apt-get install mesa-vulkan-drivers)")
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert result["stopped"] and result["wall_s"] < 60
+    said = [line for line in proc.stdout.splitlines()[:-1] if "the run stopped" in line]
+    assert len(said) == 1 and "of the 60 wall seconds asked for" in said[0], proc.stdout
+    assert "world.t_end = 0.05 s" in said[0], said  # why: the scene's end
+
+
 # ----------------------------------------------------------------------------------------------
 # the keys and the mouse, without a window
 # ----------------------------------------------------------------------------------------------

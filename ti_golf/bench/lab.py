@@ -31,7 +31,9 @@ def bench_lab(
     100,000-ball pit on a GPU: at least 0.1), frames per second, each part's seconds per frame
     (:data:`PARTS`), and as the baseline the pace of the same run's steps alone, without the
     window's frames (``stepping_sim_s_per_wall_s``); beside them the pile's deepest overlap at the
-    end. With ``screenshot``, the last frame's picture is written there (a PNG)."""
+    end. With ``screenshot``, the last frame's picture is written there (a PNG). A run that ends
+    before ``seconds`` (at ``world.t_end``, every ball at rest or out, a ball non-finite) says so,
+    and why, in a line of its own (``stopped``)."""
     info = ensure_init()
     lab = Lab(scene, overrides, speed=None)
     sim = lab.sim
@@ -91,4 +93,7 @@ def bench_lab(
         + f"; the steps alone: {out['baselines']['stepping_sim_s_per_wall_s']:.4g} simulated s per wall s"
     )
     log(f"deepest overlap at t = {sim.t:.4g} s: {100 * out['deepest_overlap']:.3g} % of a radius")
+    if out["stopped"]:  # (the figures are those of fewer wall seconds than asked for)
+        why = lab.message.removesuffix(": Continue runs on") or "the lab stopped it"
+        log(f"the run stopped after {wall:.1f} of the {seconds:g} wall seconds asked for: {why}")
     return out
