@@ -978,6 +978,15 @@ def test_bench_collide_with_a_boulder_times_the_pile_alone_too(background_runs):
     )
 
 
+def test_bench_lab_refuses_a_screenshot_path_that_ends_in_a_separator(tmp_path, capsys):
+    # `--screenshot DIR.png/` names a folder, but Path reads it as DIR.png: the picture was written there
+    shot = tmp_path / "shot.png"
+    args = ["bench", "lab", "lab_vacuum", "--seconds", "0.1", "--size", "160x90", "--screenshot", f"{shot}{os.sep}"]
+    assert main(args) == 2
+    assert f"--screenshot: cannot write '{shot}{os.sep}': it ends in a separator" in capsys.readouterr().err
+    assert not shot.exists()
+
+
 def test_bench_collide_names_the_sweeps_of_the_solver_its_pile_uses(capsys):
     # --iterations' help and pile_scene's docstring said "Jacobi sweeps per step" of a pile that the
     # default solver, Gauss-Seidel, steps

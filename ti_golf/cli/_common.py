@@ -6,6 +6,7 @@ import argparse
 import contextlib
 import difflib
 import math
+import os
 import re
 import signal
 import sys
@@ -229,14 +230,19 @@ def set_option(p: argparse.ArgumentParser, help: str) -> None:
 
 def check_writable(path: str | None, option: str, suffixes: tuple[str, ...] = ()) -> None:
     """Fail before a long computation rather than lose its result to an unwritable output path
-    (``None``: the option was not given), or write a format its name does not say: with
-    ``suffixes`` (such as ``(".npz",)``), the file's name must end in one of them."""
+    (``None``: the option was not given) or a path that names a folder (one that ends in a
+    separator: ``shot.png/``, which Path would read as ``shot.png``), or write a format its name
+    does not say: with ``suffixes`` (such as ``(".npz",)``), the file's name must end in one of them."""
     if path is None:
         return
     if not path.strip():
         raise ConfigError(option, None, "needs a file name (got an empty path)")
     if Path(path).is_dir() or Path(path).name in ("", ".", ".."):
         raise ConfigError(option, None, f"cannot write {path!r}: it is a folder; give a file name")
+    if path.endswith(
+        tuple(sep for sep in (os.sep, os.altsep, "/") if sep)
+    ):  # (a folder's name, though none is there yet)
+        raise ConfigError(option, None, f"cannot write {path!r}: it ends in a separator, as a folder; give a file name")
     parent = Path(path).resolve().parent
     if parent.exists() and not parent.is_dir():
         raise ConfigError(option, None, f"cannot write {path!r}: {str(parent)!r} is a file, not a folder")
