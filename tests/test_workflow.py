@@ -57,7 +57,7 @@ def test_the_break_shot_saved_during_the_break_goes_on_bit_for_bit(tmp_path):
 
 def _columns_scene() -> tg.Scene:
     """27 balls in 3 × 3 columns of 3 on the ground (Gauss–Seidel sweeps, quickly asleep) and a
-    ball rolling into them at 1 m/s, which arrives after 0.1 s; no air."""
+    ball rolling into them at 1 m/s, which arrives after 0.06 s; no air."""
     r = 0.02
     balls = [{"position": [2 * r * i, r + 2 * r * k, 2 * r * j]} for i in range(3) for j in range(3) for k in range(3)]
     balls.append({"position": [-0.1, r, 2 * r], "velocity": [1.0, 0.0, 0.0]})
@@ -84,7 +84,7 @@ def test_a_pile_saved_asleep_wakes_as_if_it_never_stopped(serial, tmp_path):
         return sim
 
     saved = tmp_path / "p.npz"
-    whole, resumed = _continued(make, 0.07, 0.1, saved)
+    whole, resumed = _continued(make, 0.07, 0.03, saved)  # (woken just after 0.07 s; in parallel asleep by 0.11 s)
     with np.load(saved) as d:
         assert np.count_nonzero(d["status"] == tg.AT_REST) == 27  # the columns sleep at the save
         assert ("order" in d.files) == (not serial)
