@@ -1802,3 +1802,15 @@ def test_the_pour_says_100_percent_asleep_only_when_every_ball_is():
     from ti_golf.bench.pit import asleep_share
 
     assert [asleep_share(f) for f in (1.0, 0.99997, 0.989, 0.0)] == ["100 %", "99.997 %", "98.9 %", "0 %"]
+
+
+def test_bench_collide_steps_and_warms_up_the_pile_with_its_boulder_as_the_solver_does(monkeypatch):
+    # the bench decided serial stepping (and which baseline and warm-up to run) from --n alone, while
+    # the solver holds the boulder too: at the bound, the pile was said serial and stepped in parallel
+    from ti_golf.bench.collide import bench_collide, widest_boulder
+    from ti_golf.solvers import stepping
+
+    n = 64
+    monkeypatch.setattr(stepping, "SERIAL_MAX_BALLS", n)
+    result = bench_collide(n=n, steps=1, boulder=widest_boulder(n) / 2, log=lambda _: None)
+    assert result["serial"] is False and "serial_speedup" not in result, result

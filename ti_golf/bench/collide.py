@@ -145,7 +145,9 @@ def bench_collide(
     ones), and the pile alone is timed in the same run as the baseline (``boulder_slowdown``).
     """
     info = ensure_init()
-    serial = steps_serially(n)
+    # the solver decides by the balls it holds: the boulder is one more
+    balls = n + 1 if boulder > 0 else n
+    serial = steps_serially(balls)
 
     def pile(
         m: int, floor: bool, parallel: bool = False, reorder: bool | None = None, with_boulder: bool = boulder > 0
@@ -164,7 +166,7 @@ def bench_collide(
 
     # a serial pile relists in its kernel or is built between launches (stepping.RELIST_MAX_BALLS): the
     # warm-up's serial pile is of the same kind
-    serial_warm = 64 if relists_in_kernel(n, serial) else RELIST_MAX_BALLS + 1
+    serial_warm = 64 if relists_in_kernel(balls, serial) else RELIST_MAX_BALLS + 1
     for floor in (False, True) if terrain else (False,):  # compile every kernel before timing
         for parallel, reorder in ((False, None),) * serial + ((True, False), (True, True)):
             warm = pile(64 if parallel else serial_warm, floor, parallel, reorder)
