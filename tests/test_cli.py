@@ -785,6 +785,35 @@ def test_bench_pit_interrupted_while_it_measures_the_pile_keeps_that_stretch(mon
     assert err.strip().splitlines()[-1].startswith("ti-golf: interrupted at t = 0.02 s;")
 
 
+@pytest.mark.slow
+def test_a_second_ctrl_c_while_bench_pit_takes_its_figures_still_gets_them_printed(monkeypatch, capsys):
+    # Ctrl-C ended the pour after its first stretch; a second one while the figures were taken
+    # (here as the pair tables are read) raised out of the benchmark and lost them all
+    from ti_golf.bench import pit
+
+    tables, calls = pit.pair_tables, []
+
+    def signalled_tables(sim):
+        if not calls:
+            os.kill(os.getpid(), signal.SIGINT)
+        calls.append(1)
+        return tables(sim)
+
+    def interrupted_at_the_first_row(sim, side):
+        os.kill(os.getpid(), signal.SIGINT)  # (held while the row is measured: the pour ends there)
+        return quality(sim, side)
+
+    quality = pit._measure_stretch
+    monkeypatch.setattr(pit, "_measure_stretch", interrupted_at_the_first_row)
+    monkeypatch.setattr(pit, "pair_tables", signalled_tables)
+    assert main(["bench", "pit", "--n", "300", "--t", "0.05", "--every", "0.02", "--json"]) == 130
+    out, err = capsys.readouterr()
+    result = json.loads(out.strip().splitlines()[-1])
+    assert calls == [1] and result["interrupted"] is True and result["steps"] == 20
+    assert "baselines" in result and result["deepest_overlap"] >= 0.0
+    assert "taking the figures of the pour so far" in err
+
+
 PARALLEL_PIT = SERIAL_MAX_BALLS + 1
 """Balls of the benchmarks' piles that take the parallel step: more than ``SERIAL_MAX_BALLS``."""
 

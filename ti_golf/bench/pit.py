@@ -220,78 +220,86 @@ def bench_pit(
         raise KeyboardInterrupt("before the pour's first step")
     if interrupted:
         log(f"interrupted at t = {sim.t:.4g} s: the figures below are of the pour so far")
-    # (Ctrl-C now still gets the figures printed, and then ends the command)
-    (quality, gather_rate), signalled = _held(lambda: (pile_quality(sim, side), bare_gather_rate(sim.x)))
-    interrupted = interrupted or signalled
-    ball_steps_per_s = n_balls * steps / wall_s
-    result: dict[str, Any] = {
-        "benchmark": "pit",
-        "n": n_balls,
-        "interrupted": interrupted,
-        "set": list(overrides),
-        "t_s": sim.t,
-        "dt_s": sim.dt,
-        "steps": steps,
-        "steps_asleep": sim.solver.still_steps if sim.solver is not None else 0,
-        "arch": info.arch,
-        "precision": info.precision,
-        "wall_s": wall_s,
-        "setup_s": setup_s,
-        "compile_s": compile_s,
-        "sim_s_per_wall_s": sim.t / wall_s,
-        "ball_steps_per_s": ball_steps_per_s,
-        "peak_rss_bytes": peak,
-        "bytes_per_ball_above_baseline": max(peak - base_rss, 0) / n_balls,
-        **quality,
-        "baselines": {"bare_gather_balls_per_s": gather_rate},
-        "step_cost_in_bare_gathers": gather_rate / ball_steps_per_s,
-    }
-    result.update(solver_launches(sim))
-    result.update(pair_tables(sim))
-    if times is None and steps > 0 and sim.solver is not None:
-        result.update(host_share(sim, wall_s, steps))
-    if "loop_s" in result and "launches_per_step" in result:  # (the parallel Gauss–Seidel sweeps)
-        taken = steps - result["steps_asleep"]  # (a step skipped asleep starts no loop)
-        result["sweep_loops_share"] = min(taken * result["launches_per_step"] * result["loop_s"] / wall_s, 1.0)
-    if every is not None:
-        result["timeline"] = timeline
-    if times is not None:
-        result["kernel_profiler"] = {"kernel_s": times.total_s(), "host_s": wall_s - times.total_s()}
-        result["kernels"] = times.as_dict()
-    log(
-        f"{wall_s:.1f} s after {compile_s:.1f} s of compiling ({result['sim_s_per_wall_s']:.3g} simulated s per "
-        f"wall s, {ball_steps_per_s:.3g} ball-steps/s, {result['bytes_per_ball_above_baseline']:.0f} bytes/ball)"
-    )
-    log(
-        f"pile at t = {sim.t:.3g} s: deepest overlap {100 * quality['deepest_overlap']:.3g} % of a radius, "
-        f"p99 speed {1e3 * quality['p99_speed_mps']:.3g} mm/s, {quality['outside_bin']} outside the bin, "
-        f"{asleep_share(quality['asleep_fraction'])} asleep"
-    )
-    if "launches_per_step" in result:
-        log(
-            f"{result['layout']} layout: {result['launches_per_step']} parallel loops a step in the sweeps and "
-            f"projections, a median of {result['median_items_per_launch']:.0f} work items each"
-        )
-    if "host_share" in result:
-        log(
-            f"{result['host_calls_per_step']:.1f} kernel calls a step, {1e6 * result['launch_host_s']:.1f} µs of host "
-            f"time each: the host's share of the wall time about {100 * result['host_share']:.2g} %"
-        )
-    if "loop_s" in result:
-        share = result.get("sweep_loops_share")
-        at_least = (
-            "" if share is None else f" ({100 * share:.2g} % of the wall time at least, to start the sweeps' loops)"
-        )
-        log(
-            f"one parallel loop more in a kernel: {1e6 * result['loop_s']:.1f} µs of no item, "
-            f"{1e6 * result['ball_loop_s']:.1f} µs over the balls{at_least}"
-        )
-    log(f"baseline bare_gather: {gather_rate:.3g} balls/s -> a step costs {result['step_cost_in_bare_gathers']:.1f}")
-    if times is not None:
-        dearest = ", ".join(f"{name} {s:.1f} s" for name, s in times.seconds.most_common(6))
-        log(
-            f"kernels {times.total_s():.1f} s of the {wall_s:.1f} s (dearest: {dearest}); the host {wall_s - times.total_s():.1f} s"
-        )
+    # the figures, with Ctrl-C and SIGTERM held until they are taken (a second Ctrl-C soon after the
+    # one that ended the pour lost them); the command prints them, and then ends
+    try:
+        with whole_steps("taking the figures of the pour so far; they are printed before it stops"):
+            quality, gather_rate = pile_quality(sim, side), bare_gather_rate(sim.x)
+            ball_steps_per_s = n_balls * steps / wall_s
+            result: dict[str, Any] = {
+                "benchmark": "pit",
+                "n": n_balls,
+                "interrupted": interrupted,
+                "set": list(overrides),
+                "t_s": sim.t,
+                "dt_s": sim.dt,
+                "steps": steps,
+                "steps_asleep": sim.solver.still_steps if sim.solver is not None else 0,
+                "arch": info.arch,
+                "precision": info.precision,
+                "wall_s": wall_s,
+                "setup_s": setup_s,
+                "compile_s": compile_s,
+                "sim_s_per_wall_s": sim.t / wall_s,
+                "ball_steps_per_s": ball_steps_per_s,
+                "peak_rss_bytes": peak,
+                "bytes_per_ball_above_baseline": max(peak - base_rss, 0) / n_balls,
+                **quality,
+                "baselines": {"bare_gather_balls_per_s": gather_rate},
+                "step_cost_in_bare_gathers": gather_rate / ball_steps_per_s,
+            }
+            result.update(solver_launches(sim))
+            result.update(pair_tables(sim))
+            if times is None and steps > 0 and sim.solver is not None:
+                result.update(host_share(sim, wall_s, steps))
+            if "loop_s" in result and "launches_per_step" in result:  # (the parallel Gauss–Seidel sweeps)
+                taken = steps - result["steps_asleep"]  # (a step skipped asleep starts no loop)
+                result["sweep_loops_share"] = min(taken * result["launches_per_step"] * result["loop_s"] / wall_s, 1.0)
+            if every is not None:
+                result["timeline"] = timeline
+            if times is not None:
+                result["kernel_profiler"] = {"kernel_s": times.total_s(), "host_s": wall_s - times.total_s()}
+                result["kernels"] = times.as_dict()
+            log(
+                f"{wall_s:.1f} s after {compile_s:.1f} s of compiling ({result['sim_s_per_wall_s']:.3g} simulated s per "
+                f"wall s, {ball_steps_per_s:.3g} ball-steps/s, {result['bytes_per_ball_above_baseline']:.0f} bytes/ball)"
+            )
+            log(
+                f"pile at t = {sim.t:.3g} s: deepest overlap {100 * quality['deepest_overlap']:.3g} % of a radius, "
+                f"p99 speed {1e3 * quality['p99_speed_mps']:.3g} mm/s, {quality['outside_bin']} outside the bin, "
+                f"{asleep_share(quality['asleep_fraction'])} asleep"
+            )
+            if "launches_per_step" in result:
+                log(
+                    f"{result['layout']} layout: {result['launches_per_step']} parallel loops a step in the sweeps and "
+                    f"projections, a median of {result['median_items_per_launch']:.0f} work items each"
+                )
+            if "host_share" in result:
+                log(
+                    f"{result['host_calls_per_step']:.1f} kernel calls a step, {1e6 * result['launch_host_s']:.1f} µs of host "
+                    f"time each: the host's share of the wall time about {100 * result['host_share']:.2g} %"
+                )
+            if "loop_s" in result:
+                share = result.get("sweep_loops_share")
+                at_least = (
+                    ""
+                    if share is None
+                    else f" ({100 * share:.2g} % of the wall time at least, to start the sweeps' loops)"
+                )
+                log(
+                    f"one parallel loop more in a kernel: {1e6 * result['loop_s']:.1f} µs of no item, "
+                    f"{1e6 * result['ball_loop_s']:.1f} µs over the balls{at_least}"
+                )
+            log(
+                f"baseline bare_gather: {gather_rate:.3g} balls/s -> a step costs {result['step_cost_in_bare_gathers']:.1f}"
+            )
+            if times is not None:
+                dearest = ", ".join(f"{name} {s:.1f} s" for name, s in times.seconds.most_common(6))
+                log(
+                    f"kernels {times.total_s():.1f} s of the {wall_s:.1f} s (dearest: {dearest}); the host {wall_s - times.total_s():.1f} s"
+                )
+    except KeyboardInterrupt:  # (raised as the block ends, once the result is made)
+        result["interrupted"] = True
     return result
 
 
