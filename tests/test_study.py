@@ -191,6 +191,21 @@ def test_the_command_reports_a_bad_study_in_one_line_with_exit_code_2(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("out", ["missing/out", ""])
+def test_the_study_folder_is_made_but_not_its_parents_nor_an_empty_name(tmp_path, monkeypatch, capsys, out):
+    # --out made every missing folder above the study's (a typo in a path became a tree of folders,
+    # where run --frames refuses a missing parent), and --out "" wrote the study into the current folder
+    from ti_golf.cli.main import main
+
+    path = write(tmp_path, "s.toml", FLIGHT_STUDY)
+    monkeypatch.chdir(tmp_path)
+    assert main(["study", str(path), "--out", out]) == 2
+    err = capsys.readouterr().err
+    said = "cannot make 'missing/out': folder" if out else "needs a folder name (got an empty path)"
+    assert f"--out: {said}" in err and err.count("\n") == 1, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml"]
+
+
 def test_without_dask_the_command_says_how_to_install_it_and_exits_2(tmp_path, monkeypatch, capsys):
     from ti_golf.cli.main import main
 

@@ -68,9 +68,14 @@ def run_study(
     if workers is not None:
         check_workers(workers)  # (before the study's folder is made)
     spec = study if isinstance(study, StudySpec) else load_study(study, overrides)
+    if out is not None and not str(out).strip():  # (Path("") is the current folder)
+        raise ConfigError("out", None, "needs a folder name (got an empty path)")
     folder = Path(out) if out is not None else default_folder(spec)
     if folder.exists() and not folder.is_dir():
         raise ConfigError("out", None, f"{str(folder)!r} is a file, not a folder")
+    parent = folder.resolve().parent  # (the study's folder is made, as run --frames makes its own: not its parents)
+    if not folder.exists() and not parent.is_dir():
+        raise ConfigError("out", None, f"cannot make {str(folder)!r}: folder {str(parent)!r} does not exist")
     manifest = Manifest(folder)
     if (folder / RUNS).exists() and not (folder / RUNS).is_dir():
         raise ConfigError(str(folder / RUNS), None, "is not a folder: a study folder keeps its tasks' saved runs there")
@@ -87,7 +92,8 @@ def run_study(
     try:
         if todo:
             with study_client(address, workers, gpus, need_gpu=spec.gpu) as client:
-                (folder / RUNS).mkdir(parents=True, exist_ok=True)  # (once the cluster is up: not for a bad address)
+                folder.mkdir(exist_ok=True)  # (once the cluster is up: not for a bad address)
+                (folder / RUNS).mkdir(exist_ok=True)
                 _run(spec, todo, client, folder, manifest, result, log)
     except KeyboardInterrupt:
         result.interrupted = True
