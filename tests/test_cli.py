@@ -1843,3 +1843,13 @@ def test_bench_collide_steps_and_warms_up_the_pile_with_its_boulder_as_the_solve
     monkeypatch.setattr(stepping, "SERIAL_MAX_BALLS", n)
     result = bench_collide(n=n, steps=1, boulder=widest_boulder(n) / 2, log=lambda _: None)
     assert result["serial"] is False and "serial_speedup" not in result, result
+
+
+def test_a_run_saved_under_a_capital_npz_suffix_is_written_and_resumed(tmp_path, capsys):
+    # --out took A.NPZ (its check reads the suffix in any case), ran the whole run, then the writer
+    # refused the name in a traceback and kept nothing
+    out = tmp_path / "A.NPZ"
+    assert main(["run", "lab_vacuum", "--t", "0.05", "--out", str(out)]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["A.NPZ"]
+    assert main(["run", "--resume", str(out), "--t", "0.05"]) == 0
+    assert "resumed at t = 0.05 s" in capsys.readouterr().out

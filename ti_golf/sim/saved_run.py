@@ -114,9 +114,10 @@ def write_run(sim: Any, path: str | os.PathLike[str], recording: Any, partial: b
         raise ValueError("cannot save the run: it needs a file name (got an empty path)")
     if target.is_dir():
         raise ValueError(f"cannot save the run to {str(path)!r}: it is a folder; give a file name")
-    if target.suffix and target.suffix != ".npz":  # (x.txt was saved as x.txt.npz, which load("x.txt") did not find)
+    npz = target.suffix.lower() == ".npz"  # (any case, as the command's check of --out takes it)
+    if target.suffix and not npz:  # (x.txt was saved as x.txt.npz, which load("x.txt") did not find)
         raise ValueError(f"cannot save the run to {str(path)!r}: a saved run is an .npz file; end its name in .npz")
-    if target.suffix != ".npz":
+    if not npz:
         target = target.with_name(target.name + ".npz")  # as np.savez names it
     if not target.resolve().parent.is_dir():
         raise FileNotFoundError(
@@ -183,7 +184,7 @@ def read_run(path: str | os.PathLike[str]) -> SavedRun:
     :mod:`~ti_golf.solvers.record_checks`), or a :class:`ConfigError` naming the file (and the
     entry at fault) that says why it cannot be continued."""
     source = str(path)
-    if not Path(source).exists() and Path(source).suffix != ".npz" and Path(source + ".npz").is_file():
+    if not Path(source).exists() and Path(source).suffix.lower() != ".npz" and Path(source + ".npz").is_file():
         source += ".npz"  # (as save() names it: .npz added to a path without it)
     data, meta = _read(source)
     precision = ensure_init().precision
