@@ -784,3 +784,17 @@ def test_a_study_folder_whose_manifest_or_runs_is_the_wrong_kind_is_refused_befo
         proc = run_cli("study", str(spec), "--out", str(out))
         assert proc.returncode == 2 and f"{out / name}: {said}" in proc.stderr, proc.stderr
         assert sorted(p.name for p in out.iterdir()) == [name]
+
+
+def test_a_run_tasks_carry_has_the_sign_of_a_sweeps_for_a_ball_blown_behind_the_tee():
+    # a steep shot into a 30 m/s headwind lands 16.5 m behind the tee: the sweep and shot tasks
+    # said -16.5 m, the run task +16.5 m, so the study's carry_m column changed sign with task.kind
+    import ti_golf as tg
+    from ti_golf.study.tasks import run_figures
+
+    sc = tg.load_scene("lab_turbulent", ["launch.angle_deg=80", "launch.speed=20", "air.wind=[-30,0,0]"])
+    swept = tg.sweep(sc, angles_deg=[80.0]).carry[0]
+    sim = tg.Simulation(sc)
+    sim.run(until="landed", t=10)
+    assert swept < -10.0
+    assert run_figures(sim)["carry"] == pytest.approx(swept, rel=1e-9)  # (the same flight, to round-off)

@@ -26,7 +26,7 @@ from ti_golf.golf.sweep import sweep
 from ti_golf.golf.tour import fly_tour
 from ti_golf.golf.trackman import TOURS, YD
 from ti_golf.scene.balls import scaled_block
-from ti_golf.scene.launch_monitor import right_of, scene_launch
+from ti_golf.scene.launch_monitor import along, right_of, scene_launch
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import OUT_OF_BOUNDS, Scene
 from ti_golf.sim.results import Flight, Shots
@@ -140,16 +140,17 @@ def run_figures(sim: Simulation) -> dict[str, float]:
     what the tests compare with a saved ``ti-golf run``."""
     f: Flight = sim.flight()
     launch = sim.launch_x if sim.launch_x is not None else np.full((sim.n, 3), math.nan)
-    right = right_of(target_direction(sim.scene))
+    target = target_direction(sim.scene)
     land = np.stack([f.landing_x - launch[:, 0], np.zeros(sim.n), f.landing_z - launch[:, 2]], axis=1)
+    carry = np.copysign(f.carry, land @ along(target))  # (behind the tee: negative, as the shots' carry)
     in_play = sim.status != OUT_OF_BOUNDS
     radius = np.asarray(sim.model.radius_np, float)
     quality = pile_quality(sim, math.inf)
     return {
-        "carry": landed_mean(f.carry, f.landed),
+        "carry": landed_mean(carry, f.landed),
         "apex": landed_mean(f.apex - launch[:, 1], f.landed),
         "landing_angle": landed_mean(f.landing_angle, f.landed),
-        "lateral_offset": landed_mean(land @ right, f.landed),
+        "lateral_offset": landed_mean(land @ right_of(target), f.landed),
         "pile_height": pile_height(sim.x, radius, in_play),
         "repose_angle": repose_angle(sim.x, radius, in_play),
         "deepest_overlap": quality["deepest_overlap"],
