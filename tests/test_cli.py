@@ -1853,3 +1853,13 @@ def test_a_run_saved_under_a_capital_npz_suffix_is_written_and_resumed(tmp_path,
     assert sorted(p.name for p in tmp_path.iterdir()) == ["A.NPZ"]
     assert main(["run", "--resume", str(out), "--t", "0.05"]) == 0
     assert "resumed at t = 0.05 s" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv", [["--kernels", "lab_vacuum"], ["--scenes", "lab_vacuum", "--cache", "warm"]])
+def test_bench_startup_checks_the_backend_variables_it_passes_on(monkeypatch, capsys, argv):
+    # bench startup starts no runtime of its own: a TI_GOLF_ARCH that runtime.init refuses reached
+    # the timed processes, and came back as a traceback (--kernels) or a report of failed runs, exit 0
+    monkeypatch.setenv("TI_GOLF_ARCH", "foo")
+    assert main(["bench", "startup", *argv]) == 2
+    err = capsys.readouterr().err
+    assert "TI_GOLF_ARCH: unknown backend 'foo'" in err and err.count("\n") == 1, err

@@ -67,7 +67,10 @@ def _plain_on_cuda() -> bool:
     return text != "1"
 
 
-def _resolve(arch: str | None, precision: str | None) -> tuple[str, str]:
+def resolve(arch: str | None, precision: str | None) -> tuple[str, str]:
+    """The backend and precision that :func:`init` would start from the arguments given (``None``:
+    ``$TI_GOLF_ARCH`` / ``$TI_GOLF_PRECISION``, else ``cpu`` / ``f64``), each checked: a
+    :class:`ConfigError` naming the argument or the variable otherwise."""
     arch_from = "arch" if arch else "TI_GOLF_ARCH"
     prec_from = "precision" if precision else "TI_GOLF_PRECISION"
     arch = (arch or os.environ.get("TI_GOLF_ARCH") or "cpu").lower()
@@ -138,7 +141,7 @@ def init(
     :class:`~ti_golf.errors.ConfigError` naming ``--arch`` or the environment variable.
     """
     global _info
-    want_arch, want_prec = _resolve(arch, precision)
+    want_arch, want_prec = resolve(arch, precision)
     if _info is not None:
         if (
             (arch and want_arch != _info.requested_arch)

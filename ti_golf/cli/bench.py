@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 
 from ti_golf.bench.collide import bench_collide, widest_boulder
 from ti_golf.bench.common import to_json
@@ -192,8 +191,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def cmd_startup(args: argparse.Namespace) -> int:
     """``ti-golf bench startup``: see :mod:`ti_golf.bench.startup`."""
-    arch = args.arch or os.environ.get("TI_GOLF_ARCH") or "cpu"
-    precision = args.precision or os.environ.get("TI_GOLF_PRECISION") or "f64"
+    from ti_golf.runtime import resolve
+
+    arch, precision = resolve(args.arch, args.precision)  # (the timed processes start from these: checked here)
     if args.top is not None and args.top < 1:
         raise ConfigError("--top", None, f"must be >= 1 kernels (got {args.top})")
     if args.kernels:
