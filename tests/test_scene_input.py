@@ -730,6 +730,17 @@ def test_cli_bad_range_exits_2(option, value, fragment):
             "blocks[0]",
             "puts ball 1 at the point of ball 0 (balls[0].position), [0.0, 0.5, 0.0] m",
         ),
+        (  # (a scene's ball 5 m under the ground was shoved up by it, silently; the API refused it)
+            "[[balls]]\nposition = [0, 1, 0]\n[[balls]]\nposition = [0, -5, 0]\n",
+            "balls[1].position",
+            "puts ball 1 5 m inside the ground, [0.0, -5.0, 0.0] m, the whole ball in the solid (1 ball(s) are)",
+        ),
+        (
+            "[[planes]]\npoint = [1, 0, 0]\nnormal = [-1, 0, 0]\n[[blocks]]\ncount = [4, 1, 1]\norigin = [0, 0.5, 0]\n"
+            "spacing = 0.5\n",
+            "blocks[0]",
+            "puts ball 3 0.5 m inside planes[0], [1.5, 0.5, 0.0] m",
+        ),
     ],
 )
 def test_a_block_or_terrain_value_that_a_run_cannot_use_is_refused_before_it_starts(tmp_path, text, key, fragment):

@@ -101,6 +101,15 @@ def build_balls(scene: Scene) -> Balls:
     if not parts:
         raise_config(scene.path, None, "the scene creates no ball: add a [launch] table, [[balls]] or [[blocks]]")
     balls = Balls(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("x", "v", "w", "radius", "mass", "track")))
+    buried = buried_ball(scene, balls.x, balls.radius)
+    if buried is not None:
+        i, depth, what, count = buried
+        raise_config(
+            scene.path,
+            _key_of_ball(scene, i),
+            f"puts ball {i} {depth:.6g} m inside {what}, {balls.x[i].tolist()} m, the whole ball in the solid "
+            f"({count} ball(s) are): a ball must start at least partly on the open side",
+        )
     pair = coincident_pair(balls.x) if scene.world.collisions and len(parts) > 1 else None  # (a block's are apart)
     if pair is not None:
         i, j = pair
@@ -112,6 +121,24 @@ def build_balls(scene: Scene) -> Balls:
             "world.collisions = false for balls that fly apart without meeting",
         )
     return balls
+
+
+def buried_ball(scene: Scene, x: np.ndarray, radius: np.ndarray) -> tuple[int, float, str, int] | None:
+    """The first of the balls of centres ``x`` (N, 3) [m] and radii ``radius`` [m] (N,) that lies
+    wholly below the scene's ground plane or behind one of its planes, which no contact sorts out (a
+    ball 5 m under the ground came to rest inside it; one that overlaps a solid is pushed out by the
+    position projection, B.18): (its index, the depth [m] of its centre behind the face, the solid,
+    how many balls are so); None when every ball starts at least partly on the open side."""
+    solids = [(scene.world.ground_height * np.array([0.0, 1.0, 0.0]), np.array([0.0, 1.0, 0.0]), "the ground")]
+    solids = solids[: 1 if scene.world.ground else 0] + [
+        (np.asarray(p.point, float), np.asarray(p.normal, float), f"planes[{k}]") for k, p in enumerate(scene.planes)
+    ]
+    for point, normal, what in solids:
+        height = (x - point) @ (normal / np.linalg.norm(normal))
+        inside = np.flatnonzero(height < -radius)
+        if inside.size:
+            return int(inside[0]), float(-height[inside[0]]), what, int(inside.size)
+    return None
 
 
 def coincident_pair(x: np.ndarray) -> tuple[int, int] | None:

@@ -11,7 +11,7 @@ import numpy as np
 
 from ti_golf.errors import ConfigError
 from ti_golf.runtime import available_memory
-from ti_golf.scene.balls import ball_count, block_size, coincident_pair
+from ti_golf.scene.balls import ball_count, block_size, buried_ball, coincident_pair
 from ti_golf.scene.checks import REACH, TIME_LIMIT
 from ti_golf.scene.schema import Scene
 
@@ -179,19 +179,13 @@ def check_placement(scene: Scene, x: np.ndarray, radius: np.ndarray) -> None:
     ball 5 m under the ground came to rest inside it), naming the ball and the solid. A ball that
     overlaps a solid is pushed out by the position projection (B.18). With ball–ball collisions,
     two balls at one point are refused too: their contact has no direction."""
-    solids = [(scene.world.ground_height * np.array([0.0, 1.0, 0.0]), np.array([0.0, 1.0, 0.0]), "the ground")]
-    solids = solids[: 1 if scene.world.ground else 0] + [
-        (np.asarray(p.point, float), np.asarray(p.normal, float), f"planes[{k}]") for k, p in enumerate(scene.planes)
-    ]
-    for point, normal, what in solids:
-        height = (x - point) @ (normal / np.linalg.norm(normal))
-        inside = np.flatnonzero(height < -radius)
-        if inside.size:
-            i = int(inside[0])
-            raise ValueError(
-                f"x of ball {i} ({x[i].tolist()}) lies {-height[i]:.6g} m inside {what}, the whole ball in the "
-                f"solid: a ball must start at least partly on the open side ({inside.size} ball(s) do not)"
-            )
+    buried = buried_ball(scene, x, radius)
+    if buried is not None:
+        i, depth, what, count = buried
+        raise ValueError(
+            f"x of ball {i} ({x[i].tolist()}) lies {depth:.6g} m inside {what}, the whole ball in the "
+            f"solid: a ball must start at least partly on the open side ({count} ball(s) do not)"
+        )
     pair = coincident_pair(x) if scene.world.collisions else None
     if pair is not None:
         i, j = pair
