@@ -543,3 +543,24 @@ def test_a_round_s_csv_may_not_replace_the_shots_it_plays(tmp_path, monkeypatch,
     assert cli.main(["play", "golf_hole", "--seed", "3", "--shots", "r.csv", "--out", "./r.csv"]) == 2
     assert "--out: is the --shots file './r.csv'" in capsys.readouterr().err
     assert (tmp_path / "r.csv").read_text() == strokes
+
+
+def test_the_course_map_and_the_top_view_plots_put_plus_z_down_the_page_as_the_top_camera(monkeypatch, tmp_path):
+    # seen from above with y up, the golfer's right (+z, facing +x) lies below the line of play, as
+    # the `top` camera draws it; the course map and the run plots drew +z up the page, the view
+    # from below, so a shot pushed right curved left on the map
+    from ti_golf.game import course_map
+    from ti_golf.render import plots
+
+    figures = []
+    for module in (course_map, plots):
+        monkeypatch.setattr(module, "save_figure", lambda fig, path, dpi: figures.append(fig))
+    course_map.plot_round(GolfGame(green()), tmp_path / "round.png")
+    path = np.zeros((5, 2, 3))
+    path[:, :, 0], path[:, :, 2] = np.linspace(0.0, 4.0, 5)[:, None], [0.0, 1.0]  # (on the ground: a top view)
+    plots.plot_trajectory(path, tmp_path / "paths.png")
+    axes = [ax for fig in figures for ax in fig.axes]
+    assert len(axes) == 3
+    for ax in axes:
+        (_, y0), (_, y1) = ax.transData.transform([(1.0, 0.0), (1.0, 1.0)])
+        assert y1 < y0, ax.get_title()  # (display y grows up the page)

@@ -11,12 +11,12 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
 from ti_golf.game.rules import GolfGame
-from ti_golf.render.plots import save_figure
+from ti_golf.render.plots import save_figure, top_view
 from ti_golf.render.style import SURFACE_COLORS
 
 
 def plot_round(game: GolfGame, path: str | os.PathLike[str], title: str = "") -> None:
-    """Top view of a golf round: the course (its surface types, else its heights, with height
+    """Top view of a golf round (z down the page, as seen from above: :func:`ti_golf.render.plots.top_view`): the course (its surface types, else its heights, with height
     contours), the cup and every stroke's path, numbered; beside it the 12 m around the cup."""
     ter = game.terrain
     (x0, z0), (sx, sz) = ter.origin[[0, 2]], ter.size
@@ -60,10 +60,11 @@ def plot_round(game: GolfGame, path: str | os.PathLike[str], title: str = "") ->
         a.plot(*game.cup[[0, 2]], "k^", ms=8, zorder=5, label="the hole")
         a.plot(*game.ball[[0, 2]], "o", color="white", mec="k", ms=5, zorder=6, label="the ball")
         a.set_xlabel("x [m]")
-        a.set_ylabel("z [m]")
     cup = game.cup[[0, 2]]
     zoom.set_xlim(cup[0] - 6.0, cup[0] + 6.0)
     zoom.set_ylim(cup[1] - 6.0, cup[1] + 6.0)
+    for a in (ax, zoom):
+        top_view(a, "z [m]")
     zoom.set_title("12 m around the cup", fontsize=9)
     ax.legend(handles=ax.get_legend_handles_labels()[0] + handles, loc="upper left", fontsize=7)
     ax.set_title(title or game.scene.name, fontsize=10)

@@ -20,6 +20,8 @@ TERRAIN_FILL = (0.62, 0.74, 0.50)
 """The ground under a terrain profile: pale green."""
 
 if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.axes import Axes
+
     from ti_golf.golf.sweep import SweepResult
     from ti_golf.golf.tour import TourFlight
     from ti_golf.sim.results import Recording
@@ -49,6 +51,16 @@ def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int) -> None:
             fig.savefig(fh, dpi=dpi, format=fmt)
     finally:
         ps_log.removeFilter(quiet)
+
+
+def top_view(ax: "Axes", label: str = "z [m] (top view)") -> None:
+    """Make ``ax``, which plots x across and z up the page, the view from above: z grows down the
+    page, as the ``top`` camera shows it. With y up the frame is right-handed, so the golfer's
+    right (+z, facing +x) lies below the line of play seen from above; z up the page was the view
+    from below, a mirror image."""
+    if not ax.yaxis_inverted():
+        ax.invert_yaxis()
+    ax.set_ylabel(label)
 
 
 def plot_sweep(res: "SweepResult", path: str | os.PathLike[str], title: str | None = None) -> None:
@@ -149,7 +161,9 @@ def plot_run(rec: "Recording", path: str | os.PathLike[str], title: str = "", ma
         ax1.plot(x[:, i, 0], x[:, i, 2] if top else x[:, i, 1], lw=1.0)
         ax2.plot(t, np.linalg.norm(w[:, i, :], axis=1), lw=1.0)
     ax1.set_xlabel("x [m]")
-    ax1.set_ylabel("z [m] (top view)" if top else "y [m]")
+    ax1.set_ylabel("y [m]")
+    if top:
+        top_view(ax1)
     ax1.set_aspect("equal", adjustable="datalim")
     ax1.grid(alpha=0.3)
     ax1.set_title(title, fontsize=9)
@@ -245,7 +259,9 @@ def plot_trajectory(x: np.ndarray, path: str | os.PathLike[str], title: str = ""
     for i in range(shown.shape[1]):
         ax.plot(shown[:, i, 0], shown[:, i, 2] if top else shown[:, i, 1], lw=1.0)
     ax.set_xlabel("x [m]")
-    ax.set_ylabel("z [m] (top view)" if top else "y [m]")
+    ax.set_ylabel("y [m]")
+    if top:
+        top_view(ax)
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(alpha=0.3)
     ax.set_title(title, fontsize=9)
