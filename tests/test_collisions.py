@@ -1470,6 +1470,28 @@ def test_gauss_seidel_simultaneous_impacts_bounce_by_poisson_and_add_no_energy()
     assert ratios[1.0] == pytest.approx(1.0, abs=1e-3)  # elastic: the energy kept
 
 
+@SERIAL_OR_PARALLEL
+@pytest.mark.parametrize("wall_deg", [30, 60])
+def test_a_ball_dropped_into_a_v_of_planes_bounces_straight_back_at_e_times_its_speed(serial, wall_deg):
+    # a ball falling along the middle of a V of two planes inclined ±wall_deg meets both at once:
+    # by symmetry it must come straight back at e times its speed. The planes' rebounds −e·v_n0 met
+    # in turn (Newton's law) sent it off sideways with 1.55 times its energy (walls at 30°, e = 1)
+    # or 0.35 times (60°); and with the impact stopped short of the first plane (speculative), the
+    # ball no longer reached the second and bounced off the first alone. Now the sweeps stop both
+    # (Poisson's compression) and each plane gives e times its impulse back: exact to the sweeps'
+    # convergence, which falls geometrically with their number (4: 2 % here, 16: 1e-8), and to the
+    # 1e-6 of λ's f32 rounding that the restitution pass allows (sequential.LAM_ROUNDING)
+    s, c = np.sin(np.radians(wall_deg)), np.cos(np.radians(wall_deg))
+    for e in (0.5, 1.0):
+        for sweeps, tol in ((4, 0.02), (16, 1e-5)):
+            sc = scene(f"contact.e={e}", "contact.v_bounce=0", f"contact.iterations={sweeps}")
+            sc = dataclasses.replace(sc, planes=(Plane((0, 0, 0), (s, c, 0)), Plane((0, 0, 0), (-s, c, 0))))
+            sim = tg.Simulation(sc, x=[[0.0, sc.ball.radius / c + 0.0123, 0.0]], v=[[0.0, -2.0, 0.0]])
+            sim.solver = CollisionSolver(sim.model, serial=serial)
+            sim.run(t=0.05)  # (the bounce after 12 ms or so)
+            np.testing.assert_allclose(sim.v[0], [0.0, 2.0 * e, 0.0], rtol=0, atol=tol * 2.0 * e)
+
+
 def test_a_fast_ball_dropped_onto_a_plastic_pile_does_not_bounce_back():
     # A ball at 70 m/s onto a settled pile with e = 0: every impact is plastic, so the ball must not
     # come back out. Its speculative contacts reach 7 cm (h·v) into the pile, a dozen balls at once;
