@@ -564,3 +564,18 @@ def test_the_course_map_and_the_top_view_plots_put_plus_z_down_the_page_as_the_t
     for ax in axes:
         (_, y0), (_, y1) = ax.transData.transform([(1.0, 0.0), (1.0, 1.0)])
         assert y1 < y0, ax.get_title()  # (display y grows up the page)
+
+
+def test_a_round_in_a_window_ended_by_ctrl_c_exits_130_as_in_the_console(monkeypatch, green_file, capsys):
+    # the console's round exited 130 when Ctrl-C ended it unfinished; the window's exited 0
+    class Window:  # a window whose round Ctrl-C ends before a stroke, without a display
+        def __init__(self, game, on_stroke):
+            pass
+
+        def run(self):
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr("ti_golf.game.window.check_display", lambda: None)
+    monkeypatch.setattr("ti_golf.game.window.GolfWindow", Window)
+    assert cli.main(["play", str(green_file), "--gui"]) == 130
+    assert "interrupted" in capsys.readouterr().out

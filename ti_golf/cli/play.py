@@ -144,8 +144,7 @@ def cmd_play(args: argparse.Namespace) -> int:
                 write_csv(game.strokes, args.out)
     except KeyboardInterrupt:
         ended = "interrupted"
-    _finish(game, ended, args)
-    return 130 if ended == "interrupted" and not game.over else 0
+    return _finish(game, ended, args)
 
 
 def random_round(scene: Scene) -> bool:
@@ -182,12 +181,12 @@ def _play_in_window(game: GolfGame, args: argparse.Namespace) -> int:
         ended = "interrupted"
     for stroke in game.strokes:
         print(f"Stroke {stroke.number}: {describe_stroke(stroke).strip()}")
-    _finish(game, ended, args)
-    return 0
+    return _finish(game, ended, args)
 
 
-def _finish(game: GolfGame, ended: str, args: argparse.Namespace) -> None:
-    """The round's last line, then the files asked for."""
+def _finish(game: GolfGame, ended: str, args: argparse.Namespace) -> int:
+    """The round's last line, then the files asked for; the exit code: 130 for a round that Ctrl-C
+    ended unfinished (in the console or in a window), else 0."""
     print(describe_round(game, ended))
     if args.out:
         write_csv(game.strokes, args.out)
@@ -197,6 +196,7 @@ def _finish(game: GolfGame, ended: str, args: argparse.Namespace) -> None:
 
         plot_round(game, args.plot, title=f"{game.scene.name}: {describe_round(game, ended)}")
         print(f"wrote {args.plot}")
+    return 130 if ended == "interrupted" and not game.over else 0
 
 
 def _lie(game: GolfGame) -> str:
