@@ -1863,3 +1863,17 @@ def test_bench_startup_checks_the_backend_variables_it_passes_on(monkeypatch, ca
     assert main(["bench", "startup", *argv]) == 2
     err = capsys.readouterr().err
     assert "TI_GOLF_ARCH: unknown backend 'foo'" in err and err.count("\n") == 1, err
+
+
+def test_a_run_until_landed_of_balls_none_of_which_is_tracked_is_refused(capsys, tmp_path):
+    # no ball of break_shot is tracked for its landing: the run stopped at its first check, at
+    # t = 0.05 s, exit 0, saying nothing (render's run too)
+    import ti_golf
+
+    for command in (["run"], ["render", "--out", str(tmp_path / "a.png")]):
+        assert main([*command, "break_shot", "--until", "landed", "--t", "1"]) == 2
+        assert "--until: landed has no effect on break_shot: no ball of it is tracked" in capsys.readouterr().err
+    sim = ti_golf.Simulation.from_scene("break_shot")
+    with pytest.raises(ValueError, match="until='landed' has no effect: no ball is tracked"):
+        sim.run(t=1.0, until="landed")
+    assert sim.t == 0.0

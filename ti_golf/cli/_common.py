@@ -257,6 +257,18 @@ def check_writable(path: str | None, option: str, suffixes: tuple[str, ...] = ()
         raise ConfigError(option, None, f"must end in {' or '.join(suffixes)} (got {path!r})")
 
 
+def check_until(until: str | None, sim: "Simulation") -> None:
+    """Refuse ``--until landed`` for a simulation none of whose balls is tracked for its landing:
+    the run stopped at its first check, saying nothing."""
+    if until == "landed" and sim.launch_x is None:
+        raise ConfigError(
+            "--until",
+            None,
+            f"landed has no effect on {sim.scene.name}: no ball of it is tracked for its landing (a [launch] ball "
+            "shot above the ground is); give --until rest",
+        )
+
+
 API_OPTIONS = {
     OVERRIDES: "--set",
     "arch": "--arch",

@@ -9,6 +9,7 @@ import time
 from ti_golf.cli._common import (
     Progress,
     check_steps_span,
+    check_until,
     check_writable,
     parse_size,
     refuse_given,
@@ -81,6 +82,7 @@ def cmd_render(args: argparse.Namespace) -> int:
         if not args.resume:  # (a saved run's own refusal follows: its keys act on its next steps)
             refuse_unread_keys(args.overrides, "render", STILL_NOT_READ)
     sim = scene_or_saved_run(args, "render")
+    check_until(args.until, sim)
     check_steps_span(args.steps, sim.dt)
     if args.steps is not None:
         steps = args.steps

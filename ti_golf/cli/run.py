@@ -15,6 +15,7 @@ from ti_golf.cli._common import (
     Progress,
     check_plot,
     check_steps_span,
+    check_until,
     check_writable,
     parse_size,
     plot_help,
@@ -132,6 +133,7 @@ def cmd_run(args: argparse.Namespace) -> int:  # noqa: C901 (a branch per option
     if args.t is not None or args.steps is not None:  # (world.t_end is the length of a run given neither)
         refuse_replaced(args.overrides, {"world.t_end": "--t" if args.t is not None else "--steps"})
     sim = scene_or_saved_run(args, "run")
+    check_until(args.until, sim)
     check_steps_span(args.steps, sim.dt)
     resumed_at = sim.t if args.resume else None
     record_every = args.record_every

@@ -523,6 +523,8 @@ class Simulation:
         """
         if until not in (None, "rest", "landed"):
             raise ValueError(f"until must be None, 'rest' or 'landed' (got {until!r})")
+        if until == "landed" and self.launch_x is None:  # (the run would stop at its first check)
+            raise ValueError(f"until='landed' has no effect: {NOTHING_TRACKED}")
         steps = steps_to_run(t, steps, self.dt, self.scene.world.t_end, self.scene)
         record_every, every = whole_number(record_every, "record_every"), whole_number(every, "every")
         if every and on_every is None or on_every is not None and not every:
@@ -588,3 +590,9 @@ which a run may stop, whatever it records or renders."""
 
 UNTIL_DONE = {"rest": "at rest or out of bounds", "landed": "landed"}
 """What a ball is once a run with ``until`` no longer waits for it."""
+
+NOTHING_TRACKED = (
+    "no ball is tracked for its landing (a scene's [launch] ball shot above the ground, or the balls given "
+    "with track=True, are); wait for rest instead"
+)
+"""Why a run of balls none of which is tracked cannot wait for them to land."""
