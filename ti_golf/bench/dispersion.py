@@ -13,11 +13,10 @@ from ti_golf.bench.common import _best_time, faster
 from ti_golf.bench.reference import carry_numpy, landing_scipy
 from ti_golf.golf.dispersion import PLAYER_SPREAD, draw_launches
 from ti_golf.golf.rollout import roll_out
-from ti_golf.golf.shots import target_direction
 from ti_golf.golf.sweep import fly
 from ti_golf.runtime import ensure_init
 from ti_golf.scene.balls import launch_position
-from ti_golf.scene.launch_monitor import scene_launch
+from ti_golf.scene.launch_monitor import scene_launch, target_direction
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene
 from ti_golf.sim.simulation import Simulation

@@ -21,12 +21,10 @@ from ti_golf.game.rules import GolfGame, describe_round, describe_stroke, descri
 from ti_golf.golf.sweep import sweep
 from ti_golf.render.plots import plot_spin_family, plot_sweep, plot_terrain_path
 from ti_golf.scene.balls import launch_position
+from ti_golf.scene.launch_monitor import RPM
 from ti_golf.scene.loader import load_scene, scenes_dir
 from ti_golf.scene.schema import AT_REST, launch_velocity, parse_range
 from ti_golf.sim.simulation import Simulation
-
-RPM = 2.0 * np.pi / 60.0
-"""rad/s per rpm."""
 
 
 @dataclass(frozen=True)

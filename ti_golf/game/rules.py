@@ -20,6 +20,7 @@ import numpy as np
 
 from ti_golf.errors import ConfigError
 from ti_golf.game.cup import LOW_GAP, holed_at
+from ti_golf.scene.launch_monitor import RPM
 from ti_golf.scene.schema import (
     AT_REST,
     OUT_OF_BOUNDS,
@@ -33,9 +34,6 @@ from ti_golf.sim.simulation import Simulation
 
 KMH = 1.0 / 3.6
 """m/s per km/h."""
-RPM = 2.0 * math.pi / 60.0
-"""rad/s per rpm."""
-
 HOLED, OUT, RESTS, MOVING = "holed", "out of bounds", "at rest", "still moving"
 """Outcomes of a stroke."""
 

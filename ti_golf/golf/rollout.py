@@ -7,6 +7,7 @@ from dataclasses import replace
 import numpy as np
 
 from ti_golf.errors import ConfigError
+from ti_golf.scene.launch_monitor import target_direction
 from ti_golf.scene.schema import AT_REST, Scene
 from ti_golf.signals import KeptInterrupt
 from ti_golf.sim.results import Flight, Shots
@@ -62,7 +63,7 @@ def shots_from_landing(
     is the scene's launch azimuth. An interrupt during the roll-out raises :class:`KeptInterrupt`
     holding the Shots with the rests reached by then (the balls still rolling not at rest)."""
     flight = Flight.from_arrays(x0, raw["landed"], raw["apex"], raw["t_land"], raw["land_x"], raw["land_v"])
-    direction = scene.launch.direction_deg if scene.launch is not None else 0.0  # the target line
+    direction = target_direction(scene)
     if not to_rest:
         return Shots.from_flight(flight, x0, raw["land_w"].astype(np.float64), direction)
     idx = np.flatnonzero(flight.landed)

@@ -18,17 +18,12 @@ import numpy as np
 from ti_golf.golf.rollout import shots_from_landing
 from ti_golf.golf.sweep import fly
 from ti_golf.scene.balls import launch_position
-from ti_golf.scene.launch_monitor import LAUNCH_LIMITS, MonitorLaunch
+from ti_golf.scene.launch_monitor import LAUNCH_LIMITS, MonitorLaunch, target_direction
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene
 from ti_golf.signals import KeptInterrupt, whole_steps
 from ti_golf.sim.results import Shots
 from ti_golf.sim.simulation import RunProgress
-
-
-def target_direction(scene: Scene) -> float:
-    """Azimuth of the scene's target line [deg]: its ``launch.direction_deg`` (0, the +x axis, without a launch)."""
-    return scene.launch.direction_deg if scene.launch is not None else 0.0
 
 
 def fly_shots(

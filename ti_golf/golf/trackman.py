@@ -11,15 +11,14 @@ is the check on data the fit never saw.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+
+from ti_golf.scene.launch_monitor import RPM, YARD
 
 MPH = 0.44704
 """1 mph in m/s."""
-YD = 0.9144
+YD = YARD
 """1 yard in m."""
-RPM = 2.0 * math.pi / 60.0
-"""1 rpm in rad/s."""
 
 
 @dataclass(frozen=True)

@@ -64,6 +64,11 @@ def right_of(direction_deg: float) -> np.ndarray:
     return np.array([-math.sin(ph), 0.0, math.cos(ph)])
 
 
+def target_direction(scene: Scene) -> float:
+    """Azimuth of the scene's target line [deg]: its ``launch.direction_deg`` (0, the +x axis, without a launch)."""
+    return scene.launch.direction_deg if scene.launch is not None else 0.0
+
+
 def along(direction_deg: float) -> np.ndarray:
     """Unit vector d̂ of a target line along azimuth ``direction_deg`` (from +x toward +z), shape (3,)."""
     ph = math.radians(direction_deg)

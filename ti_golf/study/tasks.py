@@ -21,12 +21,12 @@ import numpy as np
 from ti_golf.bench.pit import bench_pit, pile_quality
 from ti_golf.golf.dispersion import PLAYER_SPREAD, dispersion
 from ti_golf.golf.rollout import has_ground
-from ti_golf.golf.shots import shots, target_direction
+from ti_golf.golf.shots import shots
 from ti_golf.golf.sweep import sweep
 from ti_golf.golf.tour import fly_tour
 from ti_golf.golf.trackman import TOURS, YD
 from ti_golf.scene.balls import scaled_block
-from ti_golf.scene.launch_monitor import along, right_of, scene_launch
+from ti_golf.scene.launch_monitor import along, right_of, scene_launch, target_direction
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import OUT_OF_BOUNDS, Scene
 from ti_golf.sim.results import Flight, Shots
