@@ -1,7 +1,9 @@
 """Kernels: one thread per ball (or per lane group of balls), inputs first, outputs last.
 
-Balls do not interact yet, so each thread integrates its balls through many steps without
-leaving the kernel (a "fused" step loop): per-step launch overhead is paid once per call.
+These balls do not meet each other (flights, roll-outs, scenes with ``world.collisions = false``
+or a single ball; the collision solvers of :mod:`ti_golf.solvers` step the rest), so each thread
+integrates its balls through many steps without leaving the kernel (a "fused" step loop):
+per-step launch overhead is paid once per call.
 """
 
 import taichi as ti

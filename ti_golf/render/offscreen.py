@@ -182,7 +182,7 @@ def render(
         trails: past positions to draw as lines: a :class:`~ti_golf.Recording`, a list of (N, 3)
             arrays or an (S, N, 3) array.
         fov: vertical field of view [deg] of the presets.
-        backend: ``"auto"`` (GGUI when Vulkan works and Taichi runs on the CPU backend, else
+        backend: ``"auto"`` (GGUI when Vulkan works and Taichi runs on a backend GGUI draws from, the CPU or CUDA, else
             matplotlib with one line on stderr, once per reason and process), ``"ggui"`` (raise
             :class:`RenderError` if GGUI cannot draw) or ``"matplotlib"``.
         min_px: smallest drawn ball radius in pixels, so that far-away balls stay visible
