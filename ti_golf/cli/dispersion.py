@@ -19,7 +19,7 @@ from ti_golf.cli._common import (
     scene_options,
     seed_value,
 )
-from ti_golf.cli.shot import LAUNCH_OPTIONS, launch_line, launch_options, read_launch, units_option
+from ti_golf.cli._launch import LAUNCH_OPTIONS, launch_line, launch_options, read_launch, units_option
 from ti_golf.errors import ConfigError
 from ti_golf.golf.dispersion import MAX_SHOTS, PLAYER_SPREAD, dispersion, held_at_limits
 from ti_golf.golf.rollout import has_ground

@@ -19,7 +19,7 @@ from ti_golf.cli._common import (
     runtime_options,
     scene_options,
 )
-from ti_golf.cli.shot import golfer_table
+from ti_golf.cli._launch import golfer_table
 from ti_golf.errors import ConfigError
 from ti_golf.golf.aero_fit import beyond_the_fit
 from ti_golf.golf.rollout import has_ground
