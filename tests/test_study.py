@@ -98,6 +98,7 @@ def flight_study(tmp_path_factory):
 # -- the study file ------------------------------------------------------------------------------
 BAD = [
     ('scene = "lab_turbulent"\nwrkers = 2\n', "wrkers", "is not a study key"),
+    ('scene = "lab_turbulent"\nset = ["air.altitude"]\n', "set: air.altitude", "must be KEY=VALUE"),  # (named --set)
     ('scene = "lab_turbulent"\n[task]\nkind = "walk"\n', "task.kind", "must be one of"),
     ('scene = "lab_turbulent"\n[task]\nkind = "run"\nshots = 10\n', "task.shots", "read only when task.kind"),
     ('scene = "lab_turbulent"\n[grid]\n"air.CD" = [0.1]\n', "grid.air.CD", "is not a scene key"),
@@ -798,3 +799,67 @@ def test_a_run_tasks_carry_has_the_sign_of_a_sweeps_for_a_ball_blown_behind_the_
     sim.run(until="landed", t=10)
     assert swept < -10.0
     assert run_figures(sim)["carry"] == pytest.approx(swept, rel=1e-9)  # (the same flight, to round-off)
+
+
+def test_a_plot_of_a_study_of_three_varied_keys_is_refused_before_any_task_runs(tmp_path, capsys):
+    # --figure and --lines were checked before the run, --plot's count of varied keys only after it
+    from ti_golf.cli.main import main
+
+    path = write(tmp_path, "s.toml", FLIGHT_STUDY + '"air.rho" = [1.0, 1.2]\n')
+    out = tmp_path / "out"
+    assert main(["study", str(path), "--out", str(out), "--plot", str(tmp_path / "p.png")]) == 2
+    assert "--plot: draws a figure against one or two varied keys (the study varies 3)" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_a_study_folder_that_cannot_be_written_is_refused_before_the_cluster_starts(tmp_path, monkeypatch, capsys):
+    # a read-only --out was found only once the Dask cluster was up, in words without --out's name
+    from ti_golf.cli.main import main
+
+    monkeypatch.setattr("ti_golf.study.runner.write_problem", lambda folder: "Read-only file system")
+    path = write(tmp_path, "s.toml", FLIGHT_STUDY)
+    assert main(["study", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert f"--out: cannot write into '{tmp_path / 'out'}': Read-only file system" in err and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_ctrl_c_while_the_local_cluster_starts_stops_the_study(tmp_path, monkeypatch, capsys):
+    # Ctrl-C was ignored while the workers started (so that they inherited it ignored), and one
+    # that came then was lost: the study ran to its end and exited 0. Now it waits, blocked, and
+    # stops the study as the cluster is up, which is closed
+    from ti_golf.cli.main import main
+    from ti_golf.study import cluster
+
+    started = []
+
+    def interrupted(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)  # (as the workers start)
+        started.append(real(*args, **kwargs))
+        return started[-1]
+
+    real = cluster._start_local_cluster
+    monkeypatch.setattr(cluster, "_start_local_cluster", interrupted)
+    path = write(tmp_path, "s.toml", FLIGHT_STUDY)
+    assert main(["study", str(path), "--workers", "1", "--out", str(tmp_path / "out")]) == 130
+    assert capsys.readouterr().err.strip().splitlines()[-1] == "ti-golf: interrupted before any task ran"
+    assert len(started) == 1 and started[0].status.name == "closed"
+    assert not (tmp_path / "out").exists()
+    assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, set())  # (unblocked again)
+
+
+def test_a_tasks_identity_follows_the_heights_its_scene_reads(tmp_path):
+    # the id hashed the scene's keys, which name the heights file, not its heights: a study run
+    # again after the file was edited skipped its tasks as finished and kept the old figures
+    from ti_golf.scene.loader import scenes_dir
+
+    for name in ("lab_friction.toml", "lab_friction.npy"):
+        shutil.copy(scenes_dir() / name, tmp_path / name)
+    path = write(
+        tmp_path, "st.toml", 'scene = "lab_friction.toml"\n[task]\nkind = "run"\nt = 2\n[grid]\n"contact.mu" = [0.4]\n'
+    )
+    before = load_study(path).tasks[0].id
+    assert load_study(path).tasks[0].id == before  # (the same heights: the same task)
+    heights = np.load(tmp_path / "lab_friction.npy")
+    np.save(tmp_path / "lab_friction.npy", heights / 2)
+    assert load_study(path).tasks[0].id != before

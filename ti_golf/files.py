@@ -60,3 +60,15 @@ def plot_format(path: str | os.PathLike[str], option: str = "plot") -> str:
         allowed = ", ".join(f".{f}" for f in PLOT_FORMATS)
         raise ConfigError(option, None, f"cannot write a plot as {suffix!r} ({str(path)!r}): use {allowed}")
     return fmt
+
+
+def write_problem(folder: str | os.PathLike[str]) -> str | None:
+    """Why no file can be made in ``folder`` (the OS's words), or None: a temporary file made
+    and removed there is the one sure test (permission bits say yes to root where the file system,
+    read-only or immutable, says no)."""
+    try:
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".ti-golf-check-"):
+            pass
+    except OSError as exc:
+        return exc.strerror or str(exc)
+    return None

@@ -45,7 +45,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def cmd_study(args: argparse.Namespace) -> int:
     """Run the tasks of the study ``args.study`` not yet finished in its folder, on a Dask cluster,
     print where the table is and plot a figure (``--plot``); 1 when a task failed, else 0."""
-    from ti_golf.study.plot import figure_columns, plot_study
+    from ti_golf.study.plot import check_plottable, figure_columns, plot_study
     from ti_golf.study.runner import run_study
     from ti_golf.study.spec import load_study
 
@@ -63,7 +63,9 @@ def cmd_study(args: argparse.Namespace) -> int:
         raise ConfigError(
             "--lines", None, f"draws one line per value of a second varied key; {spec.name} varies {len(spec.keys)}"
         )
-    if args.figure is not None:  # (before the tasks run: a long study would find it only at its end)
+    if args.plot:  # (before the tasks run: a long study would find these only at its end)
+        check_plottable(spec.keys)
+    if args.figure is not None:
         _check_figure(args.figure, spec)
     require_dask()
     result = run_study(spec, out=args.out, workers=args.workers, address=args.address, gpus=args.gpus)

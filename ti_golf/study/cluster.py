@@ -179,23 +179,33 @@ def _local_cluster(n: int, gpus: int, task_threads: int | None = None) -> Any:
         "protocol": "tcp://",
         "silence_logs": WORKER_LOGS,
     }
-    with _ctrl_c_left_to_this_process():
-        return _start_local_cluster(n, gpus, threads, options)
+    cluster = None
+    try:
+        with _ctrl_c_left_to_this_process():
+            cluster = _start_local_cluster(n, gpus, threads, options)
+    except KeyboardInterrupt:  # (one held while it started: the cluster is closed, not left running)
+        if cluster is not None:
+            cluster.close()
+        raise
+    return cluster
 
 
 @contextlib.contextmanager
 def _ctrl_c_left_to_this_process() -> Iterator[None]:
-    """Ctrl-C ignored while the local workers' processes are started, so that they inherit it so:
-    a terminal's Ctrl-C reaches every process of its group, and this process alone handles it
-    (it stops the study and the cluster); the workers printed their own KeyboardInterrupt."""
+    """Ctrl-C blocked while the local cluster starts: the threads and processes started meanwhile
+    (Dask's event loop, the workers, and those it restarts later) inherit it blocked and never see
+    it, so that a terminal's Ctrl-C, which reaches every process of its group, is handled by this
+    process alone (it stops the study and the cluster; the workers printed their own
+    KeyboardInterrupt). One that comes meanwhile waits, and is raised as the block ends (it was
+    ignored, and the study ran to its end)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _start_local_cluster(n: int, gpus: int, threads: int, options: dict[str, Any]) -> Any:

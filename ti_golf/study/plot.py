@@ -22,6 +22,14 @@ def figure_columns(table: Mapping[str, list[Any]], keys: Sequence[str]) -> list[
     return [c for c in table if c not in ("task_id", "seed", *keys, *BOOKKEEPING)]
 
 
+def check_plottable(keys: Sequence[str]) -> None:
+    """Refuse ``--plot`` for a study that varies other than one or two keys (``keys``)."""
+    if not 1 <= len(keys) <= 2:
+        raise ConfigError(
+            "--plot", None, f"draws a figure against one or two varied keys (the study varies {len(keys)})"
+        )
+
+
 def plot_study(
     table: Mapping[str, list[Any]],
     keys: Sequence[str],
@@ -35,10 +43,7 @@ def plot_study(
         raise ConfigError(
             "--figure", None, f"the table has no column {column!r}; it has: {', '.join(figure_columns(table, keys))}"
         )
-    if not 1 <= len(keys) <= 2:
-        raise ConfigError(
-            "--plot", None, f"draws a figure against one or two varied keys (the study varies {len(keys)})"
-        )
+    check_plottable(keys)
     ok = [s == "ok" for s in table["status"]]
     means: dict[tuple[Any, ...], list[float]] = {}
     for i, good in enumerate(ok):

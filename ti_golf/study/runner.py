@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from ti_golf.errors import ConfigError
+from ti_golf.files import write_problem
 from ti_golf.study.cluster import check_workers, study_client
 from ti_golf.study.results import RUNS, Manifest, table_rows, write_table
 from ti_golf.study.spec import StudySpec, TaskSpec, load_study
@@ -76,6 +77,9 @@ def run_study(
     parent = folder.resolve().parent  # (the study's folder is made, as run --frames makes its own: not its parents)
     if not folder.exists() and not parent.is_dir():
         raise ConfigError("out", None, f"cannot make {str(folder)!r}: folder {str(parent)!r} does not exist")
+    problem = write_problem(folder if folder.is_dir() else parent)  # (before the cluster starts)
+    if problem is not None:
+        raise ConfigError("out", None, f"cannot write into {str(folder)!r}: {problem}")
     manifest = Manifest(folder)
     if (folder / RUNS).exists() and not (folder / RUNS).is_dir():
         raise ConfigError(str(folder / RUNS), None, "is not a folder: a study folder keeps its tasks' saved runs there")
@@ -97,6 +101,8 @@ def run_study(
                 _run(spec, todo, client, folder, manifest, result, log)
     except KeyboardInterrupt:
         result.interrupted = True
+        if not folder.is_dir():  # (while the cluster started: nothing was made)
+            raise KeyboardInterrupt("before any task ran") from None
         raise KeyboardInterrupt(
             f"after {result.ran} of {len(todo)} tasks; the finished rows are in {folder}: run the study again to "
             "finish it"

@@ -23,7 +23,6 @@ study is loaded, before anything runs. Plain Python, no Taichi.
 
 from __future__ import annotations
 
-import hashlib
 import itertools
 import json
 import math
@@ -46,6 +45,7 @@ from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
 from ti_golf.scene.values import check_value
 from ti_golf.study.figures import FIGURES, KINDS, default_figures
 from ti_golf.study.reads import refuse_unread
+from ti_golf.study.task_id import task_id
 
 MAX_TASKS = 100_000
 """The most tasks a study may hold (a grid's combinations times the seeds)."""
@@ -292,7 +292,7 @@ def load_study(path: str | os.PathLike[str], overrides: Sequence[str] = ()) -> S
         how = given[0] if given else "set"
         scene_doc = _check_scene(base, changes, source, point, how, task, file_keys, seeded=study.seeds is not None)
         for seed in seeds:
-            ident = _task_id(scene_doc, seed, task_dict, figures)
+            ident = task_id(scene_doc, seed, task_dict, figures)
             tasks.append(TaskSpec(ident, dict(point), seed, base, changes, task_dict, tuple(figures)))
     return StudySpec(
         path=source,
@@ -458,13 +458,22 @@ def _fixed_changes(
 ) -> tuple[tuple[str, ...], frozenset[str], frozenset[str]]:
     """The changes every task makes (the study file's ``set``, each key once, then the command
     line's ``--set``, which replaces the file's value of a key it gives), with the keys each gave."""
-    file_keys = [parse_override(text)[0] for text in file_set]
+    file_keys = [_file_override(text, source)[0] for text in file_set]
     twice = next((key for i, key in enumerate(file_keys) if key in file_keys[:i]), None)
     if twice is not None:
         raise_config(source, f"set: {twice}", "is given twice: give it once")
     cli_keys = frozenset(parse_override(text)[0] for text in cli_set)
     fixed = tuple(t for t, key in zip(file_set, file_keys) if key not in cli_keys) + tuple(cli_set)
     return fixed, frozenset(file_keys), cli_keys
+
+
+def _file_override(text: str, source: str) -> tuple[str, Any]:
+    """:func:`parse_override` of one text of the study file's ``set``, its errors naming the file
+    and ``set`` (they named ``--set``, which the command line was not given)."""
+    try:
+        return parse_override(text)
+    except ConfigError as exc:
+        raise_config(source, f"set: {text}", exc.reason)
 
 
 def _seeds(study: Study, task: Task, source: str) -> list[int | None]:
@@ -534,15 +543,6 @@ def _toml(value: Any) -> str:
     if isinstance(value, (list, tuple)):
         return "[" + ",".join(_toml(v) for v in value) + "]"
     return str(value)
-
-
-def _task_id(scene_doc: Mapping[str, Any], seed: int | None, task: Mapping[str, Any], figures: Sequence[str]) -> str:
-    """A task's identity: a hash of its scene (every key read), seed, task settings and figures, so
-    that a study run again, or grown by more points, finds the tasks it has already finished."""
-    text = json.dumps(
-        {"scene": scene_doc, "seed": seed, "task": task, "figures": list(figures)}, sort_keys=True, default=str
-    )
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def study_json_schema() -> dict[str, Any]:
