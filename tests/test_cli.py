@@ -1346,15 +1346,46 @@ def interrupted_launch(monkeypatch, module, name: str, signum: int, argv: list[s
 
 
 def test_an_interrupted_sweep_keeps_its_results(tmp_path, capsys, monkeypatch):
-    # a sweep is one kernel launch, which cannot stop half-way: SIGTERM (or Ctrl-C) during it is
-    # held until its results are written, then the command stops with one line and code 130
-    from ti_golf.cli import sweep as sweep_command
+    # a sweep's flights are one kernel launch, which cannot stop half-way: SIGTERM (or Ctrl-C)
+    # during it is held until its results are written, then the command stops with one line and
+    # code 130
+    from ti_golf.golf import sweep as sweep_module
 
     out = tmp_path / "s.csv"
     argv = ["sweep", "lab_vacuum", "--angles", "30,45,60", "--out", str(out)]
-    err = interrupted_launch(monkeypatch, sweep_command, "sweep", signal.SIGTERM, argv, capsys)
-    assert len(err) == 1 and err[0].startswith("ti-golf: interrupted during the sweep") and str(out) in err[0]
+    err = interrupted_launch(monkeypatch, sweep_module, "fly", signal.SIGTERM, argv, capsys)
+    assert err == [
+        f"ti-golf: interrupted during the sweep's flights, one kernel launch: they ran to their end; saved in {out}"
+    ]
     assert len(out.read_text().splitlines()) == 1 + 3  # header and the three launches
+
+
+def test_an_interrupted_sweep_to_rest_stops_its_roll_out_and_keeps_what_it_computed(tmp_path, capsys, monkeypatch):
+    # a Ctrl-C during --to-rest's roll-out waited for the whole roll-out (19 s after the signal in
+    # a sweep of 1,000 launches), then said the sweep was one kernel launch; during the flights it
+    # also ran the whole roll-out. Now the flights are kept without a roll-out, or the roll-out
+    # stops between its launches, with a line that says which
+    import csv
+
+    from ti_golf.golf import rollout
+    from ti_golf.golf import sweep as sweep_module
+
+    out = tmp_path / "s.csv"
+    argv = ["sweep", "tour_shot", "--angles", "10,12,14", "--to-rest", "--out", str(out)]
+    for module, name, said in (
+        (
+            sweep_module,
+            "fly",
+            "during the sweep's flights, one kernel launch: they ran to their end, before the roll-out",
+        ),
+        (rollout.Simulation, "run", "during the roll-out: 0 of the 3 balls landed had come to rest"),
+    ):
+        err = interrupted_launch(monkeypatch, module, name, signal.SIGINT, argv, capsys)
+        assert err == [f"ti-golf: interrupted {said}; saved in {out}"], err
+        rows = list(csv.DictReader(out.read_text().splitlines()))
+        assert len(rows) == 3 and all(float(r["carry_m"]) > 100 for r in rows), rows[:1]
+        assert all(r.get("total_m", "") in ("", "nan") for r in rows), rows[:1]  # (none rested)
+        monkeypatch.undo()
 
 
 def test_an_interrupted_dispersion_without_a_roll_out_keeps_its_shots(tmp_path, capsys, monkeypatch):

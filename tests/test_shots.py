@@ -277,6 +277,20 @@ def test_a_flight_whose_first_step_overshoots_is_stopped_not_landed_at_its_tee(s
         sweep(scene, angles_deg=[30.0], spins=spins, overrides=overrides)
 
 
+@pytest.mark.parametrize("integrator", ["semi_implicit", "rk4"])
+def test_a_ball_launched_upward_slower_than_a_step_of_gravity_lands_at_its_tee(integrator):
+    # a ball launched up at less than g·h (here 0.05 m/s against 0.098 m/s at h = 10 ms) comes
+    # back below its launch height within its first step: it barely rises, and lands at the tee. It
+    # was taken for a diverged integration, and stopped a whole sweep of small speeds (exit 3)
+    scene = load_scene("lab_magnus", [f'world.integrator="{integrator}"'])
+    g, h = -scene.world.gravity[1], scene.world.dt
+    speeds = [0.05 / math.sin(math.radians(30.0)), 0.5 * g * h / math.sin(math.radians(30.0)), 2.0]
+    res = sweep(scene, angles_deg=[30.0], speeds=speeds)
+    assert res.flight.landed.all()
+    assert res.carry[:2] == pytest.approx([0.0, 0.0], abs=2.0 * h * speeds[1])  # (at most a step's flight)
+    assert res.carry[2] > 0.1
+
+
 def test_a_ball_that_gravity_does_not_pull_down_does_not_land_and_is_no_divergence():
     # gravity upward or sideways: the rise bound of a ball pulled down said the flight diverged
     for gravity in ("[0, 9.81, 0]", "[9.81, 0, 0]"):
@@ -526,3 +540,14 @@ def test_bench_dispersion_reports_rates_baselines_and_accuracy():
     # the coarse step flies the same shots in about a tenth of the steps
     assert coarse["seconds"] < fine["seconds"]
     assert any("shots/s" in line for line in lines)
+
+
+def test_a_shot_beyond_a_golf_shots_speed_or_spin_says_which_commands_take_more(capsys):
+    # shot and dispersion bound speed and spin at 150 m/s and 2000 rad/s, sweep and the scenes at
+    # 1000 m/s and 1e5 rad/s: the error gave the bound alone, which sweep took without a word
+    from ti_golf.cli import main
+
+    for option, value, bound in (("--speed", "200", "(0, 150] m/s"), ("--spin", "3000", "[0, 2000] rad/s")):
+        assert main(["shot", "lab_vacuum", "--units", "metric", option, value]) == 2
+        said = capsys.readouterr().err
+        assert f"{option}: must be in {bound} (got {value}): the range of golf shots; a scene's [launch] and" in said

@@ -8,9 +8,7 @@ import difflib
 import math
 import os
 import re
-import signal
 import sys
-import tempfile
 import threading
 import time
 from collections.abc import Iterator, Mapping
@@ -18,8 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ti_golf.errors import OVERRIDES, ConfigError
-from ti_golf.files import PLOT_FORMATS, PLOT_FORMATS_HELP, plot_format
-from ti_golf.signals import HELD, not_ignored
+from ti_golf.files import PLOT_FORMATS, PLOT_FORMATS_HELP, plot_format, write_problem
 
 if TYPE_CHECKING:
     import rich.progress
@@ -248,11 +245,9 @@ def check_writable(path: str | None, option: str, suffixes: tuple[str, ...] = ()
         raise ConfigError(option, None, f"cannot write {path!r}: {str(parent)!r} is a file, not a folder")
     if not parent.is_dir():
         raise ConfigError(option, None, f"cannot write {path!r}: folder {str(parent)!r} does not exist")
-    try:  # the one sure test (permission bits say yes to root where the file system says no)
-        with tempfile.NamedTemporaryFile(dir=parent, prefix=".ti-golf-check-"):
-            pass
-    except OSError as exc:
-        raise ConfigError(option, None, f"cannot write {path!r}: {exc.strerror or exc}") from None
+    problem = write_problem(parent)
+    if problem is not None:
+        raise ConfigError(option, None, f"cannot write {path!r}: {problem}")
     if suffixes and Path(path).suffix.lower() not in suffixes:
         raise ConfigError(option, None, f"must end in {' or '.join(suffixes)} (got {path!r})")
 
@@ -484,26 +479,3 @@ class StartupStatus:
             text = self.line()
             if text:
                 print(text, file=sys.stderr, flush=True)
-
-
-class HeldInterrupt:
-    """Holds Ctrl-C and SIGTERM while work that cannot stop half-way runs (a sweep is one kernel
-    launch), so that what it computes is kept: ``requested`` says whether one came, and the
-    caller stops once its outputs are written. A signal the process ignores stays ignored
-    (:func:`~ti_golf.signals.not_ignored`); outside the main thread it holds nothing."""
-
-    def __init__(self) -> None:
-        self.requested = False
-        self._previous: dict[int, Any] = {}
-
-    def _hold(self, signum: int, frame: object) -> None:
-        self.requested = True
-
-    def __enter__(self) -> HeldInterrupt:
-        if threading.current_thread() is threading.main_thread():
-            self._previous = {s: signal.signal(s, self._hold) for s in not_ignored(HELD)}
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        for s, handler in self._previous.items():
-            signal.signal(s, handler)

@@ -8,7 +8,6 @@ import time
 import numpy as np
 
 from ti_golf.cli._common import (
-    HeldInterrupt,
     check_plot,
     check_writable,
     options_named,
@@ -23,12 +22,13 @@ from ti_golf.cli._launch import golfer_table
 from ti_golf.errors import ConfigError
 from ti_golf.golf.aero_fit import beyond_the_fit
 from ti_golf.golf.rollout import has_ground
-from ti_golf.golf.sweep import sweep
+from ti_golf.golf.sweep import SweepResult, sweep
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import UNITS
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.readers import FLIGHTS_NOT_READ, SWEEP_NOT_READ
-from ti_golf.scene.schema import parse_range
+from ti_golf.scene.schema import Scene, parse_range
+from ti_golf.signals import KeptInterrupt
 
 TRAJECTORIES = 21
 """The trajectories ``--plot`` draws by default."""
@@ -100,20 +100,20 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         args.overrides, "sweep" + " --to-rest" * args.to_rest, FLIGHTS_NOT_READ if args.to_rest else SWEEP_NOT_READ
     )
     scene = load_scene(args.scene, args.overrides)
-    if args.to_rest and not has_ground(scene):
-        raise ConfigError(
-            "--to-rest", None, f"{scene.name} has no ground to come to rest on (world.ground, [terrain] or planes)"
-        )
-    if args.to_rest and not (args.out or args.units):
-        raise ConfigError("--to-rest", None, "has no effect without --out or --units (which show total and roll)")
+    if args.to_rest:
+        _check_to_rest(args, scene)
     angles = _parse_opt_range(args.angles, "--angles")
     speeds = _parse_opt_range(args.speeds, "--speeds")
     spins = _parse_opt_range(args.spins, "--spins")
     t0 = time.perf_counter()
-    with HeldInterrupt() as interrupt, options_named(SWEEP_OPTIONS):  # one launch: an interrupt waits for it
-        res = sweep(
-            scene, angles, speeds, spins, trajectories=args.trajectories if args.plot else 0, to_rest=args.to_rest
-        )
+    stopped = None
+    try:
+        with options_named(SWEEP_OPTIONS):
+            res = sweep(
+                scene, angles, speeds, spins, trajectories=args.trajectories if args.plot else 0, to_rest=args.to_rest
+            )
+    except KeptInterrupt as stop:  # the flights (one launch, waited for) and the rests reached: written below
+        res, stopped = stop.kept, stop
     elapsed = time.perf_counter() - t0
     n = res.angle_deg.size
     landed = int(res.flight.landed.sum())
@@ -137,7 +137,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         edge = edge_of_angles(res.angle_deg, res.angle_deg[b])
         if edge:
             print(f"the best angle is the {edge} swept: the longest carry may lie beyond it")
-    if args.to_rest and res.shots is not None and int(res.shots.at_rest.sum()) < landed:
+    if args.to_rest and stopped is None and res.shots is not None and int(res.shots.at_rest.sum()) < landed:
         print(
             f"{landed - int(res.shots.at_rest.sum())} of the {landed} balls landed were still moving at "
             f"world.t_max = {scene.world.t_max:g} s: no total or roll for them (NaN)"
@@ -158,13 +158,30 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
         plot_sweep(res, args.plot)
         print(f"wrote {args.plot}")
-    if interrupt.requested:
-        kept = ", ".join(p for p in (args.out, args.plot) if p)
-        raise KeyboardInterrupt(
-            "during the sweep, which is one kernel launch: it ran to its end"
-            + (f" and is saved in {kept}" if kept else "")
-        )
+    if stopped is not None:
+        raise KeyboardInterrupt(_stopped_where(args, res, landed))
     return 0
+
+
+def _check_to_rest(args: argparse.Namespace, scene: Scene) -> None:
+    """Refuse ``--to-rest`` where there is no ground to rest on, or nothing shows total and roll."""
+    if not has_ground(scene):
+        raise ConfigError(
+            "--to-rest", None, f"{scene.name} has no ground to come to rest on (world.ground, [terrain] or planes)"
+        )
+    if not (args.out or args.units):
+        raise ConfigError("--to-rest", None, "has no effect without --out or --units (which show total and roll)")
+
+
+def _stopped_where(args: argparse.Namespace, res: SweepResult, landed: int) -> str:
+    """What a sweep that Ctrl-C or SIGTERM stopped ran, and where its results are."""
+    kept = ", ".join(p for p in (args.out, args.plot) if p)
+    saved = f"; saved in {kept}" if kept else ""
+    if args.to_rest and res.shots is not None and res.shots.rolled_out:
+        rested = int(res.shots.at_rest.sum())
+        return f"during the roll-out: {rested} of the {landed} balls landed had come to rest{saved}"
+    rolled = ", before the roll-out" if args.to_rest else ""
+    return f"during the sweep's flights, one kernel launch: they ran to their end{rolled}{saved}"
 
 
 def edge_of_angles(angles: np.ndarray, best: float) -> str | None:

@@ -24,6 +24,7 @@ from ti_golf.scene.checks import SPEED_LIMIT, SPIN_LIMIT, parse_range
 from ti_golf.scene.document import check_values
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene, backspin_axis
+from ti_golf.signals import KeptInterrupt, whole_steps
 from ti_golf.sim.given import whole_number
 from ti_golf.sim.results import CSV_COLUMNS, ROLLED_CSV_COLUMNS, Flight, Shots
 
@@ -286,17 +287,20 @@ def fly(
         )
     if wld.gravity[1] < 0.0:  # (the bound of a ball pulled down; nothing bounds one that is not)
         _check_rise(out["apex"], x0, v0, a.wind, -wld.gravity[1], wld.dt, step_name)
-    _check_landing(out["landed"], out["land_v"], v0, wld.dt, step_name)
+    _check_landing(out["landed"], out["land_v"], v0, max(-wld.gravity[1], 0.0), wld.dt, step_name)
     return out
 
 
-def _check_landing(landed: np.ndarray, land_v: np.ndarray, v0: np.ndarray, dt: float, step_name: str) -> None:
+def _check_landing(landed: np.ndarray, land_v: np.ndarray, v0: np.ndarray, g: float, dt: float, step_name: str) -> None:
     """Raise :class:`SimulationError` for balls that landed while rising: a ball comes down to its
     launch height, so a landing velocity with an upward y component means that a step threw the
     ball below that height in one go (the landing is then put at the launch, carry 0), the
     integration of forces that act faster than a step (a light, large ball's drag, a fast spin's
-    lift or decay)."""
-    ids = np.flatnonzero(np.asarray(landed, bool) & (np.asarray(land_v, float)[:, 1] > 0.0))
+    lift or decay). A ball launched upward at less than a step of gravity (``g``·``dt``) [m/s]
+    does the same by right: it barely rises, and lands at its launch (it stopped a sweep of small
+    speeds with this error)."""
+    rising_fast = np.asarray(v0, float)[:, 1] > g * dt
+    ids = np.flatnonzero(np.asarray(landed, bool) & (np.asarray(land_v, float)[:, 1] > 0.0) & rising_fast)
     if ids.size:
         i = ids[0]
         raise SimulationError(
@@ -360,6 +364,11 @@ def sweep(
         to_rest: also bounce and roll every ball from its landing to rest on the scene's ground
             (:func:`ti_golf.golf.rollout.roll_out`), for total and roll.
 
+    Ctrl-C (or SIGTERM) waits for the flights, one kernel launch, and stops the roll-out between
+    its launches: it raises :class:`~ti_golf.signals.KeptInterrupt` holding the result so far (no
+    trajectories; without the roll-out when it came during the flights, else the balls that came
+    to rest by then).
+
     Example:
         >>> res = sweep("lab_turbulent", angles_deg=np.arange(36, 37.41, 0.02))   # doctest: +SKIP
         >>> res.angle_deg[res.best()], res.carry.max()                           # doctest: +SKIP
@@ -376,10 +385,20 @@ def sweep(
         )
     check_values(scene, "scene")
     an, sp, sn, x0, v0, w0 = launch_grid(scene, angles_deg, speeds, spins)
-    raw = fly(scene, x0, v0, w0)
+    stopped: KeyboardInterrupt | None = None
+    try:
+        with whole_steps():  # (one launch: Ctrl-C waits for it to end, and its flights are kept)
+            raw = fly(scene, x0, v0, w0)
+    except KeyboardInterrupt as stop:  # (raised as the block ends, once raw is set)
+        stopped = stop
     flight = Flight.from_arrays(x0, raw["landed"], raw["apex"], raw["t_land"], raw["land_x"], raw["land_v"])
-    shots = shots_from_landing(scene, x0, raw, to_rest)
+    try:
+        shots = shots_from_landing(scene, x0, raw, to_rest and stopped is None)
+    except KeptInterrupt as stop:  # the roll-out stopped between its launches: the rests reached so far
+        shots, stopped = stop.kept, stop
     res = SweepResult(an, sp, sn, flight, scene, shots=shots)
+    if stopped is not None:
+        raise KeptInterrupt(res) from None
     if trajectories > 0:
         k = min(int(trajectories), an.size)
         idx = np.unique(np.linspace(0, an.size - 1, k).round().astype(int))

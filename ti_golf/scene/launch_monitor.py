@@ -176,7 +176,12 @@ LAUNCH_LIMITS = {
     "spin": (0.0, 2000.0),
     "axis_deg": (-90.0, 90.0),
 }
-"""Allowed launch values, SI (ball speed up to 150 m/s ≈ 335 mph, spin up to 2000 rad/s ≈ 19,100 rpm)."""
+"""Allowed launch values, SI (ball speed up to 150 m/s ≈ 335 mph, spin up to 2000 rad/s ≈ 19,100 rpm):
+the range of golf shots, which a launch monitor reports. A scene's ``[launch]`` and ``ti-golf
+sweep`` take any ball up to ``scene.checks.SPEED_LIMIT`` and ``SPIN_LIMIT``."""
+
+SHOT_RANGE = ": the range of golf shots; a scene's [launch] and `ti-golf sweep` take faster balls and more spin"
+"""What an error on a shot's speed or spin beyond :data:`LAUNCH_LIMITS` says of the bound."""
 
 
 def field_factor(units: Units, name: str) -> float:
@@ -200,8 +205,9 @@ def check_launch(launch: MonitorLaunch, units: Units, options: dict[str, str], s
             lo, hi = 0.0, hi - lo
         if not (math.isfinite(value) and lo <= value <= hi) or (name == "speed" and not spread and value <= 0.0):
             low = "(" if name == "speed" and not spread else "["
+            why = SHOT_RANGE if name in ("speed", "spin") and not spread else ""
             raise ConfigError(
-                options[name], None, f"must be in {low}{lo / f:.6g}, {hi / f:.6g}] {label} (got {value / f:.6g})"
+                options[name], None, f"must be in {low}{lo / f:.6g}, {hi / f:.6g}] {label} (got {value / f:.6g}){why}"
             )
 
 
