@@ -259,6 +259,16 @@ CASES = {
         "run",
         "solver value 'hash' is missing or null",
     ),
+    "an extra description field": (  # (resumed as if it were not there)
+        lambda d, m: m.update(zzz=1),
+        "run",
+        "'zzz' is not a field of a saved run's description, so it would have no effect",
+    ),
+    "f32 positions in an f64 run": (  # (resumed, no longer bit for bit)
+        _set("x", lambda x: x.astype(np.float32)),
+        "x",
+        "dtype float32; a run saved in f64 holds float64",
+    ),
     "unknown format": (
         lambda d, m: m.update(format=3),
         "run",

@@ -93,6 +93,11 @@ DESCRIPTION: dict[str, tuple[Callable[[Any], bool], str]] = {
 """The fields of the ``run`` description that a saved run is continued from, and what each allows."""
 
 
+NOTED = ("format", "arch")
+"""The fields of the ``run`` description besides :data:`DESCRIPTION`: its format (checked as it is
+read) and the backend the run was saved on (a note: a run continues on any backend)."""
+
+
 def check_description(source: str, meta: Any) -> None:
     """The ``run`` description: a table with each field of :data:`DESCRIPTION`."""
     if not isinstance(meta, dict):
@@ -102,6 +107,9 @@ def check_description(source: str, meta: Any) -> None:
             fail(source, "run", f"'{key}' is missing; expects {what}")
         if not allowed(meta[key]):
             fail(source, "run", f"'{key}' is {_short(meta[key])}; expects {what}")
+    extra = sorted(set(meta) - set(DESCRIPTION) - set(NOTED))
+    if extra:
+        fail(source, "run", f"'{extra[0]}' is not a field of a saved run's description, so it would have no effect")
 
 
 T_MAX = TIME_LIMIT
@@ -133,6 +141,15 @@ def check_entries(source: str, data: dict[str, np.ndarray], meta: dict[str, Any]
         if name not in ENTRIES and not name.startswith(("solver.", "initial.", "traj_")):
             fail(source, name, "is not an entry of a saved run, so it would have no effect")
     n = _ball_count(source, data)
+    if meta["precision"] == "f64":  # (an f32 run's fields round to f32 whatever the entry holds)
+        for name in (*BALLS, *FLIGHT, "launch_t", "t"):
+            if name in data and data[name].dtype.kind == "f" and data[name].dtype.itemsize < 8:
+                fail(
+                    source,
+                    name,
+                    f"dtype {data[name].dtype}; a run saved in f64 holds float64 (a narrower float rounds the "
+                    "state, and the run would not go on as it was)",
+                )
     for name, (what, shape, allowed, words) in BALLS.items():
         _numbers(source, data, name, what, (n, *shape), allowed, words)
     _codes(source, data, "status", "the balls' statuses", n, STATUS_NAMES)
