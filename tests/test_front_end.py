@@ -174,3 +174,28 @@ def test_the_frame_line_taichis_import_reads_is_the_one_inspect_gives():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split()[-2:] == ["inspect", "False"]
+
+
+def test_a_ctrl_c_while_taichi_is_imported_waits_for_the_import_and_then_stops():
+    # Ctrl-C while Taichi's compiled extension initialised failed the import: Taichi printed an
+    # install hint and a traceback, exit 1. It is held while Taichi is imported, and raised once
+    # the import is whole. (Here the signal comes as Taichi imports its compiled library.)
+    script = """
+import os, signal, sys
+import ti_golf
+
+class SignalAtTheLibrary:
+    def find_spec(self, name, path=None, target=None):
+        if name == "taichi._lib":
+            os.kill(os.getpid(), signal.SIGINT)
+        return None
+
+sys.meta_path.insert(0, SignalAtTheLibrary())
+try:
+    import taichi
+except KeyboardInterrupt:
+    print("interrupted;", "taichi._lib.core" in sys.modules, signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+"""
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "interrupted; True True", (done.stdout, done.stderr)  # (the import ran through)
