@@ -11,6 +11,7 @@ import pytest
 from conftest import assert_same_state, png_rgb
 
 import ti_golf as tg
+from ti_golf.lab import app
 from ti_golf.lab.app import Lab, bundled_scenes
 from ti_golf.lab.params import panel_text, parameters, slider_span, slider_value
 from ti_golf.render import orbit_view
@@ -145,7 +146,7 @@ def test_the_selected_ball_is_edited_and_read_out_in_the_break_shot():
     assert any("16 balls" in line for line in r.lines())
 
 
-def test_save_writes_the_run_its_plots_and_the_screenshot(tmp_path):
+def test_save_writes_the_run_its_plots_and_the_screenshot(tmp_path, monkeypatch):
     lab = Lab("lab_magnus")
     lab.start()
     lab.advance(max_steps=30)
@@ -186,6 +187,14 @@ def test_save_writes_the_run_its_plots_and_the_screenshot(tmp_path):
     assert lab.save(tmp_path)[0].name == "lab_magnus_002.npz"  # a second save beside the first
     (tmp_path / "file").write_text("")
     assert lab.save(tmp_path / "file") == [] and lab.refused and "cannot save into" in lab.message
+    # a plot that cannot be written (a full disk) leaves the files before it, and the message says so
+    # (its docstring promised none, and the message named none)
+    monkeypatch.setattr(app, "plot_speed", lambda *a: (_ for _ in ()).throw(OSError(28, "No space left on device")))
+    kept = lab.save(tmp_path)
+    assert [p.name for p in kept] == ["lab_magnus_003.npz", "lab_magnus_003_trajectory.png"] and lab.refused
+    assert lab.message.endswith(
+        "No space left on device (saved lab_magnus_003.npz, lab_magnus_003_trajectory.png before it)"
+    ), lab.message
 
 
 def test_load_offers_every_bundled_scene_and_refuses_a_bad_one(tmp_path):

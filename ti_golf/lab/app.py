@@ -472,8 +472,8 @@ class Lab:
         plots ``SCENE_NNN_trajectory.png``, ``_speed.png`` and ``_spin.png`` (when the run has
         samples) and, given ``screenshot`` (a function writing a PNG to the path it gets),
         ``SCENE_NNN_screen.png``; NNN is the first number not yet saved there. Every file is
-        written whole or not at all. Returns the files written (none when saving failed: the
-        message says why)."""
+        written whole or not at all. Returns the files written: when one cannot be written, those
+        before it stay, and the message names them and says why the rest were not."""
         folder = Path(folder)
         stem = _free_stem(folder, self.scene.name)
         rec = self.recording
@@ -499,7 +499,8 @@ class Lab:
                 screenshot(path)
                 written.append(path)
         except OSError as exc:
-            self._say(f"cannot save into {str(folder)!r}: {exc.strerror or exc}", refused=True)
+            kept = f" (saved {', '.join(p.name for p in written)} before it)" if written else ""
+            self._say(f"cannot save into {str(folder)!r}: {exc.strerror or exc}{kept}", refused=True)
             return written
         note = "" if rec is not None else f" (no plots: more than {MAX_RECORDED_BALLS} balls are not sampled)"
         self._say(f"saved {', '.join(p.name for p in written)} in {folder}{note}")
