@@ -228,6 +228,8 @@ def _block_balls(scene: Scene, block: Block, index: int) -> Balls:
     n = len(x)
     if jitter > 0:
         x = x + rng.uniform(-jitter, jitter, size=(n, 3))
+        if block.kind != "lattice":  # the centres in the box: a wide spacing's jitter took them out of it
+            x = np.clip(x, block.box_min, block.box_max)
     radius = R0 * (1.0 + block.radius_jitter * rng.uniform(-1.0, 1.0, n)) if block.radius_jitter else np.full(n, R0)
     mass = M0 * (radius / R0) ** 3
     v = np.tile(np.asarray(block.velocity, float), (n, 1))

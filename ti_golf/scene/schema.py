@@ -448,10 +448,18 @@ class Block:
         read_when=("kind", ("lattice",)),
     )
     box_min: Vec3 = key(
-        "vec3", (0.0, 0.0, 0.0), "m", "lower corner of a random block's box", read_when=("kind", ("random",))
+        "vec3",
+        (0.0, 0.0, 0.0),
+        "m",
+        "lower corner of the box a random block's centres lie in",
+        read_when=("kind", ("random",)),
     )
     box_max: Vec3 = key(
-        "vec3", (1.0, 1.0, 1.0), "m", "upper corner of a random block's box", read_when=("kind", ("random",))
+        "vec3",
+        (1.0, 1.0, 1.0),
+        "m",
+        "upper corner of the box a random block's centres lie in",
+        read_when=("kind", ("random",)),
     )
     velocity: Vec3 = key("vec3", (0.0, 0.0, 0.0), "m/s", "initial velocity of every ball", VELOCITY)
     velocity_jitter: float = key(
