@@ -639,8 +639,10 @@ def test_a_pile_that_tracks_no_flight_keeps_no_flight_record_and_steps_the_same(
     f = untracked.flight()
     assert f.apex.shape == (len(x),) and not f.landed.any()
     assert np.all(np.isnan(f.apex)) and np.all(np.isnan(f.carry)) and np.all(np.isnan(f.flight_time))
-    untracked.run(steps=100, until="landed")  # no tracked ball is in flight: done at once
-    assert untracked.t == pytest.approx(tracked.t + 0.05)  # one chunk of 0.05 s, the first check
+    t = untracked.t  # (waiting for no ball to land stopped at the first check, 0.05 s on: refused)
+    with pytest.raises(ValueError, match="until='landed' has no effect: no ball is tracked"):
+        untracked.run(steps=100, until="landed")
+    assert untracked.t == t
 
 
 @pytest.mark.slow
