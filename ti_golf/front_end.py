@@ -42,19 +42,17 @@ against, and not at all with ``TI_GOLF_PLAIN_FRONT_END=1`` (to compare).
 from __future__ import annotations
 
 import ast
-import contextlib
 import functools
 import linecache
 import os
-import signal
 import sys
 import textwrap
-import threading
 import types
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any
 
 from ti_golf.errors import env_switch
+from ti_golf.signals import ctrl_c_held
 
 PLAIN_ENV = "TI_GOLF_PLAIN_FRONT_END"
 """Set to 1 to run Taichi's front end as it comes (whole source positions, no memoised lookups)."""
@@ -138,33 +136,13 @@ class _TaichiImport:
                 plain = inspect.getframeinfo
                 inspect.getframeinfo = functools.partial(_frame_line, plain=plain)
                 try:
-                    with _ctrl_c_after_the_import():
+                    with ctrl_c_held():  # (an interrupted extension fails for good: Taichi's install hint)
                         run(module)
                 finally:
                     inspect.getframeinfo = plain
 
             spec.loader.exec_module = exec_module  # type: ignore[method-assign] # (this spec's own loader)
         return spec
-
-
-@contextlib.contextmanager
-def _ctrl_c_after_the_import() -> Iterator[None]:
-    """Ctrl-C held while Taichi's compiled extension loads, and raised once it has: one that came
-    while it initialised failed the import, and Taichi printed an install hint ("Share object
-    taichi_python import failed") and a traceback. Only on the main thread (where Python handles
-    signals), and not where Ctrl-C is ignored."""
-    previous = signal.getsignal(signal.SIGINT)
-    if threading.current_thread() is not threading.main_thread() or previous is signal.SIG_IGN:
-        yield
-        return
-    came: list[int] = []
-    signal.signal(signal.SIGINT, lambda signum, frame: came.append(signum))
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, signal.SIG_DFL if previous is None else previous)
-        if came:
-            signal.raise_signal(signal.SIGINT)
 
 
 def _frame_line(frame: types.FrameType, context: int = 1, *, plain: Callable[..., Any]) -> Any:

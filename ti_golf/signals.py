@@ -62,3 +62,29 @@ def whole_steps(note: str | None = None) -> Iterator[list[int]]:
             signal.signal(s, signal.SIG_DFL if handler is None else handler)  # None: set outside Python
         for signum in dict.fromkeys(came):
             signal.raise_signal(signum)
+
+
+@contextmanager
+def ctrl_c_held(block: bool = False) -> Iterator[None]:
+    """Ctrl-C (SIGINT) held inside the block and raised as it ends: for work that a
+    ``KeyboardInterrupt`` would leave broken, such as an import (a compiled extension interrupted
+    while it initialises fails for good). With ``block`` it is also blocked on this thread, so
+    that the threads and processes started meanwhile inherit it blocked and never see it (a
+    terminal's Ctrl-C reaches every process of its group: the caller alone then handles it); it is
+    recorded should another thread take it. Only on the main thread (where Python handles
+    signals), and not where Ctrl-C is ignored."""
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or previous is signal.SIG_IGN:
+        yield
+        return
+    came: list[int] = []
+    signal.signal(signal.SIGINT, lambda signum, frame: came.append(signum))
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT}) if block else None
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.SIG_DFL if previous is None else previous)
+        if mask is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)  # (one pending is taken by the handler put back)
+        if came:
+            signal.raise_signal(signal.SIGINT)

@@ -14,14 +14,13 @@ import json
 import logging
 import os
 import shutil
-import signal
 import subprocess
-import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from ti_golf.errors import ConfigError
+from ti_golf.signals import ctrl_c_held
 
 ADDRESS_ENV = "TI_GOLF_SCHEDULER"
 """The environment variable naming a scheduler to join when ``--address`` is not given."""
@@ -181,31 +180,17 @@ def _local_cluster(n: int, gpus: int, task_threads: int | None = None) -> Any:
     }
     cluster = None
     try:
-        with _ctrl_c_left_to_this_process():
+        # Ctrl-C blocked while the workers start, which inherit it so: a terminal's Ctrl-C reaches
+        # every process of its group, and this one alone stops the study and the cluster (the
+        # workers printed their own KeyboardInterrupt); one that comes meanwhile is raised once
+        # the cluster is up (it was ignored, and the study ran to its end)
+        with ctrl_c_held(block=True):
             cluster = _start_local_cluster(n, gpus, threads, options)
     except KeyboardInterrupt:  # (one held while it started: the cluster is closed, not left running)
         if cluster is not None:
             cluster.close()
         raise
     return cluster
-
-
-@contextlib.contextmanager
-def _ctrl_c_left_to_this_process() -> Iterator[None]:
-    """Ctrl-C blocked while the local cluster starts: the threads and processes started meanwhile
-    (Dask's event loop, the workers, and those it restarts later) inherit it blocked and never see
-    it, so that a terminal's Ctrl-C, which reaches every process of its group, is handled by this
-    process alone (it stops the study and the cluster; the workers printed their own
-    KeyboardInterrupt). One that comes meanwhile waits, and is raised as the block ends (it was
-    ignored, and the study ran to its end)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _start_local_cluster(n: int, gpus: int, threads: int, options: dict[str, Any]) -> Any:
