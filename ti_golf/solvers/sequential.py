@@ -44,8 +44,8 @@ def static_surface():
 
 
 LAM_ROUNDING = 1e-6
-"""How far the restitution pass's Poisson impulse (1 + e)·λ is loosened for the rounding of λ, which
-the sweeps carry in f32 (2^-24): a single impact, where it equals Newton's −e·v_n0, keeps that."""
+"""How far the restitution pass's Poisson bound (1 + e)·λ is loosened for the rounding of λ, which
+the sweeps carry in f32 (2^-24): a binary impact, where it equals Newton's −e·v_n0, keeps that."""
 
 
 @ti.func
@@ -64,8 +64,6 @@ def pair_step(
     h,
     friction: ti.template() = 0,
     poisson: ti.template() = False,
-    newton_cap=1,
-    poisson_off=0,
 ):
     """One Gauss–Seidel update of a contact (``contact.solver = "gauss_seidel"``): (the impulse P
     [N·s] on body a, −P on b; the contact's new accumulated normal impulse λ [N·s] and friction
@@ -93,17 +91,13 @@ def pair_step(
     compile-time value): the friction stops the centres' tangential velocity instead
     (:func:`ti_golf.physics.contact.centre_friction`).
 
-    ``poisson`` (a compile-time value; two balls, or a ball and a plane): an impact (e > 0,
-    approaching faster than ``v_inelastic``, meeting within the step: gap + h·v_n0 < 0) is stopped
-    by the sweeps (v_n ≥ 0: its compression λ), and ``BOUNCE`` gives back e·λ more (Poisson's
-    restitution), with ``newton_cap`` (two balls) at most as much as Newton's −e·v_n0 too. For one
-    impact the two agree; for a ball meeting several at once, Newton's rebounds met in turn made
-    energy (a ball into two touching balls at ±30°, e = 1: 29 % more than it brought; a ball
-    dropped into a V of planes at ±30°: 55 % more), while Poisson's leave the inelastic impact's
-    energy plus e² of what the compression took (to the sweeps' convergence). A ball meets planes
-    alone: Newton's bound, met in turn, would bind before the planes gave back their share (in a V
-    of planes at ±60° the ball left sideways with half its energy), so a plane gives back e·λ.
-    ``poisson_off`` (at run time): Newton's law after all (turf, :func:`surface_step`)."""
+    ``poisson`` (a compile-time value; two balls): an impact (e > 0, approaching faster than
+    ``v_inelastic``, meeting within the step: gap + h·v_n0 < 0) is stopped by the sweeps (v_n ≥ 0:
+    its compression λ), and ``BOUNCE`` gives back at most e·λ more (Poisson's restitution) as
+    well as at most Newton's −e·v_n0. For one impact the two agree; for a ball meeting several at
+    once, Newton's rebounds met in turn made energy (a ball into two touching balls at ±30°, e = 1:
+    29 % more than it brought), while Poisson's leave at most the inelastic impact's energy plus e²
+    of what the compression took (to the sweeps' convergence)."""
     v_a, w_a, r_a, inv_m_a = a.v, a.w, a.r, a.inv_m
     v_b, w_b, r_b, inv_m_b = b.v, b.w, b.r, b.inv_m
     m_eff = 1.0 / (inv_m_a + inv_m_b)
@@ -111,7 +105,7 @@ def pair_step(
     target = -ti.max(gap, 0.0) / h
     impact = False
     if ti.static(poisson):  # (an approach that meets within the step, gap + h·v_n0 < 0)
-        impact = v_n0 < -v_inelastic and e > 0.0 and gap + h * v_n0 < 0.0 and not poisson_off
+        impact = v_n0 < -v_inelastic and e > 0.0 and gap + h * v_n0 < 0.0
     if impact:
         target = 0.0  # the sweeps stop an impact (its compression); the bounce gives it back
     if phase == Phase.BOUNCE:
@@ -119,12 +113,8 @@ def pair_step(
         if v_n0 < -v_inelastic and lam > 0.0 and (e > 0.0 or gap <= 0.0):
             target = -e * v_n0
     lam_new = ti.max(lam + m_eff * (target - v_n), 0.0)
-    if phase == Phase.BOUNCE and impact and lam > 0.0:  # Poisson: e times the compression back
-        poisson_lam = (1.0 + e) * lam  # (lam_new: Newton's, the target above)
-        if newton_cap:
-            lam_new = ti.min(lam_new, poisson_lam * (1.0 + LAM_ROUNDING))
-        else:  # Poisson's to the rounding of λ: Newton's where the two agree (one impact), exact
-            lam_new = ti.min(ti.max(lam_new, poisson_lam * (1.0 - LAM_ROUNDING)), poisson_lam * (1.0 + LAM_ROUNDING))
+    if phase == Phase.BOUNCE and impact and lam > 0.0:  # Poisson: at most e times the compression back
+        lam_new = ti.min(lam_new, (1.0 + e) * lam * (1.0 + LAM_ROUNDING))
     P = (lam_new - lam) * n
     F_new = F
     # the friction, toward stopping the slip, in the sweeps; in the bounce only when it pressed
@@ -142,9 +132,7 @@ def pair_step(
 
 
 @ti.func
-def surface_step(
-    phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, h, kinds: ti.template(), plane: ti.template()
-):
+def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, h, kinds: ti.template()):
     """:func:`pair_step` of a ball against a static surface (a plane, or the terrain's patch) with
     normal n̂, per unit mass [m/s] (``v0``: the ball's velocity before the step's contacts; ``F``:
     the friction impulse applied so far), with
@@ -154,14 +142,9 @@ def surface_step(
     resting contact, not an impact) also meets rolling resistance and the resistance to spin about
     the normal, bounded by μ_roll·λ (once per step), as :func:`ti_golf.physics.contact.plane_jolt`
     applies them to a resting impulse only: an impact's jolt does not brake the ball's rolling. With the report's friction
-    (``kinds.friction``) the spin is left as it is. A ``plane`` (a compile-time value) bounces an
-    impact by Poisson's restitution (:func:`pair_step`'s ``poisson``), unless it is turf, whose
-    frame and restitution follow the impact's speed. Returns (v, ω, λ, F)."""
+    (``kinds.friction``) the spin is left as it is. Returns (v, ω, λ, F)."""
     n_eff, e = impact_frame(n, gap, v, lam, contact, v_inelastic, h, kinds)
     ball = body(v, w, radius, 1.0)
-    turf = False
-    if ti.static(kinds.turf):
-        turf = contact.turf != 0
     P, lam_new, F_new = pair_step(
         phase,
         n_eff,
@@ -176,9 +159,6 @@ def surface_step(
         v_inelastic=v_inelastic,
         h=h,
         friction=kinds.friction,
-        poisson=plane,
-        newton_cap=0,
-        poisson_off=turf,
     )
     spin = ti.static(kinds.friction != CENTRE_FRICTION)
     v_new = v + P

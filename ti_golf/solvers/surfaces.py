@@ -140,21 +140,7 @@ def surface_impulses(i, warm: ti.template(), vi, wi, h, v_inelastic, s: ti.templ
         gap = (state.x[i] - model.plane_p[p]).dot(n) - r
         v_in = surface_inelastic_speed(i, n, vi, wi, v_inelastic, h, s, warm)
         vi, wi = surface_contact_step(
-            i,
-            row,
-            p,
-            n,
-            gap,
-            vi,
-            wi,
-            r,
-            contact=contact,
-            h=h,
-            v_inelastic=v_in,
-            s=s,
-            warm=warm,
-            phase=phase,
-            plane=True,
+            i, row, p, n, gap, vi, wi, r, contact=contact, h=h, v_inelastic=v_in, s=s, warm=warm, phase=phase
         )
     if ti.static(s.kinds.terrain):
         if not far:
@@ -167,21 +153,7 @@ def surface_impulses(i, warm: ti.template(), vi, wi, h, v_inelastic, s: ti.templ
                 gap = (state.x[i] - pt).dot(n) - r
                 v_in = surface_inelastic_speed(i, n, vi, wi, v_inelastic, h, s, warm)
                 vi, wi = surface_contact_step(
-                    i,
-                    row,
-                    q,
-                    n,
-                    gap,
-                    vi,
-                    wi,
-                    r,
-                    contact=ct,
-                    h=h,
-                    v_inelastic=v_in,
-                    s=s,
-                    warm=warm,
-                    phase=phase,
-                    plane=False,
+                    i, row, q, n, gap, vi, wi, r, contact=ct, h=h, v_inelastic=v_in, s=s, warm=warm, phase=phase
                 )
     return vi, wi
 
@@ -216,21 +188,7 @@ def air_push(i, w, h, s: ti.template()):
 
 @ti.func
 def surface_contact_step(
-    i,
-    row,
-    column,
-    n,
-    gap,
-    vi,
-    wi,
-    r,
-    contact,
-    h,
-    v_inelastic,
-    s: ti.template(),
-    warm: ti.template(),
-    phase,
-    plane: ti.template(),
+    i, row, column, n, gap, vi, wi, r, contact, h, v_inelastic, s: ti.template(), warm: ti.template(), phase
 ):
     """Ball i's contact with one surface of normal ``n`` and surface gap ``gap`` [m], whose resting
     impulse (and, for the Gauss–Seidel sweeps, friction impulse) per unit mass is kept in
@@ -239,12 +197,7 @@ def surface_contact_step(
     (:func:`list_surfaces`), as a ball knocked more than the skin in one step does: from no
     carried impulse, and with nothing kept from one sweep to the next; the lists are then rebuilt
     before the next step (``s``: the step's :class:`.step.Step`; ``contact``: the surface's
-    contact parameters). A ``plane`` (a compile-time value: not the terrain) bounces an impact by
-    Poisson's restitution in the Gauss–Seidel sweeps (:func:`.sequential.surface_step`), and is
-    met when the ball's free flight reaches it within the step, whatever the sweeps made of the
-    ball's velocity so far: the sweeps stop an impact short of its plane, and a ball dropped into
-    a V of two planes, stopped short of the first, no longer reached the second and bounced off
-    the first alone, sideways. Returns (v, ω)."""
+    contact parameters). Returns (v, ω)."""
     lists, scratch, kinds = ti.static((s.lists, s.scratch, s.kinds))
     lam0, F0 = 0.0, zero3()
     if row >= 0:  # f32 in the table (see surface_impulses)
@@ -267,7 +220,7 @@ def surface_contact_step(
                         n, vi, wi, r, v_b=zero3(), w_b=zero3(), r_b=0.0, m_eff=1.0, lam=lam0, mu=contact.mu
                     )
                 vi, wi = plane_jolt(P, lam0, vi, wi, r, n, contact.mu_roll, kinds.friction)
-    elif gap + h * reaching(vi, scratch.v_free[i], n, ti.static(plane and kinds.gauss_seidel)) < 0.0 or lam0 > 0.0:
+    elif gap + h * ti.min(vi.dot(n), 0.0) < 0.0 or lam0 > 0.0:  # else no impulse (pair_impulse)
         lam_p = 0.0
         if row < 0:  # an impulse the lists did not foresee (see list_surfaces): rebuild them
             scratch.flag[0] = 1
@@ -289,7 +242,6 @@ def surface_contact_step(
                 v_inelastic=v_inelastic,
                 h=h,
                 kinds=kinds,
-                plane=plane,
             )
             if row >= 0:
                 lists.surface_impulse[row, column] = ti.Vector([lam_p, F[0], F[1], F[2]], dt=ti.f32)
@@ -304,18 +256,6 @@ def surface_contact_step(
         if lam_p > 0.0:
             scratch.clear[i] = ti.cast(NEAR, ti.f32)
     return vi, wi
-
-
-@ti.func
-def reaching(v, v_free, n, free_flight: ti.template()):
-    """The normal velocity [m/s] (≤ 0) with which a ball at ``v`` reaches a surface of unit normal
-    ``n`` within the step at most: its approach now, or with ``free_flight`` (a compile-time value)
-    the faster of that and its free flight's (``v_free``). A surface further away than h times it
-    takes no impulse (:func:`surface_contact_step`)."""
-    v_n = ti.min(v.dot(n), 0.0)
-    if ti.static(free_flight):
-        v_n = ti.min(v_n, v_free.dot(n))
-    return v_n
 
 
 @ti.func
