@@ -15,6 +15,7 @@ from dataclasses import fields, replace
 
 import numpy as np
 import pytest
+from conftest import ROOT
 from scipy.integrate import solve_ivp
 
 from ti_golf.bench.reference import derivatives
@@ -446,6 +447,23 @@ def test_bad_launch_input_is_one_line_and_exit_code_2(args, option):
     assert code == 2, (out, err)
     assert option in err and "Traceback" not in err
     assert err.strip().splitlines()[-1].startswith("ti-golf: error:")
+
+
+@pytest.mark.parametrize("command", ["sweep", "shot", "dispersion", "tour"])
+@pytest.mark.parametrize("table", ["balls", "blocks"])
+def test_flights_refuse_a_scene_whose_other_balls_they_would_not_fly(tmp_path, command, table):
+    # each launch flies alone: a scene's [[balls]] or [[blocks]] were silently left out of the
+    # flights (a ball set in the launch's path changed nothing), where `run` simulates them
+    extra = {
+        "balls": "position = [5.0, 1.0, 0.0]\n",
+        "blocks": 'kind = "lattice"\ncount = [2, 1, 1]\norigin = [5.0, 1.0, 0.0]\nspacing = 0.05\n',
+    }
+    scene = tmp_path / "shot_and_wall.toml"
+    scene.write_text((ROOT / "scenes" / "tour_shot.toml").read_text() + f"\n[[{table}]]\n{extra[table]}")
+    code, out, err = cli(command, str(scene))
+    assert code == 2, (out, err)
+    assert f"shot_and_wall.toml: key '{table}[0]' has no effect on a sweep, a shot" in err and "Traceback" not in err
+    assert cli("run", str(scene), "--steps", "1")[0] == 0  # (the scene itself is good)
 
 
 def test_dispersion_command_writes_its_shots_and_plot(tmp_path):

@@ -172,6 +172,14 @@ BAD = [
         "(the run's own length (task.t or task.steps) replaces it)",
     ),
     ('scene = "heap"\nset = ["world.t_max=9"]\n', "set: world.t_max", "is not read by a task of task.kind = 'run'"),
+    # what a task needs of its scene (each passed, and every task failed)
+    ('scene = "break_shot"\n[task]\nkind = "sweep"\n', "scene", "flies the scene's [launch]: 'break_shot' has none"),
+    ('scene = "heap"\n[task]\nkind = "run"\nuntil = "landed"\n', "task.until", "'landed' has no effect on 'heap'"),
+    (
+        'scene = "lab_vacuum"\n[task]\nkind = "run"\nuntil = "landed"\n[grid]\n"launch.angle_deg" = [0, 45]\n',
+        "task.until",
+        "no ball",
+    ),
 ]
 
 
@@ -182,6 +190,20 @@ def test_a_bad_study_file_is_one_error_naming_the_file_and_the_key(tmp_path, tex
         load_study(path)
     assert err.value.source == str(path) and err.value.key == key, str(err.value)
     assert reason in err.value.reason and "\n" not in str(err.value)
+
+
+def test_a_study_of_flights_refuses_a_scene_with_other_balls(tmp_path):
+    # a sweep, shot, dispersion or tour task flies each launch alone: the scene's [[balls]] would
+    # have no effect (the study passed, and every task failed)
+    scene = (ROOT / "scenes" / "tour_shot.toml").read_text() + "\n[[balls]]\nposition = [5.0, 1.0, 0.0]\n"
+    write(tmp_path, "wall.toml", scene)
+    for kind in ("sweep", "shot", "dispersion", "tour"):
+        path = write(tmp_path, "bad.toml", f'scene = "wall.toml"\n[task]\nkind = "{kind}"\n')
+        with pytest.raises(ConfigError) as err:
+            load_study(path)
+        assert err.value.key == "scene" and f"task.kind = '{kind}': wall's balls[0] has no effect" in err.value.reason
+    path = write(tmp_path, "good.toml", 'scene = "wall.toml"\n[task]\nkind = "run"\nt = 0.1\n')
+    assert load_study(path).tasks
 
 
 def test_the_command_reports_a_bad_study_in_one_line_with_exit_code_2(tmp_path):

@@ -19,7 +19,7 @@ from ti_golf.physics.aero import air_params
 from ti_golf.physics.kinds import kinds_of
 from ti_golf.physics.types import vec3
 from ti_golf.runtime import available_memory, ensure_init, np_float, on_cpu, plain_compile
-from ti_golf.scene.balls import launch_position
+from ti_golf.scene.balls import check_flies_alone, launch_position
 from ti_golf.scene.checks import SPEED_LIMIT, SPIN_LIMIT, parse_range
 from ti_golf.scene.document import check_values
 from ti_golf.scene.loader import load_scene
@@ -215,13 +215,15 @@ def fly(
 ) -> dict[str, np.ndarray]:
     """Integrate balls from (x0, v0, w0) (each (N, 3)) to landing at their launch height.
 
-    Uses the scene's integrator and ``world.dt``; gives up on a ball after ``world.t_max``.
+    Uses the scene's integrator and ``world.dt``; gives up on a ball after ``world.t_max``. Each
+    ball flies alone: a scene with ``[[balls]]`` or ``[[blocks]]`` is refused (ConfigError).
     ``step_name`` names the step in errors (``flight_dt`` where a caller put its own step there).
     Balls are ordered by their drag-free flight time before they are grouped into SIMD lanes, so a
     group's balls land at about the same step. Returns the raw per-ball arrays: landed (N,), apex
     (N,), t_land (N,), the landing point land_x, velocity land_v and spin land_w (N, 3) and, when
     recording, traj (N, n_samples, 3).
     """
+    check_flies_alone(scene)
     steps = scene.world.t_max / scene.world.dt
     if steps > FLIGHT_STEPS_MAX:
         blamed = ("world.t_max", "world.dt") if step_name == "world.dt" else ("world.t_max",)

@@ -54,6 +54,36 @@ def launch_position(scene: Scene) -> Vec3:
     return (0.0, scene.world.ground_height + scene.ball.radius, 0.0)
 
 
+def flies_alone_problem(scene: Scene) -> tuple[str, str] | None:
+    """(key, reason) naming the scene's first ``[[balls]]`` or ``[[blocks]]`` table, which flights to
+    landing (a sweep, a shot, a dispersion, the tour table) would not read: they fly each launch
+    alone. None when the scene has neither. ``ti-golf run`` simulates them with the launched ball."""
+    for table, given in (("balls", scene.balls), ("blocks", scene.blocks)):
+        if given:
+            return f"{table}[0]", (
+                "has no effect on a sweep, a shot, a dispersion or the tour table, which fly each launch alone; "
+                f"`ti-golf run` simulates the scene's [[{table}]] with its launch"
+            )
+    return None
+
+
+def tracks_landing(scene: Scene) -> bool:
+    """Whether some ball of the scene may be tracked for its landing (carry, apex): a ``[launch]``
+    shot upward, or a block launching balls at angles reaching above 0 (as :func:`build_balls`
+    marks them), without creating the balls."""
+    launched = scene.launch is not None and scene.launch.angle_deg > 0.0
+    return launched or any(
+        b.speed is not None and b.angle_deg is not None and b.angle_deg[1] > 0.0 for b in scene.blocks
+    )
+
+
+def check_flies_alone(scene: Scene) -> None:
+    """A ConfigError from :func:`flies_alone_problem`, naming the scene's file, when there is one."""
+    problem = flies_alone_problem(scene)
+    if problem is not None:
+        raise_config(scene.path or scene.name, *problem)
+
+
 def _one(x, v, w, r, m, track) -> Balls:
     return Balls(
         np.array([x], float),

@@ -8,8 +8,10 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 
 from ti_golf.errors import OVERRIDES
+from ti_golf.scene.balls import flies_alone_problem, tracks_landing
 from ti_golf.scene.checks import raise_config
 from ti_golf.scene.readers import APPLICATIONS, TIMED_RUN_NOT_READ, Unread, unread_reason
+from ti_golf.scene.schema import Scene
 
 VARIED_IN = {"grid": "grid", "points": "points", "random": "random.uniform"}
 """Each way of choosing the points, with the table an error names a varied key in (a point of
@@ -50,3 +52,21 @@ def refuse_unread(
             if reason is not None:
                 where = f"points[{i}].{key}" if how == "points" else f"{table}.{key}"
                 raise_config(source, where, f"{why}: varying it changes nothing ({reason})")
+
+
+def scene_problem(kind: str, until: str, scene: Scene) -> tuple[str, str] | None:
+    """(key, reason) for what a task of ``kind`` (a run stopped ``until``) needs of its ``scene``
+    and does not find, or None: a sweep, a shot and a dispersion fly the scene's ``[launch]``; the
+    flights fly each launch alone, so ``[[balls]]`` and ``[[blocks]]`` would have no effect; a run
+    until landed needs a ball tracked for its landing."""
+    if kind in ("sweep", "shot", "dispersion") and scene.launch is None:
+        return "scene", f"task.kind = {kind!r} flies the scene's [launch]: {scene.name!r} has none"
+    alone = None if kind in ("run", "pit") else flies_alone_problem(scene)
+    if alone is not None:
+        return "scene", f"task.kind = {kind!r}: {scene.name}'s {alone[0]} {alone[1]}"
+    if kind == "run" and until == "landed" and not tracks_landing(scene):
+        return "task.until", (
+            f"'landed' has no effect on {scene.name!r}: no ball of it is tracked for its landing (a [launch] "
+            "ball shot above the ground is); give task.until = 'rest'"
+        )
+    return None

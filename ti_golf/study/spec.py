@@ -44,7 +44,7 @@ from ti_golf.scene.overrides import parse_override
 from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
 from ti_golf.scene.values import check_value
 from ti_golf.study.figures import FIGURES, KINDS, default_figures
-from ti_golf.study.reads import refuse_unread
+from ti_golf.study.reads import refuse_unread, scene_problem
 from ti_golf.study.task_id import task_id
 
 MAX_TASKS = 100_000
@@ -517,8 +517,9 @@ def _check_scene(
                 source if in_file else OVERRIDES, f"set: {exc.key}" if in_file else exc.key, exc.reason
             ) from None
         raise ConfigError(source, "scene", str(exc)) from None
-    if task.kind in ("shot", "dispersion") and scene.launch is None:
-        raise_config(source, "scene", f"task.kind = {task.kind!r} flies the scene's [launch]: {scene.name!r} has none")
+    needs = scene_problem(task.kind, task.until, scene)
+    if needs is not None:
+        raise_config(source, *needs)
     random_blocks = sum(b.kind == "random" for b in scene.blocks)
     problem = scaled_block_problem(scene, task.balls) if task.kind == "run" and task.balls is not None else None
     if problem is not None:
