@@ -397,6 +397,17 @@ def test_a_dispersion_in_which_no_shot_lands_says_so():
     assert "mean" not in out.split("spread (sd):")[1]
 
 
+def test_a_dispersion_says_how_many_shots_never_flew():
+    # shots launched below the horizontal go down through their launch height at once: they were
+    # counted as landed (carry 0, a landing ellipse of 0 x 0 yd) with no word that none had flown
+    code, out, err = cli("dispersion", "tour_shot", "--n", "40", "--vla", "0", "--no-roll", "--json")
+    summary = json.loads(out.strip().splitlines()[-1])
+    note = next(line for line in out.splitlines() if line.startswith("note:") and "never rose" in line)
+    assert code == 0 and 0 < summary["unflown"] < 40 and f"note: {summary['unflown']} of the shots" in note, out + err
+    code, out, _ = cli("dispersion", "tour_shot", "--n", "40", "--vla", "5", "--no-roll", "--json")
+    assert code == 0 and json.loads(out.strip().splitlines()[-1])["unflown"] == 0 and "never rose" not in out
+
+
 def test_a_speed_ratio_below_one_is_said_as_slower():
     from ti_golf.bench.common import faster
 

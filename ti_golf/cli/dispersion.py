@@ -21,7 +21,7 @@ from ti_golf.cli._common import (
 )
 from ti_golf.cli._launch import LAUNCH_OPTIONS, launch_line, launch_options, read_launch, units_option
 from ti_golf.errors import ConfigError
-from ti_golf.golf.dispersion import MAX_SHOTS, PLAYER_SPREAD, dispersion, held_at_limits
+from ti_golf.golf.dispersion import MAX_SHOTS, PLAYER_SPREAD, Dispersion, dispersion, held_at_limits
 from ti_golf.golf.rollout import has_ground
 from ti_golf.golf.shots import FLIGHT_DT_RANGE
 from ti_golf.scene.launch_monitor import (
@@ -127,6 +127,7 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
     f, lab = units.distance, units.distance_label
     s = d.shots
     landed, rested = int(s.landed.sum()), int(s.at_rest.sum())
+    unflown = int((s.landed & ~(s.apex > 0.0)).sum())  # (down through the launch height at once: carry 0)
     dt = args.flight_dt if args.flight_dt is not None else scene.world.dt
     rest_note = f", {rested:,} at rest" if to_rest else " (not rolled out)"
     print(
@@ -135,12 +136,7 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
     )
     print(f"mean launch: {launch_line(mean, units)}")
     print(f"spread (sd): {launch_line(sd, units, signed=False)}")
-    for name, share in held_at_limits(d.launches, sd).items():
-        lo, hi = (v / field_factor(units, name) for v in LAUNCH_LIMITS[name])
-        print(
-            f"note: {100 * share:.1f} % of the drawn {LAUNCH_OPTIONS[name][2:]} values fell beyond "
-            f"[{lo:g}, {hi:g}] {field_label(units, name)} and were held there: the spread flown is narrower than its sd"
-        )
+    _notes(d, units, unflown, to_rest)
     summary = d.summary()
     if landed == 0:
         print(f"no shot landed within world.t_max = {scene.world.t_max:g} s")
@@ -177,6 +173,7 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
             "units": units.name,
             "seconds": elapsed,
             "landed": landed,
+            "unflown": unflown,
             "at_rest": rested,
             "mean_launch": mean.in_units(units),
             "sd_launch": sd.in_units(units),
@@ -197,6 +194,22 @@ def cmd_dispersion(args: argparse.Namespace) -> int:
     if stopped is not None:
         raise _stopped(s, to_rest, ", ".join(p for p in (args.out, args.plot) if p))
     return code
+
+
+def _notes(d: Dispersion, units: Units, unflown: int, to_rest: bool) -> None:
+    """Print what a reader of the figures must know: shots that never flew (``unflown``), and
+    launch values drawn beyond the launch monitor's limits and held there."""
+    if unflown:
+        print(
+            f"note: {unflown:,} of the shots never rose above their launch height: no flight, they land where they "
+            "start (carry 0)" + (" and roll out from there" if to_rest else "")
+        )
+    for name, share in held_at_limits(d.launches, d.sd).items():
+        lo, hi = (v / field_factor(units, name) for v in LAUNCH_LIMITS[name])
+        print(
+            f"note: {100 * share:.1f} % of the drawn {LAUNCH_OPTIONS[name][2:]} values fell beyond "
+            f"[{lo:g}, {hi:g}] {field_label(units, name)} and were held there: the spread flown is narrower than its sd"
+        )
 
 
 def _stopped(s: Shots, to_rest: bool, kept: str) -> KeyboardInterrupt:
