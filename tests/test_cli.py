@@ -1391,11 +1391,11 @@ def test_an_interrupted_sweep_to_rest_stops_its_roll_out_and_keeps_what_it_compu
 def test_an_interrupted_dispersion_without_a_roll_out_keeps_its_shots(tmp_path, capsys, monkeypatch):
     # the shots' flights are one kernel launch: a Ctrl-C during them waited for the launch to end,
     # then threw its shots away (no --out written); they are kept, as a sweep's are
-    from ti_golf.golf import shots
+    from ti_golf.golf import sweep
 
     out = tmp_path / "d.csv"
     argv = ["dispersion", "tour_shot", "--n", "20", "--no-roll", "--out", str(out)]
-    err = interrupted_launch(monkeypatch, shots, "fly", signal.SIGINT, argv, capsys)
+    err = interrupted_launch(monkeypatch, sweep, "fly", signal.SIGINT, argv, capsys)
     assert err[-1].startswith("ti-golf: interrupted during the shots' flights") and str(out) in err[-1], err
     assert len(out.read_text().splitlines()) >= 1 + 20  # the header (and notes) and the twenty shots
 
@@ -1405,12 +1405,12 @@ def test_an_interrupted_dispersion_with_a_roll_out_keeps_what_it_computed(tmp_pa
     # shot away; the flights are kept, and the rests reached, with a line that says which
     import csv
 
-    from ti_golf.golf import rollout, shots
+    from ti_golf.golf import rollout, sweep
 
     out = tmp_path / "d.csv"
     argv = ["dispersion", "tour_shot", "--n", "20", "--out", str(out)]
     for module, name, said in (
-        (shots, "fly", "during the shots' flights, which are one kernel launch: they ran to their end, not rolled out"),
+        (sweep, "fly", "during the shots' flights, which are one kernel launch: they ran to their end, not rolled out"),
         (rollout.Simulation, "run", "during the roll-out: 0 of the 20 landed shots had come to rest"),
     ):
         err = interrupted_launch(monkeypatch, module, name, signal.SIGINT, argv, capsys)

@@ -15,13 +15,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from ti_golf.golf.rollout import shots_from_landing
-from ti_golf.golf.sweep import fly
+from ti_golf.golf.sweep import fly_then_roll_out
 from ti_golf.scene.balls import launch_position
 from ti_golf.scene.launch_monitor import LAUNCH_LIMITS, MonitorLaunch, target_direction
 from ti_golf.scene.loader import load_scene
 from ti_golf.scene.schema import Scene
-from ti_golf.signals import KeptInterrupt, whole_steps
+from ti_golf.signals import KeptInterrupt
 from ti_golf.sim.results import Shots
 from ti_golf.sim.simulation import RunProgress
 
@@ -52,15 +51,11 @@ def fly_shots(
         lo, hi = FLIGHT_DT_RANGE
         raise ValueError(f"flight_dt must be in [{lo:g}, {hi:g}] s (got {flight_dt!r})")
     flown = scene if flight_dt is None else replace(scene, world=replace(scene.world, dt=float(flight_dt)))
-    try:
-        with whole_steps():  # (a signal is raised once the launch is done)
-            raw = fly(flown, x0, v0, w0, step_name="world.dt" if flight_dt is None else "flight_dt")
-    except KeyboardInterrupt:
-        raise KeptInterrupt(_down_at_once(shots_from_landing(scene, x0, raw, False))) from None
-    try:
-        return _down_at_once(shots_from_landing(scene, x0, raw, to_rest, progress))
-    except KeptInterrupt as stop:
-        raise KeptInterrupt(_down_at_once(stop.kept)) from None
+    step_name = "world.dt" if flight_dt is None else "flight_dt"
+    _, shots, stopped = fly_then_roll_out(scene, x0, v0, w0, to_rest, progress, flown, step_name)
+    if stopped is not None:
+        raise KeptInterrupt(_down_at_once(shots)) from None
+    return _down_at_once(shots)
 
 
 def _down_at_once(out: Shots) -> Shots:

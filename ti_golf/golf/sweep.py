@@ -27,6 +27,7 @@ from ti_golf.scene.schema import Scene, backspin_axis
 from ti_golf.signals import KeptInterrupt, whole_steps
 from ti_golf.sim.given import whole_number
 from ti_golf.sim.results import CSV_COLUMNS, ROLLED_CSV_COLUMNS, Flight, Shots
+from ti_golf.sim.simulation import RunProgress
 
 
 @dataclass(frozen=True)
@@ -343,6 +344,38 @@ def _check_rise(
         )
 
 
+def fly_then_roll_out(
+    scene: Scene,
+    x0: np.ndarray,
+    v0: np.ndarray,
+    w0: np.ndarray,
+    to_rest: bool,
+    progress: RunProgress | None = None,
+    flown: Scene | None = None,
+    step_name: str = "world.dt",
+) -> tuple[dict[str, np.ndarray], Shots, KeyboardInterrupt | None]:
+    """Fly balls from (x0, v0, ω0) (each (N, 3), SI) to landing, under ``flown``'s air and step
+    (default: ``scene``'s; :func:`fly`, ``step_name`` naming its step), and with ``to_rest`` roll
+    them out to rest on ``scene``'s ground (``progress(t_done, t_total)`` follows the roll-out).
+
+    The flights are one kernel launch, which an interrupt waits for; the roll-out stops between its
+    launches. Returns (raw, shots, stopped): :func:`fly`'s record, the :class:`Shots`, and the
+    interrupt that cut them short or None. Cut during the flights, the shots are not rolled out;
+    during the roll-out, they hold the rests reached by then.
+    """
+    stopped: KeyboardInterrupt | None = None
+    try:
+        with whole_steps():  # (a signal is raised as the block ends, once raw is set)
+            raw = fly(flown or scene, x0, v0, w0, step_name=step_name)
+    except KeyboardInterrupt as stop:
+        stopped = stop
+    try:
+        shots = shots_from_landing(scene, x0, raw, to_rest and stopped is None, progress)
+    except KeptInterrupt as stop:
+        shots, stopped = stop.kept, stop
+    return raw, shots, stopped
+
+
 def sweep(
     scene: Scene | str | os.PathLike[str],
     angles_deg: Sequence[float] | str | None = None,
@@ -387,17 +420,8 @@ def sweep(
         )
     check_values(scene, "scene")
     an, sp, sn, x0, v0, w0 = launch_grid(scene, angles_deg, speeds, spins)
-    stopped: KeyboardInterrupt | None = None
-    try:
-        with whole_steps():  # (one launch: Ctrl-C waits for it to end, and its flights are kept)
-            raw = fly(scene, x0, v0, w0)
-    except KeyboardInterrupt as stop:  # (raised as the block ends, once raw is set)
-        stopped = stop
+    raw, shots, stopped = fly_then_roll_out(scene, x0, v0, w0, to_rest)
     flight = Flight.from_arrays(x0, raw["landed"], raw["apex"], raw["t_land"], raw["land_x"], raw["land_v"])
-    try:
-        shots = shots_from_landing(scene, x0, raw, to_rest and stopped is None)
-    except KeptInterrupt as stop:  # the roll-out stopped between its launches: the rests reached so far
-        shots, stopped = stop.kept, stop
     res = SweepResult(an, sp, sn, flight, scene, shots=shots)
     if stopped is not None:
         raise KeptInterrupt(res) from None
