@@ -877,6 +877,36 @@ def test_the_longest_step_a_ball_s_drag_allows_is_the_explicit_step_s_limit(inte
     assert sim.scene.air.rho == 1.2
 
 
+def test_a_step_that_sinks_a_resting_ball_through_half_its_radius_is_refused_where_balls_collide():
+    # the contacts are solved from each step's start, and a step lets gravity carry a ball at rest
+    # g·h² into what holds it: the bundled heap's 10,000 balls ended 102 % of a radius deep in each
+    # other at world.dt = 0.05 s (g·h² = 1.2 R), with exit code 0. Refused past g·h² = R/2; a column
+    # of balls just inside that limit still stands, each ball's overlap a fraction of g·h²
+    from ti_golf.errors import ConfigError
+
+    R, g = 0.02, 9.81
+    h_max = math.sqrt(0.5 * R / g)
+
+    def column(dt: float, collisions: bool = True) -> tg.Scene:
+        return tg.load_scene(data={"world": {"dt": dt, "collisions": collisions}, "air": {"rho": 0.0}})
+
+    x = [[0.0, R + 2 * R * k, 0.0] for k in range(4)]
+    with pytest.raises(
+        ConfigError, match=rf"world.dt' = .* too long a step for balls that collide.*at most {h_max:.3g} s"
+    ):
+        tg.Simulation(column(1.01 * h_max), x=x)
+    tg.Simulation(column(1.01 * h_max), x=x[:1])  # (one ball: nothing collides)
+    tg.Simulation(column(1.01 * h_max, collisions=False), x=x)
+    sim = tg.Simulation(column(0.99 * h_max), x=x)
+    sim.run(t=1.0)
+    deepest = sim.deepest_overlap()
+    assert deepest is None or deepest.depth < 0.5 * g * sim.dt**2, deepest
+    assert np.all(np.abs(sim.x[:, 0]) < 1e-9) and sim.x[-1, 1] > 6.5 * R  # (standing, not scattered)
+    with pytest.raises(ConfigError, match="too long a step for balls that collide"):
+        sim.set("world.dt", 1.01 * h_max)  # (a change is checked too, and not made)
+    assert sim.dt == pytest.approx(0.99 * h_max)
+
+
 @pytest.mark.parametrize("integrator", ["semi_implicit", "rk4"])
 def test_the_longest_step_a_ball_s_spin_decay_allows_keeps_the_spin_s_sense(integrator):
     # laminar spin decay dω/dt = −k_ω·ω at a fixed rate k_ω = ½ρπR²·C_ω/m: a step maps ω to

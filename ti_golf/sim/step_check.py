@@ -13,6 +13,9 @@ The spin decays as dω/dt = −r·ω (:mod:`ti_golf.physics.aero`) at the rate r
 k_ω(|v_rel| + R|ω|) (γ = 2) or (ρ/1.225)·λ|v_rel|/R (``spin_reynolds``), greatest at the start spin and at
 the speed above. A step scales the spin by 1 − h·r, so it must keep h·r ≤ 1: beyond it a step turns
 the spin around (the Magnus force with it), beyond 2 it grows without bound.
+
+Where balls collide, a step must also not let gravity carry a ball at rest through a good part of
+its radius (:func:`check_contact_step`).
 """
 
 from __future__ import annotations
@@ -55,6 +58,7 @@ def check_step(scene: Scene, radius: np.ndarray, mass: np.ndarray, v: np.ndarray
             f"it must be at most {drag_max[i]:.3g} s, or the explicit step of the drag diverges (a light, large "
             "ball reaches its terminal speed within a step): a smaller world.dt, or a heavier or smaller ball",
         )
+    check_contact_step(scene, radius)
     spin = np.zeros_like(radius) if w is None else np.linalg.norm(w, axis=1)
     if a.model == "spin_reynolds":
         key, value = "air.spin_decay", a.spin_decay
@@ -77,6 +81,32 @@ def check_step(scene: Scene, radius: np.ndarray, mass: np.ndarray, v: np.ndarray
         )
 
 
+CONTACT_STEP_FALL = 0.5
+"""The most a step may let gravity carry a ball at rest, g·h², as a fraction of the smallest
+radius, when balls collide: the contacts are solved from each step's start, so a longer step sinks
+a pile into itself (the docs' solver page gives the heap's overlaps against the step)."""
+
+
+def check_contact_step(scene: Scene, radius: np.ndarray) -> None:
+    """Raise :class:`ConfigError` naming ``world.dt`` when balls of radii ``radius`` [m] (N,)
+    collide (``world.collisions``, two balls or more) and a step lets gravity carry a ball at rest
+    further than :data:`CONTACT_STEP_FALL` of the smallest radius."""
+    h, g = scene.world.dt, float(np.linalg.norm(scene.world.gravity))
+    if not scene.world.collisions or len(radius) < 2 or g == 0.0:
+        return
+    r_min = float(np.min(radius))
+    fall = g * h * h
+    if fall > CONTACT_STEP_FALL * r_min:
+        h_max = math.sqrt(CONTACT_STEP_FALL * r_min / g)
+        raise ConfigError(
+            *scene.where("world.dt"),
+            f"= {h:g} s is too long a step for balls that collide: gravity carries a ball at rest g·h² = "
+            f"{1e3 * fall:.3g} mm in a step, more than {CONTACT_STEP_FALL:g} times the smallest radius "
+            f"({1e3 * r_min:.3g} mm), and a pile sinks into itself; at most {h_max:.3g} s "
+            "(overlaps grow as h²: docs' solver page)",
+        )
+
+
 def check_changed_step(
     old: Scene,
     scene: Scene,
@@ -84,8 +114,9 @@ def check_changed_step(
     mass: np.ndarray,
     motion: Callable[[], tuple[np.ndarray, np.ndarray]],
 ) -> None:
-    """:func:`check_step` of ``scene``'s balls when its air, step or gravity differ from ``old``'s
+    """:func:`check_step` of ``scene``'s balls when its air, step, gravity or collisions differ from ``old``'s
     (a change of any other key leaves the limits as they were, and the balls' velocities and spins,
     read from the device by ``motion``, are not read then)."""
-    if (scene.air, scene.world.dt, scene.world.gravity) != (old.air, old.world.dt, old.world.gravity):
+    new, was = ((s.air, s.world.dt, s.world.gravity, s.world.collisions) for s in (scene, old))
+    if new != was:
         check_step(scene, radius, mass, *motion())
