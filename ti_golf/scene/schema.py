@@ -126,7 +126,13 @@ class Launch:
 class World:
     """Time stepping, gravity and the ground plane."""
 
-    dt: float = key("float", 0.001, "s", "time step h", Interval(0.0, 1.0, lo_open=True))
+    dt: float = key(
+        "float",
+        0.001,
+        "s",
+        "time step h; where balls collide, at most √(R/2g) for the smallest radius R (0.032 s for golf balls)",
+        Interval(0.0, 1.0, lo_open=True),
+    )
     gravity: Vec3 = key("vec3", (0.0, -9.81, 0.0), "m/s^2", "gravitational acceleration g", GRAVITY)
     integrator: str = key(
         "str",
