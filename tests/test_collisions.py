@@ -1472,21 +1472,16 @@ def test_gauss_seidel_simultaneous_impacts_bounce_by_poisson_and_add_no_energy()
     assert ratios[1.0] == pytest.approx(1.0, abs=1e-3)  # elastic: the energy kept
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the restitution pass gives each plane Newton's rebound in turn: at ±30° (e = 1) the ball leaves "
-    "sideways with 1.55 times its energy, at ±60° with 0.35 times; bouncing planes by Poisson, as balls are, "
-    "fixed the V and left a pit without sleeping livelier than its test allows",
-)
 @SERIAL_OR_PARALLEL
 @pytest.mark.parametrize("wall_deg", [30, 60])
 def test_a_ball_dropped_into_a_v_of_planes_bounces_straight_back_at_e_times_its_speed(serial, wall_deg):
     # a ball falling along the middle of a V of two planes inclined ±wall_deg meets both at once:
     # by symmetry it must come straight back at e times its speed. The planes' rebounds −e·v_n0 met
     # in turn (Newton's law) sent it off sideways with 1.55 times its energy (walls at 30°, e = 1)
-    # or 0.35 times (60°). Bounced by Poisson (the sweeps stop both impacts, and each plane gives e
-    # times its impulse back) it comes back straight, to the sweeps' convergence, which falls
-    # geometrically with their number (4: 2 % here, 16: 1e-8)
+    # or 0.35 times (60°). Now the restitution pass meets a ball's impact planes again, in rounds,
+    # until each gives back e times its approach (surfaces.joint_plane_bounce): it comes back
+    # straight, to the rounds' convergence (1e-8 here, whatever the sweeps), which Poisson's
+    # restitution (e times each compression) would give too, with the sweeps' convergence (4: 2 %)
     s, c = np.sin(np.radians(wall_deg)), np.cos(np.radians(wall_deg))
     for e in (0.5, 1.0):
         for sweeps, tol in ((4, 0.02), (16, 1e-5)):

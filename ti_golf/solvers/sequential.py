@@ -132,7 +132,7 @@ def pair_step(
 
 
 @ti.func
-def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, h, kinds: ti.template()):
+def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, h, kinds: ti.template(), resist=1):
     """:func:`pair_step` of a ball against a static surface (a plane, or the terrain's patch) with
     normal n̂, per unit mass [m/s] (``v0``: the ball's velocity before the step's contacts; ``F``:
     the friction impulse applied so far), with
@@ -142,7 +142,9 @@ def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, 
     resting contact, not an impact) also meets rolling resistance and the resistance to spin about
     the normal, bounded by μ_roll·λ (once per step), as :func:`ti_golf.physics.contact.plane_jolt`
     applies them to a resting impulse only: an impact's jolt does not brake the ball's rolling. With the report's friction
-    (``kinds.friction``) the spin is left as it is. Returns (v, ω, λ, F)."""
+    (``kinds.friction``) the spin is left as it is; ``resist`` 0 leaves both out (a ball's later
+    restitution rounds over its planes, :func:`.surfaces.joint_plane_bounce`, which revisit only
+    impacts). Returns (v, ω, λ, F)."""
     n_eff, e = impact_frame(n, gap, v, lam, contact, v_inelastic, h, kinds)
     ball = body(v, w, radius, 1.0)
     P, lam_new, F_new = pair_step(
@@ -165,7 +167,7 @@ def surface_step(phase, n, gap, v0, v, w, radius, lam, F, contact, v_inelastic, 
     w_new = w
     if ti.static(spin):
         w_new = w + spin_jolt(P, n_eff, radius, 1.0)
-    if phase == Phase.BOUNCE and lam_new > 0.0 and v0.dot(n_eff) >= -v_inelastic:  # resting, no impact
+    if phase == Phase.BOUNCE and resist and lam_new > 0.0 and v0.dot(n_eff) >= -v_inelastic:  # resting, no impact
         dv, dw = rolling_resistance(v_new, radius, contact.mu_roll, lam_new, n_eff)
         v_new += dv
         if ti.static(spin):
