@@ -33,6 +33,10 @@ FREE = [
 ]
 
 
+F32 = 2.0 * float(np.finfo(np.float32).eps)
+"""Two f32 roundings, relative: the solver keeps each surface contact's impulses in f32."""
+
+
 def scene(*overrides: str) -> tg.Scene:
     return tg.load_scene("lab_vacuum", [*FREE, *overrides])
 
@@ -1480,17 +1484,40 @@ def test_a_ball_dropped_into_a_v_of_planes_bounces_straight_back_at_e_times_its_
     # in turn (Newton's law) sent it off sideways with 1.55 times its energy (walls at 30°, e = 1)
     # or 0.35 times (60°). Now the restitution pass meets a ball's impact planes again, in rounds,
     # until each gives back e times its approach (surfaces.joint_plane_bounce): it comes back
-    # straight, to the rounds' convergence (1e-8 here, whatever the sweeps), which Poisson's
-    # restitution (e times each compression) would give too, with the sweeps' convergence (4: 2 %)
+    # straight, whatever the sweeps, which Poisson's restitution (e times each compression) would
+    # give too; to the rounds' convergence and the f32 rounding of the impulses they keep (F32)
     s, c = np.sin(np.radians(wall_deg)), np.cos(np.radians(wall_deg))
     for e in (0.5, 1.0):
-        for sweeps, tol in ((4, 0.02), (16, 1e-5)):
+        for sweeps, tol in ((4, F32), (16, F32)):
             sc = scene(f"contact.e={e}", "contact.v_bounce=0", f"contact.iterations={sweeps}")
             sc = dataclasses.replace(sc, planes=(Plane((0, 0, 0), (s, c, 0)), Plane((0, 0, 0), (-s, c, 0))))
             sim = tg.Simulation(sc, x=[[0.0, sc.ball.radius / c + 0.0123, 0.0]], v=[[0.0, -2.0, 0.0]])
             sim.solver = CollisionSolver(sim.model, serial=serial)
             sim.run(t=0.05)  # (the bounce after 12 ms or so)
             np.testing.assert_allclose(sim.v[0], [0.0, 2.0 * e, 0.0], rtol=0, atol=tol * 2.0 * e)
+
+
+@SERIAL_OR_PARALLEL
+@pytest.mark.parametrize("e", [0.5, 1.0])
+def test_a_ball_meeting_a_wedge_of_planes_at_once_leaves_each_at_e_times_its_approach(serial, e):
+    # a lopsided wedge (walls at 20° and 55°), the ball aimed off its middle and along its crease,
+    # placed so that it reaches both walls at the same moment: each sends it off at e times its
+    # approach (v'·n_k = −e·v0·n_k), so the velocity in the walls' plane turns back scaled by e and
+    # the part along the crease (n1 × n2 = z) is kept; frictionless, e = 1 keeps the energy. Met once
+    # each in turn (Newton's law), the second wall's rebound undid part of the first's
+    n1 = np.array([np.sin(np.radians(20)), np.cos(np.radians(20)), 0.0])
+    n2 = np.array([-np.sin(np.radians(55)), np.cos(np.radians(55)), 0.0])
+    v0 = np.array([0.3, -2.0, 0.5])
+    sc = scene(f"contact.e={e}", "contact.v_bounce=0")
+    R, t_hit = sc.ball.radius, 0.01225  # (between two steps of 0.5 ms)
+    # the centre whose gap to each wall, x·n_k − R, closes at t_hit: x·n_k = R − t_hit·v0·n_k
+    xy = np.linalg.solve(np.array([n1[:2], n2[:2]]), [R - t_hit * v0 @ n1, R - t_hit * v0 @ n2])
+    sc = dataclasses.replace(sc, planes=(Plane((0, 0, 0), tuple(n1)), Plane((0, 0, 0), tuple(n2))))
+    sim = tg.Simulation(sc, x=[[xy[0], xy[1], 0.0]], v=[v0])
+    sim.solver = CollisionSolver(sim.model, serial=serial)
+    sim.run(t=0.03)
+    expected = np.array([-e * v0[0], -e * v0[1], v0[2]])
+    np.testing.assert_allclose(sim.v[0], expected, rtol=0, atol=F32 * np.linalg.norm(v0))
 
 
 def test_a_fast_ball_dropped_onto_a_plastic_pile_does_not_bounce_back():
