@@ -633,6 +633,50 @@ def test_cli_bad_set_exits_2(case):
     assert_short_cli_error(proc, "--set", want_key, *fragments)
 
 
+def test_set_changes_a_key_of_one_of_the_scene_s_array_tables(tmp_path):
+    # --set said 'blocks[0].count' is not a scene key, where the docs say it changes any scene key
+    # and errors name the keys of [[blocks]] that way
+    text = (
+        "[[balls]]\nposition = [0, 1, 0]\n[[blocks]]\ncount = [2, 1, 1]\norigin = [1, 0.5, 0]\n"
+        '[[blocks]]\nkind = "random"\nnumber = 10\nbox_min = [3, 0, 0]\nbox_max = [4, 1, 1]\n'
+    )
+    path = write_scene(tmp_path, "[world]\nground = true\n" + text)
+    scene = ti_golf.load_scene(path, ["blocks[0].count=[3,2,1]", "blocks[1].number=20", "balls[0].position=[0,2,0]"])
+    assert scene.blocks[0].count == (3, 2, 1) and scene.blocks[1].number == 20 and scene.balls[0].position[1] == 2
+    assert ti_golf.Simulation(scene).n == 1 + 6 + 20
+    assert ti_golf.load_scene(path).blocks[0].count == (2, 1, 1)  # (the file's own, untouched)
+    assert ti_golf.load_scene(path, ["blocks[0].count="]).blocks[0].count == (1, 1, 1)  # (cleared: the default)
+    for override, key, fragment in (
+        ("blocks[2].number=5", "blocks[2].number", "names table 2 of [[blocks]], and the scene has 2"),
+        ("blocks[0].numbr=5", "blocks[0].numbr", "is unknown (did you mean 'number'?)"),
+        ("blocks[0].count=[0,1,1]", "blocks[0].count", "must be 3 whole numbers >= 1"),
+        ("blocks=[]", "blocks", "--set changes one key of one of them, blocks[INDEX].KEY"),
+        ("planes[0].point=[0,0,0]", "planes[0].point", "the scene has 0"),
+        ("balls[0].radius=-1", "balls[0].radius", "must be"),
+    ):
+        with pytest.raises(ConfigError) as info:
+            ti_golf.load_scene(path, [override])
+        assert (info.value.source, info.value.key) == ("overrides", key) and fragment in str(info.value), str(
+            info.value
+        )
+    with pytest.raises(ConfigError) as info:  # (checked as the balls are made: still named as --set's)
+        ti_golf.Simulation(ti_golf.load_scene(path, ["blocks[0].spacing=0.01"]))
+    assert (info.value.source, info.value.key) == ("overrides", "blocks[0].spacing"), str(info.value)
+    # a lattice made random by --set: the file's lattice keys are the ones left unread, and go
+    random = ti_golf.load_scene(path, ['blocks[0].kind="random"', "blocks[0].number=4", "blocks[0].box_max=[2,1,1]"])
+    assert random.blocks[0].kind == "random" and random.blocks[0].number == 4
+
+
+def test_a_simulation_changes_an_array_table_s_key_at_t0_only():
+    sim = ti_golf.Simulation(ti_golf.load_scene("newtons_cradle"))
+    n = sim.n
+    sim.set("blocks[0].count", [3, 1, 1])  # (at t0: set up again, as a new simulation would be)
+    assert sim.n == n - 2
+    sim.step(1)
+    with pytest.raises(ConfigError, match="sets up the balls or the ground at t0"):
+        sim.set("blocks[0].count", [4, 1, 1])
+
+
 def test_cli_set_wind_changes_the_result():
     """A 5 m/s headwind shortens the turbulent carry below the still-air maximum."""
     proc = run_cli("sweep", "lab_turbulent", "--angles", "36.6", "--set", "air.wind=[-5,0,0]")
@@ -741,6 +785,21 @@ def test_cli_bad_range_exits_2(option, value, fragment):
             "blocks[0]",
             "puts ball 3 0.5 m inside planes[0], [1.5, 0.5, 0.0] m",
         ),
+        (  # (a ball under the terrain came up through it, silently)
+            "[terrain]\norigin = [0, 5, 0]\nsize = [10, 10]\namplitude = 0\n[[balls]]\nposition = [5, 4, 5]\n",
+            "balls[0].position",
+            "puts ball 0 1 m inside the terrain, [5.0, 4.0, 5.0] m",
+        ),
+        (  # (a jitter beyond the gap was cut to it, silently)
+            "[[blocks]]\ncount = [2, 1, 1]\norigin = [0, 0.5, 0]\njitter = 10\n",
+            "blocks[0].jitter",
+            "must be at most half the free gap between the lattice's balls, (spacing − 2R)/2 = 0.0002 m (got 10)",
+        ),
+        (  # (the cup was drawn off the course, and run measured distances to it; play refused it)
+            "[terrain]\nsize = [20, 20]\namplitude = 0\n[hole]\nposition = [500, 0]\n[[balls]]\nposition = [5, 1, 5]\n",
+            "hole.position",
+            "must lie on the terrain (x in [0, 20] m, z in [0, 20] m; got [500, 0])",
+        ),
     ],
 )
 def test_a_block_or_terrain_value_that_a_run_cannot_use_is_refused_before_it_starts(tmp_path, text, key, fragment):
@@ -753,6 +812,32 @@ def test_a_block_or_terrain_value_that_a_run_cannot_use_is_refused_before_it_sta
     with pytest.raises(ConfigError) as info:
         ti_golf.Simulation(ti_golf.load_scene(path))
     assert info.value.key == key and fragment in str(info.value), str(info.value)
+
+
+@pytest.mark.parametrize("planes", ["", "[[planes]]\npoint = [0, 0, 0]\nnormal = [1, 0, 0]\n"])
+def test_a_hole_with_nothing_to_sit_on_is_refused(tmp_path, planes):
+    # no terrain, no ground and no upward-facing plane: the cup and its flag were drawn in the air
+    text = f"[world]\nground = false\n[hole]\nposition = [1, 0]\n[[balls]]\nposition = [2, 1, 0]\n{planes}"
+    with pytest.raises(ConfigError) as info:
+        ti_golf.load_scene(write_scene(tmp_path, text))
+    assert info.value.key == "hole.position" and "has nothing to sit on" in str(info.value), str(info.value)
+    upward = text.replace("normal = [1, 0, 0]", "normal = [0.5, 1, 0]") if planes else text.replace("false", "true")
+    assert ti_golf.load_scene(write_scene(tmp_path, upward)).hole is not None
+
+
+def test_the_launch_ball_rests_on_a_sloping_terrain(tmp_path):
+    # its centre was R above the surface point under it, not R / cos θ: on a 45° slope it started
+    # 5.9 mm into the surface and the position projection shoved it out along the normal in its
+    # first step (at the grid's corner, off the grid: out of bounds). Now it starts touching the
+    # tangent plane, and its first step moves it by what gravity gives in a step, g·h², at most
+    text = "[terrain]\nsize = [10, 10]\namplitude = 0\nslope = [-1, 0]\n[launch]\nspeed = 0\nangle_deg = 0\n[air]\nrho = 0\n"
+    scene = ti_golf.load_scene(write_scene(tmp_path, text))
+    sim = ti_golf.Simulation(scene)
+    x0 = sim.x[0].copy()
+    assert x0[1] == pytest.approx(scene.ball.radius * np.sqrt(2.0), rel=1e-12)
+    sim.step(1)
+    assert sim.status[0] != ti_golf.OUT_OF_BOUNDS
+    assert np.linalg.norm(sim.x[0] - x0) <= 9.81 * scene.world.dt**2, sim.x[0] - x0
 
 
 def test_one_ball_of_a_lattice_spans_nothing_whatever_its_spacing(tmp_path):
@@ -771,9 +856,14 @@ def test_a_plane_normal_too_small_or_too_large_to_square_is_still_its_direction(
 def test_a_heights_file_that_is_empty_too_high_or_too_large_is_refused(tmp_path):
     # a header that claims 200,000 x 200,000 heights had numpy allocate 298 GiB (a MemoryError
     # traceback); the header is now checked against the file, and the points against the limit
-    empty, high, lying, large = (tmp_path / f"{name}.npy" for name in ("empty", "high", "lying", "large"))
+    # (the int64 height of least value passed: its absolute value overflows back to itself; a text
+    # file named .npy was said to hold pickled data, to be loaded unsafely)
+    names = ("empty", "high", "lying", "large", "least", "text")
+    empty, high, lying, large, least, text_file = (tmp_path / f"{name}.npy" for name in names)
     empty.write_bytes(b"")
     np.save(high, np.full((4, 4), 1e308))
+    np.save(least, np.array([[0, 0, 0], [0, np.iinfo(np.int64).min, 0], [0, 0, 0]], dtype=np.int64))
+    text_file.write_text("1 2 3\n4 5 6\n")
     with open(lying, "wb") as fh:
         np.lib.format.write_array_header_1_0(fh, {"descr": "<f8", "fortran_order": False, "shape": (200_000, 200_000)})
         fh.write(b"\0" * 800)
@@ -785,6 +875,8 @@ def test_a_heights_file_that_is_empty_too_high_or_too_large_is_refused(tmp_path)
         (high, "beyond ±10000 m"),
         (lying, "cannot be read as a .npy array (mmap length is greater than file size)"),
         (large, "holds 50,000,008 points; at most 50,000,000"),
+        (least, "beyond ±10000 m (got 9.22337e+18)"),
+        (text_file, "is not a .npy file (one begins with the bytes \\x93NUMPY)"),
     ):
         text = f'[terrain]\nkind = "file"\nfile = "{path.name}"\nsize = [10, 10]\n'
         with pytest.raises(ConfigError) as info:

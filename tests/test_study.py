@@ -206,6 +206,18 @@ def test_a_study_of_flights_refuses_a_scene_with_other_balls(tmp_path):
     assert load_study(path).tasks
 
 
+def test_a_study_varies_a_key_of_the_scene_s_array_tables_by_index(tmp_path):
+    # blocks[0].number was "not a scene key", though --set and the errors name it so
+    path = write(
+        tmp_path, "n.toml", 'scene = "heap"\n[task]\nkind = "run"\nt = 0.01\n[grid]\n"blocks[0].number" = [500, 1000]\n'
+    )
+    spec = load_study(path)
+    assert spec.keys == ("blocks[0].number",) and len({t.id for t in spec.tasks}) == 2
+    bad = write(tmp_path, "b.toml", 'scene = "heap"\n[task]\nkind = "run"\n[grid]\n"blocks[1].number" = [500, 1000]\n')
+    with pytest.raises(ConfigError, match=r"names table 1 of \[\[blocks\]\], and the scene has 1"):
+        load_study(bad)
+
+
 def test_the_command_reports_a_bad_study_in_one_line_with_exit_code_2(tmp_path):
     path = write(tmp_path, "bad.toml", 'scene = "lab_turbulent"\n[grid]\n"contact.e" = [2.0]\n')
     done = run_cli("study", str(path), "--out", str(tmp_path / "out"))

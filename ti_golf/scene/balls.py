@@ -49,8 +49,8 @@ def launch_position(scene: Scene) -> Vec3:
                 f"leaves x = z = 0, where the [launch] ball rests, off the terrain (x in [{x0:g}, {x0 + sx:g}], "
                 f"z in [{z0:g}, {z0 + sz:g}] m): move the terrain, or give launch.position",
             )
-        height = float(terrain.height(0.0, 0.0))
-        return (0.0, height + scene.ball.radius, 0.0)
+        height, n_y = float(terrain.height(0.0, 0.0)), float(terrain.normal(0.0, 0.0)[1])
+        return (0.0, height + scene.ball.radius / n_y, 0.0)  # (touching the tangent plane: R/cos θ above it)
     return (0.0, scene.world.ground_height + scene.ball.radius, 0.0)
 
 
@@ -135,8 +135,7 @@ def build_balls(scene: Scene) -> Balls:
     if buried is not None:
         i, depth, what, count = buried
         raise_config(
-            scene.path,
-            _key_of_ball(scene, i),
+            *scene.where(_key_of_ball(scene, i)),
             f"puts ball {i} {depth:.6g} m inside {what}, {balls.x[i].tolist()} m, the whole ball in the solid "
             f"({count} ball(s) are): a ball must start at least partly on the open side",
         )
@@ -155,7 +154,8 @@ def build_balls(scene: Scene) -> Balls:
 
 def buried_ball(scene: Scene, x: np.ndarray, radius: np.ndarray) -> tuple[int, float, str, int] | None:
     """The first of the balls of centres ``x`` (N, 3) [m] and radii ``radius`` [m] (N,) that lies
-    wholly below the scene's ground plane or behind one of its planes, which no contact sorts out (a
+    wholly below the scene's ground plane, behind one of its planes or, over the terrain's grid,
+    under the terrain's surface (along its normal), which no contact sorts out (a
     ball 5 m under the ground came to rest inside it; one that overlaps a solid is pushed out by the
     position projection, B.18): (its index, the depth [m] of its centre behind the face, the solid,
     how many balls are so); None when every ball starts at least partly on the open side."""
@@ -163,8 +163,12 @@ def buried_ball(scene: Scene, x: np.ndarray, radius: np.ndarray) -> tuple[int, f
     solids = solids[: 1 if scene.world.ground else 0] + [
         (np.asarray(p.point, float), np.asarray(p.normal, float), f"planes[{k}]") for k, p in enumerate(scene.planes)
     ]
-    for point, normal, what in solids:
-        height = (x - point) @ (normal / np.linalg.norm(normal))
+    heights = [((x - point) @ (normal / np.linalg.norm(normal)), what) for point, normal, what in solids]
+    if scene.terrain is not None and len(x):  # (over its grid: the height along the normal under the centre)
+        terrain = build_terrain(scene.terrain, scene.path)
+        over = terrain.contains(x[:, 0], x[:, 2])
+        heights.append((np.where(over, terrain.gap(x, 0.0), np.inf), "the terrain"))
+    for height, what in heights:
         inside = np.flatnonzero(height < -radius)
         if inside.size:
             return int(inside[0]), float(-height[inside[0]]), what, int(inside.size)
@@ -232,23 +236,32 @@ def _block_balls(scene: Scene, block: Block, index: int) -> Balls:
         spacing = block.spacing or 2.02 * r_max
         if spacing < 2.0 * r_max:
             raise_config(
-                scene.path, f"{key}.spacing", f"must be at least one diameter ({2 * r_max:g} m) so balls do not overlap"
+                *scene.where(f"{key}.spacing"),
+                f"must be at least one diameter ({2 * r_max:g} m) so balls do not overlap",
             )
         grid = np.stack(np.meshgrid(*[np.arange(c) for c in counts], indexing="ij"), axis=-1).reshape(-1, 3)
         x = np.asarray(block.origin) + spacing * grid
         free = 0.5 * (spacing - 2.0 * r_max)
+        if block.jitter > free * (1.0 + 1e-12):
+            raise_config(
+                *scene.where(f"{key}.jitter", f"{key}.spacing"),
+                f"must be at most half the free gap between the lattice's balls, (spacing − 2R)/2 = {free:.6g} m "
+                f"(got {block.jitter:g}), or balls could overlap: a larger {key}.spacing leaves more room",
+            )
         jitter = min(block.jitter, free)
     else:
         n = block.number
         lo, hi = np.asarray(block.box_min), np.asarray(block.box_max)
         size = hi - lo - 2.0 * r_max
         if np.any(size < 0):
-            raise_config(scene.path, f"{key}.box_max", f"the box is smaller than one ball (diameter {2 * r_max:g} m)")
+            raise_config(
+                *scene.where(f"{key}.box_max", f"{key}.box_min"),
+                f"the box is smaller than one ball (diameter {2 * r_max:g} m)",
+            )
         spacing, per_axis = _site_grid(size, n, r_max)
         if np.prod(per_axis) < n:
             raise_config(
-                scene.path,
-                f"{key}.number",
+                *scene.where(f"{key}.number", f"{key}.box_max", f"{key}.box_min"),
                 f"{n} balls of radius up to {r_max:g} m do not fit in the box (at most {int(np.prod(per_axis))})",
             )
         sites = rng.choice(int(np.prod(per_axis)), size=n, replace=False)

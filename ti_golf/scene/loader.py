@@ -147,16 +147,29 @@ def load_scene(
         raw = dict(data)
         p = Path(path) if path else Path("<scene>")
         source = str(path) if path else "<scene>"
-    doc: dict[str, Any] = {k: (dict(v) if isinstance(v, dict) else v) for k, v in raw.items()}
+    doc = _copied(raw)
     if isinstance(overrides, str):  # one KEY=VALUE text, not its characters
         overrides = [overrides]
     file_doc = None
     if overrides:
-        file_doc = {k: (dict(v) if isinstance(v, dict) else v) for k, v in doc.items()}
+        file_doc = _copied(doc)
         items = overrides.items() if isinstance(overrides, Mapping) else (parse_override(o) for o in overrides)
         for dotted, value in items:
             apply_override(doc, dotted, value)
     return _build(doc, source, p.stem, file_doc)
+
+
+def _copied(doc: Mapping[str, Any]) -> dict[str, Any]:
+    """A copy of a scene document that overrides can change: its tables, and the tables of its
+    ``[[...]]`` arrays, copied (the values themselves are not changed in place)."""
+    return {
+        k: dict(v)
+        if isinstance(v, dict)
+        else [dict(t) if isinstance(t, dict) else t for t in v]
+        if isinstance(v, list)
+        else v
+        for k, v in doc.items()
+    }
 
 
 def _build(doc: dict[str, Any], source: str, name: str, file_doc: dict[str, Any] | None = None) -> Scene:
@@ -181,8 +194,37 @@ def _build(doc: dict[str, Any], source: str, name: str, file_doc: dict[str, Any]
         for table, value in doc.items()
         for name, given in (value.items() if isinstance(value, dict) else [("", value)])
         if _with_source(given, source)[0] == OVERRIDES
+    ) | frozenset(
+        f"{table}[{i}].{name}"
+        for table in ARRAY_SCHEMA
+        for i, values in enumerate(doc[table] if isinstance(doc.get(table), list) else [])
+        for name, given in (values.items() if isinstance(values, dict) else ())
+        if _with_source(given, source)[0] == OVERRIDES
     )
-    return _refuse_unread_across(doc, Scene(**kwargs), source, file_doc)
+    scene = Scene(**kwargs)
+    _check_hole(scene)
+    return _refuse_unread_across(doc, scene, source, file_doc)
+
+
+def _check_hole(scene: Scene) -> None:
+    """Refuse a ``[hole]`` with nothing to sit on: off the terrain's grid, or, without a terrain,
+    in a scene with neither a ground plane nor an upward-facing plane (|n_y| > 0.7 of |n|, as the
+    picture and the game take the ground); the cup and its flag floated in the air."""
+    if scene.hole is None:
+        return
+    x, z = scene.hole.position
+    if scene.terrain is not None:
+        (x0, _, z0), (sx, sz) = scene.terrain.origin, scene.terrain.size
+        if not (x0 <= x <= x0 + sx and z0 <= z <= z0 + sz):
+            raise_config(
+                *scene.where("hole.position"),
+                f"must lie on the terrain (x in [{x0:g}, {x0 + sx:g}] m, z in [{z0:g}, {z0 + sz:g}] m; got [{x:g}, {z:g}])",
+            )
+    elif not scene.world.ground and not any(p.normal[1] > 0.7 * math.hypot(*p.normal) for p in scene.planes):
+        raise_config(
+            *scene.where("hole.position"),
+            "has nothing to sit on: the cup needs a [terrain], the ground (world.ground) or an upward-facing plane",
+        )
 
 
 def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str, file_doc: dict[str, Any] | None) -> Scene:
@@ -329,13 +371,14 @@ def _array_tables(value: Any, name: str, source: str, doc: Mapping[str, Any]) ->
     keys = ARRAY_SCHEMA[name]
     out = []
     for i, table in enumerate(value):
-        values = {}
-        for k, v in table.items():
+        values, sources = {}, {}
+        for k, given in table.items():
             dotted = f"{name}[{i}].{k}"
+            sources[k], v = _with_source(given, source)
             if k not in keys:
                 raise_config(source, dotted, f"is unknown{suggest(k, keys)}; allowed in [[{name}]]: " + ", ".join(keys))
-            values[k] = coerce(v, keys[k], source, dotted)
-        _refuse_unread(values, keys, f"{name}[{i}]", {}, source, doc)
+            values[k] = coerce(v, keys[k], sources[k], dotted)
+        _refuse_unread(values, keys, f"{name}[{i}]", sources, source, doc)
         out.append(values)
     return out
 

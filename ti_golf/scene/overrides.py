@@ -4,6 +4,7 @@ before it is checked (:func:`ti_golf.scene.loader.load_scene`). No Taichi import
 from __future__ import annotations
 
 import difflib
+import re
 import sys
 from collections.abc import Iterable
 from typing import Any
@@ -14,7 +15,21 @@ else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 from ti_golf.errors import OVERRIDES, ConfigError
-from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
+from ti_golf.scene.keys import Key
+from ti_golf.scene.schema import ARRAY_SCHEMA, SCHEMA, TOP_LEVEL
+
+INDEXED = re.compile(r"^(\w+)\[(\d+)\]\.(\w+)$")
+"""A key of one table of a ``[[...]]`` array: ``blocks[0].number``."""
+
+
+def key_of(dotted: str) -> Key | None:
+    """The declaration of the scene key ``dotted`` names (``air.C_D``, ``description``,
+    ``blocks[0].number``), or None when it names none."""
+    indexed = INDEXED.match(dotted)
+    if indexed is not None:
+        return ARRAY_SCHEMA.get(indexed.group(1), {}).get(indexed.group(3))
+    table, _, name = dotted.partition(".")
+    return SCHEMA.get(table, {}).get(name) if name else TOP_LEVEL.get(table)
 
 
 def suggest(name: str, candidates: Iterable[str]) -> str:
@@ -52,8 +67,20 @@ def parse_override(text: str) -> tuple[str, Any]:
 
 def apply_override(data: dict[str, Any], dotted: str, value: Any) -> None:
     """Set ``dotted`` in the scene document ``data`` to ``value``, or clear it (``None``: the key
-    takes its default; clearing a key that the scene does not set has no effect, and is refused)."""
+    takes its default; clearing a key that the scene does not set has no effect, and is refused).
+    ``NAME[I].KEY`` names a key of the I-th table of a ``[[NAME]]`` array the scene has."""
+    indexed = INDEXED.match(dotted)
+    if indexed is not None:
+        _apply_indexed(data, dotted, indexed.group(1), int(indexed.group(2)), indexed.group(3), value)
+        return
     parts = dotted.split(".")
+    if parts[0] in ARRAY_SCHEMA:
+        raise ConfigError(
+            OVERRIDES,
+            dotted,
+            f"names the scene's [[{parts[0]}]] tables: --set changes one key of one of them, "
+            f"{parts[0]}[INDEX].KEY (e.g. {_example(parts[0])})",
+        )
     if len(parts) == 1:
         if parts[0] not in TOP_LEVEL:
             raise ConfigError(OVERRIDES, dotted, f"is not a scene key{suggest(dotted, _all_keys())}")
@@ -79,6 +106,45 @@ def apply_override(data: dict[str, Any], dotted: str, value: Any) -> None:
     table[name] = (OVERRIDES, value)
 
 
+def _apply_indexed(data: dict[str, Any], dotted: str, name: str, index: int, key: str, value: Any) -> None:
+    """Set (or clear, ``None``) ``key`` of the ``index``-th table of the scene's ``[[name]]`` array."""
+    if name not in ARRAY_SCHEMA:
+        raise ConfigError(OVERRIDES, dotted, f"is not a scene key{suggest(dotted, _all_keys())}")
+    if key not in ARRAY_SCHEMA[name]:
+        raise ConfigError(
+            OVERRIDES,
+            dotted,
+            f"is unknown{suggest(key, ARRAY_SCHEMA[name])}; allowed in [[{name}]]: " + ", ".join(ARRAY_SCHEMA[name]),
+        )
+    tables = data.get(name)
+    tables = tables if isinstance(tables, list) else []
+    count = len(tables)
+    if index >= count:
+        raise ConfigError(
+            OVERRIDES,
+            dotted,
+            f"names table {index} of [[{name}]], and the scene has {count}: --set changes the scene's tables, "
+            "it adds none (add one in the scene file)",
+        )
+    table = tables[index]
+    if not isinstance(table, dict):
+        raise ConfigError(OVERRIDES, dotted, f"cannot be set: '{name}' is not an array of tables in the scene")
+    if value is None:
+        _refuse_clearing_unset(key in table, dotted)
+        table.pop(key)
+    else:
+        table[key] = (OVERRIDES, value)
+
+
+def _example(name: str) -> str:
+    """An override of one key of a ``[[name]]`` table, for messages."""
+    return {
+        "balls": "balls[0].position=[0,1,0]",
+        "blocks": "blocks[0].number=500",
+        "planes": "planes[0].point=[0,0,0]",
+    }.get(name, f"{name}[0].name=rough")
+
+
 def _refuse_clearing_unset(is_set: bool, dotted: str) -> None:
     """A ConfigError for ``KEY=`` (clear) of a key the scene does not set: it is at its default already."""
     if not is_set:
@@ -86,4 +152,8 @@ def _refuse_clearing_unset(is_set: bool, dotted: str) -> None:
 
 
 def _all_keys() -> list[str]:
-    return list(TOP_LEVEL) + [f"{s}.{k}" for s, keys in SCHEMA.items() for k in keys]
+    return (
+        list(TOP_LEVEL)
+        + [f"{s}.{k}" for s, keys in SCHEMA.items() for k in keys]
+        + [f"{a}[0].{k}" for a, keys in ARRAY_SCHEMA.items() for k in keys]
+    )

@@ -115,9 +115,14 @@ def load_heights_file(path: str | os.PathLike[str], source: str = "") -> np.ndar
         raise_config(source, key, f"is a directory, not a .npy file: {p}")
     if not os.path.isfile(p):  # (a FIFO or a device: reading it could wait for ever)
         raise_config(source, key, f"is not a regular file: {p}")
+    magic = b""
     try:  # (mapped: the header's shape is checked against the file before anything is read)
+        with open(p, "rb") as fh:
+            magic = fh.read(6)
         a = np.load(p, mmap_mode="r", allow_pickle=False)
     except (OSError, ValueError, EOFError) as exc:  # (EOFError: an empty file)
+        if len(magic) == 6 and magic != b"\x93NUMPY":  # (numpy's reason would be the pickle's)
+            raise_config(source, key, f"is not a .npy file (one begins with the bytes \\x93NUMPY): {p}")
         raise_config(source, key, f"cannot be read as a .npy array ({exc or 'empty file'}): {p}")
     if not isinstance(a, np.ndarray) or a.dtype.kind not in "iuf":
         raise_config(
@@ -129,14 +134,14 @@ def load_heights_file(path: str | os.PathLike[str], source: str = "") -> np.ndar
         )
     if a.size > TERRAIN_POINTS_MAX:
         raise_config(source, key, f"holds {a.size:,} points; at most {TERRAIN_POINTS_MAX:,}: {p}")
-    a = np.array(a)  # (read, and the file let go)
+    a = np.array(a, dtype=np.float64)  # (read, and the file let go; abs of int64's least would overflow)
     if not np.all(np.isfinite(a)):
         raise_config(
             source, key, f"holds NaN or infinite heights ({int(np.count_nonzero(~np.isfinite(a)))} of them): {p}"
         )
     if np.max(np.abs(a)) > HEIGHT_LIMIT:
         raise_config(source, key, f"holds heights beyond ±{HEIGHT_LIMIT:g} m (got {float(np.max(np.abs(a))):g}): {p}")
-    return np.asarray(a, dtype=np.float64)
+    return a
 
 
 def _smooth(f: np.ndarray) -> np.ndarray:

@@ -5,7 +5,8 @@ A change between runs is one of:
 * *live*: the air, the contact, gravity, the time step, the integrator, sleeping, the ground
   plane, collisions and the solver: the next step uses the new value, from the current state;
 * *at t0*: the keys that set up the balls or the ground (``launch.*``, ``ball.*``,
-  ``terrain.*``): they apply when the simulation is at t0 (it is set up again, as a new
+  ``terrain.*``, and the keys of the ``[[balls]]``, ``[[blocks]]``, ``[[planes]]`` and
+  ``[[surfaces]]`` tables, ``blocks[0].number``): they apply when the simulation is at t0 (it is set up again, as a new
   simulation of the changed scene would be), and are refused later in a run;
 * *not read*: keys that no simulation reads (``description``, ``world.t_max``, ``sweep.*``,
   ``game.*``): refused, as the scene loader refuses a key that would have no effect.
@@ -22,8 +23,9 @@ from ti_golf.errors import OVERRIDES, ConfigError
 from ti_golf.scene.overrides import parse_override
 from ti_golf.scene.readers import NOT_READ, table_of, unread_reason
 
-AT_T0 = ("launch", "ball", "terrain")
-"""Tables whose keys set up the balls or the ground at t0."""
+AT_T0 = ("launch", "ball", "terrain", "balls", "blocks", "planes", "surfaces")
+"""Tables (and ``[[...]]`` arrays, whose keys are ``blocks[0].number``) whose keys set up the balls
+or the ground at t0."""
 
 MOVES_T0_BALLS = ("world.ground_height",)
 """Live keys that also place the balls at t0 (a launched ball rests on the ground): at t0 they set
@@ -86,7 +88,7 @@ _UNSET: Any = _Unset()
 
 def at_t0(key: str) -> bool:
     """Whether ``key`` sets up the balls or the ground at t0."""
-    return table_of(key) in AT_T0
+    return table_of(key).split("[", 1)[0] in AT_T0
 
 
 def refuse_unread(key: str) -> None:
@@ -120,7 +122,7 @@ def refuse_for_given_balls(key: str, initial: Any, kept: bool) -> None:
         else (initial.x is not None, initial.radius is not None, initial.mass is not None)
     )
     given = (
-        (table_of(key) == "launch" and x_given)
+        (table_of(key).split("[", 1)[0] in ("launch", "balls", "blocks") and x_given)
         or (key == "ball.radius" and radius_given)
         or (key == "ball.mass" and mass_given)
     )

@@ -40,8 +40,7 @@ from ti_golf.scene.document import scene_document
 from ti_golf.scene.jsonschema import DIALECT, key_schema
 from ti_golf.scene.keys import Key, key, keys_of, read_when_text
 from ti_golf.scene.loader import load_scene, read_toml, resolve_scene_path, scenes_dir
-from ti_golf.scene.overrides import parse_override
-from ti_golf.scene.schema import SCHEMA, TOP_LEVEL
+from ti_golf.scene.overrides import key_of, parse_override
 from ti_golf.scene.values import check_value
 from ti_golf.study.figures import FIGURES, KINDS, default_figures
 from ti_golf.study.reads import refuse_unread, scene_problem
@@ -425,13 +424,12 @@ def _points(doc: Mapping[str, Any], how: str | None, source: str) -> list[dict[s
 
 
 def _scene_key(dotted: str, source: str, where: str) -> Key:
-    """The scene key ``dotted`` names (a study varies only keys of the scene's tables)."""
-    parts = dotted.split(".")
-    if len(parts) == 1 and dotted in TOP_LEVEL:
-        return TOP_LEVEL[dotted]
-    if len(parts) == 2 and parts[0] in SCHEMA and parts[1] in SCHEMA[parts[0]]:
-        return SCHEMA[parts[0]][parts[1]]
-    raise_config(source, where, "is not a scene key (see `ti-golf keys`)")
+    """The scene key ``dotted`` names (a study varies only keys of the scene's tables, and of its
+    ``[[...]]`` tables by index: ``blocks[0].number``)."""
+    key = key_of(dotted)
+    if key is None:
+        raise_config(source, where, "is not a scene key (see `ti-golf keys`)")
+    return key
 
 
 def _values(name: str, value: Any, source: str) -> list[Any]:
