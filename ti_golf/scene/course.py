@@ -4,10 +4,15 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from ti_golf.scene.checks import DURATION, NON_NEGATIVE, POSITIVE, REACH, SPEED_LIMIT, Each, Interval
+from ti_golf.scene.checks import DURATION, NON_NEGATIVE, POSITIVE, REACH, SPEED_LIMIT, Each, Interval, raise_config
 from ti_golf.scene.keys import REQUIRED, key
+
+if TYPE_CHECKING:  # (the schema collects these tables: it imports this module)
+    from ti_golf.scene.schema import Scene
 
 
 @dataclass(frozen=True)
@@ -65,3 +70,24 @@ class GameConfig:
         DURATION,
         read_when=("[hole]", (True,)),
     )
+
+
+def check_hole(scene: "Scene") -> None:
+    """Refuse a ``[hole]`` with nothing to sit on: off the terrain's grid, or, without a terrain,
+    in a scene with neither a ground plane nor an upward-facing plane (|n_y| > 0.7 of |n|, as the
+    picture and the game take the ground); the cup and its flag floated in the air."""
+    if scene.hole is None:
+        return
+    x, z = scene.hole.position
+    if scene.terrain is not None:
+        (x0, _, z0), (sx, sz) = scene.terrain.origin, scene.terrain.size
+        if not (x0 <= x <= x0 + sx and z0 <= z <= z0 + sz):
+            raise_config(
+                *scene.where("hole.position"),
+                f"must lie on the terrain (x in [{x0:g}, {x0 + sx:g}] m, z in [{z0:g}, {z0 + sz:g}] m; got [{x:g}, {z:g}])",
+            )
+    elif not scene.world.ground and not any(p.normal[1] > 0.7 * math.hypot(*p.normal) for p in scene.planes):
+        raise_config(
+            *scene.where("hole.position"),
+            "has nothing to sit on: the cup needs a [terrain], the ground (world.ground) or an upward-facing plane",
+        )

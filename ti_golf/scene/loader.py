@@ -24,6 +24,7 @@ from ti_golf.errors import OVERRIDES, ConfigError
 from ti_golf.scene.across import READ_ACROSS, read_across, unread_text, with_value
 from ti_golf.scene.air import SPIN_RATIOS, quadratic_range
 from ti_golf.scene.checks import REACH, SPEED_LIMIT, raise_config
+from ti_golf.scene.course import check_hole
 from ti_golf.scene.keys import Key, read_when_text
 from ti_golf.scene.overrides import apply_override, parse_override, suggest
 from ti_golf.scene.schema import (
@@ -202,29 +203,8 @@ def _build(doc: dict[str, Any], source: str, name: str, file_doc: dict[str, Any]
         if _with_source(given, source)[0] == OVERRIDES
     )
     scene = Scene(**kwargs)
-    _check_hole(scene)
+    check_hole(scene)
     return _refuse_unread_across(doc, scene, source, file_doc)
-
-
-def _check_hole(scene: Scene) -> None:
-    """Refuse a ``[hole]`` with nothing to sit on: off the terrain's grid, or, without a terrain,
-    in a scene with neither a ground plane nor an upward-facing plane (|n_y| > 0.7 of |n|, as the
-    picture and the game take the ground); the cup and its flag floated in the air."""
-    if scene.hole is None:
-        return
-    x, z = scene.hole.position
-    if scene.terrain is not None:
-        (x0, _, z0), (sx, sz) = scene.terrain.origin, scene.terrain.size
-        if not (x0 <= x <= x0 + sx and z0 <= z <= z0 + sz):
-            raise_config(
-                *scene.where("hole.position"),
-                f"must lie on the terrain (x in [{x0:g}, {x0 + sx:g}] m, z in [{z0:g}, {z0 + sz:g}] m; got [{x:g}, {z:g}])",
-            )
-    elif not scene.world.ground and not any(p.normal[1] > 0.7 * math.hypot(*p.normal) for p in scene.planes):
-        raise_config(
-            *scene.where("hole.position"),
-            "has nothing to sit on: the cup needs a [terrain], the ground (world.ground) or an upward-facing plane",
-        )
 
 
 def _refuse_unread_across(doc: Mapping[str, Any], scene: Scene, source: str, file_doc: dict[str, Any] | None) -> Scene:

@@ -114,8 +114,9 @@ APPLICATIONS: Mapping[str, Unread] = {
 
 
 def table_of(key: str) -> str:
-    """The table of a dotted key (``"air"`` of ``"air.C_D"``; a top-level key is its own table)."""
-    return key.split(".", 1)[0]
+    """The table of a dotted key (``"air"`` of ``"air.C_D"``, ``"blocks"`` of ``"blocks[0].number"``;
+    a top-level key is its own table)."""
+    return key.split(".", 1)[0].split("[", 1)[0]
 
 
 def unread_reason(unread: Unread, key: str) -> str | None:

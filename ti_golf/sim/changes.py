@@ -6,8 +6,8 @@ A change between runs is one of:
   plane, collisions and the solver: the next step uses the new value, from the current state;
 * *at t0*: the keys that set up the balls or the ground (``launch.*``, ``ball.*``,
   ``terrain.*``, and the keys of the ``[[balls]]``, ``[[blocks]]``, ``[[planes]]`` and
-  ``[[surfaces]]`` tables, ``blocks[0].number``): they apply when the simulation is at t0 (it is set up again, as a new
-  simulation of the changed scene would be), and are refused later in a run;
+  ``[[surfaces]]`` tables, ``blocks[0].number``): they apply when the simulation is at t0 (it is
+  set up again, as a new simulation of the changed scene would be), and are refused later in a run;
 * *not read*: keys that no simulation reads (``description``, ``world.t_max``, ``sweep.*``,
   ``game.*``): refused, as the scene loader refuses a key that would have no effect.
 
@@ -88,7 +88,7 @@ _UNSET: Any = _Unset()
 
 def at_t0(key: str) -> bool:
     """Whether ``key`` sets up the balls or the ground at t0."""
-    return table_of(key).split("[", 1)[0] in AT_T0
+    return table_of(key) in AT_T0
 
 
 def refuse_unread(key: str) -> None:
@@ -122,7 +122,7 @@ def refuse_for_given_balls(key: str, initial: Any, kept: bool) -> None:
         else (initial.x is not None, initial.radius is not None, initial.mass is not None)
     )
     given = (
-        (table_of(key).split("[", 1)[0] in ("launch", "balls", "blocks") and x_given)
+        (table_of(key) in ("launch", "balls", "blocks") and x_given)
         or (key == "ball.radius" and radius_given)
         or (key == "ball.mass" and mass_given)
     )
